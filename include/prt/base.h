@@ -1,0 +1,64 @@
+/* prt/base.h - status codes, the context, logging and progress.
+ *
+ * A prt_context owns everything process-wide that prt needs: the Embree device, the thread
+ * count, and the log hook. Every other object is created from a context and must be released
+ * before it. A context may be used from one thread at a time; objects made from it are
+ * immutable once built and may be read from any number of threads.
+ *
+ * Every call that can fail returns a prt_status. The human-readable reason of the last failure
+ * on the calling thread is returned by prt_last_error() and is also passed to the log hook.
+ * The library never prints, never exits and never asserts on user input. */
+#ifndef PRT_BASE_H
+#define PRT_BASE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PRT_VERSION_MAJOR 0
+#define PRT_VERSION_MINOR 1
+#define PRT_VERSION_PATCH 0
+
+typedef enum prt_status {
+    PRT_OK = 0,
+    PRT_ERR_INVALID_ARG,   /* a parameter is out of range or inconsistent */
+    PRT_ERR_IO,            /* a file could not be opened, read or written */
+    PRT_ERR_FORMAT,        /* input exists but is malformed, corrupt, truncated or unsupported */
+    PRT_ERR_NO_MEMORY,     /* an allocation failed or a size would overflow */
+    PRT_ERR_CANCELLED,     /* the progress callback asked to stop */
+    PRT_ERR_BACKEND,       /* Embree, EGL/OpenGL or another library failed */
+    PRT_ERR_EMPTY          /* input holds nothing usable (no triangles, no pixels) */
+} prt_status;
+
+typedef enum prt_log_level { PRT_LOG_DEBUG, PRT_LOG_INFO, PRT_LOG_WARN, PRT_LOG_ERROR } prt_log_level;
+
+typedef void (*prt_log_fn)(void *user, prt_log_level level, const char *message);
+
+/* Called with done/total units of work; return non-zero to cancel the operation, which then
+ * returns PRT_ERR_CANCELLED and writes nothing. Called from one thread only. */
+typedef int (*prt_progress_fn)(void *user, const char *stage, uint64_t done, uint64_t total);
+
+typedef struct prt_context prt_context;
+
+typedef struct prt_context_desc {
+    int threads;          /* worker threads for bakes and relighting; 0 = all cores */
+    prt_log_fn log;       /* receives warnings and errors; NULL = silent */
+    void *log_user;
+} prt_context_desc;
+
+prt_status prt_context_create(const prt_context_desc *desc, prt_context **out);
+void prt_context_release(prt_context *ctx);
+int prt_context_threads(const prt_context *ctx);
+
+/* The message of the last failure on this thread ("" if none). Valid until the next prt call. */
+const char *prt_last_error(void);
+const char *prt_status_string(prt_status status);
+const char *prt_version_string(void);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

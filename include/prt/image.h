@@ -1,0 +1,35 @@
+/* prt/image.h - linear float RGB images: .hdr, .pfm, .exr, .png in and out.
+ * An image is a plain struct the caller owns after a load; release it with prt_image_free. */
+#ifndef PRT_IMAGE_H
+#define PRT_IMAGE_H
+
+#include "prt/base.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct prt_image {
+    int width, height;
+    float *rgb;          /* width*height*3 floats, row 0 at the top, linear radiance */
+} prt_image;
+
+/* Loads .hdr (Radiance RGBE), .pfm, .exr or .png/.jpg (sRGB decoded to linear), chosen by the
+ * file's contents. Rejects NaN or infinite pixels with PRT_ERR_FORMAT. */
+prt_status prt_image_load(const char *path, prt_image *out);
+prt_status prt_image_load_memory(const void *data, size_t size, prt_image *out);
+
+typedef struct prt_image_save_desc {
+    float exposure_stops;  /* PNG only: radiance is scaled by 2^exposure_stops; default 0 */
+    int tonemap;           /* PNG only: 0 = default (Reinhard on luminance), 1 = Reinhard, 2 = clamp */
+} prt_image_save_desc;
+
+/* Saves by extension: .png (tone-mapped, sRGB 8-bit), .exr (linear half), .hdr, .pfm.
+ * Written atomically: a temporary file is renamed over the target only when complete. */
+prt_status prt_image_save(const char *path, const prt_image *img, const prt_image_save_desc *desc);
+void prt_image_free(prt_image *img);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

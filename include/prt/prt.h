@@ -1,0 +1,15 @@
+/* prt/prt.h - precomputed radiance transfer: the whole public API.
+ * Typical use: create a context, load a scene, bake, save or relight under prt_sh_light
+ * coefficients from an environment map, and draw. See examples/minimal.c. */
+#ifndef PRT_PRT_H
+#define PRT_PRT_H
+
+#include "prt/base.h"
+#include "prt/sh.h"
+#include "prt/image.h"
+#include "prt/lighting.h"
+#include "prt/scene.h"
+#include "prt/transfer.h"
+#include "prt/render.h"
+
+#endif

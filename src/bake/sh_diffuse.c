@@ -1,0 +1,281 @@
+/* SH PRT for diffuse surfaces (Sloan, Kautz & Snyder 2002; Kautz course notes): per vertex
+ *   unshadowed   T_i = 1/pi  integral max(n.s, 0) y_i(s) ds
+ *   shadowed     T_i = 1/pi  integral V(s) max(n.s, 0) y_i(s) ds
+ *   bounce b     T^b_i = rho/pi integral T^{b-1}_i(q(s)) (1 - V(s)) max(n.s, 0) ds
+ * estimated with one shared low-discrepancy direction set of N directions (weight 4 pi / N).
+ * Every vertex's result depends only on its own inputs and the fixed direction set, so the
+ * result is bit-identical for any thread count and schedule. */
+#include "core/progress.h"
+#include "core/transfer_set.h"
+#include "geom/raycast.h"
+
+#include <string.h>
+
+#define PACKET 16
+
+typedef struct hit_entry {
+    uint32_t prim;
+    float u, v, weight;   /* barycentrics of the hit; cos * 4pi/N */
+} hit_entry;
+
+typedef struct bake_job {
+    const prt__mesh *mesh;
+    int order, ncoeff, samples;
+    float offset;
+    float *dirs;          /* [samples][3] */
+    float *basis;         /* [samples][ncoeff] */
+    prt__raycaster rc;
+    bool need_hits;
+    hit_entry **hits;     /* per vertex, for interreflection */
+    uint32_t *hit_count;
+    prt__progress progress;
+} bake_job;
+
+prt_bake_desc prt_bake_desc_defaults(void)
+{
+    prt_bake_desc d = {0};
+    d.order = 5;
+    d.samples = 1024;
+    d.kinds = PRT_TRANSFER_UNSHADOWED | PRT_TRANSFER_SHADOWED | PRT_TRANSFER_INTERREFLECTED;
+    d.bounces = 3;
+    return d;
+}
+
+static void face_normal(const prt__mesh *m, uint32_t prim, float n[3])
+{
+    const uint32_t *t = m->indices + (size_t)prim * 3;
+    float e1[3], e2[3];
+    prt__v3_sub(m->positions + t[1] * 3, m->positions + t[0] * 3, e1);
+    prt__v3_sub(m->positions + t[2] * 3, m->positions + t[0] * 3, e2);
+    prt__v3_cross(e1, e2, n);
+}
+
+/* Visibility pass for one vertex: fills the unshadowed and shadowed sums and, when needed, the
+ * list of occluded directions with what they hit. Returns false on allocation failure. */
+static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, hit_entry **hits_out, uint32_t *nhits_out)
+{
+    const prt__mesh *m = job->mesh;
+    const float *p = m->positions + v * 3, *n = m->normals + v * 3;
+    const float w = (float)(4.0 * PRT_PI / job->samples) / (float)PRT_PI;   /* 4pi/N and the 1/pi of the BRDF */
+    const int nc = job->ncoeff;
+    float org[3] = {p[0] + n[0] * job->offset, p[1] + n[1] * job->offset, p[2] + n[2] * job->offset};
+    hit_entry *hits = NULL;
+    uint32_t nhits = 0, cap = 0;
+    int lane_sample[PACKET];
+    float lane_cos[PACKET];
+    int j = 0;
+    struct RTCIntersectContext ictx;
+    rtcInitIntersectContext(&ictx);
+    while (j < job->samples) {
+        int lanes = 0;
+        for (; j < job->samples && lanes < PACKET; ++j) {
+            float c = prt__v3_dot(job->dirs + (size_t)j * 3, n);
+            if (c <= 0.0f) continue;
+            lane_sample[lanes] = j;
+            lane_cos[lanes] = c;
+            lanes++;
+        }
+        if (!lanes) break;
+        int valid[PACKET];
+        bool blocked[PACKET];
+        if (job->need_hits) {
+            _Alignas(64) struct RTCRayHit16 rh;
+            for (int k = 0; k < PACKET; ++k) {
+                const float *d = job->dirs + (size_t)lane_sample[k < lanes ? k : 0] * 3;
+                valid[k] = k < lanes ? -1 : 0;
+                rh.ray.org_x[k] = org[0]; rh.ray.org_y[k] = org[1]; rh.ray.org_z[k] = org[2];
+                rh.ray.dir_x[k] = d[0]; rh.ray.dir_y[k] = d[1]; rh.ray.dir_z[k] = d[2];
+                rh.ray.tnear[k] = 0.0f; rh.ray.tfar[k] = INFINITY; rh.ray.time[k] = 0.0f;
+                rh.ray.mask[k] = 0xFFFFFFFFu; rh.ray.id[k] = 0; rh.ray.flags[k] = 0;
+                rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID; rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+            }
+            rtcIntersect16(valid, job->rc.scene, &ictx, &rh);
+            for (int k = 0; k < lanes; ++k) {
+                blocked[k] = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+                if (!blocked[k]) continue;
+                float fn[3];
+                face_normal(m, rh.hit.primID[k], fn);
+                /* The back of a surface emits nothing: only front-face hits carry light back. */
+                if (prt__v3_dot(fn, job->dirs + (size_t)lane_sample[k] * 3) >= 0.0f) continue;
+                if (nhits == cap) {
+                    uint32_t nc2 = cap ? cap * 2 : 64;
+                    hit_entry *q = realloc(hits, nc2 * sizeof *q);
+                    if (!q) { free(hits); return false; }
+                    hits = q;
+                    cap = nc2;
+                }
+                hits[nhits++] = (hit_entry){rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k], lane_cos[k] * (float)(4.0 * PRT_PI / job->samples)};
+            }
+        } else {
+            _Alignas(64) struct RTCRay16 r;
+            for (int k = 0; k < PACKET; ++k) {
+                const float *d = job->dirs + (size_t)lane_sample[k < lanes ? k : 0] * 3;
+                valid[k] = k < lanes ? -1 : 0;
+                r.org_x[k] = org[0]; r.org_y[k] = org[1]; r.org_z[k] = org[2];
+                r.dir_x[k] = d[0]; r.dir_y[k] = d[1]; r.dir_z[k] = d[2];
+                r.tnear[k] = 0.0f; r.tfar[k] = INFINITY; r.time[k] = 0.0f;
+                r.mask[k] = 0xFFFFFFFFu; r.id[k] = 0; r.flags[k] = 0;
+            }
+            rtcOccluded16(valid, job->rc.scene, &ictx, &r);
+            for (int k = 0; k < lanes; ++k) blocked[k] = r.tfar[k] < 0.0f;
+        }
+        for (int k = 0; k < lanes; ++k) {
+            const float *y = job->basis + (size_t)lane_sample[k] * nc;
+            float c = lane_cos[k] * w;
+            if (unsh)
+                for (int i = 0; i < nc; ++i) unsh[i] += c * y[i];
+            if (sh && !blocked[k])
+                for (int i = 0; i < nc; ++i) sh[i] += c * y[i];
+        }
+    }
+    if (hits_out) { *hits_out = hits; *nhits_out = nhits; } else free(hits);
+    return true;
+}
+
+/* Interpolates a 3-channel transfer at a hit point. */
+static inline void gather_hit(const prt__mesh *m, const float *prev, int nc3, const hit_entry *h, float *acc)
+{
+    const uint32_t *t = m->indices + (size_t)h->prim * 3;
+    float b0 = (1.0f - h->u - h->v) * h->weight, b1 = h->u * h->weight, b2 = h->v * h->weight;
+    const float *t0 = prev + (size_t)t[0] * nc3, *t1 = prev + (size_t)t[1] * nc3, *t2 = prev + (size_t)t[2] * nc3;
+    for (int i = 0; i < nc3; ++i) acc[i] += b0 * t0[i] + b1 * t1[i] + b2 * t2[i];
+}
+
+prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_desc *desc_in, prt_transfer **out)
+{
+    if (!ctx || !scene || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake_sh: ctx, scene and out are required");
+    *out = NULL;
+    prt_bake_desc d = desc_in ? *desc_in : (prt_bake_desc){0};
+    prt_bake_desc def = prt_bake_desc_defaults();
+    if (d.order == 0) d.order = def.order;
+    if (d.samples == 0) d.samples = def.samples;
+    if (d.kinds == 0) d.kinds = def.kinds;
+    if (d.bounces == 0) d.bounces = def.bounces;
+    if (d.order < 1 || d.order > PRT_SH_MAX_ORDER)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "SH order %d out of range 1..%d", d.order, PRT_SH_MAX_ORDER);
+    if (d.samples < 16 || d.samples > (1 << 20))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "samples %d out of range 16..%d", d.samples, 1 << 20);
+    if (d.bounces < 1 || d.bounces > 64) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range 1..64", d.bounces);
+    if (d.kinds & ~7u) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown transfer kind bits 0x%x", d.kinds);
+    if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
+
+    double t_start = prt__now();
+    prt_transfer *t = prt__calloc(1, sizeof *t);
+    if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    const prt__mesh *sm = &scene->mesh;
+    prt_status st = prt__mesh_append(&t->mesh, sm->positions, sm->normals, sm->albedo, (float[3]){0, 0, 0}, sm->vertex_count,
+                                     sm->indices, sm->triangle_count);
+    if (st) { prt_transfer_release(t); return st; }
+    t->order = d.order;
+    t->samples = d.samples;
+    t->bounces = (d.kinds & PRT_TRANSFER_INTERREFLECTED) ? d.bounces : 0;
+    t->seed = d.seed;
+    t->threads = prt__threads(ctx);
+    snprintf(t->source, sizeof t->source, "%s", scene->source);
+
+    const size_t nv = t->mesh.vertex_count;
+    bake_job job = {0};
+    job.mesh = &t->mesh;
+    job.order = d.order;
+    job.ncoeff = d.order * d.order;
+    job.samples = d.samples;
+    job.offset = d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh);
+    job.need_hits = (d.kinds & PRT_TRANSFER_INTERREFLECTED) != 0;
+    job.progress.fn = d.progress;
+    job.progress.user = d.progress_user;
+    const int nc = job.ncoeff;
+    bool want_unsh = d.kinds & PRT_TRANSFER_UNSHADOWED;
+    bool want_sh = d.kinds & (PRT_TRANSFER_SHADOWED | PRT_TRANSFER_INTERREFLECTED);
+
+    job.dirs = prt__calloc((size_t)d.samples * 3, sizeof(float));
+    job.basis = prt__calloc((size_t)d.samples * nc, sizeof(float));
+    float *unsh = want_unsh ? prt__calloc(nv * nc, sizeof(float)) : NULL;
+    float *shad = want_sh ? prt__calloc(nv * nc, sizeof(float)) : NULL;
+    if (job.need_hits) {
+        job.hits = prt__calloc(nv, sizeof *job.hits);
+        job.hit_count = prt__calloc(nv, sizeof *job.hit_count);
+    }
+    if (!job.dirs || !job.basis || (want_unsh && !unsh) || (want_sh && !shad) || (job.need_hits && (!job.hits || !job.hit_count))) {
+        st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for a bake of %zu vertices", nv);
+        goto done;
+    }
+    for (int j = 0; j < d.samples; ++j) {
+        double u, v, dir[3], y[PRT_SH_MAX_COEFFS];
+        prt__sobol2((uint32_t)j, d.seed, &u, &v);
+        prt__sphere_dir(u, v, dir);
+        prt_sh_eval(d.order, dir, y);
+        for (int c = 0; c < 3; ++c) job.dirs[(size_t)j * 3 + c] = (float)dir[c];
+        for (int i = 0; i < nc; ++i) job.basis[(size_t)j * nc + i] = (float)y[i];
+    }
+    if ((st = prt__raycaster_create(ctx, &t->mesh, &job.rc))) goto done;
+
+    int alloc_failed = 0;
+    prt__progress_begin(&job.progress, "visibility", nv);
+#pragma omp parallel for schedule(dynamic, 32) num_threads(prt__threads(ctx))
+    for (size_t v = 0; v < nv; ++v) {
+        if (prt__progress_cancelled(&job.progress) || __atomic_load_n(&alloc_failed, __ATOMIC_RELAXED)) continue;
+        bool ok = visibility_vertex(&job, v, unsh ? unsh + v * nc : NULL, shad ? shad + v * nc : NULL,
+                                    job.need_hits ? &job.hits[v] : NULL, job.need_hits ? &job.hit_count[v] : NULL);
+        if (!ok) __atomic_store_n(&alloc_failed, 1, __ATOMIC_RELAXED);
+        prt__progress_add(&job.progress, 1);
+    }
+    prt__progress_end(&job.progress);
+    if (alloc_failed) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory recording ray hits"); goto done; }
+    if (prt__progress_cancelled(&job.progress)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled"); goto done; }
+
+    if (want_unsh) { t->sets[0].channels = 1; t->sets[0].coeffs = unsh; unsh = NULL; }
+    if (d.kinds & PRT_TRANSFER_INTERREFLECTED) {
+        const int nc3 = 3 * nc;
+        float *total = prt__calloc(nv * nc3, sizeof(float)), *prev = prt__calloc(nv * nc3, sizeof(float)),
+              *next = prt__calloc(nv * nc3, sizeof(float));
+        if (!total || !prev || !next) {
+            free(total); free(prev); free(next);
+            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for interreflection");
+            goto done;
+        }
+        /* Bounce 0 is the shadowed transfer times the (coloured) albedo. */
+        for (size_t v = 0; v < nv; ++v)
+            for (int c = 0; c < 3; ++c)
+                for (int i = 0; i < nc; ++i)
+                    prev[v * nc3 + c * nc + i] = total[v * nc3 + c * nc + i] = t->mesh.albedo[v * 3 + c] * shad[v * nc + i];
+        char stage[32];
+        for (int b = 1; b <= d.bounces; ++b) {
+            snprintf(stage, sizeof stage, "bounce %d/%d", b, d.bounces);
+            prt__progress_begin(&job.progress, stage, nv);
+#pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ctx))
+            for (size_t v = 0; v < nv; ++v) {
+                if (prt__progress_cancelled(&job.progress)) continue;
+                float acc[3 * PRT_SH_MAX_COEFFS];
+                memset(acc, 0, (size_t)nc3 * sizeof(float));
+                for (uint32_t h = 0; h < job.hit_count[v]; ++h) gather_hit(&t->mesh, prev, nc3, &job.hits[v][h], acc);
+                for (int c = 0; c < 3; ++c) {
+                    float k = t->mesh.albedo[v * 3 + c] / (float)PRT_PI;
+                    for (int i = 0; i < nc; ++i) {
+                        float x = k * acc[c * nc + i];
+                        next[v * nc3 + c * nc + i] = x;
+                        total[v * nc3 + c * nc + i] += x;
+                    }
+                }
+                if ((v & 255) == 0) prt__progress_add(&job.progress, 256);
+            }
+            prt__progress_end(&job.progress);
+            float *tmp = prev; prev = next; next = tmp;
+            if (prt__progress_cancelled(&job.progress)) break;
+        }
+        free(prev); free(next);
+        if (prt__progress_cancelled(&job.progress)) { free(total); st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled"); goto done; }
+        t->sets[2].channels = 3;
+        t->sets[2].coeffs = total;
+    }
+    if (d.kinds & PRT_TRANSFER_SHADOWED) { t->sets[1].channels = 1; t->sets[1].coeffs = shad; shad = NULL; }
+    t->bake_seconds = prt__now() - t_start;
+
+done:
+    prt__raycaster_release(&job.rc);
+    if (job.hits)
+        for (size_t v = 0; v < nv; ++v) free(job.hits[v]);
+    free(job.hits); free(job.hit_count); free(job.dirs); free(job.basis); free(unsh); free(shad);
+    if (st) { prt_transfer_release(t); return st; }
+    *out = t;
+    return PRT_OK;
+}

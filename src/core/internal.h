@@ -1,0 +1,74 @@
+/* Private helpers shared by every layer of libprt. Nothing here is part of the API. */
+#ifndef PRT_INTERNAL_H
+#define PRT_INTERNAL_H
+
+#include "prt/prt.h"
+
+#include <embree3/rtcore.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#define PRT_PI 3.14159265358979323846
+
+struct prt_context {
+    int threads;
+    prt_log_fn log;
+    void *log_user;
+    RTCDevice device;
+};
+
+/* Records the failure message for prt_last_error(), sends it to the log hook (ctx may be NULL)
+ * and returns status, so that callers can write `return prt__fail(ctx, PRT_ERR_IO, "...")`. */
+prt_status prt__fail(const prt_context *ctx, prt_status status, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+void prt__log(const prt_context *ctx, prt_log_level level, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* calloc of n*size with overflow check; NULL on failure. */
+void *prt__calloc(size_t n, size_t size);
+/* Sets *out = n*size when it does not overflow. */
+bool prt__mul_ok(size_t n, size_t size, size_t *out);
+
+uint32_t prt__crc32(const void *data, size_t size);
+
+/* Atomic file output: write to "<path>.tmp.<pid>", then fsync and rename. */
+typedef struct prt__atomic_file {
+    void *fp;
+    char *final_path;
+    char *temp_path;
+} prt__atomic_file;
+prt_status prt__atomic_open(prt__atomic_file *f, const char *path);
+prt_status prt__atomic_write(prt__atomic_file *f, const void *data, size_t size);
+prt_status prt__atomic_commit(prt__atomic_file *f);   /* closes; renames on success */
+void prt__atomic_abort(prt__atomic_file *f);          /* closes and deletes the temporary */
+
+/* Reads a whole file; *data must be freed. */
+prt_status prt__read_file(const char *path, void **data, size_t *size);
+
+/* Low-discrepancy points: element i of the 2D Hammersley-like sequence (Sobol' first two
+ * dimensions) scrambled by seed; results in [0,1). */
+void prt__sobol2(uint32_t i, uint32_t seed, double *u, double *v);
+/* Uniform direction on the sphere from (u,v). */
+void prt__sphere_dir(double u, double v, double dir[3]);
+
+/* Small vector helpers. */
+static inline void prt__v3_sub(const float *a, const float *b, float *o) { o[0]=a[0]-b[0]; o[1]=a[1]-b[1]; o[2]=a[2]-b[2]; }
+static inline void prt__v3_cross(const float *a, const float *b, float *o) {
+    float x = a[1]*b[2]-a[2]*b[1], y = a[2]*b[0]-a[0]*b[2], z = a[0]*b[1]-a[1]*b[0];
+    o[0]=x; o[1]=y; o[2]=z;
+}
+static inline float prt__v3_dot(const float *a, const float *b) { return a[0]*b[0]+a[1]*b[1]+a[2]*b[2]; }
+static inline float prt__v3_len(const float *a) { return sqrtf(prt__v3_dot(a, a)); }
+static inline bool prt__v3_normalize(float *a) {
+    float l = prt__v3_len(a);
+    if (!(l > 1e-30f) || !isfinite(l)) return false;
+    a[0] /= l; a[1] /= l; a[2] /= l;
+    return true;
+}
+
+/* Thread count for OpenMP regions. */
+int prt__threads(const prt_context *ctx);
+
+#endif

@@ -1,0 +1,25 @@
+/* Progress reporting from parallel loops: workers count finished units; only OpenMP thread 0
+ * calls the user's callback, at most every 100 ms, so the callback needs no locking. */
+#ifndef PRT_CORE_PROGRESS_H
+#define PRT_CORE_PROGRESS_H
+
+#include "core/internal.h"
+
+typedef struct prt__progress {
+    prt_progress_fn fn;
+    void *user;
+    const char *stage;
+    uint64_t done, total;    /* done is updated atomically */
+    double last_report;
+    int cancelled;           /* read and written atomically */
+} prt__progress;
+
+void prt__progress_begin(prt__progress *p, const char *stage, uint64_t total);
+/* Adds n finished units; from thread 0, may call the callback. Returns true when cancelled. */
+bool prt__progress_add(prt__progress *p, uint64_t n);
+bool prt__progress_cancelled(prt__progress *p);
+/* Final report for the stage (done = total) unless cancelled. */
+void prt__progress_end(prt__progress *p);
+double prt__now(void);
+
+#endif

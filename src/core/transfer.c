@@ -1,0 +1,81 @@
+/* prt_transfer: accessors and bookkeeping; baking, files and relighting live in their layers. */
+#include "core/transfer_set.h"
+
+#include <stdio.h>
+#include <string.h>
+#include <strings.h>
+
+int prt__kind_index(prt_transfer_kind kind)
+{
+    switch (kind) {
+    case PRT_TRANSFER_UNSHADOWED: return 0;
+    case PRT_TRANSFER_SHADOWED: return 1;
+    case PRT_TRANSFER_INTERREFLECTED: return 2;
+    }
+    return -1;
+}
+
+prt_transfer_kind prt__kind_from_index(int index) { return (prt_transfer_kind)(1u << index); }
+
+const char *prt_transfer_kind_name(prt_transfer_kind kind)
+{
+    static const char *names[PRT__KIND_COUNT] = {"unshadowed", "shadowed", "interreflected"};
+    int i = prt__kind_index(kind);
+    return i < 0 ? "unknown" : names[i];
+}
+
+prt_status prt_transfer_kind_parse(const char *name, prt_transfer_kind *out)
+{
+    for (int i = 0; i < PRT__KIND_COUNT; ++i) {
+        prt_transfer_kind k = prt__kind_from_index(i);
+        const char *full = prt_transfer_kind_name(k);
+        if (!strcasecmp(name, full) || (name[0] && !name[1] && name[0] == full[0])) { *out = k; return PRT_OK; }
+    }
+    return prt__fail(NULL, PRT_ERR_INVALID_ARG, "unknown transfer kind '%s' (use unshadowed, shadowed or interreflected)", name);
+}
+
+void prt_transfer_release(prt_transfer *t)
+{
+    if (!t) return;
+    prt__mesh_free(&t->mesh);
+    for (int i = 0; i < PRT__KIND_COUNT; ++i) free(t->sets[i].coeffs);
+    free(t);
+}
+
+void prt_transfer_get_info(const prt_transfer *t, prt_transfer_info *info)
+{
+    memset(info, 0, sizeof *info);
+    info->vertex_count = t->mesh.vertex_count;
+    info->triangle_count = t->mesh.triangle_count;
+    info->order = t->order;
+    info->samples = t->samples;
+    info->bounces = t->bounces;
+    info->seed = t->seed;
+    info->bake_seconds = t->bake_seconds;
+    info->threads = t->threads;
+    for (int i = 0; i < PRT__KIND_COUNT; ++i)
+        if (t->sets[i].channels) {
+            info->kinds |= prt__kind_from_index(i);
+            info->transfer_bytes += t->mesh.vertex_count * (size_t)t->sets[i].channels * (size_t)(t->order * t->order) * sizeof(float);
+        }
+    snprintf(info->source, sizeof info->source, "%s", t->source);
+}
+
+int prt_transfer_channels(const prt_transfer *t, prt_transfer_kind kind)
+{
+    int i = prt__kind_index(kind);
+    return i < 0 ? 0 : t->sets[i].channels;
+}
+
+const float *prt_transfer_coeffs(const prt_transfer *t, prt_transfer_kind kind)
+{
+    int i = prt__kind_index(kind);
+    return i < 0 || !t->sets[i].channels ? NULL : t->sets[i].coeffs;
+}
+
+size_t prt_transfer_vertex_count(const prt_transfer *t) { return t->mesh.vertex_count; }
+size_t prt_transfer_triangle_count(const prt_transfer *t) { return t->mesh.triangle_count; }
+const float *prt_transfer_positions(const prt_transfer *t) { return t->mesh.positions; }
+const float *prt_transfer_normals(const prt_transfer *t) { return t->mesh.normals; }
+const float *prt_transfer_albedo(const prt_transfer *t) { return t->mesh.albedo; }
+const uint32_t *prt_transfer_indices(const prt_transfer *t) { return t->mesh.indices; }

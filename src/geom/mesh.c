@@ -1,0 +1,131 @@
+/* Mesh building and cleaning: the one place input geometry is validated. */
+#include "geom/mesh.h"
+
+#include <string.h>
+
+void prt__mesh_free(prt__mesh *m)
+{
+    free(m->positions); free(m->normals); free(m->albedo); free(m->indices);
+    memset(m, 0, sizeof *m);
+}
+
+static bool grow(void **p, size_t count, size_t elem)
+{
+    size_t bytes;
+    if (!prt__mul_ok(count, elem, &bytes)) return false;
+    void *q = realloc(*p, bytes ? bytes : 1);
+    if (!q) return false;
+    *p = q;
+    return true;
+}
+
+prt_status prt__mesh_append(prt__mesh *m, const float *pos, const float *nrm, const float *albedo,
+                            const float rgb_default[3], size_t nv, const uint32_t *idx, size_t nt)
+{
+    size_t v0 = m->vertex_count, t0 = m->triangle_count, nv2 = v0 + nv, nt2 = t0 + nt;
+    if (nv2 > UINT32_MAX || nt2 > UINT32_MAX / 3)
+        return prt__fail(NULL, PRT_ERR_NO_MEMORY, "mesh too large (%zu vertices)", nv2);
+    if (!grow((void **)&m->positions, nv2 * 3, sizeof(float)) || !grow((void **)&m->normals, nv2 * 3, sizeof(float)) ||
+        !grow((void **)&m->albedo, nv2 * 3, sizeof(float)) || !grow((void **)&m->indices, nt2 * 3, sizeof(uint32_t)))
+        return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory growing mesh");
+    memcpy(m->positions + v0 * 3, pos, nv * 3 * sizeof(float));
+    if (nrm) memcpy(m->normals + v0 * 3, nrm, nv * 3 * sizeof(float));
+    else memset(m->normals + v0 * 3, 0, nv * 3 * sizeof(float));
+    for (size_t i = 0; i < nv; ++i)
+        for (int c = 0; c < 3; ++c) m->albedo[(v0 + i) * 3 + c] = albedo ? albedo[i * 3 + c] : rgb_default[c];
+    for (size_t i = 0; i < nt * 3; ++i) {
+        if (idx[i] >= nv)
+            return prt__fail(NULL, PRT_ERR_FORMAT, "triangle %zu references vertex %u of %zu", i / 3, idx[i], nv);
+        m->indices[t0 * 3 + i] = (uint32_t)(idx[i] + v0);
+    }
+    m->vertex_count = nv2;
+    m->triangle_count = nt2;
+    return PRT_OK;
+}
+
+prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *what)
+{
+    if (m->vertex_count == 0 || m->triangle_count == 0)
+        return prt__fail(ctx, PRT_ERR_EMPTY, "%s: the mesh has no triangles", what);
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < m->vertex_count * 3; ++i) {
+        if (!isfinite(m->positions[i]))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "%s: vertex %zu has a non-finite coordinate", what, i / 3);
+        if (!isfinite(m->albedo[i]) || m->albedo[i] < 0.0f || m->albedo[i] > 1.0f)
+            return prt__fail(ctx, PRT_ERR_FORMAT, "%s: vertex %zu has albedo %g outside [0, 1]", what, i / 3, m->albedo[i]);
+        lo[i % 3] = fminf(lo[i % 3], m->positions[i]);
+        hi[i % 3] = fmaxf(hi[i % 3], m->positions[i]);
+    }
+    float ext[3];
+    prt__v3_sub(hi, lo, ext);
+    double diag = prt__v3_len(ext);
+    /* Triangles whose area is below this are numerically degenerate: their normal is noise. */
+    double min_area = 1e-14 * diag * diag;
+
+    size_t kept = 0;
+    float *face_n = prt__calloc(m->triangle_count * 3, sizeof(float));
+    if (!face_n) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (size_t t = 0; t < m->triangle_count; ++t) {
+        const uint32_t *tri = m->indices + t * 3;
+        if (tri[0] >= m->vertex_count || tri[1] >= m->vertex_count || tri[2] >= m->vertex_count) {
+            free(face_n);
+            return prt__fail(ctx, PRT_ERR_FORMAT, "%s: triangle %zu references a vertex out of range", what, t);
+        }
+        float e1[3], e2[3], n[3];
+        prt__v3_sub(m->positions + tri[1] * 3, m->positions + tri[0] * 3, e1);
+        prt__v3_sub(m->positions + tri[2] * 3, m->positions + tri[0] * 3, e2);
+        prt__v3_cross(e1, e2, n);   /* length = 2 * area, so this weights normals by area */
+        if (!(0.5 * prt__v3_len(n) > min_area) || tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;
+        memmove(m->indices + kept * 3, tri, 3 * sizeof(uint32_t));
+        memcpy(face_n + kept * 3, n, sizeof n);
+        kept++;
+    }
+    if (kept == 0) {
+        free(face_n);
+        return prt__fail(ctx, PRT_ERR_EMPTY, "%s: all %zu triangles have zero area", what, m->triangle_count);
+    }
+    if (kept < m->triangle_count)
+        prt__log(ctx, PRT_LOG_WARN, "%s: dropped %zu zero-area triangles of %zu", what, m->triangle_count - kept, m->triangle_count);
+    m->triangle_count = kept;
+
+    /* Repair normals that are missing (zero), non-finite or not unit: area-weighted average of
+     * the faces around the vertex, or the first face's normal if those cancel out. */
+    float *acc = prt__calloc(m->vertex_count * 3, sizeof(float));
+    uint32_t *remap = prt__calloc(m->vertex_count, sizeof(uint32_t));
+    if (!acc || !remap) { free(face_n); free(acc); free(remap); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    for (size_t t = 0; t < kept; ++t)
+        for (int k = 0; k < 3; ++k) {
+            uint32_t v = m->indices[t * 3 + k];
+            for (int c = 0; c < 3; ++c) acc[v * 3 + c] += face_n[t * 3 + c];
+            remap[v] = 1;
+        }
+    size_t repaired = 0;
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        float *n = m->normals + v * 3;
+        float len = prt__v3_len(n);
+        if (isfinite(len) && fabsf(len - 1.0f) < 1e-3f) { prt__v3_normalize(n); continue; }
+        if (!(isfinite(len) && len > 1e-6f && prt__v3_normalize(n))) {
+            memcpy(n, acc + v * 3, 3 * sizeof(float));
+            if (!prt__v3_normalize(n)) { n[0] = 0; n[1] = 1; n[2] = 0; }
+            if (len != 0.0f) repaired++;
+        }
+    }
+    if (repaired) prt__log(ctx, PRT_LOG_WARN, "%s: recomputed %zu invalid vertex normals", what, repaired);
+
+    /* Drop unreferenced vertices (scanned PLYs carry many). */
+    size_t nv = 0;
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        if (!remap[v]) continue;
+        remap[v] = (uint32_t)nv;
+        if (nv != v) {
+            memcpy(m->positions + nv * 3, m->positions + v * 3, 3 * sizeof(float));
+            memcpy(m->normals + nv * 3, m->normals + v * 3, 3 * sizeof(float));
+            memcpy(m->albedo + nv * 3, m->albedo + v * 3, 3 * sizeof(float));
+        }
+        nv++;
+    }
+    for (size_t i = 0; i < kept * 3; ++i) m->indices[i] = remap[m->indices[i]];
+    m->vertex_count = nv;
+    free(face_n); free(acc); free(remap);
+    return PRT_OK;
+}

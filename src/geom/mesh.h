@@ -1,0 +1,38 @@
+/* The scene's triangle mesh and the growable builder that importers fill. */
+#ifndef PRT_GEOM_MESH_H
+#define PRT_GEOM_MESH_H
+
+#include "core/internal.h"
+
+/* Struct-of-arrays mesh; every array has 3 entries per vertex or per triangle. */
+typedef struct prt__mesh {
+    size_t vertex_count, triangle_count;
+    float *positions, *normals, *albedo;
+    uint32_t *indices;
+} prt__mesh;
+
+void prt__mesh_free(prt__mesh *m);
+/* Appends vertices/triangles; indices are relative to the appended vertices. normals may be
+ * NULL (then zero, meaning "compute"); albedo may be NULL (then rgb_default). */
+prt_status prt__mesh_append(prt__mesh *m, const float *pos, const float *nrm, const float *albedo,
+                            const float rgb_default[3], size_t nv, const uint32_t *idx, size_t nt);
+/* Validates and cleans in place: rejects non-finite positions and out-of-range indices, drops
+ * zero-area triangles and unreferenced vertices, repairs missing or bad normals. */
+prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *what);
+/* Splits edges until none is longer than max_edge, keeping the mesh conforming. */
+prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_edge);
+
+struct prt_scene {
+    prt__mesh mesh;
+    char source[512];
+};
+
+/* Adds the mesh file at path (anything assimp reads), with optional transform (row-major 4x4,
+ * NULL = identity) and albedo override (NULL = from materials, else desc default). */
+prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform,
+                            const float *albedo_override, const prt_scene_desc *desc, prt__mesh *m);
+/* Adds every mesh a .json scene names. */
+prt_status prt__import_scene_json(const prt_context *ctx, const char *path, const prt_scene_desc *desc,
+                                  prt__mesh *m);
+
+#endif

@@ -1,0 +1,56 @@
+/* Builds the Embree scene for a mesh. Embree copies the buffers (rtcSetNewGeometryBuffer), so
+ * the mesh may be freed independently and Embree's padding rules are met. */
+#include "geom/raycast.h"
+
+#include <string.h>
+
+prt_status prt__raycaster_create(const prt_context *ctx, const prt__mesh *m, prt__raycaster *out)
+{
+    memset(out, 0, sizeof *out);
+    RTCScene scene = rtcNewScene(ctx->device);
+    RTCGeometry geom = rtcNewGeometry(ctx->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    if (!scene || !geom) {
+        if (scene) rtcReleaseScene(scene);
+        if (geom) rtcReleaseGeometry(geom);
+        return prt__fail(ctx, PRT_ERR_BACKEND, "Embree could not create a scene");
+    }
+    float *v = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m->vertex_count);
+    uint32_t *i = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), m->triangle_count);
+    if (!v || !i) {
+        rtcReleaseGeometry(geom);
+        rtcReleaseScene(scene);
+        return prt__fail(ctx, PRT_ERR_NO_MEMORY, "Embree could not allocate geometry buffers");
+    }
+    memcpy(v, m->positions, m->vertex_count * 3 * sizeof(float));
+    memcpy(i, m->indices, m->triangle_count * 3 * sizeof(uint32_t));
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(scene, geom);
+    rtcReleaseGeometry(geom);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);   /* no rays slip through shared edges */
+    rtcCommitScene(scene);
+    if (rtcGetDeviceError(ctx->device) != RTC_ERROR_NONE) {
+        rtcReleaseScene(scene);
+        return prt__fail(ctx, PRT_ERR_BACKEND, "Embree failed to build the scene");
+    }
+    out->scene = scene;
+    return PRT_OK;
+}
+
+void prt__raycaster_release(prt__raycaster *rc)
+{
+    if (rc->scene) rtcReleaseScene(rc->scene);
+    rc->scene = NULL;
+}
+
+float prt__ray_offset(const prt__mesh *m)
+{
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < m->vertex_count * 3; ++i) {
+        lo[i % 3] = fminf(lo[i % 3], m->positions[i]);
+        hi[i % 3] = fmaxf(hi[i % 3], m->positions[i]);
+    }
+    float d[3];
+    prt__v3_sub(hi, lo, d);
+    return 1e-4f * prt__v3_len(d);
+}

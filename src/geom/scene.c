@@ -1,0 +1,85 @@
+/* prt_scene: loading, cleaning and subdividing input geometry. */
+#include "geom/mesh.h"
+
+#include <stdio.h>
+#include <string.h>
+#include <strings.h>
+
+static prt_scene_desc fill_defaults(const prt_scene_desc *in)
+{
+    prt_scene_desc d = in ? *in : (prt_scene_desc){0};
+    if (d.default_albedo[0] == 0 && d.default_albedo[1] == 0 && d.default_albedo[2] == 0)
+        d.default_albedo[0] = d.default_albedo[1] = d.default_albedo[2] = 0.7f;
+    if (d.crease_angle_deg <= 0) d.crease_angle_deg = 45.0f;
+    return d;
+}
+
+static prt_status finish(prt_context *ctx, prt_scene *s, const prt_scene_desc *d, const char *what, prt_scene **out)
+{
+    prt_status st = prt__mesh_clean(ctx, &s->mesh, what);
+    if (st == PRT_OK && d->max_edge != 0.0f) st = prt__mesh_subdivide(ctx, &s->mesh, d->max_edge);
+    if (st != PRT_OK) { prt_scene_release(s); return st; }
+    snprintf(s->source, sizeof s->source, "%s", what);
+    *out = s;
+    return PRT_OK;
+}
+
+static bool ends_with(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    return n >= k && strcasecmp(s + n - k, suffix) == 0;
+}
+
+prt_status prt_scene_load(prt_context *ctx, const char *path, const prt_scene_desc *desc, prt_scene **out)
+{
+    if (!out || !path) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_scene_load: path and out are required");
+    *out = NULL;
+    prt_scene_desc d = fill_defaults(desc);
+    for (int c = 0; c < 3; ++c)
+        if (!(d.default_albedo[c] >= 0 && d.default_albedo[c] <= 1))
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "albedo must lie in [0, 1]");
+    prt_scene *s = prt__calloc(1, sizeof *s);
+    if (!s) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    prt_status st = ends_with(path, ".json") ? prt__import_scene_json(ctx, path, &d, &s->mesh)
+                                             : prt__import_mesh(ctx, path, NULL, NULL, &d, &s->mesh);
+    if (st != PRT_OK) { prt_scene_release(s); return st; }
+    return finish(ctx, s, &d, path, out);
+}
+
+prt_status prt_scene_create_copy(prt_context *ctx, const float *positions, const float *normals,
+                                 const float *albedo, size_t vertex_count,
+                                 const uint32_t *indices, size_t triangle_count,
+                                 const prt_scene_desc *desc, prt_scene **out)
+{
+    if (!out || !positions || !indices) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_scene_create_copy: positions, indices and out are required");
+    *out = NULL;
+    prt_scene_desc d = fill_defaults(desc);
+    prt_scene *s = prt__calloc(1, sizeof *s);
+    if (!s) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    prt_status st = prt__mesh_append(&s->mesh, positions, normals, albedo, d.default_albedo, vertex_count, indices, triangle_count);
+    if (st != PRT_OK) { prt__fail(ctx, st, "%s", prt_last_error()); prt_scene_release(s); return st; }
+    return finish(ctx, s, &d, "(memory)", out);
+}
+
+void prt_scene_release(prt_scene *s)
+{
+    if (!s) return;
+    prt__mesh_free(&s->mesh);
+    free(s);
+}
+
+size_t prt_scene_vertex_count(const prt_scene *s) { return s->mesh.vertex_count; }
+size_t prt_scene_triangle_count(const prt_scene *s) { return s->mesh.triangle_count; }
+const float *prt_scene_positions(const prt_scene *s) { return s->mesh.positions; }
+const float *prt_scene_normals(const prt_scene *s) { return s->mesh.normals; }
+const float *prt_scene_albedo(const prt_scene *s) { return s->mesh.albedo; }
+const uint32_t *prt_scene_indices(const prt_scene *s) { return s->mesh.indices; }
+
+void prt_scene_bounds(const prt_scene *s, float lo[3], float hi[3])
+{
+    for (int c = 0; c < 3; ++c) { lo[c] = INFINITY; hi[c] = -INFINITY; }
+    for (size_t i = 0; i < s->mesh.vertex_count * 3; ++i) {
+        lo[i % 3] = fminf(lo[i % 3], s->mesh.positions[i]);
+        hi[i % 3] = fmaxf(hi[i % 3], s->mesh.positions[i]);
+    }
+}

@@ -1,0 +1,266 @@
+/* The .prt container (docs/FORMAT.md): a header, a chunk table, 8-byte aligned chunks each with
+ * a CRC-32. Readers bound every count by the bytes actually present before allocating. */
+#include "core/transfer_set.h"
+
+#include <cjson/cJSON.h>
+#include <stdio.h>
+#include <string.h>
+#include <zlib.h>
+
+#if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "the .prt reader and writer assume a little-endian host"
+#endif
+
+#define FILE_VERSION 1
+#define HEADER_SIZE 24
+#define ENTRY_SIZE 24
+#define MAX_CHUNKS 4096
+static const unsigned char MAGIC[8] = {'P', 'R', 'T', 'F', 0x0D, 0x0A, 0x1A, 0x0A};
+
+#define FOURCC(a, b, c, d) ((uint32_t)(a) | (uint32_t)(b) << 8 | (uint32_t)(c) << 16 | (uint32_t)(d) << 24)
+#define CHUNK_META FOURCC('M', 'E', 'T', 'A')
+#define CHUNK_MESH FOURCC('M', 'E', 'S', 'H')
+#define CHUNK_SHTR FOURCC('S', 'H', 'T', 'R')
+
+typedef struct chunk { uint32_t id; const void *parts[5]; size_t sizes[5]; size_t size; } chunk;
+
+static void put32(unsigned char *p, uint32_t v) { memcpy(p, &v, 4); }
+static void put64(unsigned char *p, uint64_t v) { memcpy(p, &v, 8); }
+static uint32_t get32(const unsigned char *p) { uint32_t v; memcpy(&v, p, 4); return v; }
+static uint64_t get64(const unsigned char *p) { uint64_t v; memcpy(&v, p, 8); return v; }
+
+static uint32_t chunk_crc(const chunk *c)
+{
+    /* One running CRC over the concatenated parts, without copying them together. */
+    uLong crc = crc32(0L, Z_NULL, 0);
+    for (int i = 0; i < 5 && c->parts[i]; ++i) {
+        const unsigned char *p = c->parts[i];
+        size_t n = c->sizes[i];
+        while (n) {
+            unsigned int k = n > 0x40000000u ? 0x40000000u : (unsigned int)n;
+            crc = crc32(crc, p, k);
+            p += k;
+            n -= k;
+        }
+    }
+    return (uint32_t)crc;
+}
+
+prt_status prt_transfer_save(const prt_transfer *t, const char *path)
+{
+    if (!t || !path) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_transfer_save: transfer and path are required");
+    const prt__mesh *m = &t->mesh;
+    cJSON *meta = cJSON_CreateObject();
+    cJSON_AddStringToObject(meta, "method", "sh");
+    cJSON_AddStringToObject(meta, "prt_version", prt_version_string());
+    cJSON_AddNumberToObject(meta, "order", t->order);
+    cJSON_AddNumberToObject(meta, "samples", t->samples);
+    cJSON_AddNumberToObject(meta, "bounces", t->bounces);
+    cJSON_AddNumberToObject(meta, "seed", t->seed);
+    cJSON_AddNumberToObject(meta, "threads", t->threads);
+    cJSON_AddNumberToObject(meta, "bake_seconds", t->bake_seconds);
+    cJSON_AddStringToObject(meta, "source", t->source);
+    char *meta_text = cJSON_PrintUnformatted(meta);
+    cJSON_Delete(meta);
+    if (!meta_text) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+
+    chunk chunks[2 + PRT__KIND_COUNT];
+    memset(chunks, 0, sizeof chunks);
+    int count = 0;
+    chunks[count++] = (chunk){CHUNK_META, {meta_text}, {strlen(meta_text)}, 0};
+    unsigned char mesh_head[16], set_head[PRT__KIND_COUNT][24];
+    put64(mesh_head, m->vertex_count);
+    put64(mesh_head + 8, m->triangle_count);
+    size_t v3 = m->vertex_count * 3 * sizeof(float);
+    chunks[count++] = (chunk){CHUNK_MESH, {mesh_head, m->positions, m->normals, m->albedo, m->indices},
+                              {16, v3, v3, v3, m->triangle_count * 3 * sizeof(uint32_t)}, 0};
+    for (int k = 0; k < PRT__KIND_COUNT; ++k) {
+        const prt__sh_set *s = &t->sets[k];
+        if (!s->channels) continue;
+        unsigned char *h = set_head[k];
+        put32(h, (uint32_t)prt__kind_from_index(k));
+        put32(h + 4, (uint32_t)s->channels);
+        put32(h + 8, (uint32_t)t->order);
+        put32(h + 12, 0);
+        put64(h + 16, m->vertex_count);
+        chunks[count++] = (chunk){CHUNK_SHTR, {h, s->coeffs},
+                                  {24, m->vertex_count * (size_t)s->channels * (size_t)(t->order * t->order) * sizeof(float)}, 0};
+    }
+    unsigned char head[HEADER_SIZE + ENTRY_SIZE * (2 + PRT__KIND_COUNT)];
+    memset(head, 0, sizeof head);
+    memcpy(head, MAGIC, 8);
+    put32(head + 8, FILE_VERSION);
+    put32(head + 12, (uint32_t)count);
+    size_t table_end = HEADER_SIZE + (size_t)ENTRY_SIZE * count, offset = (table_end + 7) & ~(size_t)7;
+    for (int i = 0; i < count; ++i) {
+        chunk *c = &chunks[i];
+        for (int p = 0; p < 5; ++p) c->size += c->sizes[p];
+        unsigned char *e = head + HEADER_SIZE + ENTRY_SIZE * i;
+        put32(e, c->id);
+        put32(e + 4, chunk_crc(c));
+        put64(e + 8, offset);
+        put64(e + 16, c->size);
+        offset = (offset + c->size + 7) & ~(size_t)7;
+    }
+    put32(head + 20, 0);
+    put32(head + 20, prt__crc32(head, table_end));   /* over the header (crc field zero) and the table */
+
+    prt__atomic_file f;
+    prt_status st = prt__atomic_open(&f, path);
+    if (st) { cJSON_free(meta_text); return st; }
+    static const unsigned char zeros[8] = {0};
+    st = prt__atomic_write(&f, head, table_end);
+    size_t pos = table_end;
+    for (int i = 0; i < count && !st; ++i) {
+        size_t pad = ((pos + 7) & ~(size_t)7) - pos;
+        st = prt__atomic_write(&f, zeros, pad);
+        pos += pad;
+        for (int p = 0; p < 5 && !st; ++p)
+            if (chunks[i].parts[p]) st = prt__atomic_write(&f, chunks[i].parts[p], chunks[i].sizes[p]);
+        pos += chunks[i].size;
+    }
+    cJSON_free(meta_text);
+    if (st) { prt__atomic_abort(&f); return st; }
+    return prt__atomic_commit(&f);
+}
+
+static prt_status bad(prt_context *ctx, const char *fmt, const char *detail)
+{
+    return prt__fail(ctx, PRT_ERR_FORMAT, fmt, detail);
+}
+
+static bool all_finite(const float *p, size_t n)
+{
+    for (size_t i = 0; i < n; ++i)
+        if (!isfinite(p[i])) return false;
+    return true;
+}
+
+prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t size, prt_transfer **out)
+{
+    if (!out || (!data && size)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_load_memory: data and out are required");
+    *out = NULL;
+    const unsigned char *b = data;
+    if (size < HEADER_SIZE || memcmp(b, MAGIC, 8) != 0) return bad(ctx, "not a .prt file (bad magic number)%s", "");
+    uint32_t version = get32(b + 8), count = get32(b + 12);
+    if (version > FILE_VERSION) {
+        return prt__fail(ctx, PRT_ERR_FORMAT, "file format version %u is newer than this prt supports (%d): upgrade prt", version, FILE_VERSION);
+    }
+    if (version < 1) return prt__fail(ctx, PRT_ERR_FORMAT, "file format version %u is not a valid .prt version", version);
+    if (count == 0 || count > MAX_CHUNKS) return prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: %u chunks", count);
+    size_t table_end = HEADER_SIZE + (size_t)ENTRY_SIZE * count;
+    if (table_end > size) return bad(ctx, "truncated .prt file (chunk table cut off)%s", "");
+    unsigned char *head = malloc(table_end);
+    if (!head) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(head, b, table_end);
+    uint32_t stored = get32(head + 20);
+    put32(head + 20, 0);
+    uint32_t actual = prt__crc32(head, table_end);
+    free(head);
+    if (stored != actual) return bad(ctx, "corrupt .prt file: header checksum mismatch%s", "");
+
+    prt_transfer *t = prt__calloc(1, sizeof *t);
+    if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    prt_status st = PRT_OK;
+    bool have_meta = false, have_mesh = false;
+    /* Two passes: the mesh fixes the vertex count that transfer chunks must match. */
+    for (int pass = 0; pass < 2 && !st; ++pass) {
+        for (uint32_t i = 0; i < count && !st; ++i) {
+            const unsigned char *e = b + HEADER_SIZE + (size_t)ENTRY_SIZE * i;
+            uint32_t id = get32(e), crc = get32(e + 4);
+            uint64_t off = get64(e + 8), len = get64(e + 16);
+            if (off > size || len > size - off) { st = bad(ctx, "truncated .prt file: a chunk extends past the end (%s)", "file cut short?"); break; }
+            const unsigned char *p = b + off;
+            bool mine = pass == 0 ? (id == CHUNK_META || id == CHUNK_MESH) : id == CHUNK_SHTR;
+            if (!mine) continue;
+            if (prt__crc32(p, (size_t)len) != crc) {
+                char what[5] = {(char)(id & 255), (char)(id >> 8 & 255), (char)(id >> 16 & 255), (char)(id >> 24), 0};
+                st = bad(ctx, "corrupt .prt file: checksum mismatch in chunk %s", what);
+                break;
+            }
+            if (id == CHUNK_META) {
+                cJSON *meta = cJSON_ParseWithLength((const char *)p, (size_t)len);
+                const cJSON *method = cJSON_GetObjectItemCaseSensitive(meta, "method");
+                if (!meta || !cJSON_IsString(method)) { cJSON_Delete(meta); st = bad(ctx, "corrupt .prt file: unreadable metadata%s", ""); break; }
+                if (strcmp(method->valuestring, "sh") != 0) {
+                    st = prt__fail(ctx, PRT_ERR_FORMAT, "this prt cannot read method '%.64s'", method->valuestring);
+                    cJSON_Delete(meta);
+                    break;
+                }
+                const cJSON *x;
+                if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "samples"))) t->samples = x->valueint;
+                if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "bounces"))) t->bounces = x->valueint;
+                if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "seed"))) t->seed = (uint32_t)x->valuedouble;
+                if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "threads"))) t->threads = x->valueint;
+                if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "bake_seconds"))) t->bake_seconds = x->valuedouble;
+                if (cJSON_IsString(x = cJSON_GetObjectItemCaseSensitive(meta, "source"))) snprintf(t->source, sizeof t->source, "%s", x->valuestring);
+                cJSON_Delete(meta);
+                have_meta = true;
+            } else if (id == CHUNK_MESH) {
+                if (have_mesh || len < 16) { st = bad(ctx, "corrupt .prt file: bad mesh chunk%s", ""); break; }
+                uint64_t nv = get64(p), nt = get64(p + 8);
+                /* Bound the counts by the chunk's length before any arithmetic can overflow. */
+                if (nv == 0 || nt == 0 || nv > len / 36 || nt > len / 12 || 16 + nv * 36 + nt * 12 != len) {
+                    st = bad(ctx, "corrupt .prt file: mesh chunk sizes are inconsistent%s", "");
+                    break;
+                }
+                prt__mesh *m = &t->mesh;
+                m->positions = malloc(nv * 12); m->normals = malloc(nv * 12); m->albedo = malloc(nv * 12);
+                m->indices = malloc(nt * 12);
+                if (!m->positions || !m->normals || !m->albedo || !m->indices) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+                memcpy(m->positions, p + 16, nv * 12);
+                memcpy(m->normals, p + 16 + nv * 12, nv * 12);
+                memcpy(m->albedo, p + 16 + nv * 24, nv * 12);
+                memcpy(m->indices, p + 16 + nv * 36, nt * 12);
+                m->vertex_count = nv;
+                m->triangle_count = nt;
+                for (uint64_t k = 0; k < nt * 3; ++k)
+                    if (m->indices[k] >= nv) { st = bad(ctx, "corrupt .prt file: a triangle index is out of range%s", ""); break; }
+                if (!st && !(all_finite(m->positions, nv * 3) && all_finite(m->normals, nv * 3) && all_finite(m->albedo, nv * 3)))
+                    st = bad(ctx, "corrupt .prt file: non-finite vertex data%s", "");
+                have_mesh = true;
+            } else {
+                if (!have_mesh) { st = bad(ctx, "corrupt .prt file: transfer without a mesh%s", ""); break; }
+                if (len < 24) { st = bad(ctx, "corrupt .prt file: short transfer chunk%s", ""); break; }
+                uint32_t kind = get32(p), channels = get32(p + 4), order = get32(p + 8);
+                uint64_t nv = get64(p + 16);
+                int k = prt__kind_index((prt_transfer_kind)kind);
+                if (k < 0 || (channels != 1 && channels != 3) || order < 1 || order > PRT_SH_MAX_ORDER || nv != t->mesh.vertex_count ||
+                    (t->order && (int)order != t->order) || t->sets[k].channels) {
+                    st = bad(ctx, "corrupt .prt file: invalid transfer chunk header%s", "");
+                    break;
+                }
+                uint64_t n = nv * channels * order * order;
+                if (n > (len - 24) / 4 || 24 + n * 4 != len) { st = bad(ctx, "corrupt .prt file: transfer chunk size mismatch%s", ""); break; }
+                float *c = malloc(n * 4);
+                if (!c) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+                memcpy(c, p + 24, n * 4);
+                t->order = (int)order;
+                t->sets[k].channels = (int)channels;
+                t->sets[k].coeffs = c;
+            }
+        }
+    }
+    if (!st && (!have_meta || !have_mesh)) st = bad(ctx, "corrupt .prt file: metadata or mesh chunk missing%s", "");
+    if (!st && !t->order) st = bad(ctx, ".prt file holds no transfer%s", "");
+    if (st) { prt_transfer_release(t); return st; }
+    *out = t;
+    return PRT_OK;
+}
+
+prt_status prt_transfer_load(prt_context *ctx, const char *path, prt_transfer **out)
+{
+    void *data;
+    size_t size;
+    if (out) *out = NULL;
+    prt_status st = prt__read_file(path, &data, &size);
+    if (st) return prt__fail(ctx, st, "%s", prt_last_error());
+    st = prt_transfer_load_memory(ctx, data, size, out);
+    free(data);
+    if (st) {
+        char msg[900];
+        snprintf(msg, sizeof msg, "%s", prt_last_error());
+        return prt__fail(ctx, st, "'%s': %s", path, msg);
+    }
+    return PRT_OK;
+}

@@ -1,0 +1,150 @@
+#include "render/draw.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static const char *VS =
+    "#version 330 core\n"
+    "layout(location = 0) in vec3 pos;\n"
+    "layout(location = 1) in vec3 radiance;\n"
+    "uniform mat4 mvp;\n"
+    "out vec3 v_radiance;\n"
+    "void main() { v_radiance = radiance; gl_Position = mvp * vec4(pos, 1.0); }\n";
+static const char *FS =
+    "#version 330 core\n"
+    "in vec3 v_radiance;\n"
+    "out vec4 color;\n"
+    "void main() { color = vec4(v_radiance, 1.0); }\n";
+
+static GLuint compile(GLenum type, const char *src, char *log, size_t logsize)
+{
+    GLuint s = glCreateShader(type);
+    glShaderSource(s, 1, &src, NULL);
+    glCompileShader(s);
+    GLint ok;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        glGetShaderInfoLog(s, (GLsizei)logsize, NULL, log);
+        glDeleteShader(s);
+        return 0;
+    }
+    return s;
+}
+
+prt_status prt__draw_init(prt__draw *d)
+{
+    memset(d, 0, sizeof *d);
+    char log[1024] = "";
+    GLuint vs = compile(GL_VERTEX_SHADER, VS, log, sizeof log);
+    GLuint fs = vs ? compile(GL_FRAGMENT_SHADER, FS, log, sizeof log) : 0;
+    if (!vs || !fs) {
+        if (vs) glDeleteShader(vs);
+        return prt__fail(NULL, PRT_ERR_BACKEND, "shader compilation failed: %s", log);
+    }
+    d->program = glCreateProgram();
+    glAttachShader(d->program, vs);
+    glAttachShader(d->program, fs);
+    glLinkProgram(d->program);
+    glDeleteShader(vs);
+    glDeleteShader(fs);
+    GLint ok;
+    glGetProgramiv(d->program, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        glGetProgramInfoLog(d->program, sizeof log, NULL, log);
+        glDeleteProgram(d->program);
+        d->program = 0;
+        return prt__fail(NULL, PRT_ERR_BACKEND, "shader link failed: %s", log);
+    }
+    d->u_mvp = glGetUniformLocation(d->program, "mvp");
+    glGenVertexArrays(1, &d->vao);
+    glGenBuffers(1, &d->vbo_pos);
+    glGenBuffers(1, &d->vbo_rad);
+    glGenBuffers(1, &d->ibo);
+    return PRT_OK;
+}
+
+void prt__draw_free(prt__draw *d)
+{
+    if (d->program) glDeleteProgram(d->program);
+    if (d->vao) glDeleteVertexArrays(1, &d->vao);
+    GLuint bufs[3] = {d->vbo_pos, d->vbo_rad, d->ibo};
+    if (d->vbo_pos) glDeleteBuffers(3, bufs);
+    memset(d, 0, sizeof *d);
+}
+
+void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
+{
+    glBindVertexArray(d->vao);
+    glBindBuffer(GL_ARRAY_BUFFER, d->vbo_pos);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(m->vertex_count * 3 * sizeof(float)), m->positions, GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, NULL);
+    glBindBuffer(GL_ARRAY_BUFFER, d->vbo_rad);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(m->vertex_count * 3 * sizeof(float)), m->radiance, GL_DYNAMIC_DRAW);
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, NULL);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d->ibo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(m->triangle_count * 3 * sizeof(uint32_t)), m->indices, GL_STATIC_DRAW);
+    glBindVertexArray(0);
+    d->index_count = m->triangle_count * 3;
+}
+
+void prt__camera_matrix(const prt_camera *cam, float aspect, float near_far[2], float out[16])
+{
+    float up[3] = {cam->up[0], cam->up[1], cam->up[2]};
+    if (up[0] == 0 && up[1] == 0 && up[2] == 0) up[1] = 1;
+    float f[3], s[3], u[3];
+    prt__v3_sub(cam->target, cam->eye, f);
+    float dist = prt__v3_len(f);
+    prt__v3_normalize(f);
+    prt__v3_cross(f, up, s);
+    if (!prt__v3_normalize(s)) { float alt[3] = {0, 0, 1}; prt__v3_cross(f, alt, s); prt__v3_normalize(s); }
+    prt__v3_cross(s, f, u);
+    float view[16] = {s[0], u[0], -f[0], 0, s[1], u[1], -f[1], 0, s[2], u[2], -f[2], 0,
+                      -prt__v3_dot(s, cam->eye), -prt__v3_dot(u, cam->eye), prt__v3_dot(f, cam->eye), 1};
+    float fov = (cam->fov_y_deg > 0 ? cam->fov_y_deg : 40.0f) * (float)PRT_PI / 180.0f;
+    float n = near_far ? near_far[0] : dist * 0.01f, fa = near_far ? near_far[1] : dist * 100.0f;
+    float t = 1.0f / tanf(fov * 0.5f);
+    float proj[16] = {t / aspect, 0, 0, 0, 0, t, 0, 0, 0, 0, (fa + n) / (n - fa), -1, 0, 0, 2 * fa * n / (n - fa), 0};
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) {
+            float acc = 0;
+            for (int k = 0; k < 4; ++k) acc += proj[k * 4 + r] * view[c * 4 + k];
+            out[c * 4 + r] = acc;
+        }
+}
+
+void prt__draw_mesh(const prt__draw *d, const prt_camera *cam, int w, int h, const float background[3])
+{
+    float mvp[16];
+    prt__camera_matrix(cam, (float)w / (float)h, NULL, mvp);
+    glViewport(0, 0, w, h);
+    glClearColor(background ? background[0] : 0, background ? background[1] : 0, background ? background[2] : 0, 1);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    glEnable(GL_DEPTH_TEST);
+    glDisable(GL_CULL_FACE);   /* one-sided walls must show from both sides */
+    glUseProgram(d->program);
+    glUniformMatrix4fv(d->u_mvp, 1, GL_FALSE, mvp);
+    glBindVertexArray(d->vao);
+    glDrawElements(GL_TRIANGLES, (GLsizei)d->index_count, GL_UNSIGNED_INT, NULL);
+    glBindVertexArray(0);
+}
+
+void prt_camera_frame(const float lo[3], const float hi[3], const float *from, float fov_y_deg, float aspect, prt_camera *out)
+{
+    memset(out, 0, sizeof *out);
+    float dir[3] = {0.55f, 0.45f, 0.7f};
+    if (from) memcpy(dir, from, sizeof dir);
+    if (!prt__v3_normalize(dir)) { dir[0] = 0; dir[1] = 0; dir[2] = 1; }
+    float c[3], ext[3];
+    for (int k = 0; k < 3; ++k) c[k] = 0.5f * (lo[k] + hi[k]);
+    prt__v3_sub(hi, lo, ext);
+    float radius = 0.5f * prt__v3_len(ext);
+    if (!(radius > 0)) radius = 1;
+    float fov = (fov_y_deg > 0 ? fov_y_deg : 40.0f) * (float)PRT_PI / 180.0f;
+    float half = aspect < 1 ? atanf(tanf(fov * 0.5f) * aspect) : fov * 0.5f;
+    float dist = radius / sinf(half) * 1.02f;
+    for (int k = 0; k < 3; ++k) { out->target[k] = c[k]; out->eye[k] = c[k] + dir[k] * dist; }
+    out->up[1] = 1;
+    out->fov_y_deg = fov_y_deg > 0 ? fov_y_deg : 40.0f;
+}

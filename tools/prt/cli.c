@@ -1,0 +1,208 @@
+#include "cli.h"
+
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <time.h>
+#include <unistd.h>
+
+void cli_error(const cli *c, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "prt %s: ", c->cmd);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    va_end(ap);
+}
+
+int cli_fail(const cli *c, prt_status st)
+{
+    cli_error(c, "%s", prt_last_error()[0] ? prt_last_error() : prt_status_string(st));
+    switch (st) {
+    case PRT_OK: return EXIT_OK;
+    case PRT_ERR_INVALID_ARG: return EXIT_USAGE;
+    case PRT_ERR_CANCELLED: return EXIT_INTERRUPTED;
+    case PRT_ERR_BACKEND: return EXIT_BACKEND;
+    case PRT_ERR_NO_MEMORY: return EXIT_NO_MEMORY;
+    default: return EXIT_FAILURE_INPUT;
+    }
+}
+
+int cli_usage(const cli *c, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "prt %s: ", c->cmd);
+    vfprintf(stderr, fmt, ap);
+    fprintf(stderr, "\nTry 'prt %s --help'.\n", c->cmd);
+    va_end(ap);
+    return EXIT_USAGE;
+}
+
+static void log_to_stderr(void *user, prt_log_level level, const char *msg)
+{
+    const cli *c = user;
+    /* Errors are reported once, by the command, from prt_last_error(). */
+    if (level == PRT_LOG_WARN && !c->quiet) fprintf(stderr, "prt %s: warning: %s\n", c->cmd, msg);
+}
+
+int cli_make_context(cli *c)
+{
+    prt_context_desc d = {0};
+    d.threads = c->threads;
+    d.log = log_to_stderr;
+    d.log_user = c;
+    prt_status st = prt_context_create(&d, &c->ctx);
+    return st ? cli_fail(c, st) : EXIT_OK;
+}
+
+bool cli_parse_int(const char *s, int lo, int hi, int *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (errno || end == s || *end || v < lo || v > hi) return false;
+    *out = (int)v;
+    return true;
+}
+
+bool cli_parse_float(const char *s, float *out)
+{
+    char *end;
+    errno = 0;
+    float v = strtof(s, &end);
+    if (errno || end == s || *end || !isfinite(v)) return false;
+    *out = v;
+    return true;
+}
+
+bool cli_parse_vec3(const char *s, bool allow_scalar, float out[3])
+{
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", s);
+    int n = 0;
+    char *save = NULL;
+    for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+        if (n == 3 || !cli_parse_float(tok, &out[n])) return false;
+        n++;
+    }
+    if (n == 1 && allow_scalar) { out[1] = out[2] = out[0]; return true; }
+    return n == 3;
+}
+
+/* ---- progress ---- */
+static volatile sig_atomic_t interrupted;
+static void on_sigint(int sig) { (void)sig; interrupted = 1; }
+void cli_catch_interrupt(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_sigint;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+}
+bool cli_interrupted(void) { return interrupted != 0; }
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+int cli_progress(void *user, const char *stage, uint64_t done, uint64_t total)
+{
+    const cli *c = user;
+    static char current[64];
+    static double start;
+    if (c->quiet || !isatty(STDERR_FILENO)) return interrupted;
+    double t = now_seconds();
+    if (strcmp(current, stage) != 0) {
+        snprintf(current, sizeof current, "%s", stage);
+        start = t;
+    }
+    double frac = total ? (double)done / (double)total : 1.0, elapsed = t - start;
+    char eta[32] = "--";
+    if (frac > 0.01 && frac < 1.0) snprintf(eta, sizeof eta, "%.0f s", elapsed * (1.0 - frac) / frac);
+    else if (frac >= 1.0) snprintf(eta, sizeof eta, "done");
+    int width = 30, filled = (int)(frac * width);
+    char bar[32];
+    for (int i = 0; i < width; ++i) bar[i] = i < filled ? '#' : '.';
+    bar[width] = 0;
+    fprintf(stderr, "\r%-14s [%s] %5.1f%%  %6.1f s  ETA %-8s", stage, bar, 100.0 * frac, elapsed, eta);
+    if (frac >= 1.0) fputc('\n', stderr);
+    fflush(stderr);
+    return interrupted;
+}
+
+/* ---- lighting ---- */
+int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
+{
+    switch (opt) {
+    case OPT_ENV: l->env_path = arg; return 1;
+    case OPT_LAYOUT:
+        if (!strcasecmp(arg, "auto")) l->layout = PRT_ENV_AUTO;
+        else if (!strcasecmp(arg, "latlong")) l->layout = PRT_ENV_LATLONG;
+        else if (!strcasecmp(arg, "angular")) l->layout = PRT_ENV_ANGULAR;
+        else if (!strcasecmp(arg, "cross")) l->layout = PRT_ENV_VCROSS;
+        else { cli_usage(c, "--layout must be latlong, angular, cross or auto (got '%s')", arg); return -1; }
+        return 1;
+    case OPT_ROTATE: {
+        float v[3] = {0, 0, 0};
+        char buf[128];
+        snprintf(buf, sizeof buf, "%s", arg);
+        int n = 0;
+        char *save = NULL;
+        for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save))
+            if (n == 3 || !cli_parse_float(tok, &v[n++])) { cli_usage(c, "--rotate takes YAW[,PITCH[,ROLL]] in degrees"); return -1; }
+        if (n == 0) { cli_usage(c, "--rotate takes YAW[,PITCH[,ROLL]] in degrees"); return -1; }
+        memcpy(l->rotate, v, sizeof v);
+        return 1;
+    }
+    case OPT_INTENSITY:
+        if (!cli_parse_float(arg, &l->intensity) || l->intensity < 0) { cli_usage(c, "--intensity must be a number >= 0"); return -1; }
+        return 1;
+    case OPT_SUN:
+        if (!cli_parse_vec3(arg, false, l->sun_dir)) { cli_usage(c, "--sun takes X,Y,Z"); return -1; }
+        return 1;
+    }
+    return 0;
+}
+
+prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh_light *out, prt_envmap **env_out)
+{
+    (void)c;
+    prt_envmap *env = NULL;
+    prt_status st;
+    if (l->env_path) {
+        st = prt_envmap_load(l->env_path, l->layout, &env);
+    } else {
+        prt_sky_desc sky = {0};
+        memcpy(sky.sun_dir, l->sun_dir, sizeof sky.sun_dir);
+        st = prt_sky_create(&sky, &env);
+    }
+    if (st) return st;
+    st = prt_envmap_project_sh(env, order, out);
+    if (!st && (l->rotate[0] != 0 || l->rotate[1] != 0 || l->rotate[2] != 0)) {
+        double rot[9];
+        prt_rotation_from_euler_deg(l->rotate[0], l->rotate[1], l->rotate[2], rot);
+        st = prt_sh_light_rotate(out, rot);
+    }
+    if (!st) prt_sh_light_scale(out, l->intensity);
+    if (env_out && !st) *env_out = env;
+    else prt_envmap_release(env);
+    return st;
+}
+
+prt_transfer_kind cli_default_kind(const prt_transfer *t)
+{
+    if (prt_transfer_channels(t, PRT_TRANSFER_INTERREFLECTED)) return PRT_TRANSFER_INTERREFLECTED;
+    if (prt_transfer_channels(t, PRT_TRANSFER_SHADOWED)) return PRT_TRANSFER_SHADOWED;
+    return PRT_TRANSFER_UNSHADOWED;
+}

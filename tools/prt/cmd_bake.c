@@ -1,0 +1,104 @@
+#include "cli.h"
+
+#include <getopt.h>
+#include <stdio.h>
+#include <string.h>
+#include <strings.h>
+
+static const char *HELP =
+    "usage: prt bake SCENE -o OUT.prt [options]\n"
+    "Precomputes SH radiance transfer for every vertex of SCENE (a mesh file assimp reads,\n"
+    "or a .json scene, see docs/SCENE.md) and writes it to OUT.prt.\n\n"
+    "  -o, --output FILE      the .prt file to write (required; written atomically)\n"
+    "      --order N          SH order, 1..10 bands (default 5 = 25 coefficients)\n"
+    "      --samples N        directions per vertex over the sphere (default 1024)\n"
+    "      --kinds LIST       comma list of unshadowed,shadowed,interreflected (default all)\n"
+    "      --bounces N        interreflection bounces (default 3)\n"
+    "      --seed N           rotates the low-discrepancy directions (default 0)\n"
+    "      --max-edge L       subdivide until no edge is longer than L scene units\n"
+    "      --albedo R,G,B     albedo for every material (or one value for grey)\n"
+    "      --default-albedo R,G,B  albedo where the file has no material (default 0.7)\n"
+    "      --crease-angle D   split computed normals above D degrees (default 45)\n"
+    "      --ray-offset E     shadow-ray origin offset (default 1e-4 x scene diagonal)\n"
+    "  -j, --threads N        worker threads (default: all cores; results do not change)\n"
+    "  -q, --quiet            no progress or warnings\n"
+    "  -h, --help             this text\n\n" EXIT_CODES_HELP;
+
+int cmd_bake(int argc, char **argv)
+{
+    cli c = {.cmd = "bake"};
+    prt_bake_desc bd = {0};
+    prt_scene_desc sd = {0};
+    const char *output = NULL;
+    static const struct option opts[] = {
+        {"output", required_argument, 0, 'o'}, {"order", required_argument, 0, 'O'}, {"samples", required_argument, 0, 'n'},
+        {"kinds", required_argument, 0, 'k'}, {"bounces", required_argument, 0, 'b'}, {"seed", required_argument, 0, 's'},
+        {"max-edge", required_argument, 0, 'e'}, {"albedo", required_argument, 0, 'a'}, {"default-albedo", required_argument, 0, 'A'},
+        {"crease-angle", required_argument, 0, 'c'}, {"ray-offset", required_argument, 0, 'r'},
+        {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    int opt, seed;
+    optind = 1;
+    while ((opt = getopt_long(argc, argv, "o:j:qh", opts, NULL)) != -1) {
+        switch (opt) {
+        case 'o': output = optarg; break;
+        case 'O': if (!cli_parse_int(optarg, 1, PRT_SH_MAX_ORDER, &bd.order)) return cli_usage(&c, "--order must be 1..%d", PRT_SH_MAX_ORDER); break;
+        case 'n': if (!cli_parse_int(optarg, 16, 1 << 20, &bd.samples)) return cli_usage(&c, "--samples must be 16..1048576"); break;
+        case 'b': if (!cli_parse_int(optarg, 1, 64, &bd.bounces)) return cli_usage(&c, "--bounces must be 1..64"); break;
+        case 's': if (!cli_parse_int(optarg, 0, 2147483647, &seed)) return cli_usage(&c, "--seed must be a non-negative integer"); bd.seed = (uint32_t)seed; break;
+        case 'k': {
+            char buf[256], *save = NULL;
+            snprintf(buf, sizeof buf, "%s", optarg);
+            bd.kinds = 0;
+            for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+                prt_transfer_kind k;
+                if (!strcasecmp(tok, "all")) { bd.kinds = 7; continue; }
+                if (prt_transfer_kind_parse(tok, &k)) return cli_usage(&c, "%s", prt_last_error());
+                bd.kinds |= (unsigned)k;
+            }
+            if (!bd.kinds) return cli_usage(&c, "--kinds is empty");
+            break;
+        }
+        case 'e': if (!cli_parse_float(optarg, &sd.max_edge) || sd.max_edge <= 0) return cli_usage(&c, "--max-edge must be > 0"); break;
+        case 'a':
+            if (!cli_parse_vec3(optarg, true, sd.default_albedo)) return cli_usage(&c, "--albedo takes R,G,B in [0, 1]");
+            sd.override_albedo = 1;
+            break;
+        case 'A': if (!cli_parse_vec3(optarg, true, sd.default_albedo)) return cli_usage(&c, "--default-albedo takes R,G,B in [0, 1]"); break;
+        case 'c': if (!cli_parse_float(optarg, &sd.crease_angle_deg) || sd.crease_angle_deg <= 0 || sd.crease_angle_deg > 180) return cli_usage(&c, "--crease-angle must be in (0, 180]"); break;
+        case 'r': if (!cli_parse_float(optarg, &bd.ray_offset) || bd.ray_offset <= 0) return cli_usage(&c, "--ray-offset must be > 0"); break;
+        case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
+        case 'q': c.quiet = true; break;
+        case 'h': fputs(HELP, stdout); return EXIT_OK;
+        default: return cli_usage(&c, "unknown option");
+        }
+    }
+    if (optind != argc - 1) return cli_usage(&c, "expected exactly one SCENE argument");
+    if (!output) return cli_usage(&c, "an output file is required (-o OUT.prt)");
+    for (int k = 0; k < 3; ++k)
+        if (sd.default_albedo[k] < 0 || sd.default_albedo[k] > 1) return cli_usage(&c, "albedo must lie in [0, 1]");
+    int rc = cli_make_context(&c);
+    if (rc) return rc;
+    cli_catch_interrupt();
+    prt_scene *scene = NULL;
+    prt_transfer *t = NULL;
+    prt_status st = prt_scene_load(c.ctx, argv[optind], &sd, &scene);
+    if (!st) {
+        if (!c.quiet)
+            fprintf(stderr, "prt bake: %s: %zu vertices, %zu triangles\n", argv[optind], prt_scene_vertex_count(scene), prt_scene_triangle_count(scene));
+        bd.progress = cli_progress;
+        bd.progress_user = &c;
+        st = prt_bake_sh(c.ctx, scene, &bd, &t);
+    }
+    if (!st) st = prt_transfer_save(t, output);
+    if (!st && !c.quiet) {
+        prt_transfer_info info;
+        prt_transfer_get_info(t, &info);
+        fprintf(stderr, "prt bake: wrote %s (order %d, %d samples, %.2f s on %d threads)\n", output, info.order, info.samples,
+                info.bake_seconds, info.threads);
+    }
+    rc = st ? cli_fail(&c, st) : EXIT_OK;
+    prt_transfer_release(t);
+    prt_scene_release(scene);
+    prt_context_release(c.ctx);
+    return rc;
+}

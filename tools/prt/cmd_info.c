@@ -1,0 +1,79 @@
+#include "cli.h"
+
+#include <cjson/cJSON.h>
+#include <getopt.h>
+#include <stdio.h>
+
+static const char *HELP =
+    "usage: prt info FILE.prt [--json]\n"
+    "Describes a .prt file: method, SH order, transfer kinds, mesh size, storage, bake settings.\n"
+    "The file is fully validated (sizes and checksums) on the way.\n\n"
+    "      --json             machine-readable output\n"
+    "  -h, --help             this text\n\n" EXIT_CODES_HELP;
+
+int cmd_info(int argc, char **argv)
+{
+    cli c = {.cmd = "info", .quiet = true};
+    int json = 0, opt;
+    static const struct option opts[] = {{"json", no_argument, 0, 'J'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    optind = 1;
+    while ((opt = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
+        if (opt == 'J') json = 1;
+        else if (opt == 'h') { fputs(HELP, stdout); return EXIT_OK; }
+        else return cli_usage(&c, "unknown option");
+    }
+    if (optind != argc - 1) return cli_usage(&c, "expected exactly one FILE.prt argument");
+    c.threads = 1;
+    int rc = cli_make_context(&c);
+    if (rc) return rc;
+    prt_transfer *t = NULL;
+    prt_status st = prt_transfer_load(c.ctx, argv[optind], &t);
+    if (st) { rc = cli_fail(&c, st); prt_context_release(c.ctx); return rc; }
+    prt_transfer_info info;
+    prt_transfer_get_info(t, &info);
+    const prt_transfer_kind all[3] = {PRT_TRANSFER_UNSHADOWED, PRT_TRANSFER_SHADOWED, PRT_TRANSFER_INTERREFLECTED};
+    if (json) {
+        cJSON *root = cJSON_CreateObject();
+        cJSON_AddStringToObject(root, "file", argv[optind]);
+        cJSON_AddStringToObject(root, "method", "sh");
+        cJSON_AddNumberToObject(root, "order", info.order);
+        cJSON_AddNumberToObject(root, "coefficients", info.order * info.order);
+        cJSON *kinds = cJSON_AddArrayToObject(root, "kinds");
+        for (int k = 0; k < 3; ++k)
+            if (info.kinds & all[k]) {
+                cJSON *o = cJSON_CreateObject();
+                cJSON_AddStringToObject(o, "kind", prt_transfer_kind_name(all[k]));
+                cJSON_AddNumberToObject(o, "channels", prt_transfer_channels(t, all[k]));
+                cJSON_AddItemToArray(kinds, o);
+            }
+        cJSON_AddNumberToObject(root, "vertices", (double)info.vertex_count);
+        cJSON_AddNumberToObject(root, "triangles", (double)info.triangle_count);
+        cJSON_AddNumberToObject(root, "transfer_bytes", (double)info.transfer_bytes);
+        cJSON_AddNumberToObject(root, "bytes_per_vertex", (double)info.transfer_bytes / (double)info.vertex_count);
+        cJSON_AddNumberToObject(root, "samples", info.samples);
+        cJSON_AddNumberToObject(root, "bounces", info.bounces);
+        cJSON_AddNumberToObject(root, "seed", info.seed);
+        cJSON_AddNumberToObject(root, "bake_seconds", info.bake_seconds);
+        cJSON_AddNumberToObject(root, "bake_threads", info.threads);
+        cJSON_AddStringToObject(root, "source", info.source);
+        char *text = cJSON_Print(root);
+        puts(text);
+        cJSON_free(text);
+        cJSON_Delete(root);
+    } else {
+        printf("file:        %s\nmethod:      spherical-harmonic PRT (diffuse)\n", argv[optind]);
+        printf("order:       %d (%d coefficients)\n", info.order, info.order * info.order);
+        printf("kinds:      ");
+        for (int k = 0; k < 3; ++k)
+            if (info.kinds & all[k]) printf(" %s (%d ch)", prt_transfer_kind_name(all[k]), prt_transfer_channels(t, all[k]));
+        printf("\nmesh:        %zu vertices, %zu triangles\n", info.vertex_count, info.triangle_count);
+        printf("storage:     %.2f MiB transfer, %.0f bytes per vertex\n", info.transfer_bytes / 1048576.0,
+               (double)info.transfer_bytes / (double)info.vertex_count);
+        printf("bake:        %d samples, %d bounces, seed %u, %.2f s on %d threads\n", info.samples, info.bounces, info.seed,
+               info.bake_seconds, info.threads);
+        printf("source:      %s\n", info.source);
+    }
+    prt_transfer_release(t);
+    prt_context_release(c.ctx);
+    return EXIT_OK;
+}

@@ -1,0 +1,33 @@
+/* prt: one command line over libprt. Each subcommand lives in its own cmd_*.c. */
+#include "cli.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static const struct { const char *name; int (*fn)(int, char **); const char *summary; } commands[] = {
+    {"bake", cmd_bake, "precompute radiance transfer for a scene into a .prt file"},
+    {"relight", cmd_relight, "per-vertex exit radiance of a .prt under a lighting, as PLY or JSON"},
+    {"render", cmd_render, "draw a relit .prt to a PNG or EXR image (headless OpenGL)"},
+    {"env", cmd_env, "project an environment probe to SH; optional band-limited / irradiance image"},
+    {"info", cmd_info, "describe what a .prt file holds"},
+    {"demo-scene", cmd_demo_scene, "write the procedural demo scene as OBJ+MTL"},
+};
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: prt COMMAND [OPTIONS]   (prt COMMAND --help for each)\n\nCommands:\n");
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i) fprintf(f, "  %-11s %s\n", commands[i].name, commands[i].summary);
+    fprintf(f, "\n" EXIT_CODES_HELP);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) { usage(stderr); return EXIT_USAGE; }
+    if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) { usage(stdout); return EXIT_OK; }
+    if (!strcmp(argv[1], "--version")) { printf("prt %s\n", prt_version_string()); return EXIT_OK; }
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i)
+        if (!strcmp(argv[1], commands[i].name)) return commands[i].fn(argc - 1, argv + 1);
+    fprintf(stderr, "prt: unknown command '%s'\n", argv[1]);
+    usage(stderr);
+    return EXIT_USAGE;
+}
