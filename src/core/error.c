@@ -3,6 +3,7 @@
 
 #include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
 
 static _Thread_local char last_error[1024];
 
@@ -15,10 +16,13 @@ static void emit(const prt_context *ctx, prt_log_level level, const char *msg)
 
 prt_status prt__fail(const prt_context *ctx, prt_status status, const char *fmt, ...)
 {
+    /* Format into a local buffer: callers may pass prt_last_error() itself as an argument. */
+    char msg[sizeof last_error];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(last_error, sizeof last_error, fmt, ap);
+    vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
+    memcpy(last_error, msg, sizeof msg);
     emit(ctx, PRT_LOG_ERROR, last_error);
     return status;
 }

@@ -166,11 +166,24 @@ prt_status prt_envmap_project_sh(const prt_envmap *e, int order, prt_sh_light *o
     /* Rows are summed separately, then in order, so the result never depends on the thread count. */
 #pragma omp parallel for schedule(static)
     for (int y = 0; y < h; ++y) {
-        double basis[PRT_SH_MAX_COEFFS], dir[3], dw;
+        double basis[PRT_SH_MAX_COEFFS], basis2[PRT_SH_MAX_COEFFS], dir[3], dw;
         double *acc = rows + (size_t)y * 3 * n;
         for (int x = 0; x < w; ++x) {
             if (!pixel_dir(e, x, y, dir, &dw)) continue;
-            prt_sh_eval(order, dir, basis);
+            if (e->layout == PRT_ENV_LATLONG) {
+                /* The image is constant over a pixel: integrate the basis over the pixel's band
+                 * of cos(theta) with 2-point Gauss-Legendre; azimuth is handled exactly below. */
+                double z0 = cos(PRT_PI * y / h), z1 = cos(PRT_PI * (y + 1) / h), zc = 0.5 * (z0 + z1), dz = 0.5 * (z0 - z1) / sqrt(3.0);
+                double s = sqrt(fmax(0.0, 1.0 - dir[1] * dir[1])), cx = s > 0 ? dir[0] / s : 0, cz = s > 0 ? dir[2] / s : -1;
+                for (int k = 0; k < 2; ++k) {
+                    double z = k ? zc - dz : zc + dz, r = sqrt(fmax(0.0, 1.0 - z * z));
+                    double d2[3] = {r * cx, z, r * cz};
+                    prt_sh_eval(order, d2, k ? basis2 : basis);
+                }
+                for (int i = 0; i < n; ++i) basis[i] = 0.5 * (basis[i] + basis2[i]);
+            } else {
+                prt_sh_eval(order, dir, basis);
+            }
             const float *p = e->img.rgb + ((size_t)y * w + x) * 3;
             for (int c = 0; c < 3; ++c) {
                 double v = p[c] * dw;
@@ -191,5 +204,16 @@ prt_status prt_envmap_project_sh(const prt_envmap *e, int order, prt_sh_light *o
     out->order = order;
     for (int c = 0; c < 3; ++c)
         for (int i = 0; i < n; ++i) out->coeffs[c][i] = (float)(total[c * n + i] * norm);
+    if (e->layout == PRT_ENV_LATLONG) {
+        /* The mean of cos(m phi) or sin(m phi) over a pixel's azimuth width is its centre value
+         * times sinc(m dphi / 2): apply it to make the sums exact pixel integrals. */
+        const double half = PRT_PI / w;
+        for (int l = 0; l < order; ++l)
+            for (int m = -l; m <= l; ++m) {
+                if (m == 0) continue;
+                double a = abs(m) * half, sinc = sin(a) / a;
+                for (int c = 0; c < 3; ++c) out->coeffs[c][l * (l + 1) + m] = (float)(out->coeffs[c][l * (l + 1) + m] * sinc);
+            }
+    }
     return PRT_OK;
 }

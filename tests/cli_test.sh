@@ -1,0 +1,101 @@
+#!/bin/sh
+# End-to-end checks of the prt command line: every subcommand's --help, the happy path on the
+# demo scene, documented exit codes for bad input, and an interrupted bake writing nothing.
+# Usage: cli_test.sh PATH/TO/prt [SHARED_DATA_DIR]
+set -u
+PRT=$1
+DATA=${2:-}
+T=$(mktemp -d /tmp/prt_cli_XXXXXX)
+trap 'rm -rf "$T"' EXIT
+pass=0
+fail=0
+
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+
+# expect CODE DESCRIPTION -- COMMAND...: runs it, checks the exit code, keeps stderr in $T/err.
+expect() {
+    code=$1; what=$2; shift 3
+    "$@" >"$T/out" 2>"$T/err"
+    rc=$?
+    if [ "$rc" -eq "$code" ]; then ok; else bad "$what: exit $rc, expected $code"; sed 's/^/    /' "$T/err"; fi
+}
+# The last stderr holds one clear line mentioning WORD.
+says() {
+    if grep -qi -- "$1" "$T/err"; then ok; else bad "stderr does not mention '$1':"; sed 's/^/    /' "$T/err"; fi
+}
+
+for cmd in bake relight render env info demo-scene; do
+    expect 0 "$cmd --help" -- "$PRT" "$cmd" --help
+    grep -q "Exit codes" "$T/out" && ok || bad "$cmd --help lacks exit codes"
+done
+expect 0 "prt --help" -- "$PRT" --help
+expect 2 "no command" -- "$PRT"
+expect 2 "unknown command" -- "$PRT" frobnicate
+expect 2 "unknown option" -- "$PRT" bake --frobnicate x.obj -o y.prt
+expect 2 "bake without output" -- "$PRT" bake x.obj
+expect 2 "bad order" -- "$PRT" bake x.obj -o y.prt --order 11
+says "order"
+expect 2 "bad kind" -- "$PRT" bake x.obj -o y.prt --kinds glossy
+says "glossy"
+
+# Happy path on the demo scene.
+expect 0 "demo-scene" -- "$PRT" demo-scene -o "$T/demo.obj"
+[ -s "$T/demo.mtl" ] && ok || bad "demo.mtl missing"
+expect 0 "bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/demo.prt" --order 4 --samples 128 --bounces 2
+expect 0 "info" -- "$PRT" info "$T/demo.prt"
+grep -q "interreflected" "$T/out" && ok || bad "info does not list interreflected"
+expect 0 "info --json" -- "$PRT" info --json "$T/demo.prt"
+grep -q '"order":[[:space:]]*4' "$T/out" && ok || bad "info --json lacks order 4"
+expect 0 "relight ply" -- "$PRT" relight -q "$T/demo.prt" -o "$T/lit.ply" --kind shadowed
+head -c 3 "$T/lit.ply" | grep -q ply && ok || bad "relight did not write a PLY"
+grep -a -q "property float red" "$T/lit.ply" && ok || bad "PLY lacks float colours"
+expect 0 "relight json" -- "$PRT" relight -q "$T/demo.prt" -o "$T/lit.json" --rotate 90,10
+grep -q '"radiance"' "$T/lit.json" && ok || bad "relight JSON lacks radiance"
+expect 0 "render png" -- "$PRT" render -q "$T/demo.prt" -k all -o "$T/img.png" --width 64 --height 48
+[ -s "$T/img.png" ] && ok || bad "render wrote no PNG"
+expect 0 "render exr" -- "$PRT" render -q "$T/demo.prt" -o "$T/img.exr" --width 32 --height 32 --view 0,1,1
+[ -s "$T/img.exr" ] && ok || bad "render wrote no EXR"
+expect 0 "env sky" -- "$PRT" env --order 3 --image "$T/irr.pfm" --irradiance -q
+grep -q '"coefficients"' "$T/out" && ok || bad "env printed no coefficients"
+
+# Bad inputs: exit 1 and a message naming the file.
+expect 1 "missing mesh" -- "$PRT" bake "$T/nothing.obj" -o "$T/x.prt"
+says "nothing.obj"
+printf 'just some text\n' >"$T/text.ply"
+expect 1 "not a mesh" -- "$PRT" bake "$T/text.ply" -o "$T/x.prt"
+says "text.ply"
+printf 'v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n' >"$T/flat.obj"
+expect 1 "zero-area mesh" -- "$PRT" bake "$T/flat.obj" -o "$T/x.prt"
+says "zero area"
+[ ! -e "$T/x.prt" ] && ok || bad "a failed bake left x.prt"
+head -c 1000 "$T/demo.prt" >"$T/cut.prt"
+expect 1 "truncated prt" -- "$PRT" info "$T/cut.prt"
+says "truncated"
+printf 'PF\n2 1\n-1.0\n' >"$T/nan.pfm"
+printf '\000\000\300\177\000\000\200\077\000\000\200\077\000\000\200\077\000\000\200\077\000\000\200\077' >>"$T/nan.pfm"
+expect 1 "NaN probe" -- "$PRT" env "$T/nan.pfm"
+says "not finite"
+expect 1 "NaN probe in render" -- "$PRT" render "$T/demo.prt" -o "$T/n.png" --env "$T/nan.pfm"
+[ ! -e "$T/n.png" ] && ok || bad "render with a bad probe wrote an image"
+
+# An interrupted bake exits 130 and leaves neither the file nor a temporary.
+"$PRT" bake "$T/demo.obj" -o "$T/long.prt" --samples 262144 --order 8 >/dev/null 2>"$T/err" &
+pid=$!
+sleep 1
+kill -INT "$pid"
+wait "$pid"
+rc=$?
+[ "$rc" -eq 130 ] && ok || bad "interrupted bake exited $rc, expected 130"
+ls "$T" | grep -q long && bad "interrupted bake left a file: $(ls "$T" | grep long)" || ok
+
+# Real probes from ../shared/data, when present.
+if [ -n "$DATA" ] && [ -f "$DATA/envmaps/probulator_ict/grace.hdr" ]; then
+    expect 0 "env grace" -- "$PRT" env "$DATA/envmaps/probulator_ict/grace.hdr" --order 5 -o "$T/grace.json"
+    grep -q '"latlong"' "$T/grace.json" && ok || bad "grace.hdr not detected as lat-long"
+else
+    echo "skipping real-probe checks: ../shared/data is absent"
+fi
+
+echo "cli: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]

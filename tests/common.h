@@ -1,0 +1,149 @@
+/* Helpers shared by the cmocka tests: procedural meshes and a quiet context. */
+#ifndef PRT_TEST_COMMON_H
+#define PRT_TEST_COMMON_H
+
+#include <math.h>
+#include <setjmp.h>
+#include <stdbool.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+#include <prt/prt.h>
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+typedef struct test_mesh {
+    float *pos, *nrm;
+    uint32_t *idx;
+    size_t nv, nt, cap_v, cap_t;
+} test_mesh;
+
+static inline void tm_vertex(test_mesh *m, float x, float y, float z, float nx, float ny, float nz)
+{
+    if (m->nv == m->cap_v) {
+        m->cap_v = m->cap_v ? m->cap_v * 2 : 256;
+        m->pos = realloc(m->pos, m->cap_v * 3 * sizeof(float));
+        m->nrm = realloc(m->nrm, m->cap_v * 3 * sizeof(float));
+    }
+    float *p = m->pos + m->nv * 3, *n = m->nrm + m->nv * 3;
+    p[0] = x; p[1] = y; p[2] = z; n[0] = nx; n[1] = ny; n[2] = nz;
+    m->nv++;
+}
+
+static inline void tm_tri(test_mesh *m, uint32_t a, uint32_t b, uint32_t c)
+{
+    if (m->nt == m->cap_t) {
+        m->cap_t = m->cap_t ? m->cap_t * 2 : 256;
+        m->idx = realloc(m->idx, m->cap_t * 3 * sizeof(uint32_t));
+    }
+    m->idx[m->nt * 3] = a; m->idx[m->nt * 3 + 1] = b; m->idx[m->nt * 3 + 2] = c;
+    m->nt++;
+}
+
+/* A grid quad from origin o spanned by edges u, v (n x n cells); normal u x v. */
+static inline void tm_quad(test_mesh *m, const float o[3], const float u[3], const float v[3], int n)
+{
+    float nn[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    float l = sqrtf(nn[0] * nn[0] + nn[1] * nn[1] + nn[2] * nn[2]);
+    uint32_t base = (uint32_t)m->nv;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) {
+            float s = (float)i / n, t = (float)j / n;
+            tm_vertex(m, o[0] + s * u[0] + t * v[0], o[1] + s * u[1] + t * v[1], o[2] + s * u[2] + t * v[2], nn[0] / l, nn[1] / l, nn[2] / l);
+        }
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            uint32_t a = base + (uint32_t)(j * (n + 1) + i), b = a + 1, c = a + (uint32_t)(n + 1), d = c + 1;
+            tm_tri(m, a, b, c);
+            tm_tri(m, b, d, c);
+        }
+}
+
+/* UV sphere with outward normals; poles are single vertices so no triangle is degenerate. */
+static inline void tm_sphere(test_mesh *m, const float c[3], float r, int rings, int segs)
+{
+    uint32_t base = (uint32_t)m->nv;
+    tm_vertex(m, c[0], c[1] + r, c[2], 0, 1, 0);
+    for (int i = 1; i < rings; ++i) {
+        float th = (float)M_PI * i / rings;
+        for (int j = 0; j < segs; ++j) {
+            float ph = 2.0f * (float)M_PI * j / segs;
+            float n[3] = {sinf(th) * cosf(ph), cosf(th), sinf(th) * sinf(ph)};
+            tm_vertex(m, c[0] + r * n[0], c[1] + r * n[1], c[2] + r * n[2], n[0], n[1], n[2]);
+        }
+    }
+    uint32_t south = (uint32_t)m->nv;
+    tm_vertex(m, c[0], c[1] - r, c[2], 0, -1, 0);
+    for (int j = 0; j < segs; ++j) {
+        uint32_t a = base + 1 + (uint32_t)j, b = base + 1 + (uint32_t)((j + 1) % segs);
+        tm_tri(m, base, b, a);
+        uint32_t la = base + 1 + (uint32_t)((rings - 2) * segs + j), lb = base + 1 + (uint32_t)((rings - 2) * segs + (j + 1) % segs);
+        tm_tri(m, south, la, lb);
+    }
+    for (int i = 0; i < rings - 2; ++i)
+        for (int j = 0; j < segs; ++j) {
+            uint32_t a = base + 1 + (uint32_t)(i * segs + j), b = base + 1 + (uint32_t)(i * segs + (j + 1) % segs);
+            uint32_t c2 = a + (uint32_t)segs, d = b + (uint32_t)segs;
+            tm_tri(m, a, b, c2);
+            tm_tri(m, b, d, c2);
+        }
+}
+
+static inline void tm_free(test_mesh *m) { free(m->pos); free(m->nrm); free(m->idx); memset(m, 0, sizeof *m); }
+
+static inline prt_context *test_context(int threads)
+{
+    prt_context *ctx = NULL;
+    prt_context_desc d = {0};
+    d.threads = threads;
+    assert_int_equal(prt_context_create(&d, &ctx), PRT_OK);
+    return ctx;
+}
+
+static inline prt_scene *tm_scene(prt_context *ctx, const test_mesh *m, float albedo)
+{
+    prt_scene_desc sd = {0};
+    sd.default_albedo[0] = sd.default_albedo[1] = sd.default_albedo[2] = albedo;
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_create_copy(ctx, m->pos, m->nrm, NULL, m->nv, m->idx, m->nt, &sd, &s), PRT_OK);
+    return s;
+}
+
+/* Uniform unit radiance from every direction: only L_00 = sqrt(4 pi). */
+static inline prt_sh_light uniform_light(int order)
+{
+    prt_sh_light l;
+    memset(&l, 0, sizeof l);
+    l.order = order;
+    for (int c = 0; c < 3; ++c) l.coeffs[c][0] = (float)sqrt(4.0 * M_PI);
+    return l;
+}
+
+/* Index of the vertex nearest to p. */
+static inline size_t nearest_vertex(const float *pos, size_t nv, const float p[3])
+{
+    size_t best = 0;
+    float bd = INFINITY;
+    for (size_t v = 0; v < nv; ++v) {
+        float dx = pos[v * 3] - p[0], dy = pos[v * 3 + 1] - p[1], dz = pos[v * 3 + 2] - p[2];
+        float d = dx * dx + dy * dy + dz * dz;
+        if (d < bd) { bd = d; best = v; }
+    }
+    return best;
+}
+
+/* Where ../shared/data lives, or NULL (tests that need it then skip). */
+static inline const char *shared_data_dir(void)
+{
+    const char *d = getenv("PRT_SHARED_DATA");
+    return d && d[0] ? d : NULL;
+}
+
+#endif

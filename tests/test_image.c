@@ -1,0 +1,260 @@
+/* Images and environment maps: file round trips, layouts, SH projection, bad pixels. */
+#include "common.h"
+
+#include <unistd.h>
+
+static char dir[256];
+
+/* A known band-limited radiance: positive everywhere, with structure in every band < 3. */
+static const float known[9] = {4.0f, 0.4f, 0.8f, -0.5f, 0.2f, -0.15f, 0.3f, 0.1f, -0.25f};
+
+static float known_eval(const double d[3])
+{
+    double y[9];
+    prt_sh_eval(3, d, y);
+    double s = 0;
+    for (int i = 0; i < 9; ++i) s += known[i] * y[i];
+    return (float)s;
+}
+
+/* Direction of a pixel centre, per the layout conventions documented in prt/lighting.h. */
+static bool layout_dir(prt_env_layout layout, int w, int h, int x, int y, double d[3])
+{
+    if (layout == PRT_ENV_LATLONG) {
+        double th = M_PI * (y + 0.5) / h, ph = 2 * M_PI * ((x + 0.5) / w - 0.5);
+        d[0] = sin(th) * sin(ph); d[1] = cos(th); d[2] = -sin(th) * cos(ph);
+        return true;
+    }
+    if (layout == PRT_ENV_ANGULAR) {
+        double a = 2.0 * (x + 0.5) / w - 1, b = 1 - 2.0 * (y + 0.5) / h, r = sqrt(a * a + b * b);
+        if (r >= 1) return false;
+        double th = M_PI * r;
+        d[0] = a / r * sin(th); d[1] = b / r * sin(th); d[2] = -cos(th);
+        return true;
+    }
+    int s = w / 3, col = x / s, row = y / s;
+    double fu = 2.0 * (x - col * s + 0.5) / s - 1, fv = 2.0 * (y - row * s + 0.5) / s - 1;
+    double v[3];
+    if (col == 1 && row == 0) { v[0] = fu; v[1] = 1; v[2] = -fv; }
+    else if (col == 0 && row == 1) { v[0] = -1; v[1] = -fv; v[2] = -fu; }
+    else if (col == 1 && row == 1) { v[0] = fu; v[1] = -fv; v[2] = -1; }
+    else if (col == 2 && row == 1) { v[0] = 1; v[1] = -fv; v[2] = fu; }
+    else if (col == 1 && row == 2) { v[0] = fu; v[1] = -1; v[2] = fv; }
+    else if (col == 1 && row == 3) { v[0] = fu; v[1] = fv; v[2] = 1; }
+    else return false;
+    double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (int i = 0; i < 3; ++i) d[i] = v[i] / l;
+    return true;
+}
+
+static void make_env_image(prt_env_layout layout, int w, int h, prt_image *img)
+{
+    img->width = w;
+    img->height = h;
+    img->rgb = calloc((size_t)w * h * 3, sizeof(float));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            double d[3];
+            if (!layout_dir(layout, w, h, x, y, d)) continue;
+            float v = known_eval(d);
+            for (int c = 0; c < 3; ++c) img->rgb[((size_t)y * w + x) * 3 + c] = v * (c == 0 ? 1.0f : c == 1 ? 0.5f : 0.25f);
+        }
+}
+
+static void test_layouts_project_known_function(void **state)
+{
+    (void)state;
+    const prt_env_layout layouts[3] = {PRT_ENV_LATLONG, PRT_ENV_ANGULAR, PRT_ENV_VCROSS};
+    const int dims[3][2] = {{512, 256}, {512, 512}, {384, 512}};
+    const char *names[3] = {"latlong.pfm", "angular.exr", "cross.hdr"};
+    for (int k = 0; k < 3; ++k) {
+        prt_image img;
+        make_env_image(layouts[k], dims[k][0], dims[k][1], &img);
+        char path[512];
+        snprintf(path, sizeof path, "%s/%s", dir, names[k]);
+        assert_int_equal(prt_image_save(path, &img, NULL), PRT_OK);
+        prt_image_free(&img);
+        prt_envmap *env = NULL;
+        /* Layout detection from the aspect ratio. */
+        assert_int_equal(prt_envmap_load(path, PRT_ENV_AUTO, &env), PRT_OK);
+        assert_int_equal(prt_envmap_layout(env), layouts[k]);
+        prt_sh_light L;
+        assert_int_equal(prt_envmap_project_sh(env, 4, &L), PRT_OK);
+        /* HDR (RGBE) keeps ~1% precision, EXR half ~0.1%; discretization adds a little. */
+        double tol = k == 2 ? 0.03 : 0.01, worst = 0;
+        for (int i = 0; i < 16; ++i) {
+            double expect = i < 9 ? known[i] : 0.0;
+            worst = fmax(worst, fabs(L.coeffs[0][i] - expect));
+            worst = fmax(worst, fabs(L.coeffs[2][i] - 0.25 * expect));
+        }
+        if (worst > tol * 3.0) fail_msg("%s: SH projection off by %g", names[k], worst);
+        /* Lookup inverts the pixel mapping. */
+        for (int j = 0; j < 50; ++j) {
+            double z = 1 - 2 * (j + 0.5) / 50, r = sqrt(1 - z * z), ph = j * 2.39996;
+            double d[3] = {r * cos(ph), z, r * sin(ph)};
+            float df[3] = {(float)d[0], (float)d[1], (float)d[2]}, rgb[3];
+            prt_envmap_lookup(env, df, rgb);
+            if (fabsf(rgb[0] - known_eval(d)) > 0.05f) fail_msg("%s: lookup at (%g %g %g) = %g, expected %g", names[k], d[0], d[1], d[2], rgb[0], known_eval(d));
+        }
+        prt_envmap_release(env);
+    }
+}
+
+static void test_latlong_orientation(void **state)
+{
+    (void)state;
+    /* A lat-long map bright only in its top rows lights from +y; bright at its centre column
+     * lights from -z: band 1 coefficients are (y, z, x). */
+    prt_image img = {64, 32, calloc(64 * 32 * 3, sizeof(float))};
+    for (int x = 0; x < 64; ++x) img.rgb[x * 3] = img.rgb[x * 3 + 1] = img.rgb[x * 3 + 2] = 1;
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_AUTO, &env), PRT_OK);
+    prt_sh_light L;
+    assert_int_equal(prt_envmap_project_sh(env, 2, &L), PRT_OK);
+    assert_true(L.coeffs[0][1] > 0 && fabsf(L.coeffs[0][2]) < 1e-6f && fabsf(L.coeffs[0][3]) < 1e-6f);
+    prt_envmap_release(env);
+    prt_image img2 = {64, 32, calloc(64 * 32 * 3, sizeof(float))};
+    for (int y = 12; y < 20; ++y)
+        for (int x = 31; x <= 32; ++x) img2.rgb[(y * 64 + x) * 3] = 1;
+    assert_int_equal(prt_envmap_from_image(&img2, PRT_ENV_LATLONG, &env), PRT_OK);
+    assert_int_equal(prt_envmap_project_sh(env, 2, &L), PRT_OK);
+    assert_true(L.coeffs[0][2] < 0);                            /* -z */
+    assert_true(fabsf(L.coeffs[0][3]) < 1e-3f * fabsf(L.coeffs[0][2]));   /* no x */
+    prt_envmap_release(env);
+}
+
+static void test_constant_env_and_irradiance_map(void **state)
+{
+    (void)state;
+    prt_image img = {128, 64, malloc(128 * 64 * 3 * sizeof(float))};
+    for (int i = 0; i < 128 * 64 * 3; ++i) img.rgb[i] = 2.0f;
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
+    prt_sh_light L;
+    assert_int_equal(prt_envmap_project_sh(env, 5, &L), PRT_OK);
+    assert_true(fabsf(L.coeffs[1][0] - 2.0f * sqrtf(4 * (float)M_PI)) < 1e-4f);
+    for (int i = 1; i < 25; ++i)
+        if (fabsf(L.coeffs[1][i]) > 1e-4f) fail_msg("coefficient %d = %g", i, L.coeffs[1][i]);
+    prt_image irr;
+    assert_int_equal(prt_sh_light_to_image(&L, 64, 1, &irr), PRT_OK);
+    /* A white Lambertian surface under constant radiance 2 reflects radiance 2. */
+    for (int i = 0; i < 64 * 32 * 3; ++i) assert_true(fabsf(irr.rgb[i] - 2.0f) < 1e-3f);
+    prt_image_free(&irr);
+    prt_envmap_release(env);
+}
+
+static void test_bad_pixels_rejected(void **state)
+{
+    (void)state;
+    char path[512];
+    snprintf(path, sizeof path, "%s/nan.pfm", dir);
+    FILE *f = fopen(path, "wb");
+    fprintf(f, "PF\n4 2\n-1.0\n");
+    for (int i = 0; i < 24; ++i) {
+        float v = i == 13 ? NAN : 1.0f;
+        fwrite(&v, 4, 1, f);
+    }
+    fclose(f);
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_envmap_load(path, PRT_ENV_AUTO, &env), PRT_ERR_FORMAT);
+    assert_non_null(strstr(prt_last_error(), "not finite"));
+    assert_non_null(strstr(prt_last_error(), "nan.pfm"));
+    snprintf(path, sizeof path, "%s/inf.pfm", dir);
+    f = fopen(path, "wb");
+    fprintf(f, "PF\n4 2\n-1.0\n");
+    for (int i = 0; i < 24; ++i) {
+        float v = i == 2 ? INFINITY : 1.0f;
+        fwrite(&v, 4, 1, f);
+    }
+    fclose(f);
+    assert_int_equal(prt_envmap_load(path, PRT_ENV_AUTO, &env), PRT_ERR_FORMAT);
+    /* Truncated pixels, garbage, wrong aspect. */
+    snprintf(path, sizeof path, "%s/short.pfm", dir);
+    f = fopen(path, "wb");
+    fprintf(f, "PF\n4 2\n-1.0\n");
+    fclose(f);
+    assert_int_equal(prt_envmap_load(path, PRT_ENV_AUTO, &env), PRT_ERR_FORMAT);
+    assert_non_null(strstr(prt_last_error(), "truncated"));
+    snprintf(path, sizeof path, "%s/garbage.hdr", dir);
+    f = fopen(path, "wb");
+    fprintf(f, "this is not an image");
+    fclose(f);
+    assert_int_equal(prt_envmap_load(path, PRT_ENV_AUTO, &env), PRT_ERR_FORMAT);
+    prt_image odd = {30, 7, calloc(30 * 7 * 3, sizeof(float))};
+    assert_int_equal(prt_envmap_from_image(&odd, PRT_ENV_AUTO, &env), PRT_ERR_FORMAT);
+    assert_non_null(strstr(prt_last_error(), "layout"));
+    prt_image_free(&odd);
+    assert_int_equal(prt_envmap_load("/nonexistent/probe.hdr", PRT_ENV_AUTO, &env), PRT_ERR_IO);
+    assert_null(env);
+}
+
+static void test_image_round_trips(void **state)
+{
+    (void)state;
+    prt_image img = {7, 5, malloc(7 * 5 * 3 * sizeof(float))};
+    for (int i = 0; i < 105; ++i) img.rgb[i] = 0.01f * (float)i + 0.001f;
+    const char *ext[4] = {"pfm", "exr", "hdr", "png"};
+    const double tol[4] = {0, 2e-3, 1e-2, 2e-2};
+    for (int k = 0; k < 4; ++k) {
+        char path[512];
+        snprintf(path, sizeof path, "%s/rt.%s", dir, ext[k]);
+        prt_image_save_desc sd = {0};
+        sd.tonemap = 2;   /* clamp: PNG keeps values < 1 */
+        assert_int_equal(prt_image_save(path, &img, &sd), PRT_OK);
+        prt_image back;
+        assert_int_equal(prt_image_load(path, &back), PRT_OK);
+        assert_int_equal(back.width, 7);
+        assert_int_equal(back.height, 5);
+        for (int i = 0; i < 105; ++i) {
+            double ref = k == 3 ? fmin(img.rgb[i], 1.0) : img.rgb[i], err = fabs(back.rgb[i] - ref);
+            if (err > tol[k] * fmax(ref, 0.05)) fail_msg("%s pixel %d: %g vs %g", ext[k], i, back.rgb[i], ref);
+        }
+        prt_image_free(&back);
+    }
+    assert_int_equal(prt_image_save("/tmp/x.bmpx", &img, NULL), PRT_ERR_INVALID_ARG);
+    prt_image_free(&img);
+}
+
+static void test_sky(void **state)
+{
+    (void)state;
+    prt_sky_desc d = {0};
+    d.sun_dir[0] = 1; d.sun_dir[1] = 1; d.sun_dir[2] = 0;
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_sky_create(&d, &env), PRT_OK);
+    prt_sh_light L;
+    assert_int_equal(prt_envmap_project_sh(env, 3, &L), PRT_OK);
+    /* The sun at +x+y dominates band 1: x and y components positive, z about zero. */
+    assert_true(L.coeffs[0][3] > 0.5f && L.coeffs[0][1] > 0.5f && fabsf(L.coeffs[0][2]) < 0.05f * L.coeffs[0][3]);
+    prt_envmap_release(env);
+    d.sun_angle_deg = 120;
+    assert_int_equal(prt_sky_create(&d, &env), PRT_ERR_INVALID_ARG);
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    snprintf(dir, sizeof dir, "/tmp/prt_test_image_XXXXXX");
+    return mkdtemp(dir) ? 0 : -1;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    char cmd[300];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_layouts_project_known_function),
+        cmocka_unit_test(test_latlong_orientation),
+        cmocka_unit_test(test_constant_env_and_irradiance_map),
+        cmocka_unit_test(test_bad_pixels_rejected),
+        cmocka_unit_test(test_image_round_trips),
+        cmocka_unit_test(test_sky),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}

@@ -1,0 +1,295 @@
+/* Scene import, cleaning, subdivision, and bad inputs. */
+#include "common.h"
+
+#include <unistd.h>
+
+static char dir[256];
+
+static void write_text(const char *name, const char *text, char *path, size_t n)
+{
+    snprintf(path, n, "%s/%s", dir, name);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+}
+
+static void test_obj_with_materials(void **state)
+{
+    (void)state;
+    char path[512];
+    write_text("two.mtl", "newmtl red\r\nKd 0.8 0.1 0.05\r\nnewmtl blue\nKd 0.1 0.2 0.7\n", path, sizeof path);
+    write_text("two.obj",
+               "mtllib two.mtl\nv 0 0 0\nv 1 0 0\nv 1 0 -1\nv 0 0 -1\nv 3 0 0\nv 4 0 0\nv 4 1 0\n"
+               "usemtl red\nf 1 2 3 4\nusemtl blue\nf 5 6 7\n",
+               path, sizeof path);
+    prt_context *ctx = test_context(1);
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    assert_int_equal(prt_scene_triangle_count(s), 3);
+    const float *alb = prt_scene_albedo(s), *pos = prt_scene_positions(s), *n = prt_scene_normals(s);
+    int red = 0, blue = 0;
+    for (size_t v = 0; v < prt_scene_vertex_count(s); ++v) {
+        if (pos[v * 3] < 2) { red++; assert_true(fabsf(alb[v * 3] - 0.8f) < 1e-6f && fabsf(n[v * 3 + 1] - 1) < 1e-5f); }
+        else { blue++; assert_true(fabsf(alb[v * 3 + 2] - 0.7f) < 1e-6f && fabsf(n[v * 3 + 2] - 1) < 1e-5f); }
+    }
+    assert_int_equal(red, 4);
+    assert_int_equal(blue, 3);
+    prt_scene_release(s);
+    /* Albedo override. */
+    prt_scene_desc d = {0};
+    d.override_albedo = 1;
+    d.default_albedo[0] = d.default_albedo[1] = d.default_albedo[2] = 0.25f;
+    assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
+    for (size_t v = 0; v < prt_scene_vertex_count(s) * 3; ++v) assert_true(prt_scene_albedo(s)[v] == 0.25f);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
+static void test_json_scene(void **state)
+{
+    (void)state;
+    char path[512];
+    write_text("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", path, sizeof path);
+    write_text("scene.json",
+               "{\"materials\": {\"gold\": {\"albedo\": [0.9, 0.7, 0.2]}},\n"
+               " \"meshes\": [{\"file\": \"tri.obj\", \"material\": \"gold\"},\n"
+               "            {\"file\": \"tri.obj\", \"translate\": [10, 0, 0], \"scale\": 2, \"albedo\": 0.5}]}",
+               path, sizeof path);
+    prt_context *ctx = test_context(1);
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    assert_int_equal(prt_scene_triangle_count(s), 2);
+    float lo[3], hi[3];
+    prt_scene_bounds(s, lo, hi);
+    assert_true(fabsf(hi[0] - 12.0f) < 1e-5f && fabsf(hi[1] - 2.0f) < 1e-5f);
+    const float *alb = prt_scene_albedo(s), *pos = prt_scene_positions(s);
+    for (size_t v = 0; v < prt_scene_vertex_count(s); ++v)
+        assert_true(pos[v * 3] >= 10 ? alb[v * 3] == 0.5f : fabsf(alb[v * 3 + 2] - 0.2f) < 1e-6f);
+    prt_scene_release(s);
+    /* Bad scene files: a clear error. */
+    const char *bad[] = {"{\"meshes\": []}", "{\"meshes\": [{\"file\": 3}]}", "{nope",
+                         "{\"meshes\": [{\"file\": \"tri.obj\", \"material\": \"none\"}]}",
+                         "{\"meshes\": [{\"file\": \"absent.obj\"}]}", "{\"meshes\": [{\"file\": \"tri.obj\", \"albedo\": [1, 2]}]}"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        write_text("bad.json", bad[i], path, sizeof path);
+        prt_status st = prt_scene_load(ctx, path, NULL, &s);
+        if (st == PRT_OK) fail_msg("bad scene %zu accepted", i);
+        assert_null(s);
+        assert_true(strlen(prt_last_error()) > 10);
+    }
+    prt_context_release(ctx);
+}
+
+static void test_bad_mesh_inputs(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(1);
+    prt_scene *s = NULL;
+    char path[512];
+    /* Missing file. */
+    snprintf(path, sizeof path, "%s/missing.obj", dir);
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_ERR_IO);
+    assert_non_null(strstr(prt_last_error(), "missing.obj"));
+    /* Not a mesh. */
+    write_text("notamesh.ply", "this is plainly not a mesh file\n", path, sizeof path);
+    assert_int_not_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    assert_non_null(strstr(prt_last_error(), "notamesh.ply"));
+    write_text("random.bin", "\x01\x02\x03\x04garbage", path, sizeof path);
+    assert_int_not_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    /* Empty mesh: vertices, no faces. */
+    write_text("empty.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", path, sizeof path);
+    prt_status st = prt_scene_load(ctx, path, NULL, &s);
+    assert_true(st == PRT_ERR_EMPTY || st == PRT_ERR_FORMAT);
+    assert_null(s);
+    /* All triangles zero-area. */
+    write_text("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\nf 1 1 2\n", path, sizeof path);
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_ERR_EMPTY);
+    assert_non_null(strstr(prt_last_error(), "zero area"));
+    prt_context_release(ctx);
+}
+
+static void test_cleaning_in_memory(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(1);
+    /* One good triangle, one degenerate, NaN and zero normals, an unreferenced vertex. */
+    float pos[] = {0, 0, 0, 1, 0, 0, 0, 0, -1, 2, 0, 0, 9, 9, 9};
+    float nrm[] = {NAN, 0, 0, 0, 0, 0, 0, 3, 0, 0, 1, 0, 0, 1, 0};
+    uint32_t idx[] = {0, 1, 2, 0, 1, 3};
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_create_copy(ctx, pos, nrm, NULL, 5, idx, 2, NULL, &s), PRT_OK);
+    assert_int_equal(prt_scene_triangle_count(s), 1);
+    assert_int_equal(prt_scene_vertex_count(s), 3);
+    const float *n = prt_scene_normals(s);
+    for (int v = 0; v < 3; ++v) {
+        assert_true(isfinite(n[v * 3]) && isfinite(n[v * 3 + 1]) && isfinite(n[v * 3 + 2]));
+        assert_true(fabsf(n[v * 3 + 1] - 1.0f) < 1e-6f);   /* repaired to the face normal, or normalized */
+    }
+    assert_true(fabsf(prt_scene_albedo(s)[0] - 0.7f) < 1e-6f);
+    prt_scene_release(s);
+    /* Non-finite positions, out-of-range indices, bad albedo: rejected. */
+    float bad_pos[] = {0, 0, 0, INFINITY, 0, 0, 0, 0, -1};
+    uint32_t tri[] = {0, 1, 2}, bad_tri[] = {0, 1, 7};
+    assert_int_equal(prt_scene_create_copy(ctx, bad_pos, NULL, NULL, 3, tri, 1, NULL, &s), PRT_ERR_FORMAT);
+    assert_int_equal(prt_scene_create_copy(ctx, pos, NULL, NULL, 3, bad_tri, 1, NULL, &s), PRT_ERR_FORMAT);
+    float bad_alb[] = {0.5f, 0.5f, 0.5f, 1.5f, 0, 0, 0.5f, 0.5f, 0.5f};
+    assert_int_equal(prt_scene_create_copy(ctx, pos, NULL, bad_alb, 3, tri, 1, NULL, &s), PRT_ERR_FORMAT);
+    assert_int_equal(prt_scene_create_copy(ctx, pos, NULL, NULL, 0, tri, 0, NULL, &s), PRT_ERR_EMPTY);
+    assert_null(s);
+    prt_context_release(ctx);
+}
+
+static double tri_area(const float *p, const uint32_t *t)
+{
+    float e1[3], e2[3];
+    for (int c = 0; c < 3; ++c) { e1[c] = p[t[1] * 3 + c] - p[t[0] * 3 + c]; e2[c] = p[t[2] * 3 + c] - p[t[0] * 3 + c]; }
+    double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2], z = e1[0] * e2[1] - e1[1] * e2[0];
+    return 0.5 * sqrt(x * x + y * y + z * z);
+}
+
+static void test_subdivision(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(1);
+    /* A cube with split normals per face (24 vertices): creases must survive subdivision. */
+    test_mesh m = {0};
+    const float o[6][3] = {{0, 0, 1}, {1, 0, 0}, {1, 0, 1}, {0, 0, 0}, {0, 1, 1}, {0, 0, 0}};
+    const float u[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 0, -1}, {0, 0, 1}, {1, 0, 0}, {0, 0, 1}};
+    const float v[6][3] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 0, -1}, {1, 0, 0}};
+    for (int f = 0; f < 6; ++f) tm_quad(&m, o[f], u[f], v[f], 1);
+    prt_scene_desc d = {0};
+    d.max_edge = 0.1f;
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_create_copy(ctx, m.pos, m.nrm, NULL, m.nv, m.idx, m.nt, &d, &s), PRT_OK);
+    const float *p = prt_scene_positions(s), *n = prt_scene_normals(s);
+    const uint32_t *t = prt_scene_indices(s);
+    size_t nt = prt_scene_triangle_count(s), nv = prt_scene_vertex_count(s);
+    assert_true(nt > 12 * 50);
+    double area = 0;
+    for (size_t i = 0; i < nt; ++i) {
+        area += tri_area(p, t + i * 3);
+        for (int k = 0; k < 3; ++k) {
+            uint32_t a = t[i * 3 + k], b = t[i * 3 + (k + 1) % 3];
+            float dx = p[a * 3] - p[b * 3], dy = p[a * 3 + 1] - p[b * 3 + 1], dz = p[a * 3 + 2] - p[b * 3 + 2];
+            assert_true(sqrtf(dx * dx + dy * dy + dz * dz) <= 0.1f + 1e-6f);
+        }
+    }
+    assert_true(fabs(area - 6.0) < 1e-4);
+    /* Normals stay axis-aligned: nothing was averaged across a crease. */
+    for (size_t i = 0; i < nv; ++i) {
+        float mx = fmaxf(fabsf(n[i * 3]), fmaxf(fabsf(n[i * 3 + 1]), fabsf(n[i * 3 + 2])));
+        assert_true(fabsf(mx - 1.0f) < 1e-6f);
+    }
+    /* Conforming: every edge inside a face is shared by exactly two triangles, so counting
+     * directed edges, each has its reverse, except along the 12 cube edges (split vertices). */
+    size_t unmatched = 0;
+    for (size_t i = 0; i < nt; ++i)
+        for (int k = 0; k < 3; ++k) {
+            uint32_t a = t[i * 3 + k], b = t[i * 3 + (k + 1) % 3];
+            bool found = false;
+            for (size_t j = 0; j < nt && !found; ++j)
+                for (int q = 0; q < 3; ++q)
+                    if (t[j * 3 + q] == b && t[j * 3 + (q + 1) % 3] == a) { found = true; break; }
+            unmatched += !found;
+        }
+    /* 12 cube edges of length 1, split into 16 segments (<= 0.1), seen from two faces. */
+    assert_int_equal(unmatched, 12 * 16 * 2);
+    prt_scene_release(s);
+    d.max_edge = -1;
+    assert_int_equal(prt_scene_create_copy(ctx, m.pos, m.nrm, NULL, m.nv, m.idx, m.nt, &d, &s), PRT_ERR_INVALID_ARG);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+static void test_demo_scene(void **state)
+{
+    (void)state;
+    char path[512];
+    snprintf(path, sizeof path, "%s/demo.obj", dir);
+    assert_int_equal(prt_demo_scene_write(path), PRT_OK);
+    prt_context *ctx = test_context(0);
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    assert_true(prt_scene_vertex_count(s) > 5000);
+    /* Its five materials arrive through the MTL file: look for the red wall's albedo. */
+    const float *alb = prt_scene_albedo(s);
+    bool red = false;
+    for (size_t v = 0; v < prt_scene_vertex_count(s); ++v) red |= alb[v * 3] > 0.7f && alb[v * 3 + 1] < 0.2f;
+    assert_true(red);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
+static void test_shared_meshes(void **state)
+{
+    (void)state;
+    const char *data = shared_data_dir();
+    char path[1024];
+    if (data) snprintf(path, sizeof path, "%s/meshes/bunny/bun_zipper.ply", data);
+    if (!data || access(path, R_OK) != 0) {
+        print_message("skipping: ../shared/data is absent (bunny and Cornell box tests need it)\n");
+        skip();
+    }
+    prt_context *ctx = test_context(0);
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    /* 35947 vertices in the file, 34834 referenced; assimp may split none (smooth normals). */
+    assert_true(prt_scene_vertex_count(s) >= 34834 && prt_scene_vertex_count(s) <= 35947);
+    assert_int_equal(prt_scene_triangle_count(s), 69451);
+    prt_scene_release(s);
+    /* The Cornell box is too coarse for per-vertex transfer: --max-edge subdivides it. */
+    snprintf(path, sizeof path, "%s/meshes/cornell_box/CornellBox-Original.obj", data);
+    prt_scene_desc d = {0};
+    d.max_edge = 0.1f;
+    assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
+    assert_true(prt_scene_triangle_count(s) > 2000);
+    const float *alb = prt_scene_albedo(s);
+    bool red = false, green = false;
+    for (size_t v = 0; v < prt_scene_vertex_count(s); ++v) {
+        red |= fabsf(alb[v * 3] - 0.63f) < 1e-3f && fabsf(alb[v * 3 + 1] - 0.065f) < 1e-3f;
+        green |= fabsf(alb[v * 3] - 0.14f) < 1e-3f && fabsf(alb[v * 3 + 1] - 0.45f) < 1e-3f;
+    }
+    assert_true(red && green);
+    prt_bake_desc bd = {0};
+    bd.order = 3;
+    bd.samples = 128;
+    bd.bounces = 2;
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake_sh(ctx, s, &bd, &t), PRT_OK);
+    /* Every transfer value is finite. */
+    const float *c = prt_transfer_coeffs(t, PRT_TRANSFER_INTERREFLECTED);
+    for (size_t i = 0; i < prt_transfer_vertex_count(t) * 27; ++i) assert_true(isfinite(c[i]));
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    snprintf(dir, sizeof dir, "/tmp/prt_test_scene_XXXXXX");
+    return mkdtemp(dir) ? 0 : -1;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    char cmd[300];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_obj_with_materials),
+        cmocka_unit_test(test_json_scene),
+        cmocka_unit_test(test_bad_mesh_inputs),
+        cmocka_unit_test(test_cleaning_in_memory),
+        cmocka_unit_test(test_subdivision),
+        cmocka_unit_test(test_demo_scene),
+        cmocka_unit_test(test_shared_meshes),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
