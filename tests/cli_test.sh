@@ -9,6 +9,10 @@ T=$(mktemp -d /tmp/prt_cli_XXXXXX)
 trap 'rm -rf "$T"' EXIT
 pass=0
 fail=0
+# Mesa's llvmpipe leaks 112 bytes inside its driver, which EGL unloads before LeakSanitizer
+# reports, so LSan cannot name (or suppress) it: render commands run without leak checking.
+# Everything else, and the library tests, keep it.
+NOLEAK="env ASAN_OPTIONS=${ASAN_OPTIONS:-}:detect_leaks=0"
 
 ok() { pass=$((pass + 1)); }
 bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
@@ -52,9 +56,9 @@ head -c 3 "$T/lit.ply" | grep -q ply && ok || bad "relight did not write a PLY"
 grep -a -q "property float red" "$T/lit.ply" && ok || bad "PLY lacks float colours"
 expect 0 "relight json" -- "$PRT" relight -q "$T/demo.prt" -o "$T/lit.json" --rotate 90,10
 grep -q '"radiance"' "$T/lit.json" && ok || bad "relight JSON lacks radiance"
-expect 0 "render png" -- "$PRT" render -q "$T/demo.prt" -k all -o "$T/img.png" --width 64 --height 48
+expect 0 "render png" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -k all -o "$T/img.png" --width 64 --height 48
 [ -s "$T/img.png" ] && ok || bad "render wrote no PNG"
-expect 0 "render exr" -- "$PRT" render -q "$T/demo.prt" -o "$T/img.exr" --width 32 --height 32 --view 0,1,1
+expect 0 "render exr" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -o "$T/img.exr" --width 32 --height 32 --view 0,1,1
 [ -s "$T/img.exr" ] && ok || bad "render wrote no EXR"
 expect 0 "env sky" -- "$PRT" env --order 3 --image "$T/irr.pfm" --irradiance -q
 grep -q '"coefficients"' "$T/out" && ok || bad "env printed no coefficients"
@@ -76,7 +80,7 @@ printf 'PF\n2 1\n-1.0\n' >"$T/nan.pfm"
 printf '\000\000\300\177\000\000\200\077\000\000\200\077\000\000\200\077\000\000\200\077\000\000\200\077' >>"$T/nan.pfm"
 expect 1 "NaN probe" -- "$PRT" env "$T/nan.pfm"
 says "not finite"
-expect 1 "NaN probe in render" -- "$PRT" render "$T/demo.prt" -o "$T/n.png" --env "$T/nan.pfm"
+expect 1 "NaN probe in render" -- $NOLEAK "$PRT" render "$T/demo.prt" -o "$T/n.png" --env "$T/nan.pfm"
 [ ! -e "$T/n.png" ] && ok || bad "render with a bad probe wrote an image"
 
 # An interrupted bake exits 130 and leaves neither the file nor a temporary.

@@ -76,7 +76,7 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, h
             lanes++;
         }
         if (!lanes) break;
-        int valid[PACKET];
+        _Alignas(64) int valid[PACKET];   /* Embree reads the mask with aligned 512-bit loads */
         bool blocked[PACKET];
         if (job->need_hits) {
             _Alignas(64) struct RTCRayHit16 rh;

@@ -81,7 +81,7 @@ static void sphere_param(const float *a, float u, float v, float *p, float *n)
 
 static prt_status write_obj(const char *obj_path, const shape *shapes, int count)
 {
-    char mtl_path[1024], mtl_name[256];
+    char mtl_path[1024], mtl_name[1024];
     snprintf(mtl_path, sizeof mtl_path, "%s", obj_path);
     char *dot = strrchr(mtl_path, '.');
     if (dot && !strchr(dot, '/')) *dot = 0;

@@ -99,6 +99,7 @@ void prt_renderer_release(prt_renderer *r)
         eglDestroyContext(r->dpy, r->egl);
     }
     if (r->dpy != EGL_NO_DISPLAY) eglTerminate(r->dpy);
+    eglReleaseThread();   /* frees the per-thread state EGL keeps for the calling thread */
     free(r);
 }
 
