@@ -46,6 +46,49 @@ static void test_obj_with_materials(void **state)
     prt_context_release(ctx);
 }
 
+/* A unit cube without normals, wound clockwise seen from outside (inside out). */
+static const char *CW_CUBE =
+    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+    "f 1 2 3\nf 1 3 4\nf 5 7 6\nf 5 8 7\nf 1 6 2\nf 1 5 6\nf 4 3 7\nf 4 7 8\nf 1 8 5\nf 1 4 8\nf 2 7 3\nf 2 6 7\n";
+
+static float mean_outwardness(const prt_scene *s)
+{
+    const float *p = prt_scene_positions(s), *n = prt_scene_normals(s);
+    double acc = 0;
+    for (size_t v = 0; v < prt_scene_vertex_count(s); ++v)
+        acc += (p[v * 3] - 0.5f) * n[v * 3] + (p[v * 3 + 1] - 0.5f) * n[v * 3 + 1] + (p[v * 3 + 2] - 0.5f) * n[v * 3 + 2];
+    return (float)(acc / (double)prt_scene_vertex_count(s));
+}
+
+static void test_winding(void **state)
+{
+    (void)state;
+    char path[512];
+    write_text("cw_cube.obj", CW_CUBE, path, sizeof path);
+    prt_context *ctx = test_context(1);
+    prt_scene *s = NULL;
+    prt_scene_desc d = {0};
+    assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);   /* auto: flipped outwards */
+    assert_true(mean_outwardness(s) > 0.4f);
+    prt_scene_release(s);
+    d.winding = PRT_WINDING_KEEP;
+    assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
+    assert_true(mean_outwardness(s) < -0.4f);
+    prt_scene_release(s);
+    d.winding = PRT_WINDING_FLIP;
+    assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
+    assert_true(mean_outwardness(s) > 0.4f);
+    prt_scene_release(s);
+    /* An open surface (a room's floor and walls facing in) is never flipped in auto mode. */
+    write_text("room.obj", "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nv 0 1 0\nv 1 1 0\nf 1 4 3\nf 1 3 2\nf 1 2 6\nf 1 6 5\n", path, sizeof path);
+    d.winding = PRT_WINDING_AUTO;
+    assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
+    const float *n = prt_scene_normals(s);
+    for (size_t v = 0; v < prt_scene_vertex_count(s); ++v) assert_true(n[v * 3 + 1] > 0.5f || n[v * 3 + 2] > 0.5f);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
 static void test_json_scene(void **state)
 {
     (void)state;
@@ -284,6 +327,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_obj_with_materials),
+        cmocka_unit_test(test_winding),
         cmocka_unit_test(test_json_scene),
         cmocka_unit_test(test_bad_mesh_inputs),
         cmocka_unit_test(test_cleaning_in_memory),

@@ -17,11 +17,22 @@ extern "C" {
 
 typedef struct prt_scene prt_scene;
 
+/* Which side of an imported triangle is its front. Files that carry normals are trusted in AUTO
+ * mode; for files without normals, AUTO flips a nearly closed mesh whose counter-clockwise
+ * normals would point inwards (its signed volume is negative), as scanned meshes such as
+ * Stanford's bun_zipper.ply are wound, and says so through the log hook. */
+typedef enum prt_winding {
+    PRT_WINDING_AUTO = 0,
+    PRT_WINDING_KEEP,     /* counter-clockwise is the front, as the file says */
+    PRT_WINDING_FLIP      /* clockwise is the front: reverse every triangle (and file normals) */
+} prt_winding;
+
 typedef struct prt_scene_desc {
     float max_edge;          /* subdivide until no edge is longer (scene units); 0 = no subdivision */
     float default_albedo[3]; /* for meshes without a material colour; all zero = 0.7 grey */
     int override_albedo;     /* non-zero: use default_albedo for every material */
     float crease_angle_deg;  /* when normals are computed: split at dihedral angles above this; 0 = 45 */
+    prt_winding winding;     /* triangle orientation of imported files; 0 = PRT_WINDING_AUTO */
 } prt_scene_desc;
 
 /* path: a mesh file, or a .json scene file (see docs/SCENE.md). */

@@ -41,26 +41,17 @@ prt_bake_desc prt_bake_desc_defaults(void)
     return d;
 }
 
-static void face_normal(const prt__mesh *m, uint32_t prim, float n[3])
-{
-    const uint32_t *t = m->indices + (size_t)prim * 3;
-    float e1[3], e2[3];
-    prt__v3_sub(m->positions + t[1] * 3, m->positions + t[0] * 3, e1);
-    prt__v3_sub(m->positions + t[2] * 3, m->positions + t[0] * 3, e2);
-    prt__v3_cross(e1, e2, n);
-}
-
 /* Visibility pass for one vertex: fills the unshadowed and shadowed sums and, when needed, the
  * list of occluded directions with what they hit. Returns false on allocation failure. */
-static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, hit_entry **hits_out, uint32_t *nhits_out)
+static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, hit_entry *scratch, hit_entry **hits_out,
+                              uint32_t *nhits_out)
 {
     const prt__mesh *m = job->mesh;
     const float *p = m->positions + v * 3, *n = m->normals + v * 3;
     const float w = (float)(4.0 * PRT_PI / job->samples) / (float)PRT_PI;   /* 4pi/N and the 1/pi of the BRDF */
     const int nc = job->ncoeff;
     float org[3] = {p[0] + n[0] * job->offset, p[1] + n[1] * job->offset, p[2] + n[2] * job->offset};
-    hit_entry *hits = NULL;
-    uint32_t nhits = 0, cap = 0;
+    uint32_t nhits = 0;   /* scratch holds one entry per sample, so it never overflows */
     int lane_sample[PACKET];
     float lane_cos[PACKET];
     int j = 0;
@@ -93,18 +84,12 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, h
             for (int k = 0; k < lanes; ++k) {
                 blocked[k] = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
                 if (!blocked[k]) continue;
-                float fn[3];
-                face_normal(m, rh.hit.primID[k], fn);
-                /* The back of a surface emits nothing: only front-face hits carry light back. */
-                if (prt__v3_dot(fn, job->dirs + (size_t)lane_sample[k] * 3) >= 0.0f) continue;
-                if (nhits == cap) {
-                    uint32_t nc2 = cap ? cap * 2 : 64;
-                    hit_entry *q = realloc(hits, nc2 * sizeof *q);
-                    if (!q) { free(hits); return false; }
-                    hits = q;
-                    cap = nc2;
-                }
-                hits[nhits++] = (hit_entry){rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k], lane_cos[k] * (float)(4.0 * PRT_PI / job->samples)};
+                /* Embree's unnormalized Ng points to the side from which the triangle winds
+                 * counter-clockwise, like prt's normals (the pit and colour-bleeding tests pin
+                 * this). The back of a surface emits nothing: only front-face hits carry light. */
+                const float *d = job->dirs + (size_t)lane_sample[k] * 3;
+                if (rh.hit.Ng_x[k] * d[0] + rh.hit.Ng_y[k] * d[1] + rh.hit.Ng_z[k] * d[2] >= 0.0f) continue;
+                scratch[nhits++] = (hit_entry){rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k], lane_cos[k] * (float)(4.0 * PRT_PI / job->samples)};
             }
         } else {
             _Alignas(64) struct RTCRay16 r;
@@ -128,7 +113,15 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, h
                 for (int i = 0; i < nc; ++i) sh[i] += c * y[i];
         }
     }
-    if (hits_out) { *hits_out = hits; *nhits_out = nhits; } else free(hits);
+    if (hits_out) {
+        *nhits_out = nhits;
+        *hits_out = NULL;
+        if (nhits) {
+            *hits_out = malloc(nhits * sizeof(hit_entry));
+            if (!*hits_out) return false;
+            memcpy(*hits_out, scratch, nhits * sizeof(hit_entry));
+        }
+    }
     return true;
 }
 
@@ -211,13 +204,19 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
 
     int alloc_failed = 0;
     prt__progress_begin(&job.progress, "visibility", nv);
-#pragma omp parallel for schedule(dynamic, 32) num_threads(prt__threads(ctx))
-    for (size_t v = 0; v < nv; ++v) {
-        if (prt__progress_cancelled(&job.progress) || __atomic_load_n(&alloc_failed, __ATOMIC_RELAXED)) continue;
-        bool ok = visibility_vertex(&job, v, unsh ? unsh + v * nc : NULL, shad ? shad + v * nc : NULL,
-                                    job.need_hits ? &job.hits[v] : NULL, job.need_hits ? &job.hit_count[v] : NULL);
-        if (!ok) __atomic_store_n(&alloc_failed, 1, __ATOMIC_RELAXED);
-        prt__progress_add(&job.progress, 1);
+#pragma omp parallel num_threads(prt__threads(ctx))
+    {
+        hit_entry *scratch = job.need_hits ? malloc((size_t)d.samples * sizeof(hit_entry)) : NULL;
+        if (job.need_hits && !scratch) __atomic_store_n(&alloc_failed, 1, __ATOMIC_RELAXED);
+#pragma omp for schedule(dynamic, 32)
+        for (size_t v = 0; v < nv; ++v) {
+            if (prt__progress_cancelled(&job.progress) || __atomic_load_n(&alloc_failed, __ATOMIC_RELAXED)) continue;
+            bool ok = visibility_vertex(&job, v, unsh ? unsh + v * nc : NULL, shad ? shad + v * nc : NULL, scratch,
+                                        job.need_hits ? &job.hits[v] : NULL, job.need_hits ? &job.hit_count[v] : NULL);
+            if (!ok) __atomic_store_n(&alloc_failed, 1, __ATOMIC_RELAXED);
+            prt__progress_add(&job.progress, 1);
+        }
+        free(scratch);
     }
     prt__progress_end(&job.progress);
     if (alloc_failed) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory recording ray hits"); goto done; }

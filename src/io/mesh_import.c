@@ -8,6 +8,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <errno.h>
+#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -25,6 +26,73 @@ static void material_albedo(const struct aiMaterial *mat, const prt_scene_desc *
     }
 }
 
+typedef struct edge_key { uint64_t key; } edge_key;
+
+static uint64_t hash_pos(const struct aiVector3D *p)
+{
+    uint32_t b[3];
+    memcpy(&b[0], &p->x, 4); memcpy(&b[1], &p->y, 4); memcpy(&b[2], &p->z, 4);
+    uint64_t h = 1469598103934665603ULL;
+    for (int i = 0; i < 3; ++i) { h ^= b[i]; h *= 1099511628211ULL; h ^= h >> 29; }
+    return h;
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* True when the file's triangles, taken together, form a nearly closed surface (under 5% of
+ * edges, matched by position, are open) whose counter-clockwise normals point inwards. */
+static bool looks_inside_out(const struct aiScene *sc)
+{
+    double c[3] = {0, 0, 0};
+    size_t nv = 0, ne = 0;
+    for (unsigned i = 0; i < sc->mNumMeshes; ++i) {
+        const struct aiMesh *am = sc->mMeshes[i];
+        for (unsigned v = 0; v < am->mNumVertices; ++v, ++nv) { c[0] += am->mVertices[v].x; c[1] += am->mVertices[v].y; c[2] += am->mVertices[v].z; }
+        ne += (size_t)am->mNumFaces * 3;
+    }
+    if (!nv || !ne) return false;
+    for (int k = 0; k < 3; ++k) c[k] /= (double)nv;
+    uint64_t *edges = malloc(ne * sizeof *edges);
+    if (!edges) return false;
+    double vol = 0, absvol = 0;
+    size_t e = 0;
+    for (unsigned i = 0; i < sc->mNumMeshes; ++i) {
+        const struct aiMesh *am = sc->mMeshes[i];
+        for (unsigned f = 0; f < am->mNumFaces; ++f) {
+            const struct aiFace *face = &am->mFaces[f];
+            if (face->mNumIndices != 3) continue;
+            const struct aiVector3D *p[3];
+            double q[3][3];
+            for (int k = 0; k < 3; ++k) {
+                p[k] = &am->mVertices[face->mIndices[k]];
+                q[k][0] = p[k]->x - c[0]; q[k][1] = p[k]->y - c[1]; q[k][2] = p[k]->z - c[2];
+            }
+            double t = (q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) - q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
+                        q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0])) / 6.0;
+            vol += t;
+            absvol += fabs(t);
+            for (int k = 0; k < 3; ++k) {
+                uint64_t a = hash_pos(p[k]), b = hash_pos(p[(k + 1) % 3]);
+                edges[e++] = a < b ? a * 31 + b : b * 31 + a;   /* the same for both directions */
+            }
+        }
+    }
+    qsort(edges, e, sizeof *edges, cmp_u64);
+    size_t open = 0;
+    for (size_t i = 0; i < e;) {
+        size_t j = i;
+        while (j < e && edges[j] == edges[i]) ++j;
+        open += j - i == 1;
+        i = j;
+    }
+    free(edges);
+    return e > 0 && open * 20 < e && vol < -0.5 * absvol;
+}
+
 prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform,
                             const float *albedo_override, const prt_scene_desc *desc, prt__mesh *m)
 {
@@ -36,8 +104,7 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
     aiSetImportPropertyFloat(props, AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, desc->crease_angle_deg);
     /* Points and lines are dropped; only triangles take part in transport. */
     aiSetImportPropertyInteger(props, AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    unsigned flags = aiProcess_Triangulate | aiProcess_GenSmoothNormals | aiProcess_JoinIdenticalVertices |
-                     aiProcess_PreTransformVertices | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+    unsigned flags = aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
     const struct aiScene *sc = aiImportFileExWithProperties(path, flags, NULL, props);
     aiReleasePropertyStore(props);
     if (!sc) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s' is not a mesh prt can read: %s", path, aiGetErrorString());
@@ -45,6 +112,33 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
         aiReleaseImport(sc);
         return prt__fail(ctx, PRT_ERR_EMPTY, "'%s' holds no triangle meshes", path);
     }
+    /* Orientation is settled before normals are generated from the winding. */
+    bool file_normals = false;
+    for (unsigned i = 0; i < sc->mNumMeshes; ++i) file_normals |= sc->mMeshes[i]->mNormals != NULL;
+    bool flip = desc->winding == PRT_WINDING_FLIP;
+    if (desc->winding == PRT_WINDING_AUTO && !file_normals && looks_inside_out(sc)) {
+        flip = true;
+        prt__log(ctx, PRT_LOG_WARN, "%s: closed mesh wound clockwise (normals would point inwards); flipped it (--winding keep to prevent)", path);
+    }
+    if (flip) {
+        /* The scene belongs to us until aiReleaseImport; assimp's C API only hands it out const. */
+        struct aiScene *msc = (struct aiScene *)sc;
+        for (unsigned i = 0; i < msc->mNumMeshes; ++i) {
+            struct aiMesh *am = msc->mMeshes[i];
+            for (unsigned f = 0; f < am->mNumFaces; ++f)
+                if (am->mFaces[f].mNumIndices == 3) {
+                    unsigned t = am->mFaces[f].mIndices[1];
+                    am->mFaces[f].mIndices[1] = am->mFaces[f].mIndices[2];
+                    am->mFaces[f].mIndices[2] = t;
+                }
+            if (am->mNormals)
+                for (unsigned v = 0; v < am->mNumVertices; ++v) {
+                    am->mNormals[v].x = -am->mNormals[v].x; am->mNormals[v].y = -am->mNormals[v].y; am->mNormals[v].z = -am->mNormals[v].z;
+                }
+        }
+    }
+    sc = aiApplyPostProcessing(sc, aiProcess_GenSmoothNormals | aiProcess_JoinIdenticalVertices);
+    if (!sc) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': assimp post-processing failed: %s", path, aiGetErrorString());
 
     /* Normals transform by the inverse transpose of the linear part. */
     float nmat[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};

@@ -19,6 +19,8 @@ static const char *HELP =
     "      --albedo R,G,B     albedo for every material (or one value for grey)\n"
     "      --default-albedo R,G,B  albedo where the file has no material (default 0.7)\n"
     "      --crease-angle D   split computed normals above D degrees (default 45)\n"
+    "      --winding W        auto | keep | flip: which side of imported triangles faces out\n"
+    "                         (auto flips closed meshes without normals that are wound inside out)\n"
     "      --ray-offset E     shadow-ray origin offset (default 1e-4 x scene diagonal)\n"
     "  -j, --threads N        worker threads (default: all cores; results do not change)\n"
     "  -q, --quiet            no progress or warnings\n"
@@ -34,7 +36,7 @@ int cmd_bake(int argc, char **argv)
         {"output", required_argument, 0, 'o'}, {"order", required_argument, 0, 'O'}, {"samples", required_argument, 0, 'n'},
         {"kinds", required_argument, 0, 'k'}, {"bounces", required_argument, 0, 'b'}, {"seed", required_argument, 0, 's'},
         {"max-edge", required_argument, 0, 'e'}, {"albedo", required_argument, 0, 'a'}, {"default-albedo", required_argument, 0, 'A'},
-        {"crease-angle", required_argument, 0, 'c'}, {"ray-offset", required_argument, 0, 'r'},
+        {"crease-angle", required_argument, 0, 'c'}, {"winding", required_argument, 0, 'w'}, {"ray-offset", required_argument, 0, 'r'},
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt, seed;
     optind = 1;
@@ -65,6 +67,12 @@ int cmd_bake(int argc, char **argv)
             break;
         case 'A': if (!cli_parse_vec3(optarg, true, sd.default_albedo)) return cli_usage(&c, "--default-albedo takes R,G,B in [0, 1]"); break;
         case 'c': if (!cli_parse_float(optarg, &sd.crease_angle_deg) || sd.crease_angle_deg <= 0 || sd.crease_angle_deg > 180) return cli_usage(&c, "--crease-angle must be in (0, 180]"); break;
+        case 'w':
+            if (!strcasecmp(optarg, "auto")) sd.winding = PRT_WINDING_AUTO;
+            else if (!strcasecmp(optarg, "keep")) sd.winding = PRT_WINDING_KEEP;
+            else if (!strcasecmp(optarg, "flip")) sd.winding = PRT_WINDING_FLIP;
+            else return cli_usage(&c, "--winding must be auto, keep or flip");
+            break;
         case 'r': if (!cli_parse_float(optarg, &bd.ray_offset) || bd.ray_offset <= 0) return cli_usage(&c, "--ray-offset must be > 0"); break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
