@@ -1,61 +1,119 @@
 /* Run-time SH relighting: per vertex, exit radiance = transfer . lighting per channel.
- * The lighting is laid out like a vertex's transfer block so the inner loop is one contiguous
- * multiply-add the compiler vectorizes; vertices are split statically across threads. */
+ *
+ * The transfer is vertex-major with n = order^2 floats per channel, n rarely a multiple of the
+ * vector width. Each vertex is done with full 8-wide multiply-adds plus a scalar tail; the
+ * kernels are instantiated per order so the compiler unrolls them completely. Vertices are split
+ * statically across threads. */
 #include "core/transfer_set.h"
 
+#include <omp.h>
 #include <string.h>
 
-prt_status prt_relight_sh(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light, float *out_rgb)
+typedef float v8 __attribute__((vector_size(32)));
+
+static inline v8 load8(const float *p)
 {
-    if (!t || !light || !out_rgb) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_sh: transfer, light and output are required");
+    v8 v;
+    memcpy(&v, p, sizeof v);   /* unaligned load */
+    return v;
+}
+
+typedef float v4 __attribute__((vector_size(16)));
+typedef int v4i __attribute__((vector_size(16)));
+
+static inline v4 fold8(v8 v)
+{
+    v4 lo, hi;
+    memcpy(&lo, &v, 16);
+    memcpy(&hi, (const char *)&v + 16, 16);
+    return lo + hi;
+}
+
+/* Horizontal sums of three vectors at once: {sum r, sum g, sum b, 0}, sharing the shuffles. */
+static inline v4 hsum8x3(v8 r, v8 g, v8 b)
+{
+    v4 r4 = fold8(r), g4 = fold8(g), b4 = fold8(b), z = {0, 0, 0, 0};
+    v4 rg = __builtin_shuffle(r4, g4, (v4i){0, 4, 1, 5}) + __builtin_shuffle(r4, g4, (v4i){2, 6, 3, 7});   /* r0+r2 g0+g2 r1+r3 g1+g3 */
+    v4 bz = __builtin_shuffle(b4, z, (v4i){0, 4, 1, 5}) + __builtin_shuffle(b4, z, (v4i){2, 6, 3, 7});
+    return __builtin_shuffle(rg, bz, (v4i){0, 1, 4, 5}) + __builtin_shuffle(rg, bz, (v4i){2, 3, 6, 7});
+}
+
+/* One-channel sets: the same n coefficients dot three lighting vectors, times albedo. */
+static inline __attribute__((always_inline)) void relight1(const float *restrict coeffs, const float *restrict albedo,
+                                                            const float (*restrict light)[PRT_SH_MAX_COEFFS + 8], int stride,
+                                                            int n, long v0, long v1, float *restrict out)
+{
+    const int full = n & ~7;
+    for (long v = v0; v < v1; ++v) {
+        const float *t = coeffs + (size_t)v * stride;
+        v8 r = {0}, g = {0}, b = {0};
+        for (int i = 0; i < full; i += 8) {
+            v8 x = load8(t + i);
+            r += x * load8(light[0] + i);
+            g += x * load8(light[1] + i);
+            b += x * load8(light[2] + i);
+        }
+        v4 sum = hsum8x3(r, g, b);
+        for (int i = full; i < n; ++i) sum += t[i] * (v4){light[0][i], light[1][i], light[2][i], 0};
+        out[v * 3] = sum[0] * albedo[v * 3];
+        out[v * 3 + 1] = sum[1] * albedo[v * 3 + 1];
+        out[v * 3 + 2] = sum[2] * albedo[v * 3 + 2];
+    }
+}
+
+/* Three-channel sets: channel c's n coefficients dot lighting channel c. */
+static inline __attribute__((always_inline)) void relight3(const float *restrict coeffs,
+                                                            const float (*restrict light)[PRT_SH_MAX_COEFFS + 8], int stride,
+                                                            int n, long v0, long v1, float *restrict out)
+{
+    const int full = n & ~7;
+    for (long v = v0; v < v1; ++v) {
+        const float *t = coeffs + (size_t)v * 3 * stride;
+        v8 acc[3] = {{0}, {0}, {0}};
+        for (int c = 0; c < 3; ++c)
+            for (int i = 0; i < full; i += 8) acc[c] += load8(t + c * stride + i) * load8(light[c] + i);
+        v4 sum = hsum8x3(acc[0], acc[1], acc[2]);
+        for (int i = full; i < n; ++i) sum += (v4){t[i], t[stride + i], t[2 * stride + i], 0} * (v4){light[0][i], light[1][i], light[2][i], 0};
+        out[v * 3] = sum[0];
+        out[v * 3 + 1] = sum[1];
+        out[v * 3 + 2] = sum[2];
+    }
+}
+
+/* Instantiates both kernels for a compile-time n. */
+#define DISPATCH(N)                                                               \
+    case N:                                                                       \
+        if (ch == 1) relight1(coeffs, albedo, light, stride, N, v0, v1, out_rgb); \
+        else relight3(coeffs, light, stride, N, v0, v1, out_rgb);                 \
+        break;
+
+prt_status prt_relight_sh(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *sh, float *out_rgb)
+{
+    if (!t || !sh || !out_rgb) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_sh: transfer, light and output are required");
     int k = prt__kind_index(kind);
     if (k < 0 || !t->sets[k].channels)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the transfer holds no %s set", prt_transfer_kind_name(kind));
-    if (light->order < 1 || light->order > PRT_SH_MAX_ORDER)
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "lighting SH order %d out of range", light->order);
+    if (sh->order < 1 || sh->order > PRT_SH_MAX_ORDER)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "lighting SH order %d out of range", sh->order);
     const int stride = t->order * t->order;
-    const int order = light->order < t->order ? light->order : t->order;
-    const int n = order * order;
-    const int ch = t->sets[k].channels;
-    const float *coeffs = t->sets[k].coeffs;
-    const float *albedo = t->mesh.albedo;
+    const int order = sh->order < t->order ? sh->order : t->order;
+    const int n = order * order, ch = t->sets[k].channels;
+    const float *coeffs = t->sets[k].coeffs, *albedo = t->mesh.albedo;
     const long nv = (long)t->mesh.vertex_count;
-
-    if (ch == 3) {
-        /* Lighting laid out as [channel][stride], zero beyond the common order. */
-        float lp[3 * PRT_SH_MAX_COEFFS];
-        memset(lp, 0, sizeof lp);
-        for (int c = 0; c < 3; ++c) memcpy(lp + c * stride, light->coeffs[c], (size_t)n * sizeof(float));
-        const int m = 3 * stride;
-#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
-        for (long v = 0; v < nv; ++v) {
-            const float *tv = coeffs + (size_t)v * m;
-            for (int c = 0; c < 3; ++c) {
-                const float *a = tv + c * stride, *b = lp + c * stride;
-                float s = 0.0f;
-#pragma omp simd reduction(+ : s)
-                for (int i = 0; i < n; ++i) s += a[i] * b[i];
-                out_rgb[v * 3 + c] = s;
-            }
-        }
-    } else {
-        float lr[PRT_SH_MAX_COEFFS], lg[PRT_SH_MAX_COEFFS], lb[PRT_SH_MAX_COEFFS];
-        memcpy(lr, light->coeffs[0], sizeof lr);
-        memcpy(lg, light->coeffs[1], sizeof lg);
-        memcpy(lb, light->coeffs[2], sizeof lb);
-#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
-        for (long v = 0; v < nv; ++v) {
-            const float *a = coeffs + (size_t)v * stride;
-            float r = 0.0f, g = 0.0f, b = 0.0f;
-#pragma omp simd reduction(+ : r, g, b)
-            for (int i = 0; i < n; ++i) {
-                r += a[i] * lr[i];
-                g += a[i] * lg[i];
-                b += a[i] * lb[i];
-            }
-            out_rgb[v * 3] = r * albedo[v * 3];
-            out_rgb[v * 3 + 1] = g * albedo[v * 3 + 1];
-            out_rgb[v * 3 + 2] = b * albedo[v * 3 + 2];
+    /* Zero-padded so vector loads of the lighting may run past n. */
+    float light[3][PRT_SH_MAX_COEFFS + 8];
+    memset(light, 0, sizeof light);
+    for (int c = 0; c < 3; ++c) memcpy(light[c], sh->coeffs[c], (size_t)n * sizeof(float));
+    const int threads = prt__threads(ctx);
+    /* Below a few thousand vertices a thread team costs more than it saves. */
+    const int team = nv < 4096 ? 1 : threads;
+#pragma omp parallel num_threads(team)
+    {
+        int tid = omp_get_thread_num(), nt = omp_get_num_threads();
+        long v0 = nv * tid / nt, v1 = nv * (tid + 1) / nt;
+        switch (n) {
+            DISPATCH(1) DISPATCH(4) DISPATCH(9) DISPATCH(16) DISPATCH(25)
+            DISPATCH(36) DISPATCH(49) DISPATCH(64) DISPATCH(81) DISPATCH(100)
         }
     }
     return PRT_OK;
