@@ -96,6 +96,7 @@ static void test_json_scene(void **state)
     write_text("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", path, sizeof path);
     write_text("scene.json",
                "{\"materials\": {\"gold\": {\"albedo\": [0.9, 0.7, 0.2]}},\n"
+               " \"environment\": {\"file\": \"probe.hdr\", \"layout\": \"angular\", \"rotate\": [30, 0, 0], \"intensity\": 2},\n"
                " \"meshes\": [{\"file\": \"tri.obj\", \"material\": \"gold\"},\n"
                "            {\"file\": \"tri.obj\", \"translate\": [10, 0, 0], \"scale\": 2, \"albedo\": 0.5}]}",
                path, sizeof path);
@@ -109,6 +110,28 @@ static void test_json_scene(void **state)
     const float *alb = prt_scene_albedo(s), *pos = prt_scene_positions(s);
     for (size_t v = 0; v < prt_scene_vertex_count(s); ++v)
         assert_true(pos[v * 3] >= 10 ? alb[v * 3] == 0.5f : fabsf(alb[v * 3 + 2] - 0.2f) < 1e-6f);
+    /* The named lighting, resolved beside the scene file, travels through a bake and a file. */
+    prt_environment_desc env;
+    assert_int_equal(prt_scene_environment(s, &env), 1);
+    char expect[600];
+    snprintf(expect, sizeof expect, "%s/probe.hdr", dir);
+    assert_string_equal(env.path, expect);
+    assert_int_equal(env.layout, PRT_ENV_ANGULAR);
+    prt_bake_desc bd = {0};
+    bd.samples = 16;
+    prt_transfer *t = NULL, *u = NULL;
+    assert_int_equal(prt_bake_sh(ctx, s, &bd, &t), PRT_OK);
+    char prt_path[600];
+    snprintf(prt_path, sizeof prt_path, "%s/env.prt", dir);
+    assert_int_equal(prt_transfer_save(t, prt_path), PRT_OK);
+    assert_int_equal(prt_transfer_load(ctx, prt_path, &u), PRT_OK);
+    memset(&env, 0, sizeof env);
+    assert_int_equal(prt_transfer_environment(u, &env), 1);
+    assert_string_equal(env.path, expect);
+    assert_int_equal(env.layout, PRT_ENV_ANGULAR);
+    assert_true(env.rotate_deg[0] == 30.0f && env.intensity == 2.0f);
+    prt_transfer_release(t);
+    prt_transfer_release(u);
     prt_scene_release(s);
     /* Bad scene files: a clear error. */
     const char *bad[] = {"{\"meshes\": []}", "{\"meshes\": [{\"file\": 3}]}", "{nope",

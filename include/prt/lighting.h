@@ -27,6 +27,16 @@ typedef struct prt_sh_light {
 
 typedef struct prt_envmap prt_envmap;
 
+/* A distant lighting named by a scene file and carried into the .prt it bakes, so that
+ * relighting and rendering can default to it. */
+typedef struct prt_environment_desc {
+    char path[1024];          /* probe file; empty = the procedural sky */
+    prt_env_layout layout;
+    float rotate_deg[3];      /* yaw (about +y), pitch, roll */
+    float intensity;          /* radiance scale; 0 = 1 */
+    float sun_dir[3];         /* procedural sky only; zero = its default */
+} prt_environment_desc;
+
 /* Takes ownership of img's pixels (img is zeroed). */
 prt_status prt_envmap_from_image(prt_image *img, prt_env_layout layout, prt_envmap **out);
 prt_status prt_envmap_load(const char *path, prt_env_layout layout, prt_envmap **out);

@@ -10,6 +10,7 @@
 #define PRT_SCENE_H
 
 #include "prt/base.h"
+#include "prt/lighting.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -53,6 +54,8 @@ const float *prt_scene_normals(const prt_scene *scene);     /* 3 per vertex, uni
 const float *prt_scene_albedo(const prt_scene *scene);      /* 3 per vertex */
 const uint32_t *prt_scene_indices(const prt_scene *scene);  /* 3 per triangle */
 void prt_scene_bounds(const prt_scene *scene, float lo[3], float hi[3]);
+/* The lighting a JSON scene names ("environment"); returns 0 when it names none. */
+int prt_scene_environment(const prt_scene *scene, prt_environment_desc *out);
 
 /* Writes the procedural demo scene (a ribbed bowl and a torus knot-like ring of spheres over a
  * ground plane between a red and a green wall) as OBJ+MTL. */

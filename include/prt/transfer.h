@@ -66,6 +66,9 @@ int prt_transfer_channels(const prt_transfer *t, prt_transfer_kind kind);  /* 0 
 /* Borrowed pointer to a set's coefficients: vertex-major, channel, coefficient; NULL if absent. */
 const float *prt_transfer_coeffs(const prt_transfer *t, prt_transfer_kind kind);
 
+/* The lighting the baked scene named, if any (0 when none); see prt_scene_environment. */
+int prt_transfer_environment(const prt_transfer *t, prt_environment_desc *out);
+
 /* The mesh the transfer was baked on. */
 size_t prt_transfer_vertex_count(const prt_transfer *t);
 size_t prt_transfer_triangle_count(const prt_transfer *t);

@@ -165,6 +165,8 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
     t->seed = d.seed;
     t->threads = prt__threads(ctx);
     snprintf(t->source, sizeof t->source, "%s", scene->source);
+    t->has_env = scene->has_env;
+    t->env = scene->env;
 
     const size_t nv = t->mesh.vertex_count;
     bake_job job = {0};

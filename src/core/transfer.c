@@ -73,6 +73,12 @@ const float *prt_transfer_coeffs(const prt_transfer *t, prt_transfer_kind kind)
     return i < 0 || !t->sets[i].channels ? NULL : t->sets[i].coeffs;
 }
 
+int prt_transfer_environment(const prt_transfer *t, prt_environment_desc *out)
+{
+    if (t->has_env) *out = t->env;
+    return t->has_env;
+}
+
 size_t prt_transfer_vertex_count(const prt_transfer *t) { return t->mesh.vertex_count; }
 size_t prt_transfer_triangle_count(const prt_transfer *t) { return t->mesh.triangle_count; }
 const float *prt_transfer_positions(const prt_transfer *t) { return t->mesh.positions; }

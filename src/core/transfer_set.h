@@ -19,6 +19,8 @@ struct prt_transfer {
     uint32_t seed;
     double bake_seconds;
     char source[512];
+    bool has_env;
+    prt_environment_desc env;
 };
 
 /* 0, 1, 2 for UNSHADOWED, SHADOWED, INTERREFLECTED; -1 for anything else. */

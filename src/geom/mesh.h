@@ -25,6 +25,8 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
 struct prt_scene {
     prt__mesh mesh;
     char source[512];
+    bool has_env;
+    prt_environment_desc env;
 };
 
 /* Adds the mesh file at path (anything assimp reads), with optional transform (row-major 4x4,
@@ -33,6 +35,6 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
                             const float *albedo_override, const prt_scene_desc *desc, prt__mesh *m);
 /* Adds every mesh a .json scene names. */
 prt_status prt__import_scene_json(const prt_context *ctx, const char *path, const prt_scene_desc *desc,
-                                  prt__mesh *m);
+                                  prt_scene *scene);
 
 #endif

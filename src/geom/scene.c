@@ -40,7 +40,7 @@ prt_status prt_scene_load(prt_context *ctx, const char *path, const prt_scene_de
             return prt__fail(ctx, PRT_ERR_INVALID_ARG, "albedo must lie in [0, 1]");
     prt_scene *s = prt__calloc(1, sizeof *s);
     if (!s) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    prt_status st = ends_with(path, ".json") ? prt__import_scene_json(ctx, path, &d, &s->mesh)
+    prt_status st = ends_with(path, ".json") ? prt__import_scene_json(ctx, path, &d, s)
                                              : prt__import_mesh(ctx, path, NULL, NULL, &d, &s->mesh);
     if (st != PRT_OK) { prt_scene_release(s); return st; }
     return finish(ctx, s, &d, path, out);
@@ -74,6 +74,12 @@ const float *prt_scene_positions(const prt_scene *s) { return s->mesh.positions;
 const float *prt_scene_normals(const prt_scene *s) { return s->mesh.normals; }
 const float *prt_scene_albedo(const prt_scene *s) { return s->mesh.albedo; }
 const uint32_t *prt_scene_indices(const prt_scene *s) { return s->mesh.indices; }
+
+int prt_scene_environment(const prt_scene *s, prt_environment_desc *out)
+{
+    if (s->has_env) *out = s->env;
+    return s->has_env;
+}
 
 void prt_scene_bounds(const prt_scene *s, float lo[3], float hi[3])
 {

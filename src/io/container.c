@@ -60,6 +60,14 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
     cJSON_AddNumberToObject(meta, "threads", t->threads);
     cJSON_AddNumberToObject(meta, "bake_seconds", t->bake_seconds);
     cJSON_AddStringToObject(meta, "source", t->source);
+    if (t->has_env) {
+        cJSON *e = cJSON_AddObjectToObject(meta, "environment");
+        cJSON_AddStringToObject(e, "file", t->env.path);
+        cJSON_AddNumberToObject(e, "layout", t->env.layout);
+        cJSON_AddItemToObject(e, "rotate", cJSON_CreateFloatArray(t->env.rotate_deg, 3));
+        cJSON_AddItemToObject(e, "sun", cJSON_CreateFloatArray(t->env.sun_dir, 3));
+        cJSON_AddNumberToObject(e, "intensity", t->env.intensity);
+    }
     char *meta_text = cJSON_PrintUnformatted(meta);
     cJSON_Delete(meta);
     if (!meta_text) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
@@ -194,6 +202,20 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "threads"))) t->threads = x->valueint;
                 if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "bake_seconds"))) t->bake_seconds = x->valuedouble;
                 if (cJSON_IsString(x = cJSON_GetObjectItemCaseSensitive(meta, "source"))) snprintf(t->source, sizeof t->source, "%s", x->valuestring);
+                if (cJSON_IsObject(x = cJSON_GetObjectItemCaseSensitive(meta, "environment"))) {
+                    const cJSON *f = cJSON_GetObjectItemCaseSensitive(x, "file"), *l = cJSON_GetObjectItemCaseSensitive(x, "layout"),
+                                *r = cJSON_GetObjectItemCaseSensitive(x, "rotate"), *s = cJSON_GetObjectItemCaseSensitive(x, "sun"),
+                                *in = cJSON_GetObjectItemCaseSensitive(x, "intensity");
+                    t->has_env = true;
+                    if (cJSON_IsString(f)) snprintf(t->env.path, sizeof t->env.path, "%s", f->valuestring);
+                    if (cJSON_IsNumber(l) && l->valueint >= 0 && l->valueint <= PRT_ENV_VCROSS) t->env.layout = (prt_env_layout)l->valueint;
+                    for (int k = 0; k < 3; ++k) {
+                        const cJSON *a = cJSON_GetArrayItem(r, k), *b = cJSON_GetArrayItem(s, k);
+                        if (cJSON_IsNumber(a)) t->env.rotate_deg[k] = (float)a->valuedouble;
+                        if (cJSON_IsNumber(b)) t->env.sun_dir[k] = (float)b->valuedouble;
+                    }
+                    if (cJSON_IsNumber(in) && in->valuedouble >= 0) t->env.intensity = (float)in->valuedouble;
+                }
                 cJSON_Delete(meta);
                 have_meta = true;
             } else if (id == CHUNK_MESH) {

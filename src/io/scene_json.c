@@ -31,8 +31,35 @@ static void make_xform(const float s[3], const float r[3], const float t[3], flo
     out[15] = 1.0f;
 }
 
-prt_status prt__import_scene_json(const prt_context *ctx, const char *path, const prt_scene_desc *desc, prt__mesh *m)
+static prt_status read_environment(const prt_context *ctx, const cJSON *e, const char *dir, prt_environment_desc *out)
 {
+    memset(out, 0, sizeof *out);
+    if (!cJSON_IsObject(e)) return prt__fail(ctx, PRT_ERR_FORMAT, "scene: \"environment\" must be an object");
+    const cJSON *v;
+    if ((v = cJSON_GetObjectItemCaseSensitive(e, "file"))) {
+        if (!cJSON_IsString(v)) return prt__fail(ctx, PRT_ERR_FORMAT, "scene: environment \"file\" must be a string");
+        snprintf(out->path, sizeof out->path, "%s%s", v->valuestring[0] == '/' ? "" : dir, v->valuestring);
+    }
+    if ((v = cJSON_GetObjectItemCaseSensitive(e, "layout"))) {
+        const char *l = cJSON_IsString(v) ? v->valuestring : "";
+        if (!strcmp(l, "latlong")) out->layout = PRT_ENV_LATLONG;
+        else if (!strcmp(l, "angular")) out->layout = PRT_ENV_ANGULAR;
+        else if (!strcmp(l, "cross")) out->layout = PRT_ENV_VCROSS;
+        else if (strcmp(l, "auto")) return prt__fail(ctx, PRT_ERR_FORMAT, "scene: environment layout must be latlong, angular, cross or auto");
+    }
+    prt_status st;
+    if ((v = cJSON_GetObjectItemCaseSensitive(e, "rotate")) && (st = read_vec3(ctx, v, "rotate", out->rotate_deg))) return st;
+    if ((v = cJSON_GetObjectItemCaseSensitive(e, "sun")) && (st = read_vec3(ctx, v, "sun", out->sun_dir))) return st;
+    if ((v = cJSON_GetObjectItemCaseSensitive(e, "intensity"))) {
+        if (!cJSON_IsNumber(v) || !(v->valuedouble >= 0)) return prt__fail(ctx, PRT_ERR_FORMAT, "scene: environment intensity must be a number >= 0");
+        out->intensity = (float)v->valuedouble;
+    }
+    return PRT_OK;
+}
+
+prt_status prt__import_scene_json(const prt_context *ctx, const char *path, const prt_scene_desc *desc, prt_scene *scene)
+{
+    prt__mesh *m = &scene->mesh;
     void *text;
     size_t size;
     prt_status st = prt__read_file(path, &text, &size);
@@ -51,6 +78,11 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
     const char *slash = strrchr(path, '/');
     if (slash && (size_t)(slash - path) < sizeof dir - 1) { memcpy(dir, path, (size_t)(slash - path) + 1); dir[slash - path + 1] = 0; }
 
+    const cJSON *env = cJSON_GetObjectItemCaseSensitive(root, "environment");
+    if (env) {
+        if ((st = read_environment(ctx, env, dir, &scene->env))) { cJSON_Delete(root); return st; }
+        scene->has_env = true;
+    }
     const cJSON *item;
     int index = 0;
     cJSON_ArrayForEach(item, meshes) {

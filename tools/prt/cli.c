@@ -145,7 +145,7 @@ int cli_progress(void *user, const char *stage, uint64_t done, uint64_t total)
 int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
 {
     switch (opt) {
-    case OPT_ENV: l->env_path = arg; return 1;
+    case OPT_ENV: l->env_path = arg; l->set_source = true; return 1;
     case OPT_LAYOUT:
         if (!strcasecmp(arg, "auto")) l->layout = PRT_ENV_AUTO;
         else if (!strcasecmp(arg, "latlong")) l->layout = PRT_ENV_LATLONG;
@@ -163,16 +163,35 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
             if (n == 3 || !cli_parse_float(tok, &v[n++])) { cli_usage(c, "--rotate takes YAW[,PITCH[,ROLL]] in degrees"); return -1; }
         if (n == 0) { cli_usage(c, "--rotate takes YAW[,PITCH[,ROLL]] in degrees"); return -1; }
         memcpy(l->rotate, v, sizeof v);
+        l->set_rotate = true;
         return 1;
     }
     case OPT_INTENSITY:
         if (!cli_parse_float(arg, &l->intensity) || l->intensity < 0) { cli_usage(c, "--intensity must be a number >= 0"); return -1; }
+        l->set_intensity = true;
         return 1;
     case OPT_SUN:
         if (!cli_parse_vec3(arg, false, l->sun_dir)) { cli_usage(c, "--sun takes X,Y,Z"); return -1; }
+        l->set_source = true;
         return 1;
     }
     return 0;
+}
+
+void cli_light_defaults_from(cli_light *l, const prt_transfer *t)
+{
+    prt_environment_desc e;
+    if (!prt_transfer_environment(t, &e)) return;
+    if (!l->set_source) {
+        if (e.path[0]) {
+            snprintf(l->path_buf, sizeof l->path_buf, "%s", e.path);
+            l->env_path = l->path_buf;
+            l->layout = e.layout;
+        }
+        memcpy(l->sun_dir, e.sun_dir, sizeof l->sun_dir);
+    }
+    if (!l->set_rotate) memcpy(l->rotate, e.rotate_deg, sizeof l->rotate);
+    if (!l->set_intensity && e.intensity > 0) l->intensity = e.intensity;
 }
 
 prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh_light *out, prt_envmap **env_out)

@@ -51,6 +51,8 @@ typedef struct cli_light {
     float rotate[3];          /* yaw, pitch, roll in degrees */
     float intensity;          /* multiplier; commands start it at 1 */
     float sun_dir[3];         /* sky only; zero = default */
+    bool set_source, set_rotate, set_intensity;   /* what the command line gave explicitly */
+    char path_buf[1024];
 } cli_light;
 
 #define CLI_LIGHT_OPTIONS_HELP \
@@ -68,6 +70,8 @@ enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN };
     {"env", required_argument, 0, OPT_ENV}, {"layout", required_argument, 0, OPT_LAYOUT}, \
     {"rotate", required_argument, 0, OPT_ROTATE}, {"intensity", required_argument, 0, OPT_INTENSITY}, \
     {"sun", required_argument, 0, OPT_SUN}
+/* Fills what the command line left unset from the lighting a .prt's scene named. */
+void cli_light_defaults_from(cli_light *l, const prt_transfer *t);
 /* Loads the environment (or builds the sky) and projects it to SH of the given order. */
 prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh_light *out, prt_envmap **env_out);
 

@@ -100,6 +100,7 @@ int cmd_relight(int argc, char **argv)
     prt_status st = prt_transfer_load(c.ctx, argv[optind], &t);
     if (!st) {
         if (!kind) kind = cli_default_kind(t);
+        cli_light_defaults_from(&light, t);
         prt_transfer_info info;
         prt_transfer_get_info(t, &info);
         st = cli_light_project(&c, &light, info.order, &sh, NULL);
