@@ -143,7 +143,7 @@ void prt_camera_frame(const float lo[3], const float hi[3], const float *from, f
     if (!(radius > 0)) radius = 1;
     float fov = (fov_y_deg > 0 ? fov_y_deg : 40.0f) * (float)PRT_PI / 180.0f;
     float half = aspect < 1 ? atanf(tanf(fov * 0.5f) * aspect) : fov * 0.5f;
-    float dist = radius / sinf(half) * 1.02f;
+    float dist = radius / sinf(half) * 0.85f;   /* the bounding sphere overstates most scenes' silhouettes */
     for (int k = 0; k < 3; ++k) { out->target[k] = c[k]; out->eye[k] = c[k] + dir[k] * dist; }
     out->up[1] = 1;
     out->fov_y_deg = fov_y_deg > 0 ? fov_y_deg : 40.0f;
