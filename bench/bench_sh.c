@@ -37,26 +37,11 @@ static double raw_embree(const prt_scene *s, const prt__raycaster *rc, const ray
             _Alignas(64) int valid[16];
             if (intersect) {
                 _Alignas(64) struct RTCRayHit16 rh;
-                for (int k = 0; k < 16; ++k) {
-                    const float *d = r->dirs + idx[k < lanes ? k : 0] * 3;
-                    valid[k] = k < lanes ? -1 : 0;
-                    rh.ray.org_x[k] = org[0]; rh.ray.org_y[k] = org[1]; rh.ray.org_z[k] = org[2];
-                    rh.ray.dir_x[k] = d[0]; rh.ray.dir_y[k] = d[1]; rh.ray.dir_z[k] = d[2];
-                    rh.ray.tnear[k] = 0; rh.ray.tfar[k] = INFINITY; rh.ray.time[k] = 0;
-                    rh.ray.mask[k] = 0xFFFFFFFFu; rh.ray.id[k] = 0; rh.ray.flags[k] = 0;
-                    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID; rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-                }
+                prt__packet_rayhits(&rh, valid, org, r->dirs, idx, lanes);
                 rtcIntersect16(valid, rc->scene, &ictx, &rh);
             } else {
                 _Alignas(64) struct RTCRay16 ray;
-                for (int k = 0; k < 16; ++k) {
-                    const float *d = r->dirs + idx[k < lanes ? k : 0] * 3;
-                    valid[k] = k < lanes ? -1 : 0;
-                    ray.org_x[k] = org[0]; ray.org_y[k] = org[1]; ray.org_z[k] = org[2];
-                    ray.dir_x[k] = d[0]; ray.dir_y[k] = d[1]; ray.dir_z[k] = d[2];
-                    ray.tnear[k] = 0; ray.tfar[k] = INFINITY; ray.time[k] = 0;
-                    ray.mask[k] = 0xFFFFFFFFu; ray.id[k] = 0; ray.flags[k] = 0;
-                }
+                prt__packet_rays(&ray, valid, org, r->dirs, idx, lanes);
                 rtcOccluded16(valid, rc->scene, &ictx, &ray);
             }
             total += (uint64_t)lanes;

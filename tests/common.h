@@ -139,6 +139,24 @@ static inline size_t nearest_vertex(const float *pos, size_t nv, const float p[3
     return best;
 }
 
+/* A scratch directory per test program, removed afterwards: use as group setup/teardown. */
+static char test_dir[256];
+
+static inline int test_dir_setup(void **state)
+{
+    (void)state;
+    snprintf(test_dir, sizeof test_dir, "/tmp/prt_test_XXXXXX");
+    return mkdtemp(test_dir) ? 0 : -1;
+}
+
+static inline int test_dir_teardown(void **state)
+{
+    (void)state;
+    char cmd[300];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", test_dir);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
 /* Where ../shared/data lives, or NULL (tests that need it then skip). */
 static inline const char *shared_data_dir(void)
 {

@@ -4,9 +4,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-static char dir[256];
 
-static void path_in(char *out, size_t n, const char *name) { snprintf(out, n, "%s/%s", dir, name); }
+static void path_in(char *out, size_t n, const char *name) { snprintf(out, n, "%s/%s", test_dir, name); }
 
 static prt_transfer *small_bake(prt_context *ctx)
 {
@@ -78,7 +77,7 @@ static void test_round_trip(void **state)
     }
     /* No temporary file is left beside the result. */
     char cmd[600];
-    snprintf(cmd, sizeof cmd, "ls %s | grep -q tmp", dir);
+    snprintf(cmd, sizeof cmd, "ls %s | grep -q tmp", test_dir);
     assert_int_not_equal(system(cmd), 0);
     prt_transfer_release(u);
     prt_transfer_release(t);
@@ -155,7 +154,7 @@ static void test_failed_save_leaves_nothing(void **state)
     prt_context *ctx = test_context(0);
     prt_transfer *t = small_bake(ctx);
     char path[512];
-    path_in(path, sizeof path, "no/such/dir/x.prt");
+    path_in(path, sizeof path, "no/such/test_dir/x.prt");
     assert_int_equal(prt_transfer_save(t, path), PRT_ERR_IO);
     assert_non_null(strstr(prt_last_error(), "x.prt"));
     /* Overwriting keeps the old file intact until the new one is complete. */
@@ -169,21 +168,6 @@ static void test_failed_save_leaves_nothing(void **state)
     prt_context_release(ctx);
 }
 
-static int setup(void **state)
-{
-    (void)state;
-    snprintf(dir, sizeof dir, "/tmp/prt_test_file_XXXXXX");
-    return mkdtemp(dir) ? 0 : -1;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    char cmd[300];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-    return system(cmd) == 0 ? 0 : -1;
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -191,5 +175,5 @@ int main(void)
         cmocka_unit_test(test_damaged_files),
         cmocka_unit_test(test_failed_save_leaves_nothing),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

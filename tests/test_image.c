@@ -3,7 +3,6 @@
 
 #include <unistd.h>
 
-static char dir[256];
 
 /* A known band-limited radiance: positive everywhere, with structure in every band < 3. */
 static const float known[9] = {4.0f, 0.4f, 0.8f, -0.5f, 0.2f, -0.15f, 0.3f, 0.1f, -0.25f};
@@ -71,7 +70,7 @@ static void test_layouts_project_known_function(void **state)
         prt_image img;
         make_env_image(layouts[k], dims[k][0], dims[k][1], &img);
         char path[512];
-        snprintf(path, sizeof path, "%s/%s", dir, names[k]);
+        snprintf(path, sizeof path, "%s/%s", test_dir, names[k]);
         assert_int_equal(prt_image_save(path, &img, NULL), PRT_OK);
         prt_image_free(&img);
         prt_envmap *env = NULL;
@@ -147,7 +146,7 @@ static void test_bad_pixels_rejected(void **state)
 {
     (void)state;
     char path[512];
-    snprintf(path, sizeof path, "%s/nan.pfm", dir);
+    snprintf(path, sizeof path, "%s/nan.pfm", test_dir);
     FILE *f = fopen(path, "wb");
     fprintf(f, "PF\n4 2\n-1.0\n");
     for (int i = 0; i < 24; ++i) {
@@ -159,7 +158,7 @@ static void test_bad_pixels_rejected(void **state)
     assert_int_equal(prt_envmap_load(path, PRT_ENV_AUTO, &env), PRT_ERR_FORMAT);
     assert_non_null(strstr(prt_last_error(), "not finite"));
     assert_non_null(strstr(prt_last_error(), "nan.pfm"));
-    snprintf(path, sizeof path, "%s/inf.pfm", dir);
+    snprintf(path, sizeof path, "%s/inf.pfm", test_dir);
     f = fopen(path, "wb");
     fprintf(f, "PF\n4 2\n-1.0\n");
     for (int i = 0; i < 24; ++i) {
@@ -169,13 +168,13 @@ static void test_bad_pixels_rejected(void **state)
     fclose(f);
     assert_int_equal(prt_envmap_load(path, PRT_ENV_AUTO, &env), PRT_ERR_FORMAT);
     /* Truncated pixels, garbage, wrong aspect. */
-    snprintf(path, sizeof path, "%s/short.pfm", dir);
+    snprintf(path, sizeof path, "%s/short.pfm", test_dir);
     f = fopen(path, "wb");
     fprintf(f, "PF\n4 2\n-1.0\n");
     fclose(f);
     assert_int_equal(prt_envmap_load(path, PRT_ENV_AUTO, &env), PRT_ERR_FORMAT);
     assert_non_null(strstr(prt_last_error(), "truncated"));
-    snprintf(path, sizeof path, "%s/garbage.hdr", dir);
+    snprintf(path, sizeof path, "%s/garbage.hdr", test_dir);
     f = fopen(path, "wb");
     fprintf(f, "this is not an image");
     fclose(f);
@@ -197,7 +196,7 @@ static void test_image_round_trips(void **state)
     const double tol[4] = {0, 2e-3, 1e-2, 2e-2};
     for (int k = 0; k < 4; ++k) {
         char path[512];
-        snprintf(path, sizeof path, "%s/rt.%s", dir, ext[k]);
+        snprintf(path, sizeof path, "%s/rt.%s", test_dir, ext[k]);
         prt_image_save_desc sd = {0};
         sd.tonemap = 2;   /* clamp: PNG keeps values < 1 */
         assert_int_equal(prt_image_save(path, &img, &sd), PRT_OK);
@@ -231,21 +230,6 @@ static void test_sky(void **state)
     assert_int_equal(prt_sky_create(&d, &env), PRT_ERR_INVALID_ARG);
 }
 
-static int setup(void **state)
-{
-    (void)state;
-    snprintf(dir, sizeof dir, "/tmp/prt_test_image_XXXXXX");
-    return mkdtemp(dir) ? 0 : -1;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    char cmd[300];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-    return system(cmd) == 0 ? 0 : -1;
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -256,5 +240,5 @@ int main(void)
         cmocka_unit_test(test_image_round_trips),
         cmocka_unit_test(test_sky),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

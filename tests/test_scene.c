@@ -3,11 +3,10 @@
 
 #include <unistd.h>
 
-static char dir[256];
 
 static void write_text(const char *name, const char *text, char *path, size_t n)
 {
-    snprintf(path, n, "%s/%s", dir, name);
+    snprintf(path, n, "%s/%s", test_dir, name);
     FILE *f = fopen(path, "wb");
     assert_non_null(f);
     fputs(text, f);
@@ -114,7 +113,7 @@ static void test_json_scene(void **state)
     prt_environment_desc env;
     assert_int_equal(prt_scene_environment(s, &env), 1);
     char expect[600];
-    snprintf(expect, sizeof expect, "%s/probe.hdr", dir);
+    snprintf(expect, sizeof expect, "%s/probe.hdr", test_dir);
     assert_string_equal(env.path, expect);
     assert_int_equal(env.layout, PRT_ENV_ANGULAR);
     prt_bake_desc bd = {0};
@@ -122,7 +121,7 @@ static void test_json_scene(void **state)
     prt_transfer *t = NULL, *u = NULL;
     assert_int_equal(prt_bake_sh(ctx, s, &bd, &t), PRT_OK);
     char prt_path[600];
-    snprintf(prt_path, sizeof prt_path, "%s/env.prt", dir);
+    snprintf(prt_path, sizeof prt_path, "%s/env.prt", test_dir);
     assert_int_equal(prt_transfer_save(t, prt_path), PRT_OK);
     assert_int_equal(prt_transfer_load(ctx, prt_path, &u), PRT_OK);
     memset(&env, 0, sizeof env);
@@ -154,7 +153,7 @@ static void test_bad_mesh_inputs(void **state)
     prt_scene *s = NULL;
     char path[512];
     /* Missing file. */
-    snprintf(path, sizeof path, "%s/missing.obj", dir);
+    snprintf(path, sizeof path, "%s/missing.obj", test_dir);
     assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_ERR_IO);
     assert_non_null(strstr(prt_last_error(), "missing.obj"));
     /* Not a mesh. */
@@ -272,7 +271,7 @@ static void test_demo_scene(void **state)
 {
     (void)state;
     char path[512];
-    snprintf(path, sizeof path, "%s/demo.obj", dir);
+    snprintf(path, sizeof path, "%s/demo.obj", test_dir);
     assert_int_equal(prt_demo_scene_write(path), PRT_OK);
     prt_context *ctx = test_context(0);
     prt_scene *s = NULL;
@@ -331,21 +330,6 @@ static void test_shared_meshes(void **state)
     prt_context_release(ctx);
 }
 
-static int setup(void **state)
-{
-    (void)state;
-    snprintf(dir, sizeof dir, "/tmp/prt_test_scene_XXXXXX");
-    return mkdtemp(dir) ? 0 : -1;
-}
-
-static int teardown(void **state)
-{
-    (void)state;
-    char cmd[300];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-    return system(cmd) == 0 ? 0 : -1;
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -358,5 +342,5 @@ int main(void)
         cmocka_unit_test(test_demo_scene),
         cmocka_unit_test(test_shared_meshes),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

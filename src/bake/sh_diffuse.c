@@ -71,15 +71,7 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, h
         bool blocked[PACKET];
         if (job->need_hits) {
             _Alignas(64) struct RTCRayHit16 rh;
-            for (int k = 0; k < PACKET; ++k) {
-                const float *d = job->dirs + (size_t)lane_sample[k < lanes ? k : 0] * 3;
-                valid[k] = k < lanes ? -1 : 0;
-                rh.ray.org_x[k] = org[0]; rh.ray.org_y[k] = org[1]; rh.ray.org_z[k] = org[2];
-                rh.ray.dir_x[k] = d[0]; rh.ray.dir_y[k] = d[1]; rh.ray.dir_z[k] = d[2];
-                rh.ray.tnear[k] = 0.0f; rh.ray.tfar[k] = INFINITY; rh.ray.time[k] = 0.0f;
-                rh.ray.mask[k] = 0xFFFFFFFFu; rh.ray.id[k] = 0; rh.ray.flags[k] = 0;
-                rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID; rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-            }
+            prt__packet_rayhits(&rh, valid, org, job->dirs, lane_sample, lanes);
             rtcIntersect16(valid, job->rc.scene, &ictx, &rh);
             for (int k = 0; k < lanes; ++k) {
                 blocked[k] = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
@@ -93,14 +85,7 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, h
             }
         } else {
             _Alignas(64) struct RTCRay16 r;
-            for (int k = 0; k < PACKET; ++k) {
-                const float *d = job->dirs + (size_t)lane_sample[k < lanes ? k : 0] * 3;
-                valid[k] = k < lanes ? -1 : 0;
-                r.org_x[k] = org[0]; r.org_y[k] = org[1]; r.org_z[k] = org[2];
-                r.dir_x[k] = d[0]; r.dir_y[k] = d[1]; r.dir_z[k] = d[2];
-                r.tnear[k] = 0.0f; r.tfar[k] = INFINITY; r.time[k] = 0.0f;
-                r.mask[k] = 0xFFFFFFFFu; r.id[k] = 0; r.flags[k] = 0;
-            }
+            prt__packet_rays(&r, valid, org, job->dirs, lane_sample, lanes);
             rtcOccluded16(valid, job->rc.scene, &ictx, &r);
             for (int k = 0; k < lanes; ++k) blocked[k] = r.tfar[k] < 0.0f;
         }

@@ -10,6 +10,26 @@ typedef struct prt__raycaster {
 
 prt_status prt__raycaster_create(const prt_context *ctx, const prt__mesh *m, prt__raycaster *out);
 void prt__raycaster_release(prt__raycaster *rc);
+/* Fills a 16-wide packet of rays from one origin along dirs[idx[k]] for the first `lanes`
+ * lanes; the rest are masked off in `valid` (which Embree reads with aligned loads). */
+static inline void prt__packet_rays(struct RTCRay16 *r, int *valid, const float org[3], const float *dirs, const int *idx, int lanes)
+{
+    for (int k = 0; k < 16; ++k) {
+        const float *d = dirs + (size_t)idx[k < lanes ? k : 0] * 3;
+        valid[k] = k < lanes ? -1 : 0;
+        r->org_x[k] = org[0]; r->org_y[k] = org[1]; r->org_z[k] = org[2];
+        r->dir_x[k] = d[0]; r->dir_y[k] = d[1]; r->dir_z[k] = d[2];
+        r->tnear[k] = 0.0f; r->tfar[k] = INFINITY; r->time[k] = 0.0f;
+        r->mask[k] = 0xFFFFFFFFu; r->id[k] = 0; r->flags[k] = 0;
+    }
+}
+
+static inline void prt__packet_rayhits(struct RTCRayHit16 *rh, int *valid, const float org[3], const float *dirs, const int *idx, int lanes)
+{
+    prt__packet_rays(&rh->ray, valid, org, dirs, idx, lanes);
+    for (int k = 0; k < 16; ++k) { rh->hit.geomID[k] = RTC_INVALID_GEOMETRY_ID; rh->hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID; }
+}
+
 /* Default origin offset for a mesh: small against its size, large against float precision. */
 float prt__ray_offset(const prt__mesh *m);
 
