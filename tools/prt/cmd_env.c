@@ -86,8 +86,14 @@ int cmd_env(int argc, char **argv)
         }
         char *text = cJSON_Print(root);
         cJSON_Delete(root);
-        FILE *f = output ? fopen(output, "w") : stdout;
-        if (!f || fputs(text, f) < 0 || fputc('\n', f) < 0 || (output && fclose(f) != 0)) {
+        /* A file is written beside its final name and renamed, so it is never seen half-written. */
+        char tmp[1100];
+        if (output) snprintf(tmp, sizeof tmp, "%s.tmp", output);
+        FILE *f = output ? fopen(tmp, "w") : stdout;
+        bool ok = f && fputs(text, f) >= 0 && fputc('\n', f) >= 0;
+        if (output && f) ok = (fclose(f) == 0) && ok && rename(tmp, output) == 0;
+        if (!ok) {
+            if (output) remove(tmp);
             cli_error(&c, "cannot write '%s'", output ? output : "(stdout)");
             rc = EXIT_FAILURE_INPUT;
         }
