@@ -88,6 +88,42 @@ static void test_winding(void **state)
     prt_context_release(ctx);
 }
 
+/* glTF 2.0 (embedded buffer, base colour) and ASCII PLY with extra vertex properties. */
+static void test_gltf_and_ply(void **state)
+{
+    (void)state;
+    char path[512];
+    write_text("tri.gltf",
+               "{\"asset\": {\"version\": \"2.0\"}, \"scene\": 0, \"scenes\": [{\"nodes\": [0]}], \"nodes\": [{\"mesh\": 0}],\n"
+               " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"indices\": 1, \"material\": 0}]}],\n"
+               " \"materials\": [{\"pbrMetallicRoughness\": {\"baseColorFactor\": [0.2, 0.4, 0.6, 1.0]}}],\n"
+               " \"buffers\": [{\"byteLength\": 44, \"uri\": \"data:application/octet-stream;base64,"
+               "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAAAAAAIC/AAABAAIAAAA=\"}],\n"
+               " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 6}],\n"
+               " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\", \"min\": [0, 0, -1], \"max\": [1, 0, 0]},\n"
+               "               {\"bufferView\": 1, \"componentType\": 5123, \"count\": 3, \"type\": \"SCALAR\"}]}\n",
+               path, sizeof path);
+    prt_context *ctx = test_context(1);
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    assert_int_equal(prt_scene_triangle_count(s), 1);
+    const float *alb = prt_scene_albedo(s), *n = prt_scene_normals(s);
+    assert_true(fabsf(alb[0] - 0.2f) < 1e-5f && fabsf(alb[1] - 0.4f) < 1e-5f && fabsf(alb[2] - 0.6f) < 1e-5f);
+    assert_true(fabsf(n[1] - 1.0f) < 1e-5f);   /* counter-clockwise seen from +y */
+    prt_scene_release(s);
+    write_text("quad.ply",
+               "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+               "property float confidence\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+               "0 0 0 1\n1 0 0 1\n1 0 -1 1\n0 0 -1 1\n5 5 5 0\n3 0 1 2\n3 0 2 3\n",
+               path, sizeof path);
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    assert_int_equal(prt_scene_triangle_count(s), 2);
+    assert_int_equal(prt_scene_vertex_count(s), 4);   /* the unreferenced fifth vertex is gone */
+    assert_true(fabsf(prt_scene_albedo(s)[0] - 0.7f) < 1e-6f);   /* no material: the default */
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
 static void test_json_scene(void **state)
 {
     (void)state;
@@ -335,6 +371,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_obj_with_materials),
         cmocka_unit_test(test_winding),
+        cmocka_unit_test(test_gltf_and_ply),
         cmocka_unit_test(test_json_scene),
         cmocka_unit_test(test_bad_mesh_inputs),
         cmocka_unit_test(test_cleaning_in_memory),

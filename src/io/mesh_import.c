@@ -11,11 +11,20 @@
 #include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
+#include <strings.h>
 
-static void material_albedo(const struct aiMaterial *mat, const prt_scene_desc *desc, float out[3])
+/* PLY and STL have no materials; assimp's readers invent a white one, which would make a
+ * scanned mesh a perfect reflector. Such files get the default albedo. */
+static bool format_has_materials(const char *path)
+{
+    const char *ext = strrchr(path, '.');
+    return !(ext && (!strcasecmp(ext, ".ply") || !strcasecmp(ext, ".stl")));
+}
+
+static void material_albedo(const struct aiMaterial *mat, const prt_scene_desc *desc, bool has_materials, float out[3])
 {
     memcpy(out, desc->default_albedo, 3 * sizeof(float));
-    if (!mat || desc->override_albedo) return;
+    if (!mat || desc->override_albedo || !has_materials) return;
     struct aiString name;
     if (aiGetMaterialString(mat, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS && strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) == 0)
         return;  /* assimp's stand-in for "no material": keep prt's default */
@@ -158,7 +167,8 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) || am->mNumFaces == 0) continue;
         float rgb[3];
         if (albedo_override) memcpy(rgb, albedo_override, sizeof rgb);
-        else material_albedo(am->mMaterialIndex < sc->mNumMaterials ? sc->mMaterials[am->mMaterialIndex] : NULL, desc, rgb);
+        else material_albedo(am->mMaterialIndex < sc->mNumMaterials ? sc->mMaterials[am->mMaterialIndex] : NULL, desc,
+                             format_has_materials(path), rgb);
         size_t nv = am->mNumVertices, nt = 0;
         float *pos = prt__calloc(nv * 3, sizeof(float)), *nrm = prt__calloc(nv * 3, sizeof(float));
         uint32_t *idx = prt__calloc((size_t)am->mNumFaces * 3, sizeof(uint32_t));
