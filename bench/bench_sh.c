@@ -171,9 +171,9 @@ int main(int argc, char **argv)
     printf("  \"bake_all_kinds_s\": %.3f, \"bake_all_kinds_rays_per_s\": %.0f, \"bake_all_kinds_ratio_vs_intersect\": %.3f,\n", bake_all,
            bake_all_rate, bake_all_rate / hit_rate);
     printf("  \"read_bandwidth_dram_GBps\": %.2f,\n", bw_dram / 1e9);
-    printf("  \"relight_shadowed_ms\": %.4f, \"relight_shadowed_GBps\": %.2f, \"read_same_bytes_GBps\": %.2f, \"relight_shadowed_ratio\": %.3f,\n",
+    printf("  \"relight_shadowed_ms\": %.4f, \"relight_shadowed_GBps\": %.2f, \"read_same_bytes_shadowed_GBps\": %.2f, \"relight_shadowed_ratio\": %.3f,\n",
            relight[0] * 1e3, bytes_sh / relight[0] / 1e9, bw_sh / 1e9, bytes_sh / relight[0] / bw_sh);
-    printf("  \"relight_interreflected_ms\": %.4f, \"relight_interreflected_GBps\": %.2f, \"read_same_bytes_GBps\": %.2f, \"relight_interreflected_ratio\": %.3f\n}\n",
+    printf("  \"relight_interreflected_ms\": %.4f, \"relight_interreflected_GBps\": %.2f, \"read_same_bytes_interreflected_GBps\": %.2f, \"relight_interreflected_ratio\": %.3f\n}\n",
            relight[1] * 1e3, bytes_ir / relight[1] / 1e9, bw_ir / 1e9, bytes_ir / relight[1] / bw_ir);
     fprintf(stderr,
             "bench: %s, %zu vertices, %d threads, order %d, %d samples\n"
