@@ -1,6 +1,7 @@
 #include "cli.h"
 
 #include <getopt.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
@@ -91,8 +92,17 @@ int cmd_bake(int argc, char **argv)
     prt_transfer *t = NULL;
     prt_status st = prt_scene_load(c.ctx, argv[optind], &sd, &scene);
     if (!st) {
-        if (!c.quiet)
+        if (!c.quiet) {
             fprintf(stderr, "prt bake: %s: %zu vertices, %zu triangles\n", argv[optind], prt_scene_vertex_count(scene), prt_scene_triangle_count(scene));
+            /* Transfer lives at vertices: a handful of big triangles gives blocky shading. */
+            if (sd.max_edge == 0 && prt_scene_triangle_count(scene) < 1000) {
+                float lo[3], hi[3];
+                prt_scene_bounds(scene, lo, hi);
+                float diag = sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+                fprintf(stderr, "prt bake: warning: only %zu triangles; per-vertex transfer will look blocky (try --max-edge %.3g)\n",
+                        prt_scene_triangle_count(scene), diag / 100.0f);
+            }
+        }
         bd.progress = cli_progress;
         bd.progress_user = &c;
         st = prt_bake_sh(c.ctx, scene, &bd, &t);
