@@ -134,6 +134,38 @@ static void test_pit_and_interreflection(void **state)
     prt_context_release(ctx);
 }
 
+/* White furnace inside a concave shape: with albedo 1 and unit radiance from everywhere, every
+ * point of the pit reflects exactly 1 once enough bounces are gathered, including the vertices
+ * on the concave edges where floor and walls meet (whose rays must not start inside the other
+ * surface's plane). */
+static void test_concave_white_furnace(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    make_pit(&m);
+    prt_scene *s = tm_scene(ctx, &m, 1.0f);
+    prt_bake_desc d = {0};
+    d.order = 2;
+    d.samples = 2048;
+    d.bounces = 64;
+    d.kinds = PRT_TRANSFER_INTERREFLECTED;
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &t), PRT_OK);
+    size_t nv = prt_transfer_vertex_count(t);
+    prt_sh_light L = uniform_light(2);
+    float *rgb = malloc(nv * 3 * sizeof(float));
+    assert_int_equal(prt_relight_sh(ctx, t, PRT_TRANSFER_INTERREFLECTED, &L, rgb), PRT_OK);
+    double worst = 0;
+    for (size_t i = 0; i < nv * 3; ++i) worst = fmax(worst, fabs(rgb[i] - 1.0));
+    if (worst > 0.01) fail_msg("furnace in a pit: worst vertex off by %g", worst);
+    free(rgb);
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 /* Colour bleeding: a white floor next to a red wall receives more red than green. */
 static void test_colour_bleeding(void **state)
 {
@@ -294,6 +326,7 @@ int main(void)
         cmocka_unit_test(test_unoccluded_plane),
         cmocka_unit_test(test_convex_white_furnace),
         cmocka_unit_test(test_pit_and_interreflection),
+        cmocka_unit_test(test_concave_white_furnace),
         cmocka_unit_test(test_colour_bleeding),
         cmocka_unit_test(test_deterministic_across_threads),
         cmocka_unit_test(test_relight_rotation),

@@ -11,5 +11,6 @@
 #include "prt/scene.h"
 #include "prt/transfer.h"
 #include "prt/render.h"
+#include "prt/reference.h"
 
 #endif

@@ -22,6 +22,7 @@ typedef struct bake_job {
     const prt__mesh *mesh;
     int order, ncoeff, samples;
     float offset;
+    float *origins;       /* [vertex][3], see prt__vertex_origins */
     float *dirs;          /* [samples][3] */
     float *basis;         /* [samples][ncoeff] */
     prt__raycaster rc;
@@ -47,10 +48,10 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, h
                               uint32_t *nhits_out)
 {
     const prt__mesh *m = job->mesh;
-    const float *p = m->positions + v * 3, *n = m->normals + v * 3;
+    const float *n = m->normals + v * 3;
     const float w = (float)(4.0 * PRT_PI / job->samples) / (float)PRT_PI;   /* 4pi/N and the 1/pi of the BRDF */
     const int nc = job->ncoeff;
-    float org[3] = {p[0] + n[0] * job->offset, p[1] + n[1] * job->offset, p[2] + n[2] * job->offset};
+    const float *org = job->origins + v * 3;
     uint32_t nhits = 0;   /* scratch holds one entry per sample, so it never overflows */
     int lane_sample[PACKET];
     float lane_cos[PACKET];
@@ -188,6 +189,7 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
         for (int i = 0; i < nc; ++i) job.basis[(size_t)j * nc + i] = (float)y[i];
     }
     if ((st = prt__raycaster_create(ctx, &t->mesh, &job.rc))) goto done;
+    if ((st = prt__vertex_origins(&t->mesh, job.offset, &job.origins))) goto done;
 
     int alloc_failed = 0;
     prt__progress_begin(&job.progress, "visibility", nv);
@@ -260,7 +262,7 @@ done:
     prt__raycaster_release(&job.rc);
     if (job.hits)
         for (size_t v = 0; v < nv; ++v) free(job.hits[v]);
-    free(job.hits); free(job.hit_count); free(job.dirs); free(job.basis); free(unsh); free(shad);
+    free(job.hits); free(job.hit_count); free(job.origins); free(job.dirs); free(job.basis); free(unsh); free(shad);
     if (st) { prt_transfer_release(t); return st; }
     *out = t;
     return PRT_OK;

@@ -43,6 +43,37 @@ void prt__raycaster_release(prt__raycaster *rc)
     rc->scene = NULL;
 }
 
+prt_status prt__vertex_origins(const prt__mesh *m, float offset, float **out)
+{
+    float *o = prt__calloc(m->vertex_count * 3, sizeof(float));
+    float *cen = prt__calloc(m->vertex_count * 3, sizeof(float));
+    if (!o || !cen) { free(o); free(cen); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for ray origins"); }
+    for (size_t t = 0; t < m->triangle_count; ++t) {
+        const uint32_t *tri = m->indices + t * 3;
+        for (int c = 0; c < 3; ++c) {
+            float centroid = (m->positions[tri[0] * 3 + c] + m->positions[tri[1] * 3 + c] + m->positions[tri[2] * 3 + c]) / 3.0f;
+            for (int k = 0; k < 3; ++k) cen[tri[k] * 3 + c] += centroid - m->positions[tri[k] * 3 + c];
+        }
+    }
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        const float *p = m->positions + v * 3, *n = m->normals + v * 3;
+        float *d = cen + v * 3;
+        float along = prt__v3_dot(d, n);   /* keep only the tangential part */
+        for (int c = 0; c < 3; ++c) d[c] -= along * n[c];
+        /* d sums the offsets to the fan's centroids: near zero inside a flat or evenly curved
+         * fan, large at a boundary or crease; its length also bounds how far is safe to move. */
+        float len = prt__v3_len(d), step = 0.0f;
+        if (len > 1e-30f) {
+            for (int c = 0; c < 3; ++c) d[c] /= len;
+            step = fminf(offset, 0.25f * len);
+        }
+        for (int c = 0; c < 3; ++c) o[v * 3 + c] = p[c] + n[c] * offset + d[c] * step;
+    }
+    free(cen);
+    *out = o;
+    return PRT_OK;
+}
+
 float prt__ray_offset(const prt__mesh *m)
 {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};

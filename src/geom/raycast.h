@@ -30,6 +30,12 @@ static inline void prt__packet_rayhits(struct RTCRayHit16 *rh, int *valid, const
     for (int k = 0; k < 16; ++k) { rh->hit.geomID[k] = RTC_INVALID_GEOMETRY_ID; rh->hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID; }
 }
 
+/* Ray origins for rays leaving each vertex: the vertex moved along its normal by `offset`, and
+ * towards the centroid of its triangle fan by as much (at most a quarter of the way). The second
+ * move keeps a vertex on a concave edge (a floor meeting a wall) from starting its rays inside the
+ * other surface's plane, where they would be blocked or leak depending on rounding. */
+prt_status prt__vertex_origins(const prt__mesh *m, float offset, float **out);
+
 /* Default origin offset for a mesh: small against its size, large against float precision. */
 float prt__ray_offset(const prt__mesh *m);
 

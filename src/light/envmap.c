@@ -1,13 +1,8 @@
 /* Environment maps: direction <-> pixel for each layout, per-pixel solid angles, lookup and
  * projection onto SH. */
-#include "core/internal.h"
+#include "light/envmap_internal.h"
 
 #include <string.h>
-
-struct prt_envmap {
-    prt_image img;
-    prt_env_layout layout;
-};
 
 prt_status prt_envmap_from_image(prt_image *img, prt_env_layout layout, prt_envmap **out)
 {
@@ -73,40 +68,49 @@ static const cross_face cross_faces[6] = {
     {1, 3, {0, 0, 1}, {1, 0, 0}, {0, 1, 0}},     /* +z, stored upside down */
 };
 
-/* Direction and solid angle of the pixel centre at (x, y); returns false outside the map. */
-static bool pixel_dir(const prt_envmap *e, int x, int y, double dir[3], double *solid_angle)
+bool prt__env_dir_at(const prt_envmap *e, double fx, double fy, double dir[3], double *jac)
 {
     const int w = e->img.width, h = e->img.height;
     if (e->layout == PRT_ENV_LATLONG) {
-        double th0 = PRT_PI * y / h, th1 = PRT_PI * (y + 1) / h, th = PRT_PI * (y + 0.5) / h;
-        double phi = 2.0 * PRT_PI * ((x + 0.5) / w - 0.5);
+        double th = PRT_PI * fy / h, phi = 2.0 * PRT_PI * (fx / w - 0.5);
         dir[0] = sin(th) * sin(phi); dir[1] = cos(th); dir[2] = -sin(th) * cos(phi);
-        *solid_angle = 2.0 * PRT_PI / w * (cos(th0) - cos(th1));
+        *jac = (2.0 * PRT_PI / w) * (PRT_PI / h) * sin(th);
         return true;
     }
     if (e->layout == PRT_ENV_ANGULAR) {
-        double a = 2.0 * (x + 0.5) / w - 1.0, b = 1.0 - 2.0 * (y + 0.5) / h, r = sqrt(a * a + b * b);
+        double a = 2.0 * fx / w - 1.0, b = 1.0 - 2.0 * fy / h, r = sqrt(a * a + b * b);
         if (r >= 1.0) return false;
         double th = PRT_PI * r, s = r > 1e-12 ? sin(th) / r : PRT_PI;
         dir[0] = a * s; dir[1] = b * s; dir[2] = -cos(th);
-        *solid_angle = PRT_PI * s * 4.0 / ((double)w * h);   /* dw = pi sin(pi r) / r dA */
+        *jac = PRT_PI * s * 4.0 / ((double)w * h);   /* dw = pi sin(pi r) / r dA */
         return true;
     }
-    int size = w / 3, col = x / size, row = y / size;
+    int size = w / 3, col = (int)floor(fx / size), row = (int)floor(fy / size);
     for (int f = 0; f < 6; ++f) {
         const cross_face *cf = &cross_faces[f];
         if (cf->col != col || cf->row != row) continue;
-        double fu = 2.0 * (x - col * size + 0.5) / size - 1.0, fv = 2.0 * (y - row * size + 0.5) / size - 1.0;
+        double fu = 2.0 * (fx - col * size) / size - 1.0, fv = 2.0 * (fy - row * size) / size - 1.0;
         double len2 = 1.0 + fu * fu + fv * fv, len = sqrt(len2);
         for (int c = 0; c < 3; ++c) dir[c] = (cf->axis[c] + fu * cf->right[c] + fv * cf->down[c]) / len;
-        *solid_angle = 4.0 / ((double)size * size) / (len2 * len);
+        *jac = 4.0 / ((double)size * size) / (len2 * len);
         return true;
     }
     return false;
 }
 
+/* Direction and solid angle of the pixel centre at (x, y); returns false outside the map. */
+static bool pixel_dir(const prt_envmap *e, int x, int y, double dir[3], double *solid_angle)
+{
+    if (!prt__env_dir_at(e, x + 0.5, y + 0.5, dir, solid_angle)) return false;
+    if (e->layout == PRT_ENV_LATLONG) {   /* exact: the pixel's band of the sphere */
+        const int w = e->img.width, h = e->img.height;
+        *solid_angle = 2.0 * PRT_PI / w * (cos(PRT_PI * y / h) - cos(PRT_PI * (y + 1) / h));
+    }
+    return true;
+}
+
 /* Continuous image coordinates (pixels) for a direction. */
-static void dir_to_pixel(const prt_envmap *e, const float d[3], float *px, float *py)
+void prt__env_pixel_of(const prt_envmap *e, const float d[3], float *px, float *py)
 {
     const int w = e->img.width, h = e->img.height;
     if (e->layout == PRT_ENV_LATLONG) {
@@ -134,11 +138,21 @@ static void dir_to_pixel(const prt_envmap *e, const float d[3], float *px, float
     }
 }
 
+size_t prt__env_pixel_index(const prt_envmap *e, const float d[3])
+{
+    float fx, fy;
+    prt__env_pixel_of(e, d, &fx, &fy);
+    int x = (int)floorf(fx), y = (int)floorf(fy);
+    x = x < 0 ? 0 : x >= e->img.width ? e->img.width - 1 : x;
+    y = y < 0 ? 0 : y >= e->img.height ? e->img.height - 1 : y;
+    return (size_t)y * e->img.width + x;
+}
+
 void prt_envmap_lookup(const prt_envmap *e, const float dir[3], float rgb[3])
 {
     const int w = e->img.width, h = e->img.height;
     float px, py;
-    dir_to_pixel(e, dir, &px, &py);
+    prt__env_pixel_of(e, dir, &px, &py);
     float fx = px - 0.5f, fy = py - 0.5f;
     int x0 = (int)floorf(fx), y0 = (int)floorf(fy);
     float tx = fx - x0, ty = fy - y0;

@@ -1,0 +1,59 @@
+/* prt/reference.h - ground truth: an unbiased Monte Carlo path tracer over the same scene and
+ * lighting that the PRT methods bake, for measuring their error.
+ *
+ * Surfaces are Lambertian with the scene's per-vertex albedo, one-sided (the back of a triangle
+ * is black, as in the bakes). Light comes from a distant environment map, piecewise constant
+ * over its pixels (as the SH projection sees it), importance-sampled and combined with cosine
+ * sampling by multiple importance sampling. Paths end by Russian roulette. Results are
+ * deterministic for a seed whatever the thread count: each (vertex or pixel, sample) pair has its
+ * own random stream. */
+#ifndef PRT_REFERENCE_H
+#define PRT_REFERENCE_H
+
+#include "prt/base.h"
+#include "prt/lighting.h"
+#include "prt/render.h"
+#include "prt/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct prt_reference_desc {
+    int samples;               /* paths per vertex or pixel; 0 = 256. With target_rel_error, the first batch */
+    float target_rel_error;    /* > 0: add batches until each vertex's standard error / mean is below this */
+    int max_samples;           /* cap for target_rel_error; 0 = 65536 */
+    int max_depth;             /* hard bounce limit; 0 = 256 (Russian roulette ends paths long before) */
+    uint32_t seed;
+    float ray_offset;          /* 0 = 1e-4 x scene diagonal, as in the bakes */
+    const double *rotation;    /* row-major 3x3 applied to the environment; NULL = identity */
+    float intensity;           /* environment scale; 0 = 1 */
+    prt_progress_fn progress;
+    void *progress_user;
+} prt_reference_desc;
+
+/* Per-vertex exit radiance; all arrays 3 floats per vertex, owned by the result. */
+typedef struct prt_reference_vertices {
+    size_t vertex_count;
+    float *radiance;           /* direct + indirect */
+    float *direct;             /* light that reached the vertex straight from the environment */
+    float *indirect;           /* light that bounced off at least one surface first */
+    float *std_error;          /* standard error of the radiance estimate */
+    float *std_error_indirect;
+    int *samples;              /* paths traced per vertex */
+} prt_reference_vertices;
+
+prt_status prt_reference_trace_vertices(prt_context *ctx, const prt_scene *scene, const prt_envmap *env,
+                                        const prt_reference_desc *desc, prt_reference_vertices *out);
+void prt_reference_vertices_free(prt_reference_vertices *r);
+
+/* An image from a camera: each pixel's radiance (background where no surface is hit, NULL =
+ * black); std_error may be NULL. */
+prt_status prt_reference_trace_image(prt_context *ctx, const prt_scene *scene, const prt_envmap *env,
+                                     const prt_reference_desc *desc, const prt_camera *cam, int width, int height,
+                                     const float background[3], prt_image *out, prt_image *std_error);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

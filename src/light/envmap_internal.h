@@ -1,0 +1,21 @@
+/* Environment-map internals shared by projection (envmap.c) and sampling (env_sample.c). */
+#ifndef PRT_LIGHT_ENVMAP_INTERNAL_H
+#define PRT_LIGHT_ENVMAP_INTERNAL_H
+
+#include "core/internal.h"
+
+struct prt_envmap {
+    prt_image img;
+    prt_env_layout layout;
+};
+
+/* Direction at continuous image coordinates (pixels, (0,0) = top-left corner) and the solid
+ * angle per unit pixel area there; false outside the map (angular rim, empty cross cells). */
+bool prt__env_dir_at(const prt_envmap *e, double fx, double fy, double dir[3], double *jac);
+/* Continuous image coordinates of a direction. */
+void prt__env_pixel_of(const prt_envmap *e, const float d[3], float *fx, float *fy);
+/* The pixel a direction falls in (the map is piecewise constant over pixels, as the SH
+ * projection and the path tracer both treat it). */
+size_t prt__env_pixel_index(const prt_envmap *e, const float d[3]);
+
+#endif

@@ -1,0 +1,258 @@
+/* The reference path tracer against closed forms, and the PRT bake against the reference. */
+#include "common.h"
+
+/* A band-limited radiance (order 3), positive everywhere, as a lat-long map. */
+static const float known[9] = {4.0f, 0.4f, 0.8f, -0.5f, 0.2f, -0.15f, 0.3f, 0.1f, -0.25f};
+
+static prt_envmap *band_limited_env(int width)
+{
+    prt_image img = {width, width / 2, malloc((size_t)width * width / 2 * 3 * sizeof(float))};
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < width; ++x) {
+            double th = M_PI * (y + 0.5) / img.height, ph = 2 * M_PI * ((x + 0.5) / width - 0.5), yv[9];
+            double d[3] = {sin(th) * sin(ph), cos(th), -sin(th) * cos(ph)};
+            prt_sh_eval(3, d, yv);
+            double v = 0;
+            for (int i = 0; i < 9; ++i) v += known[i] * yv[i];
+            for (int c = 0; c < 3; ++c) img.rgb[((size_t)y * width + x) * 3 + c] = (float)v * (c == 0 ? 1.0f : c == 1 ? 0.8f : 0.6f);
+        }
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
+    return env;
+}
+
+static prt_envmap *constant_env(float v)
+{
+    prt_image img = {64, 32, malloc(64 * 32 * 3 * sizeof(float))};
+    for (int i = 0; i < 64 * 32 * 3; ++i) img.rgb[i] = v;
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
+    return env;
+}
+
+/* White furnace: a convex object of albedo rho under unit radiance reflects exactly rho, all of
+ * it direct. */
+static void test_open_white_furnace(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_sphere(&m, (float[3]){0, 0, 0}, 1.0f, 12, 24);
+    prt_scene *s = tm_scene(ctx, &m, 0.8f);
+    prt_envmap *env = constant_env(1.0f);
+    prt_reference_desc d = {0};
+    d.samples = 256;
+    prt_reference_vertices r;
+    assert_int_equal(prt_reference_trace_vertices(ctx, s, env, &d, &r), PRT_OK);
+    for (size_t v = 0; v < r.vertex_count * 3; ++v) {
+        if (fabsf(r.radiance[v] - 0.8f) > 4 * r.std_error[v] + 1e-4f)
+            fail_msg("vertex %zu: %g +- %g, expected 0.8", v / 3, r.radiance[v], r.std_error[v]);
+        assert_true(r.indirect[v] == 0.0f);
+        assert_true(r.std_error[v] < 0.05f);
+    }
+    prt_reference_vertices_free(&r);
+    prt_envmap_release(env);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+/* The same furnace inside a concave pit: albedo 1 reflects exactly 1 everywhere, however many
+ * bounces it takes (Russian roulette must stay unbiased). */
+static void make_pit(test_mesh *m, int n);
+static void test_concave_white_furnace(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    make_pit(&m, 4);
+    prt_scene *s = tm_scene(ctx, &m, 1.0f);
+    prt_envmap *env = constant_env(1.0f);
+    prt_reference_desc d = {0};
+    d.samples = 1024;
+    prt_reference_vertices r;
+    assert_int_equal(prt_reference_trace_vertices(ctx, s, env, &d, &r), PRT_OK);
+    double sum = 0, err2 = 0;
+    for (size_t v = 0; v < r.vertex_count * 3; ++v) {
+        if (fabsf(r.radiance[v] - 1.0f) > 5 * r.std_error[v]) fail_msg("vertex %zu: %g +- %g, expected 1", v / 3, r.radiance[v], r.std_error[v]);
+        sum += r.radiance[v];
+        err2 += (double)r.std_error[v] * r.std_error[v];
+    }
+    double n = (double)r.vertex_count * 3, mean = sum / n, mean_err = sqrt(err2) / n;
+    if (fabs(mean - 1.0) > 4 * mean_err) fail_msg("mean %g +- %g, expected 1", mean, mean_err);
+    prt_reference_vertices_free(&r);
+    prt_envmap_release(env);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+/* A convex diffuse sphere under a band-limited environment: exit radiance is rho/pi times the
+ * irradiance, sum_l A_l sum_m L_lm y_lm(n) (Ramamoorthi & Hanrahan), exactly. */
+static void test_sphere_analytic_irradiance(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_sphere(&m, (float[3]){0, 0, 0}, 1.0f, 10, 20);
+    const float rho = 0.6f;
+    prt_scene *s = tm_scene(ctx, &m, rho);
+    prt_envmap *env = band_limited_env(512);
+    prt_reference_desc d = {0};
+    d.samples = 512;
+    d.seed = 5;
+    prt_reference_vertices r;
+    assert_int_equal(prt_reference_trace_vertices(ctx, s, env, &d, &r), PRT_OK);
+    double zh[3];
+    prt_sh_clamped_cosine_zh(3, zh);
+    const float *n = prt_scene_normals(s);
+    int outliers = 0;
+    for (size_t v = 0; v < r.vertex_count; ++v) {
+        double dn[3] = {n[v * 3], n[v * 3 + 1], n[v * 3 + 2]}, y[9], e = 0;
+        prt_sh_eval(3, dn, y);
+        for (int l = 0; l < 3; ++l)
+            for (int mm = -l; mm <= l; ++mm) e += sqrt(4 * M_PI / (2 * l + 1)) * zh[l] * known[l * (l + 1) + mm] * y[l * (l + 1) + mm];
+        double expect = rho / M_PI * e;   /* red channel */
+        double err = fabs(r.radiance[v * 3] - expect), bound = 4 * r.std_error[v * 3] + 0.005 * expect;
+        if (err > bound) outliers++;
+        if (err > 2 * bound) fail_msg("vertex %zu: %g +- %g, analytic %g", v, r.radiance[v * 3], r.std_error[v * 3], expect);
+    }
+    assert_true(outliers <= (int)(r.vertex_count / 100) + 1);
+    prt_reference_vertices_free(&r);
+    prt_envmap_release(env);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+/* The pit of test_transfer.c: five inward quads. */
+static void make_pit(test_mesh *m, int n)
+{
+    tm_quad(m, (float[3]){-0.5f, 0, 0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 0, -1}, n);
+    tm_quad(m, (float[3]){-0.5f, 0, 0.5f}, (float[3]){0, 0, -1}, (float[3]){0, 1, 0}, n);
+    tm_quad(m, (float[3]){0.5f, 0, -0.5f}, (float[3]){0, 0, 1}, (float[3]){0, 1, 0}, n);
+    tm_quad(m, (float[3]){-0.5f, 0, -0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 1, 0}, n);
+    tm_quad(m, (float[3]){0.5f, 0, 0.5f}, (float[3]){-1, 0, 0}, (float[3]){0, 1, 0}, n);
+}
+
+/* PRT inter-reflected transfer under a lighting of its own band limit is exact up to the bake's
+ * sampling and interpolation: it must agree with the reference within its error bars. */
+static void test_prt_matches_reference(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    make_pit(&m, 8);
+    prt_scene *s = tm_scene(ctx, &m, 0.7f);
+    prt_envmap *env = band_limited_env(256);
+    prt_bake_desc bd = {0};
+    bd.order = 3;
+    bd.samples = 4096;
+    bd.bounces = 12;
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake_sh(ctx, s, &bd, &t), PRT_OK);
+    prt_sh_light L;
+    assert_int_equal(prt_envmap_project_sh(env, 3, &L), PRT_OK);
+    size_t nv = prt_transfer_vertex_count(t);
+    float *prt_rgb = malloc(nv * 3 * sizeof(float)), *prt_direct = malloc(nv * 3 * sizeof(float));
+    assert_int_equal(prt_relight_sh(ctx, t, PRT_TRANSFER_INTERREFLECTED, &L, prt_rgb), PRT_OK);
+    assert_int_equal(prt_relight_sh(ctx, t, PRT_TRANSFER_SHADOWED, &L, prt_direct), PRT_OK);
+    prt_reference_desc d = {0};
+    d.samples = 1024;
+    prt_reference_vertices r;
+    assert_int_equal(prt_reference_trace_vertices(ctx, s, env, &d, &r), PRT_OK);
+    assert_int_equal(r.vertex_count, nv);
+    double num = 0, den = 0, num_ind = 0, den_ind = 0, noise = 0, noise_ind = 0;
+    int outside = 0;
+    for (size_t i = 0; i < nv * 3; ++i) {
+        double diff = prt_rgb[i] - r.radiance[i];
+        num += diff * diff;
+        den += (double)r.radiance[i] * r.radiance[i];
+        double ind = prt_rgb[i] - prt_direct[i], di = ind - r.indirect[i];
+        num_ind += di * di;
+        den_ind += (double)r.indirect[i] * r.indirect[i];
+        noise += (double)r.std_error[i] * r.std_error[i];
+        noise_ind += (double)r.std_error_indirect[i] * r.std_error_indirect[i];
+        if (fabs(diff) > 4 * r.std_error[i] + 0.02 * r.radiance[i]) outside++;
+    }
+    /* The reference's own noise, as a relative L2 over all vertices: what a perfect PRT would show. */
+    double rel = sqrt(num / den), rel_ind = sqrt(num_ind / den_ind), rel_noise = sqrt(noise / den), rel_noise_ind = sqrt(noise_ind / den_ind);
+    print_message("PRT (order 3, 12 bounces) vs reference on the pit: relative L2 %.4f (reference noise %.4f), indirect %.4f (noise %.4f), "
+                  "%d of %zu outside 4 sigma + 2%%\n", rel, rel_noise, rel_ind, rel_noise_ind, outside, nv * 3);
+    assert_true(rel < 1.5 * rel_noise + 0.01);
+    assert_true(rel_ind < 1.5 * rel_noise_ind + 0.02);
+    assert_true(outside < (int)(nv * 3 / 20));
+    free(prt_rgb);
+    free(prt_direct);
+    prt_reference_vertices_free(&r);
+    prt_transfer_release(t);
+    prt_envmap_release(env);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+static void test_deterministic_and_image(void **state)
+{
+    (void)state;
+    test_mesh m = {0};
+    make_pit(&m, 4);
+    prt_envmap *env = band_limited_env(64);
+    prt_reference_vertices r[2];
+    for (int i = 0; i < 2; ++i) {
+        prt_context *ctx = test_context(i + 1);
+        prt_scene *s = tm_scene(ctx, &m, 0.5f);
+        prt_reference_desc d = {0};
+        d.samples = 16;
+        d.target_rel_error = 0.05f;
+        d.max_samples = 256;
+        assert_int_equal(prt_reference_trace_vertices(ctx, s, env, &d, &r[i]), PRT_OK);
+        prt_scene_release(s);
+        prt_context_release(ctx);
+    }
+    assert_memory_equal(r[0].radiance, r[1].radiance, r[0].vertex_count * 3 * sizeof(float));
+    assert_memory_equal(r[0].samples, r[1].samples, r[0].vertex_count * sizeof(int));
+    bool grew = false;
+    for (size_t v = 0; v < r[0].vertex_count; ++v) grew |= r[0].samples[v] > 16;
+    assert_true(grew);   /* the target error asked for more samples somewhere */
+    prt_reference_vertices_free(&r[0]);
+    prt_reference_vertices_free(&r[1]);
+
+    /* An image of a convex sphere in a white furnace: rho on the sphere, background elsewhere. */
+    prt_context *ctx = test_context(0);
+    test_mesh sm = {0};
+    tm_sphere(&sm, (float[3]){0, 0, 0}, 1.0f, 16, 32);
+    prt_scene *s = tm_scene(ctx, &sm, 0.5f);
+    prt_envmap *white = constant_env(1.0f);
+    prt_camera cam = {{0, 0, 4}, {0, 0, 0}, {0, 1, 0}, 40};
+    prt_reference_desc d = {0};
+    d.samples = 64;
+    prt_image img, err;
+    float bg[3] = {0.25f, 0.25f, 0.25f};
+    assert_int_equal(prt_reference_trace_image(ctx, s, white, &d, &cam, 32, 32, bg, &img, &err), PRT_OK);
+    float centre = img.rgb[(16 * 32 + 16) * 3], corner = img.rgb[0];
+    assert_true(fabsf(centre - 0.5f) < 4 * err.rgb[(16 * 32 + 16) * 3] + 1e-3f);
+    assert_true(corner == 0.25f);
+    prt_image_free(&img);
+    prt_image_free(&err);
+    d.samples = -1;
+    assert_int_equal(prt_reference_trace_image(ctx, s, white, &d, &cam, 32, 32, bg, &img, NULL), PRT_ERR_INVALID_ARG);
+    prt_envmap_release(white);
+    prt_scene_release(s);
+    tm_free(&sm);
+    prt_context_release(ctx);
+    prt_envmap_release(env);
+    tm_free(&m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_open_white_furnace),
+        cmocka_unit_test(test_concave_white_furnace),
+        cmocka_unit_test(test_sphere_analytic_irradiance),
+        cmocka_unit_test(test_prt_matches_reference),
+        cmocka_unit_test(test_deterministic_and_image),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
