@@ -24,6 +24,11 @@ void cli_error(const cli *c, const char *fmt, ...)
 int cli_fail(const cli *c, prt_status st)
 {
     cli_error(c, "%s", prt_last_error()[0] ? prt_last_error() : prt_status_string(st));
+    return cli_exit_code(st);
+}
+
+int cli_exit_code(prt_status st)
+{
     switch (st) {
     case PRT_OK: return EXIT_OK;
     case PRT_ERR_INVALID_ARG: return EXIT_USAGE;
@@ -139,6 +144,70 @@ int cli_progress(void *user, const char *stage, uint64_t done, uint64_t total)
     if (frac >= 1.0) fputc('\n', stderr);
     fflush(stderr);
     return interrupted;
+}
+
+/* ---- camera ---- */
+int cli_view_option(const cli *c, cli_view *v, int opt, const char *arg)
+{
+    switch (opt) {
+    case OPT_WIDTH: if (!cli_parse_int(arg, 1, 8192, &v->width)) { cli_usage(c, "--width must be 1..8192"); return -1; } return 1;
+    case OPT_HEIGHT: if (!cli_parse_int(arg, 1, 8192, &v->height)) { cli_usage(c, "--height must be 1..8192"); return -1; } return 1;
+    case OPT_VIEW: if (!cli_parse_vec3(arg, false, v->view)) { cli_usage(c, "--view takes X,Y,Z"); return -1; } v->have_view = true; return 1;
+    case OPT_EYE: if (!cli_parse_vec3(arg, false, v->eye)) { cli_usage(c, "--eye takes X,Y,Z"); return -1; } v->have_eye = true; return 1;
+    case OPT_TARGET: if (!cli_parse_vec3(arg, false, v->target)) { cli_usage(c, "--target takes X,Y,Z"); return -1; } v->have_target = true; return 1;
+    case OPT_FOV: if (!cli_parse_float(arg, &v->fov) || v->fov <= 1 || v->fov >= 179) { cli_usage(c, "--fov must be in (1, 179)"); return -1; } return 1;
+    case OPT_EXPOSURE: if (!cli_parse_float(arg, &v->save.exposure_stops)) { cli_usage(c, "--exposure takes a number of stops"); return -1; } return 1;
+    case OPT_TONEMAP:
+        if (!strcasecmp(arg, "reinhard")) v->save.tonemap = 1;
+        else if (!strcasecmp(arg, "clamp")) v->save.tonemap = 2;
+        else { cli_usage(c, "--tonemap must be reinhard or clamp"); return -1; }
+        return 1;
+    case OPT_BACKGROUND: if (!cli_parse_vec3(arg, true, v->background)) { cli_usage(c, "--background takes R,G,B"); return -1; } return 1;
+    }
+    return 0;
+}
+
+void cli_view_camera(const cli_view *v, const float *p, size_t nv, float aspect, prt_camera *cam)
+{
+    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+    for (size_t i = 0; i < nv * 3; ++i) {
+        if (p[i] < lo[i % 3]) lo[i % 3] = p[i];
+        if (p[i] > hi[i % 3]) hi[i % 3] = p[i];
+    }
+    prt_camera_frame(lo, hi, v->have_view ? v->view : NULL, v->fov, aspect, cam);
+    if (v->have_eye) { memcpy(cam->eye, v->eye, sizeof v->eye); memcpy(cam->target, v->target, sizeof v->target); }
+}
+
+/* ---- scene ---- */
+int cli_scene_option(const cli *c, prt_scene_desc *sd, int opt, const char *arg)
+{
+    switch (opt) {
+    case OPT_MAX_EDGE:
+        if (!cli_parse_float(arg, &sd->max_edge) || sd->max_edge <= 0) { cli_usage(c, "--max-edge must be > 0"); return -1; }
+        return 1;
+    case OPT_ALBEDO:
+    case OPT_DEFAULT_ALBEDO:
+        if (!cli_parse_vec3(arg, true, sd->default_albedo) || sd->default_albedo[0] < 0 || sd->default_albedo[0] > 1 ||
+            sd->default_albedo[1] < 0 || sd->default_albedo[1] > 1 || sd->default_albedo[2] < 0 || sd->default_albedo[2] > 1) {
+            cli_usage(c, "--%s takes R,G,B (or one value) in [0, 1]", opt == OPT_ALBEDO ? "albedo" : "default-albedo");
+            return -1;
+        }
+        if (opt == OPT_ALBEDO) sd->override_albedo = 1;
+        return 1;
+    case OPT_CREASE:
+        if (!cli_parse_float(arg, &sd->crease_angle_deg) || sd->crease_angle_deg <= 0 || sd->crease_angle_deg > 180) {
+            cli_usage(c, "--crease-angle must be in (0, 180]");
+            return -1;
+        }
+        return 1;
+    case OPT_WINDING:
+        if (!strcasecmp(arg, "auto")) sd->winding = PRT_WINDING_AUTO;
+        else if (!strcasecmp(arg, "keep")) sd->winding = PRT_WINDING_KEEP;
+        else if (!strcasecmp(arg, "flip")) sd->winding = PRT_WINDING_FLIP;
+        else { cli_usage(c, "--winding must be auto, keep or flip"); return -1; }
+        return 1;
+    }
+    return 0;
 }
 
 /* ---- lighting ---- */

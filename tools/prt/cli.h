@@ -32,6 +32,8 @@ void cli_error(const cli *c, const char *fmt, ...) __attribute__((format(printf,
 int cli_fail(const cli *c, prt_status st);
 int cli_usage(const cli *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 int cli_make_context(cli *c);
+/* The exit code for a status, when the message was already printed. */
+int cli_exit_code(prt_status st);
 
 bool cli_parse_int(const char *s, int lo, int hi, int *out);
 bool cli_parse_float(const char *s, float *out);
@@ -75,6 +77,74 @@ void cli_light_defaults_from(cli_light *l, const prt_transfer *t);
 /* Loads the environment (or builds the sky) and projects it to SH of the given order. */
 prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh_light *out, prt_envmap **env_out);
 
+/* Scene options shared by bake, reference and sweep. */
+#define CLI_SCENE_OPTIONS_HELP \
+    "      --max-edge L       subdivide until no edge is longer than L scene units\n" \
+    "      --albedo R,G,B     albedo for every material (or one value for grey)\n" \
+    "      --default-albedo R,G,B  albedo where the file has no material (default 0.7)\n" \
+    "      --crease-angle D   split computed normals above D degrees (default 45)\n" \
+    "      --winding W        auto | keep | flip: which side of imported triangles faces out\n" \
+    "                         (auto flips closed meshes without normals that are wound inside out)\n"
+enum { OPT_MAX_EDGE = 1100, OPT_ALBEDO, OPT_DEFAULT_ALBEDO, OPT_CREASE, OPT_WINDING };
+#define CLI_SCENE_LONG_OPTIONS \
+    {"max-edge", required_argument, 0, OPT_MAX_EDGE}, {"albedo", required_argument, 0, OPT_ALBEDO}, \
+    {"default-albedo", required_argument, 0, OPT_DEFAULT_ALBEDO}, {"crease-angle", required_argument, 0, OPT_CREASE}, \
+    {"winding", required_argument, 0, OPT_WINDING}
+/* Returns 1 if consumed, 0 if not a scene option, -1 after reporting a bad value. */
+int cli_scene_option(const cli *c, prt_scene_desc *sd, int opt, const char *arg);
+
+/* ---- per-vertex and image results (results.c) ---- */
+typedef struct cli_vertex_field { const char *name; const float *rgb; } cli_vertex_field;
+/* {"kind": kind, "vertex_count": n, NAME: [[r, g, b], ...], ...}, written atomically. */
+prt_status cli_write_vertex_json(const char *path, const char *kind, size_t nv, const cli_vertex_field *fields, int nfields);
+/* Binary PLY with positions, normals and float red/green/blue, written atomically. */
+prt_status cli_write_vertex_ply(const char *path, const float *pos, const float *nrm, size_t nv, const uint32_t *idx, size_t nt,
+                                const float *rgb);
+
+/* Something to compare: per-vertex radiance (from a .prt relit, a relight or reference JSON) or
+ * an image. */
+typedef struct cli_result {
+    bool image;
+    prt_image img;
+    size_t nv;
+    float *radiance;          /* 3 per vertex */
+    float *indirect;          /* 3 per vertex, NULL when the source does not separate it */
+    float *std_error;         /* reference JSON only */
+    prt_transfer *transfer;   /* when loaded from a .prt: its mesh draws error images */
+    char what[256];
+} cli_result;
+/* Loads path; a .prt is relit with `light` and `kind` (0 = its richest). */
+prt_status cli_result_load(cli *c, const char *path, const cli_light *light, prt_transfer_kind kind, cli_result *out);
+void cli_result_free(cli_result *r);
+
+/* Camera and image options shared by render and reference. */
+typedef struct cli_view {
+    int width, height;
+    bool have_view, have_eye, have_target;
+    float view[3], eye[3], target[3], fov, background[3];
+    prt_image_save_desc save;
+} cli_view;
+#define CLI_VIEW_DEFAULTS {800, 600, false, false, false, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, 40.0f, {0.02f, 0.02f, 0.02f}, {0, 0}}
+#define CLI_VIEW_OPTIONS_HELP \
+    "      --width N          image width in pixels (default 800; per panel for render)\n" \
+    "      --height N         image height in pixels (default 600)\n" \
+    "      --view X,Y,Z       direction from the scene centre towards the camera (auto framing)\n" \
+    "      --eye X,Y,Z        camera position (with --target: overrides auto framing)\n" \
+    "      --target X,Y,Z     point the camera looks at\n" \
+    "      --fov DEG          vertical field of view (default 40)\n" \
+    "      --exposure STOPS   PNG: scale radiance by 2^STOPS before tone mapping (default 0)\n" \
+    "      --tonemap T        PNG: reinhard (default) or clamp\n" \
+    "      --background R,G,B linear radiance where no surface is hit (default 0.02)\n"
+enum { OPT_WIDTH = 1200, OPT_HEIGHT, OPT_VIEW, OPT_EYE, OPT_TARGET, OPT_FOV, OPT_EXPOSURE, OPT_TONEMAP, OPT_BACKGROUND };
+#define CLI_VIEW_LONG_OPTIONS \
+    {"width", required_argument, 0, OPT_WIDTH}, {"height", required_argument, 0, OPT_HEIGHT}, {"view", required_argument, 0, OPT_VIEW}, \
+    {"eye", required_argument, 0, OPT_EYE}, {"target", required_argument, 0, OPT_TARGET}, {"fov", required_argument, 0, OPT_FOV}, \
+    {"exposure", required_argument, 0, OPT_EXPOSURE}, {"tonemap", required_argument, 0, OPT_TONEMAP}, \
+    {"background", required_argument, 0, OPT_BACKGROUND}
+int cli_view_option(const cli *c, cli_view *v, int opt, const char *arg);
+/* The camera for a mesh's positions: auto framing unless --eye/--target were given. */
+void cli_view_camera(const cli_view *v, const float *positions, size_t nv, float aspect, prt_camera *cam);
+
 /* The richest kind a file holds, for commands where --kind is optional. */
 prt_transfer_kind cli_default_kind(const prt_transfer *t);
 
@@ -84,5 +154,8 @@ int cmd_render(int argc, char **argv);
 int cmd_env(int argc, char **argv);
 int cmd_info(int argc, char **argv);
 int cmd_demo_scene(int argc, char **argv);
+int cmd_reference(int argc, char **argv);
+int cmd_compare(int argc, char **argv);
+int cmd_sweep(int argc, char **argv);
 
 #endif

@@ -16,12 +16,7 @@ static const char *HELP =
     "      --kinds LIST       comma list of unshadowed,shadowed,interreflected (default all)\n"
     "      --bounces N        interreflection bounces (default 3)\n"
     "      --seed N           rotates the low-discrepancy directions (default 0)\n"
-    "      --max-edge L       subdivide until no edge is longer than L scene units\n"
-    "      --albedo R,G,B     albedo for every material (or one value for grey)\n"
-    "      --default-albedo R,G,B  albedo where the file has no material (default 0.7)\n"
-    "      --crease-angle D   split computed normals above D degrees (default 45)\n"
-    "      --winding W        auto | keep | flip: which side of imported triangles faces out\n"
-    "                         (auto flips closed meshes without normals that are wound inside out)\n"
+    CLI_SCENE_OPTIONS_HELP
     "      --ray-offset E     shadow-ray origin offset (default 1e-4 x scene diagonal)\n"
     "  -j, --threads N        worker threads (default: all cores; results do not change)\n"
     "  -q, --quiet            no progress or warnings\n"
@@ -36,12 +31,14 @@ int cmd_bake(int argc, char **argv)
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"order", required_argument, 0, 'O'}, {"samples", required_argument, 0, 'n'},
         {"kinds", required_argument, 0, 'k'}, {"bounces", required_argument, 0, 'b'}, {"seed", required_argument, 0, 's'},
-        {"max-edge", required_argument, 0, 'e'}, {"albedo", required_argument, 0, 'a'}, {"default-albedo", required_argument, 0, 'A'},
-        {"crease-angle", required_argument, 0, 'c'}, {"winding", required_argument, 0, 'w'}, {"ray-offset", required_argument, 0, 'r'},
+        CLI_SCENE_LONG_OPTIONS, {"ray-offset", required_argument, 0, 'r'},
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt, seed;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:j:qh", opts, NULL)) != -1) {
+        int r = cli_scene_option(&c, &sd, opt, optarg);
+        if (r < 0) return EXIT_USAGE;
+        if (r) continue;
         switch (opt) {
         case 'o': output = optarg; break;
         case 'O': if (!cli_parse_int(optarg, 1, PRT_SH_MAX_ORDER, &bd.order)) return cli_usage(&c, "--order must be 1..%d", PRT_SH_MAX_ORDER); break;
@@ -61,19 +58,6 @@ int cmd_bake(int argc, char **argv)
             if (!bd.kinds) return cli_usage(&c, "--kinds is empty");
             break;
         }
-        case 'e': if (!cli_parse_float(optarg, &sd.max_edge) || sd.max_edge <= 0) return cli_usage(&c, "--max-edge must be > 0"); break;
-        case 'a':
-            if (!cli_parse_vec3(optarg, true, sd.default_albedo)) return cli_usage(&c, "--albedo takes R,G,B in [0, 1]");
-            sd.override_albedo = 1;
-            break;
-        case 'A': if (!cli_parse_vec3(optarg, true, sd.default_albedo)) return cli_usage(&c, "--default-albedo takes R,G,B in [0, 1]"); break;
-        case 'c': if (!cli_parse_float(optarg, &sd.crease_angle_deg) || sd.crease_angle_deg <= 0 || sd.crease_angle_deg > 180) return cli_usage(&c, "--crease-angle must be in (0, 180]"); break;
-        case 'w':
-            if (!strcasecmp(optarg, "auto")) sd.winding = PRT_WINDING_AUTO;
-            else if (!strcasecmp(optarg, "keep")) sd.winding = PRT_WINDING_KEEP;
-            else if (!strcasecmp(optarg, "flip")) sd.winding = PRT_WINDING_FLIP;
-            else return cli_usage(&c, "--winding must be auto, keep or flip");
-            break;
         case 'r': if (!cli_parse_float(optarg, &bd.ray_offset) || bd.ray_offset <= 0) return cli_usage(&c, "--ray-offset must be > 0"); break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
@@ -83,8 +67,6 @@ int cmd_bake(int argc, char **argv)
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one SCENE argument");
     if (!output) return cli_usage(&c, "an output file is required (-o OUT.prt)");
-    for (int k = 0; k < 3; ++k)
-        if (sd.default_albedo[k] < 0 || sd.default_albedo[k] > 1) return cli_usage(&c, "albedo must lie in [0, 1]");
     int rc = cli_make_context(&c);
     if (rc) return rc;
     cli_catch_interrupt();

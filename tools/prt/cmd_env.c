@@ -25,7 +25,7 @@ static const char *HELP =
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
-enum { OPT_ORDER = 2100, OPT_IMAGE, OPT_IRRADIANCE, OPT_WIDTH };
+enum { OPT_ORDER = 2100, OPT_IMAGE, OPT_IRRADIANCE, OPT_IMAGE_WIDTH };
 
 static const char *layout_name(prt_env_layout l)
 {
@@ -40,7 +40,7 @@ int cmd_env(int argc, char **argv)
     int order = 3, width = 512, irradiance = 0;
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"order", required_argument, 0, OPT_ORDER}, {"image", required_argument, 0, OPT_IMAGE},
-        {"irradiance", no_argument, 0, OPT_IRRADIANCE}, {"width", required_argument, 0, OPT_WIDTH}, CLI_LIGHT_LONG_OPTIONS,
+        {"irradiance", no_argument, 0, OPT_IRRADIANCE}, {"width", required_argument, 0, OPT_IMAGE_WIDTH}, CLI_LIGHT_LONG_OPTIONS,
         {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt;
     optind = 1;
@@ -54,7 +54,7 @@ int cmd_env(int argc, char **argv)
         case OPT_ORDER: if (!cli_parse_int(optarg, 1, PRT_SH_MAX_ORDER, &order)) return cli_usage(&c, "--order must be 1..%d", PRT_SH_MAX_ORDER); break;
         case OPT_IMAGE: image = optarg; break;
         case OPT_IRRADIANCE: irradiance = 1; break;
-        case OPT_WIDTH: if (!cli_parse_int(optarg, 2, 16384, &width) || width % 2) return cli_usage(&c, "--width must be even, 2..16384"); break;
+        case OPT_IMAGE_WIDTH: if (!cli_parse_int(optarg, 2, 16384, &width) || width % 2) return cli_usage(&c, "--width must be even, 2..16384"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); return EXIT_OK;
         default: return cli_usage(&c, "unknown option");

@@ -18,50 +18,6 @@ static const char *HELP =
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
-static prt_status write_ply(const char *path, const prt_transfer *t, const float *rgb)
-{
-    size_t nv = prt_transfer_vertex_count(t), nt = prt_transfer_triangle_count(t);
-    char tmp[1100];
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "wb");
-    if (!f) return PRT_ERR_IO;
-    fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment prt relight: linear radiance\nelement vertex %zu\n"
-               "property float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
-               "property float red\nproperty float green\nproperty float blue\nelement face %zu\nproperty list uchar uint vertex_indices\nend_header\n",
-            nv, nt);
-    const float *p = prt_transfer_positions(t), *n = prt_transfer_normals(t);
-    for (size_t v = 0; v < nv; ++v) {
-        float rec[9] = {p[v * 3], p[v * 3 + 1], p[v * 3 + 2], n[v * 3], n[v * 3 + 1], n[v * 3 + 2], rgb[v * 3], rgb[v * 3 + 1], rgb[v * 3 + 2]};
-        fwrite(rec, sizeof rec, 1, f);
-    }
-    const uint32_t *idx = prt_transfer_indices(t);
-    for (size_t i = 0; i < nt; ++i) {
-        unsigned char three = 3;
-        fwrite(&three, 1, 1, f);
-        fwrite(idx + i * 3, sizeof(uint32_t), 3, f);
-    }
-    bool ok = !ferror(f);
-    ok &= fclose(f) == 0;
-    if (!ok || rename(tmp, path) != 0) { remove(tmp); return PRT_ERR_IO; }
-    return PRT_OK;
-}
-
-static prt_status write_json(const char *path, prt_transfer_kind kind, size_t nv, const float *rgb)
-{
-    char tmp[1100];
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "wb");
-    if (!f) return PRT_ERR_IO;
-    fprintf(f, "{\"kind\": \"%s\", \"vertex_count\": %zu, \"radiance\": [", prt_transfer_kind_name(kind), nv);
-    for (size_t v = 0; v < nv; ++v)
-        fprintf(f, "%s[%.7g, %.7g, %.7g]", v ? ", " : "", rgb[v * 3], rgb[v * 3 + 1], rgb[v * 3 + 2]);
-    fprintf(f, "]}\n");
-    bool ok = !ferror(f);
-    ok &= fclose(f) == 0;
-    if (!ok || rename(tmp, path) != 0) { remove(tmp); return PRT_ERR_IO; }
-    return PRT_OK;
-}
-
 int cmd_relight(int argc, char **argv)
 {
     cli c = {.cmd = "relight"};
@@ -110,7 +66,14 @@ int cmd_relight(int argc, char **argv)
         st = rgb ? prt_relight_sh(c.ctx, t, kind, &sh, rgb) : PRT_ERR_NO_MEMORY;
     }
     if (!st) {
-        st = json ? write_json(output, kind, prt_transfer_vertex_count(t), rgb) : write_ply(output, t, rgb);
+        size_t nv = prt_transfer_vertex_count(t);
+        if (json) {
+            cli_vertex_field f = {"radiance", rgb};
+            st = cli_write_vertex_json(output, prt_transfer_kind_name(kind), nv, &f, 1);
+        } else {
+            st = cli_write_vertex_ply(output, prt_transfer_positions(t), prt_transfer_normals(t), nv, prt_transfer_indices(t),
+                                      prt_transfer_triangle_count(t), rgb);
+        }
         if (st) cli_error(&c, "cannot write '%s'", output);
         else if (!c.quiet) fprintf(stderr, "prt relight: wrote %s (%s, %zu vertices)\n", output, prt_transfer_kind_name(kind), prt_transfer_vertex_count(t));
         rc = st ? EXIT_FAILURE_INPUT : EXIT_OK;

@@ -10,6 +10,9 @@ static const struct { const char *name; int (*fn)(int, char **); const char *sum
     {"render", cmd_render, "draw a relit .prt to a PNG or EXR image (headless OpenGL)"},
     {"env", cmd_env, "project an environment probe to SH; optional band-limited / irradiance image"},
     {"info", cmd_info, "describe what a .prt file holds"},
+    {"reference", cmd_reference, "ground truth by path tracing: per-vertex (direct/indirect) or an image"},
+    {"compare", cmd_compare, "error between two results (vertices or images): RMSE, relative L2, PSNR"},
+    {"sweep", cmd_sweep, "bake and relight over a parameter range against a reference: CSV and plot"},
     {"demo-scene", cmd_demo_scene, "write the procedural demo scene as OBJ+MTL"},
 };
 

@@ -1,0 +1,159 @@
+#include "cli.h"
+
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+static const char *HELP =
+    "usage: prt reference INPUT [-o OUT.json|OUT.ply] [--image OUT.exr|OUT.png] [options]\n"
+    "Ground truth by unbiased Monte Carlo path tracing (Embree): per-vertex exit radiance split\n"
+    "into direct and indirect light with standard errors, and/or an image from a camera.\n"
+    "INPUT is a .prt (its baked mesh, so results match the file vertex for vertex, and the\n"
+    "lighting its scene named) or a scene, read with the same options as prt bake.\n"
+    "Surfaces are one-sided Lambertian; light comes from the environment, importance-sampled\n"
+    "and combined with cosine sampling (MIS); paths end by Russian roulette.\n\n"
+    "  -o, --output FILE      per-vertex result: .json (radiance, direct, indirect, std_error,\n"
+    "                         std_error_indirect) or .ply (radiance as float vertex colours)\n"
+    "      --image FILE       image from the camera (.exr .png .hdr .pfm)\n"
+    "      --samples N        paths per vertex or pixel (default 256)\n"
+    "      --target-error E   add paths until every vertex's standard error is below E times its\n"
+    "                         radiance (doubling, up to --max-samples)\n"
+    "      --max-samples N    cap for --target-error (default 65536)\n"
+    "      --seed N           random seed (results do not depend on the thread count)\n"
+    CLI_VIEW_OPTIONS_HELP CLI_LIGHT_OPTIONS_HELP
+    "Scene (when INPUT is not a .prt):\n" CLI_SCENE_OPTIONS_HELP
+    "  -j, --threads N        worker threads\n"
+    "  -q, --quiet            no progress or messages\n"
+    "  -h, --help             this text\n\n" EXIT_CODES_HELP;
+
+enum { OPT_IMAGE_OUT = 2200, OPT_SAMPLES, OPT_TARGET_ERROR, OPT_MAX_SAMPLES, OPT_SEED };
+
+int cmd_reference(int argc, char **argv)
+{
+    cli c = {.cmd = "reference"};
+    cli_light light = {.intensity = 1.0f};
+    cli_view view = CLI_VIEW_DEFAULTS;
+    prt_scene_desc sd = {0};
+    prt_reference_desc rd = {0};
+    const char *output = NULL, *image = NULL;
+    int seed;
+    static const struct option opts[] = {
+        {"output", required_argument, 0, 'o'}, {"image", required_argument, 0, OPT_IMAGE_OUT},
+        {"samples", required_argument, 0, OPT_SAMPLES}, {"target-error", required_argument, 0, OPT_TARGET_ERROR},
+        {"max-samples", required_argument, 0, OPT_MAX_SAMPLES}, {"seed", required_argument, 0, OPT_SEED},
+        CLI_VIEW_LONG_OPTIONS, CLI_LIGHT_LONG_OPTIONS, CLI_SCENE_LONG_OPTIONS, {"threads", required_argument, 0, 'j'},
+        {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    int opt;
+    optind = 1;
+    while ((opt = getopt_long(argc, argv, "o:j:qh", opts, NULL)) != -1) {
+        int r = cli_light_option(&c, &light, opt, optarg);
+        if (!r) r = cli_view_option(&c, &view, opt, optarg);
+        if (!r) r = cli_scene_option(&c, &sd, opt, optarg);
+        if (r < 0) return EXIT_USAGE;
+        if (r) continue;
+        switch (opt) {
+        case 'o': output = optarg; break;
+        case OPT_IMAGE_OUT: image = optarg; break;
+        case OPT_SAMPLES: if (!cli_parse_int(optarg, 1, 1 << 24, &rd.samples)) return cli_usage(&c, "--samples must be 1..16777216"); break;
+        case OPT_TARGET_ERROR:
+            if (!cli_parse_float(optarg, &rd.target_rel_error) || rd.target_rel_error <= 0 || rd.target_rel_error >= 1)
+                return cli_usage(&c, "--target-error must be in (0, 1)");
+            break;
+        case OPT_MAX_SAMPLES: if (!cli_parse_int(optarg, 1, 1 << 24, &rd.max_samples)) return cli_usage(&c, "--max-samples must be 1..16777216"); break;
+        case OPT_SEED: if (!cli_parse_int(optarg, 0, 2147483647, &seed)) return cli_usage(&c, "--seed must be a non-negative integer"); rd.seed = (uint32_t)seed; break;
+        case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
+        case 'q': c.quiet = true; break;
+        case 'h': fputs(HELP, stdout); return EXIT_OK;
+        default: return cli_usage(&c, "unknown option");
+        }
+    }
+    if (optind != argc - 1) return cli_usage(&c, "expected exactly one INPUT (.prt or scene)");
+    if (!output && !image) return cli_usage(&c, "nothing to do: give -o OUT.json|.ply and/or --image OUT");
+    const char *ext = output ? strrchr(output, '.') : NULL;
+    bool json = ext && !strcasecmp(ext, ".json");
+    if (output && !json && !(ext && !strcasecmp(ext, ".ply"))) return cli_usage(&c, "-o must end in .json or .ply");
+    if (view.have_eye != view.have_target) return cli_usage(&c, "--eye and --target go together");
+    int rc = cli_make_context(&c);
+    if (rc) return rc;
+    cli_catch_interrupt();
+
+    const char *input = argv[optind];
+    const char *in_ext = strrchr(input, '.');
+    prt_scene *scene = NULL;
+    prt_transfer *t = NULL;
+    prt_envmap *env = NULL;
+    prt_reference_vertices res = {0};
+    prt_image img = {0};
+    prt_status st;
+    if (in_ext && !strcasecmp(in_ext, ".prt")) {
+        /* The baked mesh as it is: no cleaning or subdivision can change the vertex order. */
+        st = prt_transfer_load(c.ctx, input, &t);
+        if (!st) {
+            cli_light_defaults_from(&light, t);
+            st = prt_scene_create_copy(c.ctx, prt_transfer_positions(t), prt_transfer_normals(t), prt_transfer_albedo(t),
+                                       prt_transfer_vertex_count(t), prt_transfer_indices(t), prt_transfer_triangle_count(t), NULL, &scene);
+        }
+        if (!st && prt_scene_vertex_count(scene) != prt_transfer_vertex_count(t))
+            st = PRT_ERR_FORMAT;
+    } else {
+        st = prt_scene_load(c.ctx, input, &sd, &scene);
+        prt_environment_desc e;
+        if (!st && prt_scene_environment(scene, &e) && !light.set_source) {
+            snprintf(light.path_buf, sizeof light.path_buf, "%s", e.path);
+            light.env_path = e.path[0] ? light.path_buf : NULL;
+            light.layout = e.layout;
+            memcpy(light.sun_dir, e.sun_dir, sizeof e.sun_dir);
+            if (!light.set_rotate) memcpy(light.rotate, e.rotate_deg, sizeof e.rotate_deg);
+            if (!light.set_intensity && e.intensity > 0) light.intensity = e.intensity;
+        }
+    }
+    prt_sh_light unused;
+    if (!st) st = cli_light_project(&c, &light, 1, &unused, &env);
+    double rot[9];
+    prt_rotation_from_euler_deg(light.rotate[0], light.rotate[1], light.rotate[2], rot);
+    rd.rotation = rot;
+    rd.intensity = light.intensity > 0 ? light.intensity : 0.0f;
+    rd.progress = cli_progress;
+    rd.progress_user = &c;
+    if (!st && light.intensity == 0) st = PRT_ERR_INVALID_ARG;
+    if (!st && output) st = prt_reference_trace_vertices(c.ctx, scene, env, &rd, &res);
+    if (!st && output) {
+        size_t nv = res.vertex_count;
+        if (json) {
+            cli_vertex_field f[5] = {{"radiance", res.radiance}, {"direct", res.direct}, {"indirect", res.indirect},
+                                     {"std_error", res.std_error}, {"std_error_indirect", res.std_error_indirect}};
+            st = cli_write_vertex_json(output, "reference", nv, f, 5);
+        } else {
+            st = cli_write_vertex_ply(output, prt_scene_positions(scene), prt_scene_normals(scene), nv, prt_scene_indices(scene),
+                                      prt_scene_triangle_count(scene), res.radiance);
+        }
+        if (st) { cli_error(&c, "cannot write '%s'", output); rc = EXIT_FAILURE_INPUT; }
+        else if (!c.quiet) {
+            long total = 0;
+            int lo = res.samples[0], hi = res.samples[0];
+            for (size_t v = 0; v < nv; ++v) { total += res.samples[v]; lo = res.samples[v] < lo ? res.samples[v] : lo; hi = res.samples[v] > hi ? res.samples[v] : hi; }
+            double err = 0, sum = 0;
+            for (size_t i = 0; i < nv * 3; ++i) { err += (double)res.std_error[i] * res.std_error[i]; sum += (double)res.radiance[i] * res.radiance[i]; }
+            fprintf(stderr, "prt reference: wrote %s (%zu vertices, %d..%d paths each, %ld in all; relative standard error %.4f)\n", output, nv,
+                    lo, hi, total, sum > 0 ? sqrt(err / sum) : 0.0);
+        }
+    }
+    if (!st && !rc && image) {
+        prt_camera cam;
+        cli_view_camera(&view, prt_scene_positions(scene), prt_scene_vertex_count(scene), (float)view.width / view.height, &cam);
+        st = prt_reference_trace_image(c.ctx, scene, env, &rd, &cam, view.width, view.height, view.background, &img, NULL);
+        if (!st) st = prt_image_save(image, &img, &view.save);
+        if (!st && !c.quiet) fprintf(stderr, "prt reference: wrote %s\n", image);
+    }
+    if (st && !rc) rc = st == PRT_ERR_INVALID_ARG && light.intensity == 0 ? cli_usage(&c, "--intensity 0 leaves nothing to trace") : cli_fail(&c, st);
+    prt_image_free(&img);
+    prt_reference_vertices_free(&res);
+    prt_envmap_release(env);
+    prt_scene_release(scene);
+    prt_transfer_release(t);
+    prt_context_release(c.ctx);
+    return rc;
+}
