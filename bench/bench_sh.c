@@ -4,12 +4,13 @@
  *   relight: bytes of transfer read per frame / frame time  vs  plain memory read bandwidth
  * Usage: prt_bench [MESH] [--samples N] [--order N] [--threads N]
  * Without MESH it uses ../shared/data's bunny if present, else the procedural demo scene.
- * Prints JSON on stdout and a summary on stderr. */
+ * Prints JSON on stdout (with the process's peak resident memory) and a summary on stderr. */
 #include "core/internal.h"
 #include "core/progress.h"
 #include "geom/raycast.h"
 
 #include <omp.h>
+#include <sys/resource.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -170,7 +171,9 @@ int main(int argc, char **argv)
            bake_occ_rate / occ_rate);
     printf("  \"bake_all_kinds_s\": %.3f, \"bake_all_kinds_rays_per_s\": %.0f, \"bake_all_kinds_ratio_vs_intersect\": %.3f,\n", bake_all,
            bake_all_rate, bake_all_rate / hit_rate);
-    printf("  \"read_bandwidth_dram_GBps\": %.2f,\n", bw_dram / 1e9);
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    printf("  \"read_bandwidth_dram_GBps\": %.2f, \"peak_memory_MiB\": %.1f,\n", bw_dram / 1e9, ru.ru_maxrss / 1024.0);
     printf("  \"relight_shadowed_ms\": %.4f, \"relight_shadowed_GBps\": %.2f, \"read_same_bytes_shadowed_GBps\": %.2f, \"relight_shadowed_ratio\": %.3f,\n",
            relight[0] * 1e3, bytes_sh / relight[0] / 1e9, bw_sh / 1e9, bytes_sh / relight[0] / bw_sh);
     printf("  \"relight_interreflected_ms\": %.4f, \"relight_interreflected_GBps\": %.2f, \"read_same_bytes_interreflected_GBps\": %.2f, \"relight_interreflected_ratio\": %.3f\n}\n",

@@ -29,7 +29,7 @@ says() {
     if grep -qi -- "$1" "$T/err"; then ok; else bad "stderr does not mention '$1':"; sed 's/^/    /' "$T/err"; fi
 }
 
-for cmd in bake relight render env info demo-scene; do
+for cmd in bake relight render env info demo-scene reference compare sweep; do
     expect 0 "$cmd --help" -- "$PRT" "$cmd" --help
     grep -q "Exit codes" "$T/out" && ok || bad "$cmd --help lacks exit codes"
 done
@@ -62,6 +62,31 @@ expect 0 "render exr" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -o "$T/img.exr" 
 [ -s "$T/img.exr" ] && ok || bad "render wrote no EXR"
 expect 0 "env sky" -- "$PRT" env --order 3 --image "$T/irr.pfm" --irradiance -q
 grep -q '"coefficients"' "$T/out" && ok || bad "env printed no coefficients"
+
+# Ground truth and comparison on the same baked mesh.
+expect 0 "reference of a .prt" -- "$PRT" reference -q "$T/demo.prt" -o "$T/ref.json" --samples 8 --seed 3
+grep -q '"indirect"' "$T/ref.json" && grep -q '"std_error"' "$T/ref.json" && ok || bad "reference JSON lacks indirect or std_error"
+expect 0 "compare prt with reference" -- "$PRT" compare "$T/demo.prt" "$T/ref.json" --json "$T/cmp.json"
+grep -q '"relative_l2"' "$T/cmp.json" && ok || bad "compare JSON lacks relative_l2"
+grep -q "relative L2" "$T/out" && ok || bad "compare printed no relative L2"
+expect 0 "compare indirect" -- "$PRT" compare -q "$T/demo.prt" "$T/ref.json" --indirect --json -
+grep -q '"indirect_only":[[:space:]]*true' "$T/out" && ok || bad "compare --indirect JSON"
+expect 0 "compare error image" -- $NOLEAK "$PRT" compare -q "$T/demo.prt" "$T/ref.json" --error-image "$T/err.png" --width 48 --height 32
+[ -s "$T/err.png" ] && ok || bad "no error image"
+expect 0 "reference image" -- "$PRT" reference -q "$T/demo.prt" --image "$T/ref.exr" --width 32 --height 24 --samples 2
+expect 0 "render for comparison" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -o "$T/prt.exr" --width 32 --height 24
+expect 0 "compare images" -- "$PRT" compare "$T/prt.exr" "$T/ref.exr"
+grep -q "PSNR" "$T/out" && ok || bad "image compare printed no PSNR"
+expect 2 "image against vertices" -- "$PRT" compare "$T/prt.exr" "$T/ref.json"
+says "image"
+"$PRT" bake -q "$T/demo.obj" -o "$T/fine.prt" --order 2 --samples 16 --max-edge 0.03 >/dev/null 2>&1
+expect 1 "different meshes" -- "$PRT" compare "$T/fine.prt" "$T/ref.json"
+says "vertex counts differ"
+expect 0 "sweep with plot" -- "$PRT" sweep -q "$T/demo.obj" --reference "$T/ref.json" -o "$T/sweep.csv" --plot "$T/sweep.png" --values 2,3 --samples 32 --kinds shadowed,interreflected
+[ "$(wc -l <"$T/sweep.csv")" -eq 5 ] && ok || bad "sweep CSV should have a header and 4 rows"
+[ -s "$T/sweep.png" ] && ok || bad "sweep wrote no plot"
+expect 2 "sweep without reference" -- "$PRT" sweep "$T/demo.obj" -o "$T/s.csv"
+expect 2 "sweep bad param" -- "$PRT" sweep "$T/demo.obj" --reference "$T/ref.json" -o "$T/s.csv" --param colour
 
 # Bad inputs: exit 1 and a message naming the file.
 expect 1 "missing mesh" -- "$PRT" bake "$T/nothing.obj" -o "$T/x.prt"
