@@ -5,7 +5,7 @@ ASAN_BUILD ?= build-asan
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-asan bench install clean
+.PHONY: all deps build demo test test-asan bench accuracy install clean
 
 all: build
 
@@ -32,6 +32,10 @@ test-asan: deps
 
 bench: build
 	$(BUILD)/prt_bench
+
+# README's accuracy tables: PRT against the path-traced reference (several minutes).
+accuracy: build
+	@sh scripts/accuracy.sh $(BUILD)/prt out/accuracy
 
 install: build
 	cmake --install $(BUILD)

@@ -192,6 +192,60 @@ static void test_prt_matches_reference(void **state)
     prt_context_release(ctx);
 }
 
+/* The same agreement on the procedural demo scene (walls, a torus, a sphere on the floor).
+ * Where the torus and the sphere rest on the floor, the bake's vertex spacing (6 cm on the floor)
+ * cannot resolve the 3 mm gaps: light gathered there is interpolated from vertices outside the
+ * contact shadow, so a few percent of vertices near contacts are too bright - the per-vertex
+ * method's own discretization, which the reference makes visible. Everywhere else the two agree
+ * within the reference's error bars; the bounds below allow for the contact band. */
+static void test_prt_matches_reference_demo(void **state)
+{
+    (void)state;
+    char path[512];
+    snprintf(path, sizeof path, "%s/demo.obj", test_dir);
+    assert_int_equal(prt_demo_scene_write(path), PRT_OK);
+    prt_context *ctx = test_context(0);
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    prt_envmap *env = band_limited_env(256);
+    prt_bake_desc bd = {0};
+    bd.order = 3;
+    bd.samples = 2048;
+    bd.bounces = 8;
+    bd.kinds = PRT_TRANSFER_SHADOWED | PRT_TRANSFER_INTERREFLECTED;
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake_sh(ctx, s, &bd, &t), PRT_OK);
+    prt_sh_light L;
+    assert_int_equal(prt_envmap_project_sh(env, 3, &L), PRT_OK);
+    size_t nv = prt_transfer_vertex_count(t);
+    float *rgb = malloc(nv * 3 * sizeof(float));
+    assert_int_equal(prt_relight_sh(ctx, t, PRT_TRANSFER_INTERREFLECTED, &L, rgb), PRT_OK);
+    prt_reference_desc d = {0};
+    d.samples = 256;
+    prt_reference_vertices r;
+    assert_int_equal(prt_reference_trace_vertices(ctx, s, env, &d, &r), PRT_OK);
+    double se = 0, sb = 0, noise = 0;
+    int outside = 0;
+    for (size_t i = 0; i < nv * 3; ++i) {
+        double diff = rgb[i] - r.radiance[i];
+        se += diff * diff;
+        sb += (double)r.radiance[i] * r.radiance[i];
+        noise += (double)r.std_error[i] * r.std_error[i];
+        if (fabs(diff) > 4 * r.std_error[i] + 0.02 * r.radiance[i]) outside++;
+    }
+    double rel = sqrt(se / sb), rel_noise = sqrt(noise / sb);
+    print_message("PRT (order 3) vs reference on the demo scene: relative L2 %.4f (reference noise %.4f), %d of %zu outside 4 sigma + 2%%\n",
+                  rel, rel_noise, outside, nv * 3);
+    assert_true(rel < 1.5 * rel_noise + 0.035);
+    assert_true(outside < (int)(nv * 3 / 25));
+    free(rgb);
+    prt_reference_vertices_free(&r);
+    prt_transfer_release(t);
+    prt_envmap_release(env);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
 static void test_deterministic_and_image(void **state)
 {
     (void)state;
@@ -252,7 +306,8 @@ int main(void)
         cmocka_unit_test(test_concave_white_furnace),
         cmocka_unit_test(test_sphere_analytic_irradiance),
         cmocka_unit_test(test_prt_matches_reference),
+        cmocka_unit_test(test_prt_matches_reference_demo),
         cmocka_unit_test(test_deterministic_and_image),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }
