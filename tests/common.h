@@ -96,6 +96,17 @@ static inline void tm_sphere(test_mesh *m, const float c[3], float r, int rings,
         }
 }
 
+/* An open box (a pit) of side 1 with inward normals, n x n cells per face: its floor centre
+ * sees the sky only through the top. */
+static inline void tm_pit(test_mesh *m, int n)
+{
+    tm_quad(m, (float[3]){-0.5f, 0, 0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 0, -1}, n);   /* floor, up */
+    tm_quad(m, (float[3]){-0.5f, 0, 0.5f}, (float[3]){0, 0, -1}, (float[3]){0, 1, 0}, n);   /* x = -0.5, facing +x */
+    tm_quad(m, (float[3]){0.5f, 0, -0.5f}, (float[3]){0, 0, 1}, (float[3]){0, 1, 0}, n);    /* x = +0.5, facing -x */
+    tm_quad(m, (float[3]){-0.5f, 0, -0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 1, 0}, n);   /* z = -0.5, facing +z */
+    tm_quad(m, (float[3]){0.5f, 0, 0.5f}, (float[3]){-1, 0, 0}, (float[3]){0, 1, 0}, n);    /* z = +0.5, facing -z */
+}
+
 static inline void tm_free(test_mesh *m) { free(m->pos); free(m->nrm); free(m->idx); memset(m, 0, sizeof *m); }
 
 static inline prt_context *test_context(int threads)

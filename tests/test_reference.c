@@ -59,13 +59,12 @@ static void test_open_white_furnace(void **state)
 
 /* The same furnace inside a concave pit: albedo 1 reflects exactly 1 everywhere, however many
  * bounces it takes (Russian roulette must stay unbiased). */
-static void make_pit(test_mesh *m, int n);
 static void test_concave_white_furnace(void **state)
 {
     (void)state;
     prt_context *ctx = test_context(0);
     test_mesh m = {0};
-    make_pit(&m, 4);
+    tm_pit(&m, 4);
     prt_scene *s = tm_scene(ctx, &m, 1.0f);
     prt_envmap *env = constant_env(1.0f);
     prt_reference_desc d = {0};
@@ -125,16 +124,6 @@ static void test_sphere_analytic_irradiance(void **state)
     prt_context_release(ctx);
 }
 
-/* The pit of test_transfer.c: five inward quads. */
-static void make_pit(test_mesh *m, int n)
-{
-    tm_quad(m, (float[3]){-0.5f, 0, 0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 0, -1}, n);
-    tm_quad(m, (float[3]){-0.5f, 0, 0.5f}, (float[3]){0, 0, -1}, (float[3]){0, 1, 0}, n);
-    tm_quad(m, (float[3]){0.5f, 0, -0.5f}, (float[3]){0, 0, 1}, (float[3]){0, 1, 0}, n);
-    tm_quad(m, (float[3]){-0.5f, 0, -0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 1, 0}, n);
-    tm_quad(m, (float[3]){0.5f, 0, 0.5f}, (float[3]){-1, 0, 0}, (float[3]){0, 1, 0}, n);
-}
-
 /* PRT inter-reflected transfer under a lighting of its own band limit is exact up to the bake's
  * sampling and interpolation: it must agree with the reference within its error bars. */
 static void test_prt_matches_reference(void **state)
@@ -142,7 +131,7 @@ static void test_prt_matches_reference(void **state)
     (void)state;
     prt_context *ctx = test_context(0);
     test_mesh m = {0};
-    make_pit(&m, 8);
+    tm_pit(&m, 8);
     prt_scene *s = tm_scene(ctx, &m, 0.7f);
     prt_envmap *env = band_limited_env(256);
     prt_bake_desc bd = {0};
@@ -250,7 +239,7 @@ static void test_deterministic_and_image(void **state)
 {
     (void)state;
     test_mesh m = {0};
-    make_pit(&m, 4);
+    tm_pit(&m, 4);
     prt_envmap *env = band_limited_env(64);
     prt_reference_vertices r[2];
     for (int i = 0; i < 2; ++i) {

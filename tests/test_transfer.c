@@ -79,21 +79,10 @@ static void test_convex_white_furnace(void **state)
     prt_context_release(ctx);
 }
 
-/* An open box (a pit) with inward normals: its floor centre sees only the opening. */
-static void make_pit(test_mesh *m)
-{
-    const int n = 8;
-    tm_quad(m, (float[3]){-0.5f, 0, 0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 0, -1}, n);        /* floor, up */
-    tm_quad(m, (float[3]){-0.5f, 0, 0.5f}, (float[3]){0, 0, -1}, (float[3]){0, 1, 0}, n);        /* x = -0.5, +x */
-    tm_quad(m, (float[3]){0.5f, 0, -0.5f}, (float[3]){0, 0, 1}, (float[3]){0, 1, 0}, n);         /* x = +0.5, -x */
-    tm_quad(m, (float[3]){-0.5f, 0, -0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 1, 0}, n);        /* z = -0.5, +z */
-    tm_quad(m, (float[3]){0.5f, 0, 0.5f}, (float[3]){-1, 0, 0}, (float[3]){0, 1, 0}, n);         /* z = +0.5, -z */
-}
-
 static float floor_centre_radiance(prt_context *ctx, float albedo, prt_transfer_kind kind)
 {
     test_mesh m = {0};
-    make_pit(&m);
+    tm_pit(&m, 8);
     prt_scene *s = tm_scene(ctx, &m, albedo);
     prt_transfer *t = bake(ctx, s, 4, 1024, 0);
     size_t nv = prt_transfer_vertex_count(t), v = nearest_vertex(prt_transfer_positions(t), nv, (float[3]){0, 0, 0});
@@ -143,7 +132,7 @@ static void test_concave_white_furnace(void **state)
     (void)state;
     prt_context *ctx = test_context(0);
     test_mesh m = {0};
-    make_pit(&m);
+    tm_pit(&m, 8);
     prt_scene *s = tm_scene(ctx, &m, 1.0f);
     prt_bake_desc d = {0};
     d.order = 2;
@@ -205,7 +194,7 @@ static void test_deterministic_across_threads(void **state)
 {
     (void)state;
     test_mesh m = {0};
-    make_pit(&m);
+    tm_pit(&m, 8);
     prt_transfer *t[3];
     for (int i = 0; i < 3; ++i) {
         prt_context *ctx = test_context(i == 0 ? 1 : 2);
@@ -278,7 +267,7 @@ static void test_cancel(void **state)
     (void)state;
     prt_context *ctx = test_context(0);
     test_mesh m = {0};
-    make_pit(&m);
+    tm_pit(&m, 8);
     prt_scene *s = tm_scene(ctx, &m, 0.5f);
     int calls = 0;
     prt_bake_desc d = {0};
@@ -298,7 +287,7 @@ static void test_bad_bake_args(void **state)
     (void)state;
     prt_context *ctx = test_context(1);
     test_mesh m = {0};
-    make_pit(&m);
+    tm_pit(&m, 8);
     prt_scene *s = tm_scene(ctx, &m, 0.5f);
     prt_transfer *t = NULL;
     prt_bake_desc d = {0};

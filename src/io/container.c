@@ -132,9 +132,9 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
     return prt__atomic_commit(&f);
 }
 
-static prt_status bad(prt_context *ctx, const char *fmt, const char *detail)
+static prt_status bad(prt_context *ctx, const char *msg)
 {
-    return prt__fail(ctx, PRT_ERR_FORMAT, fmt, detail);
+    return prt__fail(ctx, PRT_ERR_FORMAT, "%s", msg);
 }
 
 static bool all_finite(const float *p, size_t n)
@@ -149,7 +149,7 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
     if (!out || (!data && size)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_load_memory: data and out are required");
     *out = NULL;
     const unsigned char *b = data;
-    if (size < HEADER_SIZE || memcmp(b, MAGIC, 8) != 0) return bad(ctx, "not a .prt file (bad magic number)%s", "");
+    if (size < HEADER_SIZE || memcmp(b, MAGIC, 8) != 0) return bad(ctx, "not a .prt file (bad magic number)");
     uint32_t version = get32(b + 8), count = get32(b + 12);
     if (version > FILE_VERSION) {
         return prt__fail(ctx, PRT_ERR_FORMAT, "file format version %u is newer than this prt supports (%d): upgrade prt", version, FILE_VERSION);
@@ -157,7 +157,7 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
     if (version < 1) return prt__fail(ctx, PRT_ERR_FORMAT, "file format version %u is not a valid .prt version", version);
     if (count == 0 || count > MAX_CHUNKS) return prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: %u chunks", count);
     size_t table_end = HEADER_SIZE + (size_t)ENTRY_SIZE * count;
-    if (table_end > size) return bad(ctx, "truncated .prt file (chunk table cut off)%s", "");
+    if (table_end > size) return bad(ctx, "truncated .prt file (chunk table cut off)");
     unsigned char *head = malloc(table_end);
     if (!head) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     memcpy(head, b, table_end);
@@ -165,7 +165,7 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
     put32(head + 20, 0);
     uint32_t actual = prt__crc32(head, table_end);
     free(head);
-    if (stored != actual) return bad(ctx, "corrupt .prt file: header checksum mismatch%s", "");
+    if (stored != actual) return bad(ctx, "corrupt .prt file: header checksum mismatch");
 
     prt_transfer *t = prt__calloc(1, sizeof *t);
     if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
@@ -177,19 +177,19 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
             const unsigned char *e = b + HEADER_SIZE + (size_t)ENTRY_SIZE * i;
             uint32_t id = get32(e), crc = get32(e + 4);
             uint64_t off = get64(e + 8), len = get64(e + 16);
-            if (off > size || len > size - off) { st = bad(ctx, "truncated .prt file: a chunk extends past the end (%s)", "file cut short?"); break; }
+            if (off > size || len > size - off) { st = bad(ctx, "truncated .prt file: a chunk extends past the end"); break; }
             const unsigned char *p = b + off;
             bool mine = pass == 0 ? (id == CHUNK_META || id == CHUNK_MESH) : id == CHUNK_SHTR;
             if (!mine) continue;
             if (prt__crc32(p, (size_t)len) != crc) {
                 char what[5] = {(char)(id & 255), (char)(id >> 8 & 255), (char)(id >> 16 & 255), (char)(id >> 24), 0};
-                st = bad(ctx, "corrupt .prt file: checksum mismatch in chunk %s", what);
+                st = prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: checksum mismatch in chunk %s", what);
                 break;
             }
             if (id == CHUNK_META) {
                 cJSON *meta = cJSON_ParseWithLength((const char *)p, (size_t)len);
                 const cJSON *method = cJSON_GetObjectItemCaseSensitive(meta, "method");
-                if (!meta || !cJSON_IsString(method)) { cJSON_Delete(meta); st = bad(ctx, "corrupt .prt file: unreadable metadata%s", ""); break; }
+                if (!meta || !cJSON_IsString(method)) { cJSON_Delete(meta); st = bad(ctx, "corrupt .prt file: unreadable metadata"); break; }
                 if (strcmp(method->valuestring, "sh") != 0) {
                     st = prt__fail(ctx, PRT_ERR_FORMAT, "this prt cannot read method '%.64s'", method->valuestring);
                     cJSON_Delete(meta);
@@ -219,11 +219,11 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 cJSON_Delete(meta);
                 have_meta = true;
             } else if (id == CHUNK_MESH) {
-                if (have_mesh || len < 16) { st = bad(ctx, "corrupt .prt file: bad mesh chunk%s", ""); break; }
+                if (have_mesh || len < 16) { st = bad(ctx, "corrupt .prt file: bad mesh chunk"); break; }
                 uint64_t nv = get64(p), nt = get64(p + 8);
                 /* Bound the counts by the chunk's length before any arithmetic can overflow. */
                 if (nv == 0 || nt == 0 || nv > len / 36 || nt > len / 12 || 16 + nv * 36 + nt * 12 != len) {
-                    st = bad(ctx, "corrupt .prt file: mesh chunk sizes are inconsistent%s", "");
+                    st = bad(ctx, "corrupt .prt file: mesh chunk sizes are inconsistent");
                     break;
                 }
                 prt__mesh *m = &t->mesh;
@@ -237,23 +237,23 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 m->vertex_count = nv;
                 m->triangle_count = nt;
                 for (uint64_t k = 0; k < nt * 3; ++k)
-                    if (m->indices[k] >= nv) { st = bad(ctx, "corrupt .prt file: a triangle index is out of range%s", ""); break; }
+                    if (m->indices[k] >= nv) { st = bad(ctx, "corrupt .prt file: a triangle index is out of range"); break; }
                 if (!st && !(all_finite(m->positions, nv * 3) && all_finite(m->normals, nv * 3) && all_finite(m->albedo, nv * 3)))
-                    st = bad(ctx, "corrupt .prt file: non-finite vertex data%s", "");
+                    st = bad(ctx, "corrupt .prt file: non-finite vertex data");
                 have_mesh = true;
             } else {
-                if (!have_mesh) { st = bad(ctx, "corrupt .prt file: transfer without a mesh%s", ""); break; }
-                if (len < 24) { st = bad(ctx, "corrupt .prt file: short transfer chunk%s", ""); break; }
+                if (!have_mesh) { st = bad(ctx, "corrupt .prt file: transfer without a mesh"); break; }
+                if (len < 24) { st = bad(ctx, "corrupt .prt file: short transfer chunk"); break; }
                 uint32_t kind = get32(p), channels = get32(p + 4), order = get32(p + 8);
                 uint64_t nv = get64(p + 16);
                 int k = prt__kind_index((prt_transfer_kind)kind);
                 if (k < 0 || (channels != 1 && channels != 3) || order < 1 || order > PRT_SH_MAX_ORDER || nv != t->mesh.vertex_count ||
                     (t->order && (int)order != t->order) || t->sets[k].channels) {
-                    st = bad(ctx, "corrupt .prt file: invalid transfer chunk header%s", "");
+                    st = bad(ctx, "corrupt .prt file: invalid transfer chunk header");
                     break;
                 }
                 uint64_t n = nv * channels * order * order;
-                if (n > (len - 24) / 4 || 24 + n * 4 != len) { st = bad(ctx, "corrupt .prt file: transfer chunk size mismatch%s", ""); break; }
+                if (n > (len - 24) / 4 || 24 + n * 4 != len) { st = bad(ctx, "corrupt .prt file: transfer chunk size mismatch"); break; }
                 float *c = malloc(n * 4);
                 if (!c) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
                 memcpy(c, p + 24, n * 4);
@@ -263,8 +263,8 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
             }
         }
     }
-    if (!st && (!have_meta || !have_mesh)) st = bad(ctx, "corrupt .prt file: metadata or mesh chunk missing%s", "");
-    if (!st && !t->order) st = bad(ctx, ".prt file holds no transfer%s", "");
+    if (!st && (!have_meta || !have_mesh)) st = bad(ctx, "corrupt .prt file: metadata or mesh chunk missing");
+    if (!st && !t->order) st = bad(ctx, ".prt file holds no transfer");
     if (st) { prt_transfer_release(t); return st; }
     *out = t;
     return PRT_OK;

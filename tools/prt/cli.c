@@ -250,17 +250,27 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
 void cli_light_defaults_from(cli_light *l, const prt_transfer *t)
 {
     prt_environment_desc e;
-    if (!prt_transfer_environment(t, &e)) return;
+    if (prt_transfer_environment(t, &e)) cli_light_defaults_from_env(l, &e);
+}
+
+void cli_light_defaults_from_scene(cli_light *l, const prt_scene *s)
+{
+    prt_environment_desc e;
+    if (prt_scene_environment(s, &e)) cli_light_defaults_from_env(l, &e);
+}
+
+void cli_light_defaults_from_env(cli_light *l, const prt_environment_desc *e)
+{
     if (!l->set_source) {
-        if (e.path[0]) {
-            snprintf(l->path_buf, sizeof l->path_buf, "%s", e.path);
+        if (e->path[0]) {
+            snprintf(l->path_buf, sizeof l->path_buf, "%s", e->path);
             l->env_path = l->path_buf;
-            l->layout = e.layout;
+            l->layout = e->layout;
         }
-        memcpy(l->sun_dir, e.sun_dir, sizeof l->sun_dir);
+        memcpy(l->sun_dir, e->sun_dir, sizeof l->sun_dir);
     }
-    if (!l->set_rotate) memcpy(l->rotate, e.rotate_deg, sizeof l->rotate);
-    if (!l->set_intensity && e.intensity > 0) l->intensity = e.intensity;
+    if (!l->set_rotate) memcpy(l->rotate, e->rotate_deg, sizeof l->rotate);
+    if (!l->set_intensity && e->intensity > 0) l->intensity = e->intensity;
 }
 
 prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh_light *out, prt_envmap **env_out)

@@ -74,6 +74,8 @@ enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN };
     {"sun", required_argument, 0, OPT_SUN}
 /* Fills what the command line left unset from the lighting a .prt's scene named. */
 void cli_light_defaults_from(cli_light *l, const prt_transfer *t);
+void cli_light_defaults_from_scene(cli_light *l, const prt_scene *s);
+void cli_light_defaults_from_env(cli_light *l, const prt_environment_desc *e);
 /* Loads the environment (or builds the sky) and projects it to SH of the given order. */
 prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh_light *out, prt_envmap **env_out);
 

@@ -76,6 +76,7 @@ int cmd_reference(int argc, char **argv)
     bool json = ext && !strcasecmp(ext, ".json");
     if (output && !json && !(ext && !strcasecmp(ext, ".ply"))) return cli_usage(&c, "-o must end in .json or .ply");
     if (view.have_eye != view.have_target) return cli_usage(&c, "--eye and --target go together");
+    if (light.set_intensity && light.intensity == 0) return cli_usage(&c, "--intensity 0 leaves nothing to trace");
     int rc = cli_make_context(&c);
     if (rc) return rc;
     cli_catch_interrupt();
@@ -100,25 +101,16 @@ int cmd_reference(int argc, char **argv)
             st = PRT_ERR_FORMAT;
     } else {
         st = prt_scene_load(c.ctx, input, &sd, &scene);
-        prt_environment_desc e;
-        if (!st && prt_scene_environment(scene, &e) && !light.set_source) {
-            snprintf(light.path_buf, sizeof light.path_buf, "%s", e.path);
-            light.env_path = e.path[0] ? light.path_buf : NULL;
-            light.layout = e.layout;
-            memcpy(light.sun_dir, e.sun_dir, sizeof e.sun_dir);
-            if (!light.set_rotate) memcpy(light.rotate, e.rotate_deg, sizeof e.rotate_deg);
-            if (!light.set_intensity && e.intensity > 0) light.intensity = e.intensity;
-        }
+        if (!st) cli_light_defaults_from_scene(&light, scene);
     }
     prt_sh_light unused;
     if (!st) st = cli_light_project(&c, &light, 1, &unused, &env);
     double rot[9];
     prt_rotation_from_euler_deg(light.rotate[0], light.rotate[1], light.rotate[2], rot);
     rd.rotation = rot;
-    rd.intensity = light.intensity > 0 ? light.intensity : 0.0f;
+    rd.intensity = light.intensity;
     rd.progress = cli_progress;
     rd.progress_user = &c;
-    if (!st && light.intensity == 0) st = PRT_ERR_INVALID_ARG;
     if (!st && output) st = prt_reference_trace_vertices(c.ctx, scene, env, &rd, &res);
     if (!st && output) {
         size_t nv = res.vertex_count;
@@ -148,7 +140,7 @@ int cmd_reference(int argc, char **argv)
         if (!st) st = prt_image_save(image, &img, &view.save);
         if (!st && !c.quiet) fprintf(stderr, "prt reference: wrote %s\n", image);
     }
-    if (st && !rc) rc = st == PRT_ERR_INVALID_ARG && light.intensity == 0 ? cli_usage(&c, "--intensity 0 leaves nothing to trace") : cli_fail(&c, st);
+    if (st && !rc) rc = cli_fail(&c, st);
     prt_image_free(&img);
     prt_reference_vertices_free(&res);
     prt_envmap_release(env);

@@ -157,15 +157,7 @@ int cmd_sweep(int argc, char **argv)
         cli_error(&c, "the scene has %zu vertices, the reference %zu: compute it from the same scene with the same options", prt_scene_vertex_count(scene), ref.nv);
         rc = EXIT_FAILURE_INPUT;
     }
-    prt_environment_desc e;
-    if (!st && prt_scene_environment(scene, &e) && !light.set_source) {
-        snprintf(light.path_buf, sizeof light.path_buf, "%s", e.path);
-        light.env_path = e.path[0] ? light.path_buf : NULL;
-        light.layout = e.layout;
-        memcpy(light.sun_dir, e.sun_dir, sizeof e.sun_dir);
-        if (!light.set_rotate) memcpy(light.rotate, e.rotate_deg, sizeof e.rotate_deg);
-        if (!light.set_intensity && e.intensity > 0) light.intensity = e.intensity;
-    }
+    if (!st) cli_light_defaults_from_scene(&light, scene);
     char tmp[1100];
     snprintf(tmp, sizeof tmp, "%s.tmp.%ld", output, (long)getpid());
     FILE *csv = !st && !rc ? fopen(tmp, "w") : NULL;
