@@ -46,6 +46,55 @@ void prt_camera_frame(const float lo[3], const float hi[3], const float *from, f
 /* The GL renderer string, for reports ("llvmpipe ..."). */
 const char *prt_renderer_name(const prt_renderer *r);
 
+/* A window (GLFW, OpenGL 3.3 core) drawing exactly what prt_render draws - the same shaders
+ * into the same float framebuffer - then tone-mapped for the screen as prt_image_save tone-maps
+ * PNGs, with an optional text overlay. Needs a display: without one, prt_window_create fails
+ * with PRT_ERR_BACKEND and says so. Use from the creating thread only. */
+typedef struct prt_window prt_window;
+
+typedef struct prt_window_desc {
+    int width, height;       /* 0 = 1024 x 768 */
+    int samples;             /* MSAA samples; 0 = 4 */
+    const char *title;       /* NULL = "prt" */
+} prt_window_desc;
+
+typedef enum prt_event_type {
+    PRT_EVENT_NONE = 0,
+    PRT_EVENT_KEY,           /* key, action, mods */
+    PRT_EVENT_BUTTON,        /* button (0 left, 1 right, 2 middle), action, mods, x, y */
+    PRT_EVENT_MOVE,          /* x, y: cursor position in pixels */
+    PRT_EVENT_SCROLL,        /* y: wheel steps */
+    PRT_EVENT_CLOSE          /* the window was asked to close */
+} prt_event_type;
+
+enum { PRT_MOD_SHIFT = 1, PRT_MOD_CTRL = 2, PRT_MOD_ALT = 4 };
+enum { PRT_ACTION_RELEASE = 0, PRT_ACTION_PRESS = 1, PRT_ACTION_REPEAT = 2 };
+/* Key codes are GLFW's: printable keys are their upper-case ASCII code, PRT_KEY_ESCAPE etc. */
+enum { PRT_KEY_ESCAPE = 256, PRT_KEY_F12 = 301 };
+
+typedef struct prt_event {
+    prt_event_type type;
+    int key, button, action, mods;
+    double x, y;
+} prt_event;
+
+prt_status prt_window_create(prt_context *ctx, const prt_window_desc *desc, prt_window **out);
+void prt_window_release(prt_window *w);
+/* Next pending input event; returns 0 when there is none (it polls the system first). */
+int prt_window_next_event(prt_window *w, prt_event *ev);
+/* Blocks until an event arrives or timeout seconds pass. */
+void prt_window_wait(prt_window *w, double timeout);
+/* Geometry and radiance to draw (copied to the GPU); set_radiance replaces the colours only. */
+void prt_window_set_mesh(prt_window *w, const prt_render_mesh *mesh);
+void prt_window_set_radiance(prt_window *w, const float *rgb, size_t vertex_count);
+/* Draws and presents. tonemap: 0/1 Reinhard, 2 clamp (as prt_image_save_desc). overlay: text
+ * drawn at the top left, NULL for none. */
+prt_status prt_window_draw(prt_window *w, const prt_camera *cam, const float background[3], float exposure_stops, int tonemap,
+                           const char *overlay);
+/* The linear radiance of the last draw, without the overlay: what prt_render would return. */
+prt_status prt_window_read(prt_window *w, prt_image *out);
+void prt_window_size(const prt_window *w, int *width, int *height);
+
 #ifdef __cplusplus
 }
 #endif

@@ -148,3 +148,78 @@ void prt_camera_frame(const float lo[3], const float hi[3], const float *from, f
     out->up[1] = 1;
     out->fov_y_deg = fov_y_deg > 0 ? fov_y_deg : 40.0f;
 }
+
+prt_status prt__target_init(prt__target *t, int width, int height, int samples)
+{
+    memset(t, 0, sizeof *t);
+    t->width = width; t->height = height; t->samples = samples;
+    glGenFramebuffers(1, &t->fbo_ms);
+    glGenRenderbuffers(1, &t->color_ms);
+    glGenRenderbuffers(1, &t->depth_ms);
+    glBindRenderbuffer(GL_RENDERBUFFER, t->color_ms);
+    /* Half floats: radiance to 3 significant digits, half the memory traffic of RGBA32F. */
+    glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA16F, width, height);
+    glBindRenderbuffer(GL_RENDERBUFFER, t->depth_ms);
+    glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, width, height);
+    glBindFramebuffer(GL_FRAMEBUFFER, t->fbo_ms);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, t->color_ms);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t->depth_ms);
+    GLenum ms_status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+    glGenFramebuffers(1, &t->fbo);
+    glGenTextures(1, &t->color_tex);
+    glBindTexture(GL_TEXTURE_2D, t->color_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA16F, width, height, 0, GL_RGBA, GL_FLOAT, NULL);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glBindFramebuffer(GL_FRAMEBUFFER, t->fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t->color_tex, 0);
+    GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    if (ms_status != GL_FRAMEBUFFER_COMPLETE || status != GL_FRAMEBUFFER_COMPLETE) {
+        prt__target_free(t);
+        return prt__fail(NULL, PRT_ERR_BACKEND, "float framebuffer is not supported by this OpenGL driver");
+    }
+    return PRT_OK;
+}
+
+void prt__target_free(prt__target *t)
+{
+    GLuint fbos[2] = {t->fbo_ms, t->fbo}, rbs[2] = {t->color_ms, t->depth_ms};
+    if (t->fbo_ms || t->fbo) glDeleteFramebuffers(2, fbos);
+    if (t->color_ms || t->depth_ms) glDeleteRenderbuffers(2, rbs);
+    if (t->color_tex) glDeleteTextures(1, &t->color_tex);
+    memset(t, 0, sizeof *t);
+}
+
+void prt__target_draw(prt__target *t, const prt__draw *d, const prt_camera *cam, const float background[3])
+{
+    glBindFramebuffer(GL_FRAMEBUFFER, t->fbo_ms);
+    prt__draw_mesh(d, cam, t->width, t->height, background);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, t->fbo_ms);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, t->fbo);
+    glBlitFramebuffer(0, 0, t->width, t->height, 0, 0, t->width, t->height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+prt_status prt__target_read(const prt__target *t, prt_image *out)
+{
+    memset(out, 0, sizeof *out);
+    size_t n = (size_t)t->width * t->height;
+    float *rgba = malloc(n * 4 * sizeof(float));
+    out->rgb = malloc(n * 3 * sizeof(float));
+    if (!rgba || !out->rgb) { free(rgba); free(out->rgb); out->rgb = NULL; return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory"); }
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, t->fbo);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, t->width, t->height, GL_RGBA, GL_FLOAT, rgba);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    GLenum err = glGetError();
+    out->width = t->width;
+    out->height = t->height;
+    for (int y = 0; y < t->height; ++y)   /* GL's rows run bottom-up; prt images top-down */
+        for (int x = 0; x < t->width; ++x)
+            for (int c = 0; c < 3; ++c)
+                out->rgb[((size_t)y * t->width + x) * 3 + c] = rgba[((size_t)(t->height - 1 - y) * t->width + x) * 4 + c];
+    free(rgba);
+    if (err != GL_NO_ERROR) { prt_image_free(out); return prt__fail(NULL, PRT_ERR_BACKEND, "OpenGL error 0x%x while drawing", err); }
+    return PRT_OK;
+}

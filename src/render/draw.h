@@ -19,6 +19,20 @@ void prt__draw_free(prt__draw *d);
 void prt__draw_upload(prt__draw *d, const prt_render_mesh *mesh);
 /* Draws into the bound framebuffer of size w x h. */
 void prt__draw_mesh(const prt__draw *d, const prt_camera *cam, int w, int h, const float background[3]);
+/* An offscreen multisampled float framebuffer, resolved into a float texture that can be read
+ * back (screenshots, prt_render) or drawn to a window with tone mapping. */
+typedef struct prt__target {
+    int width, height, samples;
+    GLuint fbo_ms, color_ms, depth_ms, fbo, color_tex;
+} prt__target;
+
+prt_status prt__target_init(prt__target *t, int width, int height, int samples);
+void prt__target_free(prt__target *t);
+/* Draws the mesh into the target and resolves it. */
+void prt__target_draw(prt__target *t, const prt__draw *d, const prt_camera *cam, const float background[3]);
+/* Reads the resolved linear radiance, top row first. */
+prt_status prt__target_read(const prt__target *t, prt_image *out);
+
 /* Column-major view-projection matrix for a camera. */
 void prt__camera_matrix(const prt_camera *cam, float aspect, float near_far[2], float out[16]);
 

@@ -159,5 +159,6 @@ int cmd_demo_scene(int argc, char **argv);
 int cmd_reference(int argc, char **argv);
 int cmd_compare(int argc, char **argv);
 int cmd_sweep(int argc, char **argv);
+int cmd_view(int argc, char **argv);
 
 #endif

@@ -8,6 +8,7 @@ static const struct { const char *name; int (*fn)(int, char **); const char *sum
     {"bake", cmd_bake, "precompute radiance transfer for a scene into a .prt file"},
     {"relight", cmd_relight, "per-vertex exit radiance of a .prt under a lighting, as PLY or JSON"},
     {"render", cmd_render, "draw a relit .prt to a PNG or EXR image (headless OpenGL)"},
+    {"view", cmd_view, "interactive real-time relighting window (GLFW); --script replays input"},
     {"env", cmd_env, "project an environment probe to SH; optional band-limited / irradiance image"},
     {"info", cmd_info, "describe what a .prt file holds"},
     {"reference", cmd_reference, "ground truth by path tracing: per-vertex (direct/indirect) or an image"},

@@ -1,0 +1,75 @@
+#!/bin/sh
+# prt view under Xvfb: scripted screenshots equal prt render for the same camera and lighting,
+# before and after rotating the environment; bad scripts and a missing display fail clearly.
+# Usage: view_test.sh PATH/TO/prt. Exits 77 (skipped) when xvfb-run is not installed.
+set -u
+PRT=$1
+if ! command -v xvfb-run >/dev/null 2>&1; then
+    echo "skipping: xvfb-run is not installed (scripts/setup-deps.sh installs xvfb)"
+    exit 77
+fi
+T=$(mktemp -d /tmp/prt_view_XXXXXX)
+trap 'rm -rf "$T"' EXIT
+pass=0
+fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+# LeakSanitizer cannot attribute Mesa's driver allocations (see cli_test.sh).
+export ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0"
+
+"$PRT" demo-scene -o "$T/demo.obj" && "$PRT" bake -q "$T/demo.obj" -o "$T/demo.prt" --order 4 --samples 64 --bounces 1 || { echo "FAIL: setup"; exit 1; }
+
+cat >"$T/script.txt" <<'S'
+# time  verb  arguments
+0    screenshot  SHOTS/first.exr
+0    env-rotate  90 0
+0    screenshot  SHOTS/rotated.exr
+0    key k
+0    key [
+0    key d
+0.1  drag left 40 -20
+0.1  drag left 30 10 ctrl
+0.2  zoom 0.8
+0.3  screenshot  SHOTS/moved.png
+0.3  quit
+S
+sed -i "s#SHOTS#$T#" "$T/script.txt"
+xvfb-run -a -s "-screen 0 1024x768x24" "$PRT" view "$T/demo.prt" --width 320 --height 240 --script "$T/script.txt" --stats >"$T/stats" 2>"$T/err"
+rc=$?
+[ "$rc" -eq 0 ] && ok || { bad "scripted view exited $rc"; cat "$T/err"; }
+grep -q '"relight_ms"' "$T/stats" && ok || bad "--stats printed no relight time"
+for f in first.exr rotated.exr moved.png; do [ -s "$T/$f" ] && ok || bad "no screenshot $f"; done
+
+"$PRT" render -q "$T/demo.prt" -o "$T/render_first.exr" --width 320 --height 240
+"$PRT" render -q "$T/demo.prt" -o "$T/render_rotated.exr" --width 320 --height 240 --rotate 90
+# Equal per pixel within half-float rounding: max |A - B| tiny against radiance near 1.
+within() {
+    "$PRT" compare --json - -q "$1" "$2" >"$T/cmp" || { bad "compare $1 $2 failed"; return; }
+    python3 - "$T/cmp" "$3" <<'P' && ok || bad "$1 differs from $2: $(cat "$T/cmp" | tr -d '\n ')"
+import json, sys
+m = json.load(open(sys.argv[1]))
+sys.exit(0 if m["max_abs"] <= float(sys.argv[2]) else 1)
+P
+}
+within "$T/first.exr" "$T/render_first.exr" 0.002
+within "$T/rotated.exr" "$T/render_rotated.exr" 0.002
+"$PRT" compare --json - -q "$T/first.exr" "$T/render_rotated.exr" >"$T/cmp"
+python3 -c "import json,sys; sys.exit(0 if json.load(open('$T/cmp'))['relative_l2'] > 0.05 else 1)" && ok || bad "rotating the environment changed nothing"
+
+# Bad scripts: a clear error, exit 2, before any window opens.
+printf '0 frobnicate 1 2\n' >"$T/bad.txt"
+xvfb-run -a "$PRT" view "$T/demo.prt" --script "$T/bad.txt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "bad.txt:1" "$T/err" && ok || { bad "bad script: exit $rc"; cat "$T/err"; }
+printf '0 key z\n' >"$T/badkey.txt"
+xvfb-run -a "$PRT" view "$T/demo.prt" --script "$T/badkey.txt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "no control is bound" "$T/err" && ok || { bad "unbound key: exit $rc"; cat "$T/err"; }
+
+# No display: exit 3 with a message, no crash.
+env -u DISPLAY -u WAYLAND_DISPLAY "$PRT" view "$T/demo.prt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 3 ] && grep -qi "display" "$T/err" && ok || { bad "no display: exit $rc"; cat "$T/err"; }
+
+echo "view: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
