@@ -12,5 +12,6 @@
 #include "prt/transfer.h"
 #include "prt/render.h"
 #include "prt/reference.h"
+#include "prt/compress.h"
 
 #endif

@@ -38,7 +38,10 @@ void prt_transfer_release(prt_transfer *t)
 {
     if (!t) return;
     prt__mesh_free(&t->mesh);
-    for (int i = 0; i < PRT__KIND_COUNT; ++i) free(t->sets[i].coeffs);
+    for (int i = 0; i < PRT__KIND_COUNT; ++i) {
+        free(t->sets[i].coeffs);
+        prt__cpca_free(t->sets[i].cpca);
+    }
     free(t);
 }
 
@@ -55,8 +58,10 @@ void prt_transfer_get_info(const prt_transfer *t, prt_transfer_info *info)
     info->threads = t->threads;
     for (int i = 0; i < PRT__KIND_COUNT; ++i)
         if (t->sets[i].channels) {
+            prt_compress_info ci;
             info->kinds |= prt__kind_from_index(i);
-            info->transfer_bytes += t->mesh.vertex_count * (size_t)t->sets[i].channels * (size_t)(t->order * t->order) * sizeof(float);
+            prt_transfer_compress_info(t, prt__kind_from_index(i), &ci);
+            info->transfer_bytes += ci.bytes;
         }
     snprintf(info->source, sizeof info->source, "%s", t->source);
 }
@@ -70,7 +75,7 @@ int prt_transfer_channels(const prt_transfer *t, prt_transfer_kind kind)
 const float *prt_transfer_coeffs(const prt_transfer *t, prt_transfer_kind kind)
 {
     int i = prt__kind_index(kind);
-    return i < 0 || !t->sets[i].channels ? NULL : t->sets[i].coeffs;
+    return i < 0 || !t->sets[i].channels ? NULL : t->sets[i].coeffs;   /* NULL for compressed sets */
 }
 
 int prt_transfer_environment(const prt_transfer *t, prt_environment_desc *out)

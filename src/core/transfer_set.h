@@ -3,12 +3,39 @@
 #define PRT_CORE_TRANSFER_SET_H
 
 #include "geom/mesh.h"
+#include "prt/compress.h"
 
 #define PRT__KIND_COUNT 3
 
+/* A clustered-PCA compressed set (compress/cpca.c); VQ and PCA are special cases. */
+typedef struct prt__cpca {
+    prt_compress_method method;
+    int clusters, dim;          /* dim = channels * order^2 */
+    uint32_t *counts;           /* PCA vectors per cluster */
+    size_t *basis_start;        /* first vector of each cluster in `basis` (derived) */
+    float *means;               /* [cluster][dim] */
+    float *basis;               /* [vector][dim], clusters' vectors one after another */
+    size_t vectors_total;
+    uint32_t *cluster_of;       /* [vertex] */
+    size_t *weight_start;       /* first weight of each vertex (derived) */
+    float *weights;             /* per vertex, counts[cluster_of[v]] floats */
+    size_t weights_total;
+    double rms_error, relative_error;
+} prt__cpca;
+
+void prt__cpca_free(prt__cpca *c);
+/* Fills basis_start and weight_start from counts and cluster_of; false if they are inconsistent. */
+bool prt__cpca_index(prt__cpca *c, size_t vertex_count);
+
+struct prt__progress;
+/* Compresses nv vectors of dim floats (X row-major) with desc's settings filled in. */
+prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim, const prt_compress_desc *desc,
+                           struct prt__progress *prog, prt__cpca **out);
+
 typedef struct prt__sh_set {
     int channels;       /* 0 = absent, 1 = albedo applied at relight, 3 = RGB with albedo */
-    float *coeffs;      /* [vertex][channel][order^2] */
+    float *coeffs;      /* [vertex][channel][order^2]; NULL when compressed */
+    prt__cpca *cpca;    /* non-NULL when compressed */
 } prt__sh_set;
 
 struct prt_transfer {

@@ -21,8 +21,11 @@ static const unsigned char MAGIC[8] = {'P', 'R', 'T', 'F', 0x0D, 0x0A, 0x1A, 0x0
 #define CHUNK_META FOURCC('M', 'E', 'T', 'A')
 #define CHUNK_MESH FOURCC('M', 'E', 'S', 'H')
 #define CHUNK_SHTR FOURCC('S', 'H', 'T', 'R')
+#define CHUNK_CPCA FOURCC('C', 'P', 'C', 'A')
+#define CPCA_HEADER 64
+#define PARTS 8
 
-typedef struct chunk { uint32_t id; const void *parts[5]; size_t sizes[5]; size_t size; } chunk;
+typedef struct chunk { uint32_t id; const void *parts[PARTS]; size_t sizes[PARTS]; size_t size; } chunk;
 
 static void put32(unsigned char *p, uint32_t v) { memcpy(p, &v, 4); }
 static void put64(unsigned char *p, uint64_t v) { memcpy(p, &v, 8); }
@@ -33,7 +36,7 @@ static uint32_t chunk_crc(const chunk *c)
 {
     /* One running CRC over the concatenated parts, without copying them together. */
     uLong crc = crc32(0L, Z_NULL, 0);
-    for (int i = 0; i < 5 && c->parts[i]; ++i) {
+    for (int i = 0; i < PARTS && c->parts[i]; ++i) {
         const unsigned char *p = c->parts[i];
         size_t n = c->sizes[i];
         while (n) {
@@ -76,7 +79,7 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
     memset(chunks, 0, sizeof chunks);
     int count = 0;
     chunks[count++] = (chunk){CHUNK_META, {meta_text}, {strlen(meta_text)}, 0};
-    unsigned char mesh_head[16], set_head[PRT__KIND_COUNT][24];
+    unsigned char mesh_head[16], set_head[PRT__KIND_COUNT][CPCA_HEADER];
     put64(mesh_head, m->vertex_count);
     put64(mesh_head + 8, m->triangle_count);
     size_t v3 = m->vertex_count * 3 * sizeof(float);
@@ -86,13 +89,29 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
         const prt__sh_set *s = &t->sets[k];
         if (!s->channels) continue;
         unsigned char *h = set_head[k];
+        memset(h, 0, CPCA_HEADER);
         put32(h, (uint32_t)prt__kind_from_index(k));
         put32(h + 4, (uint32_t)s->channels);
         put32(h + 8, (uint32_t)t->order);
-        put32(h + 12, 0);
-        put64(h + 16, m->vertex_count);
-        chunks[count++] = (chunk){CHUNK_SHTR, {h, s->coeffs},
-                                  {24, m->vertex_count * (size_t)s->channels * (size_t)(t->order * t->order) * sizeof(float)}, 0};
+        if (!s->cpca) {
+            put64(h + 16, m->vertex_count);
+            chunks[count++] = (chunk){CHUNK_SHTR, {h, s->coeffs},
+                                      {24, m->vertex_count * (size_t)s->channels * (size_t)(t->order * t->order) * sizeof(float)}, 0};
+            continue;
+        }
+        const prt__cpca *c = s->cpca;
+        put32(h + 12, (uint32_t)c->method);
+        put32(h + 16, (uint32_t)c->clusters);
+        put32(h + 20, (uint32_t)c->dim);
+        put64(h + 24, m->vertex_count);
+        put64(h + 32, c->vectors_total);
+        put64(h + 40, c->weights_total);
+        memcpy(h + 48, &c->rms_error, 8);
+        memcpy(h + 56, &c->relative_error, 8);
+        size_t dim = (size_t)c->dim;
+        chunks[count++] = (chunk){CHUNK_CPCA, {h, c->counts, c->means, c->basis, c->cluster_of, c->weights},
+                                  {CPCA_HEADER, (size_t)c->clusters * 4, (size_t)c->clusters * dim * 4, c->vectors_total * dim * 4,
+                                   m->vertex_count * 4, c->weights_total * 4}, 0};
     }
     unsigned char head[HEADER_SIZE + ENTRY_SIZE * (2 + PRT__KIND_COUNT)];
     memset(head, 0, sizeof head);
@@ -102,7 +121,7 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
     size_t table_end = HEADER_SIZE + (size_t)ENTRY_SIZE * count, offset = (table_end + 7) & ~(size_t)7;
     for (int i = 0; i < count; ++i) {
         chunk *c = &chunks[i];
-        for (int p = 0; p < 5; ++p) c->size += c->sizes[p];
+        for (int p = 0; p < PARTS; ++p) c->size += c->sizes[p];
         unsigned char *e = head + HEADER_SIZE + ENTRY_SIZE * i;
         put32(e, c->id);
         put32(e + 4, chunk_crc(c));
@@ -123,7 +142,7 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
         size_t pad = ((pos + 7) & ~(size_t)7) - pos;
         st = prt__atomic_write(&f, zeros, pad);
         pos += pad;
-        for (int p = 0; p < 5 && !st; ++p)
+        for (int p = 0; p < PARTS && !st; ++p)
             if (chunks[i].parts[p]) st = prt__atomic_write(&f, chunks[i].parts[p], chunks[i].sizes[p]);
         pos += chunks[i].size;
     }
@@ -179,7 +198,7 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
             uint64_t off = get64(e + 8), len = get64(e + 16);
             if (off > size || len > size - off) { st = bad(ctx, "truncated .prt file: a chunk extends past the end"); break; }
             const unsigned char *p = b + off;
-            bool mine = pass == 0 ? (id == CHUNK_META || id == CHUNK_MESH) : id == CHUNK_SHTR;
+            bool mine = pass == 0 ? (id == CHUNK_META || id == CHUNK_MESH) : (id == CHUNK_SHTR || id == CHUNK_CPCA);
             if (!mine) continue;
             if (prt__crc32(p, (size_t)len) != crc) {
                 char what[5] = {(char)(id & 255), (char)(id >> 8 & 255), (char)(id >> 16 & 255), (char)(id >> 24), 0};
@@ -241,6 +260,55 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 if (!st && !(all_finite(m->positions, nv * 3) && all_finite(m->normals, nv * 3) && all_finite(m->albedo, nv * 3)))
                     st = bad(ctx, "corrupt .prt file: non-finite vertex data");
                 have_mesh = true;
+            } else if (id == CHUNK_CPCA) {
+                if (!have_mesh || len < CPCA_HEADER) { st = bad(ctx, "corrupt .prt file: bad compressed transfer chunk"); break; }
+                uint32_t kind = get32(p), channels = get32(p + 4), order = get32(p + 8), method = get32(p + 12);
+                uint32_t clusters = get32(p + 16), dim = get32(p + 20);
+                uint64_t nv = get64(p + 24), nvec = get64(p + 32), nw = get64(p + 40);
+                int k = prt__kind_index((prt_transfer_kind)kind);
+                /* Every count is bounded by the chunk's own length before it sizes anything. */
+                if (k < 0 || (channels != 1 && channels != 3) || order < 1 || order > PRT_SH_MAX_ORDER || method > PRT_COMPRESS_VQ ||
+                    dim != channels * order * order || nv != t->mesh.vertex_count || (t->order && (int)order != t->order) ||
+                    t->sets[k].channels || clusters == 0 || clusters > len / 4 || nvec > len / 4 || nw > len / 4 ||
+                    (uint64_t)clusters * dim > len / 4 || nvec * dim > len / 4 ||
+                    CPCA_HEADER + 4 * ((uint64_t)clusters + (uint64_t)clusters * dim + nvec * dim + nv + nw) != len) {
+                    st = bad(ctx, "corrupt .prt file: invalid compressed transfer chunk");
+                    break;
+                }
+                prt__cpca *c = prt__calloc(1, sizeof *c);
+                if (c) {
+                    c->method = (prt_compress_method)method;
+                    c->clusters = (int)clusters;
+                    c->dim = (int)dim;
+                    c->vectors_total = nvec;
+                    c->weights_total = nw;
+                    memcpy(&c->rms_error, p + 48, 8);
+                    memcpy(&c->relative_error, p + 56, 8);
+                    c->counts = malloc(clusters * 4ull);
+                    c->means = malloc((size_t)clusters * dim * 4);
+                    c->basis = malloc(nvec * dim * 4 + 4);
+                    c->cluster_of = malloc(nv * 4);
+                    c->weights = malloc(nw * 4 + 4);
+                }
+                if (!c || !c->counts || !c->means || !c->basis || !c->cluster_of || !c->weights) {
+                    prt__cpca_free(c);
+                    st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+                    break;
+                }
+                const unsigned char *q = p + CPCA_HEADER;
+                memcpy(c->counts, q, clusters * 4ull); q += clusters * 4ull;
+                memcpy(c->means, q, (size_t)clusters * dim * 4); q += (size_t)clusters * dim * 4;
+                memcpy(c->basis, q, nvec * dim * 4); q += nvec * dim * 4;
+                memcpy(c->cluster_of, q, nv * 4); q += nv * 4;
+                memcpy(c->weights, q, nw * 4);
+                if (!prt__cpca_index(c, nv)) {
+                    prt__cpca_free(c);
+                    st = bad(ctx, "corrupt .prt file: compressed transfer indices are inconsistent");
+                    break;
+                }
+                t->order = (int)order;
+                t->sets[k].channels = (int)channels;
+                t->sets[k].cpca = c;
             } else {
                 if (!have_mesh) { st = bad(ctx, "corrupt .prt file: transfer without a mesh"); break; }
                 if (len < 24) { st = bad(ctx, "corrupt .prt file: short transfer chunk"); break; }

@@ -87,6 +87,47 @@ static inline __attribute__((always_inline)) void relight3(const float *restrict
         else relight3(coeffs, light, stride, N, v0, v1, out_rgb);                 \
         break;
 
+/* Compressed sets: project every cluster mean and PCA vector on the lighting once (a few
+ * thousand dot products), then each vertex is its mean's value plus a short weighted sum. */
+static prt_status relight_cpca(prt_context *ctx, const prt_transfer *t, const prt__sh_set *set, const float (*light)[PRT_SH_MAX_COEFFS + 8],
+                               int n, float *out)
+{
+    const prt__cpca *c = set->cpca;
+    const int stride = t->order * t->order, ch = set->channels;
+    const size_t rows = (size_t)c->clusters + c->vectors_total;
+    float *proj = malloc(rows * 3 * sizeof(float));   /* [cluster means..., vectors...][channel] */
+    if (!proj) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (size_t r = 0; r < rows; ++r) {
+        const float *x = r < (size_t)c->clusters ? c->means + r * c->dim : c->basis + (r - (size_t)c->clusters) * c->dim;
+        for (int l = 0; l < 3; ++l) {
+            const float *seg = x + (ch == 3 ? l * stride : 0);
+            float s = 0;
+            for (int i = 0; i < n; ++i) s += seg[i] * light[l][i];
+            proj[r * 3 + l] = s;
+        }
+    }
+    const float *albedo = t->mesh.albedo;
+    const long nv = (long)t->mesh.vertex_count;
+#pragma omp parallel for schedule(static) num_threads(nv < 4096 ? 1 : prt__threads(ctx))
+    for (long v = 0; v < nv; ++v) {
+        uint32_t k = c->cluster_of[v];
+        const float *m = proj + (size_t)k * 3, *w = c->weights + c->weight_start[v];
+        const float *b = proj + ((size_t)c->clusters + c->basis_start[k]) * 3;
+        float r = m[0], g = m[1], bl = m[2];
+        for (uint32_t j = 0; j < c->counts[k]; ++j) {
+            r += w[j] * b[j * 3];
+            g += w[j] * b[j * 3 + 1];
+            bl += w[j] * b[j * 3 + 2];
+        }
+        if (ch == 1) { r *= albedo[v * 3]; g *= albedo[v * 3 + 1]; bl *= albedo[v * 3 + 2]; }
+        out[v * 3] = r;
+        out[v * 3 + 1] = g;
+        out[v * 3 + 2] = bl;
+    }
+    free(proj);
+    return PRT_OK;
+}
+
 prt_status prt_relight_sh(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *sh, float *out_rgb)
 {
     if (!t || !sh || !out_rgb) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_sh: transfer, light and output are required");
@@ -104,6 +145,7 @@ prt_status prt_relight_sh(prt_context *ctx, const prt_transfer *t, prt_transfer_
     float light[3][PRT_SH_MAX_COEFFS + 8];
     memset(light, 0, sizeof light);
     for (int c = 0; c < 3; ++c) memcpy(light[c], sh->coeffs[c], (size_t)n * sizeof(float));
+    if (t->sets[k].cpca) return relight_cpca(ctx, t, &t->sets[k], light, n, out_rgb);
     const int threads = prt__threads(ctx);
     /* Below a few thousand vertices a thread team costs more than it saves. */
     const int team = nv < 4096 ? 1 : threads;

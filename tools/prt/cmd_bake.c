@@ -18,6 +18,10 @@ static const char *HELP =
     "      --seed N           rotates the low-discrepancy directions (default 0)\n"
     CLI_SCENE_OPTIONS_HELP
     "      --ray-offset E     shadow-ray origin offset (default 1e-4 x scene diagonal)\n"
+    "      --compress M       cpca | pca | vq: store the sets compressed (clustered PCA, one\n"
+    "                         cluster, or clusters only); relighting reads them directly\n"
+    "      --clusters K       clusters for cpca (default 64) and vq (default 256)\n"
+    "      --vectors N        average PCA vectors per cluster for cpca and pca (default 8)\n"
     "  -j, --threads N        worker threads (default: all cores; results do not change)\n"
     "  -q, --quiet            no progress or warnings\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
@@ -28,10 +32,13 @@ int cmd_bake(int argc, char **argv)
     prt_bake_desc bd = {0};
     prt_scene_desc sd = {0};
     const char *output = NULL;
+    prt_compress_desc cd = {0};
+    bool compress = false;
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"order", required_argument, 0, 'O'}, {"samples", required_argument, 0, 'n'},
         {"kinds", required_argument, 0, 'k'}, {"bounces", required_argument, 0, 'b'}, {"seed", required_argument, 0, 's'},
-        CLI_SCENE_LONG_OPTIONS, {"ray-offset", required_argument, 0, 'r'},
+        CLI_SCENE_LONG_OPTIONS, {"ray-offset", required_argument, 0, 'r'}, {"compress", required_argument, 0, 'C'},
+        {"clusters", required_argument, 0, 'K'}, {"vectors", required_argument, 0, 'V'},
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt, seed;
     optind = 1;
@@ -58,6 +65,15 @@ int cmd_bake(int argc, char **argv)
             if (!bd.kinds) return cli_usage(&c, "--kinds is empty");
             break;
         }
+        case 'C':
+            if (!strcasecmp(optarg, "cpca")) cd.method = PRT_COMPRESS_CPCA;
+            else if (!strcasecmp(optarg, "pca")) cd.method = PRT_COMPRESS_PCA;
+            else if (!strcasecmp(optarg, "vq")) cd.method = PRT_COMPRESS_VQ;
+            else return cli_usage(&c, "--compress must be cpca, pca or vq");
+            compress = true;
+            break;
+        case 'K': if (!cli_parse_int(optarg, 1, 65536, &cd.clusters)) return cli_usage(&c, "--clusters must be 1..65536"); break;
+        case 'V': if (!cli_parse_int(optarg, 1, 300, &cd.vectors)) return cli_usage(&c, "--vectors must be 1..300"); break;
         case 'r': if (!cli_parse_float(optarg, &bd.ray_offset) || bd.ray_offset <= 0) return cli_usage(&c, "--ray-offset must be > 0"); break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
@@ -66,6 +82,7 @@ int cmd_bake(int argc, char **argv)
         }
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one SCENE argument");
+    if (!compress && (cd.clusters || cd.vectors)) return cli_usage(&c, "--clusters and --vectors need --compress");
     if (!output) return cli_usage(&c, "an output file is required (-o OUT.prt)");
     int rc = cli_make_context(&c);
     if (rc) return rc;
@@ -88,6 +105,13 @@ int cmd_bake(int argc, char **argv)
         bd.progress = cli_progress;
         bd.progress_user = &c;
         st = prt_bake_sh(c.ctx, scene, &bd, &t);
+    }
+    if (!st && compress) {
+        prt_transfer *z = NULL;
+        cd.progress = cli_progress;
+        cd.progress_user = &c;
+        st = prt_transfer_compress(c.ctx, t, &cd, &z);
+        if (!st) { prt_transfer_release(t); t = z; }
     }
     if (!st) st = prt_transfer_save(t, output);
     if (!st && !c.quiet) {

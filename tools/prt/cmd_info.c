@@ -44,6 +44,18 @@ int cmd_info(int argc, char **argv)
                 cJSON *o = cJSON_CreateObject();
                 cJSON_AddStringToObject(o, "kind", prt_transfer_kind_name(all[k]));
                 cJSON_AddNumberToObject(o, "channels", prt_transfer_channels(t, all[k]));
+                prt_compress_info ci;
+                prt_transfer_compress_info(t, all[k], &ci);
+                cJSON_AddNumberToObject(o, "bytes", (double)ci.bytes);
+                if (ci.compressed) {
+                    static const char *names[3] = {"cpca", "pca", "vq"};
+                    cJSON_AddStringToObject(o, "compression", names[ci.method]);
+                    cJSON_AddNumberToObject(o, "clusters", ci.clusters);
+                    cJSON_AddNumberToObject(o, "pca_vectors", ci.vectors_total);
+                    cJSON_AddNumberToObject(o, "relative_error", ci.relative_error);
+                    cJSON_AddNumberToObject(o, "compression_ratio",
+                                            (double)info.vertex_count * prt_transfer_channels(t, all[k]) * info.order * info.order * 4.0 / (double)ci.bytes);
+                }
                 cJSON_AddItemToArray(kinds, o);
             }
         cJSON_AddNumberToObject(root, "vertices", (double)info.vertex_count);
@@ -66,7 +78,17 @@ int cmd_info(int argc, char **argv)
         printf("kinds:      ");
         for (int k = 0; k < 3; ++k)
             if (info.kinds & all[k]) printf(" %s (%d ch)", prt_transfer_kind_name(all[k]), prt_transfer_channels(t, all[k]));
-        printf("\nmesh:        %zu vertices, %zu triangles\n", info.vertex_count, info.triangle_count);
+        printf("\n");
+        for (int k = 0; k < 3; ++k) {
+            prt_compress_info ci;
+            if (!(info.kinds & all[k]) || prt_transfer_compress_info(t, all[k], &ci) || !ci.compressed) continue;
+            static const char *names[3] = {"clustered PCA", "PCA", "VQ"};
+            double raw = (double)info.vertex_count * prt_transfer_channels(t, all[k]) * info.order * info.order * 4.0;
+            printf("compressed:  %s %s, %d clusters, %d PCA vectors, %.1f bytes/vertex (%.1fx smaller), relative error %.4f\n",
+                   prt_transfer_kind_name(all[k]), names[ci.method], ci.clusters, ci.vectors_total, (double)ci.bytes / (double)info.vertex_count,
+                   raw / (double)ci.bytes, ci.relative_error);
+        }
+        printf("mesh:        %zu vertices, %zu triangles\n", info.vertex_count, info.triangle_count);
         printf("storage:     %.2f MiB transfer, %.0f bytes per vertex\n", info.transfer_bytes / 1048576.0,
                (double)info.transfer_bytes / (double)info.vertex_count);
         printf("bake:        %d samples, %d bounces, seed %u, %.2f s on %d threads\n", info.samples, info.bounces, info.seed,

@@ -1,0 +1,89 @@
+/* prt_transfer_compress and friends: the public face of compress/cpca.c. */
+#include "core/progress.h"
+#include "core/transfer_set.h"
+
+#include <string.h>
+
+prt_status prt_transfer_compress(prt_context *ctx, const prt_transfer *in, const prt_compress_desc *desc, prt_transfer **out)
+{
+    if (!in || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_compress: transfer and out are required");
+    *out = NULL;
+    prt_compress_desc d = desc ? *desc : (prt_compress_desc){0};
+    if (d.method > PRT_COMPRESS_VQ || d.clusters < 0 || d.vectors < 0 || d.iterations < 0)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "compression: unknown method or negative settings");
+    if (d.method == PRT_COMPRESS_PCA) d.clusters = 1;
+    if (d.clusters == 0) d.clusters = d.method == PRT_COMPRESS_VQ ? 256 : 64;
+    if (d.method == PRT_COMPRESS_VQ) d.vectors = 0;
+    else if (d.vectors == 0) d.vectors = 8;
+    if (d.iterations == 0) d.iterations = 20;
+    if (d.clusters > 65536 || d.vectors > 300 || d.iterations > 1000)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "compression: clusters <= 65536, vectors <= 300, iterations <= 1000");
+    for (int k = 0; k < PRT__KIND_COUNT; ++k)
+        if (in->sets[k].cpca) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the transfer is already compressed");
+
+    prt_transfer *t = prt__calloc(1, sizeof *t);
+    if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    *t = *in;
+    memset(&t->mesh, 0, sizeof t->mesh);
+    memset(t->sets, 0, sizeof t->sets);
+    const prt__mesh *m = &in->mesh;
+    prt_status st = prt__mesh_append(&t->mesh, m->positions, m->normals, m->albedo, (float[3]){0, 0, 0}, m->vertex_count, m->indices,
+                                     m->triangle_count);
+    prt__progress prog = {d.progress, d.progress_user, NULL, 0, 0, 0.0, 0};
+    for (int k = 0; k < PRT__KIND_COUNT && !st; ++k) {
+        const prt__sh_set *s = &in->sets[k];
+        if (!s->channels) continue;
+        char stage[48];
+        snprintf(stage, sizeof stage, "compress %s", prt_transfer_kind_name(prt__kind_from_index(k)));
+        prt__progress_begin(&prog, stage, (uint64_t)d.iterations);
+        st = prt__cpca_build(ctx, s->coeffs, m->vertex_count, s->channels * in->order * in->order, &d, &prog, &t->sets[k].cpca);
+        prt__progress_end(&prog);
+        t->sets[k].channels = s->channels;
+    }
+    if (st) { prt_transfer_release(t); return st; }
+    *out = t;
+    return PRT_OK;
+}
+
+prt_status prt_transfer_compress_info(const prt_transfer *t, prt_transfer_kind kind, prt_compress_info *out)
+{
+    memset(out, 0, sizeof *out);
+    int k = prt__kind_index(kind);
+    if (k < 0 || !t->sets[k].channels) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "the transfer holds no %s set", prt_transfer_kind_name(kind));
+    const prt__cpca *c = t->sets[k].cpca;
+    size_t nv = t->mesh.vertex_count;
+    if (!c) {
+        out->bytes = nv * (size_t)t->sets[k].channels * (size_t)(t->order * t->order) * sizeof(float);
+        return PRT_OK;
+    }
+    out->compressed = 1;
+    out->method = c->method;
+    out->clusters = c->clusters;
+    out->vectors_total = (int)c->vectors_total;
+    out->rms_error = c->rms_error;
+    out->relative_error = c->relative_error;
+    out->bytes = ((size_t)c->clusters * c->dim + c->vectors_total * c->dim + c->weights_total) * sizeof(float) + nv * sizeof(uint32_t) +
+                 (size_t)c->clusters * sizeof(uint32_t);
+    return PRT_OK;
+}
+
+prt_status prt_transfer_reconstruct(const prt_transfer *t, prt_transfer_kind kind, float *out)
+{
+    int k = prt__kind_index(kind);
+    if (k < 0 || !t->sets[k].channels) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "the transfer holds no %s set", prt_transfer_kind_name(kind));
+    const prt__sh_set *s = &t->sets[k];
+    size_t nv = t->mesh.vertex_count, dim = (size_t)s->channels * (size_t)(t->order * t->order);
+    if (!s->cpca) { memcpy(out, s->coeffs, nv * dim * sizeof(float)); return PRT_OK; }
+    const prt__cpca *c = s->cpca;
+    for (size_t v = 0; v < nv; ++v) {
+        uint32_t cl = c->cluster_of[v];
+        float *x = out + v * dim;
+        memcpy(x, c->means + (size_t)cl * dim, dim * sizeof(float));
+        for (uint32_t j = 0; j < c->counts[cl]; ++j) {
+            float w = c->weights[c->weight_start[v] + j];
+            const float *b = c->basis + (c->basis_start[cl] + j) * dim;
+            for (size_t i = 0; i < dim; ++i) x[i] += w * b[i];
+        }
+    }
+    return PRT_OK;
+}

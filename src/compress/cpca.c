@@ -1,0 +1,259 @@
+/* Clustered PCA of per-vertex transfer vectors (see prt/compress.h). Per-cluster covariance
+ * matrices are eigen-decomposed with LAPACKE; vertices are reassigned in parallel, each
+ * independently, so results never depend on the thread count. */
+#include "core/progress.h"
+#include "core/transfer_set.h"
+
+#include <lapacke.h>
+#include <string.h>
+
+void prt__cpca_free(prt__cpca *c)
+{
+    if (!c) return;
+    free(c->counts); free(c->basis_start); free(c->means); free(c->basis);
+    free(c->cluster_of); free(c->weight_start); free(c->weights);
+    free(c);
+}
+
+bool prt__cpca_index(prt__cpca *c, size_t nv)
+{
+    free(c->basis_start);
+    free(c->weight_start);
+    c->basis_start = prt__calloc((size_t)c->clusters + 1, sizeof(size_t));
+    c->weight_start = prt__calloc(nv + 1, sizeof(size_t));
+    if (!c->basis_start || !c->weight_start) return false;
+    for (int k = 0; k < c->clusters; ++k) {
+        if (c->counts[k] > (uint32_t)c->dim) return false;
+        c->basis_start[k + 1] = c->basis_start[k] + c->counts[k];
+    }
+    if (c->basis_start[c->clusters] != c->vectors_total) return false;
+    for (size_t v = 0; v < nv; ++v) {
+        if (c->cluster_of[v] >= (uint32_t)c->clusters) return false;
+        c->weight_start[v + 1] = c->weight_start[v] + c->counts[c->cluster_of[v]];
+    }
+    return c->weight_start[nv] == c->weights_total;
+}
+
+static uint64_t mix(uint64_t x)
+{
+    x ^= x >> 33; x *= 0xff51afd7ed558ccdULL; x ^= x >> 33; x *= 0xc4ceb9fe1a85ec53ULL; x ^= x >> 33;
+    return x;
+}
+
+static double dist2(const float *a, const float *b, int dim)
+{
+    double s = 0;
+    for (int i = 0; i < dim; ++i) { double d = (double)a[i] - b[i]; s += d * d; }
+    return s;
+}
+
+/* Per-cluster model during the iteration: mean, eigenvectors (descending), eigenvalues. */
+typedef struct model { double *mean, *vecs, *vals; size_t members; } model;
+
+/* Squared reconstruction error of x with the cluster's first n vectors. */
+static double recon_err(const float *x, const model *m, int dim, int n)
+{
+    double r[512];   /* dim <= 3 * 100 */
+    double e = 0;
+    for (int i = 0; i < dim; ++i) { r[i] = x[i] - m->mean[i]; e += r[i] * r[i]; }
+    for (int j = 0; j < n; ++j) {
+        const double *b = m->vecs + (size_t)j * dim;
+        double p = 0;
+        for (int i = 0; i < dim; ++i) p += b[i] * r[i];
+        e -= p * p;
+    }
+    return e > 0 ? e : 0;
+}
+
+prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim, const prt_compress_desc *d, prt__progress *prog, prt__cpca **out)
+{
+    *out = NULL;
+    int K = d->clusters;
+    if ((size_t)K > nv) K = (int)nv;
+    const int iterations = d->iterations;
+    size_t budget = (size_t)d->vectors * (size_t)K;
+    if (budget > (size_t)K * (size_t)dim) budget = (size_t)K * (size_t)dim;
+    prt_status st = PRT_OK;
+    uint32_t *assign = prt__calloc(nv, sizeof(uint32_t)), *counts = prt__calloc((size_t)K, sizeof(uint32_t));
+    size_t *order = prt__calloc(nv, sizeof(size_t)), *first = prt__calloc((size_t)K + 1, sizeof(size_t));
+    model *M = prt__calloc((size_t)K, sizeof(model));
+    double *best = prt__calloc(nv, sizeof(double));
+    if (!assign || !counts || !order || !first || !M || !best || dim > 512) {
+        st = prt__fail(ctx, dim > 512 ? PRT_ERR_INVALID_ARG : PRT_ERR_NO_MEMORY, "cannot compress: out of memory or vectors too long");
+        goto done;
+    }
+    for (int k = 0; k < K; ++k) {
+        M[k].mean = prt__calloc((size_t)dim, sizeof(double));
+        M[k].vecs = prt__calloc((size_t)dim * dim, sizeof(double));
+        M[k].vals = prt__calloc((size_t)dim, sizeof(double));
+        if (!M[k].mean || !M[k].vecs || !M[k].vals) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+    }
+    /* k-means++ seeding with hashed uniforms: deterministic for the seed. */
+    {
+        size_t c0 = mix(d->seed * 0x9e3779b97f4a7c15ULL + 1) % nv;
+        for (int i = 0; i < dim; ++i) M[0].mean[i] = X[c0 * dim + i];
+        for (size_t v = 0; v < nv; ++v) best[v] = INFINITY;
+        for (int k = 1; k <= K; ++k) {
+            double total = 0;
+            const int prev = k - 1;
+#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx)) reduction(+ : total)
+            for (size_t v = 0; v < nv; ++v) {
+                double e = 0;
+                for (int i = 0; i < dim; ++i) { double t = X[v * dim + i] - M[prev].mean[i]; e += t * t; }
+                if (e < best[v]) { best[v] = e; assign[v] = (uint32_t)prev; }
+                total += best[v];
+            }
+            if (k == K) break;
+            double u = (double)(mix(d->seed * 0x9e3779b97f4a7c15ULL + (uint64_t)k * 7919 + 2) >> 11) / 9007199254740992.0 * total, acc = 0;
+            size_t pick = nv - 1;
+            for (size_t v = 0; v < nv; ++v) { acc += best[v]; if (acc >= u && best[v] > 0) { pick = v; break; } }
+            for (int i = 0; i < dim; ++i) M[k].mean[i] = X[pick * dim + i];
+        }
+    }
+    size_t total_vectors = 0;
+    for (int it = 0; it <= iterations && !st; ++it) {
+        /* Members of each cluster, in vertex order. */
+        memset(first, 0, ((size_t)K + 1) * sizeof(size_t));
+        for (size_t v = 0; v < nv; ++v) first[assign[v] + 1]++;
+        for (int k = 0; k < K; ++k) first[k + 1] += first[k];
+        {
+            size_t *fill = prt__calloc((size_t)K, sizeof(size_t));
+            if (!fill) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+            for (size_t v = 0; v < nv; ++v) order[first[assign[v]] + fill[assign[v]]++] = v;
+            free(fill);
+        }
+        /* Local PCA per cluster (clusters in parallel: each sums its own members in order). */
+        int lapack_failed = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(prt__threads(ctx))
+        for (int k = 0; k < K; ++k) {
+            size_t n = first[k + 1] - first[k];
+            M[k].members = n;
+            if (n == 0) { memset(M[k].vals, 0, (size_t)dim * sizeof(double)); continue; }   /* keeps its old mean */
+            double *mean = M[k].mean, *cov = M[k].vecs;
+            memset(mean, 0, (size_t)dim * sizeof(double));
+            for (size_t j = first[k]; j < first[k + 1]; ++j)
+                for (int i = 0; i < dim; ++i) mean[i] += X[order[j] * dim + i];
+            for (int i = 0; i < dim; ++i) mean[i] /= (double)n;
+            memset(cov, 0, (size_t)dim * dim * sizeof(double));
+            double r[512];
+            for (size_t j = first[k]; j < first[k + 1]; ++j) {
+                for (int i = 0; i < dim; ++i) r[i] = X[order[j] * dim + i] - mean[i];
+                for (int a = 0; a < dim; ++a)
+                    for (int b = a; b < dim; ++b) cov[(size_t)a * dim + b] += r[a] * r[b];
+            }
+        }
+        /* Eigen decompositions one after another: OpenBLAS called from several OpenMP threads at
+         * once contends for its own thread pool and runs tens of times slower. */
+        double *tmp = malloc((size_t)dim * dim * sizeof(double));
+        for (int k = 0; k < K && tmp && !lapack_failed; ++k) {
+            if (M[k].members == 0) continue;
+            double *cov = M[k].vecs, w[512];
+            /* Row-major upper triangle; eigenvalues come back ascending, vectors in columns. */
+            if (LAPACKE_dsyev(LAPACK_ROW_MAJOR, 'V', 'U', dim, cov, dim, w) != 0) { lapack_failed = 1; break; }
+            for (int j = 0; j < dim; ++j) {   /* descending order, one vector per row */
+                int src = dim - 1 - j;
+                M[k].vals[j] = w[src] > 0 ? w[src] : 0;
+                for (int i = 0; i < dim; ++i) tmp[(size_t)j * dim + i] = cov[(size_t)i * dim + src];
+            }
+            memcpy(cov, tmp, (size_t)dim * dim * sizeof(double));
+        }
+        if (!tmp) lapack_failed = 1;
+        free(tmp);
+        if (lapack_failed) { st = prt__fail(ctx, PRT_ERR_BACKEND, "LAPACK eigen decomposition failed"); break; }
+        for (int k = 0; k < K; ++k)
+            if ((size_t)counts[k] > M[k].members) { total_vectors -= counts[k] - M[k].members; counts[k] = (uint32_t)M[k].members; }
+        if (it == iterations) break;   /* the last pass only refits the final clusters */
+        /* Spend the vector budget gradually over the first half of the iterations, each vector
+         * where the next eigenvalue per member vertex - the error it removes per vertex - is largest. */
+        size_t half = iterations > 1 ? (size_t)iterations / 2 : 1;
+        size_t target = (size_t)it + 1 >= half ? budget : budget * ((size_t)it + 1) / half;
+        while (total_vectors < target) {
+            int pick = -1;
+            double gain = 0;
+            for (int k = 0; k < K; ++k) {
+                if (counts[k] >= (uint32_t)dim || counts[k] >= M[k].members || M[k].members == 0) continue;
+                double g = M[k].vals[counts[k]] / (double)M[k].members;
+                if (g > gain) { gain = g; pick = k; }
+            }
+            if (pick < 0) break;
+            counts[pick]++;
+            total_vectors++;
+        }
+        /* Reassign every vertex to the cluster that reconstructs it best. */
+        size_t moved = 0;
+#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx)) reduction(+ : moved)
+        for (size_t v = 0; v < nv; ++v) {
+            double be = INFINITY;
+            uint32_t bk = assign[v];
+            for (int k = 0; k < K; ++k) {
+                if (M[k].members == 0 && k != (int)assign[v]) continue;
+                double e = recon_err(X + v * dim, &M[k], dim, (int)counts[k]);
+                if (e < be) { be = e; bk = (uint32_t)k; }
+            }
+            moved += bk != assign[v];
+            assign[v] = bk;
+        }
+        if (prog) prt__progress_add(prog, 1);
+        if (prt__progress_cancelled(prog)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); break; }
+        if (moved == 0 && total_vectors == budget) it = iterations - 1;   /* converged: go to the final refit */
+    }
+    if (st) goto done;
+    /* Keep the non-empty clusters; store means, vectors and per-vertex weights. */
+    prt__cpca *c = prt__calloc(1, sizeof *c);
+    int *remap = prt__calloc((size_t)K, sizeof(int));
+    if (!c || !remap) { free(c); free(remap); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+    int kept = 0;
+    size_t vec_total = 0;
+    for (int k = 0; k < K; ++k) {
+        remap[k] = M[k].members ? kept++ : -1;
+        if (M[k].members) vec_total += counts[k];
+    }
+    c->method = d->method;
+    c->clusters = kept;
+    c->dim = dim;
+    c->vectors_total = vec_total;
+    c->counts = prt__calloc((size_t)kept, sizeof(uint32_t));
+    c->means = prt__calloc((size_t)kept * dim, sizeof(float));
+    c->basis = prt__calloc(vec_total ? vec_total * dim : 1, sizeof(float));
+    c->cluster_of = prt__calloc(nv, sizeof(uint32_t));
+    if (!c->counts || !c->means || !c->basis || !c->cluster_of) { free(remap); prt__cpca_free(c); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+    size_t vb = 0;
+    for (int k = 0; k < K; ++k) {
+        if (remap[k] < 0) continue;
+        c->counts[remap[k]] = counts[k];
+        for (int i = 0; i < dim; ++i) c->means[(size_t)remap[k] * dim + i] = (float)M[k].mean[i];
+        for (uint32_t j = 0; j < counts[k]; ++j, ++vb)
+            for (int i = 0; i < dim; ++i) c->basis[vb * dim + i] = (float)M[k].vecs[(size_t)j * dim + i];
+    }
+    size_t wt = 0;
+    for (size_t v = 0; v < nv; ++v) { c->cluster_of[v] = (uint32_t)remap[assign[v]]; wt += counts[assign[v]]; }
+    free(remap);
+    c->weights_total = wt;
+    c->weights = prt__calloc(wt ? wt : 1, sizeof(float));
+    if (!c->weights || !prt__cpca_index(c, nv)) { prt__cpca_free(c); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+    double err = 0, norm = 0;
+#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx)) reduction(+ : err, norm)
+    for (size_t v = 0; v < nv; ++v) {
+        uint32_t k = c->cluster_of[v];
+        const float *x = X + v * dim, *m = c->means + (size_t)k * dim;
+        float rec[512];
+        for (int i = 0; i < dim; ++i) rec[i] = m[i];
+        for (uint32_t j = 0; j < c->counts[k]; ++j) {
+            const float *b = c->basis + (c->basis_start[k] + j) * dim;
+            double p = 0;
+            for (int i = 0; i < dim; ++i) p += (double)b[i] * (x[i] - m[i]);
+            c->weights[c->weight_start[v] + j] = (float)p;
+            for (int i = 0; i < dim; ++i) rec[i] += (float)p * b[i];
+        }
+        err += dist2(x, rec, dim);
+        for (int i = 0; i < dim; ++i) norm += (double)x[i] * x[i];
+    }
+    c->rms_error = sqrt(err / (double)nv);
+    c->relative_error = norm > 0 ? sqrt(err / norm) : 0;
+    *out = c;
+done:
+    if (M)
+        for (int k = 0; k < K; ++k) { free(M[k].mean); free(M[k].vecs); free(M[k].vals); }
+    free(M); free(assign); free(counts); free(order); free(first); free(best);
+    return st;
+}
