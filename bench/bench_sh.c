@@ -142,7 +142,7 @@ int main(int argc, char **argv)
     prt_sky_create(NULL, &sky);
     prt_envmap_project_sh(sky, order, &L);
     const int frames = 200;
-    double relight[2];
+    double relight[2], relight_z[2];
     const prt_transfer_kind kinds[2] = {PRT_TRANSFER_SHADOWED, PRT_TRANSFER_INTERREFLECTED};
     for (int k = 0; k < 2; ++k) {
         prt_relight_sh(ctx, t, kinds[k], &L, rgb);
@@ -156,6 +156,25 @@ int main(int argc, char **argv)
         }
         relight[k] = best;
     }
+    /* The same lighting changes on clustered-PCA sets (64 clusters, 8 vectors on average). */
+    prt_transfer *z = NULL;
+    double t_comp = prt__now();
+    if (prt_transfer_compress(ctx, t, NULL, &z)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return 1; }
+    t_comp = prt__now() - t_comp;
+    prt_compress_info zi;
+    prt_transfer_compress_info(z, PRT_TRANSFER_INTERREFLECTED, &zi);
+    for (int k = 0; k < 2; ++k) {
+        double best = 1e30;
+        for (int f = 0; f < frames; ++f) {
+            L.coeffs[0][0] += 1e-3f;
+            double a = prt__now();
+            prt_relight_sh(ctx, z, kinds[k], &L, rgb);
+            double dt = prt__now() - a;
+            if (dt < best) best = dt;
+        }
+        relight_z[k] = best;
+    }
+    prt_transfer_release(z);
     const double n2 = (double)order * order;
     double bytes_sh = nv * (n2 * 4 + 12 + 12), bytes_ir = nv * (3 * n2 * 4 + 12);
     double bw_dram = read_bandwidth((size_t)512 << 20, threads);
@@ -176,6 +195,9 @@ int main(int argc, char **argv)
     printf("  \"read_bandwidth_dram_GBps\": %.2f, \"peak_memory_MiB\": %.1f,\n", bw_dram / 1e9, ru.ru_maxrss / 1024.0);
     printf("  \"relight_shadowed_ms\": %.4f, \"relight_shadowed_GBps\": %.2f, \"read_same_bytes_shadowed_GBps\": %.2f, \"relight_shadowed_ratio\": %.3f,\n",
            relight[0] * 1e3, bytes_sh / relight[0] / 1e9, bw_sh / 1e9, bytes_sh / relight[0] / bw_sh);
+    printf("  \"compress_s\": %.3f, \"cpca_interreflected_relative_error\": %.4f, \"cpca_interreflected_bytes_per_vertex\": %.1f,\n"
+           "  \"relight_cpca_shadowed_ms\": %.4f, \"relight_cpca_interreflected_ms\": %.4f,\n",
+           t_comp, zi.relative_error, (double)zi.bytes / (double)nv, relight_z[0] * 1e3, relight_z[1] * 1e3);
     printf("  \"relight_interreflected_ms\": %.4f, \"relight_interreflected_GBps\": %.2f, \"read_same_bytes_interreflected_GBps\": %.2f, \"relight_interreflected_ratio\": %.3f\n}\n",
            relight[1] * 1e3, bytes_ir / relight[1] / 1e9, bw_ir / 1e9, bytes_ir / relight[1] / bw_ir);
     fprintf(stderr,
@@ -184,11 +206,12 @@ int main(int argc, char **argv)
             "  bake all kinds     %.2f s  %.2f Mrays/s  = %.2f x raw Embree intersection (%.2f Mrays/s)\n"
             "  relight shadowed   %.3f ms  %.1f GB/s = %.2f x a plain read of the same bytes (%.1f GB/s)\n"
             "  relight interrefl. %.3f ms  %.1f GB/s = %.2f x a plain read of the same bytes (%.1f GB/s)\n"
-            "  DRAM read bandwidth %.1f GB/s\n",
+            "  DRAM read bandwidth %.1f GB/s\n"
+            "  clustered PCA (64 x 8): relight shadowed %.3f ms, inter-reflected %.3f ms (uncompressed above); %.1f B/vertex, error %.4f\n",
             mesh, nv, threads, order, samples, bake_occ, bake_occ_rate / 1e6, bake_occ_rate / occ_rate, occ_rate / 1e6, bake_all,
             bake_all_rate / 1e6, bake_all_rate / hit_rate, hit_rate / 1e6, relight[0] * 1e3, bytes_sh / relight[0] / 1e9,
             bytes_sh / relight[0] / bw_sh, bw_sh / 1e9, relight[1] * 1e3, bytes_ir / relight[1] / 1e9, bytes_ir / relight[1] / bw_ir,
-            bw_ir / 1e9, bw_dram / 1e9);
+            bw_ir / 1e9, bw_dram / 1e9, relight_z[0] * 1e3, relight_z[1] * 1e3, (double)zi.bytes / (double)nv, zi.relative_error);
     free(rgb);
     free(r.dirs);
     prt_envmap_release(sky);

@@ -213,6 +213,51 @@ static void test_vq_files_and_determinism(void **state)
     prt_context_release(two);
 }
 
+/* 8- and 16-bit quantization: every coefficient within half a step of the original, and the
+ * file stores exactly the quantized values in about a quarter / half of the bytes. */
+static void test_quantization(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    prt_transfer *t = bake_pit(ctx, 3);
+    size_t nv = prt_transfer_vertex_count(t);
+    const int bits[2] = {8, 16};
+    for (int b = 0; b < 2; ++b) {
+        prt_transfer *q = NULL;
+        assert_int_equal(prt_transfer_quantize(ctx, t, bits[b], &q), PRT_OK);
+        const prt_transfer_kind kind = PRT_TRANSFER_INTERREFLECTED;
+        const float *x = prt_transfer_coeffs(t, kind), *y = prt_transfer_coeffs(q, kind);
+        const int dim = 27;
+        for (int j = 0; j < dim; ++j) {
+            float lo = INFINITY, hi = -INFINITY;
+            for (size_t v = 0; v < nv; ++v) { lo = fminf(lo, x[v * dim + j]); hi = fmaxf(hi, x[v * dim + j]); }
+            float half_step = (hi - lo) / (float)((1u << bits[b]) - 1) * 0.5f;
+            for (size_t v = 0; v < nv; ++v)
+                if (fabsf(x[v * dim + j] - y[v * dim + j]) > half_step * 1.001f + 1e-7f)
+                    fail_msg("%d-bit: coefficient %d of vertex %zu moved %g > %g", bits[b], j, v, fabsf(x[v * dim + j] - y[v * dim + j]), half_step);
+        }
+        char path[512];
+        snprintf(path, sizeof path, "%s/q%d.prt", test_dir, bits[b]);
+        assert_int_equal(prt_transfer_save(q, path), PRT_OK);
+        prt_transfer *back = NULL;
+        assert_int_equal(prt_transfer_load(ctx, path, &back), PRT_OK);
+        const float *z = prt_transfer_coeffs(back, kind);
+        for (size_t i = 0; i < nv * dim; ++i) assert_true(fabsf(z[i] - y[i]) <= 1e-6f * fmaxf(1.0f, fabsf(y[i])));
+        prt_compress_info ci;
+        assert_int_equal(prt_transfer_compress_info(back, kind, &ci), PRT_OK);
+        assert_int_equal(ci.quantize_bits, bits[b]);
+        assert_true(ci.bytes < nv * dim * 4 * (size_t)bits[b] / 32 + 1024);
+        prt_transfer_release(back);
+        prt_transfer *z2 = NULL;
+        assert_int_equal(prt_transfer_compress(ctx, q, NULL, &z2), PRT_ERR_INVALID_ARG);
+        prt_transfer_release(q);
+    }
+    prt_transfer *q = NULL;
+    assert_int_equal(prt_transfer_quantize(ctx, t, 12, &q), PRT_ERR_INVALID_ARG);
+    prt_transfer_release(t);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -220,6 +265,7 @@ int main(void)
         cmocka_unit_test(test_error_falls),
         cmocka_unit_test(test_relight_bound),
         cmocka_unit_test(test_vq_files_and_determinism),
+        cmocka_unit_test(test_quantization),
     };
     return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

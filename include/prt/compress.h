@@ -39,12 +39,18 @@ prt_status prt_transfer_compress(prt_context *ctx, const prt_transfer *in, const
 
 typedef struct prt_compress_info {
     int compressed;          /* 0 if the set is stored uncompressed */
+    int quantize_bits;       /* 8 or 16 when quantized, 0 for 32-bit floats */
     prt_compress_method method;
     int clusters, vectors_total;
     double rms_error;        /* RMS over vertices of |x - reconstruction| (transfer units) */
     double relative_error;   /* rms_error / RMS |x| */
     size_t bytes;            /* storage of the set */
 } prt_compress_info;
+
+/* Rounds every uncompressed set to `bits` (8 or 16) per coefficient with a scale and bias per
+ * coefficient index (each SH coefficient of each channel gets the range it uses over the mesh);
+ * the file then stores the integers. Every value moves by at most half its scale. */
+prt_status prt_transfer_quantize(prt_context *ctx, const prt_transfer *in, int bits, prt_transfer **out);
 
 prt_status prt_transfer_compress_info(const prt_transfer *t, prt_transfer_kind kind, prt_compress_info *out);
 /* Writes a set's coefficients (reconstructed when compressed), laid out as prt_transfer_coeffs. */

@@ -20,6 +20,7 @@ prt_status prt_transfer_compress(prt_context *ctx, const prt_transfer *in, const
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "compression: clusters <= 65536, vectors <= 300, iterations <= 1000");
     for (int k = 0; k < PRT__KIND_COUNT; ++k)
         if (in->sets[k].cpca) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the transfer is already compressed");
+        else if (in->sets[k].quant_bits) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "compress before quantizing, not after");
 
     prt_transfer *t = prt__calloc(1, sizeof *t);
     if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
@@ -53,7 +54,10 @@ prt_status prt_transfer_compress_info(const prt_transfer *t, prt_transfer_kind k
     const prt__cpca *c = t->sets[k].cpca;
     size_t nv = t->mesh.vertex_count;
     if (!c) {
-        out->bytes = nv * (size_t)t->sets[k].channels * (size_t)(t->order * t->order) * sizeof(float);
+        size_t dim = (size_t)t->sets[k].channels * (size_t)(t->order * t->order);
+        int bits = t->sets[k].quant_bits;
+        out->quantize_bits = bits;
+        out->bytes = bits ? nv * dim * (size_t)(bits / 8) + 2 * dim * sizeof(float) : nv * dim * sizeof(float);
         return PRT_OK;
     }
     out->compressed = 1;
@@ -85,5 +89,59 @@ prt_status prt_transfer_reconstruct(const prt_transfer *t, prt_transfer_kind kin
             for (size_t i = 0; i < dim; ++i) x[i] += w * b[i];
         }
     }
+    return PRT_OK;
+}
+
+void prt__quant_grid(const float *x, size_t nv, int dim, int bits, float *scale, float *bias)
+{
+    const float levels = (float)((1u << bits) - 1);
+    for (int j = 0; j < dim; ++j) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (size_t v = 0; v < nv; ++v) {
+            lo = fminf(lo, x[v * dim + j]);
+            hi = fmaxf(hi, x[v * dim + j]);
+        }
+        bias[j] = lo;
+        scale[j] = hi > lo ? (hi - lo) / levels : 0.0f;
+    }
+}
+
+prt_status prt_transfer_quantize(prt_context *ctx, const prt_transfer *in, int bits, prt_transfer **out)
+{
+    if (!in || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_quantize: transfer and out are required");
+    *out = NULL;
+    if (bits != 8 && bits != 16) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "quantization takes 8 or 16 bits (got %d)", bits);
+    for (int k = 0; k < PRT__KIND_COUNT; ++k)
+        if (in->sets[k].cpca) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "quantize before compressing: compressed sets keep float weights");
+    prt_transfer *t = prt__calloc(1, sizeof *t);
+    if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    *t = *in;
+    memset(&t->mesh, 0, sizeof t->mesh);
+    memset(t->sets, 0, sizeof t->sets);
+    const prt__mesh *m = &in->mesh;
+    prt_status st = prt__mesh_append(&t->mesh, m->positions, m->normals, m->albedo, (float[3]){0, 0, 0}, m->vertex_count, m->indices,
+                                     m->triangle_count);
+    for (int k = 0; k < PRT__KIND_COUNT && !st; ++k) {
+        const prt__sh_set *s = &in->sets[k];
+        if (!s->channels) continue;
+        const int dim = s->channels * in->order * in->order;
+        const size_t nv = m->vertex_count;
+        float scale[3 * PRT_SH_MAX_COEFFS], bias[3 * PRT_SH_MAX_COEFFS];
+        prt__quant_grid(s->coeffs, nv, dim, bits, scale, bias);
+        float *q = malloc(nv * (size_t)dim * sizeof(float));
+        if (!q) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+        const float levels = (float)((1u << bits) - 1);
+        for (size_t v = 0; v < nv; ++v)
+            for (int j = 0; j < dim; ++j) {
+                float x = s->coeffs[v * dim + j];
+                float l = scale[j] > 0 ? fminf(fmaxf(roundf((x - bias[j]) / scale[j]), 0.0f), levels) : 0.0f;
+                q[v * dim + j] = bias[j] + l * scale[j];
+            }
+        t->sets[k].channels = s->channels;
+        t->sets[k].coeffs = q;
+        t->sets[k].quant_bits = bits;
+    }
+    if (st) { prt_transfer_release(t); return st; }
+    *out = t;
     return PRT_OK;
 }

@@ -36,7 +36,11 @@ typedef struct prt__sh_set {
     int channels;       /* 0 = absent, 1 = albedo applied at relight, 3 = RGB with albedo */
     float *coeffs;      /* [vertex][channel][order^2]; NULL when compressed */
     prt__cpca *cpca;    /* non-NULL when compressed */
+    int quant_bits;     /* 0, or 8 / 16: coeffs hold dequantized values and files store integers */
 } prt__sh_set;
+
+/* Quantization grid of one set: per coefficient index, value = bias + q * scale. */
+void prt__quant_grid(const float *x, size_t nv, int dim, int bits, float *scale, float *bias);
 
 struct prt_transfer {
     prt__mesh mesh;

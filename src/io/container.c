@@ -76,6 +76,8 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
     if (!meta_text) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
 
     chunk chunks[2 + PRT__KIND_COUNT];
+    void *qbuf[2 * PRT__KIND_COUNT];   /* quantized copies, freed after writing */
+    int nqbuf = 0;
     memset(chunks, 0, sizeof chunks);
     int count = 0;
     chunks[count++] = (chunk){CHUNK_META, {meta_text}, {strlen(meta_text)}, 0};
@@ -94,9 +96,29 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
         put32(h + 4, (uint32_t)s->channels);
         put32(h + 8, (uint32_t)t->order);
         if (!s->cpca) {
+            const size_t dim = (size_t)s->channels * (size_t)(t->order * t->order), n = m->vertex_count * dim;
             put64(h + 16, m->vertex_count);
-            chunks[count++] = (chunk){CHUNK_SHTR, {h, s->coeffs},
-                                      {24, m->vertex_count * (size_t)s->channels * (size_t)(t->order * t->order) * sizeof(float)}, 0};
+            if (!s->quant_bits) {
+                chunks[count++] = (chunk){CHUNK_SHTR, {h, s->coeffs}, {24, n * sizeof(float)}, 0};
+                continue;
+            }
+            /* Quantized: scale[dim], bias[dim], then the integers, padded to 4 bytes. */
+            put32(h + 12, (uint32_t)s->quant_bits);
+            const size_t qbytes = n * (size_t)(s->quant_bits / 8), padded = (qbytes + 3) & ~(size_t)3;
+            float *grid = malloc(2 * dim * sizeof(float));
+            unsigned char *q = calloc(padded ? padded : 1, 1);
+            if (!grid || !q) { free(grid); free(q); cJSON_free(meta_text); for (int i = 0; i < nqbuf; ++i) free(qbuf[i]); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory"); }
+            prt__quant_grid(s->coeffs, m->vertex_count, (int)dim, s->quant_bits, grid, grid + dim);
+            for (size_t i = 0; i < n; ++i) {
+                size_t j = i % dim;
+                float l = grid[j] > 0 ? roundf((s->coeffs[i] - grid[dim + j]) / grid[j]) : 0.0f;
+                uint32_t u = (uint32_t)fminf(fmaxf(l, 0.0f), (float)((1u << s->quant_bits) - 1));
+                if (s->quant_bits == 8) q[i] = (unsigned char)u;
+                else { uint16_t w = (uint16_t)u; memcpy(q + 2 * i, &w, 2); }
+            }
+            qbuf[nqbuf++] = grid;
+            qbuf[nqbuf++] = q;
+            chunks[count++] = (chunk){CHUNK_SHTR, {h, grid, q}, {24, 2 * dim * sizeof(float), padded}, 0};
             continue;
         }
         const prt__cpca *c = s->cpca;
@@ -134,7 +156,7 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
 
     prt__atomic_file f;
     prt_status st = prt__atomic_open(&f, path);
-    if (st) { cJSON_free(meta_text); return st; }
+    if (st) { cJSON_free(meta_text); for (int i = 0; i < nqbuf; ++i) free(qbuf[i]); return st; }
     static const unsigned char zeros[8] = {0};
     st = prt__atomic_write(&f, head, table_end);
     size_t pos = table_end;
@@ -147,6 +169,7 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
         pos += chunks[i].size;
     }
     cJSON_free(meta_text);
+    for (int i = 0; i < nqbuf; ++i) free(qbuf[i]);
     if (st) { prt__atomic_abort(&f); return st; }
     return prt__atomic_commit(&f);
 }
@@ -320,11 +343,27 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                     st = bad(ctx, "corrupt .prt file: invalid transfer chunk header");
                     break;
                 }
-                uint64_t n = nv * channels * order * order;
-                if (n > (len - 24) / 4 || 24 + n * 4 != len) { st = bad(ctx, "corrupt .prt file: transfer chunk size mismatch"); break; }
+                uint32_t bits = get32(p + 12);
+                uint64_t dim = (uint64_t)channels * order * order, n = nv * dim;
+                uint64_t need = bits == 0 ? 24 + n * 4 : 24 + 8 * dim + ((n * (bits / 8) + 3) & ~3ull);
+                if ((bits != 0 && bits != 8 && bits != 16) || n > len || need != len) { st = bad(ctx, "corrupt .prt file: transfer chunk size mismatch"); break; }
                 float *c = malloc(n * 4);
                 if (!c) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
-                memcpy(c, p + 24, n * 4);
+                if (bits == 0) {
+                    memcpy(c, p + 24, n * 4);
+                } else {
+                    const unsigned char *grid = p + 24, *q = p + 24 + 8 * dim;
+                    for (uint64_t i = 0; i < n; ++i) {
+                        uint64_t j = i % dim;
+                        float scale, bias;
+                        memcpy(&scale, grid + 4 * j, 4);
+                        memcpy(&bias, grid + 4 * (dim + j), 4);
+                        uint32_t u = q[i];
+                        if (bits == 16) { uint16_t w; memcpy(&w, q + 2 * i, 2); u = w; }
+                        c[i] = bias + (float)u * scale;
+                    }
+                }
+                t->sets[k].quant_bits = (int)bits;
                 t->order = (int)order;
                 t->sets[k].channels = (int)channels;
                 t->sets[k].coeffs = c;

@@ -22,6 +22,8 @@ static const char *HELP =
     "                         cluster, or clusters only); relighting reads them directly\n"
     "      --clusters K       clusters for cpca (default 64) and vq (default 256)\n"
     "      --vectors N        average PCA vectors per cluster for cpca and pca (default 8)\n"
+    "      --quantize B       store uncompressed sets as 8- or 16-bit integers (scale and bias\n"
+    "                         per coefficient)\n"
     "  -j, --threads N        worker threads (default: all cores; results do not change)\n"
     "  -q, --quiet            no progress or warnings\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
@@ -34,11 +36,12 @@ int cmd_bake(int argc, char **argv)
     const char *output = NULL;
     prt_compress_desc cd = {0};
     bool compress = false;
+    int quantize = 0;
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"order", required_argument, 0, 'O'}, {"samples", required_argument, 0, 'n'},
         {"kinds", required_argument, 0, 'k'}, {"bounces", required_argument, 0, 'b'}, {"seed", required_argument, 0, 's'},
         CLI_SCENE_LONG_OPTIONS, {"ray-offset", required_argument, 0, 'r'}, {"compress", required_argument, 0, 'C'},
-        {"clusters", required_argument, 0, 'K'}, {"vectors", required_argument, 0, 'V'},
+        {"clusters", required_argument, 0, 'K'}, {"vectors", required_argument, 0, 'V'}, {"quantize", required_argument, 0, 'Q'},
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt, seed;
     optind = 1;
@@ -73,6 +76,9 @@ int cmd_bake(int argc, char **argv)
             compress = true;
             break;
         case 'K': if (!cli_parse_int(optarg, 1, 65536, &cd.clusters)) return cli_usage(&c, "--clusters must be 1..65536"); break;
+        case 'Q':
+            if (!cli_parse_int(optarg, 8, 16, &quantize) || (quantize != 8 && quantize != 16)) return cli_usage(&c, "--quantize must be 8 or 16");
+            break;
         case 'V': if (!cli_parse_int(optarg, 1, 300, &cd.vectors)) return cli_usage(&c, "--vectors must be 1..300"); break;
         case 'r': if (!cli_parse_float(optarg, &bd.ray_offset) || bd.ray_offset <= 0) return cli_usage(&c, "--ray-offset must be > 0"); break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
@@ -83,6 +89,7 @@ int cmd_bake(int argc, char **argv)
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one SCENE argument");
     if (!compress && (cd.clusters || cd.vectors)) return cli_usage(&c, "--clusters and --vectors need --compress");
+    if (compress && quantize) return cli_usage(&c, "--quantize applies to uncompressed sets; drop --compress or --quantize");
     if (!output) return cli_usage(&c, "an output file is required (-o OUT.prt)");
     int rc = cli_make_context(&c);
     if (rc) return rc;
@@ -112,6 +119,11 @@ int cmd_bake(int argc, char **argv)
         cd.progress_user = &c;
         st = prt_transfer_compress(c.ctx, t, &cd, &z);
         if (!st) { prt_transfer_release(t); t = z; }
+    }
+    if (!st && quantize) {
+        prt_transfer *q = NULL;
+        st = prt_transfer_quantize(c.ctx, t, quantize, &q);
+        if (!st) { prt_transfer_release(t); t = q; }
     }
     if (!st) st = prt_transfer_save(t, output);
     if (!st && !c.quiet) {

@@ -47,6 +47,7 @@ int cmd_info(int argc, char **argv)
                 prt_compress_info ci;
                 prt_transfer_compress_info(t, all[k], &ci);
                 cJSON_AddNumberToObject(o, "bytes", (double)ci.bytes);
+                if (ci.quantize_bits) cJSON_AddNumberToObject(o, "quantize_bits", ci.quantize_bits);
                 if (ci.compressed) {
                     static const char *names[3] = {"cpca", "pca", "vq"};
                     cJSON_AddStringToObject(o, "compression", names[ci.method]);
@@ -81,7 +82,9 @@ int cmd_info(int argc, char **argv)
         printf("\n");
         for (int k = 0; k < 3; ++k) {
             prt_compress_info ci;
-            if (!(info.kinds & all[k]) || prt_transfer_compress_info(t, all[k], &ci) || !ci.compressed) continue;
+            if (!(info.kinds & all[k]) || prt_transfer_compress_info(t, all[k], &ci)) continue;
+            if (ci.quantize_bits) printf("quantized:   %s %d-bit\n", prt_transfer_kind_name(all[k]), ci.quantize_bits);
+            if (!ci.compressed) continue;
             static const char *names[3] = {"clustered PCA", "PCA", "VQ"};
             double raw = (double)info.vertex_count * prt_transfer_channels(t, all[k]) * info.order * info.order * 4.0;
             printf("compressed:  %s %s, %d clusters, %d PCA vectors, %.1f bytes/vertex (%.1fx smaller), relative error %.4f\n",

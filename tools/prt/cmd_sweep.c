@@ -17,7 +17,9 @@ static const char *HELP =
     "  -o, --output FILE      the CSV (param,value,kind,rmse,relative_l2,max_abs,bytes_per_vertex,bake_seconds)\n"
     "      --reference FILE   per-vertex reference JSON (required)\n"
     "      --plot FILE        PNG plot of relative L2 error and bytes per vertex\n"
-    "      --param P          order | samples | bounces (default order)\n"
+    "      --param P          order | samples | bounces | clusters | vectors (default order);\n"
+    "                         clusters and vectors bake once and compress with clustered PCA\n"
+    "                         (vectors per cluster --vectors, default 8; clusters --clusters, 64)\n"
     "      --values LIST      comma list (default for order: 3,4,5,6,7,8,9,10)\n"
     "      --kinds LIST       unshadowed,shadowed,interreflected (default all)\n"
     "      --indirect         compare only the indirect light (inter-reflected minus shadowed)\n"
@@ -27,7 +29,8 @@ static const char *HELP =
     "  -q, --quiet            no progress\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
-enum { OPT_REFERENCE = 2400, OPT_PLOT, OPT_PARAM, OPT_VALUES, OPT_KINDS, OPT_INDIRECT_ONLY, OPT_ORDER, OPT_SAMPLES, OPT_BOUNCES, OPT_SEED };
+enum { OPT_REFERENCE = 2400, OPT_PLOT, OPT_PARAM, OPT_VALUES, OPT_KINDS, OPT_INDIRECT_ONLY, OPT_ORDER, OPT_SAMPLES, OPT_BOUNCES, OPT_SEED,
+       OPT_CLUSTERS, OPT_VECTORS };
 
 static prt_status plot(const cli *c, const char *csv, const char *png, const char *param, unsigned kinds, bool indirect)
 {
@@ -76,13 +79,13 @@ int cmd_sweep(int argc, char **argv)
     const char *output = NULL, *reference = NULL, *plot_path = NULL, *param = "order", *values = NULL;
     unsigned kinds = 7;
     bool indirect = false;
-    int seed;
+    int seed, clusters = 64, vectors = 8;
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"reference", required_argument, 0, OPT_REFERENCE}, {"plot", required_argument, 0, OPT_PLOT},
         {"param", required_argument, 0, OPT_PARAM}, {"values", required_argument, 0, OPT_VALUES}, {"kinds", required_argument, 0, OPT_KINDS},
         {"indirect", no_argument, 0, OPT_INDIRECT_ONLY}, {"order", required_argument, 0, OPT_ORDER},
         {"samples", required_argument, 0, OPT_SAMPLES}, {"bounces", required_argument, 0, OPT_BOUNCES}, {"seed", required_argument, 0, OPT_SEED},
-        CLI_LIGHT_LONG_OPTIONS, CLI_SCENE_LONG_OPTIONS, {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'},
+        {"clusters", required_argument, 0, OPT_CLUSTERS}, {"vectors", required_argument, 0, OPT_VECTORS}, CLI_LIGHT_LONG_OPTIONS, CLI_SCENE_LONG_OPTIONS, {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt;
     optind = 1;
@@ -96,8 +99,9 @@ int cmd_sweep(int argc, char **argv)
         case OPT_REFERENCE: reference = optarg; break;
         case OPT_PLOT: plot_path = optarg; break;
         case OPT_PARAM:
-            if (strcmp(optarg, "order") && strcmp(optarg, "samples") && strcmp(optarg, "bounces"))
-                return cli_usage(&c, "--param must be order, samples or bounces");
+            if (strcmp(optarg, "order") && strcmp(optarg, "samples") && strcmp(optarg, "bounces") && strcmp(optarg, "clusters") &&
+                strcmp(optarg, "vectors"))
+                return cli_usage(&c, "--param must be order, samples, bounces, clusters or vectors");
             param = optarg;
             break;
         case OPT_VALUES: values = optarg; break;
@@ -119,6 +123,8 @@ int cmd_sweep(int argc, char **argv)
         case OPT_SAMPLES: if (!cli_parse_int(optarg, 16, 1 << 20, &base.samples)) return cli_usage(&c, "--samples must be 16..1048576"); break;
         case OPT_BOUNCES: if (!cli_parse_int(optarg, 1, 64, &base.bounces)) return cli_usage(&c, "--bounces must be 1..64"); break;
         case OPT_SEED: if (!cli_parse_int(optarg, 0, 2147483647, &seed)) return cli_usage(&c, "--seed must be a non-negative integer"); base.seed = (uint32_t)seed; break;
+        case OPT_CLUSTERS: if (!cli_parse_int(optarg, 1, 65536, &clusters)) return cli_usage(&c, "--clusters must be 1..65536"); break;
+        case OPT_VECTORS: if (!cli_parse_int(optarg, 1, 300, &vectors)) return cli_usage(&c, "--vectors must be 1..300"); break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); return EXIT_OK;
@@ -132,8 +138,11 @@ int cmd_sweep(int argc, char **argv)
     int list[64], nvalues = 0;
     {
         char buf[512], *save = NULL;
-        snprintf(buf, sizeof buf, "%s", values ? values : !strcmp(param, "order") ? "3,4,5,6,7,8,9,10" : !strcmp(param, "samples") ? "64,128,256,512,1024,2048,4096" : "1,2,3,4,6,8");
-        int hi = !strcmp(param, "order") ? PRT_SH_MAX_ORDER : !strcmp(param, "samples") ? 1 << 20 : 64, lo = !strcmp(param, "samples") ? 16 : 1;
+        bool cl = !strcmp(param, "clusters"), ve = !strcmp(param, "vectors");
+        snprintf(buf, sizeof buf, "%s", values ? values : !strcmp(param, "order") ? "3,4,5,6,7,8,9,10" : !strcmp(param, "samples") ? "64,128,256,512,1024,2048,4096"
+                                                 : cl ? "1,4,16,64,256" : ve ? "1,2,4,8,16" : "1,2,3,4,6,8");
+        int hi = !strcmp(param, "order") ? PRT_SH_MAX_ORDER : !strcmp(param, "samples") ? 1 << 20 : cl ? 65536 : ve ? 300 : 64;
+        int lo = !strcmp(param, "samples") ? 16 : 1;
         for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
             if (nvalues == 64 || !cli_parse_int(tok, lo, hi, &list[nvalues])) return cli_usage(&c, "--values: '%s' is not a valid %s", tok, param);
             nvalues++;
@@ -164,16 +173,26 @@ int cmd_sweep(int argc, char **argv)
     if (!st && !rc && !csv) { cli_error(&c, "cannot write '%s'", output); rc = EXIT_FAILURE_INPUT; }
     if (csv) fprintf(csv, "param,value,kind,rmse,relative_l2,max_abs,bytes_per_vertex,bake_seconds\n");
     float *rgb = !st && !rc ? malloc(ref.nv * 3 * sizeof(float)) : NULL, *direct = rgb ? malloc(ref.nv * 3 * sizeof(float)) : NULL;
+    const bool compressing = !strcmp(param, "clusters") || !strcmp(param, "vectors");
+    prt_transfer *baked = NULL;   /* compression sweeps bake once */
     for (int i = 0; i < nvalues && !st && !rc && direct; ++i) {
         prt_bake_desc d = base;
         if (!strcmp(param, "order")) d.order = list[i];
         else if (!strcmp(param, "samples")) d.samples = list[i];
-        else d.bounces = list[i];
+        else if (!strcmp(param, "bounces")) d.bounces = list[i];
         d.kinds = kinds | (indirect ? PRT_TRANSFER_SHADOWED : 0);
         d.progress = cli_progress;
         d.progress_user = &c;
         prt_transfer *t = NULL;
-        if ((st = prt_bake_sh(c.ctx, scene, &d, &t))) break;
+        if (!compressing || !baked) {
+            if ((st = prt_bake_sh(c.ctx, scene, &d, compressing ? &baked : &t))) break;
+        }
+        if (compressing) {
+            prt_compress_desc cd = {0};
+            cd.clusters = !strcmp(param, "clusters") ? list[i] : clusters;
+            cd.vectors = !strcmp(param, "vectors") ? list[i] : vectors;
+            if ((st = prt_transfer_compress(c.ctx, baked, &cd, &t))) break;
+        }
         prt_transfer_info info;
         prt_transfer_get_info(t, &info);
         prt_sh_light sh;
@@ -195,7 +214,9 @@ int cmd_sweep(int argc, char **argv)
                 sb += (double)b[v] * b[v];
                 mx = fmax(mx, fabs(diff));
             }
-            double bytes = (double)ref.nv * prt_transfer_channels(t, kind) * info.order * info.order * sizeof(float) / (double)ref.nv;
+            prt_compress_info ci;
+            prt_transfer_compress_info(t, kind, &ci);
+            double bytes = (double)ci.bytes / (double)ref.nv;
             fprintf(csv, "%s,%d,%s,%.6g,%.6g,%.6g,%.0f,%.3f\n", param, list[i], prt_transfer_kind_name(kind), sqrt(se / (3.0 * ref.nv)),
                     sb > 0 ? sqrt(se / sb) : INFINITY, mx, bytes, info.bake_seconds);
             if (!c.quiet)
@@ -203,6 +224,7 @@ int cmd_sweep(int argc, char **argv)
         }
         prt_transfer_release(t);
     }
+    prt_transfer_release(baked);
     if (!direct && !st && !rc) st = PRT_ERR_NO_MEMORY;
     if (csv) {
         bool ok = !ferror(csv);
