@@ -4,6 +4,22 @@
 
 #include <string.h>
 
+/* A new transfer with in's mesh and settings and no sets yet. */
+static prt_status copy_without_sets(prt_context *ctx, const prt_transfer *in, prt_transfer **out)
+{
+    prt_transfer *t = prt__calloc(1, sizeof *t);
+    if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    *t = *in;
+    memset(&t->mesh, 0, sizeof t->mesh);
+    memset(t->sets, 0, sizeof t->sets);
+    const prt__mesh *m = &in->mesh;
+    prt_status st = prt__mesh_append(&t->mesh, m->positions, m->normals, m->albedo, (float[3]){0, 0, 0}, m->vertex_count, m->indices,
+                                     m->triangle_count);
+    if (st) { prt_transfer_release(t); return prt__fail(ctx, st, "%s", prt_last_error()); }
+    *out = t;
+    return PRT_OK;
+}
+
 prt_status prt_transfer_compress(prt_context *ctx, const prt_transfer *in, const prt_compress_desc *desc, prt_transfer **out)
 {
     if (!in || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_compress: transfer and out are required");
@@ -22,14 +38,10 @@ prt_status prt_transfer_compress(prt_context *ctx, const prt_transfer *in, const
         if (in->sets[k].cpca) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the transfer is already compressed");
         else if (in->sets[k].quant_bits) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "compress before quantizing, not after");
 
-    prt_transfer *t = prt__calloc(1, sizeof *t);
-    if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    *t = *in;
-    memset(&t->mesh, 0, sizeof t->mesh);
-    memset(t->sets, 0, sizeof t->sets);
+    prt_transfer *t = NULL;
+    prt_status st = copy_without_sets(ctx, in, &t);
+    if (st) return st;
     const prt__mesh *m = &in->mesh;
-    prt_status st = prt__mesh_append(&t->mesh, m->positions, m->normals, m->albedo, (float[3]){0, 0, 0}, m->vertex_count, m->indices,
-                                     m->triangle_count);
     prt__progress prog = {d.progress, d.progress_user, NULL, 0, 0, 0.0, 0};
     for (int k = 0; k < PRT__KIND_COUNT && !st; ++k) {
         const prt__sh_set *s = &in->sets[k];
@@ -113,14 +125,10 @@ prt_status prt_transfer_quantize(prt_context *ctx, const prt_transfer *in, int b
     if (bits != 8 && bits != 16) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "quantization takes 8 or 16 bits (got %d)", bits);
     for (int k = 0; k < PRT__KIND_COUNT; ++k)
         if (in->sets[k].cpca) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "quantize before compressing: compressed sets keep float weights");
-    prt_transfer *t = prt__calloc(1, sizeof *t);
-    if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    *t = *in;
-    memset(&t->mesh, 0, sizeof t->mesh);
-    memset(t->sets, 0, sizeof t->sets);
+    prt_transfer *t = NULL;
+    prt_status st = copy_without_sets(ctx, in, &t);
+    if (st) return st;
     const prt__mesh *m = &in->mesh;
-    prt_status st = prt__mesh_append(&t->mesh, m->positions, m->normals, m->albedo, (float[3]){0, 0, 0}, m->vertex_count, m->indices,
-                                     m->triangle_count);
     for (int k = 0; k < PRT__KIND_COUNT && !st; ++k) {
         const prt__sh_set *s = &in->sets[k];
         if (!s->channels) continue;
