@@ -95,34 +95,40 @@ static prt_status relight_cpca(prt_context *ctx, const prt_transfer *t, const pr
     const prt__cpca *c = set->cpca;
     const int stride = t->order * t->order, ch = set->channels;
     const size_t rows = (size_t)c->clusters + c->vectors_total;
-    float *proj = malloc(rows * 3 * sizeof(float));   /* [cluster means..., vectors...][channel] */
+    v4 *proj = malloc(rows * sizeof(v4));   /* [cluster means..., vectors...] x {r, g, b, 0} */
     if (!proj) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     for (size_t r = 0; r < rows; ++r) {
         const float *x = r < (size_t)c->clusters ? c->means + r * c->dim : c->basis + (r - (size_t)c->clusters) * c->dim;
+        v4 p = {0, 0, 0, 0};
         for (int l = 0; l < 3; ++l) {
             const float *seg = x + (ch == 3 ? l * stride : 0);
             float s = 0;
             for (int i = 0; i < n; ++i) s += seg[i] * light[l][i];
-            proj[r * 3 + l] = s;
+            p[l] = s;
         }
+        proj[r] = p;
     }
     const float *albedo = t->mesh.albedo;
     const long nv = (long)t->mesh.vertex_count;
 #pragma omp parallel for schedule(static) num_threads(nv < 4096 ? 1 : prt__threads(ctx))
     for (long v = 0; v < nv; ++v) {
         uint32_t k = c->cluster_of[v];
-        const float *m = proj + (size_t)k * 3, *w = c->weights + c->weight_start[v];
-        const float *b = proj + ((size_t)c->clusters + c->basis_start[k]) * 3;
-        float r = m[0], g = m[1], bl = m[2];
-        for (uint32_t j = 0; j < c->counts[k]; ++j) {
-            r += w[j] * b[j * 3];
-            g += w[j] * b[j * 3 + 1];
-            bl += w[j] * b[j * 3 + 2];
+        const float *w = c->weights + c->weight_start[v];
+        const v4 *b = proj + (size_t)c->clusters + c->basis_start[k];
+        /* Two running sums halve the dependency chain of the multiply-adds. */
+        v4 acc = proj[k], acc2 = {0, 0, 0, 0};
+        const uint32_t cnt = c->counts[k];
+        uint32_t j = 0;
+        for (; j + 1 < cnt; j += 2) {
+            acc += w[j] * b[j];
+            acc2 += w[j + 1] * b[j + 1];
         }
-        if (ch == 1) { r *= albedo[v * 3]; g *= albedo[v * 3 + 1]; bl *= albedo[v * 3 + 2]; }
-        out[v * 3] = r;
-        out[v * 3 + 1] = g;
-        out[v * 3 + 2] = bl;
+        if (j < cnt) acc += w[j] * b[j];
+        acc += acc2;
+        if (ch == 1) { acc[0] *= albedo[v * 3]; acc[1] *= albedo[v * 3 + 1]; acc[2] *= albedo[v * 3 + 2]; }
+        out[v * 3] = acc[0];
+        out[v * 3 + 1] = acc[1];
+        out[v * 3 + 2] = acc[2];
     }
     free(proj);
     return PRT_OK;
