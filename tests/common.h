@@ -157,7 +157,9 @@ static char test_dir[256];
 static inline int test_dir_setup(void **state)
 {
     (void)state;
-    snprintf(test_dir, sizeof test_dir, "/tmp/prt_test_XXXXXX");
+    /* mkdtemp's template ends in six 'X' that it replaces. */
+    int n = snprintf(test_dir, sizeof test_dir, "/tmp/prt_test_%06d", 0);
+    memset(test_dir + n - 6, 'X', 6);
     return mkdtemp(test_dir) ? 0 : -1;
 }
 
