@@ -124,6 +124,67 @@ static void test_sphere_analytic_irradiance(void **state)
     prt_context_release(ctx);
 }
 
+/* A sun: black sky but for a 3-degree disc 20000 times brighter than the unit sky. Importance
+ * sampling must find it with few paths: each vertex of a convex sphere gets within a few
+ * percent of the exact sum over the map's pixels, sum L_p max(n . w_p, 0) dw_p * rho / pi. */
+static void test_sun_converges(void **state)
+{
+    (void)state;
+    const int w = 512, h = 256;
+    prt_image img = {w, h, calloc((size_t)w * h * 3, sizeof(float))};
+    const double sun[3] = {0.48, 0.8, 0.36};   /* unit length */
+    const double cos_r = cos(1.5 * M_PI / 180.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            double th = M_PI * (y + 0.5) / h, ph = 2 * M_PI * ((x + 0.5) / w - 0.5);
+            double d[3] = {sin(th) * sin(ph), cos(th), -sin(th) * cos(ph)};
+            if (d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2] > cos_r)
+                for (int c = 0; c < 3; ++c) img.rgb[((size_t)y * w + x) * 3 + c] = 20000.0f;
+        }
+    /* The exact answer for the piecewise-constant map, per normal. */
+    float *copy = malloc((size_t)w * h * 3 * sizeof(float));
+    memcpy(copy, img.rgb, (size_t)w * h * 3 * sizeof(float));
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_sphere(&m, (float[3]){0, 0, 0}, 1.0f, 8, 16);
+    const float rho = 0.5f;
+    prt_scene *s = tm_scene(ctx, &m, rho);
+    prt_reference_desc d = {0};
+    d.samples = 64;
+    prt_reference_vertices r;
+    assert_int_equal(prt_reference_trace_vertices(ctx, s, env, &d, &r), PRT_OK);
+    const float *n = prt_scene_normals(s);
+    int checked = 0;
+    for (size_t v = 0; v < r.vertex_count; ++v) {
+        double e = 0;
+        for (int y = 0; y < h; ++y) {
+            double th0 = M_PI * y / h, th1 = M_PI * (y + 1) / h, th = 0.5 * (th0 + th1), dw = 2 * M_PI / w * (cos(th0) - cos(th1));
+            for (int x = 0; x < w; ++x) {
+                float L = copy[((size_t)y * w + x) * 3];
+                if (L == 0) continue;
+                double ph = 2 * M_PI * ((x + 0.5) / w - 0.5);
+                double dd[3] = {sin(th) * sin(ph), cos(th), -sin(th) * cos(ph)};
+                double c = n[v * 3] * dd[0] + n[v * 3 + 1] * dd[1] + n[v * 3 + 2] * dd[2];
+                if (c > 0) e += L * c * dw;
+            }
+        }
+        double expect = rho / M_PI * e;
+        if (expect < 1.0) continue;   /* the terminator, where a 3-degree disc is partly below the horizon */
+        checked++;
+        if (fabs(r.radiance[v * 3] - expect) > 0.03 * expect)
+            fail_msg("vertex %zu: %g with 64 paths, exact %g", v, r.radiance[v * 3], expect);
+    }
+    assert_true(checked > 20);
+    free(copy);
+    prt_reference_vertices_free(&r);
+    prt_envmap_release(env);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 /* PRT inter-reflected transfer under a lighting of its own band limit is exact up to the bake's
  * sampling and interpolation: it must agree with the reference within its error bars. */
 static void test_prt_matches_reference(void **state)
@@ -294,6 +355,7 @@ int main(void)
         cmocka_unit_test(test_open_white_furnace),
         cmocka_unit_test(test_concave_white_furnace),
         cmocka_unit_test(test_sphere_analytic_irradiance),
+        cmocka_unit_test(test_sun_converges),
         cmocka_unit_test(test_prt_matches_reference),
         cmocka_unit_test(test_prt_matches_reference_demo),
         cmocka_unit_test(test_deterministic_and_image),
