@@ -171,6 +171,17 @@ static inline int test_dir_teardown(void **state)
     return system(cmd) == 0 ? 0 : -1;
 }
 
+/* Writes the procedural demo scene into the scratch directory and loads it. */
+static inline prt_scene *load_demo_scene(prt_context *ctx)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/demo.obj", test_dir);
+    assert_int_equal(prt_demo_scene_write(path), PRT_OK);
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    return s;
+}
+
 /* Where ../shared/data lives, or NULL (tests that need it then skip). */
 static inline const char *shared_data_dir(void)
 {

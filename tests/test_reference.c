@@ -251,12 +251,8 @@ static void test_prt_matches_reference(void **state)
 static void test_prt_matches_reference_demo(void **state)
 {
     (void)state;
-    char path[512];
-    snprintf(path, sizeof path, "%s/demo.obj", test_dir);
-    assert_int_equal(prt_demo_scene_write(path), PRT_OK);
     prt_context *ctx = test_context(0);
-    prt_scene *s = NULL;
-    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    prt_scene *s = load_demo_scene(ctx);
     prt_envmap *env = band_limited_env(256);
     prt_bake_desc bd = {0};
     bd.order = 3;

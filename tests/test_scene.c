@@ -306,12 +306,8 @@ static void test_subdivision(void **state)
 static void test_demo_scene(void **state)
 {
     (void)state;
-    char path[512];
-    snprintf(path, sizeof path, "%s/demo.obj", test_dir);
-    assert_int_equal(prt_demo_scene_write(path), PRT_OK);
     prt_context *ctx = test_context(0);
-    prt_scene *s = NULL;
-    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    prt_scene *s = load_demo_scene(ctx);
     assert_true(prt_scene_vertex_count(s) > 5000);
     /* Its five materials arrive through the MTL file: look for the red wall's albedo. */
     const float *alb = prt_scene_albedo(s);
