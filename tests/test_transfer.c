@@ -298,9 +298,23 @@ static void test_bad_bake_args(void **state)
     d.samples = 3;
     assert_int_equal(prt_bake_sh(ctx, s, &d, &t), PRT_ERR_INVALID_ARG);
     d.samples = 0;
-    d.kinds = 8;
+    d.kinds = 32;   /* no such kind */
     assert_int_equal(prt_bake_sh(ctx, s, &d, &t), PRT_ERR_INVALID_ARG);
     assert_null(t);
+    d.kinds = PRT_TRANSFER_SHADOWED;   /* a BRDF to bake in, but no glossy kind to bake it into */
+    d.glossy_exit = 1;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &t), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "glossy kind"));
+    d.glossy_exit = 0;
+    prt_brdf bad_brdf = {0};
+    bad_brdf.model = PRT_BRDF_PHONG;
+    bad_brdf.exponent = -3;
+    d.glossy_brdf = &bad_brdf;
+    d.kinds = PRT_TRANSFER_GLOSSY_SHADOWED;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &t), PRT_ERR_INVALID_ARG);
+    assert_null(t);
+    d.glossy_brdf = NULL;
+    d.kinds = 0;
     prt_bake_desc def = prt_bake_desc_defaults();
     assert_int_equal(def.order, 5);
     assert_int_equal(def.samples, 1024);

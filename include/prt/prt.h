@@ -8,6 +8,7 @@
 #include "prt/sh.h"
 #include "prt/image.h"
 #include "prt/lighting.h"
+#include "prt/brdf.h"
 #include "prt/scene.h"
 #include "prt/transfer.h"
 #include "prt/render.h"

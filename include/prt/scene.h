@@ -10,6 +10,7 @@
 #define PRT_SCENE_H
 
 #include "prt/base.h"
+#include "prt/brdf.h"
 #include "prt/lighting.h"
 
 #ifdef __cplusplus
@@ -46,6 +47,10 @@ prt_status prt_scene_create_copy(prt_context *ctx, const float *positions, const
                                  const uint32_t *indices, size_t triangle_count,
                                  const prt_scene_desc *desc, prt_scene **out);
 void prt_scene_release(prt_scene *scene);
+/* Gives vertices [first, first + count) of the scene (as it is now, after cleaning) a BRDF
+ * material; their albedo becomes the BRDF's Lambertian part. */
+prt_status prt_scene_set_brdf(prt_scene *scene, size_t first, size_t count, const prt_brdf *brdf);
+int prt_scene_brdf_count(const prt_scene *scene);
 
 size_t prt_scene_vertex_count(const prt_scene *scene);
 size_t prt_scene_triangle_count(const prt_scene *scene);

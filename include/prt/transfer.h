@@ -10,6 +10,7 @@
 #define PRT_TRANSFER_H
 
 #include "prt/base.h"
+#include "prt/brdf.h"
 #include "prt/lighting.h"
 #include "prt/scene.h"
 
@@ -20,17 +21,31 @@ extern "C" {
 typedef enum prt_transfer_kind {
     PRT_TRANSFER_UNSHADOWED = 1,
     PRT_TRANSFER_SHADOWED = 2,
-    PRT_TRANSFER_INTERREFLECTED = 4
+    PRT_TRANSFER_INTERREFLECTED = 4,
+    /* Glossy transfer matrices (Sloan et al. 2002, section 6): per vertex and channel an
+     * order^2 x order^2 matrix M from source lighting L to transferred incident radiance
+     * M L (world frame, lower hemisphere cut off), or - with a BRDF baked in - to exit radiance.
+     * Stored lighting-coefficient-major: M[j][i] is the response of incident coefficient i to
+     * lighting coefficient j. */
+    PRT_TRANSFER_GLOSSY_SHADOWED = 8,
+    PRT_TRANSFER_GLOSSY_INTERREFLECTED = 16   /* diffuse-to-glossy and glossy-to-glossy bounces */
 } prt_transfer_kind;
+
+#define PRT_TRANSFER_ALL_KINDS 31u
 
 typedef struct prt_bake_desc {
     int order;            /* SH order (bands); 0 = 5 (25 coefficients); 1..10 */
     int samples;          /* directions per vertex over the sphere; 0 = 1024 */
-    unsigned kinds;       /* OR of prt_transfer_kind; 0 = all three */
+    unsigned kinds;       /* OR of prt_transfer_kind; 0 = the three diffuse kinds */
     int bounces;          /* extra bounces for INTERREFLECTED; 0 = 3 */
     uint32_t seed;        /* rotates the low-discrepancy direction set; results are identical
                              for the same seed whatever the thread count */
     float ray_offset;     /* origin offset along the normal, scene units; 0 = 1e-4 x bbox diagonal */
+    /* Glossy sets: 0 stores transferred incident radiance, convolved with a reflection lobe at
+     * run time (prt_relight_sh_glossy); 1 bakes each vertex's scene material BRDF in (any
+     * isotropic model, through its SH matrix), so the sets hold exit radiance. */
+    int glossy_exit;
+    const prt_brdf *glossy_brdf;   /* with glossy_exit: this BRDF for every vertex instead */
     prt_progress_fn progress;
     void *progress_user;
 } prt_bake_desc;
@@ -82,8 +97,33 @@ const uint32_t *prt_transfer_indices(const prt_transfer *t);
 prt_status prt_relight_sh(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind,
                           const prt_sh_light *light, float *out_rgb);
 
+/* Glossy relighting: per vertex 3 x order^2 SH coefficients (world frame) of view-dependent exit
+ * radiance, for the renderer to evaluate per pixel (prt_render_mesh.exit_sh). For sets that hold
+ * incident radiance, the reflection lobe comes from `brdf` (NULL: each vertex's material; Lambert
+ * vertices get zero) and the result is to be evaluated at the mirror of the view direction; for
+ * sets with the BRDF baked in, `brdf` must be NULL and the result is evaluated at the view
+ * direction itself (see prt_transfer_glossy_mirror). */
+prt_status prt_relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light,
+                                 const prt_brdf *brdf, float *out_exit);
+/* 1 when glossy exit coefficients are evaluated at the mirror direction (run-time lobes), 0
+ * when at the view direction (BRDF baked in). */
+int prt_transfer_glossy_mirror(const prt_transfer *t);
+/* Floats per vertex a set holds uncompressed: channels x order^2 (x order^2 for glossy sets). */
+size_t prt_transfer_set_floats(const prt_transfer *t, prt_transfer_kind kind);
+/* The diffuse kind that supplies the view-independent part beside a glossy kind. */
+prt_transfer_kind prt_transfer_kind_diffuse_part(prt_transfer_kind glossy);
+int prt_transfer_kind_is_glossy(prt_transfer_kind kind);
+/* Scene materials with a BRDF: count, and the model of material k (1-based, as per-vertex ids). */
+int prt_transfer_brdf_count(const prt_transfer *t);
+const prt_brdf *prt_transfer_brdf(const prt_transfer *t, int k);
+const uint8_t *prt_transfer_materials(const prt_transfer *t);   /* per vertex; 0 = plain diffuse */
+/* CPU evaluation of glossy exit coefficients (as prt_relight_sh_glossy returns) for one vertex:
+ * to_eye points from the surface to the viewer; normal is the shading normal. */
+void prt_glossy_eval(int order, const float *exit_coeffs, int mirror, const float normal[3], const float to_eye[3], float rgb[3]);
+
 const char *prt_transfer_kind_name(prt_transfer_kind kind);
-/* Parses "unshadowed", "shadowed", "interreflected" (or their first letter). */
+/* Parses "unshadowed", "shadowed", "interreflected" (or their first letter), "glossy-shadowed",
+ * "glossy-interreflected". */
 prt_status prt_transfer_kind_parse(const char *name, prt_transfer_kind *out);
 
 #ifdef __cplusplus

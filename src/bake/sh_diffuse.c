@@ -3,20 +3,18 @@
  *   shadowed     T_i = 1/pi  integral V(s) max(n.s, 0) y_i(s) ds
  *   bounce b     T^b_i = rho/pi integral T^{b-1}_i(q(s)) (1 - V(s)) max(n.s, 0) ds
  * estimated with one shared low-discrepancy direction set of N directions (weight 4 pi / N).
+ * The glossy shadowed matrix M_ji = integral V(s) H(n.s) y_j(s) y_i(s) ds shares the rays; glossy
+ * bounces live in sh_glossy.c.
  * Every vertex's result depends only on its own inputs and the fixed direction set, so the
  * result is bit-identical for any thread count and schedule. */
-#include "core/progress.h"
-#include "core/transfer_set.h"
+#include "bake/bake_internal.h"
 #include "geom/raycast.h"
 
 #include <string.h>
 
 #define PACKET 16
 
-typedef struct hit_entry {
-    uint32_t prim;
-    float u, v, weight;   /* barycentrics of the hit; cos * 4pi/N */
-} hit_entry;
+typedef prt__hit hit_entry;
 
 typedef struct bake_job {
     const prt__mesh *mesh;
@@ -44,8 +42,8 @@ prt_bake_desc prt_bake_desc_defaults(void)
 
 /* Visibility pass for one vertex: fills the unshadowed and shadowed sums and, when needed, the
  * list of occluded directions with what they hit. Returns false on allocation failure. */
-static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, hit_entry *scratch, hit_entry **hits_out,
-                              uint32_t *nhits_out)
+static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, float *glossy, hit_entry *scratch,
+                              hit_entry **hits_out, uint32_t *nhits_out)
 {
     const prt__mesh *m = job->mesh;
     const float *n = m->normals + v * 3;
@@ -82,7 +80,8 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, h
                  * this). The back of a surface emits nothing: only front-face hits carry light. */
                 const float *d = job->dirs + (size_t)lane_sample[k] * 3;
                 if (rh.hit.Ng_x[k] * d[0] + rh.hit.Ng_y[k] * d[1] + rh.hit.Ng_z[k] * d[2] >= 0.0f) continue;
-                scratch[nhits++] = (hit_entry){rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k], lane_cos[k] * (float)(4.0 * PRT_PI / job->samples)};
+                scratch[nhits++] = (hit_entry){rh.hit.primID[k], (uint32_t)lane_sample[k], rh.hit.u[k], rh.hit.v[k],
+                                               lane_cos[k] * (float)(4.0 * PRT_PI / job->samples)};
             }
         } else {
             _Alignas(64) struct RTCRay16 r;
@@ -97,6 +96,13 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, h
                 for (int i = 0; i < nc; ++i) unsh[i] += c * y[i];
             if (sh && !blocked[k])
                 for (int i = 0; i < nc; ++i) sh[i] += c * y[i];
+            if (glossy && !blocked[k]) {
+                const float wg = (float)(4.0 * PRT_PI / job->samples);
+                for (int j = 0; j < nc; ++j) {
+                    float s = wg * y[j];
+                    for (int i = 0; i < nc; ++i) glossy[j * nc + i] += s * y[i];
+                }
+            }
         }
     }
     if (hits_out) {
@@ -135,24 +141,43 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
     if (d.samples < 16 || d.samples > (1 << 20))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "samples %d out of range 16..%d", d.samples, 1 << 20);
     if (d.bounces < 1 || d.bounces > 64) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range 1..64", d.bounces);
-    if (d.kinds & ~7u) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown transfer kind bits 0x%x", d.kinds);
+    if (d.kinds & ~PRT_TRANSFER_ALL_KINDS) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown transfer kind bits 0x%x", d.kinds);
+    if (d.glossy_brdf) {
+        prt_status bst = prt_brdf_validate(d.glossy_brdf);
+        if (bst) return prt__fail(ctx, bst, "glossy BRDF: %s", prt_last_error());
+        if (!d.glossy_exit) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a glossy BRDF at bake time needs glossy_exit (it is baked in)");
+    }
+    if (d.glossy_exit && !(d.kinds & (PRT_TRANSFER_GLOSSY_SHADOWED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "baking a BRDF in needs a glossy kind (glossy-shadowed or glossy-interreflected)");
+
     if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
 
     double t_start = prt__now();
     prt_transfer *t = prt__calloc(1, sizeof *t);
     if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     const prt__mesh *sm = &scene->mesh;
-    prt_status st = prt__mesh_append(&t->mesh, sm->positions, sm->normals, sm->albedo, (float[3]){0, 0, 0}, sm->vertex_count,
-                                     sm->indices, sm->triangle_count);
+    prt_status st = prt__mesh_copy(&t->mesh, sm);
     if (st) { prt_transfer_release(t); return st; }
     t->order = d.order;
     t->samples = d.samples;
-    t->bounces = (d.kinds & PRT_TRANSFER_INTERREFLECTED) ? d.bounces : 0;
+    t->bounces = (d.kinds & (PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)) ? d.bounces : 0;
     t->seed = d.seed;
     t->threads = prt__threads(ctx);
     snprintf(t->source, sizeof t->source, "%s", scene->source);
     t->has_env = scene->has_env;
     t->env = scene->env;
+    t->brdf_count = scene->brdf_count;
+    memcpy(t->brdfs, scene->brdfs, sizeof t->brdfs);
+    bool scene_glossy = false;   /* some vertex has a material with a glossy part */
+    for (size_t v = 0; v < t->mesh.vertex_count && !scene_glossy; ++v) {
+        uint8_t k = t->mesh.material[v];
+        scene_glossy = k && k <= t->brdf_count && prt_brdf_is_glossy(&t->brdfs[k - 1]);
+    }
+    const bool want_gsh = d.kinds & PRT_TRANSFER_GLOSSY_SHADOWED, want_gir = d.kinds & PRT_TRANSFER_GLOSSY_INTERREFLECTED;
+    const bool want_ir = d.kinds & (PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED);
+    /* Glossy surfaces in the scene or glossy receivers put the glossy matrices into the bounce loop. */
+    const bool coupled = want_ir && (want_gir || scene_glossy);
+    const bool need_glossy_sh = want_gsh || coupled;
 
     const size_t nv = t->mesh.vertex_count;
     bake_job job = {0};
@@ -161,22 +186,24 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
     job.ncoeff = d.order * d.order;
     job.samples = d.samples;
     job.offset = d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh);
-    job.need_hits = (d.kinds & PRT_TRANSFER_INTERREFLECTED) != 0;
+    job.need_hits = want_ir;
     job.progress.fn = d.progress;
     job.progress.user = d.progress_user;
     const int nc = job.ncoeff;
     bool want_unsh = d.kinds & PRT_TRANSFER_UNSHADOWED;
-    bool want_sh = d.kinds & (PRT_TRANSFER_SHADOWED | PRT_TRANSFER_INTERREFLECTED);
+    bool want_sh = d.kinds & (PRT_TRANSFER_SHADOWED | PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED);
+    const size_t nn = (size_t)nc * nc;
 
     job.dirs = prt__calloc((size_t)d.samples * 3, sizeof(float));
     job.basis = prt__calloc((size_t)d.samples * nc, sizeof(float));
     float *unsh = want_unsh ? prt__calloc(nv * nc, sizeof(float)) : NULL;
     float *shad = want_sh ? prt__calloc(nv * nc, sizeof(float)) : NULL;
+    float *gshad = need_glossy_sh ? prt__calloc(nv * nn, sizeof(float)) : NULL;
     if (job.need_hits) {
         job.hits = prt__calloc(nv, sizeof *job.hits);
         job.hit_count = prt__calloc(nv, sizeof *job.hit_count);
     }
-    if (!job.dirs || !job.basis || (want_unsh && !unsh) || (want_sh && !shad) || (job.need_hits && (!job.hits || !job.hit_count))) {
+    if (!job.dirs || !job.basis || (want_unsh && !unsh) || (want_sh && !shad) || (need_glossy_sh && !gshad) || (job.need_hits && (!job.hits || !job.hit_count))) {
         st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for a bake of %zu vertices", nv);
         goto done;
     }
@@ -200,7 +227,8 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
 #pragma omp for schedule(dynamic, 32)
         for (size_t v = 0; v < nv; ++v) {
             if (prt__progress_cancelled(&job.progress) || __atomic_load_n(&alloc_failed, __ATOMIC_RELAXED)) continue;
-            bool ok = visibility_vertex(&job, v, unsh ? unsh + v * nc : NULL, shad ? shad + v * nc : NULL, scratch,
+            bool ok = visibility_vertex(&job, v, unsh ? unsh + v * nc : NULL, shad ? shad + v * nc : NULL,
+                                        gshad ? gshad + v * nn : NULL, scratch,
                                         job.need_hits ? &job.hits[v] : NULL, job.need_hits ? &job.hit_count[v] : NULL);
             if (!ok) __atomic_store_n(&alloc_failed, 1, __ATOMIC_RELAXED);
             prt__progress_add(&job.progress, 1);
@@ -212,7 +240,15 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
     if (prt__progress_cancelled(&job.progress)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled"); goto done; }
 
     if (want_unsh) { t->sets[0].channels = 1; t->sets[0].coeffs = unsh; unsh = NULL; }
-    if (d.kinds & PRT_TRANSFER_INTERREFLECTED) {
+    if (coupled) {
+        prt__bounce_input bi = {&t->mesh, d.order, d.samples, job.basis, job.hits, job.hit_count, shad, gshad,
+                                t->brdfs, t->brdf_count, d.bounces, want_gir, &job.progress};
+        float *dtot = NULL, *gtot = NULL;
+        if ((st = prt__bake_glossy_bounces(ctx, &bi, &dtot, want_gir ? &gtot : NULL))) goto done;
+        if (d.kinds & PRT_TRANSFER_INTERREFLECTED) { t->sets[2].channels = 3; t->sets[2].coeffs = dtot; }
+        else free(dtot);
+        if (want_gir) { t->sets[4].channels = 3; t->sets[4].coeffs = gtot; }
+    } else if (d.kinds & PRT_TRANSFER_INTERREFLECTED) {
         const int nc3 = 3 * nc;
         float *total = prt__calloc(nv * nc3, sizeof(float)), *prev = prt__calloc(nv * nc3, sizeof(float)),
               *next = prt__calloc(nv * nc3, sizeof(float));
@@ -256,13 +292,15 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
         t->sets[2].coeffs = total;
     }
     if (d.kinds & PRT_TRANSFER_SHADOWED) { t->sets[1].channels = 1; t->sets[1].coeffs = shad; shad = NULL; }
+    if (want_gsh) { t->sets[3].channels = 1; t->sets[3].coeffs = gshad; gshad = NULL; }
+    if (d.glossy_exit && (st = prt__bake_brdf_in(ctx, t, d.glossy_brdf))) goto done;
     t->bake_seconds = prt__now() - t_start;
 
 done:
     prt__raycaster_release(&job.rc);
     if (job.hits)
         for (size_t v = 0; v < nv; ++v) free(job.hits[v]);
-    free(job.hits); free(job.hit_count); free(job.origins); free(job.dirs); free(job.basis); free(unsh); free(shad);
+    free(job.hits); free(job.hit_count); free(job.origins); free(job.dirs); free(job.basis); free(unsh); free(shad); free(gshad);
     if (st) { prt_transfer_release(t); return st; }
     *out = t;
     return PRT_OK;

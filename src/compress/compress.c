@@ -13,8 +13,7 @@ static prt_status copy_without_sets(prt_context *ctx, const prt_transfer *in, pr
     memset(&t->mesh, 0, sizeof t->mesh);
     memset(t->sets, 0, sizeof t->sets);
     const prt__mesh *m = &in->mesh;
-    prt_status st = prt__mesh_append(&t->mesh, m->positions, m->normals, m->albedo, (float[3]){0, 0, 0}, m->vertex_count, m->indices,
-                                     m->triangle_count);
+    prt_status st = prt__mesh_copy(&t->mesh, m);
     if (st) { prt_transfer_release(t); return prt__fail(ctx, st, "%s", prt_last_error()); }
     *out = t;
     return PRT_OK;
@@ -49,7 +48,7 @@ prt_status prt_transfer_compress(prt_context *ctx, const prt_transfer *in, const
         char stage[48];
         snprintf(stage, sizeof stage, "compress %s", prt_transfer_kind_name(prt__kind_from_index(k)));
         prt__progress_begin(&prog, stage, (uint64_t)d.iterations);
-        st = prt__cpca_build(ctx, s->coeffs, m->vertex_count, s->channels * in->order * in->order, &d, &prog, &t->sets[k].cpca);
+        st = prt__cpca_build(ctx, s->coeffs, m->vertex_count, (int)prt__set_dim(in, k), &d, &prog, &t->sets[k].cpca);
         prt__progress_end(&prog);
         t->sets[k].channels = s->channels;
     }
@@ -66,7 +65,7 @@ prt_status prt_transfer_compress_info(const prt_transfer *t, prt_transfer_kind k
     const prt__cpca *c = t->sets[k].cpca;
     size_t nv = t->mesh.vertex_count;
     if (!c) {
-        size_t dim = (size_t)t->sets[k].channels * (size_t)(t->order * t->order);
+        size_t dim = prt__set_dim(t, k);
         int bits = t->sets[k].quant_bits;
         out->quantize_bits = bits;
         out->bytes = bits ? nv * dim * (size_t)(bits / 8) + 2 * dim * sizeof(float) : nv * dim * sizeof(float);
@@ -88,7 +87,7 @@ prt_status prt_transfer_reconstruct(const prt_transfer *t, prt_transfer_kind kin
     int k = prt__kind_index(kind);
     if (k < 0 || !t->sets[k].channels) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "the transfer holds no %s set", prt_transfer_kind_name(kind));
     const prt__sh_set *s = &t->sets[k];
-    size_t nv = t->mesh.vertex_count, dim = (size_t)s->channels * (size_t)(t->order * t->order);
+    size_t nv = t->mesh.vertex_count, dim = prt__set_dim(t, k);
     if (!s->cpca) { memcpy(out, s->coeffs, nv * dim * sizeof(float)); return PRT_OK; }
     const prt__cpca *c = s->cpca;
     for (size_t v = 0; v < nv; ++v) {
@@ -132,12 +131,12 @@ prt_status prt_transfer_quantize(prt_context *ctx, const prt_transfer *in, int b
     for (int k = 0; k < PRT__KIND_COUNT && !st; ++k) {
         const prt__sh_set *s = &in->sets[k];
         if (!s->channels) continue;
-        const int dim = s->channels * in->order * in->order;
+        const int dim = (int)prt__set_dim(in, k);
         const size_t nv = m->vertex_count;
-        float scale[3 * PRT_SH_MAX_COEFFS], bias[3 * PRT_SH_MAX_COEFFS];
-        prt__quant_grid(s->coeffs, nv, dim, bits, scale, bias);
+        float *scale = malloc(2 * (size_t)dim * sizeof(float)), *bias = scale ? scale + dim : NULL;
         float *q = malloc(nv * (size_t)dim * sizeof(float));
-        if (!q) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+        if (!q || !scale) { free(q); free(scale); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+        prt__quant_grid(s->coeffs, nv, dim, bits, scale, bias);
         const float levels = (float)((1u << bits) - 1);
         for (size_t v = 0; v < nv; ++v)
             for (int j = 0; j < dim; ++j) {
@@ -145,6 +144,7 @@ prt_status prt_transfer_quantize(prt_context *ctx, const prt_transfer *in, int b
                 float l = scale[j] > 0 ? fminf(fmaxf(roundf((x - bias[j]) / scale[j]), 0.0f), levels) : 0.0f;
                 q[v * dim + j] = bias[j] + l * scale[j];
             }
+        free(scale);
         t->sets[k].channels = s->channels;
         t->sets[k].coeffs = q;
         t->sets[k].quant_bits = bits;

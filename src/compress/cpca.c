@@ -80,7 +80,8 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
     model *M = prt__calloc((size_t)K, sizeof(model));
     double *best = prt__calloc(nv, sizeof(double));
     if (!assign || !counts || !order || !first || !M || !best || dim > 512) {
-        st = prt__fail(ctx, dim > 512 ? PRT_ERR_INVALID_ARG : PRT_ERR_NO_MEMORY, "cannot compress: out of memory or vectors too long");
+        st = dim > 512 ? prt__fail(ctx, PRT_ERR_INVALID_ARG, "cannot compress vectors of %d floats (at most 512: glossy matrices up to order 4, one channel)", dim)
+                       : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         goto done;
     }
     for (int k = 0; k < K; ++k) {

@@ -11,6 +11,8 @@ int prt__kind_index(prt_transfer_kind kind)
     case PRT_TRANSFER_UNSHADOWED: return 0;
     case PRT_TRANSFER_SHADOWED: return 1;
     case PRT_TRANSFER_INTERREFLECTED: return 2;
+    case PRT_TRANSFER_GLOSSY_SHADOWED: return 3;
+    case PRT_TRANSFER_GLOSSY_INTERREFLECTED: return 4;
     }
     return -1;
 }
@@ -19,7 +21,8 @@ prt_transfer_kind prt__kind_from_index(int index) { return (prt_transfer_kind)(1
 
 const char *prt_transfer_kind_name(prt_transfer_kind kind)
 {
-    static const char *names[PRT__KIND_COUNT] = {"unshadowed", "shadowed", "interreflected"};
+    static const char *names[PRT__KIND_COUNT] = {"unshadowed", "shadowed", "interreflected", "glossy-shadowed",
+                                                 "glossy-interreflected"};
     int i = prt__kind_index(kind);
     return i < 0 ? "unknown" : names[i];
 }
@@ -29,9 +32,10 @@ prt_status prt_transfer_kind_parse(const char *name, prt_transfer_kind *out)
     for (int i = 0; i < PRT__KIND_COUNT; ++i) {
         prt_transfer_kind k = prt__kind_from_index(i);
         const char *full = prt_transfer_kind_name(k);
-        if (!strcasecmp(name, full) || (name[0] && !name[1] && name[0] == full[0])) { *out = k; return PRT_OK; }
+        if (!strcasecmp(name, full) || (i < 3 && name[0] && !name[1] && name[0] == full[0])) { *out = k; return PRT_OK; }
     }
-    return prt__fail(NULL, PRT_ERR_INVALID_ARG, "unknown transfer kind '%s' (use unshadowed, shadowed or interreflected)", name);
+    return prt__fail(NULL, PRT_ERR_INVALID_ARG,
+                     "unknown transfer kind '%s' (use unshadowed, shadowed, interreflected, glossy-shadowed or glossy-interreflected)", name);
 }
 
 void prt_transfer_release(prt_transfer *t)
@@ -90,3 +94,29 @@ const float *prt_transfer_positions(const prt_transfer *t) { return t->mesh.posi
 const float *prt_transfer_normals(const prt_transfer *t) { return t->mesh.normals; }
 const float *prt_transfer_albedo(const prt_transfer *t) { return t->mesh.albedo; }
 const uint32_t *prt_transfer_indices(const prt_transfer *t) { return t->mesh.indices; }
+
+int prt_transfer_kind_is_glossy(prt_transfer_kind kind) { return kind == PRT_TRANSFER_GLOSSY_SHADOWED || kind == PRT_TRANSFER_GLOSSY_INTERREFLECTED; }
+
+prt_transfer_kind prt_transfer_kind_diffuse_part(prt_transfer_kind glossy)
+{
+    return glossy == PRT_TRANSFER_GLOSSY_INTERREFLECTED ? PRT_TRANSFER_INTERREFLECTED : PRT_TRANSFER_SHADOWED;
+}
+
+size_t prt_transfer_set_floats(const prt_transfer *t, prt_transfer_kind kind)
+{
+    int i = prt__kind_index(kind);
+    return i < 0 ? 0 : prt__set_dim(t, i);
+}
+
+int prt_transfer_glossy_mirror(const prt_transfer *t) { return !t->glossy_exit; }
+int prt_transfer_brdf_count(const prt_transfer *t) { return t->brdf_count; }
+const prt_brdf *prt_transfer_brdf(const prt_transfer *t, int k) { return k >= 1 && k <= t->brdf_count ? &t->brdfs[k - 1] : NULL; }
+const uint8_t *prt_transfer_materials(const prt_transfer *t) { return t->mesh.material; }
+
+prt_status prt__mesh_copy(prt__mesh *dst, const prt__mesh *src)
+{
+    prt_status st = prt__mesh_append(dst, src->positions, src->normals, src->albedo, (float[3]){0, 0, 0}, src->vertex_count,
+                                     src->indices, src->triangle_count);
+    if (!st && src->material) memcpy(dst->material, src->material, src->vertex_count);
+    return st;
+}

@@ -5,7 +5,7 @@
 #include "geom/mesh.h"
 #include "prt/compress.h"
 
-#define PRT__KIND_COUNT 3
+#define PRT__KIND_COUNT 5
 
 /* A clustered-PCA compressed set (compress/cpca.c); VQ and PCA are special cases. */
 typedef struct prt__cpca {
@@ -52,9 +52,22 @@ struct prt_transfer {
     char source[512];
     bool has_env;
     prt_environment_desc env;
+    bool glossy_exit;                 /* glossy sets hold exit radiance (BRDF baked in) */
+    int brdf_count;
+    prt_brdf brdfs[PRT__MAX_BRDFS];   /* materials named by mesh.material */
 };
 
-/* 0, 1, 2 for UNSHADOWED, SHADOWED, INTERREFLECTED; -1 for anything else. */
+static inline bool prt__kind_glossy(int index) { return index >= 3; }
+/* Floats per vertex of set k when uncompressed. */
+static inline size_t prt__set_dim(const prt_transfer *t, int k)
+{
+    size_t n = (size_t)t->order * (size_t)t->order;
+    return (size_t)t->sets[k].channels * n * (prt__kind_glossy(k) ? n : 1);
+}
+/* Copies a mesh including materials. */
+prt_status prt__mesh_copy(prt__mesh *dst, const prt__mesh *src);
+
+/* 0..4 for UNSHADOWED, SHADOWED, INTERREFLECTED, GLOSSY_SHADOWED, GLOSSY_INTERREFLECTED; -1 otherwise. */
 int prt__kind_index(prt_transfer_kind kind);
 prt_transfer_kind prt__kind_from_index(int index);
 

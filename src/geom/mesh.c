@@ -5,7 +5,7 @@
 
 void prt__mesh_free(prt__mesh *m)
 {
-    free(m->positions); free(m->normals); free(m->albedo); free(m->indices);
+    free(m->positions); free(m->normals); free(m->albedo); free(m->material); free(m->indices);
     memset(m, 0, sizeof *m);
 }
 
@@ -26,11 +26,12 @@ prt_status prt__mesh_append(prt__mesh *m, const float *pos, const float *nrm, co
     if (nv2 > UINT32_MAX || nt2 > UINT32_MAX / 3)
         return prt__fail(NULL, PRT_ERR_NO_MEMORY, "mesh too large (%zu vertices)", nv2);
     if (!grow((void **)&m->positions, nv2 * 3, sizeof(float)) || !grow((void **)&m->normals, nv2 * 3, sizeof(float)) ||
-        !grow((void **)&m->albedo, nv2 * 3, sizeof(float)) || !grow((void **)&m->indices, nt2 * 3, sizeof(uint32_t)))
+        !grow((void **)&m->albedo, nv2 * 3, sizeof(float)) || !grow((void **)&m->material, nv2, 1) || !grow((void **)&m->indices, nt2 * 3, sizeof(uint32_t)))
         return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory growing mesh");
     memcpy(m->positions + v0 * 3, pos, nv * 3 * sizeof(float));
     if (nrm) memcpy(m->normals + v0 * 3, nrm, nv * 3 * sizeof(float));
     else memset(m->normals + v0 * 3, 0, nv * 3 * sizeof(float));
+    memset(m->material + v0, 0, nv);
     for (size_t i = 0; i < nv; ++i)
         for (int c = 0; c < 3; ++c) m->albedo[(v0 + i) * 3 + c] = albedo ? albedo[i * 3 + c] : rgb_default[c];
     for (size_t i = 0; i < nt * 3; ++i) {
@@ -121,6 +122,7 @@ prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *wha
             memcpy(m->positions + nv * 3, m->positions + v * 3, 3 * sizeof(float));
             memcpy(m->normals + nv * 3, m->normals + v * 3, 3 * sizeof(float));
             memcpy(m->albedo + nv * 3, m->albedo + v * 3, 3 * sizeof(float));
+            m->material[nv] = m->material[v];
         }
         nv++;
     }

@@ -3,13 +3,17 @@
 #define PRT_GEOM_MESH_H
 
 #include "core/internal.h"
+#include "prt/brdf.h"
 
 /* Struct-of-arrays mesh; every array has 3 entries per vertex or per triangle. */
 typedef struct prt__mesh {
     size_t vertex_count, triangle_count;
     float *positions, *normals, *albedo;
+    uint8_t *material;    /* per vertex: 0 = Lambert with `albedo`, k = the owner's brdfs[k - 1] */
     uint32_t *indices;
 } prt__mesh;
+
+#define PRT__MAX_BRDFS 255
 
 void prt__mesh_free(prt__mesh *m);
 /* Appends vertices/triangles; indices are relative to the appended vertices. normals may be
@@ -24,6 +28,8 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
 
 struct prt_scene {
     prt__mesh mesh;
+    int brdf_count;
+    prt_brdf brdfs[PRT__MAX_BRDFS];
     char source[512];
     bool has_env;
     prt_environment_desc env;

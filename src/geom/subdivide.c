@@ -68,8 +68,10 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
         if (nrm) m->normals = nrm;
         float *alb = nrm ? realloc(m->albedo, max_v * 3 * sizeof(float)) : NULL;
         if (alb) m->albedo = alb;
+        uint8_t *mat = alb ? realloc(m->material, max_v) : NULL;
+        if (mat) m->material = mat;
         uint32_t *out = prt__calloc(new_tris * 3, sizeof(uint32_t));
-        if (!em.keys || !em.values || !alb || !out || max_v > UINT32_MAX) {
+        if (!em.keys || !em.values || !mat || !out || max_v > UINT32_MAX) {
             free(em.keys); free(em.values); free(out);
             return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory subdividing the mesh");
         }
@@ -92,6 +94,7 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
                         m->normals[nv * 3 + c] = m->normals[a * 3 + c] + m->normals[b * 3 + c];
                         m->albedo[nv * 3 + c] = 0.5f * (m->albedo[a * 3 + c] + m->albedo[b * 3 + c]);
                     }
+                    m->material[nv] = m->material[a];   /* edges never join two objects */
                     if (!prt__v3_normalize(m->normals + nv * 3)) memcpy(m->normals + nv * 3, m->normals + a * 3, 3 * sizeof(float));
                     *slot = nv;
                 }

@@ -22,6 +22,8 @@ static const unsigned char MAGIC[8] = {'P', 'R', 'T', 'F', 0x0D, 0x0A, 0x1A, 0x0
 #define CHUNK_MESH FOURCC('M', 'E', 'S', 'H')
 #define CHUNK_SHTR FOURCC('S', 'H', 'T', 'R')
 #define CHUNK_CPCA FOURCC('C', 'P', 'C', 'A')
+#define CHUNK_MATL FOURCC('M', 'A', 'T', 'L')
+#define BRDF_RECORD 160   /* model, lobes, then 38 floats: see put_brdf */
 #define CPCA_HEADER 64
 #define PARTS 8
 
@@ -31,6 +33,38 @@ static void put32(unsigned char *p, uint32_t v) { memcpy(p, &v, 4); }
 static void put64(unsigned char *p, uint64_t v) { memcpy(p, &v, 8); }
 static uint32_t get32(const unsigned char *p) { uint32_t v; memcpy(&v, p, 4); return v; }
 static uint64_t get64(const unsigned char *p) { uint64_t v; memcpy(&v, p, 8); return v; }
+
+static void put_brdf(unsigned char *p, const prt_brdf *b)
+{
+    float f[38];
+    memcpy(f, b->diffuse, 12);
+    memcpy(f + 3, b->specular, 12);
+    f[6] = b->exponent;
+    f[7] = b->exponent_v;
+    memcpy(f + 8, b->cxy, 36);
+    memcpy(f + 17, b->cz, 36);
+    memcpy(f + 26, b->n, 36);
+    f[35] = f[36] = f[37] = 0;
+    put32(p, (uint32_t)b->model);
+    put32(p + 4, (uint32_t)b->lobes);
+    memcpy(p + 8, f, sizeof f);
+}
+
+static void get_brdf(const unsigned char *p, prt_brdf *b)
+{
+    float f[38];
+    memset(b, 0, sizeof *b);
+    b->model = (prt_brdf_model)get32(p);
+    b->lobes = (int)get32(p + 4);
+    memcpy(f, p + 8, sizeof f);
+    memcpy(b->diffuse, f, 12);
+    memcpy(b->specular, f + 3, 12);
+    b->exponent = f[6];
+    b->exponent_v = f[7];
+    memcpy(b->cxy, f + 8, 36);
+    memcpy(b->cz, f + 17, 36);
+    memcpy(b->n, f + 26, 36);
+}
 
 static uint32_t chunk_crc(const chunk *c)
 {
@@ -63,6 +97,7 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
     cJSON_AddNumberToObject(meta, "threads", t->threads);
     cJSON_AddNumberToObject(meta, "bake_seconds", t->bake_seconds);
     cJSON_AddStringToObject(meta, "source", t->source);
+    if (t->glossy_exit) cJSON_AddBoolToObject(meta, "glossy_exit", 1);
     if (t->has_env) {
         cJSON *e = cJSON_AddObjectToObject(meta, "environment");
         cJSON_AddStringToObject(e, "file", t->env.path);
@@ -75,8 +110,8 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
     cJSON_Delete(meta);
     if (!meta_text) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
 
-    chunk chunks[2 + PRT__KIND_COUNT];
-    void *qbuf[2 * PRT__KIND_COUNT];   /* quantized copies, freed after writing */
+    chunk chunks[3 + PRT__KIND_COUNT];
+    void *qbuf[2 * PRT__KIND_COUNT + 1];   /* quantized copies, freed after writing */
     int nqbuf = 0;
     memset(chunks, 0, sizeof chunks);
     int count = 0;
@@ -96,7 +131,7 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
         put32(h + 4, (uint32_t)s->channels);
         put32(h + 8, (uint32_t)t->order);
         if (!s->cpca) {
-            const size_t dim = (size_t)s->channels * (size_t)(t->order * t->order), n = m->vertex_count * dim;
+            const size_t dim = prt__set_dim(t, k), n = m->vertex_count * dim;
             put64(h + 16, m->vertex_count);
             if (!s->quant_bits) {
                 chunks[count++] = (chunk){CHUNK_SHTR, {h, s->coeffs}, {24, n * sizeof(float)}, 0};
@@ -135,7 +170,19 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
                                   {CPCA_HEADER, (size_t)c->clusters * 4, (size_t)c->clusters * dim * 4, c->vectors_total * dim * 4,
                                    m->vertex_count * 4, c->weights_total * 4}, 0};
     }
-    unsigned char head[HEADER_SIZE + ENTRY_SIZE * (2 + PRT__KIND_COUNT)];
+    unsigned char *matl = NULL;
+    if (t->brdf_count) {
+        /* count, pad, the BRDF records, then one material id per vertex padded to 8 bytes. */
+        size_t bytes = 8 + (size_t)t->brdf_count * BRDF_RECORD + ((m->vertex_count + 7) & ~(size_t)7);
+        matl = calloc(bytes, 1);
+        if (!matl) { cJSON_free(meta_text); for (int i = 0; i < nqbuf; ++i) free(qbuf[i]); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory"); }
+        put32(matl, (uint32_t)t->brdf_count);
+        for (int k = 0; k < t->brdf_count; ++k) put_brdf(matl + 8 + (size_t)k * BRDF_RECORD, &t->brdfs[k]);
+        if (m->material) memcpy(matl + 8 + (size_t)t->brdf_count * BRDF_RECORD, m->material, m->vertex_count);
+        qbuf[nqbuf++] = matl;
+        chunks[count++] = (chunk){CHUNK_MATL, {matl}, {bytes}, 0};
+    }
+    unsigned char head[HEADER_SIZE + ENTRY_SIZE * (3 + PRT__KIND_COUNT)];
     memset(head, 0, sizeof head);
     memcpy(head, MAGIC, 8);
     put32(head + 8, FILE_VERSION);
@@ -221,7 +268,7 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
             uint64_t off = get64(e + 8), len = get64(e + 16);
             if (off > size || len > size - off) { st = bad(ctx, "truncated .prt file: a chunk extends past the end"); break; }
             const unsigned char *p = b + off;
-            bool mine = pass == 0 ? (id == CHUNK_META || id == CHUNK_MESH) : (id == CHUNK_SHTR || id == CHUNK_CPCA);
+            bool mine = pass == 0 ? (id == CHUNK_META || id == CHUNK_MESH) : (id == CHUNK_SHTR || id == CHUNK_CPCA || id == CHUNK_MATL);
             if (!mine) continue;
             if (prt__crc32(p, (size_t)len) != crc) {
                 char what[5] = {(char)(id & 255), (char)(id >> 8 & 255), (char)(id >> 16 & 255), (char)(id >> 24), 0};
@@ -244,6 +291,7 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "threads"))) t->threads = x->valueint;
                 if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "bake_seconds"))) t->bake_seconds = x->valuedouble;
                 if (cJSON_IsString(x = cJSON_GetObjectItemCaseSensitive(meta, "source"))) snprintf(t->source, sizeof t->source, "%s", x->valuestring);
+                t->glossy_exit = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(meta, "glossy_exit"));
                 if (cJSON_IsObject(x = cJSON_GetObjectItemCaseSensitive(meta, "environment"))) {
                     const cJSON *f = cJSON_GetObjectItemCaseSensitive(x, "file"), *l = cJSON_GetObjectItemCaseSensitive(x, "layout"),
                                 *r = cJSON_GetObjectItemCaseSensitive(x, "rotate"), *s = cJSON_GetObjectItemCaseSensitive(x, "sun"),
@@ -271,7 +319,8 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 prt__mesh *m = &t->mesh;
                 m->positions = malloc(nv * 12); m->normals = malloc(nv * 12); m->albedo = malloc(nv * 12);
                 m->indices = malloc(nt * 12);
-                if (!m->positions || !m->normals || !m->albedo || !m->indices) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+                m->material = calloc(nv, 1);
+                if (!m->positions || !m->normals || !m->albedo || !m->indices || !m->material) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
                 memcpy(m->positions, p + 16, nv * 12);
                 memcpy(m->normals, p + 16 + nv * 12, nv * 12);
                 memcpy(m->albedo, p + 16 + nv * 24, nv * 12);
@@ -283,6 +332,23 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 if (!st && !(all_finite(m->positions, nv * 3) && all_finite(m->normals, nv * 3) && all_finite(m->albedo, nv * 3)))
                     st = bad(ctx, "corrupt .prt file: non-finite vertex data");
                 have_mesh = true;
+            } else if (id == CHUNK_MATL) {
+                uint64_t nv = t->mesh.vertex_count;
+                uint32_t nb = len >= 8 ? get32(p) : 0;
+                if (!have_mesh || t->brdf_count || nb == 0 || nb > PRT__MAX_BRDFS ||
+                    8 + (uint64_t)nb * BRDF_RECORD + ((nv + 7) & ~7ull) != len) {
+                    st = bad(ctx, "corrupt .prt file: invalid material chunk");
+                    break;
+                }
+                for (uint32_t k = 0; k < nb && !st; ++k) {
+                    get_brdf(p + 8 + (size_t)k * BRDF_RECORD, &t->brdfs[k]);
+                    if (prt_brdf_validate(&t->brdfs[k])) st = bad(ctx, "corrupt .prt file: invalid BRDF in the material chunk");
+                }
+                if (st) break;
+                t->brdf_count = (int)nb;
+                memcpy(t->mesh.material, p + 8 + (size_t)nb * BRDF_RECORD, nv);
+                for (uint64_t v = 0; v < nv; ++v)
+                    if (t->mesh.material[v] > nb) { st = bad(ctx, "corrupt .prt file: a material id is out of range"); break; }
             } else if (id == CHUNK_CPCA) {
                 if (!have_mesh || len < CPCA_HEADER) { st = bad(ctx, "corrupt .prt file: bad compressed transfer chunk"); break; }
                 uint32_t kind = get32(p), channels = get32(p + 4), order = get32(p + 8), method = get32(p + 12);
@@ -291,7 +357,7 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 int k = prt__kind_index((prt_transfer_kind)kind);
                 /* Every count is bounded by the chunk's own length before it sizes anything. */
                 if (k < 0 || (channels != 1 && channels != 3) || order < 1 || order > PRT_SH_MAX_ORDER || method > PRT_COMPRESS_VQ ||
-                    dim != channels * order * order || nv != t->mesh.vertex_count || (t->order && (int)order != t->order) ||
+                    dim != channels * order * order * (prt__kind_glossy(k) ? order * order : 1) || nv != t->mesh.vertex_count || (t->order && (int)order != t->order) ||
                     t->sets[k].channels || clusters == 0 || clusters > len / 4 || nvec > len / 4 || nw > len / 4 ||
                     (uint64_t)clusters * dim > len / 4 || nvec * dim > len / 4 ||
                     CPCA_HEADER + 4 * ((uint64_t)clusters + (uint64_t)clusters * dim + nvec * dim + nv + nw) != len) {
@@ -344,7 +410,7 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                     break;
                 }
                 uint32_t bits = get32(p + 12);
-                uint64_t dim = (uint64_t)channels * order * order, n = nv * dim;
+                uint64_t dim = (uint64_t)channels * order * order * (prt__kind_glossy(k) ? order * order : 1), n = nv * dim;
                 uint64_t need = bits == 0 ? 24 + n * 4 : 24 + 8 * dim + ((n * (bits / 8) + 3) & ~3ull);
                 if ((bits != 0 && bits != 8 && bits != 16) || n > len || need != len) { st = bad(ctx, "corrupt .prt file: transfer chunk size mismatch"); break; }
                 float *c = malloc(n * 4);

@@ -96,20 +96,48 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         if ((v = cJSON_GetObjectItemCaseSensitive(item, "scale")) && (st = read_vec3(ctx, v, "scale", s))) break;
         if ((v = cJSON_GetObjectItemCaseSensitive(item, "rotate")) && (st = read_vec3(ctx, v, "rotate", r))) break;
         if ((v = cJSON_GetObjectItemCaseSensitive(item, "translate")) && (st = read_vec3(ctx, v, "translate", t))) break;
+        prt_brdf brdf;
+        bool has_brdf = false;
+        const cJSON *a = NULL, *b = NULL;
         if ((v = cJSON_GetObjectItemCaseSensitive(item, "material"))) {
             const cJSON *mat = cJSON_IsString(v) ? cJSON_GetObjectItemCaseSensitive(materials, v->valuestring) : NULL;
-            const cJSON *a = mat ? cJSON_GetObjectItemCaseSensitive(mat, "albedo") : NULL;
-            if (!a) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d] names a material with no \"albedo\" in \"materials\"", path, index); break; }
+            if (!mat) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d] names a material that \"materials\" does not define", path, index); break; }
+            a = cJSON_GetObjectItemCaseSensitive(mat, "albedo");
+            b = cJSON_GetObjectItemCaseSensitive(mat, "brdf");
+            if (!a && !b) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s' needs an \"albedo\" or a \"brdf\"", path, v->valuestring); break; }
+        }
+        if ((v = cJSON_GetObjectItemCaseSensitive(item, "albedo"))) a = v;
+        if ((v = cJSON_GetObjectItemCaseSensitive(item, "brdf"))) b = v;
+        if (a && b) {
+            st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d]: give an albedo or a brdf, not both (the BRDF's kd is its albedo)", path, index);
+            break;
+        }
+        if (a) {
             if ((st = read_vec3(ctx, a, "albedo", rgb))) break;
             albedo = rgb;
         }
-        if ((v = cJSON_GetObjectItemCaseSensitive(item, "albedo"))) {
-            if ((st = read_vec3(ctx, v, "albedo", rgb))) break;
+        if (b) {
+            if (!cJSON_IsString(b)) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d]: \"brdf\" must be a string such as \"phong:32:0.5:0.3\"", path, index); break; }
+            if ((st = prt_brdf_parse(b->valuestring, &brdf))) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d]: %s", path, index, prt_last_error()); break; }
+            prt_brdf_lambert_albedo(&brdf, rgb);
             albedo = rgb;
+            has_brdf = true;
         }
         float xf[16];
         make_xform(s, r, t, xf);
+        const size_t first_vertex = m->vertex_count;
         if ((st = prt__import_mesh(ctx, full, xf, albedo, desc, m))) break;
+        if (has_brdf) {
+            int id = 0;
+            for (int k = 0; k < scene->brdf_count && !id; ++k)
+                if (!memcmp(&scene->brdfs[k], &brdf, sizeof brdf)) id = k + 1;
+            if (!id) {
+                if (scene->brdf_count == PRT__MAX_BRDFS) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDF materials", path, PRT__MAX_BRDFS); break; }
+                scene->brdfs[scene->brdf_count++] = brdf;
+                id = scene->brdf_count;
+            }
+            memset(m->material + first_vertex, id, m->vertex_count - first_vertex);
+        }
         index++;
     }
     cJSON_Delete(root);

@@ -140,6 +140,8 @@ prt_status prt_relight_sh(prt_context *ctx, const prt_transfer *t, prt_transfer_
     int k = prt__kind_index(kind);
     if (k < 0 || !t->sets[k].channels)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the transfer holds no %s set", prt_transfer_kind_name(kind));
+    if (prt__kind_glossy(k))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s is view-dependent: relight it with prt_relight_sh_glossy", prt_transfer_kind_name(kind));
     if (sh->order < 1 || sh->order > PRT_SH_MAX_ORDER)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "lighting SH order %d out of range", sh->order);
     const int stride = t->order * t->order;
