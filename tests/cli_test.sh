@@ -108,6 +108,35 @@ says "not finite"
 expect 1 "NaN probe in render" -- $NOLEAK "$PRT" render "$T/demo.prt" -o "$T/n.png" --env "$T/nan.pfm"
 [ ! -e "$T/n.png" ] && ok || bad "render with a bad probe wrote an image"
 
+# Glossy transfer: a scene with a Phong material, glossy matrices, rendering and relighting them.
+printf '%s\n' '{ "materials": { "gloss": { "brdf": "phong:30:0.6:0.2" } },' \
+    '  "meshes": [ { "file": "demo.obj" }, { "file": "demo.obj", "material": "gloss", "scale": 0.4, "translate": [0.3, 0.6, 0.2] } ] }' \
+    >"$T/glossy.json"
+expect 0 "glossy bake" -- "$PRT" bake -q "$T/glossy.json" -o "$T/glossy.prt" --order 3 --samples 64 --bounces 1 \
+    --kinds shadowed,interreflected,glossy-shadowed,glossy-interreflected
+expect 0 "glossy info" -- "$PRT" info "$T/glossy.prt"
+grep -q "glossy-interreflected" "$T/out" && grep -q "phong:30:0.6:0.2" "$T/out" && ok || bad "info does not list the glossy set and material"
+expect 0 "glossy render" -- $NOLEAK "$PRT" render -q "$T/glossy.prt" -o "$T/glossy.png" --width 64 --height 48 -k interreflected,glossy-interreflected
+expect 0 "glossy render, run-time lobe" -- $NOLEAK "$PRT" render -q "$T/glossy.prt" -o "$T/glossy2.png" --width 32 --height 32 --brdf blinn:80:0.3
+expect 2 "glossy relight without eye" -- "$PRT" relight "$T/glossy.prt" -k glossy-shadowed -o "$T/g.json"
+says "eye"
+expect 0 "glossy relight" -- "$PRT" relight -q "$T/glossy.prt" -k glossy-shadowed --eye 2,2,2 -o "$T/g.json"
+expect 2 "bad brdf" -- "$PRT" render "$T/glossy.prt" -o "$T/x.png" --brdf ward:3
+says "unknown BRDF"
+expect 2 "a BRDF to bake in without a glossy kind" -- "$PRT" bake -q "$T/demo.obj" -o "$T/x.prt" --brdf phong:10 --kinds shadowed
+says "glossy kind"
+expect 0 "bake a BRDF in" -- "$PRT" bake -q "$T/demo.obj" -o "$T/baked.prt" --order 3 --samples 64 --kinds shadowed,glossy-shadowed --brdf lafortune:clay
+expect 2 "run-time lobe on a baked-in BRDF" -- $NOLEAK "$PRT" render "$T/baked.prt" -o "$T/x.png" --brdf phong:10
+says "baked in"
+expect 2 "glossy kind the file lacks" -- $NOLEAK "$PRT" render "$T/demo.prt" -o "$T/x.png" -k glossy-shadowed
+says "glossy-shadowed"
+printf '{"materials": {"m": {"albedo": 0.5, "brdf": "phong:8"}}, "meshes": [{"file": "demo.obj", "material": "m"}]}' >"$T/both.json"
+expect 1 "albedo and brdf together" -- "$PRT" bake "$T/both.json" -o "$T/x.prt"
+says "not both"
+printf '{"meshes": [{"file": "demo.obj", "brdf": "phong:-2"}]}' >"$T/badb.json"
+expect 1 "bad brdf in a scene" -- "$PRT" bake "$T/badb.json" -o "$T/x.prt"
+says "exponent"
+
 # An interrupted bake exits 130 and leaves neither the file nor a temporary.
 "$PRT" bake "$T/demo.obj" -o "$T/long.prt" --samples 262144 --order 8 >/dev/null 2>"$T/err" &
 pid=$!

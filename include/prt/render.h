@@ -28,10 +28,18 @@ typedef struct prt_camera {
 /* Borrowed arrays describing what to draw. */
 typedef struct prt_render_mesh {
     const float *positions;      /* 3 per vertex */
-    const float *radiance;       /* 3 per vertex, linear */
+    const float *radiance;       /* 3 per vertex, linear (view-independent part) */
     size_t vertex_count;
     const uint32_t *indices;     /* 3 per triangle */
     size_t triangle_count;
+    /* Optional view-dependent part (glossy PRT): per vertex 3 x exit_order^2 SH coefficients
+     * (prt_relight_sh_glossy's output), interpolated and evaluated per pixel at the view
+     * direction, or at its mirror about the interpolated normal when exit_mirror is set; the
+     * result (clamped at zero) is added to radiance. normals are required with it. */
+    const float *normals;
+    const float *exit_sh;
+    int exit_order;              /* 0 = none; 1..10 */
+    int exit_mirror;
 } prt_render_mesh;
 
 prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, prt_renderer **out);
@@ -87,6 +95,8 @@ void prt_window_wait(prt_window *w, double timeout);
 /* Geometry and radiance to draw (copied to the GPU); set_radiance replaces the colours only. */
 void prt_window_set_mesh(prt_window *w, const prt_render_mesh *mesh);
 void prt_window_set_radiance(prt_window *w, const float *rgb, size_t vertex_count);
+/* Replaces the glossy exit coefficients (same layout and order as given to set_mesh). */
+void prt_window_set_exit(prt_window *w, const float *exit_sh, size_t vertex_count);
 /* Draws and presents. tonemap: 0/1 Reinhard, 2 clamp (as prt_image_save_desc). overlay: text
  * drawn at the top left, NULL for none. */
 prt_status prt_window_draw(prt_window *w, const prt_camera *cam, const float background[3], float exposure_stops, int tonemap,

@@ -16,6 +16,63 @@ static const char *FS =
     "out vec4 color;\n"
     "void main() { color = vec4(v_radiance, 1.0); }\n";
 
+/* Glossy: the geometry shader hands every fragment its triangle's vertex ids and barycentrics,
+ * so the fragment shader interpolates the three vertices' exit SH (too many to pass as
+ * varyings) and evaluates them at its own view direction by the recurrence of core/sh.c. */
+static const char *VS_G =
+    "#version 330 core\n"
+    "layout(location = 0) in vec3 pos;\n"
+    "layout(location = 1) in vec3 radiance;\n"
+    "layout(location = 2) in vec3 normal;\n"
+    "uniform mat4 mvp;\n"
+    "out vec3 g_pos; out vec3 g_nrm; out vec3 g_rad; flat out int g_id;\n"
+    "void main() { g_pos = pos; g_nrm = normal; g_rad = radiance; g_id = gl_VertexID; gl_Position = mvp * vec4(pos, 1.0); }\n";
+static const char *GS_G =
+    "#version 330 core\n"
+    "layout(triangles) in;\n"
+    "layout(triangle_strip, max_vertices = 3) out;\n"
+    "in vec3 g_pos[]; in vec3 g_nrm[]; in vec3 g_rad[]; flat in int g_id[];\n"
+    "out vec3 f_pos; out vec3 f_nrm; out vec3 f_rad; out vec3 f_bary; flat out ivec3 f_ids;\n"
+    "void main() {\n"
+    "  for (int k = 0; k < 3; ++k) {\n"
+    "    f_pos = g_pos[k]; f_nrm = g_nrm[k]; f_rad = g_rad[k];\n"
+    "    f_bary = vec3(k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 2 ? 1.0 : 0.0);\n"
+    "    f_ids = ivec3(g_id[0], g_id[1], g_id[2]);\n"
+    "    gl_Position = gl_in[k].gl_Position; EmitVertex();\n"
+    "  }\n"
+    "  EndPrimitive();\n"
+    "}\n";
+static const char *FS_G =
+    "#version 330 core\n"
+    "in vec3 f_pos; in vec3 f_nrm; in vec3 f_rad; in vec3 f_bary; flat in ivec3 f_ids;\n"
+    "uniform samplerBuffer exit_sh; uniform int order; uniform int mirror; uniform vec3 eye;\n"
+    "uniform float knorm[100];\n"
+    "out vec4 color;\n"
+    "vec3 coeff(int i) {\n"
+    "  int n2 = order * order;\n"
+    "  return f_bary.x * texelFetch(exit_sh, f_ids.x * n2 + i).rgb + f_bary.y * texelFetch(exit_sh, f_ids.y * n2 + i).rgb\n"
+    "       + f_bary.z * texelFetch(exit_sh, f_ids.z * n2 + i).rgb;\n"
+    "}\n"
+    "void main() {\n"
+    "  vec3 n = normalize(f_nrm), v = normalize(eye - f_pos);\n"
+    "  vec3 d = mirror != 0 ? normalize(2.0 * dot(n, v) * n - v) : v;\n"
+    "  float re = 1.0, im = 0.0, qmm = 1.0;\n"
+    "  vec3 acc = vec3(0.0);\n"
+    "  for (int m = 0; m < order; ++m) {\n"
+    "    if (m > 0) { float r2 = re * d.x - im * d.y; im = re * d.y + im * d.x; re = r2; qmm *= float(2 * m - 1); }\n"
+    "    float qp = 0.0, q = qmm;\n"
+    "    for (int l = m; l < order; ++l) {\n"
+    "      if (l == m + 1) { qp = q; q = d.z * float(2 * m + 1) * qp; }\n"
+    "      else if (l > m + 1) { float qn = (float(2 * l - 1) * d.z * q - float(l + m - 1) * qp) / float(l - m); qp = q; q = qn; }\n"
+    "      float k = knorm[l * 10 + m] * q;\n"
+    "      int c = l * (l + 1);\n"
+    "      if (m == 0) acc += k * coeff(c);\n"
+    "      else acc += k * re * coeff(c + m) + k * im * coeff(c - m);\n"
+    "    }\n"
+    "  }\n"
+    "  color = vec4(f_rad + max(acc, vec3(0.0)), 1.0);\n"
+    "}\n";
+
 static GLuint compile(GLenum type, const char *src, char *log, size_t logsize)
 {
     GLuint s = glCreateShader(type);
@@ -31,31 +88,53 @@ static GLuint compile(GLenum type, const char *src, char *log, size_t logsize)
     return s;
 }
 
+/* Compiles and links vs (+ gs) + fs; 0 and a message on failure. */
+static GLuint link_program(const char *vs_src, const char *gs_src, const char *fs_src)
+{
+    char log[1024] = "";
+    GLuint vs = compile(GL_VERTEX_SHADER, vs_src, log, sizeof log);
+    GLuint gs = vs && gs_src ? compile(GL_GEOMETRY_SHADER, gs_src, log, sizeof log) : 0;
+    GLuint fs = vs && (gs || !gs_src) ? compile(GL_FRAGMENT_SHADER, fs_src, log, sizeof log) : 0;
+    if (!vs || (gs_src && !gs) || !fs) {
+        if (vs) glDeleteShader(vs);
+        if (gs) glDeleteShader(gs);
+        prt__fail(NULL, PRT_ERR_BACKEND, "shader compilation failed: %s", log);
+        return 0;
+    }
+    GLuint p = glCreateProgram();
+    glAttachShader(p, vs);
+    if (gs) glAttachShader(p, gs);
+    glAttachShader(p, fs);
+    glLinkProgram(p);
+    glDeleteShader(vs);
+    if (gs) glDeleteShader(gs);
+    glDeleteShader(fs);
+    GLint ok;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        glGetProgramInfoLog(p, sizeof log, NULL, log);
+        glDeleteProgram(p);
+        prt__fail(NULL, PRT_ERR_BACKEND, "shader link failed: %s", log);
+        return 0;
+    }
+    return p;
+}
+
 prt_status prt__draw_init(prt__draw *d)
 {
     memset(d, 0, sizeof *d);
-    char log[1024] = "";
-    GLuint vs = compile(GL_VERTEX_SHADER, VS, log, sizeof log);
-    GLuint fs = vs ? compile(GL_FRAGMENT_SHADER, FS, log, sizeof log) : 0;
-    if (!vs || !fs) {
-        if (vs) glDeleteShader(vs);
-        return prt__fail(NULL, PRT_ERR_BACKEND, "shader compilation failed: %s", log);
-    }
-    d->program = glCreateProgram();
-    glAttachShader(d->program, vs);
-    glAttachShader(d->program, fs);
-    glLinkProgram(d->program);
-    glDeleteShader(vs);
-    glDeleteShader(fs);
-    GLint ok;
-    glGetProgramiv(d->program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        glGetProgramInfoLog(d->program, sizeof log, NULL, log);
-        glDeleteProgram(d->program);
-        d->program = 0;
-        return prt__fail(NULL, PRT_ERR_BACKEND, "shader link failed: %s", log);
-    }
+    if (!(d->program = link_program(VS, NULL, FS))) return PRT_ERR_BACKEND;
+    if (!(d->program_g = link_program(VS_G, GS_G, FS_G))) { glDeleteProgram(d->program); d->program = 0; return PRT_ERR_BACKEND; }
     d->u_mvp = glGetUniformLocation(d->program, "mvp");
+    d->ug_mvp = glGetUniformLocation(d->program_g, "mvp");
+    d->ug_order = glGetUniformLocation(d->program_g, "order");
+    d->ug_mirror = glGetUniformLocation(d->program_g, "mirror");
+    d->ug_eye = glGetUniformLocation(d->program_g, "eye");
+    d->ug_knorm = glGetUniformLocation(d->program_g, "knorm");
+    d->ug_exit = glGetUniformLocation(d->program_g, "exit_sh");
+    glGenBuffers(1, &d->vbo_nrm);
+    glGenBuffers(1, &d->tbo);
+    glGenTextures(1, &d->tbo_tex);
     glGenVertexArrays(1, &d->vao);
     glGenBuffers(1, &d->vbo_pos);
     glGenBuffers(1, &d->vbo_rad);
@@ -66,6 +145,10 @@ prt_status prt__draw_init(prt__draw *d)
 void prt__draw_free(prt__draw *d)
 {
     if (d->program) glDeleteProgram(d->program);
+    if (d->program_g) glDeleteProgram(d->program_g);
+    if (d->vbo_nrm) { GLuint b[2] = {d->vbo_nrm, d->tbo}; glDeleteBuffers(2, b); }
+    if (d->tbo_tex) glDeleteTextures(1, &d->tbo_tex);
+    free(d->pack);
     if (d->vao) glDeleteVertexArrays(1, &d->vao);
     GLuint bufs[3] = {d->vbo_pos, d->vbo_rad, d->ibo};
     if (d->vbo_pos) glDeleteBuffers(3, bufs);
@@ -85,8 +168,57 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, NULL);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d->ibo);
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(m->triangle_count * 3 * sizeof(uint32_t)), m->indices, GL_STATIC_DRAW);
+    d->exit_order = m->exit_sh && m->normals && m->exit_order >= 1 && m->exit_order <= PRT_SH_MAX_ORDER ? m->exit_order : 0;
+    d->exit_mirror = m->exit_mirror;
+    if (d->exit_order) {
+        glBindBuffer(GL_ARRAY_BUFFER, d->vbo_nrm);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(m->vertex_count * 3 * sizeof(float)), m->normals, GL_STATIC_DRAW);
+        glEnableVertexAttribArray(2);
+        glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, 0, NULL);
+    } else {
+        glDisableVertexAttribArray(2);
+    }
     glBindVertexArray(0);
     d->index_count = m->triangle_count * 3;
+    if (d->exit_order) prt__draw_upload_exit(d, m->exit_sh, m->vertex_count);
+}
+
+void prt__draw_upload_exit(prt__draw *d, const float *exit_sh, size_t nv)
+{
+    if (!d->exit_order) return;
+    const size_t n = (size_t)d->exit_order * d->exit_order;
+    if (d->pack_vertices != nv) {
+        free(d->pack);
+        d->pack = malloc(nv * n * 4 * sizeof(float));
+        d->pack_vertices = d->pack ? nv : 0;
+        if (!d->pack) { d->exit_order = 0; return; }   /* draws without the glossy part rather than crash */
+    }
+    /* One RGBA texel per coefficient: GL 3.3 buffer textures have no RGB32F. */
+    for (size_t v = 0; v < nv; ++v)
+        for (size_t i = 0; i < n; ++i) {
+            float *t = d->pack + (v * n + i) * 4;
+            for (int c = 0; c < 3; ++c) t[c] = exit_sh[(v * 3 + (size_t)c) * n + i];
+            t[3] = 0.0f;
+        }
+    glBindBuffer(GL_TEXTURE_BUFFER, d->tbo);
+    glBufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)(nv * n * 4 * sizeof(float)), d->pack, GL_DYNAMIC_DRAW);
+    glBindTexture(GL_TEXTURE_BUFFER, d->tbo_tex);
+    glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, d->tbo);
+    glBindTexture(GL_TEXTURE_BUFFER, 0);
+    glBindBuffer(GL_TEXTURE_BUFFER, 0);
+}
+
+/* K_lm of core/sh.c, for the shader's recurrence. */
+static void sh_norms(float out[100])
+{
+    for (int l = 0; l < PRT_SH_MAX_ORDER; ++l)
+        for (int m = 0; m < PRT_SH_MAX_ORDER; ++m) {
+            if (m > l) { out[l * 10 + m] = 0; continue; }
+            double ratio = 1.0;
+            for (int k = l - m + 1; k <= l + m; ++k) ratio /= k;
+            double k_lm = sqrt((2.0 * l + 1.0) / (4.0 * PRT_PI) * ratio);
+            out[l * 10 + m] = (float)(m == 0 ? k_lm : sqrt(2.0) * k_lm);
+        }
 }
 
 void prt__camera_matrix(const prt_camera *cam, float aspect, float near_far[2], float out[16])
@@ -123,8 +255,22 @@ void prt__draw_mesh(const prt__draw *d, const prt_camera *cam, int w, int h, con
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     glEnable(GL_DEPTH_TEST);
     glDisable(GL_CULL_FACE);   /* one-sided walls must show from both sides */
-    glUseProgram(d->program);
-    glUniformMatrix4fv(d->u_mvp, 1, GL_FALSE, mvp);
+    if (d->exit_order) {
+        static float knorm[100];
+        if (knorm[0] == 0.0f) sh_norms(knorm);
+        glUseProgram(d->program_g);
+        glUniformMatrix4fv(d->ug_mvp, 1, GL_FALSE, mvp);
+        glUniform1i(d->ug_order, d->exit_order);
+        glUniform1i(d->ug_mirror, d->exit_mirror);
+        glUniform3fv(d->ug_eye, 1, cam->eye);
+        glUniform1fv(d->ug_knorm, 100, knorm);
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_BUFFER, d->tbo_tex);
+        glUniform1i(d->ug_exit, 0);
+    } else {
+        glUseProgram(d->program);
+        glUniformMatrix4fv(d->u_mvp, 1, GL_FALSE, mvp);
+    }
     glBindVertexArray(d->vao);
     glDrawElements(GL_TRIANGLES, (GLsizei)d->index_count, GL_UNSIGNED_INT, NULL);
     glBindVertexArray(0);

@@ -11,12 +11,20 @@ typedef struct prt__draw {
     GLuint program, vao, vbo_pos, vbo_rad, ibo;
     GLint u_mvp;
     size_t index_count;
+    /* Glossy path: per-pixel evaluation of per-vertex exit SH held in a texture buffer. */
+    GLuint program_g, vbo_nrm, tbo, tbo_tex;
+    GLint ug_mvp, ug_order, ug_mirror, ug_eye, ug_knorm, ug_exit;
+    int exit_order, exit_mirror;
+    float *pack;            /* staging for the RGBA texel layout */
+    size_t pack_vertices;
 } prt__draw;
 
 prt_status prt__draw_init(prt__draw *d);
 void prt__draw_free(prt__draw *d);
 /* Uploads geometry and radiance (re-uploads everything; the radiance changes per relight). */
 void prt__draw_upload(prt__draw *d, const prt_render_mesh *mesh);
+/* Replaces the glossy exit coefficients (mesh layout: vertex, channel, coefficient). */
+void prt__draw_upload_exit(prt__draw *d, const float *exit_sh, size_t vertex_count);
 /* Draws into the bound framebuffer of size w x h. */
 void prt__draw_mesh(const prt__draw *d, const prt_camera *cam, int w, int h, const float background[3]);
 /* An offscreen multisampled float framebuffer, resolved into a float texture that can be read

@@ -239,6 +239,10 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
         if (!cli_parse_float(arg, &l->intensity) || l->intensity < 0) { cli_usage(c, "--intensity must be a number >= 0"); return -1; }
         l->set_intensity = true;
         return 1;
+    case OPT_BRDF:
+        if (prt_brdf_parse(arg, &l->brdf)) { cli_usage(c, "--brdf: %s", prt_last_error()); return -1; }
+        l->have_brdf = true;
+        return 1;
     case OPT_SUN:
         if (!cli_parse_vec3(arg, false, l->sun_dir)) { cli_usage(c, "--sun takes X,Y,Z"); return -1; }
         l->set_source = true;
@@ -303,4 +307,32 @@ prt_transfer_kind cli_default_kind(const prt_transfer *t)
     if (prt_transfer_channels(t, PRT_TRANSFER_INTERREFLECTED)) return PRT_TRANSFER_INTERREFLECTED;
     if (prt_transfer_channels(t, PRT_TRANSFER_SHADOWED)) return PRT_TRANSFER_SHADOWED;
     return PRT_TRANSFER_UNSHADOWED;
+}
+
+prt_transfer_kind cli_default_view_kind(const prt_transfer *t)
+{
+    if (prt_transfer_channels(t, PRT_TRANSFER_GLOSSY_INTERREFLECTED)) return PRT_TRANSFER_GLOSSY_INTERREFLECTED;
+    if (prt_transfer_channels(t, PRT_TRANSFER_GLOSSY_SHADOWED)) return PRT_TRANSFER_GLOSSY_SHADOWED;
+    return cli_default_kind(t);
+}
+
+prt_status cli_relight(const cli *c, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *sh, const cli_light *l,
+                       float *rgb, float **exit)
+{
+    *exit = NULL;
+    if (!prt_transfer_kind_is_glossy(kind)) return prt_relight_sh(c->ctx, t, kind, sh, rgb);
+    const size_t nv = prt_transfer_vertex_count(t);
+    prt_transfer_info info;
+    prt_transfer_get_info(t, &info);
+    prt_transfer_kind diffuse = prt_transfer_kind_diffuse_part(kind);
+    prt_status st = PRT_OK;
+    if (prt_transfer_channels(t, diffuse)) st = prt_relight_sh(c->ctx, t, diffuse, sh, rgb);
+    else memset(rgb, 0, nv * 3 * sizeof(float));
+    if (st) return st;
+    float *e = malloc(nv * 3 * (size_t)info.order * info.order * sizeof(float));
+    if (!e) return PRT_ERR_NO_MEMORY;
+    st = prt_relight_sh_glossy(c->ctx, t, kind, sh, l && l->have_brdf ? &l->brdf : NULL, e);
+    if (st) { free(e); return st; }
+    *exit = e;
+    return PRT_OK;
 }

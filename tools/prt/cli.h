@@ -54,6 +54,8 @@ typedef struct cli_light {
     float intensity;          /* multiplier; commands start it at 1 */
     float sun_dir[3];         /* sky only; zero = default */
     bool set_source, set_rotate, set_intensity;   /* what the command line gave explicitly */
+    bool have_brdf;           /* --brdf: the reflection lobe for glossy sets */
+    prt_brdf brdf;
     char path_buf[1024];
 } cli_light;
 
@@ -63,15 +65,17 @@ typedef struct cli_light {
     "  --layout L            latlong | angular | cross | auto (default auto, from aspect ratio)\n" \
     "  --rotate Y[,P[,R]]    rotate the lighting: yaw about +y, pitch, roll in degrees\n" \
     "  --intensity S         scale the lighting (default 1)\n" \
-    "  --sun X,Y,Z           sun direction of the procedural sky\n"
+    "  --sun X,Y,Z           sun direction of the procedural sky\n" \
+    "  --brdf SPEC           reflection lobe for glossy kinds: phong:N[:KS] or blinn:N[:KS]\n" \
+    "                        (default: the scene's materials; not with a BRDF baked in)\n"
 
 /* Returns 1 if the option was a lighting option (consumed), 0 if not, -1 on a bad value. */
 int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg);
-enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN };
+enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN, OPT_BRDF };
 #define CLI_LIGHT_LONG_OPTIONS \
     {"env", required_argument, 0, OPT_ENV}, {"layout", required_argument, 0, OPT_LAYOUT}, \
     {"rotate", required_argument, 0, OPT_ROTATE}, {"intensity", required_argument, 0, OPT_INTENSITY}, \
-    {"sun", required_argument, 0, OPT_SUN}
+    {"sun", required_argument, 0, OPT_SUN}, {"brdf", required_argument, 0, OPT_BRDF}
 /* Fills what the command line left unset from the lighting a .prt's scene named. */
 void cli_light_defaults_from(cli_light *l, const prt_transfer *t);
 void cli_light_defaults_from_scene(cli_light *l, const prt_scene *s);
@@ -147,8 +151,15 @@ int cli_view_option(const cli *c, cli_view *v, int opt, const char *arg);
 /* The camera for a mesh's positions: auto framing unless --eye/--target were given. */
 void cli_view_camera(const cli_view *v, const float *positions, size_t nv, float aspect, prt_camera *cam);
 
-/* The richest kind a file holds, for commands where --kind is optional. */
+/* The richest diffuse kind a file holds, for commands where --kind is optional. */
 prt_transfer_kind cli_default_kind(const prt_transfer *t);
+/* For drawing commands: the richest glossy kind when the file has one, else as above. */
+prt_transfer_kind cli_default_view_kind(const prt_transfer *t);
+/* Relights one kind for drawing: rgb (3 per vertex) gets the view-independent part; for glossy
+ * kinds *exit gets a new array of exit SH (3 x order^2 per vertex; free it) and rgb the diffuse
+ * kind beside it (zero when the file lacks it). For diffuse kinds *exit is NULL. */
+prt_status cli_relight(const cli *c, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *sh, const cli_light *l,
+                       float *rgb, float **exit);
 
 int cmd_bake(int argc, char **argv);
 int cmd_relight(int argc, char **argv);

@@ -13,7 +13,15 @@ static const char *HELP =
     "  -o, --output FILE      the .prt file to write (required; written atomically)\n"
     "      --order N          SH order, 1..10 bands (default 5 = 25 coefficients)\n"
     "      --samples N        directions per vertex over the sphere (default 1024)\n"
-    "      --kinds LIST       comma list of unshadowed,shadowed,interreflected (default all)\n"
+    "      --kinds LIST       comma list of unshadowed, shadowed, interreflected (or 'all':\n"
+    "                         these three, the default) and glossy-shadowed,\n"
+    "                         glossy-interreflected: per-vertex transfer matrices (order^4\n"
+    "                         floats each; use --order 4 or 5) for view-dependent surfaces\n"
+    "      --brdf SPEC        bake this BRDF into the glossy sets for every vertex (any isotropic\n"
+    "                         model: lambert, phong, blinn, ashikhmin:N:N, lafortune:clay|skin)\n"
+    "      --bake-materials   bake each vertex's scene material BRDF into the glossy sets\n"
+    "                         (without either, glossy sets hold incident radiance and the lobe\n"
+    "                         is chosen when rendering)\n"
     "      --bounces N        interreflection bounces (default 3)\n"
     "      --seed N           rotates the low-discrepancy directions (default 0)\n"
     CLI_SCENE_OPTIONS_HELP
@@ -42,8 +50,10 @@ int cmd_bake(int argc, char **argv)
         {"kinds", required_argument, 0, 'k'}, {"bounces", required_argument, 0, 'b'}, {"seed", required_argument, 0, 's'},
         CLI_SCENE_LONG_OPTIONS, {"ray-offset", required_argument, 0, 'r'}, {"compress", required_argument, 0, 'C'},
         {"clusters", required_argument, 0, 'K'}, {"vectors", required_argument, 0, 'V'}, {"quantize", required_argument, 0, 'Q'},
+        {"brdf", required_argument, 0, 'B'}, {"bake-materials", no_argument, 0, 'M'},
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt, seed;
+    prt_brdf bake_brdf;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:j:qh", opts, NULL)) != -1) {
         int r = cli_scene_option(&c, &sd, opt, optarg);
@@ -68,6 +78,12 @@ int cmd_bake(int argc, char **argv)
             if (!bd.kinds) return cli_usage(&c, "--kinds is empty");
             break;
         }
+        case 'B':
+            if (prt_brdf_parse(optarg, &bake_brdf)) return cli_usage(&c, "--brdf: %s", prt_last_error());
+            bd.glossy_brdf = &bake_brdf;
+            bd.glossy_exit = 1;
+            break;
+        case 'M': bd.glossy_exit = 1; break;
         case 'C':
             if (!strcasecmp(optarg, "cpca")) cd.method = PRT_COMPRESS_CPCA;
             else if (!strcasecmp(optarg, "pca")) cd.method = PRT_COMPRESS_PCA;

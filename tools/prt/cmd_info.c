@@ -31,7 +31,9 @@ int cmd_info(int argc, char **argv)
     if (st) { rc = cli_fail(&c, st); prt_context_release(c.ctx); return rc; }
     prt_transfer_info info;
     prt_transfer_get_info(t, &info);
-    const prt_transfer_kind all[3] = {PRT_TRANSFER_UNSHADOWED, PRT_TRANSFER_SHADOWED, PRT_TRANSFER_INTERREFLECTED};
+    const prt_transfer_kind all[5] = {PRT_TRANSFER_UNSHADOWED, PRT_TRANSFER_SHADOWED, PRT_TRANSFER_INTERREFLECTED,
+                                      PRT_TRANSFER_GLOSSY_SHADOWED, PRT_TRANSFER_GLOSSY_INTERREFLECTED};
+    const bool glossy = info.kinds & (PRT_TRANSFER_GLOSSY_SHADOWED | PRT_TRANSFER_GLOSSY_INTERREFLECTED);
     if (json) {
         cJSON *root = cJSON_CreateObject();
         cJSON_AddStringToObject(root, "file", argv[optind]);
@@ -39,11 +41,12 @@ int cmd_info(int argc, char **argv)
         cJSON_AddNumberToObject(root, "order", info.order);
         cJSON_AddNumberToObject(root, "coefficients", info.order * info.order);
         cJSON *kinds = cJSON_AddArrayToObject(root, "kinds");
-        for (int k = 0; k < 3; ++k)
+        for (int k = 0; k < 5; ++k)
             if (info.kinds & all[k]) {
                 cJSON *o = cJSON_CreateObject();
                 cJSON_AddStringToObject(o, "kind", prt_transfer_kind_name(all[k]));
                 cJSON_AddNumberToObject(o, "channels", prt_transfer_channels(t, all[k]));
+                cJSON_AddNumberToObject(o, "floats_per_vertex", (double)prt_transfer_set_floats(t, all[k]));
                 prt_compress_info ci;
                 prt_transfer_compress_info(t, all[k], &ci);
                 cJSON_AddNumberToObject(o, "bytes", (double)ci.bytes);
@@ -55,7 +58,7 @@ int cmd_info(int argc, char **argv)
                     cJSON_AddNumberToObject(o, "pca_vectors", ci.vectors_total);
                     cJSON_AddNumberToObject(o, "relative_error", ci.relative_error);
                     cJSON_AddNumberToObject(o, "compression_ratio",
-                                            (double)info.vertex_count * prt_transfer_channels(t, all[k]) * info.order * info.order * 4.0 / (double)ci.bytes);
+                                            (double)info.vertex_count * (double)prt_transfer_set_floats(t, all[k]) * 4.0 / (double)ci.bytes);
                 }
                 cJSON_AddItemToArray(kinds, o);
             }
@@ -69,24 +72,39 @@ int cmd_info(int argc, char **argv)
         cJSON_AddNumberToObject(root, "bake_seconds", info.bake_seconds);
         cJSON_AddNumberToObject(root, "bake_threads", info.threads);
         cJSON_AddStringToObject(root, "source", info.source);
+        if (glossy) cJSON_AddStringToObject(root, "glossy", prt_transfer_glossy_mirror(t) ? "incident radiance (lobe at render time)" : "exit radiance (BRDF baked in)");
+        cJSON *mats = cJSON_AddArrayToObject(root, "materials");
+        for (int k = 1; k <= prt_transfer_brdf_count(t); ++k) {
+            char spec[128];
+            prt_brdf_format(prt_transfer_brdf(t, k), spec, sizeof spec);
+            cJSON_AddItemToArray(mats, cJSON_CreateString(spec));
+        }
         char *text = cJSON_Print(root);
         puts(text);
         cJSON_free(text);
         cJSON_Delete(root);
     } else {
-        printf("file:        %s\nmethod:      spherical-harmonic PRT (diffuse)\n", argv[optind]);
+        printf("file:        %s\nmethod:      spherical-harmonic PRT (%s)\n", argv[optind], glossy ? "diffuse and glossy" : "diffuse");
         printf("order:       %d (%d coefficients)\n", info.order, info.order * info.order);
         printf("kinds:      ");
-        for (int k = 0; k < 3; ++k)
+        for (int k = 0; k < 5; ++k)
             if (info.kinds & all[k]) printf(" %s (%d ch)", prt_transfer_kind_name(all[k]), prt_transfer_channels(t, all[k]));
         printf("\n");
-        for (int k = 0; k < 3; ++k) {
+        if (glossy)
+            printf("glossy:      %s\n", prt_transfer_glossy_mirror(t) ? "transfer matrices to incident radiance; the lobe is applied when rendering"
+                                                                      : "transfer matrices to exit radiance (BRDF baked in)");
+        for (int k = 1; k <= prt_transfer_brdf_count(t); ++k) {
+            char spec[128];
+            prt_brdf_format(prt_transfer_brdf(t, k), spec, sizeof spec);
+            printf("material %d:  %s\n", k, spec);
+        }
+        for (int k = 0; k < 5; ++k) {
             prt_compress_info ci;
             if (!(info.kinds & all[k]) || prt_transfer_compress_info(t, all[k], &ci)) continue;
             if (ci.quantize_bits) printf("quantized:   %s %d-bit\n", prt_transfer_kind_name(all[k]), ci.quantize_bits);
             if (!ci.compressed) continue;
             static const char *names[3] = {"clustered PCA", "PCA", "VQ"};
-            double raw = (double)info.vertex_count * prt_transfer_channels(t, all[k]) * info.order * info.order * 4.0;
+            double raw = (double)info.vertex_count * (double)prt_transfer_set_floats(t, all[k]) * 4.0;
             printf("compressed:  %s %s, %d clusters, %d PCA vectors, %.1f bytes/vertex (%.1fx smaller), relative error %.4f\n",
                    prt_transfer_kind_name(all[k]), names[ci.method], ci.clusters, ci.vectors_total, (double)ci.bytes / (double)info.vertex_count,
                    raw / (double)ci.bytes, ci.relative_error);

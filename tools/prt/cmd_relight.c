@@ -12,7 +12,9 @@ static const char *HELP =
     "PLY output is binary with float red/green/blue vertex properties (opens in MeshLab,\n"
     "Blender, Open3D); JSON holds {\"kind\", \"vertex_count\", \"radiance\": [[r,g,b], ...]}.\n\n"
     "  -o, --output FILE      .ply or .json (required; written atomically)\n"
-    "  -k, --kind K           unshadowed | shadowed | interreflected (default: the richest held)\n"
+    "  -k, --kind K           unshadowed | shadowed | interreflected | glossy-shadowed |\n"
+    "                         glossy-interreflected (default: the richest diffuse kind held)\n"
+    "      --eye X,Y,Z        glossy kinds: the viewpoint each vertex's colour is seen from\n"
     CLI_LIGHT_OPTIONS_HELP
     "  -j, --threads N        worker threads\n"
     "  -q, --quiet            no messages\n"
@@ -24,9 +26,11 @@ int cmd_relight(int argc, char **argv)
     cli_light light = {.intensity = 1.0f};
     const char *output = NULL, *kind_name = NULL;
     static const struct option opts[] = {{"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'},
-                                         CLI_LIGHT_LONG_OPTIONS, {"threads", required_argument, 0, 'j'},
+                                         {"eye", required_argument, 0, 'e'}, CLI_LIGHT_LONG_OPTIONS, {"threads", required_argument, 0, 'j'},
                                          {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt;
+    float eye[3] = {0, 0, 0};
+    bool have_eye = false;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:k:j:qh", opts, NULL)) != -1) {
         int r = cli_light_option(&c, &light, opt, optarg);
@@ -35,6 +39,7 @@ int cmd_relight(int argc, char **argv)
         switch (opt) {
         case 'o': output = optarg; break;
         case 'k': kind_name = optarg; break;
+        case 'e': if (!cli_parse_vec3(optarg, false, eye)) return cli_usage(&c, "--eye takes X,Y,Z"); have_eye = true; break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); return EXIT_OK;
@@ -48,6 +53,8 @@ int cmd_relight(int argc, char **argv)
     if (!json && !(ext && !strcasecmp(ext, ".ply"))) return cli_usage(&c, "output must end in .ply or .json");
     prt_transfer_kind kind = 0;
     if (kind_name && prt_transfer_kind_parse(kind_name, &kind)) return cli_usage(&c, "%s", prt_last_error());
+    if (kind && prt_transfer_kind_is_glossy(kind) && !have_eye) return cli_usage(&c, "glossy kinds are view-dependent: give --eye X,Y,Z");
+    if (have_eye && !(kind && prt_transfer_kind_is_glossy(kind))) return cli_usage(&c, "--eye applies to glossy kinds only");
     int rc = cli_make_context(&c);
     if (rc) return rc;
     prt_transfer *t = NULL;
@@ -63,7 +70,19 @@ int cmd_relight(int argc, char **argv)
     }
     if (!st) {
         rgb = malloc(prt_transfer_vertex_count(t) * 3 * sizeof(float));
-        st = rgb ? prt_relight_sh(c.ctx, t, kind, &sh, rgb) : PRT_ERR_NO_MEMORY;
+        float *exit = NULL;
+        st = rgb ? cli_relight(&c, t, kind, &sh, &light, rgb, &exit) : PRT_ERR_NO_MEMORY;
+        if (!st && exit) {
+            /* The view factor per vertex, as the renderer applies it per pixel. */
+            const float *P = prt_transfer_positions(t), *N = prt_transfer_normals(t);
+            const int order = sh.order;
+            for (size_t v = 0; v < prt_transfer_vertex_count(t); ++v) {
+                float to_eye[3] = {eye[0] - P[v * 3], eye[1] - P[v * 3 + 1], eye[2] - P[v * 3 + 2]}, g[3];
+                prt_glossy_eval(order, exit + v * 3 * (size_t)order * order, prt_transfer_glossy_mirror(t), N + v * 3, to_eye, g);
+                for (int ch = 0; ch < 3; ++ch) rgb[v * 3 + ch] += g[ch];
+            }
+        }
+        free(exit);
     }
     if (!st) {
         size_t nv = prt_transfer_vertex_count(t);

@@ -11,8 +11,10 @@ static const char *HELP =
     "Relights a baked .prt and draws it with OpenGL 3.3 (headless EGL; Mesa llvmpipe without a\n"
     "GPU). Several kinds are drawn side by side, left to right, in the order given.\n\n"
     "  -o, --output FILE      .png (tone-mapped sRGB), .exr (linear half), .hdr or .pfm\n"
-    "  -k, --kind LIST        comma list of unshadowed,shadowed,interreflected or 'all'\n"
-    "                         (default: the richest kind in the file)\n"
+    "  -k, --kind LIST        comma list of unshadowed, shadowed, interreflected, glossy-shadowed,\n"
+    "                         glossy-interreflected, or 'all' (the three diffuse kinds); default:\n"
+    "                         the richest kind in the file. Glossy kinds add the view-dependent\n"
+    "                         part, evaluated per pixel, to the diffuse kind of the same shadowing\n"
     CLI_VIEW_OPTIONS_HELP
     CLI_LIGHT_OPTIONS_HELP
     "  -j, --threads N        worker threads for relighting\n"
@@ -24,7 +26,7 @@ int cmd_render(int argc, char **argv)
     cli c = {.cmd = "render"};
     cli_light light = {.intensity = 1.0f};
     const char *output = NULL;
-    prt_transfer_kind kinds[3];
+    prt_transfer_kind kinds[5];
     int nkinds = 0;
     cli_view view = CLI_VIEW_DEFAULTS;
     static const struct option opts[] = {
@@ -49,7 +51,7 @@ int cmd_render(int argc, char **argv)
                     nkinds = 3;
                     continue;
                 }
-                if (nkinds == 3) return cli_usage(&c, "--kind takes at most three kinds");
+                if (nkinds == 5) return cli_usage(&c, "--kind takes at most five kinds");
                 if (prt_transfer_kind_parse(tok, &kinds[nkinds])) return cli_usage(&c, "%s", prt_last_error());
                 nkinds++;
             }
@@ -75,7 +77,7 @@ int cmd_render(int argc, char **argv)
     prt_sh_light sh;
     prt_status st = prt_transfer_load(c.ctx, argv[optind], &t);
     if (!st) {
-        if (!nkinds) kinds[nkinds++] = cli_default_kind(t);
+        if (!nkinds) kinds[nkinds++] = cli_default_view_kind(t);
         cli_light_defaults_from(&light, t);
         prt_transfer_info info;
         prt_transfer_get_info(t, &info);
@@ -95,11 +97,16 @@ int cmd_render(int argc, char **argv)
         cli_view_camera(&view, prt_transfer_positions(t), prt_transfer_vertex_count(t), (float)width / height, &cam);
     }
     for (int k = 0; k < nkinds && !st; ++k) {
-        st = prt_relight_sh(c.ctx, t, kinds[k], &sh, rgb);
+        float *exit = NULL;
+        st = cli_relight(&c, t, kinds[k], &sh, &light, rgb, &exit);
         if (st) break;
+        prt_transfer_info info;
+        prt_transfer_get_info(t, &info);
         prt_render_mesh mesh = {prt_transfer_positions(t), rgb, prt_transfer_vertex_count(t), prt_transfer_indices(t),
-                                prt_transfer_triangle_count(t)};
+                                prt_transfer_triangle_count(t), prt_transfer_normals(t), exit, exit ? info.order : 0,
+                                prt_transfer_glossy_mirror(t)};
         st = prt_render(r, &mesh, &cam, view.background, &panel);
+        free(exit);
         if (st) break;
         for (int y = 0; y < height; ++y)
             memcpy(sheet.rgb + ((size_t)y * sheet.width + (size_t)k * width) * 3, panel.rgb + (size_t)y * width * 3,

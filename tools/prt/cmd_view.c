@@ -104,7 +104,7 @@ void view_rotate_env(viewer *v, float dyaw, float dpitch)
 }
 
 /* ---- relight worker ---- */
-static void relight(viewer *v, const relight_job *job, float *out)
+static void relight(viewer *v, const relight_job *job, float *out, float *exit)
 {
     prt_sh_light sh = v->sh;
     sh.order = job->order;
@@ -114,6 +114,28 @@ static void relight(viewer *v, const relight_job *job, float *out)
         prt_sh_light_rotate(&sh, rot);
     }
     size_t nv = prt_transfer_vertex_count(v->t);
+    if (exit) memset(exit, 0, nv * v->exit_floats * sizeof(float));
+    if (prt_transfer_kind_is_glossy(job->kind)) {
+        /* The diffuse kind of the same shadowing plus the view-dependent part; direct only is the
+         * shadowed pair, indirect only the inter-reflected pair minus it. */
+        const prt_brdf *lobe = v->light.have_brdf ? &v->light.brdf : NULL;
+        prt_transfer_kind g = job->component == 1 ? PRT_TRANSFER_GLOSSY_SHADOWED : job->kind;
+        prt_transfer_kind d = prt_transfer_kind_diffuse_part(g);
+        if (prt_transfer_channels(v->t, d)) prt_relight_sh(v->worker_ctx, v->t, d, &sh, out);
+        else memset(out, 0, nv * 3 * sizeof(float));
+        if (prt_relight_sh_glossy(v->worker_ctx, v->t, g, &sh, lobe, exit)) return;
+        if (job->component == 2) {
+            float *direct = malloc(nv * v->exit_floats * sizeof(float)), *ddiff = malloc(nv * 3 * sizeof(float));
+            if (direct && ddiff && !prt_relight_sh_glossy(v->worker_ctx, v->t, PRT_TRANSFER_GLOSSY_SHADOWED, &sh, lobe, direct)) {
+                for (size_t i = 0; i < nv * v->exit_floats; ++i) exit[i] -= direct[i];
+                if (!prt_relight_sh(v->worker_ctx, v->t, PRT_TRANSFER_SHADOWED, &sh, ddiff))
+                    for (size_t i = 0; i < nv * 3; ++i) out[i] -= ddiff[i];
+            }
+            free(direct);
+            free(ddiff);
+        }
+        return;
+    }
     prt_transfer_kind kind = job->component ? PRT_TRANSFER_INTERREFLECTED : job->kind;
     if (prt_relight_sh(v->worker_ctx, v->t, kind, &sh, out)) return;
     if (job->component) {
@@ -130,6 +152,8 @@ static void *worker(void *arg)
 {
     viewer *v = arg;
     float *buf = malloc(prt_transfer_vertex_count(v->t) * 3 * sizeof(float));
+    float *ebuf = v->exit_floats ? malloc(prt_transfer_vertex_count(v->t) * v->exit_floats * sizeof(float)) : NULL;
+    if (v->exit_floats && !ebuf) { free(buf); buf = NULL; }
     pthread_mutex_lock(&v->lock);
     while (!v->quit_worker) {
         if (!v->job_posted) { pthread_cond_wait(&v->wake, &v->lock); continue; }
@@ -137,11 +161,12 @@ static void *worker(void *arg)
         v->job_posted = false;
         pthread_mutex_unlock(&v->lock);
         double t0 = now();
-        if (buf) relight(v, &job, buf);
+        if (buf) relight(v, &job, buf, ebuf);
         double ms = (now() - t0) * 1e3;
         pthread_mutex_lock(&v->lock);
         if (buf) {
             memcpy(v->result, buf, prt_transfer_vertex_count(v->t) * 3 * sizeof(float));
+            if (ebuf) memcpy(v->result_exit, ebuf, prt_transfer_vertex_count(v->t) * v->exit_floats * sizeof(float));
             v->result_version = job.version;
             v->result_ready = true;
             v->relight_ms = ms;
@@ -150,6 +175,7 @@ static void *worker(void *arg)
     }
     pthread_mutex_unlock(&v->lock);
     free(buf);
+    free(ebuf);
     return NULL;
 }
 
@@ -170,6 +196,7 @@ static bool take_result(viewer *v)
     pthread_mutex_lock(&v->lock);
     if (v->result_ready) {
         prt_window_set_radiance(v->win, v->result, prt_transfer_vertex_count(v->t));
+        if (v->exit_floats) prt_window_set_exit(v->win, v->result_exit, prt_transfer_vertex_count(v->t));
         v->shown_version = v->result_version;
         v->result_ready = false;
         v->relight_ms_sum += v->relight_ms;
@@ -325,7 +352,23 @@ int cmd_view(int argc, char **argv)
     view_register_sh(&v);
     size_t nv = prt_transfer_vertex_count(v.t);
     v.result = calloc(nv * 3, sizeof(float));
-    prt_render_mesh mesh = {prt_transfer_positions(v.t), v.result, nv, prt_transfer_indices(v.t), prt_transfer_triangle_count(v.t)};
+    if (prt_transfer_channels(v.t, PRT_TRANSFER_GLOSSY_SHADOWED) || prt_transfer_channels(v.t, PRT_TRANSFER_GLOSSY_INTERREFLECTED)) {
+        v.exit_floats = 3 * (size_t)info.order * info.order;
+        v.result_exit = calloc(nv * v.exit_floats, sizeof(float));
+    }
+    if (!v.result || (v.exit_floats && !v.result_exit)) {
+        cli_error(&c, "out of memory");
+        free(v.result);
+    free(v.result_exit); free(v.result_exit);
+        prt_window_release(v.win);
+        prt_transfer_release(v.t);
+        prt_context_release(v.worker_ctx);
+        prt_context_release(c.ctx);
+        view_script_free(script);
+        return EXIT_NO_MEMORY;
+    }
+    prt_render_mesh mesh = {prt_transfer_positions(v.t), v.result, nv, prt_transfer_indices(v.t), prt_transfer_triangle_count(v.t),
+                            prt_transfer_normals(v.t), v.result_exit, v.exit_floats ? info.order : 0, prt_transfer_glossy_mirror(v.t)};
     prt_window_set_mesh(v.win, &mesh);
     int fw, fh;
     prt_window_size(v.win, &fw, &fh);
@@ -334,7 +377,7 @@ int cmd_view(int argc, char **argv)
         cli_view view = CLI_VIEW_DEFAULTS;   /* the same framing as prt render */
         cli_view_camera(&view, prt_transfer_positions(v.t), nv, (float)fw / fh, &v.start_cam);
     }
-    v.want.kind = cli_default_kind(v.t);
+    v.want.kind = cli_default_view_kind(v.t);
     v.want.order = info.order;
     pthread_mutex_init(&v.lock, NULL);
     pthread_cond_init(&v.wake, NULL);
@@ -375,6 +418,7 @@ int cmd_view(int argc, char **argv)
     pthread_mutex_destroy(&v.lock);
     pthread_cond_destroy(&v.wake);
     free(v.result);
+    free(v.result_exit);
     prt_transfer_release(v.t);
     prt_context_release(v.worker_ctx);
     prt_context_release(c.ctx);

@@ -53,6 +53,8 @@ struct viewer {
     bool quit_worker, job_posted, result_ready;
     relight_job job;
     float *result;              /* written by the worker under lock */
+    float *result_exit;         /* glossy exit SH per vertex, when the file has glossy sets */
+    size_t exit_floats;         /* per vertex: 3 x order^2, or 0 */
     unsigned result_version, shown_version;
     double relight_ms;
     prt_context *worker_ctx;

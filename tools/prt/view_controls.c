@@ -81,10 +81,10 @@ void view_register_core(viewer *v) { view_register(v, core, (int)(sizeof core / 
 /* ---- spherical-harmonic PRT ---- */
 static void next_kind(viewer *v)
 {
-    for (int step = 1; step <= 3; ++step) {
+    for (int step = 1; step <= 5; ++step) {
         int i = 0;
         while ((1u << i) != (unsigned)v->want.kind) ++i;
-        prt_transfer_kind k = (prt_transfer_kind)(1u << ((i + step) % 3));
+        prt_transfer_kind k = (prt_transfer_kind)(1u << ((i + step) % 5));
         if (prt_transfer_channels(v->t, k)) {
             v->want.kind = k;
             break;
@@ -113,7 +113,7 @@ static void next_component(viewer *v)
 }
 
 static const view_control sh[] = {
-    {'K', "k", "next transfer kind (unshadowed, shadowed, inter-reflected)", next_kind},
+    {'K', "k", "next transfer kind (unshadowed, shadowed, inter-reflected, glossy ones)", next_kind},
     {'[', "[", "SH order -1", order_down},
     {']', "]", "SH order +1", order_up},
     {'D', "d", "full / direct only / indirect only", next_component},
