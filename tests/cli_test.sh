@@ -137,6 +137,22 @@ printf '{"meshes": [{"file": "demo.obj", "brdf": "phong:-2"}]}' >"$T/badb.json"
 expect 1 "bad brdf in a scene" -- "$PRT" bake "$T/badb.json" -o "$T/x.prt"
 says "exponent"
 
+# Per-texel transfer over the demo scene's UV atlas, a normal map, the radiance map, and the errors.
+expect 0 "texel bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/texels.prt" --order 3 --samples 64 --bounces 1 --texels 64 --kinds shadowed,interreflected
+expect 0 "texel info" -- "$PRT" info "$T/texels.prt"
+grep -q "64 x 64" "$T/out" && ok || bad "info does not show the texel sets"
+expect 0 "texel map" -- "$PRT" relight -q "$T/texels.prt" --texels -o "$T/map.pfm" -k interreflected
+expect 0 "texel render" -- $NOLEAK "$PRT" render -q "$T/texels.prt" -o "$T/texels.png" --width 64 --height 48
+expect 1 "texel map without texels" -- "$PRT" relight "$T/demo.prt" --texels -o "$T/map2.pfm"
+says "per-texel"
+printf 'P3\n2 2\n255\n128 128 255 200 128 220 128 128 255 128 60 230\n' >"$T/nm.ppm"
+expect 1 "unreadable normal map" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --texels 16 --normal-map "$T/nm.ppm"
+says "normal map"
+expect 2 "normal map without texels" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --normal-map "$T/nm.ppm"
+printf 'v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n' >"$T/nouv.obj"
+expect 2 "texels without UVs" -- "$PRT" bake "$T/nouv.obj" -o "$T/x.prt" --texels 16
+says "texture coordinates"
+
 # An interrupted bake exits 130 and leaves neither the file nor a temporary.
 "$PRT" bake "$T/demo.obj" -o "$T/long.prt" --samples 262144 --order 8 >/dev/null 2>"$T/err" &
 pid=$!

@@ -73,6 +73,19 @@ within "$T/g2.exr" "$T/rg2.exr" 0.002
 r=$(field relative_l2 "$T/cmp")
 awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "the glossy part added nothing (relative L2 $r)"
 
+# Per-texel: the viewer samples the same radiance map prt render does.
+"$PRT" bake -q "$T/demo.obj" -o "$T/texels.prt" --order 3 --samples 64 --texels 128 --kinds shadowed || bad "texel bake"
+printf '%s\n' "0 screenshot $T/t1.exr" "0.1 quit" >"$T/tscript.txt"
+xvfb-run -a -s "-screen 0 1024x768x24" "$PRT" view "$T/texels.prt" --width 320 --height 240 --script "$T/tscript.txt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 0 ] && ok || { bad "texel view exited $rc"; cat "$T/err"; }
+"$PRT" render -q "$T/texels.prt" -o "$T/rt1.exr" --width 320 --height 240
+"$PRT" render -q "$T/texels.prt" -o "$T/rt2.exr" --width 320 --height 240 --per-vertex
+within "$T/t1.exr" "$T/rt1.exr" 0.002
+"$PRT" compare --json - -q "$T/rt1.exr" "$T/rt2.exr" >"$T/cmp"
+r=$(field relative_l2 "$T/cmp")
+awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.005) }' && ok || bad "per-texel and per-vertex drawings are identical (relative L2 $r)"
+
 printf '0 frobnicate 1 2\n' >"$T/bad.txt"
 xvfb-run -a "$PRT" view "$T/demo.prt" --script "$T/bad.txt" >/dev/null 2>"$T/err"
 rc=$?

@@ -40,6 +40,12 @@ typedef struct prt_render_mesh {
     const float *exit_sh;
     int exit_order;              /* 0 = none; 1..10 */
     int exit_mirror;
+    /* Optional per-texel radiance (prt_relight_sh_texels' output): a texel_width x
+     * texel_height RGB map, row 0 at v near 0, sampled bilinearly per pixel at the vertices'
+     * interpolated uv (2 per vertex) in place of `radiance`. */
+    const float *uv;
+    const float *texel_radiance;
+    int texel_width, texel_height;
 } prt_render_mesh;
 
 prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, prt_renderer **out);
@@ -95,6 +101,8 @@ void prt_window_wait(prt_window *w, double timeout);
 /* Geometry and radiance to draw (copied to the GPU); set_radiance replaces the colours only. */
 void prt_window_set_mesh(prt_window *w, const prt_render_mesh *mesh);
 void prt_window_set_radiance(prt_window *w, const float *rgb, size_t vertex_count);
+/* Replaces the per-texel radiance map (needs the mesh's uv); NULL switches back to vertex radiance. */
+void prt_window_set_texels(prt_window *w, const float *rgb, int width, int height);
 /* Replaces the glossy exit coefficients (same layout and order as given to set_mesh). */
 void prt_window_set_exit(prt_window *w, const float *exit_sh, size_t vertex_count);
 /* Draws and presents. tonemap: 0/1 Reinhard, 2 clamp (as prt_image_save_desc). overlay: text

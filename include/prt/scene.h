@@ -51,6 +51,9 @@ void prt_scene_release(prt_scene *scene);
  * material; their albedo becomes the BRDF's Lambertian part. */
 prt_status prt_scene_set_brdf(prt_scene *scene, size_t first, size_t count, const prt_brdf *brdf);
 int prt_scene_brdf_count(const prt_scene *scene);
+/* Sets texture coordinates (2 per vertex) of vertices [first, first + count); mesh files bring
+ * their own (the first UV channel). Per-texel transfer needs them on every vertex. */
+prt_status prt_scene_set_uv(prt_scene *scene, size_t first, size_t count, const float *uv);
 
 size_t prt_scene_vertex_count(const prt_scene *scene);
 size_t prt_scene_triangle_count(const prt_scene *scene);

@@ -11,6 +11,7 @@
 
 #include "prt/base.h"
 #include "prt/brdf.h"
+#include "prt/image.h"
 #include "prt/lighting.h"
 #include "prt/scene.h"
 
@@ -46,6 +47,12 @@ typedef struct prt_bake_desc {
      * isotropic model, through its SH matrix), so the sets hold exit radiance. */
     int glossy_exit;
     const prt_brdf *glossy_brdf;   /* with glossy_exit: this BRDF for every vertex instead */
+    /* Per-texel transfer (the diffuse kinds asked for) over the mesh's UV layout, which must be
+     * unique and inside [0, 1]: texels x texels texels; 0 = none. */
+    int texels;
+    /* Tangent-space normal map for the per-texel transfer: RGB in [0, 1] as stored in the file
+     * (0.5, 0.5, 1 = unperturbed; +y of the map along +v), or NULL. */
+    const prt_image *normal_map;
     prt_progress_fn progress;
     void *progress_user;
 } prt_bake_desc;
@@ -72,7 +79,9 @@ typedef struct prt_transfer_info {
     uint32_t seed;
     double bake_seconds;
     int threads;              /* threads the bake used (does not change the result) */
-    size_t transfer_bytes;    /* bytes of all transfer sets */
+    size_t transfer_bytes;    /* bytes of all transfer sets (vertex and texel) */
+    int texel_width, texel_height;   /* per-texel sets' size, 0 without */
+    size_t texel_bytes;       /* bytes of the per-texel sets and their albedo */
     char source[512];         /* the scene the bake read */
 } prt_transfer_info;
 
@@ -120,6 +129,16 @@ const uint8_t *prt_transfer_materials(const prt_transfer *t);   /* per vertex; 0
 /* CPU evaluation of glossy exit coefficients (as prt_relight_sh_glossy returns) for one vertex:
  * to_eye points from the surface to the viewer; normal is the shading normal. */
 void prt_glossy_eval(int order, const float *exit_coeffs, int mirror, const float normal[3], const float to_eye[3], float rgb[3]);
+
+/* Per-texel transfer: its size (returns 0 when the file has none), a set's coefficients
+ * ([texel][channel][order^2], row 0 at v near 0; channels as for vertex sets), the mesh's UVs
+ * (2 per vertex, NULL without), and relighting into a width x height RGB radiance map (albedo
+ * applied; row 0 at v near 0). */
+int prt_transfer_texel_size(const prt_transfer *t, int *width, int *height);
+const float *prt_transfer_texel_coeffs(const prt_transfer *t, prt_transfer_kind kind, int *channels);
+const float *prt_transfer_uvs(const prt_transfer *t);
+prt_status prt_relight_sh_texels(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light,
+                                 float *out_rgb);
 
 const char *prt_transfer_kind_name(prt_transfer_kind kind);
 /* Parses "unshadowed", "shadowed", "interreflected" (or their first letter), "glossy-shadowed",

@@ -5,6 +5,8 @@
 #include "core/progress.h"
 #include "core/transfer_set.h"
 
+#include <embree3/rtcore.h>
+
 /* One occluded direction of a vertex and the front face it hit. */
 typedef struct prt__hit {
     uint32_t prim, sample;
@@ -35,6 +37,23 @@ prt_status prt__bake_glossy_bounces(prt_context *ctx, const prt__bounce_input *i
 /* Per material, the local-frame SH matrix of its glossy part (NULL for materials without one):
  * out[k] holds 3 x order^4 floats for material k + 1. */
 prt_status prt__brdf_matrices(prt_context *ctx, const prt_brdf *brdfs, int count, int order, float **out);
+
+typedef struct prt__texel_input {
+    const prt__mesh *mesh;
+    const char *source;
+    int order, samples;
+    const float *dirs, *basis;       /* [sample][3], [sample][order^2] */
+    RTCScene scene;
+    float offset;
+    const float *vertex_ir;          /* [vertex][3][order^2] inter-reflected transfer, or NULL */
+    unsigned kinds;
+    int width, height;
+    const prt_image *normal_map;     /* tangent-space, values in [0, 1] (0.5 = flat), or NULL */
+    prt__progress *progress;
+} prt__texel_input;
+
+/* Per-texel transfer of the diffuse kinds asked for; fails clearly without a unique UV layout. */
+prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__texel_sets *out);
 
 /* Turns t's glossy sets from incident into exit radiance (3 channels) with each vertex's
  * material BRDF, or `override` for all; vertices without a glossy part get zero. */

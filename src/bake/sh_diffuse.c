@@ -147,6 +147,10 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
         if (bst) return prt__fail(ctx, bst, "glossy BRDF: %s", prt_last_error());
         if (!d.glossy_exit) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a glossy BRDF at bake time needs glossy_exit (it is baked in)");
     }
+    if (d.texels < 0 || d.texels > 8192) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "texels %d out of range 0..8192", d.texels);
+    if (d.normal_map && !d.texels) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a normal map needs per-texel transfer (texels > 0)");
+    if (d.normal_map && (d.normal_map->width < 1 || d.normal_map->height < 1 || !d.normal_map->rgb))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the normal map is empty");
     if (d.glossy_exit && !(d.kinds & (PRT_TRANSFER_GLOSSY_SHADOWED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "baking a BRDF in needs a glossy kind (glossy-shadowed or glossy-interreflected)");
 
@@ -293,6 +297,11 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
     }
     if (d.kinds & PRT_TRANSFER_SHADOWED) { t->sets[1].channels = 1; t->sets[1].coeffs = shad; shad = NULL; }
     if (want_gsh) { t->sets[3].channels = 1; t->sets[3].coeffs = gshad; gshad = NULL; }
+    if (d.texels) {
+        prt__texel_input ti = {&t->mesh, t->source, d.order, d.samples, job.dirs, job.basis, job.rc.scene, job.offset,
+                               t->sets[2].coeffs, d.kinds & 7u, d.texels, d.texels, d.normal_map, &job.progress};
+        if ((st = prt__bake_texels(ctx, &ti, &t->texels))) goto done;
+    }
     if (d.glossy_exit && (st = prt__bake_brdf_in(ctx, t, d.glossy_brdf))) goto done;
     t->bake_seconds = prt__now() - t_start;
 

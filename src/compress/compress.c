@@ -12,8 +12,10 @@ static prt_status copy_without_sets(prt_context *ctx, const prt_transfer *in, pr
     *t = *in;
     memset(&t->mesh, 0, sizeof t->mesh);
     memset(t->sets, 0, sizeof t->sets);
+    memset(&t->texels, 0, sizeof t->texels);
     const prt__mesh *m = &in->mesh;
     prt_status st = prt__mesh_copy(&t->mesh, m);
+    if (!st) st = prt__texel_sets_copy(&t->texels, &in->texels, in->order);   /* texel sets stay as they are */
     if (st) { prt_transfer_release(t); return prt__fail(ctx, st, "%s", prt_last_error()); }
     *out = t;
     return PRT_OK;

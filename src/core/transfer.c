@@ -46,6 +46,7 @@ void prt_transfer_release(prt_transfer *t)
         free(t->sets[i].coeffs);
         prt__cpca_free(t->sets[i].cpca);
     }
+    prt__texel_sets_free(&t->texels);
     free(t);
 }
 
@@ -67,6 +68,15 @@ void prt_transfer_get_info(const prt_transfer *t, prt_transfer_info *info)
             prt_transfer_compress_info(t, prt__kind_from_index(i), &ci);
             info->transfer_bytes += ci.bytes;
         }
+    const prt__texel_sets *tx = &t->texels;
+    info->texel_width = tx->width;
+    info->texel_height = tx->height;
+    if (tx->width) {
+        size_t ntex = (size_t)tx->width * tx->height;
+        info->texel_bytes = ntex * (3 * sizeof(float) + 1);
+        for (int k = 0; k < 3; ++k) info->texel_bytes += ntex * (size_t)tx->channels[k] * t->order * t->order * sizeof(float);
+        info->transfer_bytes += info->texel_bytes;
+    }
     snprintf(info->source, sizeof info->source, "%s", t->source);
 }
 
@@ -118,5 +128,23 @@ prt_status prt__mesh_copy(prt__mesh *dst, const prt__mesh *src)
     prt_status st = prt__mesh_append(dst, src->positions, src->normals, src->albedo, (float[3]){0, 0, 0}, src->vertex_count,
                                      src->indices, src->triangle_count);
     if (!st && src->material) memcpy(dst->material, src->material, src->vertex_count);
+    if (!st && src->uv) memcpy(dst->uv, src->uv, src->vertex_count * 2 * sizeof(float));
     return st;
 }
+
+int prt_transfer_texel_size(const prt_transfer *t, int *width, int *height)
+{
+    if (width) *width = t->texels.width;
+    if (height) *height = t->texels.height;
+    return t->texels.width > 0;
+}
+
+const float *prt_transfer_texel_coeffs(const prt_transfer *t, prt_transfer_kind kind, int *channels)
+{
+    int i = prt__kind_index(kind);
+    if (i < 0 || i > 2 || !t->texels.coeffs[i]) return NULL;
+    if (channels) *channels = t->texels.channels[i];
+    return t->texels.coeffs[i];
+}
+
+const float *prt_transfer_uvs(const prt_transfer *t) { return prt__mesh_has_uv(&t->mesh) ? t->mesh.uv : NULL; }

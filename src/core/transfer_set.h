@@ -42,6 +42,18 @@ typedef struct prt__sh_set {
 /* Quantization grid of one set: per coefficient index, value = bias + q * scale. */
 void prt__quant_grid(const float *x, size_t nv, int dim, int bits, float *scale, float *bias);
 
+/* Per-texel transfer over the UV layout: texel (x, y) has its centre at uv ((x + .5) / W,
+ * (y + .5) / H); row 0 is v near 0. Diffuse kinds only (index 0..2 as for vertex sets). */
+typedef struct prt__texel_sets {
+    int width, height;
+    float *albedo;        /* [texel][3] */
+    uint8_t *covered;     /* [texel]: 1 baked, 2 filled from neighbours, 0 outside every chart */
+    int channels[3];
+    float *coeffs[3];     /* [texel][channel][order^2] */
+} prt__texel_sets;
+void prt__texel_sets_free(prt__texel_sets *s);
+prt_status prt__texel_sets_copy(prt__texel_sets *dst, const prt__texel_sets *src, int order);
+
 struct prt_transfer {
     prt__mesh mesh;
     int order;
@@ -55,6 +67,7 @@ struct prt_transfer {
     bool glossy_exit;                 /* glossy sets hold exit radiance (BRDF baked in) */
     int brdf_count;
     prt_brdf brdfs[PRT__MAX_BRDFS];   /* materials named by mesh.material */
+    prt__texel_sets texels;
 };
 
 static inline bool prt__kind_glossy(int index) { return index >= 3; }

@@ -5,7 +5,7 @@
 
 void prt__mesh_free(prt__mesh *m)
 {
-    free(m->positions); free(m->normals); free(m->albedo); free(m->material); free(m->indices);
+    free(m->positions); free(m->normals); free(m->albedo); free(m->material); free(m->uv); free(m->indices);
     memset(m, 0, sizeof *m);
 }
 
@@ -26,12 +26,13 @@ prt_status prt__mesh_append(prt__mesh *m, const float *pos, const float *nrm, co
     if (nv2 > UINT32_MAX || nt2 > UINT32_MAX / 3)
         return prt__fail(NULL, PRT_ERR_NO_MEMORY, "mesh too large (%zu vertices)", nv2);
     if (!grow((void **)&m->positions, nv2 * 3, sizeof(float)) || !grow((void **)&m->normals, nv2 * 3, sizeof(float)) ||
-        !grow((void **)&m->albedo, nv2 * 3, sizeof(float)) || !grow((void **)&m->material, nv2, 1) || !grow((void **)&m->indices, nt2 * 3, sizeof(uint32_t)))
+        !grow((void **)&m->albedo, nv2 * 3, sizeof(float)) || !grow((void **)&m->material, nv2, 1) || !grow((void **)&m->uv, nv2 * 2, sizeof(float)) || !grow((void **)&m->indices, nt2 * 3, sizeof(uint32_t)))
         return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory growing mesh");
     memcpy(m->positions + v0 * 3, pos, nv * 3 * sizeof(float));
     if (nrm) memcpy(m->normals + v0 * 3, nrm, nv * 3 * sizeof(float));
     else memset(m->normals + v0 * 3, 0, nv * 3 * sizeof(float));
     memset(m->material + v0, 0, nv);
+    for (size_t i = 0; i < nv * 2; ++i) m->uv[v0 * 2 + i] = NAN;
     for (size_t i = 0; i < nv; ++i)
         for (int c = 0; c < 3; ++c) m->albedo[(v0 + i) * 3 + c] = albedo ? albedo[i * 3 + c] : rgb_default[c];
     for (size_t i = 0; i < nt * 3; ++i) {
@@ -123,6 +124,7 @@ prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *wha
             memcpy(m->normals + nv * 3, m->normals + v * 3, 3 * sizeof(float));
             memcpy(m->albedo + nv * 3, m->albedo + v * 3, 3 * sizeof(float));
             m->material[nv] = m->material[v];
+            memcpy(m->uv + nv * 2, m->uv + v * 2, 2 * sizeof(float));
         }
         nv++;
     }
@@ -130,4 +132,17 @@ prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *wha
     m->vertex_count = nv;
     free(face_n); free(acc); free(remap);
     return PRT_OK;
+}
+
+void prt__mesh_set_uv(prt__mesh *m, size_t first, size_t count, const float *uv)
+{
+    memcpy(m->uv + first * 2, uv, count * 2 * sizeof(float));
+}
+
+bool prt__mesh_has_uv(const prt__mesh *m)
+{
+    if (!m->uv || !m->vertex_count) return false;
+    for (size_t i = 0; i < m->vertex_count * 2; ++i)
+        if (!isfinite(m->uv[i])) return false;
+    return true;
 }

@@ -10,6 +10,7 @@ typedef struct prt__mesh {
     size_t vertex_count, triangle_count;
     float *positions, *normals, *albedo;
     uint8_t *material;    /* per vertex: 0 = Lambert with `albedo`, k = the owner's brdfs[k - 1] */
+    float *uv;            /* 2 per vertex; NaN where the input had no texture coordinates */
     uint32_t *indices;
 } prt__mesh;
 
@@ -20,6 +21,10 @@ void prt__mesh_free(prt__mesh *m);
  * NULL (then zero, meaning "compute"); albedo may be NULL (then rgb_default). */
 prt_status prt__mesh_append(prt__mesh *m, const float *pos, const float *nrm, const float *albedo,
                             const float rgb_default[3], size_t nv, const uint32_t *idx, size_t nt);
+/* Sets texture coordinates of vertices [first, first + count). */
+void prt__mesh_set_uv(prt__mesh *m, size_t first, size_t count, const float *uv);
+/* True when every vertex has texture coordinates. */
+bool prt__mesh_has_uv(const prt__mesh *m);
 /* Validates and cleans in place: rejects non-finite positions and out-of-range indices, drops
  * zero-area triangles and unreferenced vertices, repairs missing or bad normals. */
 prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *what);

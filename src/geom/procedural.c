@@ -9,8 +9,9 @@
 typedef struct shape {
     const char *material;
     float rgb[3];
+    float chart[4];       /* u0, v0, u1, v1: the shape's rectangle in the scene's UV atlas */
     size_t nv, nt;
-    float *pos, *nrm;
+    float *pos, *nrm, *uv;
     uint32_t *idx;
 } shape;
 
@@ -20,7 +21,8 @@ static bool shape_alloc(shape *s, size_t nv, size_t nt)
     s->pos = prt__calloc(nv * 3, sizeof(float));
     s->nrm = prt__calloc(nv * 3, sizeof(float));
     s->idx = prt__calloc(nt * 3, sizeof(uint32_t));
-    return s->pos && s->nrm && s->idx;
+    s->uv = prt__calloc(nv * 2, sizeof(float));
+    return s->pos && s->nrm && s->idx && s->uv;
 }
 
 /* (u+1) x (v+1) grid of vertices with param(u, v) -> position, normal; wraps nothing. */
@@ -33,6 +35,9 @@ static bool shape_grid(shape *s, int nu, int nv, param_fn f, const float *args)
         for (int i = 0; i <= nu; ++i) {
             size_t k = (size_t)j * (nu + 1) + i;
             f(args, (float)i / nu, (float)j / nv, s->pos + k * 3, s->nrm + k * 3);
+            /* A unique UV layout (one chart per shape), so per-texel transfer works on the demo. */
+            s->uv[k * 2] = s->chart[0] + (s->chart[2] - s->chart[0]) * (float)i / nu;
+            s->uv[k * 2 + 1] = s->chart[1] + (s->chart[3] - s->chart[1]) * (float)j / nv;
         }
     size_t t = 0;
     for (int j = 0; j < nv; ++j)
@@ -110,13 +115,13 @@ static prt_status write_obj(const char *obj_path, const shape *shapes, int count
         n = snprintf(line, sizeof line, "o %s\nusemtl %s\n", s->material, s->material);
         st = prt__atomic_write(&f, line, (size_t)n);
         for (size_t v = 0; v < s->nv && !st; ++v) {
-            n = snprintf(line, sizeof line, "v %.6f %.6f %.6f\nvn %.6f %.6f %.6f\n", s->pos[v * 3], s->pos[v * 3 + 1],
-                         s->pos[v * 3 + 2], s->nrm[v * 3], s->nrm[v * 3 + 1], s->nrm[v * 3 + 2]);
+            n = snprintf(line, sizeof line, "v %.6f %.6f %.6f\nvn %.6f %.6f %.6f\nvt %.6f %.6f\n", s->pos[v * 3], s->pos[v * 3 + 1],
+                         s->pos[v * 3 + 2], s->nrm[v * 3], s->nrm[v * 3 + 1], s->nrm[v * 3 + 2], s->uv[v * 2], s->uv[v * 2 + 1]);
             st = prt__atomic_write(&f, line, (size_t)n);
         }
         for (size_t t = 0; t < s->nt && !st; ++t) {
             size_t a = s->idx[t * 3] + base_v, b = s->idx[t * 3 + 1] + base_v, c = s->idx[t * 3 + 2] + base_v;
-            n = snprintf(line, sizeof line, "f %zu//%zu %zu//%zu %zu//%zu\n", a, a, b, b, c, c);
+            n = snprintf(line, sizeof line, "f %zu/%zu/%zu %zu/%zu/%zu %zu/%zu/%zu\n", a, a, a, b, b, b, c, c, c);
             st = prt__atomic_write(&f, line, (size_t)n);
         }
         base_v += s->nv;
@@ -127,9 +132,12 @@ static prt_status write_obj(const char *obj_path, const shape *shapes, int count
 
 prt_status prt_demo_scene_write(const char *obj_path)
 {
-    shape s[5] = {{"floor", {0.75f, 0.75f, 0.72f}, 0, 0, 0, 0, 0}, {"red_wall", {0.75f, 0.12f, 0.08f}, 0, 0, 0, 0, 0},
-                  {"green_wall", {0.12f, 0.6f, 0.12f}, 0, 0, 0, 0, 0}, {"torus", {0.8f, 0.8f, 0.78f}, 0, 0, 0, 0, 0},
-                  {"sphere", {0.85f, 0.7f, 0.45f}, 0, 0, 0, 0, 0}};
+    /* Charts sized roughly by area, 0.01 apart. */
+    shape s[5] = {{.material = "floor", .rgb = {0.75f, 0.75f, 0.72f}, .chart = {0.01f, 0.01f, 0.49f, 0.49f}},
+                  {.material = "red_wall", .rgb = {0.75f, 0.12f, 0.08f}, .chart = {0.51f, 0.01f, 0.99f, 0.245f}},
+                  {.material = "green_wall", .rgb = {0.12f, 0.6f, 0.12f}, .chart = {0.51f, 0.255f, 0.99f, 0.49f}},
+                  {.material = "torus", .rgb = {0.8f, 0.8f, 0.78f}, .chart = {0.01f, 0.51f, 0.99f, 0.74f}},
+                  {.material = "sphere", .rgb = {0.85f, 0.7f, 0.45f}, .chart = {0.01f, 0.75f, 0.6f, 0.99f}}};
     const float floor_args[9] = {-1.5f, 0, 1.5f, 3, 0, 0, 0, 0, -3};
     const float red_args[9] = {-1.5f, 0, 1.5f, 0, 0, -3, 0, 1.5f, 0};
     const float green_args[9] = {-1.5f, 0, -1.5f, 3, 0, 0, 0, 1.5f, 0};
@@ -139,6 +147,6 @@ prt_status prt_demo_scene_write(const char *obj_path)
               shape_grid(&s[2], 48, 24, plane_param, green_args) && shape_grid(&s[3], 96, 32, torus_param, torus_args) &&
               shape_grid(&s[4], 64, 32, sphere_param, sphere_args);
     prt_status st = ok ? write_obj(obj_path, s, 5) : prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
-    for (int i = 0; i < 5; ++i) { free(s[i].pos); free(s[i].nrm); free(s[i].idx); }
+    for (int i = 0; i < 5; ++i) { free(s[i].pos); free(s[i].nrm); free(s[i].idx); free(s[i].uv); }
     return st;
 }

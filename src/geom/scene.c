@@ -87,6 +87,17 @@ prt_status prt_scene_set_brdf(prt_scene *s, size_t first, size_t count, const pr
 
 int prt_scene_brdf_count(const prt_scene *s) { return s->brdf_count; }
 
+prt_status prt_scene_set_uv(prt_scene *s, size_t first, size_t count, const float *uv)
+{
+    if (!s || !uv) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_uv: scene and uv are required");
+    if (first > s->mesh.vertex_count || count > s->mesh.vertex_count - first)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "vertex range %zu+%zu exceeds the scene's %zu vertices", first, count, s->mesh.vertex_count);
+    for (size_t i = 0; i < count * 2; ++i)
+        if (!isfinite(uv[i])) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "texture coordinate %zu is not finite", i / 2);
+    prt__mesh_set_uv(&s->mesh, first, count, uv);
+    return PRT_OK;
+}
+
 void prt_scene_release(prt_scene *s)
 {
     if (!s) return;

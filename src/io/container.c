@@ -23,6 +23,9 @@ static const unsigned char MAGIC[8] = {'P', 'R', 'T', 'F', 0x0D, 0x0A, 0x1A, 0x0
 #define CHUNK_SHTR FOURCC('S', 'H', 'T', 'R')
 #define CHUNK_CPCA FOURCC('C', 'P', 'C', 'A')
 #define CHUNK_MATL FOURCC('M', 'A', 'T', 'L')
+#define CHUNK_UVS FOURCC('U', 'V', 'S', '0')
+#define CHUNK_TXAL FOURCC('T', 'X', 'A', 'L')
+#define CHUNK_TXLS FOURCC('T', 'X', 'L', 'S')
 #define BRDF_RECORD 160   /* model, lobes, then 38 floats: see put_brdf */
 #define CPCA_HEADER 64
 #define PARTS 8
@@ -72,6 +75,7 @@ static uint32_t chunk_crc(const chunk *c)
     uLong crc = crc32(0L, Z_NULL, 0);
     for (int i = 0; i < PARTS && c->parts[i]; ++i) {
         const unsigned char *p = c->parts[i];
+        if (!c->sizes[i]) continue;
         size_t n = c->sizes[i];
         while (n) {
             unsigned int k = n > 0x40000000u ? 0x40000000u : (unsigned int)n;
@@ -110,7 +114,7 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
     cJSON_Delete(meta);
     if (!meta_text) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
 
-    chunk chunks[3 + PRT__KIND_COUNT];
+    chunk chunks[8 + PRT__KIND_COUNT];
     void *qbuf[2 * PRT__KIND_COUNT + 1];   /* quantized copies, freed after writing */
     int nqbuf = 0;
     memset(chunks, 0, sizeof chunks);
@@ -182,7 +186,28 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
         qbuf[nqbuf++] = matl;
         chunks[count++] = (chunk){CHUNK_MATL, {matl}, {bytes}, 0};
     }
-    unsigned char head[HEADER_SIZE + ENTRY_SIZE * (3 + PRT__KIND_COUNT)];
+    if (prt__mesh_has_uv(m)) chunks[count++] = (chunk){CHUNK_UVS, {m->uv}, {m->vertex_count * 2 * sizeof(float)}, 0};
+    const prt__texel_sets *tx = &t->texels;
+    unsigned char txal_head[8], txls_head[3][24];
+    static const unsigned char pad4[4] = {0};
+    if (tx->width) {
+        const size_t ntex = (size_t)tx->width * tx->height;
+        put32(txal_head, (uint32_t)tx->width);
+        put32(txal_head + 4, (uint32_t)tx->height);
+        chunks[count++] = (chunk){CHUNK_TXAL, {txal_head, tx->albedo, tx->covered, pad4}, {8, ntex * 12, ntex, ((ntex + 3) & ~(size_t)3) - ntex}, 0};
+        for (int k = 0; k < 3; ++k) {
+            if (!tx->coeffs[k]) continue;
+            unsigned char *h = txls_head[k];
+            memset(h, 0, 24);
+            put32(h, (uint32_t)prt__kind_from_index(k));
+            put32(h + 4, (uint32_t)tx->channels[k]);
+            put32(h + 8, (uint32_t)t->order);
+            put32(h + 12, (uint32_t)tx->width);
+            put32(h + 16, (uint32_t)tx->height);
+            chunks[count++] = (chunk){CHUNK_TXLS, {h, tx->coeffs[k]}, {24, ntex * (size_t)tx->channels[k] * t->order * t->order * 4}, 0};
+        }
+    }
+    unsigned char head[HEADER_SIZE + ENTRY_SIZE * (8 + PRT__KIND_COUNT)];
     memset(head, 0, sizeof head);
     memcpy(head, MAGIC, 8);
     put32(head + 8, FILE_VERSION);
@@ -261,14 +286,16 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
     prt_status st = PRT_OK;
     bool have_meta = false, have_mesh = false;
     /* Two passes: the mesh fixes the vertex count that transfer chunks must match. */
-    for (int pass = 0; pass < 2 && !st; ++pass) {
+    for (int pass = 0; pass < 3 && !st; ++pass) {
         for (uint32_t i = 0; i < count && !st; ++i) {
             const unsigned char *e = b + HEADER_SIZE + (size_t)ENTRY_SIZE * i;
             uint32_t id = get32(e), crc = get32(e + 4);
             uint64_t off = get64(e + 8), len = get64(e + 16);
             if (off > size || len > size - off) { st = bad(ctx, "truncated .prt file: a chunk extends past the end"); break; }
             const unsigned char *p = b + off;
-            bool mine = pass == 0 ? (id == CHUNK_META || id == CHUNK_MESH) : (id == CHUNK_SHTR || id == CHUNK_CPCA || id == CHUNK_MATL);
+            bool mine = pass == 0   ? (id == CHUNK_META || id == CHUNK_MESH)
+                        : pass == 1 ? (id == CHUNK_SHTR || id == CHUNK_CPCA || id == CHUNK_MATL || id == CHUNK_UVS || id == CHUNK_TXAL)
+                                    : id == CHUNK_TXLS;
             if (!mine) continue;
             if (prt__crc32(p, (size_t)len) != crc) {
                 char what[5] = {(char)(id & 255), (char)(id >> 8 & 255), (char)(id >> 16 & 255), (char)(id >> 24), 0};
@@ -320,7 +347,9 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 m->positions = malloc(nv * 12); m->normals = malloc(nv * 12); m->albedo = malloc(nv * 12);
                 m->indices = malloc(nt * 12);
                 m->material = calloc(nv, 1);
-                if (!m->positions || !m->normals || !m->albedo || !m->indices || !m->material) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+                m->uv = malloc(nv * 8);
+                if (m->uv) for (uint64_t k = 0; k < nv * 2; ++k) m->uv[k] = NAN;
+                if (!m->positions || !m->normals || !m->albedo || !m->indices || !m->material || !m->uv) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
                 memcpy(m->positions, p + 16, nv * 12);
                 memcpy(m->normals, p + 16 + nv * 12, nv * 12);
                 memcpy(m->albedo, p + 16 + nv * 24, nv * 12);
@@ -332,6 +361,39 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 if (!st && !(all_finite(m->positions, nv * 3) && all_finite(m->normals, nv * 3) && all_finite(m->albedo, nv * 3)))
                     st = bad(ctx, "corrupt .prt file: non-finite vertex data");
                 have_mesh = true;
+            } else if (id == CHUNK_UVS) {
+                uint64_t nv = t->mesh.vertex_count;
+                if (len != nv * 8) { st = bad(ctx, "corrupt .prt file: texture coordinate chunk size mismatch"); break; }
+                memcpy(t->mesh.uv, p, nv * 8);
+                if (!prt__mesh_has_uv(&t->mesh)) { st = bad(ctx, "corrupt .prt file: non-finite texture coordinates"); break; }
+            } else if (id == CHUNK_TXAL) {
+                uint32_t w = len >= 8 ? get32(p) : 0, h = len >= 8 ? get32(p + 4) : 0;
+                uint64_t ntex = (uint64_t)w * h;
+                if (t->texels.width || w == 0 || h == 0 || w > 8192 || h > 8192 || 8 + ntex * 12 + ((ntex + 3) & ~3ull) != len) {
+                    st = bad(ctx, "corrupt .prt file: invalid texel albedo chunk");
+                    break;
+                }
+                t->texels.albedo = malloc(ntex * 12);
+                t->texels.covered = malloc(ntex);
+                if (!t->texels.albedo || !t->texels.covered) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+                memcpy(t->texels.albedo, p + 8, ntex * 12);
+                memcpy(t->texels.covered, p + 8 + ntex * 12, ntex);
+                t->texels.width = (int)w;
+                t->texels.height = (int)h;
+                if (!all_finite(t->texels.albedo, ntex * 3)) { st = bad(ctx, "corrupt .prt file: non-finite texel albedo"); break; }
+            } else if (id == CHUNK_TXLS) {
+                uint32_t kind = len >= 24 ? get32(p) : 0, channels = len >= 24 ? get32(p + 4) : 0, order = len >= 24 ? get32(p + 8) : 0;
+                uint32_t w = len >= 24 ? get32(p + 12) : 0, h = len >= 24 ? get32(p + 16) : 0;
+                int k = prt__kind_index((prt_transfer_kind)kind);
+                uint64_t n = (uint64_t)w * h * channels * order * order;
+                if (k < 0 || k > 2 || (channels != 1 && channels != 3) || (int)order != t->order || (int)w != t->texels.width ||
+                    (int)h != t->texels.height || !w || t->texels.coeffs[k] || 24 + n * 4 != len) {
+                    st = bad(ctx, "corrupt .prt file: invalid texel transfer chunk");
+                    break;
+                }
+                if (!(t->texels.coeffs[k] = malloc(n * 4))) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+                memcpy(t->texels.coeffs[k], p + 24, n * 4);
+                t->texels.channels[k] = (int)channels;
             } else if (id == CHUNK_MATL) {
                 uint64_t nv = t->mesh.vertex_count;
                 uint32_t nb = len >= 8 ? get32(p) : 0;

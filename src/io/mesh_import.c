@@ -193,8 +193,16 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
             memcpy(idx + nt * 3, face->mIndices, 3 * sizeof(uint32_t));
             nt++;
         }
+        const size_t first = m->vertex_count;
         st = prt__mesh_append(m, pos, nrm, NULL, rgb, nv, idx, nt);
         free(pos); free(nrm); free(idx);
+        if (st == PRT_OK && am->mTextureCoords[0]) {
+            float *uv = prt__calloc(nv * 2, sizeof(float));
+            if (!uv) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory importing '%s'", path); break; }
+            for (size_t v = 0; v < nv; ++v) { uv[v * 2] = am->mTextureCoords[0][v].x; uv[v * 2 + 1] = am->mTextureCoords[0][v].y; }
+            prt__mesh_set_uv(m, first, nv, uv);
+            free(uv);
+        }
     }
     aiReleaseImport(sc);
     if (st == PRT_OK && m->triangle_count == before)

@@ -16,6 +16,21 @@ static const char *FS =
     "out vec4 color;\n"
     "void main() { color = vec4(v_radiance, 1.0); }\n";
 
+/* Per-texel: radiance comes from a map over the UV layout. */
+static const char *VS_T =
+    "#version 330 core\n"
+    "layout(location = 0) in vec3 pos;\n"
+    "layout(location = 3) in vec2 uv;\n"
+    "uniform mat4 mvp;\n"
+    "out vec2 v_uv;\n"
+    "void main() { v_uv = uv; gl_Position = mvp * vec4(pos, 1.0); }\n";
+static const char *FS_T =
+    "#version 330 core\n"
+    "in vec2 v_uv;\n"
+    "uniform sampler2D map;\n"
+    "out vec4 color;\n"
+    "void main() { color = vec4(texture(map, v_uv).rgb, 1.0); }\n";
+
 /* Glossy: the geometry shader hands every fragment its triangle's vertex ids and barycentrics,
  * so the fragment shader interpolates the three vertices' exit SH (too many to pass as
  * varyings) and evaluates them at its own view direction by the recurrence of core/sh.c. */
@@ -124,7 +139,19 @@ prt_status prt__draw_init(prt__draw *d)
 {
     memset(d, 0, sizeof *d);
     if (!(d->program = link_program(VS, NULL, FS))) return PRT_ERR_BACKEND;
-    if (!(d->program_g = link_program(VS_G, GS_G, FS_G))) { glDeleteProgram(d->program); d->program = 0; return PRT_ERR_BACKEND; }
+    if (!(d->program_g = link_program(VS_G, GS_G, FS_G)) || !(d->program_t = link_program(VS_T, NULL, FS_T))) {
+        glDeleteProgram(d->program);
+        if (d->program_g) glDeleteProgram(d->program_g);
+    if (d->program_t) glDeleteProgram(d->program_t);
+    if (d->vbo_uv) glDeleteBuffers(1, &d->vbo_uv);
+    if (d->tex) glDeleteTextures(1, &d->tex);
+        d->program = d->program_g = 0;
+        return PRT_ERR_BACKEND;
+    }
+    d->ut_mvp = glGetUniformLocation(d->program_t, "mvp");
+    d->ut_map = glGetUniformLocation(d->program_t, "map");
+    glGenBuffers(1, &d->vbo_uv);
+    glGenTextures(1, &d->tex);
     d->u_mvp = glGetUniformLocation(d->program, "mvp");
     d->ug_mvp = glGetUniformLocation(d->program_g, "mvp");
     d->ug_order = glGetUniformLocation(d->program_g, "order");
@@ -146,6 +173,9 @@ void prt__draw_free(prt__draw *d)
 {
     if (d->program) glDeleteProgram(d->program);
     if (d->program_g) glDeleteProgram(d->program_g);
+    if (d->program_t) glDeleteProgram(d->program_t);
+    if (d->vbo_uv) glDeleteBuffers(1, &d->vbo_uv);
+    if (d->tex) glDeleteTextures(1, &d->tex);
     if (d->vbo_nrm) { GLuint b[2] = {d->vbo_nrm, d->tbo}; glDeleteBuffers(2, b); }
     if (d->tbo_tex) glDeleteTextures(1, &d->tbo_tex);
     free(d->pack);
@@ -178,9 +208,35 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     } else {
         glDisableVertexAttribArray(2);
     }
+    d->has_uv = m->uv != NULL;
+    d->texel_width = d->texel_height = 0;
+    if (d->has_uv) {
+        glBindBuffer(GL_ARRAY_BUFFER, d->vbo_uv);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(m->vertex_count * 2 * sizeof(float)), m->uv, GL_STATIC_DRAW);
+        glEnableVertexAttribArray(3);
+        glVertexAttribPointer(3, 2, GL_FLOAT, GL_FALSE, 0, NULL);
+    } else {
+        glDisableVertexAttribArray(3);
+    }
     glBindVertexArray(0);
     d->index_count = m->triangle_count * 3;
     if (d->exit_order) prt__draw_upload_exit(d, m->exit_sh, m->vertex_count);
+    if (m->texel_radiance && m->texel_width > 0 && m->texel_height > 0) prt__draw_upload_texels(d, m->texel_radiance, m->texel_width, m->texel_height);
+}
+
+void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int height)
+{
+    if (!rgb || !d->has_uv || width <= 0 || height <= 0) { d->texel_width = d->texel_height = 0; return; }
+    glBindTexture(GL_TEXTURE_2D, d->tex);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB32F, width, height, 0, GL_RGB, GL_FLOAT, rgb);   /* row 0 = v near 0, as GL wants */
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    d->texel_width = width;
+    d->texel_height = height;
 }
 
 void prt__draw_upload_exit(prt__draw *d, const float *exit_sh, size_t nv)
@@ -255,7 +311,13 @@ void prt__draw_mesh(const prt__draw *d, const prt_camera *cam, int w, int h, con
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     glEnable(GL_DEPTH_TEST);
     glDisable(GL_CULL_FACE);   /* one-sided walls must show from both sides */
-    if (d->exit_order) {
+    if (d->texel_width) {
+        glUseProgram(d->program_t);
+        glUniformMatrix4fv(d->ut_mvp, 1, GL_FALSE, mvp);
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_2D, d->tex);
+        glUniform1i(d->ut_map, 0);
+    } else if (d->exit_order) {
         static float knorm[100];
         if (knorm[0] == 0.0f) sh_norms(knorm);
         glUseProgram(d->program_g);

@@ -17,12 +17,19 @@ typedef struct prt__draw {
     int exit_order, exit_mirror;
     float *pack;            /* staging for the RGBA texel layout */
     size_t pack_vertices;
+    /* Per-texel path: radiance map sampled at interpolated uv. */
+    GLuint program_t, vbo_uv, tex;
+    GLint ut_mvp, ut_map;
+    int texel_width, texel_height;   /* 0: the per-texel path is off */
+    bool has_uv;
 } prt__draw;
 
 prt_status prt__draw_init(prt__draw *d);
 void prt__draw_free(prt__draw *d);
 /* Uploads geometry and radiance (re-uploads everything; the radiance changes per relight). */
 void prt__draw_upload(prt__draw *d, const prt_render_mesh *mesh);
+/* Replaces the per-texel radiance map; NULL turns the per-texel path off (vertex radiance). */
+void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int height);
 /* Replaces the glossy exit coefficients (mesh layout: vertex, channel, coefficient). */
 void prt__draw_upload_exit(prt__draw *d, const float *exit_sh, size_t vertex_count);
 /* Draws into the bound framebuffer of size w x h. */

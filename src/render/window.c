@@ -196,6 +196,12 @@ void prt_window_set_radiance(prt_window *w, const float *rgb, size_t nv)
     glBindBuffer(GL_ARRAY_BUFFER, 0);
 }
 
+void prt_window_set_texels(prt_window *w, const float *rgb, int width, int height)
+{
+    glfwMakeContextCurrent(w->win);
+    prt__draw_upload_texels(&w->draw, rgb, width, height);
+}
+
 void prt_window_set_exit(prt_window *w, const float *exit_sh, size_t nv)
 {
     glfwMakeContextCurrent(w->win);

@@ -23,6 +23,10 @@ static const char *HELP =
     "                         (without either, glossy sets hold incident radiance and the lobe\n"
     "                         is chosen when rendering)\n"
     "      --bounces N        interreflection bounces (default 3)\n"
+    "      --texels N         also bake per-texel transfer (the diffuse kinds) over the mesh's\n"
+    "                         UV layout into an N x N map; needs unique UVs inside [0, 1]\n"
+    "      --normal-map FILE  tangent-space normal map perturbing the per-texel normals\n"
+    "                         (.png/.jpg values as stored; .exr/.hdr/.pfm values in [0, 1])\n"
     "      --seed N           rotates the low-discrepancy directions (default 0)\n"
     CLI_SCENE_OPTIONS_HELP
     "      --ray-offset E     shadow-ray origin offset (default 1e-4 x scene diagonal)\n"
@@ -51,9 +55,12 @@ int cmd_bake(int argc, char **argv)
         CLI_SCENE_LONG_OPTIONS, {"ray-offset", required_argument, 0, 'r'}, {"compress", required_argument, 0, 'C'},
         {"clusters", required_argument, 0, 'K'}, {"vectors", required_argument, 0, 'V'}, {"quantize", required_argument, 0, 'Q'},
         {"brdf", required_argument, 0, 'B'}, {"bake-materials", no_argument, 0, 'M'},
+        {"texels", required_argument, 0, 'T'}, {"normal-map", required_argument, 0, 'N'},
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt, seed;
     prt_brdf bake_brdf;
+    const char *normal_map_path = NULL;
+    prt_image normal_map = {0};
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:j:qh", opts, NULL)) != -1) {
         int r = cli_scene_option(&c, &sd, opt, optarg);
@@ -84,6 +91,8 @@ int cmd_bake(int argc, char **argv)
             bd.glossy_exit = 1;
             break;
         case 'M': bd.glossy_exit = 1; break;
+        case 'T': if (!cli_parse_int(optarg, 1, 8192, &bd.texels)) return cli_usage(&c, "--texels must be 1..8192"); break;
+        case 'N': normal_map_path = optarg; break;
         case 'C':
             if (!strcasecmp(optarg, "cpca")) cd.method = PRT_COMPRESS_CPCA;
             else if (!strcasecmp(optarg, "pca")) cd.method = PRT_COMPRESS_PCA;
@@ -107,12 +116,30 @@ int cmd_bake(int argc, char **argv)
     if (!compress && (cd.clusters || cd.vectors)) return cli_usage(&c, "--clusters and --vectors need --compress");
     if (compress && quantize) return cli_usage(&c, "--quantize applies to uncompressed sets; drop --compress or --quantize");
     if (!output) return cli_usage(&c, "an output file is required (-o OUT.prt)");
+    if (normal_map_path && !bd.texels) return cli_usage(&c, "--normal-map needs --texels N");
     int rc = cli_make_context(&c);
     if (rc) return rc;
     cli_catch_interrupt();
     prt_scene *scene = NULL;
     prt_transfer *t = NULL;
-    prt_status st = prt_scene_load(c.ctx, argv[optind], &sd, &scene);
+    prt_status st = PRT_OK;
+    if (normal_map_path) {
+        st = prt_image_load(normal_map_path, &normal_map);
+        if (st) {
+            cli_error(&c, "normal map: %s", prt_last_error());
+            prt_context_release(c.ctx);
+            return cli_exit_code(st);
+        }
+        /* 8-bit images come back sRGB-decoded; a normal map stores plain numbers, so undo it. */
+        const char *ext = strrchr(normal_map_path, '.');
+        if (ext && (!strcasecmp(ext, ".png") || !strcasecmp(ext, ".jpg") || !strcasecmp(ext, ".jpeg")))
+            for (size_t i = 0; i < (size_t)normal_map.width * normal_map.height * 3; ++i) {
+                float x = normal_map.rgb[i];
+                normal_map.rgb[i] = x <= 0.0031308f ? 12.92f * x : 1.055f * powf(x, 1.0f / 2.4f) - 0.055f;
+            }
+        bd.normal_map = &normal_map;
+    }
+    st = prt_scene_load(c.ctx, argv[optind], &sd, &scene);
     if (!st) {
         if (!c.quiet) {
             fprintf(stderr, "prt bake: %s: %zu vertices, %zu triangles\n", argv[optind], prt_scene_vertex_count(scene), prt_scene_triangle_count(scene));
@@ -151,6 +178,7 @@ int cmd_bake(int argc, char **argv)
     rc = st ? cli_fail(&c, st) : EXIT_OK;
     prt_transfer_release(t);
     prt_scene_release(scene);
+    prt_image_free(&normal_map);
     prt_context_release(c.ctx);
     return rc;
 }

@@ -187,8 +187,8 @@ int cmd_compare(int argc, char **argv)
                 prt_camera cam;
                 cli_view_camera(&view, prt_transfer_positions(t), prt_transfer_vertex_count(t), (float)view.width / view.height, &cam);
                 st = prt_renderer_create(c.ctx, &(prt_renderer_desc){view.width, view.height, 0}, &r);
-                prt_render_mesh mesh = {prt_transfer_positions(t), err, prt_transfer_vertex_count(t), prt_transfer_indices(t),
-                                        prt_transfer_triangle_count(t), NULL, NULL, 0, 0};
+                prt_render_mesh mesh = {.positions = prt_transfer_positions(t), .radiance = err, .vertex_count = prt_transfer_vertex_count(t),
+                                        .indices = prt_transfer_indices(t), .triangle_count = prt_transfer_triangle_count(t)};
                 if (!st) st = prt_render(r, &mesh, &cam, view.background, &out);
                 prt_renderer_release(r);
             }

@@ -62,10 +62,19 @@ int cmd_info(int argc, char **argv)
                 }
                 cJSON_AddItemToArray(kinds, o);
             }
+        if (info.texel_width) {
+            cJSON *tx = cJSON_AddObjectToObject(root, "texels");
+            cJSON_AddNumberToObject(tx, "width", info.texel_width);
+            cJSON_AddNumberToObject(tx, "height", info.texel_height);
+            cJSON_AddNumberToObject(tx, "bytes", (double)info.texel_bytes);
+            cJSON *tk = cJSON_AddArrayToObject(tx, "kinds");
+            for (int k = 0; k < 3; ++k)
+                if (prt_transfer_texel_coeffs(t, all[k], NULL)) cJSON_AddItemToArray(tk, cJSON_CreateString(prt_transfer_kind_name(all[k])));
+        }
         cJSON_AddNumberToObject(root, "vertices", (double)info.vertex_count);
         cJSON_AddNumberToObject(root, "triangles", (double)info.triangle_count);
         cJSON_AddNumberToObject(root, "transfer_bytes", (double)info.transfer_bytes);
-        cJSON_AddNumberToObject(root, "bytes_per_vertex", (double)info.transfer_bytes / (double)info.vertex_count);
+        cJSON_AddNumberToObject(root, "bytes_per_vertex", (double)(info.transfer_bytes - info.texel_bytes) / (double)info.vertex_count);
         cJSON_AddNumberToObject(root, "samples", info.samples);
         cJSON_AddNumberToObject(root, "bounces", info.bounces);
         cJSON_AddNumberToObject(root, "seed", info.seed);
@@ -109,9 +118,15 @@ int cmd_info(int argc, char **argv)
                    prt_transfer_kind_name(all[k]), names[ci.method], ci.clusters, ci.vectors_total, (double)ci.bytes / (double)info.vertex_count,
                    raw / (double)ci.bytes, ci.relative_error);
         }
-        printf("mesh:        %zu vertices, %zu triangles\n", info.vertex_count, info.triangle_count);
-        printf("storage:     %.2f MiB transfer, %.0f bytes per vertex\n", info.transfer_bytes / 1048576.0,
-               (double)info.transfer_bytes / (double)info.vertex_count);
+        if (info.texel_width) {
+            printf("texels:      %d x %d (", info.texel_width, info.texel_height);
+            for (int k = 0, first = 1; k < 3; ++k)
+                if (prt_transfer_texel_coeffs(t, all[k], NULL)) { printf("%s%s", first ? "" : ", ", prt_transfer_kind_name(all[k])); first = 0; }
+            printf("), %.2f MiB\n", info.texel_bytes / 1048576.0);
+        }
+        printf("mesh:        %zu vertices, %zu triangles%s\n", info.vertex_count, info.triangle_count, prt_transfer_uvs(t) ? ", with UVs" : "");
+        printf("storage:     %.2f MiB transfer, %.0f bytes per vertex (vertex sets)\n", info.transfer_bytes / 1048576.0,
+               (double)(info.transfer_bytes - info.texel_bytes) / (double)info.vertex_count);
         printf("bake:        %d samples, %d bounces, seed %u, %.2f s on %d threads\n", info.samples, info.bounces, info.seed,
                info.bake_seconds, info.threads);
         printf("source:      %s\n", info.source);

@@ -8,6 +8,7 @@
 
 static const char *HELP =
     "usage: prt relight FILE.prt -o OUT.ply|OUT.json [options]\n"
+    "       prt relight FILE.prt --texels -o MAP.exr|.hdr|.pfm|.png [options]\n"
     "Evaluates per-vertex exit radiance (linear RGB) of a baked .prt under a distant lighting.\n"
     "PLY output is binary with float red/green/blue vertex properties (opens in MeshLab,\n"
     "Blender, Open3D); JSON holds {\"kind\", \"vertex_count\", \"radiance\": [[r,g,b], ...]}.\n\n"
@@ -15,6 +16,7 @@ static const char *HELP =
     "  -k, --kind K           unshadowed | shadowed | interreflected | glossy-shadowed |\n"
     "                         glossy-interreflected (default: the richest diffuse kind held)\n"
     "      --eye X,Y,Z        glossy kinds: the viewpoint each vertex's colour is seen from\n"
+    "      --texels           write the per-texel radiance map (top row = v 1) instead\n"
     CLI_LIGHT_OPTIONS_HELP
     "  -j, --threads N        worker threads\n"
     "  -q, --quiet            no messages\n"
@@ -26,11 +28,11 @@ int cmd_relight(int argc, char **argv)
     cli_light light = {.intensity = 1.0f};
     const char *output = NULL, *kind_name = NULL;
     static const struct option opts[] = {{"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'},
-                                         {"eye", required_argument, 0, 'e'}, CLI_LIGHT_LONG_OPTIONS, {"threads", required_argument, 0, 'j'},
+                                         {"eye", required_argument, 0, 'e'}, {"texels", no_argument, 0, 'T'}, CLI_LIGHT_LONG_OPTIONS, {"threads", required_argument, 0, 'j'},
                                          {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt;
     float eye[3] = {0, 0, 0};
-    bool have_eye = false;
+    bool have_eye = false, texels = false;
     optind = 1;
     while ((opt = getopt_long(argc, argv, "o:k:j:qh", opts, NULL)) != -1) {
         int r = cli_light_option(&c, &light, opt, optarg);
@@ -39,6 +41,7 @@ int cmd_relight(int argc, char **argv)
         switch (opt) {
         case 'o': output = optarg; break;
         case 'k': kind_name = optarg; break;
+        case 'T': texels = true; break;
         case 'e': if (!cli_parse_vec3(optarg, false, eye)) return cli_usage(&c, "--eye takes X,Y,Z"); have_eye = true; break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
@@ -50,7 +53,8 @@ int cmd_relight(int argc, char **argv)
     if (!output) return cli_usage(&c, "an output file is required (-o OUT.ply or OUT.json)");
     const char *ext = strrchr(output, '.');
     bool json = ext && !strcasecmp(ext, ".json");
-    if (!json && !(ext && !strcasecmp(ext, ".ply"))) return cli_usage(&c, "output must end in .ply or .json");
+    if (!texels && !json && !(ext && !strcasecmp(ext, ".ply"))) return cli_usage(&c, "output must end in .ply or .json");
+    if (texels && (json || (ext && !strcasecmp(ext, ".ply")))) return cli_usage(&c, "--texels writes an image: .exr, .hdr, .pfm or .png");
     prt_transfer_kind kind = 0;
     if (kind_name && prt_transfer_kind_parse(kind_name, &kind)) return cli_usage(&c, "%s", prt_last_error());
     if (kind && prt_transfer_kind_is_glossy(kind) && !have_eye) return cli_usage(&c, "glossy kinds are view-dependent: give --eye X,Y,Z");
@@ -67,6 +71,29 @@ int cmd_relight(int argc, char **argv)
         prt_transfer_info info;
         prt_transfer_get_info(t, &info);
         st = cli_light_project(&c, &light, info.order, &sh, NULL);
+    }
+    if (!st && texels) {
+        int w = 0, h = 0;
+        if (!prt_transfer_texel_size(t, &w, &h)) {
+            cli_error(&c, "'%s' has no per-texel transfer (bake with --texels N)", argv[optind]);
+            rc = EXIT_FAILURE_INPUT;
+        } else {
+            prt_image img = {w, h, malloc((size_t)w * h * 3 * sizeof(float))};
+            rgb = malloc((size_t)w * h * 3 * sizeof(float));
+            st = img.rgb && rgb ? prt_relight_sh_texels(c.ctx, t, kind, &sh, rgb) : PRT_ERR_NO_MEMORY;
+            if (!st) {
+                for (int y = 0; y < h; ++y)   /* texel row 0 is v near 0: the image's bottom */
+                    memcpy(img.rgb + (size_t)(h - 1 - y) * w * 3, rgb + (size_t)y * w * 3, (size_t)w * 3 * sizeof(float));
+                st = prt_image_save(output, &img, NULL);
+            }
+            rc = st ? cli_fail(&c, st) : EXIT_OK;
+            if (!st && !c.quiet) fprintf(stderr, "prt relight: wrote %s (%s, %d x %d texels)\n", output, prt_transfer_kind_name(kind), w, h);
+            prt_image_free(&img);
+        }
+        free(rgb);
+        prt_transfer_release(t);
+        prt_context_release(c.ctx);
+        return rc;
     }
     if (!st) {
         rgb = malloc(prt_transfer_vertex_count(t) * 3 * sizeof(float));

@@ -17,6 +17,7 @@ static const char *HELP =
     "                         part, evaluated per pixel, to the diffuse kind of the same shadowing\n"
     CLI_VIEW_OPTIONS_HELP
     CLI_LIGHT_OPTIONS_HELP
+    "      --per-vertex       shade from the vertex sets even where the file has per-texel ones\n"
     "  -j, --threads N        worker threads for relighting\n"
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
@@ -28,9 +29,10 @@ int cmd_render(int argc, char **argv)
     const char *output = NULL;
     prt_transfer_kind kinds[5];
     int nkinds = 0;
+    bool per_vertex = false;
     cli_view view = CLI_VIEW_DEFAULTS;
     static const struct option opts[] = {
-        {"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'}, CLI_VIEW_LONG_OPTIONS, CLI_LIGHT_LONG_OPTIONS, {"threads", required_argument, 0, 'j'},
+        {"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'}, CLI_VIEW_LONG_OPTIONS, CLI_LIGHT_LONG_OPTIONS, {"threads", required_argument, 0, 'j'}, {"per-vertex", no_argument, 0, 'P'},
         {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt;
     optind = 1;
@@ -41,6 +43,7 @@ int cmd_render(int argc, char **argv)
         if (r) continue;
         switch (opt) {
         case 'o': output = optarg; break;
+        case 'P': per_vertex = true; break;
         case 'k': {
             char buf[256], *save_ptr = NULL;
             snprintf(buf, sizeof buf, "%s", optarg);
@@ -97,16 +100,26 @@ int cmd_render(int argc, char **argv)
         cli_view_camera(&view, prt_transfer_positions(t), prt_transfer_vertex_count(t), (float)width / height, &cam);
     }
     for (int k = 0; k < nkinds && !st; ++k) {
-        float *exit = NULL;
+        float *exit = NULL, *texels = NULL;
         st = cli_relight(&c, t, kinds[k], &sh, &light, rgb, &exit);
         if (st) break;
         prt_transfer_info info;
         prt_transfer_get_info(t, &info);
-        prt_render_mesh mesh = {prt_transfer_positions(t), rgb, prt_transfer_vertex_count(t), prt_transfer_indices(t),
-                                prt_transfer_triangle_count(t), prt_transfer_normals(t), exit, exit ? info.order : 0,
-                                prt_transfer_glossy_mirror(t)};
+        int tw = 0, th = 0;
+        if (!per_vertex && prt_transfer_texel_coeffs(t, kinds[k], NULL)) {
+            prt_transfer_texel_size(t, &tw, &th);
+            texels = malloc((size_t)tw * th * 3 * sizeof(float));
+            st = texels ? prt_relight_sh_texels(c.ctx, t, kinds[k], &sh, texels) : PRT_ERR_NO_MEMORY;
+            if (st) { free(exit); free(texels); break; }
+        }
+        prt_render_mesh mesh = {.positions = prt_transfer_positions(t), .radiance = rgb, .vertex_count = prt_transfer_vertex_count(t),
+                                .indices = prt_transfer_indices(t), .triangle_count = prt_transfer_triangle_count(t),
+                                .normals = prt_transfer_normals(t), .exit_sh = exit, .exit_order = exit ? info.order : 0,
+                                .exit_mirror = prt_transfer_glossy_mirror(t), .uv = prt_transfer_uvs(t), .texel_radiance = texels,
+                                .texel_width = tw, .texel_height = th};
         st = prt_render(r, &mesh, &cam, view.background, &panel);
         free(exit);
+        free(texels);
         if (st) break;
         for (int y = 0; y < height; ++y)
             memcpy(sheet.rgb + ((size_t)y * sheet.width + (size_t)k * width) * 3, panel.rgb + (size_t)y * width * 3,

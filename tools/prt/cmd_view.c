@@ -104,7 +104,7 @@ void view_rotate_env(viewer *v, float dyaw, float dpitch)
 }
 
 /* ---- relight worker ---- */
-static void relight(viewer *v, const relight_job *job, float *out, float *exit)
+static void relight(viewer *v, const relight_job *job, float *out, float *exit, float *texels, bool *used_texels)
 {
     prt_sh_light sh = v->sh;
     sh.order = job->order;
@@ -115,6 +115,8 @@ static void relight(viewer *v, const relight_job *job, float *out, float *exit)
     }
     size_t nv = prt_transfer_vertex_count(v->t);
     if (exit) memset(exit, 0, nv * v->exit_floats * sizeof(float));
+    *used_texels = texels && !job->component && prt_transfer_texel_coeffs(v->t, job->kind, NULL) &&
+                   !prt_relight_sh_texels(v->worker_ctx, v->t, job->kind, &sh, texels);
     if (prt_transfer_kind_is_glossy(job->kind)) {
         /* The diffuse kind of the same shadowing plus the view-dependent part; direct only is the
          * shadowed pair, indirect only the inter-reflected pair minus it. */
@@ -154,6 +156,8 @@ static void *worker(void *arg)
     float *buf = malloc(prt_transfer_vertex_count(v->t) * 3 * sizeof(float));
     float *ebuf = v->exit_floats ? malloc(prt_transfer_vertex_count(v->t) * v->exit_floats * sizeof(float)) : NULL;
     if (v->exit_floats && !ebuf) { free(buf); buf = NULL; }
+    float *tbuf = v->result_texels ? malloc((size_t)v->texel_width * v->texel_height * 3 * sizeof(float)) : NULL;
+    bool used_texels = false;
     pthread_mutex_lock(&v->lock);
     while (!v->quit_worker) {
         if (!v->job_posted) { pthread_cond_wait(&v->wake, &v->lock); continue; }
@@ -161,12 +165,14 @@ static void *worker(void *arg)
         v->job_posted = false;
         pthread_mutex_unlock(&v->lock);
         double t0 = now();
-        if (buf) relight(v, &job, buf, ebuf);
+        if (buf) relight(v, &job, buf, ebuf, tbuf, &used_texels);
         double ms = (now() - t0) * 1e3;
         pthread_mutex_lock(&v->lock);
         if (buf) {
             memcpy(v->result, buf, prt_transfer_vertex_count(v->t) * 3 * sizeof(float));
             if (ebuf) memcpy(v->result_exit, ebuf, prt_transfer_vertex_count(v->t) * v->exit_floats * sizeof(float));
+            v->result_has_texels = used_texels;
+            if (used_texels) memcpy(v->result_texels, tbuf, (size_t)v->texel_width * v->texel_height * 3 * sizeof(float));
             v->result_version = job.version;
             v->result_ready = true;
             v->relight_ms = ms;
@@ -176,6 +182,7 @@ static void *worker(void *arg)
     pthread_mutex_unlock(&v->lock);
     free(buf);
     free(ebuf);
+    free(tbuf);
     return NULL;
 }
 
@@ -197,6 +204,8 @@ static bool take_result(viewer *v)
     if (v->result_ready) {
         prt_window_set_radiance(v->win, v->result, prt_transfer_vertex_count(v->t));
         if (v->exit_floats) prt_window_set_exit(v->win, v->result_exit, prt_transfer_vertex_count(v->t));
+        if (v->result_texels)
+            prt_window_set_texels(v->win, v->result_has_texels ? v->result_texels : NULL, v->texel_width, v->texel_height);
         v->shown_version = v->result_version;
         v->result_ready = false;
         v->relight_ms_sum += v->relight_ms;
@@ -356,10 +365,13 @@ int cmd_view(int argc, char **argv)
         v.exit_floats = 3 * (size_t)info.order * info.order;
         v.result_exit = calloc(nv * v.exit_floats, sizeof(float));
     }
-    if (!v.result || (v.exit_floats && !v.result_exit)) {
+    if (prt_transfer_texel_size(v.t, &v.texel_width, &v.texel_height))
+        v.result_texels = calloc((size_t)v.texel_width * v.texel_height * 3, sizeof(float));
+    if (!v.result || (v.exit_floats && !v.result_exit) || (v.texel_width && !v.result_texels)) {
         cli_error(&c, "out of memory");
         free(v.result);
-    free(v.result_exit); free(v.result_exit);
+        free(v.result_exit);
+        free(v.result_texels);
         prt_window_release(v.win);
         prt_transfer_release(v.t);
         prt_context_release(v.worker_ctx);
@@ -367,8 +379,10 @@ int cmd_view(int argc, char **argv)
         view_script_free(script);
         return EXIT_NO_MEMORY;
     }
-    prt_render_mesh mesh = {prt_transfer_positions(v.t), v.result, nv, prt_transfer_indices(v.t), prt_transfer_triangle_count(v.t),
-                            prt_transfer_normals(v.t), v.result_exit, v.exit_floats ? info.order : 0, prt_transfer_glossy_mirror(v.t)};
+    prt_render_mesh mesh = {.positions = prt_transfer_positions(v.t), .radiance = v.result, .vertex_count = nv,
+                            .indices = prt_transfer_indices(v.t), .triangle_count = prt_transfer_triangle_count(v.t),
+                            .normals = prt_transfer_normals(v.t), .exit_sh = v.result_exit, .exit_order = v.exit_floats ? info.order : 0,
+                            .exit_mirror = prt_transfer_glossy_mirror(v.t), .uv = prt_transfer_uvs(v.t)};
     prt_window_set_mesh(v.win, &mesh);
     int fw, fh;
     prt_window_size(v.win, &fw, &fh);
@@ -419,6 +433,7 @@ int cmd_view(int argc, char **argv)
     pthread_cond_destroy(&v.wake);
     free(v.result);
     free(v.result_exit);
+    free(v.result_texels);
     prt_transfer_release(v.t);
     prt_context_release(v.worker_ctx);
     prt_context_release(c.ctx);

@@ -55,6 +55,9 @@ struct viewer {
     float *result;              /* written by the worker under lock */
     float *result_exit;         /* glossy exit SH per vertex, when the file has glossy sets */
     size_t exit_floats;         /* per vertex: 3 x order^2, or 0 */
+    float *result_texels;       /* per-texel radiance map, when the file has texel sets */
+    bool result_has_texels;     /* the latest result used them (its kind has a texel set) */
+    int texel_width, texel_height;
     unsigned result_version, shown_version;
     double relight_ms;
     prt_context *worker_ctx;
