@@ -175,6 +175,60 @@ int main(int argc, char **argv)
         relight_z[k] = best;
     }
     prt_transfer_release(z);
+
+    /* Glossy matrices at the bench's order: a lighting change relights them into exit SH vectors;
+     * a view change only re-evaluates those vectors in new directions (per pixel in the renderer;
+     * here per vertex on the CPU). */
+    const int gorder = order, gn = gorder * gorder;
+    bd.order = gorder;
+    bd.kinds = PRT_TRANSFER_GLOSSY_SHADOWED;
+    prt_transfer *g = NULL, *gz = NULL;
+    t0 = prt__now();
+    if (prt_bake_sh(ctx, s, &bd, &g)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return 1; }
+    double bake_glossy = prt__now() - t0;
+    t0 = prt__now();
+    if (prt_transfer_compress(ctx, g, NULL, &gz)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return 1; }
+    double compress_glossy = prt__now() - t0;
+    prt_compress_info gzi;
+    prt_transfer_compress_info(gz, PRT_TRANSFER_GLOSSY_SHADOWED, &gzi);
+    prt_brdf lobe;
+    prt_brdf_parse("phong:32", &lobe);
+    prt_sh_light gl;
+    prt_envmap_project_sh(sky, gorder, &gl);
+    float *exit = malloc(nv * 3 * (size_t)gn * sizeof(float)), *vrgb = malloc(nv * 3 * sizeof(float));
+    double glossy_light[2];
+    for (int k = 0; k < 2; ++k) {
+        prt_transfer *which = k ? gz : g;
+        prt_relight_sh_glossy(ctx, which, PRT_TRANSFER_GLOSSY_SHADOWED, &gl, &lobe, exit);
+        double best = 1e30;
+        for (int f = 0; f < frames / 4; ++f) {
+            gl.coeffs[0][0] += 1e-3f;
+            double a = prt__now();
+            prt_relight_sh_glossy(ctx, which, PRT_TRANSFER_GLOSSY_SHADOWED, &gl, &lobe, exit);
+            double dt = prt__now() - a;
+            if (dt < best) best = dt;
+        }
+        glossy_light[k] = best;
+    }
+    const float *P = prt_transfer_positions(g), *N = prt_transfer_normals(g);
+    double glossy_view = 1e30;
+    for (int f = 0; f < frames / 4; ++f) {
+        float eye[3] = {2.0f * cosf(0.01f * f), 1.0f, 2.0f * sinf(0.01f * f)};
+        double a = prt__now();
+#pragma omp parallel for schedule(static) num_threads(threads)
+        for (size_t v = 0; v < nv; ++v) {
+            float to_eye[3] = {eye[0] - P[v * 3], eye[1] - P[v * 3 + 1], eye[2] - P[v * 3 + 2]};
+            prt_glossy_eval(gorder, exit + v * 3 * gn, 1, N + v * 3, to_eye, vrgb + v * 3);
+        }
+        double dt = prt__now() - a;
+        if (dt < glossy_view) glossy_view = dt;
+    }
+    const double bytes_glossy = (double)nv * gn * gn * 4;
+    double bw_glossy = read_bandwidth((size_t)bytes_glossy, threads);
+    free(exit);
+    free(vrgb);
+    prt_transfer_release(gz);
+    prt_transfer_release(g);
     const double n2 = (double)order * order;
     double bytes_sh = nv * (n2 * 4 + 12 + 12), bytes_ir = nv * (3 * n2 * 4 + 12);
     double bw_dram = read_bandwidth((size_t)512 << 20, threads);
@@ -198,8 +252,14 @@ int main(int argc, char **argv)
     printf("  \"compress_s\": %.3f, \"cpca_interreflected_relative_error\": %.4f, \"cpca_interreflected_bytes_per_vertex\": %.1f,\n"
            "  \"relight_cpca_shadowed_ms\": %.4f, \"relight_cpca_interreflected_ms\": %.4f,\n",
            t_comp, zi.relative_error, (double)zi.bytes / (double)nv, relight_z[0] * 1e3, relight_z[1] * 1e3);
-    printf("  \"relight_interreflected_ms\": %.4f, \"relight_interreflected_GBps\": %.2f, \"read_same_bytes_interreflected_GBps\": %.2f, \"relight_interreflected_ratio\": %.3f\n}\n",
+    printf("  \"relight_interreflected_ms\": %.4f, \"relight_interreflected_GBps\": %.2f, \"read_same_bytes_interreflected_GBps\": %.2f, \"relight_interreflected_ratio\": %.3f,\n",
            relight[1] * 1e3, bytes_ir / relight[1] / 1e9, bw_ir / 1e9, bytes_ir / relight[1] / bw_ir);
+    printf("  \"glossy_order\": %d, \"bake_glossy_shadowed_s\": %.3f, \"compress_glossy_s\": %.3f, \"cpca_glossy_relative_error\": %.4f,\n"
+           "  \"cpca_glossy_bytes_per_vertex\": %.1f, \"glossy_bytes_per_vertex\": %.1f,\n"
+           "  \"glossy_light_change_ms\": %.4f, \"glossy_light_change_ratio_vs_read\": %.3f, \"cpca_glossy_light_change_ms\": %.4f,\n"
+           "  \"glossy_view_change_ms\": %.4f, \"read_same_bytes_glossy_GBps\": %.2f\n}\n",
+           gorder, bake_glossy, compress_glossy, gzi.relative_error, (double)gzi.bytes / (double)nv, (double)gn * gn * 4,
+           glossy_light[0] * 1e3, bytes_glossy / glossy_light[0] / bw_glossy, glossy_light[1] * 1e3, glossy_view * 1e3, bw_glossy / 1e9);
     fprintf(stderr,
             "bench: %s, %zu vertices, %d threads, order %d, %d samples\n"
             "  bake shadowed      %.2f s  %.2f Mrays/s  = %.2f x raw Embree occlusion (%.2f Mrays/s)\n"
@@ -207,11 +267,15 @@ int main(int argc, char **argv)
             "  relight shadowed   %.3f ms  %.1f GB/s = %.2f x a plain read of the same bytes (%.1f GB/s)\n"
             "  relight interrefl. %.3f ms  %.1f GB/s = %.2f x a plain read of the same bytes (%.1f GB/s)\n"
             "  DRAM read bandwidth %.1f GB/s\n"
-            "  clustered PCA (64 x 8): relight shadowed %.3f ms, inter-reflected %.3f ms (uncompressed above); %.1f B/vertex, error %.4f\n",
+            "  clustered PCA (64 x 8): relight shadowed %.3f ms, inter-reflected %.3f ms (uncompressed above); %.1f B/vertex, error %.4f\n"
+            "  glossy order %d: bake %.2f s; light change %.3f ms (%.2f x a read of the matrices), clustered PCA %.3f ms\n"
+            "                  (%.0f instead of %.0f B/vertex, error %.4f, compressed in %.1f s); view change %.3f ms\n",
             mesh, nv, threads, order, samples, bake_occ, bake_occ_rate / 1e6, bake_occ_rate / occ_rate, occ_rate / 1e6, bake_all,
             bake_all_rate / 1e6, bake_all_rate / hit_rate, hit_rate / 1e6, relight[0] * 1e3, bytes_sh / relight[0] / 1e9,
             bytes_sh / relight[0] / bw_sh, bw_sh / 1e9, relight[1] * 1e3, bytes_ir / relight[1] / 1e9, bytes_ir / relight[1] / bw_ir,
-            bw_ir / 1e9, bw_dram / 1e9, relight_z[0] * 1e3, relight_z[1] * 1e3, (double)zi.bytes / (double)nv, zi.relative_error);
+            bw_ir / 1e9, bw_dram / 1e9, relight_z[0] * 1e3, relight_z[1] * 1e3, (double)zi.bytes / (double)nv, zi.relative_error,
+            gorder, bake_glossy, glossy_light[0] * 1e3, bytes_glossy / glossy_light[0] / bw_glossy, glossy_light[1] * 1e3,
+            (double)gzi.bytes / (double)nv, (double)gn * gn * 4, gzi.relative_error, compress_glossy, glossy_view * 1e3);
     free(rgb);
     free(r.dirs);
     prt_envmap_release(sky);

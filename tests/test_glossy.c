@@ -396,6 +396,59 @@ static void test_glossy_interreflection_paths(void **state)
     prt_context_release(ctx);
 }
 
+/* Clustered PCA of order-5 glossy matrices (625 floats: the subspace-iteration path): error
+ * falls as vectors grow, and relighting from the compressed set stays within the error's bound. */
+static void test_glossy_cpca(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    test_mesh m = {0};
+    tm_pit(&m, 6);
+    tm_sphere(&m, (float[3]){0.1f, 0.3f, -0.1f}, 0.2f, 8, 16);
+    prt_scene *scene = tm_scene(ctx, &m, 0.6f);
+    prt_bake_desc d = {0};
+    d.order = 5;
+    d.samples = 512;
+    d.kinds = PRT_TRANSFER_GLOSSY_SHADOWED;
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake_sh(ctx, scene, &d, &t), PRT_OK);
+    size_t nv = prt_transfer_vertex_count(t);
+    prt_sh_light L = test_light();
+    prt_brdf lobe;
+    assert_int_equal(prt_brdf_parse("phong:16:1", &lobe), PRT_OK);
+    float *e0 = malloc(nv * 75 * sizeof(float)), *e1 = malloc(nv * 75 * sizeof(float));
+    assert_int_equal(prt_relight_sh_glossy(ctx, t, PRT_TRANSFER_GLOSSY_SHADOWED, &L, &lobe, e0), PRT_OK);
+    double prev = INFINITY;
+    for (int vectors = 2; vectors <= 12; vectors += 5) {
+        prt_compress_desc cd = {0};
+        cd.clusters = 8;
+        cd.vectors = vectors;
+        prt_transfer *z = NULL;
+        assert_int_equal(prt_transfer_compress(ctx, t, &cd, &z), PRT_OK);
+        prt_compress_info ci;
+        assert_int_equal(prt_transfer_compress_info(z, PRT_TRANSFER_GLOSSY_SHADOWED, &ci), PRT_OK);
+        print_message("glossy CPCA 8 x %d: relative error %.4f, %.0f B/vertex\n", vectors, ci.relative_error, (double)ci.bytes / nv);
+        assert_true(ci.relative_error < prev);
+        prev = ci.relative_error;
+        /* |e - e'| <= |A| |M - M'| |L| per vertex; summed: the reconstruction error times the
+         * largest lobe factor (1) times |L|. */
+        assert_int_equal(prt_relight_sh_glossy(ctx, z, PRT_TRANSFER_GLOSSY_SHADOWED, &L, &lobe, e1), PRT_OK);
+        double diff = 0, lnorm = 0;
+        for (size_t i = 0; i < nv * 75; ++i) diff += (double)(e0[i] - e1[i]) * (e0[i] - e1[i]);
+        for (int c = 0; c < 3; ++c)
+            for (int j = 0; j < 9; ++j) lnorm = fmax(lnorm, fabs(L.coeffs[c][j]));
+        assert_true(sqrt(diff) <= ci.rms_error * sqrt((double)nv) * 3 * lnorm + 1e-5);
+        prt_transfer_release(z);
+    }
+    assert_true(prev < 0.1);
+    free(e0);
+    free(e1);
+    prt_transfer_release(t);
+    prt_scene_release(scene);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 /* Glossy sets and materials survive the file; damage is caught. */
 static void test_glossy_file(void **state)
 {
@@ -466,6 +519,7 @@ int main(void)
         cmocka_unit_test(test_glossy_convex_phong),
         cmocka_unit_test(test_glossy_baked_brdf),
         cmocka_unit_test(test_glossy_interreflection_paths),
+        cmocka_unit_test(test_glossy_cpca),
         cmocka_unit_test_setup_teardown(test_glossy_file, test_dir_setup, test_dir_teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -54,16 +54,84 @@ typedef struct model { double *mean, *vecs, *vals; size_t members; } model;
 /* Squared reconstruction error of x with the cluster's first n vectors. */
 static double recon_err(const float *x, const model *m, int dim, int n)
 {
-    double r[512];   /* dim <= 3 * 100 */
     double e = 0;
-    for (int i = 0; i < dim; ++i) { r[i] = x[i] - m->mean[i]; e += r[i] * r[i]; }
+    for (int i = 0; i < dim; ++i) { double r = x[i] - m->mean[i]; e += r * r; }
     for (int j = 0; j < n; ++j) {
         const double *b = m->vecs + (size_t)j * dim;
         double p = 0;
-        for (int i = 0; i < dim; ++i) p += b[i] * r[i];
+        for (int i = 0; i < dim; ++i) p += b[i] * (x[i] - m->mean[i]);
         e -= p * p;
     }
     return e > 0 ? e : 0;
+}
+
+/* Vectors longer than this (glossy matrices) get the leading eigenvectors by subspace
+ * iteration instead of a full covariance decomposition, whose dim^3 cost would dominate. */
+#define FULL_EIGEN_MAX_DIM 512
+
+static double unit_hash(uint64_t a) { return (double)(mix(a) >> 11) / 9007199254740992.0 * 2.0 - 1.0; }
+
+/* Orthonormalizes the p rows of Q (dim each) in place, modified Gram-Schmidt; rows that
+ * vanish stay zero. */
+static void orthonormalize(double *Q, int p, int dim)
+{
+    for (int a = 0; a < p; ++a) {
+        double *qa = Q + (size_t)a * dim;
+        for (int b = 0; b < a; ++b) {
+            const double *qb = Q + (size_t)b * dim;
+            double d = 0;
+            for (int i = 0; i < dim; ++i) d += qa[i] * qb[i];
+            for (int i = 0; i < dim; ++i) qa[i] -= d * qb[i];
+        }
+        double l = 0;
+        for (int i = 0; i < dim; ++i) l += qa[i] * qa[i];
+        l = sqrt(l);
+        for (int i = 0; i < dim; ++i) qa[i] = l > 1e-300 ? qa[i] / l : 0.0;
+    }
+}
+
+/* Leading p-dimensional subspace of the n centred members' scatter (rows of Q) and the
+ * projected scatter C = (R Q^T)^T (R Q^T), p x p, by three rounds of subspace iteration. */
+static bool subspace(const float *X, const size_t *members, size_t n, const double *mean, int dim, int p, uint64_t seed,
+                     double *Q, double *C)
+{
+    double *Y = malloc(n * (size_t)p * sizeof(double)), *Z = malloc((size_t)p * dim * sizeof(double)), *r = malloc((size_t)dim * sizeof(double));
+    if (!Y || !Z || !r) { free(Y); free(Z); free(r); return false; }
+    for (size_t k = 0; k < (size_t)p * dim; ++k) Q[k] = unit_hash(seed * 0x9e3779b97f4a7c15ULL + k);
+    orthonormalize(Q, p, dim);
+    for (int round = 0; round <= 3; ++round) {
+        for (size_t m = 0; m < n; ++m) {   /* Y = R Q^T */
+            const float *x = X + members[m] * dim;
+            for (int i = 0; i < dim; ++i) r[i] = x[i] - mean[i];
+            for (int a = 0; a < p; ++a) {
+                const double *q = Q + (size_t)a * dim;
+                double s = 0;
+                for (int i = 0; i < dim; ++i) s += q[i] * r[i];
+                Y[m * p + a] = s;
+            }
+        }
+        if (round == 3) break;
+        memset(Z, 0, (size_t)p * dim * sizeof(double));   /* Z = (R^T Y)^T */
+        for (size_t m = 0; m < n; ++m) {
+            const float *x = X + members[m] * dim;
+            for (int i = 0; i < dim; ++i) r[i] = x[i] - mean[i];
+            for (int a = 0; a < p; ++a) {
+                const double y = Y[m * p + a];
+                double *z = Z + (size_t)a * dim;
+                for (int i = 0; i < dim; ++i) z[i] += y * r[i];
+            }
+        }
+        memcpy(Q, Z, (size_t)p * dim * sizeof(double));
+        orthonormalize(Q, p, dim);
+    }
+    for (int a = 0; a < p; ++a)
+        for (int b = 0; b < p; ++b) {
+            double s = 0;
+            for (size_t m = 0; m < n; ++m) s += Y[m * p + a] * Y[m * p + b];
+            C[a * p + b] = s;
+        }
+    free(Y); free(Z); free(r);
+    return true;
 }
 
 prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim, const prt_compress_desc *d, prt__progress *prog, prt__cpca **out)
@@ -73,21 +141,31 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
     if ((size_t)K > nv) K = (int)nv;
     const int iterations = d->iterations;
     size_t budget = (size_t)d->vectors * (size_t)K;
-    if (budget > (size_t)K * (size_t)dim) budget = (size_t)K * (size_t)dim;
+    if (budget > (size_t)K * (size_t)dim) budget = (size_t)K * (size_t)dim;   /* tightened below for long vectors */
     prt_status st = PRT_OK;
     uint32_t *assign = prt__calloc(nv, sizeof(uint32_t)), *counts = prt__calloc((size_t)K, sizeof(uint32_t));
     size_t *order = prt__calloc(nv, sizeof(size_t)), *first = prt__calloc((size_t)K + 1, sizeof(size_t));
     model *M = prt__calloc((size_t)K, sizeof(model));
     double *best = prt__calloc(nv, sizeof(double));
-    if (!assign || !counts || !order || !first || !M || !best || dim > 512) {
-        st = dim > 512 ? prt__fail(ctx, PRT_ERR_INVALID_ARG, "cannot compress vectors of %d floats (at most 512: glossy matrices up to order 4, one channel)", dim)
-                       : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    /* Large vectors keep only the leading eigenvectors a cluster can be given (vector budgets
+     * stay well below these), found in a subspace a few vectors wider. */
+    const bool large = dim > FULL_EIGEN_MAX_DIM;
+    int keep = dim;
+    if (large) {
+        keep = 2 * d->vectors + 8;
+        if (keep < 16) keep = 16;
+        if (keep > dim) keep = dim;
+    }
+    const int sub = large ? (keep + 8 < dim ? keep + 8 : dim) : dim;
+    if (budget > (size_t)K * (size_t)keep) budget = (size_t)K * (size_t)keep;
+    if (!assign || !counts || !order || !first || !M || !best) {
+        st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         goto done;
     }
     for (int k = 0; k < K; ++k) {
         M[k].mean = prt__calloc((size_t)dim, sizeof(double));
-        M[k].vecs = prt__calloc((size_t)dim * dim, sizeof(double));
-        M[k].vals = prt__calloc((size_t)dim, sizeof(double));
+        M[k].vecs = prt__calloc((size_t)sub * dim, sizeof(double));
+        M[k].vals = prt__calloc((size_t)sub, sizeof(double));
         if (!M[k].mean || !M[k].vecs || !M[k].vals) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
     }
     /* k-means++ seeding with hashed uniforms: deterministic for the seed. */
@@ -130,16 +208,24 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
         }
         /* Local PCA per cluster (clusters in parallel: each sums its own members in order). */
         int lapack_failed = 0;
+        double *small = large ? malloc((size_t)K * sub * sub * sizeof(double)) : NULL;   /* projected scatter per cluster */
+        if (large && !small) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
 #pragma omp parallel for schedule(dynamic, 1) num_threads(prt__threads(ctx))
         for (int k = 0; k < K; ++k) {
             size_t n = first[k + 1] - first[k];
             M[k].members = n;
-            if (n == 0) { memset(M[k].vals, 0, (size_t)dim * sizeof(double)); continue; }   /* keeps its old mean */
+            if (n == 0) { memset(M[k].vals, 0, (size_t)sub * sizeof(double)); continue; }   /* keeps its old mean */
             double *mean = M[k].mean, *cov = M[k].vecs;
             memset(mean, 0, (size_t)dim * sizeof(double));
             for (size_t j = first[k]; j < first[k + 1]; ++j)
                 for (int i = 0; i < dim; ++i) mean[i] += X[order[j] * dim + i];
             for (int i = 0; i < dim; ++i) mean[i] /= (double)n;
+            if (large) {
+                if (!subspace(X, order + first[k], n, mean, dim, sub, d->seed + (uint64_t)k * 131 + (uint64_t)it * 7919, M[k].vecs,
+                              small + (size_t)k * sub * sub))
+                    __atomic_store_n(&lapack_failed, 1, __ATOMIC_RELAXED);
+                continue;
+            }
             memset(cov, 0, (size_t)dim * dim * sizeof(double));
             double r[512];
             for (size_t j = first[k]; j < first[k + 1]; ++j) {
@@ -150,10 +236,27 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
         }
         /* Eigen decompositions one after another: OpenBLAS is not meant to be entered from several
          * OpenMP threads at once. */
-        double *tmp = malloc((size_t)dim * dim * sizeof(double));
-        for (int k = 0; k < K && tmp && !lapack_failed; ++k) {
+        double *tmp = malloc((size_t)sub * dim * sizeof(double));
+        for (int k = 0; k < K && tmp && !lapack_failed && large; ++k) {
             if (M[k].members == 0) continue;
-            double *cov = M[k].vecs, w[512];
+            double *C = small + (size_t)k * sub * sub, w[FULL_EIGEN_MAX_DIM];
+            if (LAPACKE_dsyev(LAPACK_ROW_MAJOR, 'V', 'U', sub, C, sub, w) != 0) { lapack_failed = 1; break; }
+            for (int j = 0; j < sub; ++j) {   /* descending; eigenvector j of the scatter = sum_a V[a][src] Q_a */
+                int src = sub - 1 - j;
+                M[k].vals[j] = w[src] > 0 ? w[src] : 0;
+                double *out = tmp + (size_t)j * dim;
+                memset(out, 0, (size_t)dim * sizeof(double));
+                for (int a = 0; a < sub; ++a) {
+                    const double va = C[(size_t)a * sub + src], *q = M[k].vecs + (size_t)a * dim;
+                    for (int i = 0; i < dim; ++i) out[i] += va * q[i];
+                }
+            }
+            memcpy(M[k].vecs, tmp, (size_t)sub * dim * sizeof(double));
+        }
+        free(small);
+        for (int k = 0; k < K && tmp && !lapack_failed && !large; ++k) {
+            if (M[k].members == 0) continue;
+            double *cov = M[k].vecs, w[FULL_EIGEN_MAX_DIM];
             /* Row-major upper triangle; eigenvalues come back ascending, vectors in columns. */
             if (LAPACKE_dsyev(LAPACK_ROW_MAJOR, 'V', 'U', dim, cov, dim, w) != 0) { lapack_failed = 1; break; }
             for (int j = 0; j < dim; ++j) {   /* descending order, one vector per row */
@@ -177,7 +280,7 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
             int pick = -1;
             double gain = 0;
             for (int k = 0; k < K; ++k) {
-                if (counts[k] >= (uint32_t)dim || counts[k] >= M[k].members || M[k].members == 0) continue;
+                if (counts[k] >= (uint32_t)keep || counts[k] >= M[k].members || M[k].members == 0) continue;
                 double g = M[k].vals[counts[k]] / (double)M[k].members;
                 if (g > gain) { gain = g; pick = k; }
             }
@@ -191,10 +294,30 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
         for (size_t v = 0; v < nv; ++v) {
             double be = INFINITY;
             uint32_t bk = assign[v];
-            for (int k = 0; k < K; ++k) {
+            /* Long vectors try their own cluster and the four with the nearest means only: testing
+             * every cluster's subspace would cost K times the vector's length times its vectors. */
+            enum { NEAR = 4 };
+            int cand[NEAR + 1], nc = 0;
+            if (large) {
+                double cd[NEAR];
+                for (int k = 0; k < K; ++k) {
+                    if (M[k].members == 0 || k == (int)assign[v]) continue;
+                    double e = 0;
+                    for (int i = 0; i < dim; ++i) { double t = X[v * dim + i] - M[k].mean[i]; e += t * t; }
+                    int pos = nc < NEAR ? nc++ : NEAR;
+                    if (pos == NEAR && e >= cd[NEAR - 1]) continue;
+                    if (pos == NEAR) pos = NEAR - 1;
+                    while (pos > 0 && cd[pos - 1] > e) { cd[pos] = cd[pos - 1]; cand[pos] = cand[pos - 1]; pos--; }
+                    cd[pos] = e;
+                    cand[pos] = k;
+                }
+                cand[nc++] = (int)assign[v];
+            }
+            for (int ci = 0; ci < (large ? nc : K); ++ci) {
+                int k = large ? cand[ci] : ci;
                 if (M[k].members == 0 && k != (int)assign[v]) continue;
                 double e = recon_err(X + v * dim, &M[k], dim, (int)counts[k]);
-                if (e < be) { be = e; bk = (uint32_t)k; }
+                if (e < be || (e == be && (uint32_t)k < bk)) { be = e; bk = (uint32_t)k; }
             }
             moved += bk != assign[v];
             assign[v] = bk;
@@ -243,7 +366,7 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
     for (size_t v = 0; v < nv; ++v) {
         uint32_t k = c->cluster_of[v];
         const float *x = X + v * dim, *m = c->means + (size_t)k * dim;
-        float rec[512];
+        float rec[dim];   /* a few KB at most: 3 x 625 floats for order-5 RGB matrices */
         for (int i = 0; i < dim; ++i) rec[i] = m[i];
         for (uint32_t j = 0; j < c->counts[k]; ++j) {
             const float *b = c->basis + (c->basis_start[k] + j) * dim;
