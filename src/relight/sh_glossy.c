@@ -109,13 +109,24 @@ prt_status prt_relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_tr
         int mat = brdf ? 1 : (t->mesh.material ? t->mesh.material[v] : 0);
         if (!t->glossy_exit && (!mat || !has[mat - 1])) { memset(e, 0, (size_t)3 * n * sizeof(float)); continue; }
         if (cp) {
-            uint32_t cl = cp->cluster_of[v];
-            memcpy(e, proj_mean + (size_t)cl * 3 * n, (size_t)3 * n * sizeof(float));
-            for (uint32_t j = 0; j < cp->counts[cl]; ++j) {
-                const float w = cp->weights[cp->weight_start[v] + j];
-                const float *restrict b = proj_basis + (cp->basis_start[cl] + j) * 3 * n;
+            const uint32_t cl = cp->cluster_of[v], cnt = cp->counts[cl];
+            const float *restrict mean = proj_mean + (size_t)cl * 3 * n, *restrict B = proj_basis + cp->basis_start[cl] * 3 * n;
+            const float *restrict w = cp->weights + cp->weight_start[v];
+            /* Four vectors per pass: adding them one by one into e chained every add through a
+             * store and a load of the same bytes. */
+            const int m3 = 3 * n;
+            memcpy(e, mean, (size_t)m3 * sizeof(float));
+            uint32_t j = 0;
+            for (; j + 4 <= cnt; j += 4) {
+                const float w0 = w[j], w1 = w[j + 1], w2 = w[j + 2], w3 = w[j + 3];
+                const float *restrict b0 = B + (size_t)j * m3, *restrict b1 = b0 + m3, *restrict b2 = b1 + m3, *restrict b3 = b2 + m3;
 #pragma omp simd
-                for (int i = 0; i < 3 * n; ++i) e[i] += w * b[i];
+                for (int i = 0; i < m3; ++i) e[i] += w0 * b0[i] + w1 * b1[i] + w2 * b2[i] + w3 * b3[i];
+            }
+            for (; j < cnt; ++j) {
+                const float wj = w[j], *restrict bj = B + (size_t)j * m3;
+#pragma omp simd
+                for (int i = 0; i < m3; ++i) e[i] += wj * bj[i];
             }
         } else {
             apply_light(s->coeffs + v * dim, s->channels, n, nl, light, e);
