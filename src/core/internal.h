@@ -50,6 +50,8 @@ prt_status prt__read_file(const char *path, void **data, size_t *size);
 /* Low-discrepancy points: element i of the 2D Hammersley-like sequence (Sobol' first two
  * dimensions) scrambled by seed; results in [0,1). */
 void prt__sobol2(uint32_t i, uint32_t seed, double *u, double *v);
+/* K_lm of the SH recurrence (core/sh.c) at [l * PRT_SH_MAX_ORDER + m], m <= l; for shaders. */
+void prt__sh_norms(float out[PRT_SH_MAX_ORDER * PRT_SH_MAX_ORDER]);
 /* Uniform direction on the sphere from (u,v). */
 void prt__sphere_dir(double u, double v, double dir[3]);
 

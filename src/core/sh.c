@@ -25,6 +25,13 @@ static void init_norms(void)
     __atomic_store_n(&norm_ready, 1, __ATOMIC_RELEASE);
 }
 
+void prt__sh_norms(float out[PRT_SH_MAX_ORDER * PRT_SH_MAX_ORDER])
+{
+    if (!__atomic_load_n(&norm_ready, __ATOMIC_ACQUIRE)) init_norms();
+    for (int l = 0; l < PRT_SH_MAX_ORDER; ++l)
+        for (int m = 0; m < PRT_SH_MAX_ORDER; ++m) out[l * PRT_SH_MAX_ORDER + m] = m <= l ? (float)norm_table[l][m] : 0.0f;
+}
+
 void prt_sh_eval(int order, const double dir[3], double *out)
 {
     if (!__atomic_load_n(&norm_ready, __ATOMIC_ACQUIRE)) init_norms();  /* idempotent: a race writes equal values */

@@ -148,3 +148,33 @@ const float *prt_transfer_texel_coeffs(const prt_transfer *t, prt_transfer_kind 
 }
 
 const float *prt_transfer_uvs(const prt_transfer *t) { return prt__mesh_has_uv(&t->mesh) ? t->mesh.uv : NULL; }
+
+void prt__texel_sets_free(prt__texel_sets *s)
+{
+    for (int k = 0; k < 3; ++k) free(s->coeffs[k]);
+    free(s->albedo);
+    free(s->covered);
+    memset(s, 0, sizeof *s);
+}
+
+prt_status prt__texel_sets_copy(prt__texel_sets *dst, const prt__texel_sets *src, int order)
+{
+    memset(dst, 0, sizeof *dst);
+    if (!src->width) return PRT_OK;
+    const size_t ntex = (size_t)src->width * src->height, nc = (size_t)order * order;
+    dst->width = src->width;
+    dst->height = src->height;
+    dst->albedo = malloc(ntex * 3 * sizeof(float));
+    dst->covered = malloc(ntex);
+    bool ok = dst->albedo && dst->covered;
+    if (ok) { memcpy(dst->albedo, src->albedo, ntex * 3 * sizeof(float)); memcpy(dst->covered, src->covered, ntex); }
+    for (int k = 0; k < 3 && ok; ++k) {
+        if (!src->coeffs[k]) continue;
+        dst->channels[k] = src->channels[k];
+        size_t bytes = ntex * (size_t)src->channels[k] * nc * sizeof(float);
+        ok = (dst->coeffs[k] = malloc(bytes)) != NULL;
+        if (ok) memcpy(dst->coeffs[k], src->coeffs[k], bytes);
+    }
+    if (!ok) { prt__texel_sets_free(dst); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory copying texel sets"); }
+    return PRT_OK;
+}

@@ -40,6 +40,9 @@ struct prt_scene {
     prt_environment_desc env;
 };
 
+/* The material id (1-based) of brdf in the scene's table, adding it if new; 0 when the table is full. */
+int prt__scene_brdf_id(prt_scene *scene, const prt_brdf *brdf);
+
 /* Adds the mesh file at path (anything assimp reads), with optional transform (row-major 4x4,
  * NULL = identity) and albedo override (NULL = from materials, else desc default). */
 prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform,

@@ -61,6 +61,15 @@ prt_status prt_scene_create_copy(prt_context *ctx, const float *positions, const
     return finish(ctx, s, &d, "(memory)", out);
 }
 
+int prt__scene_brdf_id(prt_scene *s, const prt_brdf *brdf)
+{
+    for (int k = 0; k < s->brdf_count; ++k)
+        if (!memcmp(&s->brdfs[k], brdf, sizeof *brdf)) return k + 1;
+    if (s->brdf_count == PRT__MAX_BRDFS) return 0;
+    s->brdfs[s->brdf_count++] = *brdf;
+    return s->brdf_count;
+}
+
 prt_status prt_scene_set_brdf(prt_scene *s, size_t first, size_t count, const prt_brdf *brdf)
 {
     if (!s || !brdf) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_brdf: scene and brdf are required");
@@ -68,14 +77,8 @@ prt_status prt_scene_set_brdf(prt_scene *s, size_t first, size_t count, const pr
         return prt__fail(NULL, PRT_ERR_INVALID_ARG, "vertex range %zu+%zu exceeds the scene's %zu vertices", first, count, s->mesh.vertex_count);
     prt_status st = prt_brdf_validate(brdf);
     if (st) return st;
-    int id = 0;
-    for (int k = 0; k < s->brdf_count && !id; ++k)
-        if (!memcmp(&s->brdfs[k], brdf, sizeof *brdf)) id = k + 1;
-    if (!id) {
-        if (s->brdf_count == PRT__MAX_BRDFS) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "more than %d BRDF materials", PRT__MAX_BRDFS);
-        s->brdfs[s->brdf_count++] = *brdf;
-        id = s->brdf_count;
-    }
+    int id = prt__scene_brdf_id(s, brdf);
+    if (!id) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "more than %d BRDF materials", PRT__MAX_BRDFS);
     float rho[3];
     prt_brdf_lambert_albedo(brdf, rho);
     for (size_t v = first; v < first + count; ++v) {

@@ -128,14 +128,8 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         const size_t first_vertex = m->vertex_count;
         if ((st = prt__import_mesh(ctx, full, xf, albedo, desc, m))) break;
         if (has_brdf) {
-            int id = 0;
-            for (int k = 0; k < scene->brdf_count && !id; ++k)
-                if (!memcmp(&scene->brdfs[k], &brdf, sizeof brdf)) id = k + 1;
-            if (!id) {
-                if (scene->brdf_count == PRT__MAX_BRDFS) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDF materials", path, PRT__MAX_BRDFS); break; }
-                scene->brdfs[scene->brdf_count++] = brdf;
-                id = scene->brdf_count;
-            }
+            int id = prt__scene_brdf_id(scene, &brdf);
+            if (!id) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDF materials", path, PRT__MAX_BRDFS); break; }
             memset(m->material + first_vertex, id, m->vertex_count - first_vertex);
         }
         index++;

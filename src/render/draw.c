@@ -61,7 +61,7 @@ static const char *FS_G =
     "#version 330 core\n"
     "in vec3 f_pos; in vec3 f_nrm; in vec3 f_rad; in vec3 f_bary; flat in ivec3 f_ids;\n"
     "uniform samplerBuffer exit_sh; uniform int order; uniform int mirror; uniform vec3 eye;\n"
-    "uniform float knorm[100];\n"
+    "uniform float knorm[100];   // [l * 10 + m], PRT_SH_MAX_ORDER = 10\n"
     "out vec4 color;\n"
     "vec3 coeff(int i) {\n"
     "  int n2 = order * order;\n"
@@ -264,19 +264,6 @@ void prt__draw_upload_exit(prt__draw *d, const float *exit_sh, size_t nv)
     glBindBuffer(GL_TEXTURE_BUFFER, 0);
 }
 
-/* K_lm of core/sh.c, for the shader's recurrence. */
-static void sh_norms(float out[100])
-{
-    for (int l = 0; l < PRT_SH_MAX_ORDER; ++l)
-        for (int m = 0; m < PRT_SH_MAX_ORDER; ++m) {
-            if (m > l) { out[l * 10 + m] = 0; continue; }
-            double ratio = 1.0;
-            for (int k = l - m + 1; k <= l + m; ++k) ratio /= k;
-            double k_lm = sqrt((2.0 * l + 1.0) / (4.0 * PRT_PI) * ratio);
-            out[l * 10 + m] = (float)(m == 0 ? k_lm : sqrt(2.0) * k_lm);
-        }
-}
-
 void prt__camera_matrix(const prt_camera *cam, float aspect, float near_far[2], float out[16])
 {
     float up[3] = {cam->up[0], cam->up[1], cam->up[2]};
@@ -318,8 +305,8 @@ void prt__draw_mesh(const prt__draw *d, const prt_camera *cam, int w, int h, con
         glBindTexture(GL_TEXTURE_2D, d->tex);
         glUniform1i(d->ut_map, 0);
     } else if (d->exit_order) {
-        static float knorm[100];
-        if (knorm[0] == 0.0f) sh_norms(knorm);
+        float knorm[PRT_SH_MAX_ORDER * PRT_SH_MAX_ORDER];   /* the same K_lm as the CPU's evaluation */
+        prt__sh_norms(knorm);
         glUseProgram(d->program_g);
         glUniformMatrix4fv(d->ug_mvp, 1, GL_FALSE, mvp);
         glUniform1i(d->ug_order, d->exit_order);
