@@ -69,6 +69,53 @@ prt_status prt_brdf_lobe_bands(const prt_brdf *b, int order, double *a);
  * are under-resolved). */
 prt_status prt_brdf_sh_matrix(const prt_brdf *b, int order, float *B);
 
+
+/* ---- Separable approximation (Kautz & McCool 1999; Wang, Tran & Luebke 2005) ----
+ * f(wi, wo) ~ sum_k g_k(wi) h_k(wo) per channel, from the SVD of the BRDF sampled on a
+ * resolution x resolution parameterization of the hemisphere for both directions. g_k are the
+ * light maps, h_k the view maps (sqrt(sigma_k) u_k and sqrt(sigma_k) v_k). Directions are in the
+ * local frame (z = normal, x = the tangent s, y = t; see prt_brdf_frame). */
+typedef enum prt_brdf_param {
+    PRT_BRDF_PARAM_GRID = 0,   /* x = (w.s + 1) / 2, y = (w.t + 1) / 2: the disk inside the square (eq. 10) */
+    PRT_BRDF_PARAM_POLAR       /* x = atan2(w.t, w.s) / 2pi, y = sqrt(1 - w.n) (eq. 11): better for anisotropy */
+} prt_brdf_param;
+
+#define PRT_BRDF_MAX_TERMS 16
+
+typedef struct prt_brdf_factor_desc {
+    int terms;              /* K, 1..PRT_BRDF_MAX_TERMS; 0 = 4 */
+    int resolution;         /* texels per side of the light and view maps, 4..96; 0 = 48 */
+    prt_brdf_param param;
+} prt_brdf_factor_desc;
+
+typedef struct prt_brdf_factors prt_brdf_factors;
+
+/* Samples f on the parameterization (cell centres; cells of the grid outside the disk are not
+ * directions and take their rim neighbour's values for filtering), factors each channel by a
+ * SVD (LAPACKE sgesdd; channels with equal samples share one) and keeps the leading
+ * max(K, 8) terms, of which the first K are used. */
+prt_status prt_brdf_factor(const prt_brdf *b, const prt_brdf_factor_desc *desc, prt_brdf_factors **out);
+void prt_brdf_factors_release(prt_brdf_factors *f);
+int prt_brdf_factors_terms(const prt_brdf_factors *f);
+/* Terms computed (>= terms): the error report covers them all. */
+int prt_brdf_factors_computed(const prt_brdf_factors *f);
+int prt_brdf_factors_resolution(const prt_brdf_factors *f);
+prt_brdf_param prt_brdf_factors_param(const prt_brdf_factors *f);
+/* Singular value k (0-based) of channel c. */
+float prt_brdf_factors_sigma(const prt_brdf_factors *f, int c, int k);
+/* Bilinearly filtered light (view = 0) or view (view = 1) maps at local direction w: out[c * terms + k]
+ * for the first `terms` terms (<= computed). Zero below the horizon. */
+void prt_brdf_factors_lookup(const prt_brdf_factors *f, int view, int terms, const float w[3], float *out);
+/* The approximation with the first `terms` terms at (wi, wo). */
+void prt_brdf_factors_eval(const prt_brdf_factors *f, int terms, const float wi[3], const float wo[3], float rgb[3]);
+/* Cosine-weighted RMS error against the analytic BRDF over `samples` direction pairs (uniform on
+ * the hemisphere, cosine of wi as weight; 0 = 100000), for K = 1 .. computed: rms[K - 1] and
+ * relative[K - 1] (RMS over the cosine-weighted RMS of f). Channels averaged. */
+prt_status prt_brdf_factors_error(const prt_brdf_factors *f, const prt_brdf *b, int samples, double *rms, double *relative);
+/* The frame of eq. 10 for a normal: s from the stereographic parameterization of normals (one
+ * discontinuity, at n = -y), t = n x s. */
+void prt_brdf_frame(const float n[3], float s[3], float t[3]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -14,5 +14,6 @@
 #include "prt/render.h"
 #include "prt/reference.h"
 #include "prt/compress.h"
+#include "prt/wavelet.h"
 
 #endif

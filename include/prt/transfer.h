@@ -29,7 +29,10 @@ typedef enum prt_transfer_kind {
      * Stored lighting-coefficient-major: M[j][i] is the response of incident coefficient i to
      * lighting coefficient j. */
     PRT_TRANSFER_GLOSSY_SHADOWED = 8,
-    PRT_TRANSFER_GLOSSY_INTERREFLECTED = 16   /* diffuse-to-glossy and glossy-to-glossy bounces */
+    PRT_TRANSFER_GLOSSY_INTERREFLECTED = 16,  /* diffuse-to-glossy and glossy-to-glossy bounces */
+    /* The wavelet method's sparse transport (prt/wavelet.h, prt_bake_wavelet): direct light plus
+     * the interreflection passes baked; not a prt_bake_sh kind. */
+    PRT_TRANSFER_WAVELET = 32
 } prt_transfer_kind;
 
 #define PRT_TRANSFER_ALL_KINDS 31u
@@ -142,7 +145,7 @@ prt_status prt_relight_sh_texels(prt_context *ctx, const prt_transfer *t, prt_tr
 
 const char *prt_transfer_kind_name(prt_transfer_kind kind);
 /* Parses "unshadowed", "shadowed", "interreflected" (or their first letter), "glossy-shadowed",
- * "glossy-interreflected". */
+ * "glossy-interreflected", "wavelet". */
 prt_status prt_transfer_kind_parse(const char *name, prt_transfer_kind *out);
 
 #ifdef __cplusplus

@@ -13,6 +13,7 @@ int prt__kind_index(prt_transfer_kind kind)
     case PRT_TRANSFER_INTERREFLECTED: return 2;
     case PRT_TRANSFER_GLOSSY_SHADOWED: return 3;
     case PRT_TRANSFER_GLOSSY_INTERREFLECTED: return 4;
+    case PRT_TRANSFER_WAVELET: return -1;   /* not an SH set */
     }
     return -1;
 }
@@ -23,6 +24,7 @@ const char *prt_transfer_kind_name(prt_transfer_kind kind)
 {
     static const char *names[PRT__KIND_COUNT] = {"unshadowed", "shadowed", "interreflected", "glossy-shadowed",
                                                  "glossy-interreflected"};
+    if (kind == PRT_TRANSFER_WAVELET) return "wavelet";
     int i = prt__kind_index(kind);
     return i < 0 ? "unknown" : names[i];
 }
@@ -34,8 +36,9 @@ prt_status prt_transfer_kind_parse(const char *name, prt_transfer_kind *out)
         const char *full = prt_transfer_kind_name(k);
         if (!strcasecmp(name, full) || (i < 3 && name[0] && !name[1] && name[0] == full[0])) { *out = k; return PRT_OK; }
     }
+    if (!strcasecmp(name, "wavelet")) { *out = PRT_TRANSFER_WAVELET; return PRT_OK; }
     return prt__fail(NULL, PRT_ERR_INVALID_ARG,
-                     "unknown transfer kind '%s' (use unshadowed, shadowed, interreflected, glossy-shadowed or glossy-interreflected)", name);
+                     "unknown transfer kind '%s' (use unshadowed, shadowed, interreflected, glossy-shadowed, glossy-interreflected or wavelet)", name);
 }
 
 void prt_transfer_release(prt_transfer *t)
@@ -47,6 +50,7 @@ void prt_transfer_release(prt_transfer *t)
         prt__cpca_free(t->sets[i].cpca);
     }
     prt__texel_sets_free(&t->texels);
+    prt__wavelet_set_free(t->wavelet);
     free(t);
 }
 
@@ -77,11 +81,16 @@ void prt_transfer_get_info(const prt_transfer *t, prt_transfer_info *info)
         for (int k = 0; k < 3; ++k) info->texel_bytes += ntex * (size_t)tx->channels[k] * t->order * t->order * sizeof(float);
         info->transfer_bytes += info->texel_bytes;
     }
+    if (t->wavelet) {
+        info->kinds |= PRT_TRANSFER_WAVELET;
+        info->transfer_bytes += prt__sparse_bytes(&t->wavelet->store);
+    }
     snprintf(info->source, sizeof info->source, "%s", t->source);
 }
 
 int prt_transfer_channels(const prt_transfer *t, prt_transfer_kind kind)
 {
+    if (kind == PRT_TRANSFER_WAVELET) return t->wavelet ? 3 : 0;
     int i = prt__kind_index(kind);
     return i < 0 ? 0 : t->sets[i].channels;
 }
@@ -177,4 +186,58 @@ prt_status prt__texel_sets_copy(prt__texel_sets *dst, const prt__texel_sets *src
     }
     if (!ok) { prt__texel_sets_free(dst); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory copying texel sets"); }
     return PRT_OK;
+}
+
+void prt__wavelet_set_free(prt__wavelet_set *w)
+{
+    if (!w) return;
+    free(w->term_count);
+    free(w->vec_start);
+    prt__sparse_free(&w->store);
+    for (int k = 0; k < PRT__MAX_BRDFS; ++k) prt_brdf_factors_release(w->factors[k]);
+    free(w);
+}
+
+bool prt__wavelet_index(prt__wavelet_set *w, size_t vertex_count, size_t *vectors)
+{
+    size_t at = 0;
+    for (size_t v = 0; v < vertex_count; ++v) {
+        if (w->term_count[v] < 1 || w->term_count[v] > PRT_BRDF_MAX_TERMS) return false;
+        w->vec_start[v] = at;
+        at += w->term_count[v];
+    }
+    w->vec_start[vertex_count] = at;
+    *vectors = at;
+    return true;
+}
+
+int prt_transfer_wavelet_info(const prt_transfer *t, prt_wavelet_info *info)
+{
+    if (info) memset(info, 0, sizeof *info);
+    if (!t || !t->wavelet) return 0;
+    const prt__wavelet_set *w = t->wavelet;
+    if (info) {
+        info->terms = w->terms;
+        info->coefficients = w->store.n;
+        info->bits = w->store.bits;
+        info->supersample = w->supersample;
+        info->bounces = w->bounces;
+        info->gather_resolution = w->gather_resolution;
+        info->brdf_resolution = w->brdf_resolution;
+        info->param = w->param;
+        info->vectors = w->store.vectors;
+        info->bytes = prt__sparse_bytes(&w->store);
+        for (int k = 0; k < PRT__MAX_BRDFS; ++k) info->glossy_materials += w->factors[k] != NULL;
+    }
+    return 1;
+}
+
+int prt_transfer_wavelet_vertex_terms(const prt_transfer *t, size_t v)
+{
+    return t && t->wavelet && v < t->mesh.vertex_count ? t->wavelet->term_count[v] : 0;
+}
+
+const prt_brdf_factors *prt_transfer_wavelet_factors(const prt_transfer *t, int k)
+{
+    return t && t->wavelet && k >= 1 && k <= PRT__MAX_BRDFS ? t->wavelet->factors[k - 1] : NULL;
 }

@@ -4,6 +4,9 @@
 
 #include "geom/mesh.h"
 #include "prt/compress.h"
+#include "prt/wavelet.h"
+#include "brdf/separable.h"
+#include "compress/sparse.h"
 
 #define PRT__KIND_COUNT 5
 
@@ -54,6 +57,20 @@ typedef struct prt__texel_sets {
 void prt__texel_sets_free(prt__texel_sets *s);
 prt_status prt__texel_sets_copy(prt__texel_sets *dst, const prt__texel_sets *src, int order);
 
+/* The wavelet method's transfer (prt/wavelet.h): per vertex term_count[v] sparse vectors,
+ * vertex v's first at vec_start[v]. */
+typedef struct prt__wavelet_set {
+    int terms, supersample, bounces, gather_resolution, brdf_resolution;
+    prt_brdf_param param;
+    uint8_t *term_count;                          /* [vertex] */
+    size_t *vec_start;                            /* [vertex + 1], derived */
+    prt__sparse_store store;
+    prt_brdf_factors *factors[PRT__MAX_BRDFS];    /* per material (k - 1); NULL = Lambertian */
+} prt__wavelet_set;
+void prt__wavelet_set_free(prt__wavelet_set *w);
+/* Fills vec_start from term_count; false if a count is 0 or above 16. */
+bool prt__wavelet_index(prt__wavelet_set *w, size_t vertex_count, size_t *vectors);
+
 struct prt_transfer {
     prt__mesh mesh;
     int order;
@@ -68,6 +85,7 @@ struct prt_transfer {
     int brdf_count;
     prt_brdf brdfs[PRT__MAX_BRDFS];   /* materials named by mesh.material */
     prt__texel_sets texels;
+    prt__wavelet_set *wavelet;        /* NULL unless baked with the wavelet method */
 };
 
 static inline bool prt__kind_glossy(int index) { return index >= 3; }

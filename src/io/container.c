@@ -26,6 +26,11 @@ static const unsigned char MAGIC[8] = {'P', 'R', 'T', 'F', 0x0D, 0x0A, 0x1A, 0x0
 #define CHUNK_UVS FOURCC('U', 'V', 'S', '0')
 #define CHUNK_TXAL FOURCC('T', 'X', 'A', 'L')
 #define CHUNK_TXLS FOURCC('T', 'X', 'L', 'S')
+#define CHUNK_WAVP FOURCC('W', 'A', 'V', 'P')
+#define CHUNK_WBRF FOURCC('W', 'B', 'R', 'F')
+#define CHUNK_WAVT FOURCC('W', 'A', 'V', 'T')
+#define WAVP_HEADER 48
+#define WBRF_HEADER (24 + 3 * PRT_BRDF_MAX_TERMS * 4)
 #define BRDF_RECORD 160   /* model, lobes, then 38 floats: see put_brdf */
 #define CPCA_HEADER 64
 #define PARTS 8
@@ -92,7 +97,7 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
     if (!t || !path) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_transfer_save: transfer and path are required");
     const prt__mesh *m = &t->mesh;
     cJSON *meta = cJSON_CreateObject();
-    cJSON_AddStringToObject(meta, "method", "sh");
+    cJSON_AddStringToObject(meta, "method", t->wavelet ? "wavelet" : "sh");
     cJSON_AddStringToObject(meta, "prt_version", prt_version_string());
     cJSON_AddNumberToObject(meta, "order", t->order);
     cJSON_AddNumberToObject(meta, "samples", t->samples);
@@ -114,7 +119,7 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
     cJSON_Delete(meta);
     if (!meta_text) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
 
-    chunk chunks[8 + PRT__KIND_COUNT];
+    chunk chunks[11 + PRT__KIND_COUNT + PRT__MAX_BRDFS];
     void *qbuf[2 * PRT__KIND_COUNT + 1];   /* quantized copies, freed after writing */
     int nqbuf = 0;
     memset(chunks, 0, sizeof chunks);
@@ -207,7 +212,39 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
             chunks[count++] = (chunk){CHUNK_TXLS, {h, tx->coeffs[k]}, {24, ntex * (size_t)tx->channels[k] * t->order * t->order * 4}, 0};
         }
     }
-    unsigned char head[HEADER_SIZE + ENTRY_SIZE * (8 + PRT__KIND_COUNT)];
+    unsigned char wavp_head[WAVP_HEADER], wbrf_head[PRT__MAX_BRDFS][WBRF_HEADER];
+    const prt__wavelet_set *ws = t->wavelet;
+    if (ws) {
+        /* Parameters, then one term count per vertex padded to 8 bytes. */
+        const prt__sparse_store *ss = &ws->store;
+        memset(wavp_head, 0, sizeof wavp_head);
+        const uint32_t p32[8] = {(uint32_t)ws->terms, (uint32_t)ss->n, (uint32_t)ss->bits, (uint32_t)ws->supersample,
+                                 (uint32_t)ws->bounces, (uint32_t)ws->gather_resolution, (uint32_t)ws->brdf_resolution, (uint32_t)ws->param};
+        for (int i = 0; i < 8; ++i) put32(wavp_head + 4 * i, p32[i]);
+        put64(wavp_head + 32, ss->vectors);
+        put64(wavp_head + 40, m->vertex_count);
+        static const unsigned char zero8[8] = {0};
+        chunks[count++] = (chunk){CHUNK_WAVP, {wavp_head, ws->term_count, zero8}, {WAVP_HEADER, m->vertex_count, ((m->vertex_count + 7) & ~(size_t)7) - m->vertex_count}, 0};
+        for (int k = 0; k < PRT__MAX_BRDFS; ++k) {
+            const prt_brdf_factors *f = ws->factors[k];
+            if (!f) continue;
+            unsigned char *h = wbrf_head[k];
+            memset(h, 0, WBRF_HEADER);
+            put32(h, (uint32_t)(k + 1));
+            put32(h + 4, (uint32_t)f->terms);
+            put32(h + 8, (uint32_t)f->computed);
+            put32(h + 12, (uint32_t)f->resolution);
+            put32(h + 16, (uint32_t)f->param);
+            for (int c = 0; c < 3; ++c) memcpy(h + 24 + (size_t)c * PRT_BRDF_MAX_TERMS * 4, f->sigma[c], PRT_BRDF_MAX_TERMS * 4);
+            size_t maps = (size_t)3 * f->computed * f->resolution * f->resolution * sizeof(float);
+            chunks[count++] = (chunk){CHUNK_WBRF, {h, f->light, f->view}, {WBRF_HEADER, maps, maps}, 0};
+        }
+        const size_t cells = ss->vectors * (size_t)ss->n, ib = cells * 2, vb = cells * 3 * (size_t)(ss->bits / 8);
+        static const unsigned char zero4[4] = {0};
+        chunks[count++] = (chunk){CHUNK_WAVT, {ss->index, zero4, ss->values, zero4, ss->scale},
+                                  {ib, ((ib + 3) & ~(size_t)3) - ib, vb, ((vb + 3) & ~(size_t)3) - vb, ss->vectors * 12}, 0};
+    }
+    unsigned char head[HEADER_SIZE + ENTRY_SIZE * (11 + PRT__KIND_COUNT + PRT__MAX_BRDFS)];
     memset(head, 0, sizeof head);
     memcpy(head, MAGIC, 8);
     put32(head + 8, FILE_VERSION);
@@ -258,6 +295,87 @@ static bool all_finite(const float *p, size_t n)
     return true;
 }
 
+/* Wavelet chunks: WAVP (parameters, per-vertex term counts) comes in pass 1, WBRF (one
+ * factorization per glossy material) and WAVT (the sparse vectors) in pass 2. */
+static prt_status read_wavelet_chunk(prt_context *ctx, prt_transfer *t, uint32_t id, const unsigned char *p, uint64_t len)
+{
+    const uint64_t nv = t->mesh.vertex_count;
+    prt__wavelet_set *w = t->wavelet;
+    if (id == CHUNK_WAVP) {
+        if (w || len < WAVP_HEADER || get64(p + 40) != nv || WAVP_HEADER + ((nv + 7) & ~7ull) != len)
+            return bad(ctx, "corrupt .prt file: invalid wavelet parameter chunk");
+        uint32_t terms = get32(p), n = get32(p + 4), bits = get32(p + 8), param = get32(p + 28);
+        uint64_t vectors = get64(p + 32);
+        if (terms < 1 || terms > PRT_BRDF_MAX_TERMS || n < 1 || n > PRT_WAVELET_DIM || (bits != 8 && bits != 16) || param > PRT_BRDF_PARAM_POLAR ||
+            vectors < nv || vectors > nv * PRT_BRDF_MAX_TERMS)
+            return bad(ctx, "corrupt .prt file: wavelet parameters out of range");
+        w = t->wavelet = prt__calloc(1, sizeof *w);
+        if (!w) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        w->terms = (int)terms;
+        w->supersample = (int)get32(p + 12);
+        w->bounces = (int)get32(p + 16);
+        w->gather_resolution = (int)get32(p + 20);
+        w->brdf_resolution = (int)get32(p + 24);
+        w->param = (prt_brdf_param)param;
+        w->term_count = malloc(nv);
+        w->vec_start = malloc((nv + 1) * sizeof(size_t));
+        if (!w->term_count || !w->vec_start) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        memcpy(w->term_count, p + WAVP_HEADER, nv);
+        size_t total = 0;
+        if (!prt__wavelet_index(w, nv, &total) || total != vectors) return bad(ctx, "corrupt .prt file: wavelet term counts are inconsistent");
+        w->store.n = (int)n;
+        w->store.bits = (int)bits;
+        w->store.dim = PRT_WAVELET_DIM;
+        w->store.vectors = vectors;
+        return PRT_OK;
+    }
+    if (!w) return bad(ctx, "corrupt .prt file: wavelet data without its parameter chunk");
+    if (id == CHUNK_WBRF) {
+        if (len < WBRF_HEADER) return bad(ctx, "corrupt .prt file: short BRDF factorization chunk");
+        uint32_t k = get32(p), terms = get32(p + 4), computed = get32(p + 8), res = get32(p + 12), param = get32(p + 16);
+        uint64_t maps = (uint64_t)3 * computed * res * res * 4;
+        if (k < 1 || k > PRT__MAX_BRDFS || w->factors[k - 1] || terms < 1 || terms > computed || computed > PRT_BRDF_MAX_TERMS || res < 4 ||
+            res > 96 || param > PRT_BRDF_PARAM_POLAR || WBRF_HEADER + 2 * maps != len)
+            return bad(ctx, "corrupt .prt file: invalid BRDF factorization chunk");
+        prt_brdf_factors *f = prt__brdf_factors_alloc((int)terms, (int)computed, (int)res, (prt_brdf_param)param);
+        if (!f) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        for (int c = 0; c < 3; ++c) memcpy(f->sigma[c], p + 24 + (size_t)c * PRT_BRDF_MAX_TERMS * 4, PRT_BRDF_MAX_TERMS * 4);
+        memcpy(f->light, p + WBRF_HEADER, maps);
+        memcpy(f->view, p + WBRF_HEADER + maps, maps);
+        w->factors[k - 1] = f;
+        if (!all_finite(f->light, maps / 4) || !all_finite(f->view, maps / 4)) return bad(ctx, "corrupt .prt file: non-finite BRDF maps");
+        return PRT_OK;
+    }
+    prt__sparse_store *s = &w->store;
+    if (s->index) return bad(ctx, "corrupt .prt file: two wavelet transfer chunks");
+    const uint64_t cells = (uint64_t)s->vectors * s->n, ib = cells * 2, vb = cells * 3 * (uint64_t)(s->bits / 8);
+    if (((ib + 3) & ~3ull) + ((vb + 3) & ~3ull) + s->vectors * 12 != len) return bad(ctx, "corrupt .prt file: wavelet transfer chunk size mismatch");
+    int n = s->n, bits = s->bits;
+    size_t vectors = s->vectors;
+    prt_status st = prt__sparse_alloc(s, vectors, n, bits, PRT_WAVELET_DIM);
+    if (st) return prt__fail(ctx, st, "out of memory");
+    memcpy(s->index, p, ib);
+    memcpy(s->values, p + ((ib + 3) & ~3ull), vb);
+    memcpy(s->scale, p + ((ib + 3) & ~3ull) + ((vb + 3) & ~3ull), vectors * 12);
+    for (uint64_t i = 0; i < cells; ++i)
+        if (s->index[i] >= PRT_WAVELET_DIM) return bad(ctx, "corrupt .prt file: a wavelet index is out of range");
+    if (!all_finite(s->scale, vectors * 3)) return bad(ctx, "corrupt .prt file: non-finite wavelet scales");
+    return PRT_OK;
+}
+
+/* Every vertex's term count must match its material's factorization. */
+static prt_status check_wavelet(prt_context *ctx, const prt_transfer *t)
+{
+    const prt__wavelet_set *w = t->wavelet;
+    if (!w->store.index) return bad(ctx, "corrupt .prt file: wavelet transfer chunk missing");
+    for (size_t v = 0; v < t->mesh.vertex_count; ++v) {
+        uint8_t mat = t->mesh.material[v];
+        const prt_brdf_factors *f = mat ? w->factors[mat - 1] : NULL;
+        if (w->term_count[v] != (f ? f->terms : 1)) return bad(ctx, "corrupt .prt file: wavelet term counts do not match the materials");
+    }
+    return PRT_OK;
+}
+
 prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t size, prt_transfer **out)
 {
     if (!out || (!data && size)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_load_memory: data and out are required");
@@ -294,8 +412,9 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
             if (off > size || len > size - off) { st = bad(ctx, "truncated .prt file: a chunk extends past the end"); break; }
             const unsigned char *p = b + off;
             bool mine = pass == 0   ? (id == CHUNK_META || id == CHUNK_MESH)
-                        : pass == 1 ? (id == CHUNK_SHTR || id == CHUNK_CPCA || id == CHUNK_MATL || id == CHUNK_UVS || id == CHUNK_TXAL)
-                                    : id == CHUNK_TXLS;
+                        : pass == 1 ? (id == CHUNK_SHTR || id == CHUNK_CPCA || id == CHUNK_MATL || id == CHUNK_UVS || id == CHUNK_TXAL ||
+                                       id == CHUNK_WAVP)
+                                    : (id == CHUNK_TXLS || id == CHUNK_WBRF || id == CHUNK_WAVT);
             if (!mine) continue;
             if (prt__crc32(p, (size_t)len) != crc) {
                 char what[5] = {(char)(id & 255), (char)(id >> 8 & 255), (char)(id >> 16 & 255), (char)(id >> 24), 0};
@@ -306,7 +425,7 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 cJSON *meta = cJSON_ParseWithLength((const char *)p, (size_t)len);
                 const cJSON *method = cJSON_GetObjectItemCaseSensitive(meta, "method");
                 if (!meta || !cJSON_IsString(method)) { cJSON_Delete(meta); st = bad(ctx, "corrupt .prt file: unreadable metadata"); break; }
-                if (strcmp(method->valuestring, "sh") != 0) {
+                if (strcmp(method->valuestring, "sh") != 0 && strcmp(method->valuestring, "wavelet") != 0) {
                     st = prt__fail(ctx, PRT_ERR_FORMAT, "this prt cannot read method '%.64s'", method->valuestring);
                     cJSON_Delete(meta);
                     break;
@@ -394,6 +513,8 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
                 if (!(t->texels.coeffs[k] = malloc(n * 4))) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
                 memcpy(t->texels.coeffs[k], p + 24, n * 4);
                 t->texels.channels[k] = (int)channels;
+            } else if (id == CHUNK_WAVP || id == CHUNK_WBRF || id == CHUNK_WAVT) {
+                st = read_wavelet_chunk(ctx, t, id, p, len);
             } else if (id == CHUNK_MATL) {
                 uint64_t nv = t->mesh.vertex_count;
                 uint32_t nb = len >= 8 ? get32(p) : 0;
@@ -499,7 +620,8 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
         }
     }
     if (!st && (!have_meta || !have_mesh)) st = bad(ctx, "corrupt .prt file: metadata or mesh chunk missing");
-    if (!st && !t->order) st = bad(ctx, ".prt file holds no transfer");
+    if (!st && t->wavelet) st = check_wavelet(ctx, t);
+    if (!st && !t->order && !t->wavelet) st = bad(ctx, ".prt file holds no transfer");
     if (st) { prt_transfer_release(t); return st; }
     *out = t;
     return PRT_OK;

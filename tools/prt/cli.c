@@ -290,7 +290,7 @@ prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh
         st = prt_sky_create(&sky, &env);
     }
     if (st) return st;
-    st = prt_envmap_project_sh(env, order, out);
+    st = prt_envmap_project_sh(env, order < 1 ? 1 : order, out);   /* wavelet-only files have no SH order */
     if (!st && (l->rotate[0] != 0 || l->rotate[1] != 0 || l->rotate[2] != 0)) {
         double rot[9];
         prt_rotation_from_euler_deg(l->rotate[0], l->rotate[1], l->rotate[2], rot);
@@ -304,6 +304,9 @@ prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh
 
 prt_transfer_kind cli_default_kind(const prt_transfer *t)
 {
+    prt_transfer_info info;
+    prt_transfer_get_info(t, &info);
+    if (info.kinds == PRT_TRANSFER_WAVELET) return PRT_TRANSFER_WAVELET;
     if (prt_transfer_channels(t, PRT_TRANSFER_INTERREFLECTED)) return PRT_TRANSFER_INTERREFLECTED;
     if (prt_transfer_channels(t, PRT_TRANSFER_SHADOWED)) return PRT_TRANSFER_SHADOWED;
     return PRT_TRANSFER_UNSHADOWED;
@@ -311,15 +314,17 @@ prt_transfer_kind cli_default_kind(const prt_transfer *t)
 
 prt_transfer_kind cli_default_view_kind(const prt_transfer *t)
 {
+    if (prt_transfer_channels(t, PRT_TRANSFER_WAVELET)) return PRT_TRANSFER_WAVELET;
     if (prt_transfer_channels(t, PRT_TRANSFER_GLOSSY_INTERREFLECTED)) return PRT_TRANSFER_GLOSSY_INTERREFLECTED;
     if (prt_transfer_channels(t, PRT_TRANSFER_GLOSSY_SHADOWED)) return PRT_TRANSFER_GLOSSY_SHADOWED;
     return cli_default_kind(t);
 }
 
 prt_status cli_relight(const cli *c, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *sh, const cli_light *l,
-                       float *rgb, float **exit)
+                       const float eye[3], float *rgb, float **exit)
 {
     *exit = NULL;
+    if (kind == PRT_TRANSFER_WAVELET) return cli_relight_wavelet(c, t, l, eye, rgb);
     if (!prt_transfer_kind_is_glossy(kind)) return prt_relight_sh(c->ctx, t, kind, sh, rgb);
     const size_t nv = prt_transfer_vertex_count(t);
     prt_transfer_info info;
@@ -335,4 +340,55 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, prt_transfer_kind ki
     if (st) { free(e); return st; }
     *exit = e;
     return PRT_OK;
+}
+
+void cli_report_factors(const prt_transfer *t)
+{
+    for (int k = 1; k <= prt_transfer_brdf_count(t); ++k) {
+        const prt_brdf_factors *f = prt_transfer_wavelet_factors(t, k);
+        if (!f) continue;
+        double rms[PRT_BRDF_MAX_TERMS], rel[PRT_BRDF_MAX_TERMS];
+        char spec[128];
+        prt_brdf_format(prt_transfer_brdf(t, k), spec, sizeof spec);
+        if (prt_brdf_factors_error(f, prt_transfer_brdf(t, k), 0, rms, rel)) continue;
+        fprintf(stderr, "prt bake: material %d (%s), %d terms used; cosine-weighted RMS error by terms:\n", k, spec, prt_brdf_factors_terms(f));
+        for (int K = 1; K <= prt_brdf_factors_computed(f); ++K)
+            fprintf(stderr, "  K=%-2d %.4g (%.1f%%)%s\n", K, rms[K - 1], 100.0 * rel[K - 1], K == prt_brdf_factors_terms(f) ? "  <- used" : "");
+    }
+}
+
+prt_status cli_light_wavelet(const cli *c, const cli_light *l, prt_wavelet_light **out)
+{
+    prt_envmap *env = NULL;
+    prt_status st;
+    if (l->env_path) {
+        st = prt_envmap_load(l->env_path, l->layout, &env);
+    } else {
+        prt_sky_desc sky = {0};
+        memcpy(sky.sun_dir, l->sun_dir, sizeof sky.sun_dir);
+        st = prt_sky_create(&sky, &env);
+    }
+    if (st) return st;
+    prt_wavelet_light_desc d = {0};
+    d.intensity = l->intensity;
+    if (l->rotate[0] != 0 || l->rotate[1] != 0 || l->rotate[2] != 0) prt_rotation_from_euler_deg(l->rotate[0], l->rotate[1], l->rotate[2], d.rotation);
+    st = prt_wavelet_light_create(c->ctx, env, &d, out);
+    prt_envmap_release(env);
+    return st;
+}
+
+prt_status cli_relight_wavelet(const cli *c, const prt_transfer *t, const cli_light *l, const float eye[3], float *rgb)
+{
+    prt_wavelet_info wi;
+    if (!prt_transfer_wavelet_info(t, &wi)) return PRT_ERR_INVALID_ARG;
+    prt_wavelet_light *wl = NULL;
+    prt_status st = cli_light_wavelet(c, l, &wl);
+    if (st) return st;
+    float *kvec = malloc(prt_transfer_vertex_count(t) * (size_t)wi.terms * 3 * sizeof(float));
+    if (!kvec) st = PRT_ERR_NO_MEMORY;
+    if (!st) st = prt_relight_wavelet(c->ctx, t, wl, kvec);
+    if (!st) st = prt_wavelet_shade(c->ctx, t, kvec, eye, rgb);
+    free(kvec);
+    prt_wavelet_light_release(wl);
+    return st;
 }

@@ -83,6 +83,13 @@ void cli_light_defaults_from_env(cli_light *l, const prt_environment_desc *e);
 /* Loads the environment (or builds the sky) and projects it to SH of the given order. */
 prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh_light *out, prt_envmap **env_out);
 
+/* Prints each factored material's cosine-weighted RMS error per number of terms (stderr). */
+void cli_report_factors(const prt_transfer *t);
+/* Wavelet files: the lighting as a wavelet light (rotation and intensity applied). */
+prt_status cli_light_wavelet(const cli *c, const cli_light *l, prt_wavelet_light **out);
+/* Wavelet files: exit radiance per vertex towards eye, lighting from l. */
+prt_status cli_relight_wavelet(const cli *c, const prt_transfer *t, const cli_light *l, const float eye[3], float *rgb);
+
 /* Scene options shared by bake, reference and sweep. */
 #define CLI_SCENE_OPTIONS_HELP \
     "      --max-edge L       subdivide until no edge is longer than L scene units\n" \
@@ -157,9 +164,10 @@ prt_transfer_kind cli_default_kind(const prt_transfer *t);
 prt_transfer_kind cli_default_view_kind(const prt_transfer *t);
 /* Relights one kind for drawing: rgb (3 per vertex) gets the view-independent part; for glossy
  * kinds *exit gets a new array of exit SH (3 x order^2 per vertex; free it) and rgb the diffuse
- * kind beside it (zero when the file lacks it). For diffuse kinds *exit is NULL. */
+ * kind beside it (zero when the file lacks it). For diffuse kinds *exit is NULL. The wavelet
+ * kind shades each vertex towards eye (a world position) on the CPU: rgb gets all of it. */
 prt_status cli_relight(const cli *c, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *sh, const cli_light *l,
-                       float *rgb, float **exit);
+                       const float eye[3], float *rgb, float **exit);
 
 int cmd_bake(int argc, char **argv);
 int cmd_relight(int argc, char **argv);

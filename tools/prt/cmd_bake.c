@@ -8,9 +8,11 @@
 
 static const char *HELP =
     "usage: prt bake SCENE -o OUT.prt [options]\n"
-    "Precomputes SH radiance transfer for every vertex of SCENE (a mesh file assimp reads,\n"
+    "Precomputes radiance transfer for every vertex of SCENE (a mesh file assimp reads,\n"
     "or a .json scene, see docs/SCENE.md) and writes it to OUT.prt.\n\n"
     "  -o, --output FILE      the .prt file to write (required; written atomically)\n"
+    "      --method M         sh (default): spherical-harmonic PRT; wavelet: all-frequency\n"
+    "                         glossy PRT (Haar cube maps, separable BRDFs; options below)\n"
     "      --order N          SH order, 1..10 bands (default 5 = 25 coefficients)\n"
     "      --samples N        directions per vertex over the sphere (default 1024)\n"
     "      --kinds LIST       comma list of unshadowed, shadowed, interreflected (or 'all':\n"
@@ -22,7 +24,8 @@ static const char *HELP =
     "      --bake-materials   bake each vertex's scene material BRDF into the glossy sets\n"
     "                         (without either, glossy sets hold incident radiance and the lobe\n"
     "                         is chosen when rendering)\n"
-    "      --bounces N        interreflection bounces (default 3)\n"
+    "      --bounces N        interreflection bounces (sh: 1..64, default 3; wavelet: 0..8,\n"
+    "                         default 0 = direct light only)\n"
     "      --texels N         also bake per-texel transfer (the diffuse kinds) over the mesh's\n"
     "                         UV layout into an N x N map; needs unique UVs inside [0, 1]\n"
     "      --normal-map FILE  tangent-space normal map perturbing the per-texel normals\n"
@@ -36,6 +39,16 @@ static const char *HELP =
     "      --vectors N        average PCA vectors per cluster for cpca and pca (default 8)\n"
     "      --quantize B       store uncompressed sets as 8- or 16-bit integers (scale and bias\n"
     "                         per coefficient)\n"
+    "Wavelet method (--method wavelet):\n"
+    "      --terms K          separable BRDF terms per glossy material, 1..16 (default 4); the\n"
+    "                         cosine-weighted RMS error per K is printed\n"
+    "      --coefficients N   Haar coefficients kept per transport vector (default 128)\n"
+    "      --bits B           8 (default) or 16-bit quantization per colour channel\n"
+    "      --supersample S    visibility rays per cube texel side, 1..4 (default 2: 6x128x128)\n"
+    "      --gather-res R     hit-point cube map per side for bounces, 4..64 (default 32)\n"
+    "      --brdf-res R       BRDF light/view map size, 4..96 (default 48)\n"
+    "      --param P          grid (default, eq. 10) or polar (eq. 11) BRDF parameterization\n"
+    "      --brdf SPEC        this BRDF for every vertex instead of the scene's materials\n"
     "  -j, --threads N        worker threads (default: all cores; results do not change)\n"
     "  -q, --quiet            no progress or warnings\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
@@ -56,8 +69,13 @@ int cmd_bake(int argc, char **argv)
         {"clusters", required_argument, 0, 'K'}, {"vectors", required_argument, 0, 'V'}, {"quantize", required_argument, 0, 'Q'},
         {"brdf", required_argument, 0, 'B'}, {"bake-materials", no_argument, 0, 'M'},
         {"texels", required_argument, 0, 'T'}, {"normal-map", required_argument, 0, 'N'},
+        {"method", required_argument, 0, 1500}, {"terms", required_argument, 0, 1501}, {"coefficients", required_argument, 0, 1502},
+        {"bits", required_argument, 0, 1503}, {"supersample", required_argument, 0, 1504}, {"gather-res", required_argument, 0, 1505},
+        {"brdf-res", required_argument, 0, 1506}, {"param", required_argument, 0, 1507},
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt, seed;
+    bool wavelet = false, sh_only = false, wavelet_only = false, have_bounces = false;
+    prt_wavelet_bake_desc wd = {0};
     prt_brdf bake_brdf;
     const char *normal_map_path = NULL;
     prt_image normal_map = {0};
@@ -70,7 +88,23 @@ int cmd_bake(int argc, char **argv)
         case 'o': output = optarg; break;
         case 'O': if (!cli_parse_int(optarg, 1, PRT_SH_MAX_ORDER, &bd.order)) return cli_usage(&c, "--order must be 1..%d", PRT_SH_MAX_ORDER); break;
         case 'n': if (!cli_parse_int(optarg, 16, 1 << 20, &bd.samples)) return cli_usage(&c, "--samples must be 16..1048576"); break;
-        case 'b': if (!cli_parse_int(optarg, 1, 64, &bd.bounces)) return cli_usage(&c, "--bounces must be 1..64"); break;
+        case 'b': if (!cli_parse_int(optarg, 0, 64, &bd.bounces)) return cli_usage(&c, "--bounces must be 0..64"); have_bounces = true; break;
+        case 1500:
+            if (!strcasecmp(optarg, "wavelet")) wavelet = true;
+            else if (strcasecmp(optarg, "sh")) return cli_usage(&c, "--method must be sh or wavelet");
+            break;
+        case 1501: if (!cli_parse_int(optarg, 1, PRT_BRDF_MAX_TERMS, &wd.terms)) return cli_usage(&c, "--terms must be 1..%d", PRT_BRDF_MAX_TERMS); wavelet_only = true; break;
+        case 1502: if (!cli_parse_int(optarg, 1, PRT_WAVELET_DIM, &wd.coefficients)) return cli_usage(&c, "--coefficients must be 1..%d", PRT_WAVELET_DIM); wavelet_only = true; break;
+        case 1503: if (!cli_parse_int(optarg, 8, 16, &wd.bits) || (wd.bits != 8 && wd.bits != 16)) return cli_usage(&c, "--bits must be 8 or 16"); wavelet_only = true; break;
+        case 1504: if (!cli_parse_int(optarg, 1, 4, &wd.supersample)) return cli_usage(&c, "--supersample must be 1..4"); wavelet_only = true; break;
+        case 1505: if (!cli_parse_int(optarg, 4, 64, &wd.gather_resolution)) return cli_usage(&c, "--gather-res must be 4..64"); wavelet_only = true; break;
+        case 1506: if (!cli_parse_int(optarg, 4, 96, &wd.brdf_resolution)) return cli_usage(&c, "--brdf-res must be 4..96"); wavelet_only = true; break;
+        case 1507:
+            if (!strcasecmp(optarg, "grid")) wd.param = PRT_BRDF_PARAM_GRID;
+            else if (!strcasecmp(optarg, "polar")) wd.param = PRT_BRDF_PARAM_POLAR;
+            else return cli_usage(&c, "--param must be grid or polar");
+            wavelet_only = true;
+            break;
         case 's': if (!cli_parse_int(optarg, 0, 2147483647, &seed)) return cli_usage(&c, "--seed must be a non-negative integer"); bd.seed = (uint32_t)seed; break;
         case 'k': {
             char buf[256], *save = NULL;
@@ -113,6 +147,18 @@ int cmd_bake(int argc, char **argv)
         }
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one SCENE argument");
+    sh_only = bd.order || bd.samples || bd.kinds || bd.seed || (bd.glossy_exit && !bd.glossy_brdf) || bd.texels || normal_map_path || compress || quantize;
+    if (wavelet && sh_only)
+        return cli_usage(&c, "--order, --samples, --kinds, --seed, --bake-materials, --texels, --normal-map, --compress and --quantize are SH options, not for --method wavelet");
+    if (!wavelet && wavelet_only) return cli_usage(&c, "--terms, --coefficients, --bits, --supersample, --gather-res, --brdf-res and --param need --method wavelet");
+    if (wavelet) {
+        if (bd.bounces > 8) return cli_usage(&c, "--bounces must be 0..8 for the wavelet method");
+        wd.bounces = bd.bounces;
+        wd.brdf = bd.glossy_brdf;
+        wd.ray_offset = bd.ray_offset;
+    } else if (have_bounces && bd.bounces < 1) {
+        return cli_usage(&c, "--bounces must be 1..64 for the SH method");
+    }
     if (!compress && (cd.clusters || cd.vectors)) return cli_usage(&c, "--clusters and --vectors need --compress");
     if (compress && quantize) return cli_usage(&c, "--quantize applies to uncompressed sets; drop --compress or --quantize");
     if (!output) return cli_usage(&c, "an output file is required (-o OUT.prt)");
@@ -152,10 +198,11 @@ int cmd_bake(int argc, char **argv)
                         prt_scene_triangle_count(scene), diag / 100.0f);
             }
         }
-        bd.progress = cli_progress;
-        bd.progress_user = &c;
-        st = prt_bake_sh(c.ctx, scene, &bd, &t);
+        bd.progress = wd.progress = cli_progress;
+        bd.progress_user = wd.progress_user = &c;
+        st = wavelet ? prt_bake_wavelet(c.ctx, scene, &wd, &t) : prt_bake_sh(c.ctx, scene, &bd, &t);
     }
+    if (!st && wavelet && !c.quiet) cli_report_factors(t);
     if (!st && compress) {
         prt_transfer *z = NULL;
         cd.progress = cli_progress;
@@ -172,8 +219,15 @@ int cmd_bake(int argc, char **argv)
     if (!st && !c.quiet) {
         prt_transfer_info info;
         prt_transfer_get_info(t, &info);
-        fprintf(stderr, "prt bake: wrote %s (order %d, %d samples, %.2f s on %d threads)\n", output, info.order, info.samples,
-                info.bake_seconds, info.threads);
+        if (wavelet) {
+            prt_wavelet_info wi;
+            prt_transfer_wavelet_info(t, &wi);
+            fprintf(stderr, "prt bake: wrote %s (wavelet: %zu vectors of %d coefficients at %d bits, %.1f bytes/vertex, %.2f s on %d threads)\n",
+                    output, wi.vectors, wi.coefficients, wi.bits, (double)wi.bytes / (double)info.vertex_count, info.bake_seconds, info.threads);
+        } else {
+            fprintf(stderr, "prt bake: wrote %s (order %d, %d samples, %.2f s on %d threads)\n", output, info.order, info.samples,
+                    info.bake_seconds, info.threads);
+        }
     }
     rc = st ? cli_fail(&c, st) : EXIT_OK;
     prt_transfer_release(t);

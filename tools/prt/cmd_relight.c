@@ -14,8 +14,10 @@ static const char *HELP =
     "Blender, Open3D); JSON holds {\"kind\", \"vertex_count\", \"radiance\": [[r,g,b], ...]}.\n\n"
     "  -o, --output FILE      .ply or .json (required; written atomically)\n"
     "  -k, --kind K           unshadowed | shadowed | interreflected | glossy-shadowed |\n"
-    "                         glossy-interreflected (default: the richest diffuse kind held)\n"
-    "      --eye X,Y,Z        glossy kinds: the viewpoint each vertex's colour is seen from\n"
+    "                         glossy-interreflected | wavelet (default: the richest diffuse kind\n"
+    "                         held; wavelet for files baked with --method wavelet)\n"
+    "      --eye X,Y,Z        glossy and wavelet kinds: the viewpoint each vertex's colour is\n"
+    "                         seen from (wavelet files with only Lambertian materials need none)\n"
     "      --texels           write the per-texel radiance map (top row = v 1) instead\n"
     CLI_LIGHT_OPTIONS_HELP
     "  -j, --threads N        worker threads\n"
@@ -58,7 +60,7 @@ int cmd_relight(int argc, char **argv)
     prt_transfer_kind kind = 0;
     if (kind_name && prt_transfer_kind_parse(kind_name, &kind)) return cli_usage(&c, "%s", prt_last_error());
     if (kind && prt_transfer_kind_is_glossy(kind) && !have_eye) return cli_usage(&c, "glossy kinds are view-dependent: give --eye X,Y,Z");
-    if (have_eye && !(kind && prt_transfer_kind_is_glossy(kind))) return cli_usage(&c, "--eye applies to glossy kinds only");
+    if (have_eye && kind && !prt_transfer_kind_is_glossy(kind) && kind != PRT_TRANSFER_WAVELET) return cli_usage(&c, "--eye applies to glossy and wavelet kinds only");
     int rc = cli_make_context(&c);
     if (rc) return rc;
     prt_transfer *t = NULL;
@@ -67,6 +69,16 @@ int cmd_relight(int argc, char **argv)
     prt_status st = prt_transfer_load(c.ctx, argv[optind], &t);
     if (!st) {
         if (!kind) kind = cli_default_kind(t);
+        if (kind == PRT_TRANSFER_WAVELET) {
+            prt_wavelet_info wi;
+            prt_transfer_wavelet_info(t, &wi);
+            if (wi.glossy_materials && !have_eye) { cli_error(&c, "'%s' has glossy wavelet transfer, which is view-dependent: give --eye X,Y,Z", argv[optind]); st = PRT_ERR_INVALID_ARG; }
+            else if (light.have_brdf) { cli_error(&c, "--brdf does not apply to wavelet transfer: its BRDFs are baked in"); st = PRT_ERR_INVALID_ARG; }
+            if (st) { prt_transfer_release(t); prt_context_release(c.ctx); return EXIT_USAGE; }
+        } else if (have_eye && !prt_transfer_kind_is_glossy(kind)) {
+            cli_error(&c, "--eye applies to glossy and wavelet kinds only");
+            prt_transfer_release(t); prt_context_release(c.ctx); return EXIT_USAGE;
+        }
         cli_light_defaults_from(&light, t);
         prt_transfer_info info;
         prt_transfer_get_info(t, &info);
@@ -98,7 +110,7 @@ int cmd_relight(int argc, char **argv)
     if (!st) {
         rgb = malloc(prt_transfer_vertex_count(t) * 3 * sizeof(float));
         float *exit = NULL;
-        st = rgb ? cli_relight(&c, t, kind, &sh, &light, rgb, &exit) : PRT_ERR_NO_MEMORY;
+        st = rgb ? cli_relight(&c, t, kind, &sh, &light, eye, rgb, &exit) : PRT_ERR_NO_MEMORY;
         if (!st && exit) {
             /* The view factor per vertex, as the renderer applies it per pixel. */
             const float *P = prt_transfer_positions(t), *N = prt_transfer_normals(t);

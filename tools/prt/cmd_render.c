@@ -14,7 +14,9 @@ static const char *HELP =
     "  -k, --kind LIST        comma list of unshadowed, shadowed, interreflected, glossy-shadowed,\n"
     "                         glossy-interreflected, or 'all' (the three diffuse kinds); default:\n"
     "                         the richest kind in the file. Glossy kinds add the view-dependent\n"
-    "                         part, evaluated per pixel, to the diffuse kind of the same shadowing\n"
+    "                         part, evaluated per pixel, to the diffuse kind of the same shadowing;\n"
+    "                         wavelet (files baked with --method wavelet) is shaded per vertex\n"
+    "                         towards the camera\n"
     CLI_VIEW_OPTIONS_HELP
     CLI_LIGHT_OPTIONS_HELP
     "      --per-vertex       shade from the vertex sets even where the file has per-texel ones\n"
@@ -101,7 +103,8 @@ int cmd_render(int argc, char **argv)
     }
     for (int k = 0; k < nkinds && !st; ++k) {
         float *exit = NULL, *texels = NULL;
-        st = cli_relight(&c, t, kinds[k], &sh, &light, rgb, &exit);
+        if (kinds[k] == PRT_TRANSFER_WAVELET && light.have_brdf) { cli_error(&c, "--brdf does not apply to wavelet transfer: its BRDFs are baked in"); st = PRT_ERR_INVALID_ARG; break; }
+        st = cli_relight(&c, t, kinds[k], &sh, &light, cam.eye, rgb, &exit);
         if (st) break;
         prt_transfer_info info;
         prt_transfer_get_info(t, &info);

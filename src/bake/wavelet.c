@@ -1,0 +1,440 @@
+/* All-frequency glossy transfer (Wang, Tran & Luebke 2005): per vertex and BRDF term k the
+ * transport T_k = g_k V cos dw over a 6 x 64 x 64 cube map, Haar-transformed per face and cut to
+ * its N largest coefficients (direct pass, eq. 3), then interreflection passes gathering the
+ * previous pass's vectors through a coarser cube map of hit points (eq. 8):
+ *   T^{i+1}_k(x) = sum_w [sum_l h_l(x~, -w) T^i_l(x~)] g_k(w) (1 - V(x, w)) cos dw.
+ * Every vertex depends only on its own rays and the previous pass, so results are identical for
+ * any thread count. */
+#include "bake/bake_internal.h"
+#include "core/cubemap.h"
+#include "core/haar.h"
+#include "geom/raycast.h"
+
+#include <string.h>
+
+#define FACE PRT_WAVELET_FACE
+#define DIM PRT_WAVELET_DIM
+#define PACKET 16
+#define PASS_BITS 16   /* intermediate passes keep 16 bits so truncation, not rounding, dominates */
+
+/* A table of cube map directions, ordered in 4 x 4 tiles so a packet's rays stay coherent. */
+typedef struct dir_table {
+    int count;
+    float *dir;      /* [entry][3] */
+    float *dw;       /* [entry] solid angle */
+    int *texel;      /* [entry] texel of the 64 x 64 (direct) or gather cube map */
+} dir_table;
+
+static void dir_table_free(dir_table *t) { free(t->dir); free(t->dw); free(t->texel); }
+
+/* res x res per face, each texel split into ss x ss samples; texel indices at res (not res * ss). */
+static bool dir_table_build(dir_table *t, int res, int ss)
+{
+    const int n = res * ss;
+    t->count = 6 * n * n;
+    t->dir = malloc((size_t)t->count * 3 * sizeof(float));
+    t->dw = malloc((size_t)t->count * sizeof(float));
+    t->texel = malloc((size_t)t->count * sizeof(int));
+    if (!t->dir || !t->dw || !t->texel) { dir_table_free(t); return false; }
+    const int tile = n >= 4 ? 4 : n;
+    int e = 0;
+    for (int f = 0; f < 6; ++f)
+        for (int ty = 0; ty < n; ty += tile)
+            for (int tx = 0; tx < n; tx += tile)
+                for (int y = ty; y < ty + tile; ++y)
+                    for (int x = tx; x < tx + tile; ++x, ++e) {
+                        prt__cube_texel(n, f, x, y, t->dir + (size_t)e * 3, &t->dw[e]);
+                        t->texel[e] = (f * res + y / ss) * res + x / ss;
+                    }
+    return true;
+}
+
+typedef struct wjob {
+    const prt__mesh *mesh;
+    prt__raycaster rc;
+    float *origins;
+    float *frames;                    /* [vertex][9]: s, t, n */
+    prt_brdf_factors *const *factors; /* per material */
+    const uint8_t *term_count;
+    const size_t *vec_start;
+    int kmax;
+    dir_table direct, gather;
+    prt__progress progress;
+} wjob;
+
+static const prt_brdf_factors *vertex_factors(const wjob *j, size_t v)
+{
+    uint8_t m = j->mesh->material[v];
+    return m ? j->factors[m - 1] : NULL;
+}
+
+/* Light-map values g[c * K + k] of vertex v towards world direction d (1 for Lambertian vertices). */
+static void light_maps(const wjob *j, size_t v, const float d[3], float *g, int K)
+{
+    const prt_brdf_factors *f = vertex_factors(j, v);
+    if (!f) { g[0] = g[1] = g[2] = 1.0f; return; }
+    const float *fr = j->frames + v * 9;
+    float w[3] = {prt__v3_dot(d, fr), prt__v3_dot(d, fr + 3), prt__v3_dot(d, fr + 6)};
+    prt_brdf_factors_lookup(f, 0, K, w, g);
+}
+
+/* View-map values of vertex v seen from world direction d (pointing away from v); false below its
+ * horizon. Lambertian vertices: albedo / pi. */
+static bool view_maps(const wjob *j, size_t v, const float d[3], float *h, int K)
+{
+    const float *fr = j->frames + v * 9;
+    float w[3] = {prt__v3_dot(d, fr), prt__v3_dot(d, fr + 3), prt__v3_dot(d, fr + 6)};
+    if (w[2] <= 0.0f) return false;
+    const prt_brdf_factors *f = vertex_factors(j, v);
+    if (!f) {
+        for (int c = 0; c < 3; ++c) h[c] = j->mesh->albedo[v * 3 + c] / (float)PRT_PI;
+        return true;
+    }
+    prt_brdf_factors_lookup(f, 1, K, w, h);
+    return true;
+}
+
+static void haar_planes(float *planes, int count)
+{
+    for (int p = 0; p < count; ++p)
+        for (int f = 0; f < 6; ++f) prt__haar2d_forward(planes + (size_t)p * DIM + (size_t)f * FACE * FACE, FACE);
+}
+
+/* Encodes K terms x 3 planes (or one grey plane for Lambertian vertices) into vectors from `first`. */
+static void encode_terms(prt__sparse_store *s, size_t first, const float *planes, int K, bool grey, prt__sparse_scratch *w)
+{
+    for (int k = 0; k < K; ++k) {
+        const float *r = planes + (size_t)k * 3 * DIM;
+        if (grey) prt__sparse_encode(s, first + k, r, r, r, w);
+        else prt__sparse_encode(s, first + k, r, r + DIM, r + 2 * DIM, w);
+    }
+}
+
+static void direct_vertex(const wjob *j, size_t v, float *planes, prt__sparse_store *out, prt__sparse_scratch *w)
+{
+    const int K = j->term_count[v];
+    const bool lambert = vertex_factors(j, v) == NULL;
+    memset(planes, 0, (size_t)K * 3 * DIM * sizeof(float));
+    const float *n = j->frames + v * 9 + 6, *org = j->origins + v * 3;
+    const dir_table *t = &j->direct;
+    struct RTCIntersectContext ictx;
+    rtcInitIntersectContext(&ictx);
+    int lane_entry[PACKET], e = 0;
+    float lane_cos[PACKET];
+    float g[3 * PRT_BRDF_MAX_TERMS];
+    while (e < t->count) {
+        int lanes = 0;
+        for (; e < t->count && lanes < PACKET; ++e) {
+            float c = prt__v3_dot(t->dir + (size_t)e * 3, n);
+            if (c <= 0.0f) continue;
+            lane_entry[lanes] = e;
+            lane_cos[lanes++] = c;
+        }
+        if (!lanes) break;
+        _Alignas(64) int valid[PACKET];
+        _Alignas(64) struct RTCRay16 r;
+        prt__packet_rays(&r, valid, org, t->dir, lane_entry, lanes);
+        rtcOccluded16(valid, j->rc.scene, &ictx, &r);
+        for (int l = 0; l < lanes; ++l) {
+            if (r.tfar[l] < 0.0f) continue;   /* blocked */
+            const int en = lane_entry[l], texel = t->texel[en];
+            const float wgt = lane_cos[l] * t->dw[en];
+            if (lambert) { planes[texel] += wgt; continue; }
+            light_maps(j, v, t->dir + (size_t)en * 3, g, K);
+            for (int k = 0; k < K; ++k)
+                for (int c = 0; c < 3; ++c) planes[((size_t)k * 3 + c) * DIM + texel] += g[c * K + k] * wgt;
+        }
+    }
+    haar_planes(planes, lambert ? 1 : 3 * K);
+    encode_terms(out, j->vec_start[v], planes, K, lambert, w);
+}
+
+/* Per-thread gathering state: weights per source vertex, [source term][receiver term][3]. */
+typedef struct gather_state {
+    int32_t *slot_of;        /* [vertex] -> entry, -1 when untouched */
+    uint32_t *touched;       /* entries' vertices */
+    float *weights;          /* [entry][kmax][kmax][3] */
+    size_t count, capacity;
+} gather_state;
+
+static float *gather_entry(gather_state *gs, uint32_t v, int kmax)
+{
+    const size_t stride = (size_t)kmax * kmax * 3;
+    if (gs->slot_of[v] < 0) {
+        if (gs->count == gs->capacity) {
+            size_t cap = gs->capacity ? 2 * gs->capacity : 256;
+            float *w = realloc(gs->weights, cap * stride * sizeof(float));
+            uint32_t *t = realloc(gs->touched, cap * sizeof(uint32_t));
+            if (w) gs->weights = w;
+            if (t) gs->touched = t;
+            if (!w || !t) return NULL;
+            gs->capacity = cap;
+        }
+        gs->slot_of[v] = (int32_t)gs->count;
+        gs->touched[gs->count] = v;
+        memset(gs->weights + gs->count * stride, 0, stride * sizeof(float));
+        gs->count++;
+    }
+    return gs->weights + (size_t)gs->slot_of[v] * stride;
+}
+
+static bool bounce_vertex(const wjob *j, size_t x, const prt__sparse_store *prev, float *planes, gather_state *gs,
+                          prt__sparse_store *out, prt__sparse_scratch *w)
+{
+    const prt__mesh *m = j->mesh;
+    const int K = j->term_count[x], kmax = j->kmax;
+    const bool lambert = vertex_factors(j, x) == NULL;
+    const float *n = j->frames + x * 9 + 6, *org = j->origins + x * 3;
+    const dir_table *t = &j->gather;
+    struct RTCIntersectContext ictx;
+    rtcInitIntersectContext(&ictx);
+    int lane_entry[PACKET], e = 0;
+    float lane_cos[PACKET], g[3 * PRT_BRDF_MAX_TERMS], h[3 * PRT_BRDF_MAX_TERMS];
+    gs->count = 0;
+    while (e < t->count) {
+        int lanes = 0;
+        for (; e < t->count && lanes < PACKET; ++e) {
+            float c = prt__v3_dot(t->dir + (size_t)e * 3, n);
+            if (c <= 0.0f) continue;
+            lane_entry[lanes] = e;
+            lane_cos[lanes++] = c;
+        }
+        if (!lanes) break;
+        _Alignas(64) int valid[PACKET];
+        _Alignas(64) struct RTCRayHit16 rh;
+        prt__packet_rayhits(&rh, valid, org, t->dir, lane_entry, lanes);
+        rtcIntersect16(valid, j->rc.scene, &ictx, &rh);
+        for (int l = 0; l < lanes; ++l) {
+            if (rh.hit.geomID[l] == RTC_INVALID_GEOMETRY_ID) continue;
+            const float *d = t->dir + (size_t)lane_entry[l] * 3;
+            /* Only front faces emit (see sh_diffuse.c). */
+            if (rh.hit.Ng_x[l] * d[0] + rh.hit.Ng_y[l] * d[1] + rh.hit.Ng_z[l] * d[2] >= 0.0f) continue;
+            const float wgt = lane_cos[l] * t->dw[lane_entry[l]];
+            float rw[3 * PRT_BRDF_MAX_TERMS];   /* receiver: g_k(w) cos dw, [k][c] */
+            if (lambert) rw[0] = rw[1] = rw[2] = wgt;
+            else {
+                light_maps(j, x, d, g, K);
+                for (int k = 0; k < K; ++k)
+                    for (int c = 0; c < 3; ++c) rw[k * 3 + c] = g[c * K + k] * wgt;
+            }
+            const uint32_t *tri = m->indices + (size_t)rh.hit.primID[l] * 3;
+            const float bary[3] = {1.0f - rh.hit.u[l] - rh.hit.v[l], rh.hit.u[l], rh.hit.v[l]};
+            const float back[3] = {-d[0], -d[1], -d[2]};
+            for (int q = 0; q < 3; ++q) {
+                if (bary[q] <= 0.0f) continue;
+                const uint32_t src = tri[q];
+                const int Ks = j->term_count[src];
+                if (!view_maps(j, src, back, h, Ks)) continue;
+                float *ew = gather_entry(gs, src, kmax);
+                if (!ew) return false;
+                for (int s = 0; s < Ks; ++s)
+                    for (int k = 0; k < K; ++k)
+                        for (int c = 0; c < 3; ++c) ew[((size_t)s * kmax + k) * 3 + c] += bary[q] * h[c * Ks + s] * rw[k * 3 + c];
+            }
+        }
+    }
+    memset(planes, 0, (size_t)K * 3 * DIM * sizeof(float));
+    for (size_t i = 0; i < gs->count; ++i) {
+        const uint32_t src = gs->touched[i];
+        const float *ew = gs->weights + i * (size_t)kmax * kmax * 3;
+        for (int s = 0; s < j->term_count[src]; ++s)
+            for (int k = 0; k < K; ++k)
+                prt__sparse_accumulate(prev, j->vec_start[src] + s, ew + ((size_t)s * kmax + k) * 3, planes + (size_t)k * 3 * DIM);
+        gs->slot_of[src] = -1;
+    }
+    encode_terms(out, j->vec_start[x], planes, K, false, w);
+    return true;
+}
+
+/* total = truncate(total + pass), vector by vector. */
+static void add_pass(const wjob *j, size_t v, const prt__sparse_store *a, const prt__sparse_store *b, float *planes, prt__sparse_store *out,
+                     prt__sparse_scratch *w)
+{
+    const int K = j->term_count[v];
+    const float one[3] = {1, 1, 1};
+    memset(planes, 0, (size_t)K * 3 * DIM * sizeof(float));
+    for (int k = 0; k < K; ++k) {
+        prt__sparse_accumulate(a, j->vec_start[v] + k, one, planes + (size_t)k * 3 * DIM);
+        if (b) prt__sparse_accumulate(b, j->vec_start[v] + k, one, planes + (size_t)k * 3 * DIM);
+    }
+    encode_terms(out, j->vec_start[v], planes, K, false, w);
+}
+
+typedef enum { STEP_DIRECT, STEP_BOUNCE, STEP_SUM } step_kind;
+
+static prt_status run_step(prt_context *ctx, wjob *j, step_kind kind, const char *stage, const prt__sparse_store *a,
+                           const prt__sparse_store *b, prt__sparse_store *out)
+{
+    const size_t nv = j->mesh->vertex_count;
+    int failed = 0;
+    prt__progress_begin(&j->progress, stage, nv);
+#pragma omp parallel num_threads(prt__threads(ctx))
+    {
+        float *planes = malloc((size_t)j->kmax * 3 * DIM * sizeof(float));
+        prt__sparse_scratch w = {0};
+        gather_state gs = {0};
+        bool ok = planes && prt__sparse_scratch_init(&w, DIM);
+        if (ok && kind == STEP_BOUNCE) {
+            gs.slot_of = malloc(nv * sizeof(int32_t));
+            if (gs.slot_of) memset(gs.slot_of, 0xff, nv * sizeof(int32_t));
+            else ok = false;
+        }
+        if (!ok) __atomic_store_n(&failed, 1, __ATOMIC_RELAXED);
+#pragma omp for schedule(dynamic, 16)
+        for (size_t v = 0; v < nv; ++v) {
+            if (!ok || __atomic_load_n(&failed, __ATOMIC_RELAXED) || prt__progress_cancelled(&j->progress)) continue;
+            if (kind == STEP_DIRECT) direct_vertex(j, v, planes, out, &w);
+            else if (kind == STEP_SUM) add_pass(j, v, a, b, planes, out, &w);
+            else if (!bounce_vertex(j, v, a, planes, &gs, out, &w)) __atomic_store_n(&failed, 1, __ATOMIC_RELAXED);
+            prt__progress_add(&j->progress, 1);
+        }
+        free(planes);
+        prt__sparse_scratch_free(&w);
+        free(gs.slot_of); free(gs.touched); free(gs.weights);
+    }
+    prt__progress_end(&j->progress);
+    if (failed) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory in the wavelet bake (%s)", stage);
+    if (prt__progress_cancelled(&j->progress)) return prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    return PRT_OK;
+}
+
+prt_status prt_bake_wavelet(prt_context *ctx, const prt_scene *scene, const prt_wavelet_bake_desc *desc_in, prt_transfer **out)
+{
+    if (!ctx || !scene || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake_wavelet: ctx, scene and out are required");
+    *out = NULL;
+    prt_wavelet_bake_desc d = desc_in ? *desc_in : (prt_wavelet_bake_desc){0};
+    if (!d.terms) d.terms = 4;
+    if (!d.coefficients) d.coefficients = 128;
+    if (!d.bits) d.bits = 8;
+    if (!d.supersample) d.supersample = 2;
+    if (!d.gather_resolution) d.gather_resolution = 32;
+    if (!d.brdf_resolution) d.brdf_resolution = 48;
+    if (d.terms < 1 || d.terms > PRT_BRDF_MAX_TERMS) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "BRDF terms %d out of range 1..%d", d.terms, PRT_BRDF_MAX_TERMS);
+    if (d.coefficients < 1 || d.coefficients > DIM) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "wavelet coefficients %d out of range 1..%d", d.coefficients, DIM);
+    if (d.bits != 8 && d.bits != 16) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "quantization bits must be 8 or 16, not %d", d.bits);
+    if (d.supersample < 1 || d.supersample > 4) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "supersampling %d out of range 1..4", d.supersample);
+    if (d.bounces < 0 || d.bounces > 8) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range 0..8", d.bounces);
+    if (d.gather_resolution < 4 || d.gather_resolution > 64) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "gather resolution %d out of range 4..64", d.gather_resolution);
+    if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
+    if (d.brdf) {
+        prt_status bst = prt_brdf_validate(d.brdf);
+        if (bst) return prt__fail(ctx, bst, "BRDF: %s", prt_last_error());
+    }
+
+    double t_start = prt__now();
+    prt_transfer *t = prt__calloc(1, sizeof *t);
+    prt__wavelet_set *ws = prt__calloc(1, sizeof *ws);
+    if (!t || !ws) { free(t); free(ws); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    t->wavelet = ws;
+    prt_status st = prt__mesh_copy(&t->mesh, &scene->mesh);
+    if (st) { prt_transfer_release(t); return st; }
+    const size_t nv = t->mesh.vertex_count;
+    snprintf(t->source, sizeof t->source, "%s", scene->source);
+    t->has_env = scene->has_env;
+    t->env = scene->env;
+    t->brdf_count = scene->brdf_count;
+    memcpy(t->brdfs, scene->brdfs, sizeof t->brdfs);
+    if (d.brdf) {   /* one BRDF everywhere: it becomes the only material, its kd the albedo */
+        t->brdf_count = 1;
+        t->brdfs[0] = *d.brdf;
+        float kd[3];
+        prt_brdf_lambert_albedo(d.brdf, kd);
+        for (size_t v = 0; v < nv; ++v) {
+            t->mesh.material[v] = 1;
+            memcpy(t->mesh.albedo + v * 3, kd, sizeof kd);
+        }
+    }
+    t->bounces = d.bounces;
+    t->threads = prt__threads(ctx);
+    ws->terms = d.terms;
+    ws->supersample = d.supersample;
+    ws->bounces = d.bounces;
+    ws->gather_resolution = d.gather_resolution;
+    ws->brdf_resolution = d.brdf_resolution;
+    ws->param = d.param;
+
+    wjob j = {0};
+    j.mesh = &t->mesh;
+    j.progress.fn = d.progress;
+    j.progress.user = d.progress_user;
+    prt__sparse_store direct = {0}, prev = {0}, next = {0}, total = {0};
+    /* Factor every material with a glossy part that some vertex uses. */
+    bool used[PRT__MAX_BRDFS + 1] = {false};
+    for (size_t v = 0; v < nv; ++v) used[t->mesh.material[v]] = true;
+    for (int k = 1; k <= t->brdf_count && !st; ++k) {
+        if (!used[k] || !prt_brdf_is_glossy(&t->brdfs[k - 1])) continue;
+        prt_brdf_factor_desc fd = {d.terms, d.brdf_resolution, d.param};
+        if ((st = prt_brdf_factor(&t->brdfs[k - 1], &fd, &ws->factors[k - 1]))) st = prt__fail(ctx, st, "material %d: %s", k, prt_last_error());
+    }
+    ws->term_count = prt__calloc(nv, 1);
+    ws->vec_start = prt__calloc(nv + 1, sizeof(size_t));
+    j.frames = prt__calloc(nv * 9, sizeof(float));
+    if (!st && (!ws->term_count || !ws->vec_start || !j.frames)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (st) goto done;
+    j.factors = ws->factors;
+    j.kmax = 1;
+    for (size_t v = 0; v < nv; ++v) {
+        uint8_t mat = t->mesh.material[v];
+        ws->term_count[v] = (uint8_t)(mat && ws->factors[mat - 1] ? d.terms : 1);
+        if (ws->term_count[v] > j.kmax) j.kmax = ws->term_count[v];
+        float *fr = j.frames + v * 9;
+        memcpy(fr + 6, t->mesh.normals + v * 3, 3 * sizeof(float));
+        prt_brdf_frame(fr + 6, fr, fr + 3);
+    }
+    size_t vectors = 0;
+    prt__wavelet_index(ws, nv, &vectors);
+    j.term_count = ws->term_count;
+    j.vec_start = ws->vec_start;
+    if (!dir_table_build(&j.direct, FACE, d.supersample) || (d.bounces && !dir_table_build(&j.gather, d.gather_resolution, 1))) {
+        st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        goto done;
+    }
+    if ((st = prt__raycaster_create(ctx, &t->mesh, &j.rc))) goto done;
+    if ((st = prt__vertex_origins(&t->mesh, d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh), &j.origins))) goto done;
+
+    if (!d.bounces) {
+        if ((st = prt__sparse_alloc(&ws->store, vectors, d.coefficients, d.bits, DIM))) goto done;
+        if ((st = run_step(ctx, &j, STEP_DIRECT, "wavelet direct", NULL, NULL, &ws->store))) goto done;
+    } else {
+        if ((st = prt__sparse_alloc(&direct, vectors, d.coefficients, PASS_BITS, DIM))) goto done;
+        if ((st = run_step(ctx, &j, STEP_DIRECT, "wavelet direct", NULL, NULL, &direct))) goto done;
+        if ((st = prt__sparse_alloc(&next, vectors, d.coefficients, PASS_BITS, DIM))) goto done;
+        const prt__sparse_store *from = &direct;
+        for (int b = 1; b <= d.bounces; ++b) {
+            char stage[32];
+            snprintf(stage, sizeof stage, "wavelet bounce %d/%d", b, d.bounces);
+            if ((st = run_step(ctx, &j, STEP_BOUNCE, stage, from, NULL, &next))) goto done;
+            /* Running total, truncated after each pass (as the paper does). */
+            const bool last = b == d.bounces;
+            prt__sparse_store sum = {0};
+            if ((st = prt__sparse_alloc(&sum, vectors, d.coefficients, last ? d.bits : PASS_BITS, DIM))) goto done;
+            st = run_step(ctx, &j, STEP_SUM, "wavelet sum", b == 1 ? &direct : &total, &next, &sum);
+            if (st) { prt__sparse_free(&sum); goto done; }
+            if (b > 1) prt__sparse_free(&total);
+            total = sum;
+            /* next becomes the source of the following pass. */
+            prt__sparse_store tmp = prev;
+            prev = next;
+            next = tmp;
+            if (!next.index && b < d.bounces && (st = prt__sparse_alloc(&next, vectors, d.coefficients, PASS_BITS, DIM))) goto done;
+            from = &prev;
+        }
+        ws->store = total;
+        memset(&total, 0, sizeof total);
+    }
+    t->bake_seconds = prt__now() - t_start;
+
+done:
+    prt__raycaster_release(&j.rc);
+    free(j.origins);
+    free(j.frames);
+    dir_table_free(&j.direct);
+    dir_table_free(&j.gather);
+    prt__sparse_free(&direct);
+    prt__sparse_free(&prev);
+    prt__sparse_free(&next);
+    prt__sparse_free(&total);
+    if (st) { prt_transfer_release(t); return st; }
+    *out = t;
+    return PRT_OK;
+}

@@ -1,0 +1,98 @@
+/* Wavelet relighting: the light-dependent K-vector g_k = T_k . L per lighting change (sparse
+ * transport against the dense, truncated light), and the view factor sum_k h_k(wo) g_k per view
+ * change. */
+#include "core/transfer_set.h"
+
+#include <string.h>
+
+static inline void dot_8(const uint16_t *idx, const int8_t *q, int n, const float *L, float acc[3])
+{
+    float a0 = 0, a1 = 0, a2 = 0;
+    for (int i = 0; i < n; ++i) {
+        const float *l = L + (size_t)idx[i] * 4;
+        a0 += (float)q[3 * i] * l[0];
+        a1 += (float)q[3 * i + 1] * l[1];
+        a2 += (float)q[3 * i + 2] * l[2];
+    }
+    acc[0] = a0; acc[1] = a1; acc[2] = a2;
+}
+
+static inline void dot_16(const uint16_t *idx, const int16_t *q, int n, const float *L, float acc[3])
+{
+    float a0 = 0, a1 = 0, a2 = 0;
+    for (int i = 0; i < n; ++i) {
+        const float *l = L + (size_t)idx[i] * 4;
+        a0 += (float)q[3 * i] * l[0];
+        a1 += (float)q[3 * i + 1] * l[1];
+        a2 += (float)q[3 * i + 2] * l[2];
+    }
+    acc[0] = a0; acc[1] = a1; acc[2] = a2;
+}
+
+prt_status prt_relight_wavelet(prt_context *ctx, const prt_transfer *t, const prt_wavelet_light *light, float *out_kvec)
+{
+    if (!t || !light || !out_kvec) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_wavelet: transfer, light and output are required");
+    const prt__wavelet_set *w = t->wavelet;
+    if (!w) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this .prt holds no wavelet transfer (bake with --method wavelet)");
+    const size_t nv = t->mesh.vertex_count;
+    const int K = w->terms, n = w->store.n;
+    const float *L = prt_wavelet_light_coeffs(light);
+    const prt__sparse_store *s = &w->store;
+#pragma omp parallel for schedule(static, 256) num_threads(prt__threads(ctx))
+    for (size_t v = 0; v < nv; ++v) {
+        float *o = out_kvec + v * (size_t)K * 3;
+        memset(o, 0, (size_t)K * 3 * sizeof(float));
+        for (int k = 0; k < w->term_count[v]; ++k) {
+            const size_t vec = w->vec_start[v] + k;
+            float acc[3];
+            if (s->bits == 8) dot_8(s->index + vec * n, (const int8_t *)s->values + vec * n * 3, n, L, acc);
+            else dot_16(s->index + vec * n, (const int16_t *)s->values + vec * n * 3, n, L, acc);
+            for (int c = 0; c < 3; ++c) o[k * 3 + c] = acc[c] * s->scale[vec * 3 + c];
+        }
+    }
+    return PRT_OK;
+}
+
+prt_status prt_wavelet_shade(prt_context *ctx, const prt_transfer *t, const float *kvec, const float eye[3], float *out_rgb)
+{
+    if (!t || !kvec || !eye || !out_rgb) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_wavelet_shade: transfer, K-vectors, eye and output are required");
+    const prt__wavelet_set *w = t->wavelet;
+    if (!w) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this .prt holds no wavelet transfer (bake with --method wavelet)");
+    const prt__mesh *m = &t->mesh;
+    const size_t nv = m->vertex_count;
+    const int K = w->terms;
+#pragma omp parallel for schedule(static, 256) num_threads(prt__threads(ctx))
+    for (size_t v = 0; v < nv; ++v) {
+        const float *g = kvec + v * (size_t)K * 3;
+        float *o = out_rgb + v * 3;
+        const uint8_t mat = m->material[v];
+        const prt_brdf_factors *f = mat ? w->factors[mat - 1] : NULL;
+        if (!f) {
+            for (int c = 0; c < 3; ++c) o[c] = m->albedo[v * 3 + c] / (float)PRT_PI * g[c];
+            continue;
+        }
+        const float *n = m->normals + v * 3;
+        float s[3], tt[3], wo[3], loc[3], h[3 * PRT_BRDF_MAX_TERMS];
+        prt_brdf_frame(n, s, tt);
+        prt__v3_sub(eye, m->positions + v * 3, wo);
+        prt__v3_normalize(wo);
+        loc[0] = prt__v3_dot(wo, s);
+        loc[1] = prt__v3_dot(wo, tt);
+        loc[2] = prt__v3_dot(wo, n);
+        /* Interpolated normals turn slightly away from the eye along silhouettes: read the view
+         * maps just above the horizon there instead of going black. */
+        if (loc[2] < 0.02f) {
+            float r = sqrtf(loc[0] * loc[0] + loc[1] * loc[1]);
+            float sc = r > 0 ? sqrtf(1.0f - 0.02f * 0.02f) / r : 0.0f;
+            loc[0] *= sc; loc[1] *= sc; loc[2] = 0.02f;
+        }
+        const int Kv = w->term_count[v];
+        prt_brdf_factors_lookup(f, 1, Kv, loc, h);
+        for (int c = 0; c < 3; ++c) {
+            float acc = 0;
+            for (int k = 0; k < Kv; ++k) acc += h[c * Kv + k] * g[k * 3 + c];
+            o[c] = acc;
+        }
+    }
+    return PRT_OK;
+}
