@@ -88,6 +88,14 @@ prt_status prt_relight_wavelet(prt_context *ctx, const prt_transfer *t, const pr
  * direction dotted with its K-vector. Recompute when the view changes. */
 prt_status prt_wavelet_shade(prt_context *ctx, const prt_transfer *t, const float *kvec, const float eye[3], float *out_rgb);
 
+/* Vertex v's term k decoded: its kept coefficients' indices and RGB values (dequantized), at
+ * most info.coefficients of each; returns how many (0 when v or k is out of range). */
+int prt_transfer_wavelet_vector(const prt_transfer *t, size_t v, int k, int *index, float *rgb);
+
+/* The orthonormal 2D Haar transform used per cube face (non-standard decomposition, Mallat
+ * layout), in place on an n x n image, n a power of two from 1 to 128; inverse != 0 undoes it. */
+prt_status prt_haar2d(float *img, int n, int inverse);
+
 /* Cube map geometry, for tests and tools: the unit direction through the centre of texel i and
  * its solid angle. */
 void prt_wavelet_texel(int index, float dir[3], float *solid_angle);

@@ -381,6 +381,7 @@ prt_status prt_bake_wavelet(prt_context *ctx, const prt_scene *scene, const prt_
         memcpy(fr + 6, t->mesh.normals + v * 3, 3 * sizeof(float));
         prt_brdf_frame(fr + 6, fr, fr + 3);
     }
+    ws->terms = j.kmax;   /* K-vectors are this long: 1 when every vertex is Lambertian */
     size_t vectors = 0;
     prt__wavelet_index(ws, nv, &vectors);
     j.term_count = ws->term_count;

@@ -2,6 +2,8 @@
  * (a b / c d) of the current s x s average image by its average and three details, each scaled
  * by 1/2 so that the step is orthonormal. */
 #include "core/haar.h"
+#include "core/internal.h"
+#include "prt/wavelet.h"
 
 #include <string.h>
 
@@ -43,4 +45,13 @@ void prt__haar2d_inverse(float *img, int n)
         }
         for (int y = 0; y < s; ++y) memcpy(img + (size_t)y * n, out + (size_t)y * s, (size_t)s * sizeof(float));
     }
+}
+
+prt_status prt_haar2d(float *img, int n, int inverse)
+{
+    if (!img || n < 1 || n > PRT__HAAR_MAX || (n & (n - 1)))
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "Haar transform size %d must be a power of two from 1 to %d", n, PRT__HAAR_MAX);
+    if (inverse) prt__haar2d_inverse(img, n);
+    else prt__haar2d_forward(img, n);
+    return PRT_OK;
 }

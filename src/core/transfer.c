@@ -241,3 +241,12 @@ const prt_brdf_factors *prt_transfer_wavelet_factors(const prt_transfer *t, int 
 {
     return t && t->wavelet && k >= 1 && k <= PRT__MAX_BRDFS ? t->wavelet->factors[k - 1] : NULL;
 }
+
+int prt_transfer_wavelet_vector(const prt_transfer *t, size_t v, int k, int *index, float *rgb)
+{
+    if (!t || !t->wavelet || v >= t->mesh.vertex_count || k < 0 || k >= t->wavelet->term_count[v]) return 0;
+    const prt__wavelet_set *w = t->wavelet;
+    const size_t vec = w->vec_start[v] + (size_t)k;
+    for (int i = 0; i < w->store.n; ++i) prt__sparse_get(&w->store, vec, i, &index[i], rgb + 3 * i);
+    return w->store.n;
+}

@@ -79,6 +79,8 @@ prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, con
                 prt__cube_dir(face, a, b, dir);
                 /* Weight by the solid angle of the sample: the cube's Jacobian (1 + a^2 + b^2)^-3/2. */
                 double r2 = 1.0 + (double)a * a + (double)b * b, w = 1.0 / (r2 * sqrt(r2));
+                const float inv = (float)(1.0 / sqrt(r2));   /* |dir| = sqrt(r2); lookups want unit vectors */
+                for (int i = 0; i < 3; ++i) dir[i] *= inv;
                 for (int i = 0; i < 3; ++i) src[i] = (float)(R[i] * dir[0] + R[3 + i] * dir[1] + R[6 + i] * dir[2]);   /* R^T d */
                 prt_envmap_lookup(env, src, rgb);
                 for (int c = 0; c < 3; ++c) acc[c] += w * rgb[c];
@@ -106,9 +108,12 @@ prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, con
         free(sorted);
     }
     float maxabs[3] = {0, 0, 0};
-    int kept = 0;
+    /* Everything above the threshold, then ties in index order up to the count. */
+    int above = 0, kept = 0;
+    for (int j = 0; j < DIM; ++j) above += mag[j] > thr;
+    int ties = d.coefficients - above;
     for (int j = 0; j < DIM; ++j) {
-        if (!(mag[j] >= thr) || kept == d.coefficients) { mag[j] = -1; continue; }
+        if (!(mag[j] > thr || (mag[j] == thr && ties-- > 0))) { mag[j] = -1; continue; }
         kept++;
         for (int c = 0; c < 3; ++c) maxabs[c] = fmaxf(maxabs[c], fabsf(planes[(size_t)c * DIM + j]));
     }

@@ -1,0 +1,608 @@
+/* The wavelet method (Wang, Tran & Luebke 2005): Haar basis, separable BRDFs, sparse quantized
+ * transport, interreflection passes, against analytic answers, the SH method and the reference
+ * path tracer. */
+#include "common.h"
+
+#define DIM PRT_WAVELET_DIM
+
+static uint32_t rng_state = 12345u;
+static float frand(void)
+{
+    rng_state = rng_state * 1664525u + 1013904223u;
+    return (float)(rng_state >> 8) / 16777216.0f;
+}
+
+/* Orthonormal: inner products survive the transform; exactly invertible; the basis functions of a
+ * small size form an identity Gram matrix. */
+static void test_haar(void **state)
+{
+    (void)state;
+    for (int n = 1; n <= 128; n *= 2) {
+        size_t nn = (size_t)n * n;
+        float *a = malloc(nn * sizeof(float)), *b = malloc(nn * sizeof(float)), *a0 = malloc(nn * sizeof(float));
+        double dot0 = 0, dot1 = 0, norm = 0;
+        for (size_t i = 0; i < nn; ++i) {
+            a[i] = a0[i] = frand() - 0.3f;
+            b[i] = frand();
+            dot0 += (double)a[i] * b[i];
+            norm += (double)a[i] * a[i];
+        }
+        assert_int_equal(prt_haar2d(a, n, 0), PRT_OK);
+        assert_int_equal(prt_haar2d(b, n, 0), PRT_OK);
+        for (size_t i = 0; i < nn; ++i) dot1 += (double)a[i] * b[i];
+        if (fabs(dot1 - dot0) > 1e-5 * (fabs(dot0) + norm)) fail_msg("n = %d: inner product %g became %g", n, dot0, dot1);
+        assert_int_equal(prt_haar2d(a, n, 1), PRT_OK);
+        for (size_t i = 0; i < nn; ++i)
+            if (fabsf(a[i] - a0[i]) > 1e-5f) fail_msg("n = %d: inverse differs at %zu: %g vs %g", n, i, a[i], a0[i]);
+        free(a); free(b); free(a0);
+    }
+    /* Gram matrix of the 64 basis functions of an 8 x 8 image. */
+    float basis[64][64];
+    for (int i = 0; i < 64; ++i) {
+        memset(basis[i], 0, sizeof basis[i]);
+        basis[i][i] = 1;
+        assert_int_equal(prt_haar2d(basis[i], 8, 1), PRT_OK);
+    }
+    for (int i = 0; i < 64; ++i)
+        for (int j = 0; j < 64; ++j) {
+            double d = 0;
+            for (int k = 0; k < 64; ++k) d += (double)basis[i][k] * basis[j][k];
+            assert_true(fabs(d - (i == j)) < 1e-6);
+        }
+    float img[9] = {0};
+    assert_int_equal(prt_haar2d(img, 3, 0), PRT_ERR_INVALID_ARG);
+    assert_int_equal(prt_haar2d(img, 256, 0), PRT_ERR_INVALID_ARG);
+}
+
+static prt_envmap *constant_env(float v)
+{
+    prt_image img = {64, 32, malloc(64 * 32 * 3 * sizeof(float))};
+    for (int i = 0; i < 64 * 32 * 3; ++i) img.rgb[i] = v;
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
+    return env;
+}
+
+/* A smooth environment: SH order 3, positive, coloured. */
+static prt_envmap *band_limited_env(int width)
+{
+    static const double known[9] = {4.0, 0.4, 0.8, -0.5, 0.2, -0.15, 0.3, 0.1, -0.25};
+    prt_image img = {width, width / 2, malloc((size_t)width * width / 2 * 3 * sizeof(float))};
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < width; ++x) {
+            double th = M_PI * (y + 0.5) / img.height, ph = 2 * M_PI * ((x + 0.5) / width - 0.5), yv[9];
+            double d[3] = {sin(th) * sin(ph), cos(th), -sin(th) * cos(ph)};
+            prt_sh_eval(3, d, yv);
+            double v = 0;
+            for (int i = 0; i < 9; ++i) v += known[i] * yv[i];
+            for (int c = 0; c < 3; ++c) img.rgb[((size_t)y * width + x) * 3 + c] = (float)v * (c == 0 ? 1.0f : c == 1 ? 0.8f : 0.6f);
+        }
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
+    return env;
+}
+
+/* Black with a bright disc of angular radius `radius_deg` around dir: a small area light. */
+static prt_envmap *disc_env(const float dir[3], float radius_deg, float radiance, int width)
+{
+    prt_image img = {width, width / 2, calloc((size_t)width * width / 2 * 3, sizeof(float))};
+    const double cr = cos(radius_deg * M_PI / 180.0);
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < width; ++x) {
+            double th = M_PI * (y + 0.5) / img.height, ph = 2 * M_PI * ((x + 0.5) / width - 0.5);
+            double d[3] = {sin(th) * sin(ph), cos(th), -sin(th) * cos(ph)};
+            if (d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2] >= cr)
+                for (int c = 0; c < 3; ++c) img.rgb[((size_t)y * width + x) * 3 + c] = radiance;
+        }
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
+    return env;
+}
+
+/* The cube map's solid angles add up to the sphere; a constant environment has one scaling
+ * coefficient per face and no details. */
+static void test_light_cubemap(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    double total = 0;
+    for (int i = 0; i < DIM; ++i) {
+        float d[3], dw;
+        prt_wavelet_texel(i, d, &dw);
+        assert_true(fabsf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] - 1) < 1e-5f);
+        total += dw;
+    }
+    assert_true(fabs(total - 4 * M_PI) < 1e-4);
+    prt_envmap *env = constant_env(2.0f);
+    prt_wavelet_light *l = NULL;
+    prt_wavelet_light_desc d = {0};
+    d.coefficients = DIM;
+    d.bits = 32;
+    assert_int_equal(prt_wavelet_light_create(ctx, env, &d, &l), PRT_OK);
+    const float *cube = prt_wavelet_light_cubemap(l), *c = prt_wavelet_light_coeffs(l);
+    for (int i = 0; i < DIM * 3; ++i) assert_true(fabsf(cube[i] - 2.0f) < 1e-5f);
+    for (int i = 0; i < DIM; ++i) {
+        float expect = i % 4096 == 0 ? 2.0f * 64 : 0.0f;   /* orthonormal scaling function: 1/64 */
+        if (fabsf(c[i * 4] - expect) > 1e-3f) fail_msg("coefficient %d: %g, expected %g", i, c[i * 4], expect);
+    }
+    prt_wavelet_light_release(l);
+    /* Bad descriptions fail clearly. */
+    d.bits = 12;
+    assert_int_equal(prt_wavelet_light_create(ctx, env, &d, &l), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "bits"));
+    d.bits = 0;
+    d.coefficients = DIM + 1;
+    assert_int_equal(prt_wavelet_light_create(ctx, env, &d, &l), PRT_ERR_INVALID_ARG);
+    prt_envmap_release(env);
+    prt_context_release(ctx);
+}
+
+/* With every coefficient kept, relighting equals the cube map quadrature of the rendering
+ * equation, sum_j L_j rho/pi max(n.w_j, 0) dw_j, for an unoccluded plane; with a constant sky it
+ * is rho L (the white furnace), to the quadrature's accuracy. */
+static void test_keep_all_reproduces_integral(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_quad(&m, (float[3]){-1, 0, 1}, (float[3]){2, 0, 0}, (float[3]){0, 0, -2}, 2);   /* facing +y */
+    const float rho = 0.6f;
+    prt_scene *s = tm_scene(ctx, &m, rho);
+    prt_wavelet_bake_desc bd = {0};
+    bd.coefficients = DIM;
+    bd.bits = 16;
+    bd.supersample = 1;
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake_wavelet(ctx, s, &bd, &t), PRT_OK);
+    prt_sky_desc sky = {0};
+    prt_envmap *envs[2] = {NULL, constant_env(1.5f)};
+    assert_int_equal(prt_sky_create(&sky, &envs[0]), PRT_OK);
+    for (int e = 0; e < 2; ++e) {
+        prt_wavelet_light *l = NULL;
+        prt_wavelet_light_desc ld = {0};
+        ld.coefficients = DIM;
+        ld.bits = 32;
+        assert_int_equal(prt_wavelet_light_create(ctx, envs[e], &ld, &l), PRT_OK);
+        const float *cube = prt_wavelet_light_cubemap(l);
+        double expect[3] = {0, 0, 0};
+        for (int i = 0; i < DIM; ++i) {
+            float d[3], dw;
+            prt_wavelet_texel(i, d, &dw);
+            if (d[1] > 0)
+                for (int c = 0; c < 3; ++c) expect[c] += rho / M_PI * cube[i * 3 + c] * d[1] * dw;
+        }
+        if (e == 1)
+            for (int c = 0; c < 3; ++c) assert_true(fabs(expect[c] - rho * 1.5) < 2e-3 * rho * 1.5);
+        float kvec[9 * 3], rgb[9 * 3];
+        assert_int_equal(prt_relight_wavelet(ctx, t, l, kvec), PRT_OK);
+        assert_int_equal(prt_wavelet_shade(ctx, t, kvec, (float[3]){0, 5, 0}, rgb), PRT_OK);
+        /* The only difference left is the 16-bit rounding of the transport: at most half a step
+         * per coefficient, times the light's coefficient there. */
+        const float *L = prt_wavelet_light_coeffs(l);
+        int *idx = malloc(DIM * sizeof(int));
+        float *val = malloc(DIM * 3 * sizeof(float));
+        for (int v = 0; v < 9; ++v) {
+            assert_int_equal(prt_transfer_wavelet_vector(t, (size_t)v, 0, idx, val), DIM);
+            for (int c = 0; c < 3; ++c) {
+                float mx = 0;
+                double bound = 0;
+                for (int i = 0; i < DIM; ++i) mx = fmaxf(mx, fabsf(val[i * 3 + c]));
+                for (int i = 0; i < DIM; ++i) bound += 0.5 * mx / 32767.0 * fabs(L[(size_t)idx[i] * 4 + c]);
+                bound *= rho / M_PI;
+                if (fabs(rgb[v * 3 + c] - expect[c]) > bound + 1e-5 * expect[c])
+                    fail_msg("env %d vertex %d channel %d: %g, expected %g (16-bit bound %g)", e, v, c, rgb[v * 3 + c], expect[c], bound);
+                assert_true(bound < 2e-3 * expect[c]);
+            }
+        }
+        free(idx);
+        free(val);
+        prt_wavelet_light_release(l);
+        prt_envmap_release(envs[e]);
+    }
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+/* With K = the full rank the factorization reproduces the sampled BRDF at the sample points,
+ * for every model and both parameterizations; a Lambertian BRDF is rank one. */
+static void test_svd_full_rank(void **state)
+{
+    (void)state;
+    const char *specs[] = {"phong:20:0.5:0.3", "blinn:40:0.6:0.2", "lafortune:clay", "ashikhmin:10:100:0.75:0.5"};
+    for (int p = 0; p < 2; ++p)
+        for (int i = 0; i < 4; ++i) {
+            prt_brdf b;
+            assert_int_equal(prt_brdf_parse(specs[i], &b), PRT_OK);
+            const int res = 4, full = p == 0 ? 12 : 16;   /* grid: 12 cells lie inside the disk */
+            prt_brdf_factor_desc d = {full, res, p == 0 ? PRT_BRDF_PARAM_GRID : PRT_BRDF_PARAM_POLAR};
+            prt_brdf_factors *f = NULL;
+            assert_int_equal(prt_brdf_factor(&b, &d, &f), PRT_OK);
+            double maxerr = 0, maxf = 0;
+            for (int a = 0; a < res * res; ++a)
+                for (int c = 0; c < res * res; ++c) {
+                    float wi[3], wo[3], ref[3], got[3];
+                    double ua = (a % res + 0.5) / res, va = (a / res + 0.5) / res, uc = (c % res + 0.5) / res, vc = (c / res + 0.5) / res;
+                    if (p == 0) {
+                        wi[0] = (float)(2 * ua - 1); wi[1] = (float)(2 * va - 1);
+                        wo[0] = (float)(2 * uc - 1); wo[1] = (float)(2 * vc - 1);
+                        if (wi[0] * wi[0] + wi[1] * wi[1] >= 1 || wo[0] * wo[0] + wo[1] * wo[1] >= 1) continue;
+                        wi[2] = sqrtf(1 - wi[0] * wi[0] - wi[1] * wi[1]);
+                        wo[2] = sqrtf(1 - wo[0] * wo[0] - wo[1] * wo[1]);
+                    } else {
+                        double ca = 1 - va * va, cc = 1 - vc * vc, sa = sqrt(1 - ca * ca), sc = sqrt(1 - cc * cc);
+                        wi[0] = (float)(sa * cos(2 * M_PI * ua)); wi[1] = (float)(sa * sin(2 * M_PI * ua)); wi[2] = (float)ca;
+                        wo[0] = (float)(sc * cos(2 * M_PI * uc)); wo[1] = (float)(sc * sin(2 * M_PI * uc)); wo[2] = (float)cc;
+                    }
+                    prt_brdf_eval(&b, wi, wo, ref);
+                    prt_brdf_factors_eval(f, full, wi, wo, got);
+                    for (int ch = 0; ch < 3; ++ch) {
+                        maxerr = fmax(maxerr, fabs(ref[ch] - got[ch]));
+                        maxf = fmax(maxf, fabs(ref[ch]));
+                    }
+                }
+            if (maxerr > 1e-4 * maxf) fail_msg("%s (%s): full rank misses the samples by %g of %g", specs[i], p ? "polar" : "grid", maxerr, maxf);
+            /* More terms never fit the samples worse: the singular values decrease. */
+            for (int k = 1; k < full; ++k) assert_true(prt_brdf_factors_sigma(f, 0, k) <= prt_brdf_factors_sigma(f, 0, k - 1) * (1 + 1e-5f));
+            prt_brdf_factors_release(f);
+        }
+    prt_brdf lam;
+    assert_int_equal(prt_brdf_parse("lambert:0.7", &lam), PRT_OK);
+    prt_brdf_factors *f = NULL;
+    assert_int_equal(prt_brdf_factor(&lam, &(prt_brdf_factor_desc){1, 0, 0}, &f), PRT_OK);
+    double rms[16], rel[16];
+    assert_int_equal(prt_brdf_factors_error(f, &lam, 20000, rms, rel), PRT_OK);
+    assert_true(rel[0] < 1e-5);
+    assert_true(prt_brdf_factors_sigma(f, 0, 1) < 1e-4f * prt_brdf_factors_sigma(f, 0, 0));
+    prt_brdf_factors_release(f);
+    /* Bad requests. */
+    assert_int_equal(prt_brdf_factor(&lam, &(prt_brdf_factor_desc){17, 0, 0}, &f), PRT_ERR_INVALID_ARG);
+    assert_int_equal(prt_brdf_factor(&lam, &(prt_brdf_factor_desc){4, 200, 0}, &f), PRT_ERR_INVALID_ARG);
+    assert_int_equal(prt_brdf_factor(&lam, &(prt_brdf_factor_desc){13, 4, 0}, &f), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "finer"));
+}
+
+static double rel_rms(const float *a, const float *b, size_t n)
+{
+    double e = 0, r = 0;
+    for (size_t i = 0; i < n; ++i) {
+        e += ((double)a[i] - b[i]) * ((double)a[i] - b[i]);
+        r += (double)b[i] * b[i];
+    }
+    return sqrt(e / r);
+}
+
+static float *wavelet_vertices(prt_context *ctx, const prt_transfer *t, const prt_envmap *env, const float eye[3])
+{
+    prt_wavelet_info wi;
+    assert_true(prt_transfer_wavelet_info(t, &wi));
+    size_t nv = prt_transfer_vertex_count(t);
+    prt_wavelet_light *l = NULL;
+    assert_int_equal(prt_wavelet_light_create(ctx, env, NULL, &l), PRT_OK);
+    float *k = malloc(nv * (size_t)wi.terms * 3 * sizeof(float)), *rgb = malloc(nv * 3 * sizeof(float));
+    assert_int_equal(prt_relight_wavelet(ctx, t, l, k), PRT_OK);
+    assert_int_equal(prt_wavelet_shade(ctx, t, k, eye, rgb), PRT_OK);
+    free(k);
+    prt_wavelet_light_release(l);
+    return rgb;
+}
+
+/* A convex diffuse sphere: under a smooth environment the wavelet result (128 coefficients,
+ * 8 bits) matches SH PRT; under a sharp one (sky with sun) both match the path tracer. */
+static void test_convex_diffuse(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_sphere(&m, (float[3]){0, 0, 0}, 1.0f, 10, 20);
+    prt_scene *s = tm_scene(ctx, &m, 0.7f);
+    prt_transfer *tw = NULL, *ts = NULL;
+    assert_int_equal(prt_bake_wavelet(ctx, s, &(prt_wavelet_bake_desc){.supersample = 1}, &tw), PRT_OK);
+    prt_bake_desc sd = {0};
+    sd.order = 6;
+    sd.samples = 4096;
+    sd.kinds = PRT_TRANSFER_SHADOWED;
+    assert_int_equal(prt_bake_sh(ctx, s, &sd, &ts), PRT_OK);
+    const size_t nv = m.nv;
+    const float eye[3] = {0, 0, 10};
+    prt_envmap *smooth = band_limited_env(256);
+    float *w = wavelet_vertices(ctx, tw, smooth, eye), *sh = malloc(nv * 3 * sizeof(float));
+    prt_sh_light L;
+    assert_int_equal(prt_envmap_project_sh(smooth, 6, &L), PRT_OK);
+    assert_int_equal(prt_relight_sh(ctx, ts, PRT_TRANSFER_SHADOWED, &L, sh), PRT_OK);
+    double e = rel_rms(w, sh, nv * 3);
+    print_message("convex sphere, smooth light: wavelet vs SH order 6: %.2f%% relative RMS\n", 100 * e);
+    assert_true(e < 0.02);
+    free(w);
+
+    prt_sky_desc sky = {0};
+    prt_envmap *sharp = NULL;
+    assert_int_equal(prt_sky_create(&sky, &sharp), PRT_OK);
+    w = wavelet_vertices(ctx, tw, sharp, eye);
+    prt_reference_desc rd = {0};
+    rd.samples = 2048;
+    prt_reference_vertices r;
+    assert_int_equal(prt_reference_trace_vertices(ctx, s, sharp, &rd, &r), PRT_OK);
+    double err = rel_rms(w, r.radiance, nv * 3), noise = 0, ref2 = 0;
+    for (size_t i = 0; i < nv * 3; ++i) { noise += (double)r.std_error[i] * r.std_error[i]; ref2 += (double)r.radiance[i] * r.radiance[i]; }
+    noise = sqrt(noise / ref2);
+    assert_int_equal(prt_envmap_project_sh(sharp, 6, &L), PRT_OK);
+    assert_int_equal(prt_relight_sh(ctx, ts, PRT_TRANSFER_SHADOWED, &L, sh), PRT_OK);
+    double esh = rel_rms(sh, r.radiance, nv * 3);
+    print_message("convex sphere, sky with sun: wavelet %.2f%%, SH order 6 %.2f%% vs path tracer (noise %.2f%%)\n", 100 * err, 100 * esh, 100 * noise);
+    /* Diffuse transfer is band-limited by the cosine, so on a convex object SH is as good: both
+     * must agree with the path tracer to 3% beyond its noise. */
+    assert_true(err < 0.03 + 2 * noise);
+    assert_true(esh < 0.03 + 2 * noise);
+    free(w);
+    free(sh);
+    prt_reference_vertices_free(&r);
+    prt_envmap_release(smooth);
+    prt_envmap_release(sharp);
+    prt_transfer_release(tw);
+    prt_transfer_release(ts);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+/* Width (in scene units, along x) over which radiance along a row of floor vertices rises from
+ * 10% to 90% of its lit level. */
+static double edge_width(const float *pos, const float *rgb, const size_t *row, int count)
+{
+    float lo = INFINITY, hi = 0;
+    for (int i = 0; i < count; ++i) { lo = fminf(lo, rgb[row[i] * 3 + 1]); hi = fmaxf(hi, rgb[row[i] * 3 + 1]); }
+    double x10 = NAN, x90 = NAN;
+    for (int i = 0; i < count; ++i) {
+        float f = (rgb[row[i] * 3 + 1] - lo) / (hi - lo);
+        if (isnan(x10) && f >= 0.1f) x10 = pos[row[i] * 3];
+        if (isnan(x90) && f >= 0.9f) x90 = pos[row[i] * 3];
+    }
+    return x90 - x10;
+}
+
+/* A small light and an occluder with a straight edge: the wavelet shadow edge is as sharp as the
+ * geometry allows (penumbra plus vertex spacing); order-5 SH smears it far wider. */
+static void test_sharp_shadow(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    const int cells = 100;
+    tm_quad(&m, (float[3]){-1, 0, 1}, (float[3]){2, 0, 0}, (float[3]){0, 0, -2}, cells);   /* floor, +y */
+    /* Occluder: a double-sided card over x < 0 at height h (two quads back to back). */
+    const float h = 0.3f;
+    tm_quad(&m, (float[3]){-3, h, -3}, (float[3]){3, 0, 0}, (float[3]){0, 0, 6}, 1);
+    tm_quad(&m, (float[3]){-3, h, 3}, (float[3]){3, 0, 0}, (float[3]){0, 0, -6}, 1);
+    prt_scene *s = tm_scene(ctx, &m, 0.5f);
+    const float radius = 1.0f;   /* degrees: the light subtends 2 degrees, straight above */
+    prt_envmap *env = disc_env((float[3]){0, 1, 0}, radius, 2000.0f, 1024);
+    prt_transfer *tw = NULL, *ts = NULL;
+    assert_int_equal(prt_bake_wavelet(ctx, s, &(prt_wavelet_bake_desc){.supersample = 2}, &tw), PRT_OK);
+    prt_bake_desc sd = {0};
+    sd.order = 5;
+    sd.samples = 4096;
+    sd.kinds = PRT_TRANSFER_SHADOWED;
+    assert_int_equal(prt_bake_sh(ctx, s, &sd, &ts), PRT_OK);
+    float *w = wavelet_vertices(ctx, tw, env, (float[3]){0, 5, 0}), *sh = malloc(prt_transfer_vertex_count(ts) * 3 * sizeof(float));
+    prt_sh_light L;
+    assert_int_equal(prt_envmap_project_sh(env, 5, &L), PRT_OK);
+    assert_int_equal(prt_relight_sh(ctx, ts, PRT_TRANSFER_SHADOWED, &L, sh), PRT_OK);
+    /* The floor row through z = 0, x from -0.5 to 0.5. */
+    size_t row[cells + 1];
+    int count = 0;
+    for (int i = 0; i <= cells; ++i) {
+        float x = -1 + 2.0f * i / cells;
+        if (x < -0.5f || x > 0.5f) continue;
+        row[count++] = nearest_vertex(m.pos, (size_t)(cells + 1) * (cells + 1), (float[3]){x, 0, 0});
+    }
+    const double spacing = 2.0 / cells, penumbra = 2 * h * tan(radius * M_PI / 180), bound = penumbra + 2 * spacing;
+    double ww = edge_width(m.pos, w, row, count), ws = edge_width(m.pos, sh, row, count);
+    print_message("shadow edge 10-90%%: wavelet %.3f, SH order 5 %.3f (penumbra %.3f + 2 vertex spacings = %.3f)\n", ww, ws, penumbra, bound);
+    assert_true(ww <= bound + 1e-6);
+    assert_true(ws > 3 * bound);
+    free(w);
+    free(sh);
+    prt_envmap_release(env);
+    prt_transfer_release(tw);
+    prt_transfer_release(ts);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+/* 8-bit coefficients stay within half a quantization step of the 16-bit ones (the same
+ * coefficients are kept), and relit K-vectors within the bound that implies. */
+static void test_quantization_bound(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_sphere(&m, (float[3]){0, 1.2f, 0}, 0.5f, 8, 16);
+    tm_quad(&m, (float[3]){-2, 0, 2}, (float[3]){4, 0, 0}, (float[3]){0, 0, -4}, 6);
+    prt_scene *s = tm_scene(ctx, &m, 0.6f);
+    prt_brdf b;
+    assert_int_equal(prt_brdf_parse("phong:10:0.4:0.4", &b), PRT_OK);
+    prt_transfer *t8 = NULL, *t16 = NULL;
+    prt_wavelet_bake_desc d = {.supersample = 1, .brdf = &b, .terms = 2, .brdf_resolution = 16};
+    assert_int_equal(prt_bake_wavelet(ctx, s, &d, &t8), PRT_OK);
+    d.bits = 16;
+    assert_int_equal(prt_bake_wavelet(ctx, s, &d, &t16), PRT_OK);
+    prt_wavelet_info wi;
+    prt_transfer_wavelet_info(t8, &wi);
+    assert_int_equal(wi.bits, 8);
+    const int n = wi.coefficients;
+    int *i8 = malloc(n * sizeof(int)), *i16 = malloc(n * sizeof(int));
+    float *v8 = malloc(n * 3 * sizeof(float)), *v16 = malloc(n * 3 * sizeof(float));
+    prt_sky_desc sky = {0};
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_sky_create(&sky, &env), PRT_OK);
+    prt_wavelet_light *l = NULL;
+    assert_int_equal(prt_wavelet_light_create(ctx, env, NULL, &l), PRT_OK);
+    const float *L = prt_wavelet_light_coeffs(l);
+    const size_t nv = prt_transfer_vertex_count(t8);
+    float *k8 = malloc(nv * 2 * 3 * sizeof(float)), *k16 = malloc(nv * 2 * 3 * sizeof(float));
+    assert_int_equal(prt_relight_wavelet(ctx, t8, l, k8), PRT_OK);
+    assert_int_equal(prt_relight_wavelet(ctx, t16, l, k16), PRT_OK);
+    for (size_t v = 0; v < nv; ++v)
+        for (int k = 0; k < 2; ++k) {
+            assert_int_equal(prt_transfer_wavelet_vector(t8, v, k, i8, v8), n);
+            assert_int_equal(prt_transfer_wavelet_vector(t16, v, k, i16, v16), n);
+            for (int c = 0; c < 3; ++c) {
+                float mx = 0;
+                for (int i = 0; i < n; ++i) mx = fmaxf(mx, fabsf(v16[i * 3 + c]));
+                const float step8 = mx / 127.0f, step16 = mx / 32767.0f;
+                double bound = 0;
+                for (int i = 0; i < n; ++i) {
+                    assert_int_equal(i8[i], i16[i]);
+                    if (fabsf(v8[i * 3 + c] - v16[i * 3 + c]) > 0.5f * (step8 + 2 * step16) * 1.001f + 1e-12f)
+                        fail_msg("vertex %zu term %d coefficient %d: 8-bit %g vs %g (step %g)", v, k, i, v8[i * 3 + c], v16[i * 3 + c], step8);
+                    bound += 0.5 * (step8 + 2 * step16) * fabs(L[(size_t)i8[i] * 4 + c]);
+                }
+                double diff = fabs(k8[(v * 2 + k) * 3 + c] - k16[(v * 2 + k) * 3 + c]);
+                if (diff > bound * 1.001 + 1e-6) fail_msg("vertex %zu term %d: K-vectors differ by %g, bound %g", v, k, diff, bound);
+            }
+        }
+    free(i8); free(i16); free(v8); free(v16); free(k8); free(k16);
+    prt_wavelet_light_release(l);
+    prt_envmap_release(env);
+    prt_transfer_release(t8);
+    prt_transfer_release(t16);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+/* Interreflection in a pit: one wavelet bounce pass agrees with one SH bounce (diffuse, the
+ * light that bounced is low-frequency) and adds light; bakes are identical for any thread count. */
+static void test_interreflection(void **state)
+{
+    (void)state;
+    prt_context *ctx1 = test_context(1), *ctx = test_context(2);
+    test_mesh m = {0};
+    tm_pit(&m, 6);
+    prt_scene *s = tm_scene(ctx, &m, 0.8f);
+    prt_transfer *t0 = NULL, *t1 = NULL, *t1b = NULL, *ts = NULL;
+    prt_wavelet_bake_desc d = {.supersample = 1, .gather_resolution = 16};
+    assert_int_equal(prt_bake_wavelet(ctx, s, &d, &t0), PRT_OK);
+    d.bounces = 1;
+    assert_int_equal(prt_bake_wavelet(ctx, s, &d, &t1), PRT_OK);
+    assert_int_equal(prt_bake_wavelet(ctx1, s, &d, &t1b), PRT_OK);
+    prt_bake_desc sd = {0};
+    sd.order = 6;
+    sd.samples = 4096;
+    sd.bounces = 1;
+    sd.kinds = PRT_TRANSFER_INTERREFLECTED;
+    assert_int_equal(prt_bake_sh(ctx, s, &sd, &ts), PRT_OK);
+    prt_envmap *env = band_limited_env(256);
+    const float eye[3] = {0, 3, 0};
+    const size_t nv = m.nv;
+    float *w0 = wavelet_vertices(ctx, t0, env, eye), *w1 = wavelet_vertices(ctx, t1, env, eye), *w1b = wavelet_vertices(ctx, t1b, env, eye);
+    float *sh = malloc(nv * 3 * sizeof(float));
+    prt_sh_light L;
+    assert_int_equal(prt_envmap_project_sh(env, 6, &L), PRT_OK);
+    assert_int_equal(prt_relight_sh(ctx, ts, PRT_TRANSFER_INTERREFLECTED, &L, sh), PRT_OK);
+    assert_memory_equal(w1, w1b, nv * 3 * sizeof(float));
+    double sum0 = 0, sum1 = 0;
+    for (size_t i = 0; i < nv * 3; ++i) { sum0 += w0[i]; sum1 += w1[i]; }
+    double e = rel_rms(w1, sh, nv * 3);
+    print_message("pit, one bounce: wavelet vs SH %.2f%% relative RMS; the bounce adds %.1f%%\n", 100 * e, 100 * (sum1 / sum0 - 1));
+    assert_true(sum1 > 1.1 * sum0);
+    assert_true(e < 0.05);
+    free(w0); free(w1); free(w1b); free(sh);
+    prt_envmap_release(env);
+    prt_transfer_release(t0); prt_transfer_release(t1); prt_transfer_release(t1b); prt_transfer_release(ts);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+    prt_context_release(ctx1);
+}
+
+/* Save and load give the same relighting; damage is caught; bad descriptions fail clearly. */
+static void test_wavelet_file(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_sphere(&m, (float[3]){0, 0.6f, 0}, 0.5f, 6, 12);
+    tm_quad(&m, (float[3]){-1, 0, 1}, (float[3]){2, 0, 0}, (float[3]){0, 0, -2}, 3);
+    prt_scene *s = tm_scene(ctx, &m, 0.5f);
+    prt_brdf b;
+    assert_int_equal(prt_brdf_parse("ashikhmin:10:100:0.6:0.3", &b), PRT_OK);
+    assert_int_equal(prt_scene_set_brdf(s, 0, 6 * 12 - 10, &b), PRT_OK);
+    prt_transfer *t = NULL, *u = NULL;
+    assert_int_equal(prt_bake_wavelet(ctx, s, &(prt_wavelet_bake_desc){.supersample = 1, .terms = 3, .brdf_resolution = 16, .param = PRT_BRDF_PARAM_POLAR}, &t), PRT_OK);
+    prt_wavelet_info wi;
+    assert_true(prt_transfer_wavelet_info(t, &wi));
+    assert_int_equal(wi.glossy_materials, 1);
+    assert_int_equal(prt_transfer_wavelet_vertex_terms(t, 0), 3);
+    assert_int_equal(prt_transfer_wavelet_vertex_terms(t, m.nv - 1), 1);
+    char path[512];
+    snprintf(path, sizeof path, "%s/w.prt", test_dir);
+    assert_int_equal(prt_transfer_save(t, path), PRT_OK);
+    assert_int_equal(prt_transfer_load(ctx, path, &u), PRT_OK);
+    prt_sky_desc sky = {0};
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_sky_create(&sky, &env), PRT_OK);
+    float *a = wavelet_vertices(ctx, t, env, (float[3]){1, 2, 3}), *c = wavelet_vertices(ctx, u, env, (float[3]){1, 2, 3});
+    assert_memory_equal(a, c, m.nv * 3 * sizeof(float));
+    prt_transfer_info info;
+    prt_transfer_get_info(u, &info);
+    assert_true(info.kinds & PRT_TRANSFER_WAVELET);
+    assert_int_equal(prt_transfer_channels(u, PRT_TRANSFER_WAVELET), 3);
+    /* SH relighting of a wavelet file and wavelet relighting of an SH file fail with a message. */
+    prt_sh_light L = uniform_light(3);
+    assert_int_not_equal(prt_relight_sh(ctx, u, PRT_TRANSFER_SHADOWED, &L, a), PRT_OK);
+    prt_transfer *ts = NULL;
+    assert_int_equal(prt_bake_sh(ctx, s, &(prt_bake_desc){.order = 2, .samples = 64, .kinds = PRT_TRANSFER_SHADOWED}, &ts), PRT_OK);
+    prt_wavelet_light *l = NULL;
+    assert_int_equal(prt_wavelet_light_create(ctx, env, NULL, &l), PRT_OK);
+    assert_int_equal(prt_relight_wavelet(ctx, ts, l, a), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "wavelet"));
+    /* A flipped byte in the transport is caught by its checksum. */
+    FILE *f = fopen(path, "rb");
+    fseek(f, 0, SEEK_END);
+    long size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *bytes = malloc((size_t)size);
+    assert_int_equal(fread(bytes, 1, (size_t)size, f), (size_t)size);
+    fclose(f);
+    bytes[size - 40] ^= 0x5a;
+    prt_transfer *bad = NULL;
+    assert_int_equal(prt_transfer_load_memory(ctx, bytes, (size_t)size, &bad), PRT_ERR_FORMAT);
+    assert_non_null(strstr(prt_last_error(), "checksum"));
+    free(bytes);
+    /* Out-of-range bake settings. */
+    const prt_wavelet_bake_desc bads[] = {{.terms = 17}, {.coefficients = DIM + 1}, {.bits = 12}, {.supersample = 5}, {.bounces = 9}, {.gather_resolution = 2}, {.brdf_resolution = 100}};
+    const char *words[] = {"terms", "coefficients", "bits", "supersampling", "bounces", "gather", "resolution"};
+    for (int i = 0; i < 7; ++i) {
+        prt_transfer *x = NULL;
+        assert_int_equal(prt_bake_wavelet(ctx, s, &bads[i], &x), PRT_ERR_INVALID_ARG);
+        if (!strstr(prt_last_error(), words[i])) fail_msg("message '%s' does not name %s", prt_last_error(), words[i]);
+        assert_null(x);
+    }
+    free(a); free(c);
+    prt_wavelet_light_release(l);
+    prt_envmap_release(env);
+    prt_transfer_release(t); prt_transfer_release(u); prt_transfer_release(ts);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_haar),
+        cmocka_unit_test(test_light_cubemap),
+        cmocka_unit_test(test_keep_all_reproduces_integral),
+        cmocka_unit_test(test_svd_full_rank),
+        cmocka_unit_test(test_convex_diffuse),
+        cmocka_unit_test(test_sharp_shadow),
+        cmocka_unit_test(test_quantization_bound),
+        cmocka_unit_test(test_interreflection),
+        cmocka_unit_test_setup_teardown(test_wavelet_file, test_dir_setup, test_dir_teardown),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
