@@ -137,6 +137,38 @@ printf '{"meshes": [{"file": "demo.obj", "brdf": "phong:-2"}]}' >"$T/badb.json"
 expect 1 "bad brdf in a scene" -- "$PRT" bake "$T/badb.json" -o "$T/x.prt"
 says "exponent"
 
+# The wavelet method: bake (direct and one bounce), the per-K error report, info, render, relight,
+# compare, and its option errors.
+expect 0 "wavelet bake" -- "$PRT" bake "$T/glossy.json" -o "$T/wavelet.prt" --method wavelet --supersample 1 --terms 2 --brdf-res 16 --bounces 1 --gather-res 8
+says "K=2"
+grep -q "<- used" "$T/err" && ok || bad "the per-K error report does not mark the K used"
+expect 0 "wavelet info" -- "$PRT" info "$T/wavelet.prt"
+grep -q "wavelet" "$T/out" && grep -q "2 separable terms" "$T/out" && grep -q "bytes per vertex" "$T/out" && ok || bad "info does not describe the wavelet file"
+expect 0 "wavelet info json" -- "$PRT" info --json "$T/wavelet.prt"
+grep -q '"method":[[:space:]]*"wavelet"' "$T/out" && grep -q '"bake_seconds"' "$T/out" && ok || bad "info --json lacks the wavelet method or bake time"
+expect 0 "wavelet render" -- $NOLEAK "$PRT" render -q "$T/wavelet.prt" -o "$T/wavelet.png" --width 64 --height 48 --rotate 30
+expect 2 "wavelet relight without eye" -- "$PRT" relight "$T/wavelet.prt" -o "$T/w.json"
+says "eye"
+expect 0 "wavelet relight" -- "$PRT" relight -q "$T/wavelet.prt" --eye 2,2,2 -o "$T/w.json"
+grep -q '"kind":[[:space:]]*"wavelet"' "$T/w.json" && ok || bad "wavelet relight JSON lacks its kind"
+expect 0 "wavelet compare" -- "$PRT" compare -q "$T/wavelet.prt" "$T/glossy.prt"
+expect 2 "run-time lobe on wavelet" -- $NOLEAK "$PRT" render "$T/wavelet.prt" -o "$T/x.png" --brdf phong:10
+says "baked in"
+expect 2 "SH option with wavelet" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --order 3
+says "SH options"
+expect 2 "wavelet option without wavelet" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --terms 3
+says "method wavelet"
+expect 2 "bad method" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method fourier
+says "sh or wavelet"
+expect 2 "bad bits" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --bits 12
+says "8 or 16"
+expect 2 "too many wavelet bounces" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --bounces 9
+says "0..8"
+expect 2 "zero SH bounces" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --bounces 0
+says "1..64"
+expect 2 "wavelet kind on an SH file" -- $NOLEAK "$PRT" render "$T/demo.prt" -o "$T/x.png" -k wavelet
+says "wavelet"
+
 # Per-texel transfer over the demo scene's UV atlas, a normal map, the radiance map, and the errors.
 expect 0 "texel bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/texels.prt" --order 3 --samples 64 --bounces 1 --texels 64 --kinds shadowed,interreflected
 expect 0 "texel info" -- "$PRT" info "$T/texels.prt"

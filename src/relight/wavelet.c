@@ -31,9 +31,9 @@ static inline void dot_16(const uint16_t *idx, const int16_t *q, int n, const fl
 
 prt_status prt_relight_wavelet(prt_context *ctx, const prt_transfer *t, const prt_wavelet_light *light, float *out_kvec)
 {
+    if (t && !t->wavelet) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this .prt holds no wavelet transfer (bake with --method wavelet)");
     if (!t || !light || !out_kvec) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_wavelet: transfer, light and output are required");
     const prt__wavelet_set *w = t->wavelet;
-    if (!w) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this .prt holds no wavelet transfer (bake with --method wavelet)");
     const size_t nv = t->mesh.vertex_count;
     const int K = w->terms, n = w->store.n;
     const float *L = prt_wavelet_light_coeffs(light);

@@ -380,7 +380,7 @@ prt_status cli_light_wavelet(const cli *c, const cli_light *l, prt_wavelet_light
 prt_status cli_relight_wavelet(const cli *c, const prt_transfer *t, const cli_light *l, const float eye[3], float *rgb)
 {
     prt_wavelet_info wi;
-    if (!prt_transfer_wavelet_info(t, &wi)) return PRT_ERR_INVALID_ARG;
+    if (!prt_transfer_wavelet_info(t, &wi)) return prt_relight_wavelet(c->ctx, t, NULL, NULL);   /* reports the missing set */
     prt_wavelet_light *wl = NULL;
     prt_status st = cli_light_wavelet(c, l, &wl);
     if (st) return st;

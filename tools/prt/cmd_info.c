@@ -34,6 +34,65 @@ int cmd_info(int argc, char **argv)
     const prt_transfer_kind all[5] = {PRT_TRANSFER_UNSHADOWED, PRT_TRANSFER_SHADOWED, PRT_TRANSFER_INTERREFLECTED,
                                       PRT_TRANSFER_GLOSSY_SHADOWED, PRT_TRANSFER_GLOSSY_INTERREFLECTED};
     const bool glossy = info.kinds & (PRT_TRANSFER_GLOSSY_SHADOWED | PRT_TRANSFER_GLOSSY_INTERREFLECTED);
+    prt_wavelet_info wi;
+    const bool wavelet = prt_transfer_wavelet_info(t, &wi);
+    if (wavelet) {
+        static const char *params[2] = {"grid", "polar"};
+        if (json) {
+            cJSON *root = cJSON_CreateObject();
+            cJSON_AddStringToObject(root, "file", argv[optind]);
+            cJSON_AddStringToObject(root, "method", "wavelet");
+            cJSON_AddNumberToObject(root, "terms", wi.terms);
+            cJSON_AddNumberToObject(root, "coefficients", wi.coefficients);
+            cJSON_AddNumberToObject(root, "bits", wi.bits);
+            cJSON_AddNumberToObject(root, "supersample", wi.supersample);
+            cJSON_AddNumberToObject(root, "bounces", wi.bounces);
+            cJSON_AddNumberToObject(root, "gather_resolution", wi.gather_resolution);
+            cJSON_AddNumberToObject(root, "brdf_resolution", wi.brdf_resolution);
+            cJSON_AddStringToObject(root, "brdf_parameterization", params[wi.param]);
+            cJSON_AddNumberToObject(root, "vectors", (double)wi.vectors);
+            cJSON_AddNumberToObject(root, "vertices", (double)info.vertex_count);
+            cJSON_AddNumberToObject(root, "triangles", (double)info.triangle_count);
+            cJSON_AddNumberToObject(root, "transfer_bytes", (double)wi.bytes);
+            cJSON_AddNumberToObject(root, "bytes_per_vertex", (double)wi.bytes / (double)info.vertex_count);
+            cJSON_AddNumberToObject(root, "bake_seconds", info.bake_seconds);
+            cJSON_AddNumberToObject(root, "bake_threads", info.threads);
+            cJSON_AddStringToObject(root, "source", info.source);
+            cJSON *mats = cJSON_AddArrayToObject(root, "materials");
+            for (int k = 1; k <= prt_transfer_brdf_count(t); ++k) {
+                char spec[128];
+                prt_brdf_format(prt_transfer_brdf(t, k), spec, sizeof spec);
+                cJSON *o = cJSON_CreateObject();
+                cJSON_AddStringToObject(o, "brdf", spec);
+                cJSON_AddNumberToObject(o, "terms", prt_brdf_factors_terms(prt_transfer_wavelet_factors(t, k)));
+                cJSON_AddItemToArray(mats, o);
+            }
+            char *text = cJSON_Print(root);
+            puts(text);
+            cJSON_free(text);
+            cJSON_Delete(root);
+        } else {
+            printf("file:        %s\nmethod:      all-frequency wavelet PRT (separable BRDFs, Haar cube maps)\n", argv[optind]);
+            printf("transport:   6x64x64 Haar, %d coefficients per vector, %d-bit, up to %d terms per vertex\n", wi.coefficients, wi.bits, wi.terms);
+            printf("bake:        %d x %d rays per texel, %d interreflection pass%s (%dx%d gather), %.2f s on %d threads\n", wi.supersample,
+                   wi.supersample, wi.bounces, wi.bounces == 1 ? "" : "es", wi.gather_resolution, wi.gather_resolution, info.bake_seconds, info.threads);
+            for (int k = 1; k <= prt_transfer_brdf_count(t); ++k) {
+                char spec[128];
+                prt_brdf_format(prt_transfer_brdf(t, k), spec, sizeof spec);
+                const prt_brdf_factors *f = prt_transfer_wavelet_factors(t, k);
+                if (f) printf("material %d:  %s: %d separable terms, %dx%d %s maps\n", k, spec, prt_brdf_factors_terms(f), wi.brdf_resolution,
+                              wi.brdf_resolution, params[wi.param]);
+                else printf("material %d:  %s: Lambertian (one term)\n", k, spec);
+            }
+            printf("mesh:        %zu vertices, %zu triangles\n", info.vertex_count, info.triangle_count);
+            printf("storage:     %.2f MiB transfer, %zu vectors, %.0f bytes per vertex\n", wi.bytes / 1048576.0, wi.vectors,
+                   (double)wi.bytes / (double)info.vertex_count);
+            printf("source:      %s\n", info.source);
+        }
+        prt_transfer_release(t);
+        prt_context_release(c.ctx);
+        return EXIT_OK;
+    }
     if (json) {
         cJSON *root = cJSON_CreateObject();
         cJSON_AddStringToObject(root, "file", argv[optind]);

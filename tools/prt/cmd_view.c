@@ -104,8 +104,30 @@ void view_rotate_env(viewer *v, float dyaw, float dpitch)
 }
 
 /* ---- relight worker ---- */
+static void relight_wavelet(viewer *v, const relight_job *job, float *out)
+{
+    /* The viewer's rotation on top of the file's (or command line's), as for SH lighting. */
+    double rj[9], rf[9];
+    prt_rotation_from_euler_deg(job->env_yaw, job->env_pitch, 0, rj);
+    prt_rotation_from_euler_deg(v->light.rotate[0], v->light.rotate[1], v->light.rotate[2], rf);
+    prt_wavelet_light_desc d = {0};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) d.rotation[i * 3 + j] = rj[i * 3] * rf[j] + rj[i * 3 + 1] * rf[3 + j] + rj[i * 3 + 2] * rf[6 + j];
+    d.coefficients = job->light_coefficients;
+    d.intensity = v->light.intensity;
+    prt_wavelet_light *wl = NULL;
+    if (prt_wavelet_light_create(v->worker_ctx, v->env, &d, &wl)) return;
+    prt_relight_wavelet(v->worker_ctx, v->t, wl, out);
+    prt_wavelet_light_release(wl);
+}
+
 static void relight(viewer *v, const relight_job *job, float *out, float *exit, float *texels, bool *used_texels)
 {
+    if (job->kind == PRT_TRANSFER_WAVELET) {
+        *used_texels = false;
+        relight_wavelet(v, job, out);
+        return;
+    }
     prt_sh_light sh = v->sh;
     sh.order = job->order;
     if (job->env_yaw != 0 || job->env_pitch != 0) {
@@ -153,7 +175,8 @@ static void relight(viewer *v, const relight_job *job, float *out, float *exit, 
 static void *worker(void *arg)
 {
     viewer *v = arg;
-    float *buf = malloc(prt_transfer_vertex_count(v->t) * 3 * sizeof(float));
+    const size_t floats = prt_transfer_vertex_count(v->t) * 3 * (size_t)(v->kterms ? v->kterms : 1);
+    float *buf = malloc(floats * sizeof(float));
     float *ebuf = v->exit_floats ? malloc(prt_transfer_vertex_count(v->t) * v->exit_floats * sizeof(float)) : NULL;
     if (v->exit_floats && !ebuf) { free(buf); buf = NULL; }
     float *tbuf = v->result_texels ? malloc((size_t)v->texel_width * v->texel_height * 3 * sizeof(float)) : NULL;
@@ -169,7 +192,7 @@ static void *worker(void *arg)
         double ms = (now() - t0) * 1e3;
         pthread_mutex_lock(&v->lock);
         if (buf) {
-            memcpy(v->result, buf, prt_transfer_vertex_count(v->t) * 3 * sizeof(float));
+            memcpy(v->result, buf, floats * sizeof(float));
             if (ebuf) memcpy(v->result_exit, ebuf, prt_transfer_vertex_count(v->t) * v->exit_floats * sizeof(float));
             v->result_has_texels = used_texels;
             if (used_texels) memcpy(v->result_texels, tbuf, (size_t)v->texel_width * v->texel_height * 3 * sizeof(float));
@@ -196,16 +219,32 @@ void view_request_relight(viewer *v)
     pthread_mutex_unlock(&v->lock);
 }
 
+/* Wavelet files: the view factor at the current eye, uploaded as vertex radiance. */
+static void shade(viewer *v)
+{
+    prt_camera cam;
+    view_camera(v, &cam);
+    if (prt_wavelet_shade(v->c->ctx, v->t, v->kvec, cam.eye, v->shaded)) return;
+    memcpy(v->shaded_eye, cam.eye, sizeof v->shaded_eye);
+    v->have_shade = true;
+    prt_window_set_radiance(v->win, v->shaded, prt_transfer_vertex_count(v->t));
+}
+
 /* Takes a finished result, if any; returns true when new radiance was uploaded. */
 static bool take_result(viewer *v)
 {
     bool got = false;
     pthread_mutex_lock(&v->lock);
-    if (v->result_ready) {
+    if (v->result_ready && v->kvec) {
+        memcpy(v->kvec, v->result, prt_transfer_vertex_count(v->t) * 3 * (size_t)v->kterms * sizeof(float));
+        shade(v);
+    } else if (v->result_ready) {
         prt_window_set_radiance(v->win, v->result, prt_transfer_vertex_count(v->t));
         if (v->exit_floats) prt_window_set_exit(v->win, v->result_exit, prt_transfer_vertex_count(v->t));
         if (v->result_texels)
             prt_window_set_texels(v->win, v->result_has_texels ? v->result_texels : NULL, v->texel_width, v->texel_height);
+    }
+    if (v->result_ready) {
         v->shown_version = v->result_version;
         v->result_ready = false;
         v->relight_ms_sum += v->relight_ms;
@@ -230,7 +269,10 @@ static void status_line(const viewer *v, char *buf, size_t n)
     static const char *component[3] = {"", " (direct only)", " (indirect only)"};
     double frames = v->frames ? (double)v->frames : 1.0, draws = v->draws ? (double)v->draws : 1.0;
     double relights = v->relights ? (double)v->relights : 1.0;
-    int len = snprintf(buf, n, "SH %s%s, order %d, %zu vertices, exposure %+.1f, light at %.0f, %.0f deg\nframe %.2f ms  draw %.2f ms  relight %.2f ms  (h: help)",
+    int len = v->kvec ? snprintf(buf, n, "wavelet, up to %d terms, %d light coefficients, %zu vertices, exposure %+.1f, light at %.0f, %.0f deg\nframe %.2f ms  draw %.2f ms  relight %.2f ms  (h: help)",
+                                 v->kterms, v->want.light_coefficients, prt_transfer_vertex_count(v->t), v->exposure, v->want.env_yaw, v->want.env_pitch,
+                                 v->frame_ms_sum / frames, v->draw_ms_sum / draws, v->relight_ms_sum / relights)
+                      : snprintf(buf, n, "SH %s%s, order %d, %zu vertices, exposure %+.1f, light at %.0f, %.0f deg\nframe %.2f ms  draw %.2f ms  relight %.2f ms  (h: help)",
                        prt_transfer_kind_name(v->want.component ? PRT_TRANSFER_INTERREFLECTED : v->want.kind), component[v->want.component],
                        v->want.order, prt_transfer_vertex_count(v->t), v->exposure, v->want.env_yaw, v->want.env_pitch,
                        v->frame_ms_sum / frames, v->draw_ms_sum / draws, v->relight_ms_sum / relights);
@@ -244,6 +286,7 @@ int view_frame(viewer *v)
     double t0 = now();
     prt_camera cam;
     view_camera(v, &cam);
+    if (v->kvec && v->have_shade && memcmp(cam.eye, v->shaded_eye, sizeof cam.eye)) shade(v);   /* a camera move changes the view factor only */
     char overlay[4096] = "";
     if (v->hud) status_line(v, overlay, sizeof overlay);
     prt_status st = prt_window_draw(v->win, &cam, v->background, v->exposure, v->tonemap, overlay);
@@ -343,7 +386,7 @@ int cmd_view(int argc, char **argv)
     if (!st) {
         prt_transfer_get_info(v.t, &info);
         cli_light_defaults_from(&v.light, v.t);
-        st = cli_light_project(&c, &v.light, info.order, &v.sh, NULL);
+        st = cli_light_project(&c, &v.light, info.order, &v.sh, prt_transfer_channels(v.t, PRT_TRANSFER_WAVELET) ? &v.env : NULL);
     }
     if (!st) st = prt_context_create(&(prt_context_desc){c.threads, NULL, NULL}, &v.worker_ctx);
     char title[600];
@@ -358,9 +401,20 @@ int cmd_view(int argc, char **argv)
         return rc;
     }
     view_register_core(&v);
-    view_register_sh(&v);
     size_t nv = prt_transfer_vertex_count(v.t);
-    v.result = calloc(nv * 3, sizeof(float));
+    if (v.env) {
+        prt_wavelet_info wi;
+        prt_transfer_wavelet_info(v.t, &wi);
+        v.kterms = wi.terms;
+        v.kvec = calloc(nv * 3 * (size_t)v.kterms, sizeof(float));
+        v.shaded = calloc(nv * 3, sizeof(float));
+        v.want.light_coefficients = 4096;
+        view_register_wavelet(&v);
+    } else {
+        view_register_sh(&v);
+    }
+    v.result = calloc(nv * 3 * (size_t)(v.kterms ? v.kterms : 1), sizeof(float));
+    if (v.env && (!v.kvec || !v.shaded)) { free(v.result); v.result = NULL; }
     if (prt_transfer_channels(v.t, PRT_TRANSFER_GLOSSY_SHADOWED) || prt_transfer_channels(v.t, PRT_TRANSFER_GLOSSY_INTERREFLECTED)) {
         v.exit_floats = 3 * (size_t)info.order * info.order;
         v.result_exit = calloc(nv * v.exit_floats, sizeof(float));
@@ -434,6 +488,9 @@ int cmd_view(int argc, char **argv)
     free(v.result);
     free(v.result_exit);
     free(v.result_texels);
+    free(v.kvec);
+    free(v.shaded);
+    prt_envmap_release(v.env);
     prt_transfer_release(v.t);
     prt_context_release(v.worker_ctx);
     prt_context_release(c.ctx);

@@ -124,6 +124,15 @@ static prt_status relight_file(cli *c, const char *path, const cli_light *light_
     out->nv = prt_transfer_vertex_count(t);
     out->radiance = malloc(out->nv * 3 * sizeof(float));
     if (!out->radiance) return PRT_ERR_NO_MEMORY;
+    if (kind == PRT_TRANSFER_WAVELET) {
+        /* View-dependent vertices are seen from the auto-framed camera that render uses. */
+        cli_view view = CLI_VIEW_DEFAULTS;
+        prt_camera cam;
+        cli_view_camera(&view, prt_transfer_positions(t), out->nv, (float)view.width / view.height, &cam);
+        if ((st = cli_relight_wavelet(c, t, &light, cam.eye, out->radiance))) return st;
+        snprintf(out->what, sizeof out->what, "%s (%s)", path, prt_transfer_kind_name(kind));
+        return PRT_OK;
+    }
     if ((st = prt_relight_sh(c->ctx, t, kind, &sh, out->radiance))) return st;
     if (kind == PRT_TRANSFER_INTERREFLECTED && prt_transfer_channels(t, PRT_TRANSFER_SHADOWED)) {
         /* Inter-reflected minus shadowed is the light that bounced at least once. */

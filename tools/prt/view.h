@@ -26,6 +26,7 @@ typedef struct relight_job {
     int order;
     int component;             /* 0 full, 1 direct only, 2 indirect only */
     float env_yaw, env_pitch;  /* degrees */
+    int light_coefficients;    /* wavelet: Haar coefficients of the lighting kept */
     unsigned version;
 } relight_job;
 
@@ -55,6 +56,13 @@ struct viewer {
     float *result;              /* written by the worker under lock */
     float *result_exit;         /* glossy exit SH per vertex, when the file has glossy sets */
     size_t exit_floats;         /* per vertex: 3 x order^2, or 0 */
+    /* wavelet files: the worker returns light-dependent K-vectors (result, kterms x 3 per
+     * vertex); the main thread applies the view factor whenever the camera moves. */
+    prt_envmap *env;
+    int kterms;
+    float *kvec, *shaded;
+    float shaded_eye[3];
+    bool have_shade;
     float *result_texels;       /* per-texel radiance map, when the file has texel sets */
     bool result_has_texels;     /* the latest result used them (its kind has a texel set) */
     int texel_width, texel_height;
@@ -76,6 +84,7 @@ struct viewer {
 void view_register(viewer *v, const view_control *table, int count);
 void view_register_core(viewer *v);
 void view_register_sh(viewer *v);
+void view_register_wavelet(viewer *v);
 /* Looks a key up by its script name ("k", "[", "escape"); returns 0 if unknown. */
 int view_key_code(const viewer *v, const char *name);
 /* Runs the control bound to key, if any. */

@@ -46,9 +46,15 @@ static void reload_probe(viewer *v)
     prt_transfer_info info;
     prt_transfer_get_info(v->t, &info);
     prt_sh_light sh;
-    if (cli_light_project(v->c, &v->light, info.order, &sh, NULL)) {
+    prt_envmap *env = NULL;
+    if (cli_light_project(v->c, &v->light, info.order, &sh, v->env ? &env : NULL)) {
         cli_error(v->c, "reload failed: %s", prt_last_error());
         return;
+    }
+    if (env) {   /* the worker reads the map: swap it while the worker is idle */
+        view_sync(v);
+        prt_envmap_release(v->env);
+        v->env = env;
     }
     /* cli_light_project applies the file's rotation and intensity; the viewer's own rotation
      * is applied by the worker on top. */
@@ -120,3 +126,22 @@ static const view_control sh[] = {
 };
 
 void view_register_sh(viewer *v) { view_register(v, sh, (int)(sizeof sh / sizeof sh[0])); }
+
+/* ---- wavelet PRT ---- */
+static void fewer_light_coefficients(viewer *v)
+{
+    if (v->want.light_coefficients > 64) v->want.light_coefficients /= 2;
+    view_request_relight(v);
+}
+static void more_light_coefficients(viewer *v)
+{
+    if (v->want.light_coefficients < PRT_WAVELET_DIM) v->want.light_coefficients = v->want.light_coefficients * 2 > PRT_WAVELET_DIM ? PRT_WAVELET_DIM : v->want.light_coefficients * 2;
+    view_request_relight(v);
+}
+
+static const view_control wavelet[] = {
+    {'[', "[", "keep half the lighting's Haar coefficients", fewer_light_coefficients},
+    {']', "]", "keep twice the lighting's Haar coefficients", more_light_coefficients},
+};
+
+void view_register_wavelet(viewer *v) { view_register(v, wavelet, (int)(sizeof wavelet / sizeof wavelet[0])); }
