@@ -32,6 +32,7 @@ test-asan: deps
 
 bench: build
 	$(BUILD)/prt_bench
+	$(BUILD)/prt_bench_wavelet
 
 # README's accuracy tables: PRT against the path-traced reference (several minutes).
 accuracy: build

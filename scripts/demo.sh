@@ -19,6 +19,9 @@ mkdir -p "$OUT"
 "$PRT" bake "$OUT/scene.obj" -o "$OUT/texels.prt" --order 5 --samples 512 --bounces 2 --texels 512 --kinds shadowed,interreflected -q
 "$PRT" render "$OUT/texels.prt" --kind shadowed,interreflected -o "$OUT/texels.png" --width 480 --height 360
 "$PRT" relight "$OUT/texels.prt" --texels --kind interreflected -o "$OUT/lightmap.png" -q
+"$PRT" bake "$OUT/scene.obj" -o "$OUT/wavelet.prt" --method wavelet --brdf phong:30:0.4:0.5 --bounces 1 -q
+"$PRT" render "$OUT/wavelet.prt" -o "$OUT/wavelet.png" --width 480 --height 360
+"$PRT" render "$OUT/wavelet.prt" -o "$OUT/wavelet_rotated.png" --width 480 --height 360 --rotate 150
 PROBE=../shared/data/envmaps/probulator_ict/grace.hdr
 if [ -f "$PROBE" ]; then
     "$PRT" render "$OUT/scene.prt" --kind all -o "$OUT/grace.png" --width 480 --height 360 --env "$PROBE" --exposure -1
@@ -28,5 +31,6 @@ else
 fi
 echo
 echo "Demo images (sky*, grace*: unshadowed, shadowed, inter-reflected; glossy: diffuse, then with the"
-echo "Phong lobe evaluated per pixel; texels: per-texel shadowed, inter-reflected; lightmap: the map):"
+echo "Phong lobe evaluated per pixel; texels: per-texel shadowed, inter-reflected; lightmap: the map;"
+echo "wavelet*: all-frequency glossy transfer, one bounce, Haar-wavelet lighting):"
 for f in "$OUT"/*.png "$OUT"/*.exr; do echo "  $f"; done

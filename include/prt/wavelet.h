@@ -65,7 +65,7 @@ typedef struct prt_wavelet_light_desc {
     int bits;              /* 16, or 32 for unquantized floats; 0 = 16 */
     double rotation[9];    /* lighting from d now arrives from R d; all zero = none */
     float intensity;       /* radiance scale; 0 = 1 */
-    int supersample;       /* env lookups per texel side; 0 = from the map's resolution (>= 2) */
+    int supersample;       /* env lookups per texel side; 0 = about one per map pixel (>= 2) */
 } prt_wavelet_light_desc;
 
 typedef struct prt_wavelet_light prt_wavelet_light;

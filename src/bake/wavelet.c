@@ -217,20 +217,19 @@ static bool bounce_vertex(const wjob *j, size_t x, const prt__sparse_store *prev
                 for (int k = 0; k < K; ++k)
                     for (int c = 0; c < 3; ++c) rw[k * 3 + c] = g[c * K + k] * wgt;
             }
+            /* The hit's nearest vertex stands for the point seen, as the paper's false-colour
+             * cube map does: a third of the gathering that interpolating three vertices costs. */
             const uint32_t *tri = m->indices + (size_t)rh.hit.primID[l] * 3;
-            const float bary[3] = {1.0f - rh.hit.u[l] - rh.hit.v[l], rh.hit.u[l], rh.hit.v[l]};
+            const float bu = rh.hit.u[l], bv = rh.hit.v[l], bw = 1.0f - bu - bv;
+            const uint32_t src = bw >= bu && bw >= bv ? tri[0] : bu >= bv ? tri[1] : tri[2];
             const float back[3] = {-d[0], -d[1], -d[2]};
-            for (int q = 0; q < 3; ++q) {
-                if (bary[q] <= 0.0f) continue;
-                const uint32_t src = tri[q];
-                const int Ks = j->term_count[src];
-                if (!view_maps(j, src, back, h, Ks)) continue;
-                float *ew = gather_entry(gs, src, kmax);
-                if (!ew) return false;
-                for (int s = 0; s < Ks; ++s)
-                    for (int k = 0; k < K; ++k)
-                        for (int c = 0; c < 3; ++c) ew[((size_t)s * kmax + k) * 3 + c] += bary[q] * h[c * Ks + s] * rw[k * 3 + c];
-            }
+            const int Ks = j->term_count[src];
+            if (!view_maps(j, src, back, h, Ks)) continue;
+            float *ew = gather_entry(gs, src, kmax);
+            if (!ew) return false;
+            for (int s = 0; s < Ks; ++s)
+                for (int k = 0; k < K; ++k)
+                    for (int c = 0; c < 3; ++c) ew[((size_t)s * kmax + k) * 3 + c] += h[c * Ks + s] * rw[k * 3 + c];
         }
     }
     memset(planes, 0, (size_t)K * 3 * DIM * sizeof(float));

@@ -41,6 +41,13 @@ float prt_brdf_factors_sigma(const prt_brdf_factors *f, int c, int k)
     return f && c >= 0 && c < 3 && k >= 0 && k < f->computed ? f->sigma[c][k] : 0.0f;
 }
 
+void prt__brdf_factors_finish(prt_brdf_factors *f)
+{
+    const size_t per = (size_t)f->computed * f->resolution * f->resolution * sizeof(float);
+    f->grey = !memcmp(f->light, f->light + per / 4, per) && !memcmp(f->light, f->light + per / 2, per) && !memcmp(f->view, f->view + per / 4, per) &&
+              !memcmp(f->view, f->view + per / 2, per);
+}
+
 bool prt__brdf_cell_dir(prt_brdf_param param, int res, int x, int y, float w[3])
 {
     double u = (x + 0.5) / res, v = (y + 0.5) / res;
@@ -173,6 +180,7 @@ prt_status prt_brdf_factor(const prt_brdf *b, const prt_brdf_factor_desc *desc, 
                     }
             }
     }
+    prt__brdf_factors_finish(f);
 done:
     free(cell_of); free(dirs); free(M); free(A); free(U); free(VT); free(S);
     if (st) { prt_brdf_factors_release(f); return st; }
@@ -213,11 +221,16 @@ void prt_brdf_factors_lookup(const prt_brdf_factors *f, int view, int terms, con
     const float w00 = (1 - tx) * (1 - ty), w10 = tx * (1 - ty), w01 = (1 - tx) * ty, w11 = tx * ty;
     const size_t cells = (size_t)res * res;
     const float *maps = view ? f->view : f->light;
-    for (int c = 0; c < 3; ++c)
+    const int i00 = y0 * res + x0, i10 = y0 * res + x1, i01 = y1 * res + x0, i11 = y1 * res + x1;
+    for (int c = 0; c < (f->grey ? 1 : 3); ++c)
         for (int k = 0; k < terms; ++k) {
             const float *p = maps + ((size_t)c * f->computed + k) * cells;
-            out[c * terms + k] = w00 * p[y0 * res + x0] + w10 * p[y0 * res + x1] + w01 * p[y1 * res + x0] + w11 * p[y1 * res + x1];
+            out[c * terms + k] = w00 * p[i00] + w10 * p[i10] + w01 * p[i01] + w11 * p[i11];
         }
+    if (f->grey) {
+        memcpy(out + terms, out, (size_t)terms * sizeof(float));
+        memcpy(out + 2 * terms, out, (size_t)terms * sizeof(float));
+    }
 }
 
 void prt_brdf_factors_eval(const prt_brdf_factors *f, int terms, const float wi[3], const float wo[3], float rgb[3])

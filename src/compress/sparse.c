@@ -14,7 +14,7 @@ prt_status prt__sparse_alloc(prt__sparse_store *s, size_t vectors, int n, int bi
     s->vectors = vectors;
     size_t cells = vectors * (size_t)n;
     s->index = prt__calloc(cells ? cells : 1, sizeof(uint16_t));
-    s->values = prt__calloc(cells ? cells * 3 : 1, (size_t)bits / 8);
+    s->values = prt__calloc(cells * 3 * ((size_t)bits / 8) + 8, 1);   /* padded: SIMD readers load 4 or 8 bytes at the last value */
     s->scale = prt__calloc(vectors ? vectors * 3 : 1, sizeof(float));
     if (!s->index || !s->values || !s->scale) {
         prt__sparse_free(s);
@@ -73,11 +73,33 @@ static float select_kth_largest(float *x, int n, int k)
 void prt__sparse_encode(prt__sparse_store *s, size_t vec, const float *r, const float *g, const float *b, prt__sparse_scratch *w)
 {
     const int dim = s->dim, n = s->n;
-    for (int j = 0; j < dim; ++j) w->mag[j] = r[j] * r[j] + g[j] * g[j] + b[j] * b[j];
+    /* Non-negative floats order like their bit patterns: a histogram of the top 12 bits finds the
+     * bin holding the n-th largest, and only that bin's members need a selection. */
+    enum { BINS = 4096, SHIFT = 19 };
+    uint32_t hist[BINS];
+    memset(hist, 0, sizeof hist);
+    for (int j = 0; j < dim; ++j) {
+        float m = r[j] * r[j] + g[j] * g[j] + b[j] * b[j];
+        uint32_t u;
+        memcpy(&u, &m, 4);
+        w->mag[j] = m;
+        if (u) hist[u >> SHIFT]++;   /* zeros (most of a cube below the horizon) would serialize on one counter */
+    }
+    uint32_t nonzero = 0;
+    for (int i = 1; i < BINS; ++i) nonzero += hist[i];
+    hist[0] += (uint32_t)dim - nonzero - hist[0];
     float thr = -1.0f;   /* keeps everything when n == dim */
     if (n < dim) {
-        memcpy(w->sel, w->mag, (size_t)dim * sizeof(float));
-        thr = select_kth_largest(w->sel, dim, n - 1);
+        int bin = BINS - 1;
+        uint32_t above_bin = 0;
+        while (bin > 0 && above_bin + hist[bin] < (uint32_t)n) above_bin += hist[bin--];
+        int members = 0;
+        for (int j = 0; j < dim; ++j) {
+            uint32_t u;
+            memcpy(&u, &w->mag[j], 4);
+            if ((int)(u >> SHIFT) == bin) w->sel[members++] = w->mag[j];
+        }
+        thr = select_kth_largest(w->sel, members, n - 1 - (int)above_bin);
     }
     /* Strictly above the threshold first, then ties in index order, so the choice is unique. */
     int above = 0;

@@ -342,6 +342,7 @@ static prt_status read_wavelet_chunk(prt_context *ctx, prt_transfer *t, uint32_t
         for (int c = 0; c < 3; ++c) memcpy(f->sigma[c], p + 24 + (size_t)c * PRT_BRDF_MAX_TERMS * 4, PRT_BRDF_MAX_TERMS * 4);
         memcpy(f->light, p + WBRF_HEADER, maps);
         memcpy(f->view, p + WBRF_HEADER + maps, maps);
+        prt__brdf_factors_finish(f);
         w->factors[k - 1] = f;
         if (!all_finite(f->light, maps / 4) || !all_finite(f->view, maps / 4)) return bad(ctx, "corrupt .prt file: non-finite BRDF maps");
         return PRT_OK;

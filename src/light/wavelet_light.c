@@ -51,10 +51,10 @@ prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, con
     if (any) memcpy(R, d.rotation, sizeof R);
     int ss = d.supersample;
     if (!ss) {
-        /* Enough lookups per texel to cover every map pixel under it at least twice per side. */
+        /* About one bilinear lookup per map pixel under the texel: every pixel contributes. */
         const prt_image *img = &env->img;
         double pixel = sqrt(4.0 * PRT_PI / ((double)img->width * img->height)), texel = 0.5 * PRT_PI / FACE;
-        ss = (int)ceil(2.0 * texel / pixel);
+        ss = (int)ceil(texel / pixel);
         ss = ss < 2 ? 2 : ss > 16 ? 16 : ss;
     }
 
