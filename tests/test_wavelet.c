@@ -577,6 +577,52 @@ static void test_interreflection(void **state)
     prt_context_release(ctx1);
 }
 
+/* Both bounce paths of eq. 8 at work between a floor and a wall: a glossy wall lights a diffuse
+ * floor (glossy-to-diffuse), a diffuse wall lights a glossy floor (diffuse-to-glossy); a black wall
+ * adds nothing. */
+static void test_glossy_bounce_paths(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_quad(&m, (float[3]){-1, 0, 1}, (float[3]){2, 0, 0}, (float[3]){0, 0, -2}, 6);    /* floor, +y */
+    const size_t floor_nv = m.nv;
+    tm_quad(&m, (float[3]){-1, 0, -1}, (float[3]){2, 0, 0}, (float[3]){0, 2, 0}, 6);    /* wall at z = -1, facing +z */
+    prt_brdf glossy, lambert, black;
+    assert_int_equal(prt_brdf_parse("phong:8:0.7:0.1", &glossy), PRT_OK);
+    assert_int_equal(prt_brdf_parse("lambert:0.8", &lambert), PRT_OK);
+    assert_int_equal(prt_brdf_parse("lambert:0", &black), PRT_OK);
+    prt_envmap *env = band_limited_env(128);
+    const float eye[3] = {0, 1.5f, 3};
+    const prt_wavelet_bake_desc d = {.supersample = 1, .terms = 3, .brdf_resolution = 16, .bounces = 1, .gather_resolution = 16};
+    /* [case]: 0 black wall, 1 Lambertian wall, 2 glossy wall (floor Lambertian); 3 black wall,
+     * 4 Lambertian wall (floor glossy). Mean floor radiance. */
+    double mean[5];
+    for (int cse = 0; cse < 5; ++cse) {
+        prt_scene *s = tm_scene(ctx, &m, 0.6f);
+        const prt_brdf *wall = cse == 0 || cse == 3 ? &black : cse == 2 ? &glossy : &lambert;
+        assert_int_equal(prt_scene_set_brdf(s, floor_nv, m.nv - floor_nv, wall), PRT_OK);
+        if (cse >= 3) assert_int_equal(prt_scene_set_brdf(s, 0, floor_nv, &glossy), PRT_OK);
+        prt_transfer *t = NULL;
+        assert_int_equal(prt_bake_wavelet(ctx, s, &d, &t), PRT_OK);
+        float *rgb = wavelet_vertices(ctx, t, env, eye);
+        mean[cse] = 0;
+        for (size_t v = 0; v < floor_nv; ++v) mean[cse] += rgb[v * 3 + 1] / (double)floor_nv;
+        free(rgb);
+        prt_transfer_release(t);
+        prt_scene_release(s);
+    }
+    print_message("floor: black wall %.4f, Lambertian wall %.4f, glossy wall %.4f; glossy floor: black wall %.4f, Lambertian wall %.4f\n", mean[0],
+                  mean[1], mean[2], mean[3], mean[4]);
+    assert_true(mean[1] > 1.05 * mean[0]);
+    assert_true(mean[2] > 1.02 * mean[0]);   /* glossy-to-diffuse */
+    assert_true(fabs(mean[2] - mean[1]) > 0.005 * mean[1]);
+    assert_true(mean[4] > 1.02 * mean[3]);   /* diffuse-to-glossy */
+    prt_envmap_release(env);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 /* Save and load give the same relighting; damage is caught; bad descriptions fail clearly. */
 static void test_wavelet_file(void **state)
 {
@@ -612,6 +658,11 @@ static void test_wavelet_file(void **state)
     /* SH relighting of a wavelet file and wavelet relighting of an SH file fail with a message. */
     prt_sh_light L = uniform_light(3);
     assert_int_not_equal(prt_relight_sh(ctx, u, PRT_TRANSFER_SHADOWED, &L, a), PRT_OK);
+    prt_transfer *z = NULL;
+    assert_int_equal(prt_transfer_compress(ctx, u, NULL, &z), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "SH sets"));
+    assert_int_equal(prt_transfer_quantize(ctx, u, 8, &z), PRT_ERR_INVALID_ARG);
+    assert_null(z);
     prt_transfer *ts = NULL;
     assert_int_equal(prt_bake_sh(ctx, s, &(prt_bake_desc){.order = 2, .samples = 64, .kinds = PRT_TRANSFER_SHADOWED}, &ts), PRT_OK);
     prt_wavelet_light *l = NULL;
@@ -661,6 +712,7 @@ int main(void)
         cmocka_unit_test(test_sharp_shadow),
         cmocka_unit_test(test_quantization_bound),
         cmocka_unit_test(test_interreflection),
+        cmocka_unit_test(test_glossy_bounce_paths),
         cmocka_unit_test_setup_teardown(test_wavelet_file, test_dir_setup, test_dir_teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -25,6 +25,7 @@ prt_status prt_transfer_compress(prt_context *ctx, const prt_transfer *in, const
 {
     if (!in || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_compress: transfer and out are required");
     *out = NULL;
+    if (in->wavelet) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "wavelet transfer is already sparse and quantized: compression applies to SH sets");
     prt_compress_desc d = desc ? *desc : (prt_compress_desc){0};
     if (d.method > PRT_COMPRESS_VQ || d.clusters < 0 || d.vectors < 0 || d.iterations < 0)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "compression: unknown method or negative settings");
@@ -123,6 +124,7 @@ prt_status prt_transfer_quantize(prt_context *ctx, const prt_transfer *in, int b
 {
     if (!in || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_quantize: transfer and out are required");
     *out = NULL;
+    if (in->wavelet) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "wavelet transfer is quantized when baked (--bits): quantization applies to SH sets");
     if (bits != 8 && bits != 16) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "quantization takes 8 or 16 bits (got %d)", bits);
     for (int k = 0; k < PRT__KIND_COUNT; ++k)
         if (in->sets[k].cpca) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "quantize before compressing: compressed sets keep float weights");
