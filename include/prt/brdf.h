@@ -91,9 +91,11 @@ typedef struct prt_brdf_factor_desc {
 typedef struct prt_brdf_factors prt_brdf_factors;
 
 /* Samples f on the parameterization (cell centres; cells of the grid outside the disk are not
- * directions and take their rim neighbour's values for filtering), factors each channel by a
- * SVD (LAPACKE sgesdd; channels with equal samples share one) and keeps the leading
- * max(K, 8) terms, of which the first K are used. */
+ * directions and take their rim neighbour's values for filtering), weights each cell by the
+ * square root of its projected solid angle on both sides (so the truncation is the best fit in
+ * the cos(wi) cos(wo)-weighted norm; uniform for the grid, whose cells all project to equal
+ * areas), factors each channel by an SVD (LAPACKE sgesdd; channels with equal samples share one)
+ * and keeps the leading max(K, 8) terms, of which the first K are used. */
 prt_status prt_brdf_factor(const prt_brdf *b, const prt_brdf_factor_desc *desc, prt_brdf_factors **out);
 void prt_brdf_factors_release(prt_brdf_factors *f);
 int prt_brdf_factors_terms(const prt_brdf_factors *f);
@@ -108,9 +110,10 @@ float prt_brdf_factors_sigma(const prt_brdf_factors *f, int c, int k);
 void prt_brdf_factors_lookup(const prt_brdf_factors *f, int view, int terms, const float w[3], float *out);
 /* The approximation with the first `terms` terms at (wi, wo). */
 void prt_brdf_factors_eval(const prt_brdf_factors *f, int terms, const float wi[3], const float wo[3], float rgb[3]);
-/* Cosine-weighted RMS error against the analytic BRDF over `samples` direction pairs (uniform on
- * the hemisphere, cosine of wi as weight; 0 = 100000), for K = 1 .. computed: rms[K - 1] and
- * relative[K - 1] (RMS over the cosine-weighted RMS of f). Channels averaged. */
+/* Cosine-weighted RMS error against the analytic BRDF over `samples` independent direction pairs
+ * (uniform on the hemisphere, weight cos(wi) cos(wo): light arrives cosine-weighted and grazing
+ * views cover little of an image; 0 = 100000), for K = 1 .. computed: rms[K - 1] and
+ * relative[K - 1] (RMS over the weighted RMS of f itself). Channels averaged. */
 prt_status prt_brdf_factors_error(const prt_brdf_factors *f, const prt_brdf *b, int samples, double *rms, double *relative);
 /* The frame of eq. 10 for a normal: s from the stereographic parameterization of normals (one
  * discontinuity, at n = -y), t = n x s. */

@@ -113,13 +113,24 @@ prt_status prt_brdf_factor(const prt_brdf *b, const prt_brdf_factor_desc *desc, 
     float *A = prt__calloc(mm, sizeof(float));
     float *U = prt__calloc(mm, sizeof(float)), *VT = prt__calloc(mm, sizeof(float));
     float *S = prt__calloc((size_t)m, sizeof(float));
+    float *sw = prt__calloc((size_t)m, sizeof(float));
     prt_brdf_factors *f = prt__brdf_factors_alloc(d.terms, computed, res, d.param);
-    if (!M || !A || !U || !VT || !S || !f) { st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for a %d x %d BRDF matrix", m, m); goto done; }
+    if (!M || !A || !U || !VT || !S || !sw || !f) { st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for a %d x %d BRDF matrix", m, m); goto done; }
+    /* Each cell weighs by its projected solid angle (cos dw) on both sides, so that the SVD's
+     * truncation is the best fit in the norm that matters when rendering: light arrives
+     * cosine-weighted and grazing views cover little of the screen. Grid cells all have the same
+     * projected solid angle (the disk is the projected hemisphere); polar cells have
+     * cos(theta) dw = 2 (1 - v^2) v dv dphi. Without it, the huge grazing values of BRDFs such
+     * as Ashikhmin-Shirley take every term. */
+    for (int i = 0; i < m; ++i) {
+        float z = dirs[(size_t)i * 3 + 2];
+        sw[i] = d.param == PRT_BRDF_PARAM_GRID ? 1.0f : sqrtf(z * sqrtf(1.0f - z));   /* sqrt of (1 - v^2) v, v = sqrt(1 - cos) */
+    }
     for (int i = 0; i < m; ++i)
         for (int j = 0; j < m; ++j) {
             float rgb[3];
             prt_brdf_eval(b, dirs + (size_t)i * 3, dirs + (size_t)j * 3, rgb);
-            for (int c = 0; c < 3; ++c) M[c * mm + (size_t)i * m + j] = rgb[c];
+            for (int c = 0; c < 3; ++c) M[c * mm + (size_t)i * m + j] = rgb[c] * sw[i] * sw[j];
         }
     for (int c = 0; c < 3 && !st; ++c) {
         int same = -1;   /* grey BRDFs: factor once */
@@ -152,8 +163,8 @@ prt_status prt_brdf_factor(const prt_brdf *b, const prt_brdf_factor_desc *desc, 
             for (int cell = 0; cell < cells; ++cell) {
                 int i = cell_of[cell];
                 if (i < 0) continue;
-                lk[cell] = sign * VT[k + (size_t)i * m];
-                vk[cell] = sign * U[i + (size_t)k * m];
+                lk[cell] = sign * VT[k + (size_t)i * m] / sw[i];
+                vk[cell] = sign * U[i + (size_t)k * m] / sw[i];
             }
         }
     }
@@ -182,6 +193,7 @@ prt_status prt_brdf_factor(const prt_brdf *b, const prt_brdf_factor_desc *desc, 
     }
     prt__brdf_factors_finish(f);
 done:
+    free(sw);
     free(cell_of); free(dirs); free(M); free(A); free(U); free(VT); free(S);
     if (st) { prt_brdf_factors_release(f); return st; }
     *out = f;
@@ -246,6 +258,16 @@ void prt_brdf_factors_eval(const prt_brdf_factors *f, int terms, const float wi[
     }
 }
 
+/* splitmix64: a fixed, well-mixed stream, so the error report is the same on every run. */
+static double next_uniform(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    return (double)(z >> 11) * 0x1.0p-53;
+}
+
 /* Uniform hemisphere direction from two numbers in [0, 1). */
 static void hemi(double u, double v, float w[3])
 {
@@ -259,17 +281,17 @@ prt_status prt_brdf_factors_error(const prt_brdf_factors *f, const prt_brdf *b, 
     if (samples <= 0) samples = 100000;
     const int K = f->computed;
     double err[PRT_BRDF_MAX_TERMS] = {0}, norm = 0, wsum = 0;
+    uint64_t rng = 0x9e3779b97f4a7c15ull;
     for (int s = 0; s < samples; ++s) {
-        double u0, v0, u1, v1;
-        prt__sobol2((uint32_t)s, 0x5eedu, &u0, &v0);
-        prt__sobol2((uint32_t)s, 0xb1dfu, &u1, &v1);
+        /* Independent pairs: two scrambles of one 2D sequence would tie wo to wi. */
+        double u0 = next_uniform(&rng), v0 = next_uniform(&rng), u1 = next_uniform(&rng), v1 = next_uniform(&rng);
         float wi[3], wo[3], g[3 * PRT_BRDF_MAX_TERMS], h[3 * PRT_BRDF_MAX_TERMS], ref[3];
         hemi(u0, v0, wi);
         hemi(u1, v1, wo);
         prt_brdf_eval(b, wi, wo, ref);
         prt_brdf_factors_lookup(f, 0, K, wi, g);
         prt_brdf_factors_lookup(f, 1, K, wo, h);
-        const double cw = wi[2];
+        const double cw = (double)wi[2] * wo[2];
         wsum += cw * 3;
         for (int c = 0; c < 3; ++c) {
             double acc = 0;
