@@ -73,8 +73,8 @@ within "$T/g2.exr" "$T/rg2.exr" 0.002
 r=$(field relative_l2 "$T/cmp")
 awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "the glossy part added nothing (relative L2 $r)"
 
-# Wavelet: the worker computes K-vectors on lighting changes, the view factor follows the camera;
-# screenshots equal prt render, and a camera move alone changes the glossy shading.
+# Wavelet: the worker computes K-vectors on lighting changes, the GPU applies the view factor per
+# pixel; screenshots equal prt render, and a camera move alone changes the glossy shading.
 "$PRT" bake -q "$T/glossy.json" -o "$T/wavelet.prt" --method wavelet --supersample 1 --terms 2 --brdf-res 16 || bad "wavelet bake"
 printf '%s\n' "0 screenshot $T/w1.exr" "0 env-rotate 90 0" "0 screenshot $T/w2.exr" "0 key ]" "0.1 drag left 60 0" "0.2 screenshot $T/w3.exr" "0.3 quit" >"$T/wscript.txt"
 xvfb-run -a -s "-screen 0 1024x768x24" "$PRT" view "$T/wavelet.prt" --width 320 --height 240 --script "$T/wscript.txt" >/dev/null 2>"$T/err"
@@ -87,6 +87,11 @@ within "$T/w2.exr" "$T/rw2.exr" 0.002
 "$PRT" compare --json - -q "$T/w2.exr" "$T/w3.exr" >"$T/cmp"
 r=$(field relative_l2 "$T/cmp")
 awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "moving the camera changed nothing in the wavelet view (relative L2 $r)"
+# The view factor per pixel agrees with the per-vertex evaluation it refines.
+"$PRT" render -q "$T/wavelet.prt" -o "$T/rwv.exr" --width 320 --height 240 --per-vertex
+"$PRT" compare --json - -q "$T/rw1.exr" "$T/rwv.exr" >"$T/cmp"
+r=$(field relative_l2 "$T/cmp")
+awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0 && r < 0.1) }' && ok || bad "per-pixel and per-vertex wavelet shading disagree or coincide (relative L2 $r)"
 
 # Per-texel: the viewer samples the same radiance map prt render does.
 "$PRT" bake -q "$T/demo.obj" -o "$T/texels.prt" --order 3 --samples 64 --texels 128 --kinds shadowed || bad "texel bake"

@@ -46,6 +46,16 @@ typedef struct prt_render_mesh {
     const float *uv;
     const float *texel_radiance;
     int texel_width, texel_height;
+    /* Optional separable view factor (wavelet PRT): per vertex kvec_terms RGB light-dependent
+     * terms g_k (prt_relight_wavelet's output) and its view-map set (0: none), the view maps
+     * ([set][term][channel][res][res], prt_wavelet_view_maps). Per pixel each corner's
+     * sum_k h_k(wo) g_k is evaluated at the pixel's view direction in the frame of the
+     * interpolated normal, blended by barycentrics and added to radiance. Needs normals. */
+    const float *kvec;
+    int kvec_terms;
+    const uint8_t *view_set;
+    const float *view_maps;
+    int view_map_sets, view_map_resolution, view_map_polar;
 } prt_render_mesh;
 
 prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, prt_renderer **out);
@@ -105,6 +115,8 @@ void prt_window_set_radiance(prt_window *w, const float *rgb, size_t vertex_coun
 void prt_window_set_texels(prt_window *w, const float *rgb, int width, int height);
 /* Replaces the glossy exit coefficients (same layout and order as given to set_mesh). */
 void prt_window_set_exit(prt_window *w, const float *exit_sh, size_t vertex_count);
+/* Replaces the wavelet K-vectors (same layout as prt_render_mesh.kvec). */
+void prt_window_set_kvec(prt_window *w, const float *kvec, size_t vertex_count);
 /* Draws and presents. tonemap: 0/1 Reinhard, 2 clamp (as prt_image_save_desc). overlay: text
  * drawn at the top left, NULL for none. */
 prt_status prt_window_draw(prt_window *w, const prt_camera *cam, const float background[3], float exposure_stops, int tonemap,

@@ -85,8 +85,17 @@ int prt_wavelet_light_kept(const prt_wavelet_light *l);
  * terms of a vertex are zero). Recompute when the lighting changes. */
 prt_status prt_relight_wavelet(prt_context *ctx, const prt_transfer *t, const prt_wavelet_light *light, float *out_kvec);
 /* Exit radiance per vertex towards eye (a world position): the view maps at each vertex's view
- * direction dotted with its K-vector. Recompute when the view changes. */
+ * direction dotted with its K-vector, clamped at zero (a few separable terms can undershoot).
+ * Recompute when the view changes. With eye NULL only the
+ * Lambertian vertices are shaded (their radiance does not depend on the view) and the glossy
+ * ones get zero: the renderer adds their view factor per pixel (prt_render_mesh.kvec). */
 prt_status prt_wavelet_shade(prt_context *ctx, const prt_transfer *t, const float *kvec, const float eye[3], float *out_rgb);
+
+/* What the renderer needs to evaluate the view factor per pixel: the view maps of the file's
+ * factored materials as one array [set][term][channel][resolution][resolution] (terms = info.terms;
+ * map row y, column x; borrowed until t is released), and per vertex its set (0: Lambertian,
+ * s: the s-th factored material). Returns 0 when the file has no factored material. */
+int prt_wavelet_view_maps(const prt_transfer *t, const float **maps, int *sets, int *resolution, int *polar, const uint8_t **vertex_set);
 
 /* Vertex v's term k decoded: its kept coefficients' indices and RGB values (dequantized), at
  * most info.coefficients of each; returns how many (0 when v or k is out of range). */

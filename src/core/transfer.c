@@ -193,6 +193,8 @@ void prt__wavelet_set_free(prt__wavelet_set *w)
     if (!w) return;
     free(w->term_count);
     free(w->vec_start);
+    free(w->view_maps);
+    free(w->vertex_set);
     prt__sparse_free(&w->store);
     for (int k = 0; k < PRT__MAX_BRDFS; ++k) prt_brdf_factors_release(w->factors[k]);
     free(w);
@@ -249,4 +251,46 @@ int prt_transfer_wavelet_vector(const prt_transfer *t, size_t v, int k, int *ind
     const size_t vec = w->vec_start[v] + (size_t)k;
     for (int i = 0; i < w->store.n; ++i) prt__sparse_get(&w->store, vec, i, &index[i], rgb + 3 * i);
     return w->store.n;
+}
+
+int prt_wavelet_view_maps(const prt_transfer *t, const float **maps, int *sets, int *resolution, int *polar, const uint8_t **vertex_set)
+{
+    if (!t || !t->wavelet) return 0;
+    prt__wavelet_set *w = t->wavelet;
+    if (!w->view_maps) {
+        /* Gather the factored materials' first `terms` view maps into one array; vertices point
+         * at their material's slot. Built once, kept with the (otherwise read-only) set. */
+        int slot[PRT__MAX_BRDFS] = {0}, n = 0, res = 0;
+        for (int k = 0; k < PRT__MAX_BRDFS; ++k)
+            if (w->factors[k]) { slot[k] = ++n; res = w->factors[k]->resolution; }
+        if (!n) return 0;
+        const size_t cells = (size_t)res * res, per_set = (size_t)w->terms * 3 * cells;
+        float *m = prt__calloc((size_t)n * per_set, sizeof(float));
+        uint8_t *vs = prt__calloc(t->mesh.vertex_count, 1);
+        if (!m || !vs) { free(m); free(vs); return 0; }
+        for (int k = 0; k < PRT__MAX_BRDFS; ++k) {
+            const prt_brdf_factors *f = w->factors[k];
+            if (!f) continue;
+            for (int term = 0; term < f->terms && term < w->terms; ++term)
+                for (int c = 0; c < 3; ++c)
+                    memcpy(m + (size_t)(slot[k] - 1) * per_set + ((size_t)term * 3 + c) * cells, f->view + ((size_t)c * f->computed + term) * cells,
+                           cells * sizeof(float));
+        }
+        for (size_t v = 0; v < t->mesh.vertex_count; ++v) {
+            uint8_t mat = t->mesh.material[v];
+            vs[v] = mat ? (uint8_t)slot[mat - 1] : 0;
+        }
+        w->view_maps = m;
+        w->vertex_set = vs;
+        w->view_sets = n;
+    }
+    int res = 0;
+    for (int k = 0; k < PRT__MAX_BRDFS && !res; ++k)
+        if (w->factors[k]) res = w->factors[k]->resolution;
+    if (maps) *maps = w->view_maps;
+    if (sets) *sets = w->view_sets;
+    if (resolution) *resolution = res;
+    if (polar) *polar = w->param == PRT_BRDF_PARAM_POLAR;
+    if (vertex_set) *vertex_set = w->vertex_set;
+    return 1;
 }

@@ -66,6 +66,9 @@ typedef struct prt__wavelet_set {
     size_t *vec_start;                            /* [vertex + 1], derived */
     prt__sparse_store store;
     prt_brdf_factors *factors[PRT__MAX_BRDFS];    /* per material (k - 1); NULL = Lambertian */
+    float *view_maps;                             /* prt_wavelet_view_maps' arrays, built on first use */
+    uint8_t *vertex_set;
+    int view_sets;
 } prt__wavelet_set;
 void prt__wavelet_set_free(prt__wavelet_set *w);
 /* Fills vec_start from term_count; false if a count is 0 or above 16. */

@@ -97,7 +97,7 @@ prt_status prt_relight_wavelet(prt_context *ctx, const prt_transfer *t, const pr
 
 prt_status prt_wavelet_shade(prt_context *ctx, const prt_transfer *t, const float *kvec, const float eye[3], float *out_rgb)
 {
-    if (!t || !kvec || !eye || !out_rgb) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_wavelet_shade: transfer, K-vectors, eye and output are required");
+    if (!t || !kvec || !out_rgb) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_wavelet_shade: transfer, K-vectors and output are required");
     const prt__wavelet_set *w = t->wavelet;
     if (!w) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this .prt holds no wavelet transfer (bake with --method wavelet)");
     const prt__mesh *m = &t->mesh;
@@ -111,6 +111,10 @@ prt_status prt_wavelet_shade(prt_context *ctx, const prt_transfer *t, const floa
         const prt_brdf_factors *f = mat ? w->factors[mat - 1] : NULL;
         if (!f) {
             for (int c = 0; c < 3; ++c) o[c] = m->albedo[v * 3 + c] / (float)PRT_PI * g[c];
+            continue;
+        }
+        if (!eye) {   /* drawn per pixel */
+            o[0] = o[1] = o[2] = 0.0f;
             continue;
         }
         const float *n = m->normals + v * 3;
@@ -133,7 +137,7 @@ prt_status prt_wavelet_shade(prt_context *ctx, const prt_transfer *t, const floa
         for (int c = 0; c < 3; ++c) {
             float acc = 0;
             for (int k = 0; k < Kv; ++k) acc += h[c * Kv + k] * g[k * 3 + c];
-            o[c] = acc;
+            o[c] = acc > 0.0f ? acc : 0.0f;   /* a few terms can undershoot; radiance cannot (the shader clamps too) */
         }
     }
     return PRT_OK;

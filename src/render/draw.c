@@ -88,6 +88,37 @@ static const char *FS_G =
     "  color = vec4(f_rad + max(acc, vec3(0.0)), 1.0);\n"
     "}\n";
 
+/* Separable view factor (wavelet PRT): the same geometry shader; each corner's K-vector (texel
+ * v * K + k: rgb = g_k, a = its view-map set) meets the view maps at this pixel's direction in
+ * the frame of eq. 10 built on the interpolated normal, as relight/wavelet.c does per vertex. */
+static const char *FS_S =
+    "#version 330 core\n"
+    "in vec3 f_pos; in vec3 f_nrm; in vec3 f_rad; in vec3 f_bary; flat in ivec3 f_ids;\n"
+    "uniform samplerBuffer kvec; uniform sampler2DArray maps; uniform int terms; uniform int polar; uniform vec3 eye;\n"
+    "out vec4 color;\n"
+    "void main() {\n"
+    "  vec3 n = normalize(f_nrm);\n"
+    "  float ny1 = n.y + 1.0;\n"
+    "  vec3 s = vec3(ny1 * ny1 + n.z * n.z - n.x * n.x, -2.0 * ny1 * n.x, -2.0 * n.x * n.z);\n"
+    "  s = length(s) < 1e-6 ? vec3(1.0, 0.0, 0.0) : normalize(s);\n"
+    "  vec3 t = normalize(cross(n, s));\n"
+    "  vec3 wo = normalize(eye - f_pos);\n"
+    "  vec3 l = vec3(dot(wo, s), dot(wo, t), dot(wo, n));\n"
+    "  if (l.z < 0.02) { float r = length(l.xy); l.xy *= r > 0.0 ? sqrt(1.0 - 0.0004) / r : 0.0; l.z = 0.02; }\n"
+    "  vec2 uv = polar != 0 ? vec2(fract(atan(l.y, l.x) / 6.28318530718), sqrt(max(0.0, 1.0 - l.z))) : 0.5 * (l.xy + 1.0);\n"
+    "  vec3 acc = vec3(0.0);\n"
+    "  for (int c = 0; c < 3; ++c) {\n"
+    "    int id = f_ids[c];\n"
+    "    int set = int(texelFetch(kvec, id * terms).a + 0.5);\n"
+    "    if (set == 0) continue;\n"
+    "    vec3 sum = vec3(0.0);\n"
+    "    for (int k = 0; k < terms; ++k)\n"
+    "      sum += texture(maps, vec3(uv, float((set - 1) * terms + k))).rgb * texelFetch(kvec, id * terms + k).rgb;\n"
+    "    acc += f_bary[c] * sum;\n"
+    "  }\n"
+    "  color = vec4(max(f_rad + acc, vec3(0.0)), 1.0);\n"
+    "}\n";
+
 static GLuint compile(GLenum type, const char *src, char *log, size_t logsize)
 {
     GLuint s = glCreateShader(type);
@@ -139,15 +170,23 @@ prt_status prt__draw_init(prt__draw *d)
 {
     memset(d, 0, sizeof *d);
     if (!(d->program = link_program(VS, NULL, FS))) return PRT_ERR_BACKEND;
-    if (!(d->program_g = link_program(VS_G, GS_G, FS_G)) || !(d->program_t = link_program(VS_T, NULL, FS_T))) {
+    if (!(d->program_g = link_program(VS_G, GS_G, FS_G)) || !(d->program_t = link_program(VS_T, NULL, FS_T)) ||
+        !(d->program_s = link_program(VS_G, GS_G, FS_S))) {
         glDeleteProgram(d->program);
         if (d->program_g) glDeleteProgram(d->program_g);
-    if (d->program_t) glDeleteProgram(d->program_t);
-    if (d->vbo_uv) glDeleteBuffers(1, &d->vbo_uv);
-    if (d->tex) glDeleteTextures(1, &d->tex);
-        d->program = d->program_g = 0;
+        if (d->program_t) glDeleteProgram(d->program_t);
+        d->program = d->program_g = d->program_t = 0;
         return PRT_ERR_BACKEND;
     }
+    d->us_mvp = glGetUniformLocation(d->program_s, "mvp");
+    d->us_eye = glGetUniformLocation(d->program_s, "eye");
+    d->us_terms = glGetUniformLocation(d->program_s, "terms");
+    d->us_polar = glGetUniformLocation(d->program_s, "polar");
+    d->us_kvec = glGetUniformLocation(d->program_s, "kvec");
+    d->us_maps = glGetUniformLocation(d->program_s, "maps");
+    glGenBuffers(1, &d->tbo_k);
+    glGenTextures(1, &d->tbo_k_tex);
+    glGenTextures(1, &d->maps_tex);
     d->ut_mvp = glGetUniformLocation(d->program_t, "mvp");
     d->ut_map = glGetUniformLocation(d->program_t, "map");
     glGenBuffers(1, &d->vbo_uv);
@@ -174,6 +213,12 @@ void prt__draw_free(prt__draw *d)
     if (d->program) glDeleteProgram(d->program);
     if (d->program_g) glDeleteProgram(d->program_g);
     if (d->program_t) glDeleteProgram(d->program_t);
+    if (d->program_s) glDeleteProgram(d->program_s);
+    if (d->tbo_k) glDeleteBuffers(1, &d->tbo_k);
+    if (d->tbo_k_tex) glDeleteTextures(1, &d->tbo_k_tex);
+    if (d->maps_tex) glDeleteTextures(1, &d->maps_tex);
+    free(d->kpack);
+    free(d->view_set);
     if (d->vbo_uv) glDeleteBuffers(1, &d->vbo_uv);
     if (d->tex) glDeleteTextures(1, &d->tex);
     if (d->vbo_nrm) { GLuint b[2] = {d->vbo_nrm, d->tbo}; glDeleteBuffers(2, b); }
@@ -200,7 +245,9 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(m->triangle_count * 3 * sizeof(uint32_t)), m->indices, GL_STATIC_DRAW);
     d->exit_order = m->exit_sh && m->normals && m->exit_order >= 1 && m->exit_order <= PRT_SH_MAX_ORDER ? m->exit_order : 0;
     d->exit_mirror = m->exit_mirror;
-    if (d->exit_order) {
+    d->kvec_terms = m->kvec && m->normals && m->view_set && m->view_maps && m->kvec_terms >= 1 && m->view_map_sets >= 1 &&
+                            m->view_map_resolution >= 1 ? m->kvec_terms : 0;
+    if (d->exit_order || d->kvec_terms) {
         glBindBuffer(GL_ARRAY_BUFFER, d->vbo_nrm);
         glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(m->vertex_count * 3 * sizeof(float)), m->normals, GL_STATIC_DRAW);
         glEnableVertexAttribArray(2);
@@ -221,6 +268,33 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     glBindVertexArray(0);
     d->index_count = m->triangle_count * 3;
     if (d->exit_order) prt__draw_upload_exit(d, m->exit_sh, m->vertex_count);
+    if (d->kvec_terms) {
+        free(d->view_set);
+        d->view_set = malloc(m->vertex_count);
+        if (!d->view_set) { d->kvec_terms = 0; return; }
+        memcpy(d->view_set, m->view_set, m->vertex_count);
+        d->kpack_vertices = 0;   /* the packing must be rebuilt with the new sets */
+        d->view_polar = m->view_map_polar;
+        const int res = m->view_map_resolution, layers = m->view_map_sets * m->kvec_terms;
+        /* [set][term][channel][res][res] -> one RGB layer per (set, term). */
+        float *rgb = malloc((size_t)layers * res * res * 3 * sizeof(float));
+        if (!rgb) { d->kvec_terms = 0; return; }
+        for (int layer = 0; layer < layers; ++layer)
+            for (int i = 0; i < res * res; ++i)
+                for (int c = 0; c < 3; ++c)
+                    rgb[((size_t)layer * res * res + i) * 3 + c] = m->view_maps[((size_t)layer * 3 + c) * res * res + i];
+        glBindTexture(GL_TEXTURE_2D_ARRAY, d->maps_tex);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+        glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGB32F, res, res, layers, 0, GL_RGB, GL_FLOAT, rgb);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        /* As the CPU lookup: the polar angle wraps, everything else clamps at the edge texels. */
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, d->view_polar ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
+        free(rgb);
+        prt__draw_upload_kvec(d, m->kvec, m->vertex_count);
+    }
     if (m->texel_radiance && m->texel_width > 0 && m->texel_height > 0) prt__draw_upload_texels(d, m->texel_radiance, m->texel_width, m->texel_height);
 }
 
@@ -260,6 +334,30 @@ void prt__draw_upload_exit(prt__draw *d, const float *exit_sh, size_t nv)
     glBufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)(nv * n * 4 * sizeof(float)), d->pack, GL_DYNAMIC_DRAW);
     glBindTexture(GL_TEXTURE_BUFFER, d->tbo_tex);
     glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, d->tbo);
+    glBindTexture(GL_TEXTURE_BUFFER, 0);
+    glBindBuffer(GL_TEXTURE_BUFFER, 0);
+}
+
+void prt__draw_upload_kvec(prt__draw *d, const float *kvec, size_t nv)
+{
+    if (!d->kvec_terms || !kvec) return;
+    const size_t K = (size_t)d->kvec_terms;
+    if (d->kpack_vertices != nv) {
+        free(d->kpack);
+        d->kpack = malloc(nv * K * 4 * sizeof(float));
+        d->kpack_vertices = d->kpack ? nv : 0;
+        if (!d->kpack) { d->kvec_terms = 0; return; }
+    }
+    for (size_t v = 0; v < nv; ++v)
+        for (size_t k = 0; k < K; ++k) {
+            float *t = d->kpack + (v * K + k) * 4;
+            for (int c = 0; c < 3; ++c) t[c] = kvec[(v * K + k) * 3 + (size_t)c];
+            t[3] = (float)d->view_set[v];
+        }
+    glBindBuffer(GL_TEXTURE_BUFFER, d->tbo_k);
+    glBufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)(nv * K * 4 * sizeof(float)), d->kpack, GL_DYNAMIC_DRAW);
+    glBindTexture(GL_TEXTURE_BUFFER, d->tbo_k_tex);
+    glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, d->tbo_k);
     glBindTexture(GL_TEXTURE_BUFFER, 0);
     glBindBuffer(GL_TEXTURE_BUFFER, 0);
 }
@@ -304,6 +402,18 @@ void prt__draw_mesh(const prt__draw *d, const prt_camera *cam, int w, int h, con
         glActiveTexture(GL_TEXTURE0);
         glBindTexture(GL_TEXTURE_2D, d->tex);
         glUniform1i(d->ut_map, 0);
+    } else if (d->kvec_terms) {
+        glUseProgram(d->program_s);
+        glUniformMatrix4fv(d->us_mvp, 1, GL_FALSE, mvp);
+        glUniform3fv(d->us_eye, 1, cam->eye);
+        glUniform1i(d->us_terms, d->kvec_terms);
+        glUniform1i(d->us_polar, d->view_polar);
+        glActiveTexture(GL_TEXTURE0);
+        glBindTexture(GL_TEXTURE_BUFFER, d->tbo_k_tex);
+        glUniform1i(d->us_kvec, 0);
+        glActiveTexture(GL_TEXTURE1);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, d->maps_tex);
+        glUniform1i(d->us_maps, 1);
     } else if (d->exit_order) {
         float knorm[PRT_SH_MAX_ORDER * PRT_SH_MAX_ORDER];   /* the same K_lm as the CPU's evaluation */
         prt__sh_norms(knorm);

@@ -22,6 +22,14 @@ typedef struct prt__draw {
     GLint ut_mvp, ut_map;
     int texel_width, texel_height;   /* 0: the per-texel path is off */
     bool has_uv;
+    /* Separable view factor (wavelet PRT): K-vectors and view-map sets in a texture buffer,
+     * view maps in a texture array. */
+    GLuint program_s, tbo_k, tbo_k_tex, maps_tex;
+    GLint us_mvp, us_eye, us_terms, us_polar, us_kvec, us_maps;
+    int kvec_terms, view_polar;
+    uint8_t *view_set;               /* a copy, for K-vector updates */
+    float *kpack;
+    size_t kpack_vertices;
 } prt__draw;
 
 prt_status prt__draw_init(prt__draw *d);
@@ -32,6 +40,8 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *mesh);
 void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int height);
 /* Replaces the glossy exit coefficients (mesh layout: vertex, channel, coefficient). */
 void prt__draw_upload_exit(prt__draw *d, const float *exit_sh, size_t vertex_count);
+/* Replaces the wavelet K-vectors (prt_render_mesh.kvec layout). */
+void prt__draw_upload_kvec(prt__draw *d, const float *kvec, size_t vertex_count);
 /* Draws into the bound framebuffer of size w x h. */
 void prt__draw_mesh(const prt__draw *d, const prt_camera *cam, int w, int h, const float background[3]);
 /* An offscreen multisampled float framebuffer, resolved into a float texture that can be read

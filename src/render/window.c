@@ -208,6 +208,12 @@ void prt_window_set_exit(prt_window *w, const float *exit_sh, size_t nv)
     prt__draw_upload_exit(&w->draw, exit_sh, nv);
 }
 
+void prt_window_set_kvec(prt_window *w, const float *kvec, size_t nv)
+{
+    glfwMakeContextCurrent(w->win);
+    prt__draw_upload_kvec(&w->draw, kvec, nv);
+}
+
 static void draw_text(prt_window *w, const char *text, int fw, int fh)
 {
     static char quads[1 << 20];   /* stb_easy_font: 4 vertices of 16 bytes per quad; room for a full help page */

@@ -377,18 +377,28 @@ prt_status cli_light_wavelet(const cli *c, const cli_light *l, prt_wavelet_light
     return st;
 }
 
-prt_status cli_relight_wavelet(const cli *c, const prt_transfer *t, const cli_light *l, const float eye[3], float *rgb)
+prt_status cli_wavelet_kvec(const cli *c, const prt_transfer *t, const cli_light *l, float **kvec)
 {
+    *kvec = NULL;
     prt_wavelet_info wi;
     if (!prt_transfer_wavelet_info(t, &wi)) return prt_relight_wavelet(c->ctx, t, NULL, NULL);   /* reports the missing set */
     prt_wavelet_light *wl = NULL;
     prt_status st = cli_light_wavelet(c, l, &wl);
     if (st) return st;
-    float *kvec = malloc(prt_transfer_vertex_count(t) * (size_t)wi.terms * 3 * sizeof(float));
-    if (!kvec) st = PRT_ERR_NO_MEMORY;
-    if (!st) st = prt_relight_wavelet(c->ctx, t, wl, kvec);
+    float *k = malloc(prt_transfer_vertex_count(t) * (size_t)wi.terms * 3 * sizeof(float));
+    if (!k) st = PRT_ERR_NO_MEMORY;
+    if (!st) st = prt_relight_wavelet(c->ctx, t, wl, k);
+    prt_wavelet_light_release(wl);
+    if (st) { free(k); return st; }
+    *kvec = k;
+    return PRT_OK;
+}
+
+prt_status cli_relight_wavelet(const cli *c, const prt_transfer *t, const cli_light *l, const float eye[3], float *rgb)
+{
+    float *kvec = NULL;
+    prt_status st = cli_wavelet_kvec(c, t, l, &kvec);
     if (!st) st = prt_wavelet_shade(c->ctx, t, kvec, eye, rgb);
     free(kvec);
-    prt_wavelet_light_release(wl);
     return st;
 }

@@ -87,6 +87,8 @@ prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh
 void cli_report_factors(const prt_transfer *t);
 /* Wavelet files: the lighting as a wavelet light (rotation and intensity applied). */
 prt_status cli_light_wavelet(const cli *c, const cli_light *l, prt_wavelet_light **out);
+/* Wavelet files: the light-dependent K-vectors under l (a new array: free it). */
+prt_status cli_wavelet_kvec(const cli *c, const prt_transfer *t, const cli_light *l, float **kvec);
 /* Wavelet files: exit radiance per vertex towards eye, lighting from l. */
 prt_status cli_relight_wavelet(const cli *c, const prt_transfer *t, const cli_light *l, const float eye[3], float *rgb);
 

@@ -19,7 +19,8 @@ static const char *HELP =
     "                         towards the camera\n"
     CLI_VIEW_OPTIONS_HELP
     CLI_LIGHT_OPTIONS_HELP
-    "      --per-vertex       shade from the vertex sets even where the file has per-texel ones\n"
+    "      --per-vertex       shade from the vertex sets even where the file has per-texel ones,\n"
+    "                         and wavelet files' view factor per vertex rather than per pixel\n"
     "  -j, --threads N        worker threads for relighting\n"
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
@@ -104,8 +105,20 @@ int cmd_render(int argc, char **argv)
     for (int k = 0; k < nkinds && !st; ++k) {
         float *exit = NULL, *texels = NULL;
         if (kinds[k] == PRT_TRANSFER_WAVELET && light.have_brdf) { cli_error(&c, "--brdf does not apply to wavelet transfer: its BRDFs are baked in"); st = PRT_ERR_INVALID_ARG; break; }
-        st = cli_relight(&c, t, kinds[k], &sh, &light, cam.eye, rgb, &exit);
-        if (st) break;
+        /* Wavelet files with glossy materials: the view factor per pixel from the K-vectors. */
+        float *kvec = NULL;
+        const float *view_maps = NULL;
+        const uint8_t *view_set = NULL;
+        int sets = 0, res = 0, polar = 0;
+        prt_wavelet_info wi;
+        if (kinds[k] == PRT_TRANSFER_WAVELET && !per_vertex && prt_transfer_wavelet_info(t, &wi) &&
+            prt_wavelet_view_maps(t, &view_maps, &sets, &res, &polar, &view_set)) {
+            st = cli_wavelet_kvec(&c, t, &light, &kvec);
+            if (!st) st = prt_wavelet_shade(c.ctx, t, kvec, NULL, rgb);   /* Lambertian vertices; glossy ones per pixel */
+        } else {
+            st = cli_relight(&c, t, kinds[k], &sh, &light, cam.eye, rgb, &exit);
+        }
+        if (st) { free(kvec); break; }
         prt_transfer_info info;
         prt_transfer_get_info(t, &info);
         int tw = 0, th = 0;
@@ -119,9 +132,12 @@ int cmd_render(int argc, char **argv)
                                 .indices = prt_transfer_indices(t), .triangle_count = prt_transfer_triangle_count(t),
                                 .normals = prt_transfer_normals(t), .exit_sh = exit, .exit_order = exit ? info.order : 0,
                                 .exit_mirror = prt_transfer_glossy_mirror(t), .uv = prt_transfer_uvs(t), .texel_radiance = texels,
-                                .texel_width = tw, .texel_height = th};
+                                .texel_width = tw, .texel_height = th, .kvec = kvec, .kvec_terms = kvec ? wi.terms : 0,
+                                .view_set = view_set, .view_maps = view_maps, .view_map_sets = sets, .view_map_resolution = res,
+                                .view_map_polar = polar};
         st = prt_render(r, &mesh, &cam, view.background, &panel);
         free(exit);
+        free(kvec);
         free(texels);
         if (st) break;
         for (int y = 0; y < height; ++y)

@@ -221,15 +221,13 @@ void view_request_relight(viewer *v)
     pthread_mutex_unlock(&v->lock);
 }
 
-/* Wavelet files: the view factor at the current eye, uploaded as vertex radiance. */
+/* Wavelet files: the new K-vectors go to the GPU, which evaluates the view factor per pixel;
+ * Lambertian vertices' radiance (view-independent) is uploaded as vertex radiance. */
 static void shade(viewer *v)
 {
-    prt_camera cam;
-    view_camera(v, &cam);
-    if (prt_wavelet_shade(v->c->ctx, v->t, v->kvec, cam.eye, v->shaded)) return;
-    memcpy(v->shaded_eye, cam.eye, sizeof v->shaded_eye);
-    v->have_shade = true;
+    if (prt_wavelet_shade(v->c->ctx, v->t, v->kvec, NULL, v->shaded)) return;
     prt_window_set_radiance(v->win, v->shaded, prt_transfer_vertex_count(v->t));
+    prt_window_set_kvec(v->win, v->kvec, prt_transfer_vertex_count(v->t));
 }
 
 /* Takes a finished result, if any; returns true when new radiance was uploaded. */
@@ -288,7 +286,6 @@ int view_frame(viewer *v)
     double t0 = now();
     prt_camera cam;
     view_camera(v, &cam);
-    if (v->kvec && v->have_shade && memcmp(cam.eye, v->shaded_eye, sizeof cam.eye)) shade(v);   /* a camera move changes the view factor only */
     char overlay[4096] = "";
     if (v->hud) status_line(v, overlay, sizeof overlay);
     prt_status st = prt_window_draw(v->win, &cam, v->background, v->exposure, v->tonemap, overlay);
@@ -439,6 +436,13 @@ int cmd_view(int argc, char **argv)
                             .indices = prt_transfer_indices(v.t), .triangle_count = prt_transfer_triangle_count(v.t),
                             .normals = prt_transfer_normals(v.t), .exit_sh = v.result_exit, .exit_order = v.exit_floats ? info.order : 0,
                             .exit_mirror = prt_transfer_glossy_mirror(v.t), .uv = prt_transfer_uvs(v.t)};
+    if (v.kvec) {
+        mesh.radiance = v.shaded;
+        if (prt_wavelet_view_maps(v.t, &mesh.view_maps, &mesh.view_map_sets, &mesh.view_map_resolution, &mesh.view_map_polar, &mesh.view_set)) {
+            mesh.kvec = v.kvec;
+            mesh.kvec_terms = v.kterms;
+        }
+    }
     prt_window_set_mesh(v.win, &mesh);
     int fw, fh;
     prt_window_size(v.win, &fw, &fh);

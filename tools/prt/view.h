@@ -57,12 +57,10 @@ struct viewer {
     float *result_exit;         /* glossy exit SH per vertex, when the file has glossy sets */
     size_t exit_floats;         /* per vertex: 3 x order^2, or 0 */
     /* wavelet files: the worker returns light-dependent K-vectors (result, kterms x 3 per
-     * vertex); the main thread applies the view factor whenever the camera moves. */
+     * vertex); the GPU applies the view factor per pixel, so camera moves relight nothing. */
     prt_envmap *env;
     int kterms;
     float *kvec, *shaded;
-    float shaded_eye[3];
-    bool have_shade;
     float *result_texels;       /* per-texel radiance map, when the file has texel sets */
     bool result_has_texels;     /* the latest result used them (its kind has a texel set) */
     int texel_width, texel_height;
