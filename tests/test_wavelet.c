@@ -635,6 +635,32 @@ static void test_glossy_bounce_paths(void **state)
     prt_context_release(ctx);
 }
 
+static int cancel_at_first(void *user, const char *stage, uint64_t done, uint64_t total)
+{
+    (void)stage; (void)done; (void)total;
+    ++*(int *)user;
+    return 1;
+}
+
+/* A progress callback that asks to stop cancels the bake cleanly. */
+static void test_cancel(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_sphere(&m, (float[3]){0, 0, 0}, 1.0f, 24, 48);
+    prt_scene *s = tm_scene(ctx, &m, 0.5f);
+    int calls = 0;
+    prt_transfer *t = NULL;
+    prt_wavelet_bake_desc d = {.supersample = 1, .bounces = 1, .progress = cancel_at_first, .progress_user = &calls};
+    assert_int_equal(prt_bake_wavelet(ctx, s, &d, &t), PRT_ERR_CANCELLED);
+    assert_null(t);
+    assert_true(calls >= 1);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 /* Save and load give the same relighting; damage is caught; bad descriptions fail clearly. */
 static void test_wavelet_file(void **state)
 {
@@ -725,6 +751,7 @@ int main(void)
         cmocka_unit_test(test_quantization_bound),
         cmocka_unit_test(test_interreflection),
         cmocka_unit_test(test_glossy_bounce_paths),
+        cmocka_unit_test(test_cancel),
         cmocka_unit_test_setup_teardown(test_wavelet_file, test_dir_setup, test_dir_teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

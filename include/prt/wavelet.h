@@ -94,7 +94,8 @@ prt_status prt_wavelet_shade(prt_context *ctx, const prt_transfer *t, const floa
 /* What the renderer needs to evaluate the view factor per pixel: the view maps of the file's
  * factored materials as one array [set][term][channel][resolution][resolution] (terms = info.terms;
  * map row y, column x; borrowed until t is released), and per vertex its set (0: Lambertian,
- * s: the s-th factored material). Returns 0 when the file has no factored material. */
+ * s: the s-th factored material). Returns 0 when the file has no factored material. The first
+ * call builds the arrays inside t: make it before sharing t between threads. */
 int prt_wavelet_view_maps(const prt_transfer *t, const float **maps, int *sets, int *resolution, int *polar, const uint8_t **vertex_set);
 
 /* Vertex v's term k decoded: its kept coefficients' indices and RGB values (dequantized), at
