@@ -7,6 +7,40 @@
 
 #if defined(__SSE4_1__)
 #include <immintrin.h>
+#if defined(__AVX2__)
+/* Two coefficients per step: their six bytes spread to two RGB0 lane groups, converted once and
+ * multiplied with the two light texels loaded side by side. The store pads its values, so the
+ * 8-byte reads past the last coefficient stay inside. */
+static inline void dot_8(const uint16_t *idx, const int8_t *q, int n, const float *L, float acc[3])
+{
+    const __m128i spread = _mm_setr_epi8(0, 1, 2, -1, 3, 4, 5, -1, -1, -1, -1, -1, -1, -1, -1, -1);
+    __m256 a = _mm256_setzero_ps(), b = _mm256_setzero_ps();
+    int i = 0;
+    for (; i + 4 <= n; i += 4) {
+        int64_t w0, w1;
+        memcpy(&w0, q + 3 * i, 8);
+        memcpy(&w1, q + 3 * i + 6, 8);
+        __m256 q0 = _mm256_cvtepi32_ps(_mm256_cvtepi8_epi32(_mm_shuffle_epi8(_mm_cvtsi64_si128(w0), spread)));
+        __m256 q1 = _mm256_cvtepi32_ps(_mm256_cvtepi8_epi32(_mm_shuffle_epi8(_mm_cvtsi64_si128(w1), spread)));
+        __m256 l0 = _mm256_loadu2_m128(L + (size_t)idx[i + 1] * 4, L + (size_t)idx[i] * 4);
+        __m256 l1 = _mm256_loadu2_m128(L + (size_t)idx[i + 3] * 4, L + (size_t)idx[i + 2] * 4);
+        a = _mm256_fmadd_ps(q0, l0, a);
+        b = _mm256_fmadd_ps(q1, l1, b);
+    }
+    a = _mm256_add_ps(a, b);
+    __m128 s = _mm_add_ps(_mm256_castps256_ps128(a), _mm256_extractf128_ps(a, 1));
+    for (; i < n; ++i) {
+        int32_t w;
+        memcpy(&w, q + 3 * i, 4);
+        __m128 qv = _mm_cvtepi32_ps(_mm_cvtepi8_epi32(_mm_shuffle_epi8(_mm_cvtsi32_si128(w), spread)));
+        s = _mm_add_ps(s, _mm_mul_ps(qv, _mm_loadu_ps(L + (size_t)idx[i] * 4)));
+    }
+    float out[4];
+    _mm_storeu_ps(out, s);
+    acc[0] = out[0]; acc[1] = out[1]; acc[2] = out[2];
+}
+
+#else
 /* One coefficient per step, all three channels at once: the light's RGB(0) at the index times
  * the coefficient's three integers (the fourth lane reads the next byte and meets the zero pad).
  * The store pads its values by 4 bytes, so the last read stays inside. */
@@ -33,6 +67,7 @@ static inline void dot_8(const uint16_t *idx, const int8_t *q, int n, const floa
     acc[0] = out[0]; acc[1] = out[1]; acc[2] = out[2];
 }
 
+#endif
 static inline void dot_16(const uint16_t *idx, const int16_t *q, int n, const float *L, float acc[3])
 {
     __m128 a = _mm_setzero_ps();
