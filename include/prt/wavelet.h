@@ -65,13 +65,16 @@ typedef struct prt_wavelet_light_desc {
     int bits;              /* 16, or 32 for unquantized floats; 0 = 16 */
     double rotation[9];    /* lighting from d now arrives from R d; all zero = none */
     float intensity;       /* radiance scale; 0 = 1 */
-    int supersample;       /* env lookups per texel side; 0 = about one per map pixel (>= 2) */
+    int supersample;       /* samples per texel side of a 6 x 256 x 256 pre-filtered cube (built
+                              once per map, then resampled under rotations); 0 = 2, which
+                              averages the 4 x 4 fine texels under each texel */
 } prt_wavelet_light_desc;
 
 typedef struct prt_wavelet_light prt_wavelet_light;
 
-/* Samples env into the cube map (box filter over each texel), transforms each face, keeps the
- * largest coefficients and quantizes them. */
+/* Samples env into the cube map (box filter over each texel, through a finer cube the map keeps
+ * after the first call, so later rotations are cheap), transforms each face, keeps the largest
+ * coefficients and quantizes them. */
 prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, const prt_wavelet_light_desc *desc,
                                     prt_wavelet_light **out);
 void prt_wavelet_light_release(prt_wavelet_light *l);

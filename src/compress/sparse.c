@@ -51,8 +51,7 @@ void prt__sparse_scratch_free(prt__sparse_scratch *w)
     w->mag = w->sel = NULL;
 }
 
-/* The k-th largest (0-based) of x[0..n), reordering x (Hoare's selection). */
-static float select_kth_largest(float *x, int n, int k)
+float prt__kth_largest(float *x, int n, int k)
 {
     int lo = 0, hi = n - 1;
     while (lo < hi) {
@@ -99,7 +98,7 @@ void prt__sparse_encode(prt__sparse_store *s, size_t vec, const float *r, const 
             memcpy(&u, &w->mag[j], 4);
             if ((int)(u >> SHIFT) == bin) w->sel[members++] = w->mag[j];
         }
-        thr = select_kth_largest(w->sel, members, n - 1 - (int)above_bin);
+        thr = prt__kth_largest(w->sel, members, n - 1 - (int)above_bin);
     }
     /* Strictly above the threshold first, then ties in index order, so the choice is unique. */
     int above = 0;

@@ -18,6 +18,9 @@ prt_status prt__sparse_alloc(prt__sparse_store *s, size_t vectors, int n, int bi
 void prt__sparse_free(prt__sparse_store *s);
 size_t prt__sparse_bytes(const prt__sparse_store *s);
 
+/* The k-th largest (0-based) of x[0..n), reordering x (Hoare's selection, expected linear time). */
+float prt__kth_largest(float *x, int n, int k);
+
 /* Scratch for encoding one vector. */
 typedef struct prt__sparse_scratch {
     float *mag, *sel;

@@ -50,6 +50,7 @@ void prt_envmap_release(prt_envmap *e)
 {
     if (!e) return;
     prt_image_free(&e->img);
+    free(e->cube_cache);
     free(e);
 }
 

@@ -1,8 +1,9 @@
 /* Wavelet lighting (Ng et al. 2003; Wang et al. 2005 section 4.3): the environment box-filtered
- * into a 6 x 64 x 64 cube map, each face Haar-transformed, the largest coefficients kept and
+ * (once, into a finer cube; then per rotation from that) into a 6 x 64 x 64 cube map, each face Haar-transformed, the largest coefficients kept and
  * quantized. Many more coefficients are kept than per transport vector, so that rotating the
  * lighting does not flicker. */
 #include "core/cubemap.h"
+#include "compress/sparse.h"
 #include "core/haar.h"
 #include "light/envmap_internal.h"
 #include "prt/wavelet.h"
@@ -25,10 +26,62 @@ void prt_wavelet_texel(int index, float dir[3], float *solid_angle)
     prt__cube_texel(FACE, face, x, y, dir, solid_angle);
 }
 
-static int cmp_desc(const void *a, const void *b)
+#define SRC 256   /* source cube resolution: 4 x 4 source texels under each lighting texel */
+
+/* Bilinear lookup in the source cube (clamped at face edges) along any non-zero direction. */
+static void cube_lookup(const float *src, const float d[3], float rgb[3])
 {
-    float x = *(const float *)a, y = *(const float *)b;
-    return (x < y) - (x > y);
+    float a, b;
+    const int face = prt__cube_face(d, &a, &b);
+    float fx = (a + 1.0f) * 0.5f * SRC - 0.5f, fy = (b + 1.0f) * 0.5f * SRC - 0.5f;
+    fx = fminf(fmaxf(fx, 0.0f), SRC - 1.0f);
+    fy = fminf(fmaxf(fy, 0.0f), SRC - 1.0f);
+    int x0 = (int)fx, y0 = (int)fy, x1 = x0 + 1 < SRC ? x0 + 1 : x0, y1 = y0 + 1 < SRC ? y0 + 1 : y0;
+    float tx = fx - x0, ty = fy - y0;
+    const float *p = src + (size_t)face * SRC * SRC * 3;
+    const float *p00 = p + ((size_t)y0 * SRC + x0) * 3, *p10 = p + ((size_t)y0 * SRC + x1) * 3, *p01 = p + ((size_t)y1 * SRC + x0) * 3,
+                *p11 = p + ((size_t)y1 * SRC + x1) * 3;
+    for (int c = 0; c < 3; ++c)
+        rgb[c] = (1 - ty) * ((1 - tx) * p00[c] + tx * p10[c]) + ty * ((1 - tx) * p01[c] + tx * p11[c]);
+}
+
+/* The environment box-filtered into the source cube, once per map: about one lookup per map
+ * pixel under each source texel. Concurrent first calls may both build it; one copy wins. */
+static const float *source_cube(prt_context *ctx, const prt_envmap *env)
+{
+    float *cached = __atomic_load_n(&env->cube_cache, __ATOMIC_ACQUIRE);
+    if (cached) return cached;
+    float *c = malloc((size_t)6 * SRC * SRC * 3 * sizeof(float));
+    if (!c) return NULL;
+    const prt_image *img = &env->img;
+    const double pixel = sqrt(4.0 * PRT_PI / ((double)img->width * img->height)), texel = 0.5 * PRT_PI / SRC;
+    int ss = (int)ceil(texel / pixel);
+    ss = ss < 1 ? 1 : ss > 16 ? 16 : ss;
+#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
+    for (int t = 0; t < 6 * SRC * SRC; ++t) {
+        int face = t / (SRC * SRC), y = t / SRC % SRC, x = t % SRC;
+        double acc[3] = {0, 0, 0}, wsum = 0;
+        for (int sy = 0; sy < ss; ++sy)
+            for (int sx = 0; sx < ss; ++sx) {
+                float a = (float)(2.0 * (x + (sx + 0.5) / ss) / SRC - 1.0), b = (float)(2.0 * (y + (sy + 0.5) / ss) / SRC - 1.0);
+                float dir[3], rgb[3];
+                prt__cube_dir(face, a, b, dir);
+                double r2 = 1.0 + (double)a * a + (double)b * b, w = 1.0 / (r2 * sqrt(r2));
+                const float inv = (float)(1.0 / sqrt(r2));   /* lookups want unit vectors */
+                for (int i = 0; i < 3; ++i) dir[i] *= inv;
+                prt_envmap_lookup(env, dir, rgb);
+                for (int k = 0; k < 3; ++k) acc[k] += w * rgb[k];
+                wsum += w;
+            }
+        for (int k = 0; k < 3; ++k) c[(size_t)t * 3 + k] = (float)(acc[k] / wsum);
+    }
+    float *expected = NULL;
+    /* The cache is a memo of a pure function of the map, so filling it through a const map is safe. */
+    if (!__atomic_compare_exchange_n(&((prt_envmap *)env)->cube_cache, &expected, c, false, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE)) {
+        free(c);
+        return expected;
+    }
+    return c;
 }
 
 prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, const prt_wavelet_light_desc *desc,
@@ -49,14 +102,10 @@ prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, con
     bool any = false;
     for (int i = 0; i < 9; ++i) any |= d.rotation[i] != 0;
     if (any) memcpy(R, d.rotation, sizeof R);
-    int ss = d.supersample;
-    if (!ss) {
-        /* About one bilinear lookup per map pixel under the texel: every pixel contributes. */
-        const prt_image *img = &env->img;
-        double pixel = sqrt(4.0 * PRT_PI / ((double)img->width * img->height)), texel = 0.5 * PRT_PI / FACE;
-        ss = (int)ceil(texel / pixel);
-        ss = ss < 2 ? 2 : ss > 16 ? 16 : ss;
-    }
+    const float *src = source_cube(ctx, env);
+    /* Bilinear samples at the corners shared by 2 x 2 source texels average them exactly: 2 x 2
+     * samples cover the 4 x 4 source texels under a lighting texel. */
+    const int ss = d.supersample ? d.supersample : SRC / FACE / 2;
 
     prt_wavelet_light *l = prt__calloc(1, sizeof *l);
     float *planes = prt__calloc((size_t)3 * DIM, sizeof(float)), *mag = prt__calloc(DIM, sizeof(float));
@@ -64,7 +113,7 @@ prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, con
         l->cube = prt__calloc((size_t)DIM * 3, sizeof(float));
         l->coeffs = prt__calloc((size_t)DIM * 4, sizeof(float));
     }
-    if (!l || !planes || !mag || !l->cube || !l->coeffs) {
+    if (!src || !l || !planes || !mag || !l->cube || !l->coeffs) {
         prt_wavelet_light_release(l); free(planes); free(mag);
         return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
@@ -75,14 +124,12 @@ prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, con
         for (int sy = 0; sy < ss; ++sy)
             for (int sx = 0; sx < ss; ++sx) {
                 float a = (float)(2.0 * (x + (sx + 0.5) / ss) / FACE - 1.0), b = (float)(2.0 * (y + (sy + 0.5) / ss) / FACE - 1.0);
-                float dir[3], src[3], rgb[3];
+                float dir[3], rot[3], rgb[3];
                 prt__cube_dir(face, a, b, dir);
                 /* Weight by the solid angle of the sample: the cube's Jacobian (1 + a^2 + b^2)^-3/2. */
                 double r2 = 1.0 + (double)a * a + (double)b * b, w = 1.0 / (r2 * sqrt(r2));
-                const float inv = (float)(1.0 / sqrt(r2));   /* |dir| = sqrt(r2); lookups want unit vectors */
-                for (int i = 0; i < 3; ++i) dir[i] *= inv;
-                for (int i = 0; i < 3; ++i) src[i] = (float)(R[i] * dir[0] + R[3 + i] * dir[1] + R[6 + i] * dir[2]);   /* R^T d */
-                prt_envmap_lookup(env, src, rgb);
+                for (int i = 0; i < 3; ++i) rot[i] = (float)(R[i] * dir[0] + R[3 + i] * dir[1] + R[6 + i] * dir[2]);   /* R^T d */
+                cube_lookup(src, rot, rgb);
                 for (int c = 0; c < 3; ++c) acc[c] += w * rgb[c];
                 wsum += w;
             }
@@ -103,8 +150,7 @@ prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, con
         float *sorted = malloc((size_t)DIM * sizeof(float));
         if (!sorted) { prt_wavelet_light_release(l); free(planes); free(mag); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
         memcpy(sorted, mag, (size_t)DIM * sizeof(float));
-        qsort(sorted, DIM, sizeof(float), cmp_desc);
-        thr = sorted[d.coefficients - 1];
+        thr = prt__kth_largest(sorted, DIM, d.coefficients - 1);
         free(sorted);
     }
     float maxabs[3] = {0, 0, 0};
