@@ -5,9 +5,7 @@
  * Usage: prt_bench [MESH] [--samples N] [--order N] [--threads N]
  * Without MESH it uses ../shared/data's bunny if present, else the procedural demo scene.
  * Prints JSON on stdout (with the process's peak resident memory) and a summary on stderr. */
-#include "core/internal.h"
-#include "core/progress.h"
-#include "geom/raycast.h"
+#include "bench_common.h"
 
 #include <omp.h>
 #include <sys/resource.h>
@@ -16,66 +14,17 @@
 
 typedef struct rays { float *dirs; int samples; float offset; } rays;
 
-/* Traces the bake's rays (every vertex, every direction above its normal) with nothing else
- * around them; returns rays traced and the time taken. */
+/* The bake's rays (every vertex, every direction above its normal) from the vertex offset along
+ * its normal, as bench_raw_rays traces them. */
 static double raw_embree(const prt_scene *s, const prt__raycaster *rc, const rays *r, bool intersect, int threads, uint64_t *count)
 {
     const prt__mesh *m = &s->mesh;
-    uint64_t total = 0;
-    double t0 = prt__now();
-#pragma omp parallel for schedule(dynamic, 32) num_threads(threads) reduction(+ : total)
-    for (size_t v = 0; v < m->vertex_count; ++v) {
-        const float *p = m->positions + v * 3, *n = m->normals + v * 3;
-        float org[3] = {p[0] + n[0] * r->offset, p[1] + n[1] * r->offset, p[2] + n[2] * r->offset};
-        struct RTCIntersectContext ictx;
-        rtcInitIntersectContext(&ictx);
-        int j = 0;
-        while (j < r->samples) {
-            int lanes = 0, idx[16];
-            for (; j < r->samples && lanes < 16; ++j)
-                if (prt__v3_dot(r->dirs + j * 3, n) > 0) idx[lanes++] = j;
-            if (!lanes) break;
-            _Alignas(64) int valid[16];
-            if (intersect) {
-                _Alignas(64) struct RTCRayHit16 rh;
-                prt__packet_rayhits(&rh, valid, org, r->dirs, idx, lanes);
-                rtcIntersect16(valid, rc->scene, &ictx, &rh);
-            } else {
-                _Alignas(64) struct RTCRay16 ray;
-                prt__packet_rays(&ray, valid, org, r->dirs, idx, lanes);
-                rtcOccluded16(valid, rc->scene, &ictx, &ray);
-            }
-            total += (uint64_t)lanes;
-        }
-    }
-    *count = total;
-    return prt__now() - t0;
-}
-
-/* Read bandwidth of a plain streaming sum over `bytes` of floats, best of many passes: for a
- * buffer the size of the relight's data this is the limit the relight loop can reach (cache-
- * resident when it fits, like the relight's own data); 512 MiB gives the DRAM figure. */
-static double read_bandwidth(size_t bytes, int threads)
-{
-    const size_t n = bytes / sizeof(float);
-    float *buf = malloc(n * sizeof(float));
-    if (!buf) return 0;
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (size_t i = 0; i < n; ++i) buf[i] = (float)(i & 1023);
-    const int passes = bytes > ((size_t)64 << 20) ? 5 : 200;
-    double best = 1e30, sink = 0;
-    for (int pass = 0; pass < passes; ++pass) {
-        double t0 = prt__now();
-        float s = 0;
-#pragma omp parallel for simd schedule(static) num_threads(threads) reduction(+ : s)
-        for (size_t i = 0; i < n; ++i) s += buf[i];
-        double dt = prt__now() - t0;
-        sink += s;
-        if (dt < best) best = dt;
-    }
-    free(buf);
-    if (sink == 42.0) fputs("", stderr);   /* keep the sums alive */
-    return (double)n * sizeof(float) / best;
+    float *org = malloc(m->vertex_count * 3 * sizeof(float));
+    if (!org) { *count = 0; return 1e30; }
+    for (size_t v = 0; v < m->vertex_count * 3; ++v) org[v] = m->positions[v] + m->normals[v] * r->offset;
+    double t = bench_raw_rays(m, rc, org, r->dirs, r->samples, 1, intersect, threads, count);
+    free(org);
+    return t;
 }
 
 int main(int argc, char **argv)
@@ -224,15 +173,15 @@ int main(int argc, char **argv)
         if (dt < glossy_view) glossy_view = dt;
     }
     const double bytes_glossy = (double)nv * gn * gn * 4;
-    double bw_glossy = read_bandwidth((size_t)bytes_glossy, threads);
+    double bw_glossy = bench_read_bandwidth((size_t)bytes_glossy, threads);
     free(exit);
     free(vrgb);
     prt_transfer_release(gz);
     prt_transfer_release(g);
     const double n2 = (double)order * order;
     double bytes_sh = nv * (n2 * 4 + 12 + 12), bytes_ir = nv * (3 * n2 * 4 + 12);
-    double bw_dram = read_bandwidth((size_t)512 << 20, threads);
-    double bw_sh = read_bandwidth((size_t)bytes_sh, threads), bw_ir = read_bandwidth((size_t)bytes_ir, threads);
+    double bw_dram = bench_read_bandwidth((size_t)512 << 20, threads);
+    double bw_sh = bench_read_bandwidth((size_t)bytes_sh, threads), bw_ir = bench_read_bandwidth((size_t)bytes_ir, threads);
 
     double occ_rate = nrays / raw_occ, hit_rate = nrays / raw_hit;
     double bake_occ_rate = nrays / bake_occ, bake_all_rate = nrays / bake_all;

@@ -9,66 +9,13 @@
  * Usage: prt_bench_wavelet [MESH] [--terms K] [--supersample S] [--bounces B] [--threads N]
  * Without MESH it uses ../shared/data's bunny if present, else the procedural demo scene. Prints
  * JSON on stdout and a summary on stderr. */
+#include "bench_common.h"
 #include "core/cubemap.h"
-#include "core/internal.h"
-#include "core/progress.h"
 #include "core/transfer_set.h"
-#include "geom/raycast.h"
 
 #include <immintrin.h>
 #include <string.h>
 #include <unistd.h>
-
-/* The bake's direct-pass rays for every `stride`-th vertex: each cube texel's centre direction
- * (supersample 1) above the normal, packets of 16 from the vertex. */
-static double raw_embree(const prt__mesh *m, const prt__raycaster *rc, const float *origins, const float *dirs, int count, size_t stride,
-                         int threads, uint64_t *rays)
-{
-    uint64_t total = 0;
-    double t0 = prt__now();
-#pragma omp parallel for schedule(dynamic, 8) num_threads(threads) reduction(+ : total)
-    for (size_t v = 0; v < m->vertex_count; v += stride) {
-        const float *n = m->normals + v * 3;
-        struct RTCIntersectContext ictx;
-        rtcInitIntersectContext(&ictx);
-        int j = 0;
-        while (j < count) {
-            int lanes = 0, idx[16];
-            for (; j < count && lanes < 16; ++j)
-                if (prt__v3_dot(dirs + (size_t)j * 3, n) > 0) idx[lanes++] = j;
-            if (!lanes) break;
-            _Alignas(64) int valid[16];
-            _Alignas(64) struct RTCRay16 ray;
-            prt__packet_rays(&ray, valid, origins + v * 3, dirs, idx, lanes);
-            rtcOccluded16(valid, rc->scene, &ictx, &ray);
-            total += (uint64_t)lanes;
-        }
-    }
-    *rays = total;
-    return prt__now() - t0;
-}
-
-static double read_bandwidth(size_t bytes, int threads)
-{
-    const size_t n = bytes / sizeof(float);
-    float *buf = malloc(n * sizeof(float));
-    if (!buf) return 0;
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (size_t i = 0; i < n; ++i) buf[i] = (float)(i & 1023);
-    double best = 1e30, sink = 0;
-    for (int pass = 0; pass < 20; ++pass) {
-        double t0 = prt__now();
-        float s = 0;
-#pragma omp parallel for simd schedule(static) num_threads(threads) reduction(+ : s)
-        for (size_t i = 0; i < n; ++i) s += buf[i];
-        double dt = prt__now() - t0;
-        sink += s;
-        if (dt < best) best = dt;
-    }
-    free(buf);
-    if (sink == 42.0) fputs("", stderr);
-    return (double)n * sizeof(float) / best;
-}
 
 /* The limit of the sparse inner products with these indices: fetch each non-zero's RGB(0) light
  * texel and add it up, 16 bytes per load as the relight kernel does, without decoding any
@@ -183,8 +130,9 @@ int main(int argc, char **argv)
     for (int i = 0; i < PRT_WAVELET_DIM; ++i) prt_wavelet_texel(i, dirs + (size_t)i * 3, NULL);
     if (prt__raycaster_create(ctx, m, &rc) || prt__vertex_origins(m, prt__ray_offset(m), &origins)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return 1; }
     uint64_t raw_rays = 0;
-    raw_embree(m, &rc, origins, dirs, PRT_WAVELET_DIM, 64, threads, &raw_rays);   /* warm-up */
-    double raw_t = raw_embree(m, &rc, origins, dirs, PRT_WAVELET_DIM, 16, threads, &raw_rays);
+    bench_raw_rays(m, &rc, origins, dirs, PRT_WAVELET_DIM, 64, false, threads, &raw_rays);   /* warm-up */
+    /* Every 16th vertex, the direct pass's texel-centre directions. */
+    double raw_t = bench_raw_rays(m, &rc, origins, dirs, PRT_WAVELET_DIM, 16, false, threads, &raw_rays);
     const double raw_rate = (double)raw_rays / raw_t;
     prt__raycaster_release(&rc);
     free(origins);
@@ -243,7 +191,7 @@ int main(int argc, char **argv)
         shade_best = fmin(shade_best, d - c);
     }
     const double nonzeros = (double)wi.vectors * wi.coefficients, bytes = (double)wi.bytes;
-    const double bw = read_bandwidth((size_t)bytes, threads), gather = raw_gather(t->wavelet->store.index, (size_t)nonzeros, threads);
+    const double bw = bench_read_bandwidth((size_t)bytes, threads), gather = raw_gather(t->wavelet->store.index, (size_t)nonzeros, threads);
     const double bake_rate = (double)bake_rays / direct_s;
     printf("{\n  \"mesh\": \"%s\", \"vertices\": %zu, \"object_vertices\": %zu, \"terms\": %d, \"supersample\": %d, \"bounces\": %d, \"threads\": %d,\n", mesh, nv,
            object_nv, terms, supersample, bounces, threads);

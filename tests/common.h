@@ -189,4 +189,47 @@ static inline const char *shared_data_dir(void)
     return d && d[0] ? d : NULL;
 }
 
+/* SH order-3 coefficients of a smooth, positive test environment (index l(l+1)+m). */
+static const float test_known_sh[9] = {4.0f, 0.4f, 0.8f, -0.5f, 0.2f, -0.15f, 0.3f, 0.1f, -0.25f};
+
+/* A lat-long environment that is exactly band-limited: test_known_sh, tinted (1, 0.8, 0.6). */
+static inline prt_envmap *band_limited_env(int width)
+{
+    prt_image img = {width, width / 2, malloc((size_t)width * width / 2 * 3 * sizeof(float))};
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < width; ++x) {
+            double th = M_PI * (y + 0.5) / img.height, ph = 2 * M_PI * ((x + 0.5) / width - 0.5), yv[9];
+            double d[3] = {sin(th) * sin(ph), cos(th), -sin(th) * cos(ph)};
+            prt_sh_eval(3, d, yv);
+            double v = 0;
+            for (int i = 0; i < 9; ++i) v += test_known_sh[i] * yv[i];
+            for (int c = 0; c < 3; ++c) img.rgb[((size_t)y * width + x) * 3 + c] = (float)v * (c == 0 ? 1.0f : c == 1 ? 0.8f : 0.6f);
+        }
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
+    return env;
+}
+
+/* Radiance v from every direction. */
+static inline prt_envmap *constant_env(float v)
+{
+    prt_image img = {64, 32, malloc(64 * 32 * 3 * sizeof(float))};
+    for (int i = 0; i < 64 * 32 * 3; ++i) img.rgb[i] = v;
+    prt_envmap *env = NULL;
+    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
+    return env;
+}
+
+/* A unit tangent perpendicular to the unit vector n. */
+static inline void tangent_of(const float n[3], float t[3])
+{
+    float a[3] = {0, 0, 0};
+    a[fabsf(n[0]) < 0.6f ? 0 : 2] = 1;
+    t[0] = a[1] * n[2] - a[2] * n[1];
+    t[1] = a[2] * n[0] - a[0] * n[2];
+    t[2] = a[0] * n[1] - a[1] * n[0];
+    float l = sqrtf(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    for (int c = 0; c < 3; ++c) t[c] /= l;
+}
+
 #endif

@@ -136,18 +136,6 @@ static double light_eval(const prt_sh_light *l, int ch, const double d[3])
     return s;
 }
 
-/* A unit tangent perpendicular to n. */
-static void tangent_of(const float n[3], float t[3])
-{
-    float a[3] = {0, 0, 0};
-    a[fabsf(n[0]) < 0.6f ? 0 : 2] = 1;
-    t[0] = a[1] * n[2] - a[2] * n[1];
-    t[1] = a[2] * n[0] - a[0] * n[2];
-    t[2] = a[0] * n[1] - a[1] * n[0];
-    float l = sqrtf(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
-    for (int c = 0; c < 3; ++c) t[c] /= l;
-}
-
 /* Legendre P_l(t). */
 static double legendre(int l, double t)
 {

@@ -1,35 +1,6 @@
 /* The reference path tracer against closed forms, and the PRT bake against the reference. */
 #include "common.h"
 
-/* A band-limited radiance (order 3), positive everywhere, as a lat-long map. */
-static const float known[9] = {4.0f, 0.4f, 0.8f, -0.5f, 0.2f, -0.15f, 0.3f, 0.1f, -0.25f};
-
-static prt_envmap *band_limited_env(int width)
-{
-    prt_image img = {width, width / 2, malloc((size_t)width * width / 2 * 3 * sizeof(float))};
-    for (int y = 0; y < img.height; ++y)
-        for (int x = 0; x < width; ++x) {
-            double th = M_PI * (y + 0.5) / img.height, ph = 2 * M_PI * ((x + 0.5) / width - 0.5), yv[9];
-            double d[3] = {sin(th) * sin(ph), cos(th), -sin(th) * cos(ph)};
-            prt_sh_eval(3, d, yv);
-            double v = 0;
-            for (int i = 0; i < 9; ++i) v += known[i] * yv[i];
-            for (int c = 0; c < 3; ++c) img.rgb[((size_t)y * width + x) * 3 + c] = (float)v * (c == 0 ? 1.0f : c == 1 ? 0.8f : 0.6f);
-        }
-    prt_envmap *env = NULL;
-    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
-    return env;
-}
-
-static prt_envmap *constant_env(float v)
-{
-    prt_image img = {64, 32, malloc(64 * 32 * 3 * sizeof(float))};
-    for (int i = 0; i < 64 * 32 * 3; ++i) img.rgb[i] = v;
-    prt_envmap *env = NULL;
-    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
-    return env;
-}
-
 /* White furnace: a convex object of albedo rho under unit radiance reflects exactly rho, all of
  * it direct. */
 static void test_open_white_furnace(void **state)
@@ -110,7 +81,7 @@ static void test_sphere_analytic_irradiance(void **state)
         double dn[3] = {n[v * 3], n[v * 3 + 1], n[v * 3 + 2]}, y[9], e = 0;
         prt_sh_eval(3, dn, y);
         for (int l = 0; l < 3; ++l)
-            for (int mm = -l; mm <= l; ++mm) e += sqrt(4 * M_PI / (2 * l + 1)) * zh[l] * known[l * (l + 1) + mm] * y[l * (l + 1) + mm];
+            for (int mm = -l; mm <= l; ++mm) e += sqrt(4 * M_PI / (2 * l + 1)) * zh[l] * test_known_sh[l * (l + 1) + mm] * y[l * (l + 1) + mm];
         double expect = rho / M_PI * e;   /* red channel */
         double err = fabs(r.radiance[v * 3] - expect), bound = 4 * r.std_error[v * 3] + 0.005 * expect;
         if (err > bound) outliers++;

@@ -54,34 +54,6 @@ static void test_haar(void **state)
     assert_int_equal(prt_haar2d(img, 256, 0), PRT_ERR_INVALID_ARG);
 }
 
-static prt_envmap *constant_env(float v)
-{
-    prt_image img = {64, 32, malloc(64 * 32 * 3 * sizeof(float))};
-    for (int i = 0; i < 64 * 32 * 3; ++i) img.rgb[i] = v;
-    prt_envmap *env = NULL;
-    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
-    return env;
-}
-
-/* A smooth environment: SH order 3, positive, coloured. */
-static prt_envmap *band_limited_env(int width)
-{
-    static const double known[9] = {4.0, 0.4, 0.8, -0.5, 0.2, -0.15, 0.3, 0.1, -0.25};
-    prt_image img = {width, width / 2, malloc((size_t)width * width / 2 * 3 * sizeof(float))};
-    for (int y = 0; y < img.height; ++y)
-        for (int x = 0; x < width; ++x) {
-            double th = M_PI * (y + 0.5) / img.height, ph = 2 * M_PI * ((x + 0.5) / width - 0.5), yv[9];
-            double d[3] = {sin(th) * sin(ph), cos(th), -sin(th) * cos(ph)};
-            prt_sh_eval(3, d, yv);
-            double v = 0;
-            for (int i = 0; i < 9; ++i) v += known[i] * yv[i];
-            for (int c = 0; c < 3; ++c) img.rgb[((size_t)y * width + x) * 3 + c] = (float)v * (c == 0 ? 1.0f : c == 1 ? 0.8f : 0.6f);
-        }
-    prt_envmap *env = NULL;
-    assert_int_equal(prt_envmap_from_image(&img, PRT_ENV_LATLONG, &env), PRT_OK);
-    return env;
-}
-
 /* Black with a bright disc of angular radius `radius_deg` around dir: a small area light. */
 static prt_envmap *disc_env(const float dir[3], float radius_deg, float radiance, int width)
 {
@@ -386,11 +358,8 @@ static void test_glossy_furnace(void **state)
         float cwo = wo[0] * n[0] + wo[1] * n[1] + wo[2] * n[2];
         if (cwo < 0.2f) continue;   /* silhouettes: the view maps' rim */
         /* Local frame with z = n; the BRDF is isotropic, so any tangent works. */
-        float tx[3] = {fabsf(n[0]) < 0.9f ? 1.0f : 0.0f, fabsf(n[0]) < 0.9f ? 0.0f : 1.0f, 0};
-        float d = tx[0] * n[0] + tx[1] * n[1];
-        for (int i = 0; i < 3; ++i) tx[i] -= d * n[i];
-        l = sqrtf(tx[0] * tx[0] + tx[1] * tx[1] + tx[2] * tx[2]);
-        for (int i = 0; i < 3; ++i) tx[i] /= l;
+        float tx[3];
+        tangent_of(n, tx);
         float ty[3] = {n[1] * tx[2] - n[2] * tx[1], n[2] * tx[0] - n[0] * tx[2], n[0] * tx[1] - n[1] * tx[0]};
         float lo[3] = {wo[0] * tx[0] + wo[1] * tx[1] + wo[2] * tx[2], wo[0] * ty[0] + wo[1] * ty[1] + wo[2] * ty[2], cwo};
         double expect = 0;

@@ -94,6 +94,19 @@ static bool view_maps(const wjob *j, size_t v, const float d[3], float *h, int K
     return true;
 }
 
+/* The next (up to) 16 table entries above the normal n from entry *e on, and their cosines. */
+static int next_packet(const dir_table *t, const float n[3], int *e, int lane_entry[PACKET], float lane_cos[PACKET])
+{
+    int lanes = 0;
+    for (; *e < t->count && lanes < PACKET; ++*e) {
+        float c = prt__v3_dot(t->dir + (size_t)*e * 3, n);
+        if (c <= 0.0f) continue;
+        lane_entry[lanes] = *e;
+        lane_cos[lanes++] = c;
+    }
+    return lanes;
+}
+
 static void haar_planes(float *planes, int count)
 {
     for (int p = 0; p < count; ++p)
@@ -122,15 +135,8 @@ static void direct_vertex(const wjob *j, size_t v, float *planes, prt__sparse_st
     int lane_entry[PACKET], e = 0;
     float lane_cos[PACKET];
     float g[3 * PRT_BRDF_MAX_TERMS];
-    while (e < t->count) {
-        int lanes = 0;
-        for (; e < t->count && lanes < PACKET; ++e) {
-            float c = prt__v3_dot(t->dir + (size_t)e * 3, n);
-            if (c <= 0.0f) continue;
-            lane_entry[lanes] = e;
-            lane_cos[lanes++] = c;
-        }
-        if (!lanes) break;
+    int lanes;
+    while ((lanes = next_packet(t, n, &e, lane_entry, lane_cos)) > 0) {
         _Alignas(64) int valid[PACKET];
         _Alignas(64) struct RTCRay16 r;
         prt__packet_rays(&r, valid, org, t->dir, lane_entry, lanes);
@@ -191,15 +197,8 @@ static bool bounce_vertex(const wjob *j, size_t x, const prt__sparse_store *prev
     int lane_entry[PACKET], e = 0;
     float lane_cos[PACKET], g[3 * PRT_BRDF_MAX_TERMS], h[3 * PRT_BRDF_MAX_TERMS];
     gs->count = 0;
-    while (e < t->count) {
-        int lanes = 0;
-        for (; e < t->count && lanes < PACKET; ++e) {
-            float c = prt__v3_dot(t->dir + (size_t)e * 3, n);
-            if (c <= 0.0f) continue;
-            lane_entry[lanes] = e;
-            lane_cos[lanes++] = c;
-        }
-        if (!lanes) break;
+    int lanes;
+    while ((lanes = next_packet(t, n, &e, lane_entry, lane_cos)) > 0) {
         _Alignas(64) int valid[PACKET];
         _Alignas(64) struct RTCRayHit16 rh;
         prt__packet_rayhits(&rh, valid, org, t->dir, lane_entry, lanes);

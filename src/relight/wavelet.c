@@ -81,29 +81,21 @@ static inline void dot_16(const uint16_t *idx, const int16_t *q, int n, const fl
     acc[0] = out[0]; acc[1] = out[1]; acc[2] = out[2];
 }
 #else
-static inline void dot_8(const uint16_t *idx, const int8_t *q, int n, const float *L, float acc[3])
-{
-    float a0 = 0, a1 = 0, a2 = 0;
-    for (int i = 0; i < n; ++i) {
-        const float *l = L + (size_t)idx[i] * 4;
-        a0 += (float)q[3 * i] * l[0];
-        a1 += (float)q[3 * i + 1] * l[1];
-        a2 += (float)q[3 * i + 2] * l[2];
+/* Portable builds: one scalar loop for either width. */
+#define SCALAR_DOT(name, type)                                                                    \
+    static inline void name(const uint16_t *idx, const type *q, int n, const float *L, float acc[3]) \
+    {                                                                                             \
+        float a0 = 0, a1 = 0, a2 = 0;                                                             \
+        for (int i = 0; i < n; ++i) {                                                             \
+            const float *l = L + (size_t)idx[i] * 4;                                              \
+            a0 += (float)q[3 * i] * l[0];                                                         \
+            a1 += (float)q[3 * i + 1] * l[1];                                                     \
+            a2 += (float)q[3 * i + 2] * l[2];                                                     \
+        }                                                                                         \
+        acc[0] = a0; acc[1] = a1; acc[2] = a2;                                                    \
     }
-    acc[0] = a0; acc[1] = a1; acc[2] = a2;
-}
-
-static inline void dot_16(const uint16_t *idx, const int16_t *q, int n, const float *L, float acc[3])
-{
-    float a0 = 0, a1 = 0, a2 = 0;
-    for (int i = 0; i < n; ++i) {
-        const float *l = L + (size_t)idx[i] * 4;
-        a0 += (float)q[3 * i] * l[0];
-        a1 += (float)q[3 * i + 1] * l[1];
-        a2 += (float)q[3 * i + 2] * l[2];
-    }
-    acc[0] = a0; acc[1] = a1; acc[2] = a2;
-}
+SCALAR_DOT(dot_8, int8_t)
+SCALAR_DOT(dot_16, int16_t)
 #endif
 
 prt_status prt_relight_wavelet(prt_context *ctx, const prt_transfer *t, const prt_wavelet_light *light, float *out_kvec)

@@ -1,0 +1,72 @@
+/* Limits the benchmarks measure in the same run as the code they judge: raw Embree ray
+ * throughput on the bake's own rays, and plain memory read bandwidth. */
+#ifndef PRT_BENCH_COMMON_H
+#define PRT_BENCH_COMMON_H
+
+#include "core/internal.h"
+#include "core/progress.h"
+#include "geom/raycast.h"
+
+/* Traces, from origins[v] of every stride-th vertex, each of the `count` directions above its
+ * normal in packets of 16 (rtcIntersect16 or rtcOccluded16) with nothing else around them;
+ * returns the time taken and the rays traced in *rays. */
+static inline double bench_raw_rays(const prt__mesh *m, const prt__raycaster *rc, const float *origins, const float *dirs, int count,
+                                    size_t stride, bool intersect, int threads, uint64_t *rays)
+{
+    uint64_t total = 0;
+    double t0 = prt__now();
+#pragma omp parallel for schedule(dynamic, 8) num_threads(threads) reduction(+ : total)
+    for (size_t v = 0; v < m->vertex_count; v += stride) {
+        const float *n = m->normals + v * 3;
+        struct RTCIntersectContext ictx;
+        rtcInitIntersectContext(&ictx);
+        int j = 0;
+        while (j < count) {
+            int lanes = 0, idx[16];
+            for (; j < count && lanes < 16; ++j)
+                if (prt__v3_dot(dirs + (size_t)j * 3, n) > 0) idx[lanes++] = j;
+            if (!lanes) break;
+            _Alignas(64) int valid[16];
+            if (intersect) {
+                _Alignas(64) struct RTCRayHit16 rh;
+                prt__packet_rayhits(&rh, valid, origins + v * 3, dirs, idx, lanes);
+                rtcIntersect16(valid, rc->scene, &ictx, &rh);
+            } else {
+                _Alignas(64) struct RTCRay16 ray;
+                prt__packet_rays(&ray, valid, origins + v * 3, dirs, idx, lanes);
+                rtcOccluded16(valid, rc->scene, &ictx, &ray);
+            }
+            total += (uint64_t)lanes;
+        }
+    }
+    *rays = total;
+    return prt__now() - t0;
+}
+
+/* Read bandwidth of a plain streaming sum over `bytes` of floats, best of many passes: for a
+ * buffer the size of the relight's data this is the limit the relight loop can reach (cache-
+ * resident when it fits, like the relight's own data); 512 MiB gives the DRAM figure. */
+static inline double bench_read_bandwidth(size_t bytes, int threads)
+{
+    const size_t n = bytes / sizeof(float);
+    float *buf = malloc(n * sizeof(float));
+    if (!buf) return 0;
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (size_t i = 0; i < n; ++i) buf[i] = (float)(i & 1023);
+    const int passes = bytes > ((size_t)64 << 20) ? 5 : 200;
+    double best = 1e30, sink = 0;
+    for (int pass = 0; pass < passes; ++pass) {
+        double t0 = prt__now();
+        float s = 0;
+#pragma omp parallel for simd schedule(static) num_threads(threads) reduction(+ : s)
+        for (size_t i = 0; i < n; ++i) s += buf[i];
+        double dt = prt__now() - t0;
+        sink += s;
+        if (dt < best) best = dt;
+    }
+    free(buf);
+    if (sink == 42.0) fputs("", stderr);   /* keep the sums alive */
+    return (double)n * sizeof(float) / best;
+}
+
+#endif
