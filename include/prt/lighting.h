@@ -1,4 +1,19 @@
-/* prt/lighting.h - distant lighting: environment maps, the procedural sky, SH projection.
+/* prt/lighting.h - lighting: environment maps, the procedural sky, SH projection, local lights
+ * and the lighting object every layer shares.
+ *
+ * Units are radiometric, linear RGB, and hold everywhere in prt:
+ *   environment  radiance L(w) arriving from direction w, W / (m^2 sr);
+ *   point        radiant intensity I, W / sr: a surface at distance r whose normal makes angle
+ *                theta with the direction to the light receives irradiance E = I cos(theta) / r^2;
+ *   spot         a point light (same I) restricted to a cone around `direction`: full intensity
+ *                within the inner half-angle `falloff`, none beyond the outer half-angle `angle`,
+ *                smoothstep in cos between;
+ *   directional  irradiance E, W / m^2, on a surface facing the light (direction = towards it);
+ *   sphere       uniform radiance L, W / (m^2 sr), leaving a sphere of radius R (soft shadows): an
+ *                unoccluded surface facing its centre at distance d > R receives E = pi L R^2 / d^2;
+ *   emissive     radiance L_e, W / (m^2 sr), leaving the front of scene triangles whose material
+ *                emits (Ke in MTL, emissiveFactor in glTF, "emission" in scene JSON).
+ * A Lambertian surface of albedo rho under irradiance E leaves radiance rho / pi * E.
  *
  * Lighting for SH PRT is prt_sh_light: order*order coefficients per RGB channel of the incident
  * radiance L(w), with L_i = integral L(w) y_i(w) dw over the sphere. */
@@ -30,6 +45,7 @@ typedef struct prt_envmap prt_envmap;
 /* A distant lighting named by a scene file and carried into the .prt it bakes, so that
  * relighting and rendering can default to it. */
 typedef struct prt_environment_desc {
+    int none;                 /* non-zero: no environment light at all (a room lit by its lamps) */
     char path[1024];          /* probe file; empty = the procedural sky */
     prt_env_layout layout;
     float rotate_deg[3];      /* yaw (about +y), pitch, roll */
@@ -71,6 +87,101 @@ void prt_sh_light_eval(const prt_sh_light *light, const float dir[3], float rgb[
 /* Renders the band-limited lighting (or, with irradiance != 0, the irradiance / pi, i.e. the
  * exit radiance of a white Lambertian surface facing each direction) as a lat-long image. */
 prt_status prt_sh_light_to_image(const prt_sh_light *light, int width, int irradiance, prt_image *out);
+
+/* ---- Local lights ---- */
+typedef enum prt_light_type {
+    PRT_LIGHT_POINT = 1,
+    PRT_LIGHT_SPOT,
+    PRT_LIGHT_DIRECTIONAL,
+    PRT_LIGHT_SPHERE
+} prt_light_type;
+
+/* One light; units as stated at the top of this header. */
+typedef struct prt_light {
+    prt_light_type type;
+    float position[3];    /* point, spot, sphere: world position */
+    float direction[3];   /* spot: the axis it shines along; directional: towards the light (unit) */
+    float intensity[3];   /* point, spot: W/sr */
+    float irradiance[3];  /* directional: W/m^2 at normal incidence */
+    float radiance[3];    /* sphere: W/(m^2 sr) */
+    float angle_deg;      /* spot: outer half-angle, (0, 90]; 0 = 30 */
+    float falloff_deg;    /* spot: inner half-angle, [0, angle]; 0 = angle (a hard edge) */
+    float radius;         /* sphere: > 0 */
+} prt_light;
+
+/* Checks type, finiteness and ranges (non-negative colours, unit-able directions, angles);
+ * normalises directions and fills the spot defaults. */
+prt_status prt_light_validate(prt_light *l);
+/* Parses the command-line form:
+ *   point:X,Y,Z:R,G,B                       intensity W/sr
+ *   spot:X,Y,Z:DX,DY,DZ:ANGLE[,FALLOFF]:R,G,B
+ *   directional:DX,DY,DZ:R,G,B              towards the light; irradiance W/m^2
+ *   sphere:X,Y,Z:RADIUS:R,G,B               radiance
+ * (one number for R,G,B means grey). */
+prt_status prt_light_parse(const char *spec, prt_light *out);
+/* The command-line form of l (prt_light_parse reads it back). */
+void prt_light_format(const prt_light *l, char *buf, size_t size);
+const char *prt_light_type_name(prt_light_type type);
+/* Irradiance at point p with unit normal n from l, ignoring occlusion (sphere: its unoccluded
+ * visible cap, exact). */
+void prt_light_irradiance(const prt_light *l, const float p[3], const float n[3], float rgb[3]);
+
+/* What a lighting holds, and what a method relights (prt_method_lighting). */
+enum {
+    PRT_LIGHTS_ENVIRONMENT = 1,
+    PRT_LIGHTS_POINT = 2,
+    PRT_LIGHTS_SPOT = 4,
+    PRT_LIGHTS_DIRECTIONAL = 8,
+    PRT_LIGHTS_SPHERE = 16,
+    PRT_LIGHTS_EMISSIVE = 32
+};
+/* The PRT_LIGHTS_* bit of a light type. */
+unsigned prt_light_type_bit(prt_light_type type);
+/* "environment", "point lights", ... for one bit. */
+const char *prt_lights_bit_name(unsigned bit);
+
+/* ---- The lighting object ----
+ * An environment (probe or procedural sky, rotated and scaled; or none), any number of local
+ * lights, and a scale for the scene's emissive surfaces (their geometry and radiance belong to
+ * the scene). Not thread-safe while being changed; read-only use from many threads is fine. */
+typedef struct prt_lighting prt_lighting;
+
+/* An empty lighting: no environment, no lights, emissive surfaces at scale 1. */
+prt_status prt_lighting_create(prt_lighting **out);
+prt_status prt_lighting_copy(const prt_lighting *src, prt_lighting **out);
+void prt_lighting_release(prt_lighting *l);
+
+/* Loads the environment a desc names (probe file, or the procedural sky when path is empty;
+ * none when desc->none) with its rotation and intensity. */
+prt_status prt_lighting_set_environment(prt_lighting *l, const prt_environment_desc *desc);
+/* Takes ownership of env (NULL removes the environment); rot row-major (NULL = identity);
+ * intensity 0 = 1. */
+prt_status prt_lighting_set_envmap(prt_lighting *l, prt_envmap *env, const double rot[9], float intensity);
+void prt_lighting_set_rotation(prt_lighting *l, const double rot[9]);
+void prt_lighting_set_intensity(prt_lighting *l, float intensity);
+/* NULL when the lighting has no environment. */
+const prt_envmap *prt_lighting_envmap(const prt_lighting *l);
+void prt_lighting_rotation(const prt_lighting *l, double rot[9]);
+float prt_lighting_intensity(const prt_lighting *l);
+/* The desc the environment came from (all zero when set by prt_lighting_set_envmap). */
+const prt_environment_desc *prt_lighting_environment_desc(const prt_lighting *l);
+
+/* Validates and appends a copy; *index (may be NULL) gets its position. */
+prt_status prt_lighting_add(prt_lighting *l, const prt_light *light, int *index);
+prt_status prt_lighting_set(prt_lighting *l, int index, const prt_light *light);
+prt_status prt_lighting_remove(prt_lighting *l, int index);
+void prt_lighting_clear_lights(prt_lighting *l);
+int prt_lighting_count(const prt_lighting *l);
+const prt_light *prt_lighting_light(const prt_lighting *l, int index);   /* NULL out of range */
+
+/* Scale of the scene's emissive surfaces (default 1; 0 turns them off). */
+void prt_lighting_set_emission(prt_lighting *l, float scale);
+float prt_lighting_emission(const prt_lighting *l);
+
+/* PRT_LIGHTS_* bits of what l holds: the environment, each light type present, and
+ * PRT_LIGHTS_EMISSIVE when the emission scale is above zero (whether the scene emits is the
+ * scene's business). */
+unsigned prt_lighting_content(const prt_lighting *l);
 
 #ifdef __cplusplus
 }

@@ -1,10 +1,13 @@
 /* prt/reference.h - ground truth: an unbiased Monte Carlo path tracer over the same scene and
  * lighting that the PRT methods bake, for measuring their error.
  *
- * Surfaces are Lambertian with the scene's per-vertex albedo, one-sided (the back of a triangle
- * is black, as in the bakes). Light comes from a distant environment map, piecewise constant
- * over its pixels (as the SH projection sees it), importance-sampled and combined with cosine
- * sampling by multiple importance sampling. Paths end by Russian roulette. Results are
+ * Surfaces are one-sided (the back of a triangle is black, as in the bakes) and reflect with
+ * their material's BRDF from prt's library (Lambert with the per-vertex albedo where a vertex has
+ * no BRDF material). Light comes from a prt_lighting: a distant environment map, piecewise
+ * constant over its pixels (as the SH projection sees it), local lights (point, spot,
+ * directional, sphere) and the scene's emissive surfaces, all sampled explicitly (next-event
+ * estimation) and combined by multiple importance sampling with BRDF sampling where paths can
+ * also hit them (environment, spheres, emissive triangles). Paths end by Russian roulette. Results are
  * deterministic for a seed whatever the thread count: each (vertex or pixel, sample) pair has its
  * own random stream. */
 #ifndef PRT_REFERENCE_H
@@ -28,6 +31,12 @@ typedef struct prt_reference_desc {
     float ray_offset;          /* 0 = 1e-4 x scene diagonal, as in the bakes */
     const double *rotation;    /* row-major 3x3 applied to the environment; NULL = identity */
     float intensity;           /* environment scale; 0 = 1 */
+    /* The lighting to trace under. When set, the env argument of the trace functions must be
+     * NULL and rotation/intensity are ignored (the lighting carries its own). */
+    const prt_lighting *lighting;
+    /* Per-vertex results: exit radiance towards this world position (glossy surfaces are
+     * view-dependent); NULL = along the vertex normal. */
+    const float *eye;
     prt_progress_fn progress;
     void *progress_user;
 } prt_reference_desc;

@@ -64,6 +64,16 @@ const uint32_t *prt_scene_indices(const prt_scene *scene);  /* 3 per triangle */
 void prt_scene_bounds(const prt_scene *scene, float lo[3], float hi[3]);
 /* The lighting a JSON scene names ("environment"); returns 0 when it names none. */
 int prt_scene_environment(const prt_scene *scene, prt_environment_desc *out);
+/* The local lights a JSON scene names ("lights"), in file order. */
+int prt_scene_light_count(const prt_scene *scene);
+const prt_light *prt_scene_light(const prt_scene *scene, int index);
+/* Emitted radiance per vertex (3 floats, W/(m^2 sr), leaving the front side), from emissive
+ * materials (Ke in MTL, emissiveFactor in glTF, "emission" in scene JSON); NULL when nothing emits. */
+const float *prt_scene_emission(const prt_scene *scene);
+/* A lighting object with everything the scene names: its environment (the procedural sky when
+ * it names neither an environment nor lights; none when it names lights only), its lights, and
+ * its emissive surfaces at scale 1. */
+prt_status prt_scene_lighting(prt_context *ctx, const prt_scene *scene, prt_lighting **out);
 
 /* Writes the procedural demo scene (a ribbed bowl and a torus knot-like ring of spheres over a
  * ground plane between a red and a green wall) as OBJ+MTL. */

@@ -11,6 +11,7 @@ typedef struct prt__mesh {
     float *positions, *normals, *albedo;
     uint8_t *material;    /* per vertex: 0 = Lambert with `albedo`, k = the owner's brdfs[k - 1] */
     float *uv;            /* 2 per vertex; NaN where the input had no texture coordinates */
+    float *emission;      /* 3 per vertex, emitted radiance; NULL when nothing emits */
     uint32_t *indices;
 } prt__mesh;
 
@@ -38,6 +39,8 @@ struct prt_scene {
     char source[512];
     bool has_env;
     prt_environment_desc env;
+    int light_count;
+    prt_light *lights;
 };
 
 /* The material id (1-based) of brdf in the scene's table, adding it if new; 0 when the table is full. */
