@@ -11,7 +11,7 @@
  * JSON on stdout and a summary on stderr. */
 #include "bench_common.h"
 #include "core/cubemap.h"
-#include "core/transfer_set.h"
+#include "method/wavelet.h"
 
 #include <immintrin.h>
 #include <string.h>
@@ -191,7 +191,7 @@ int main(int argc, char **argv)
         shade_best = fmin(shade_best, d - c);
     }
     const double nonzeros = (double)wi.vectors * wi.coefficients, bytes = (double)wi.bytes;
-    const double bw = bench_read_bandwidth((size_t)bytes, threads), gather = raw_gather(t->wavelet->store.index, (size_t)nonzeros, threads);
+    const double bw = bench_read_bandwidth((size_t)bytes, threads), gather = raw_gather(prt__wavelet(t)->store.index, (size_t)nonzeros, threads);
     const double bake_rate = (double)bake_rays / direct_s;
     printf("{\n  \"mesh\": \"%s\", \"vertices\": %zu, \"object_vertices\": %zu, \"terms\": %d, \"supersample\": %d, \"bounces\": %d, \"threads\": %d,\n", mesh, nv,
            object_nv, terms, supersample, bounces, threads);

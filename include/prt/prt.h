@@ -1,6 +1,7 @@
 /* prt/prt.h - precomputed radiance transfer: the whole public API.
- * Typical use: create a context, load a scene, bake, save or relight under prt_sh_light
- * coefficients from an environment map, and draw. See examples/minimal.c. */
+ * Typical use: create a context, load a scene, bake with a method of the method table
+ * (prt/method.h), save, relight under a prt_lighting (prt/lighting.h) and draw. See
+ * examples/minimal.c and docs/ARCHITECTURE.md. */
 #ifndef PRT_PRT_H
 #define PRT_PRT_H
 
@@ -10,6 +11,7 @@
 #include "prt/lighting.h"
 #include "prt/brdf.h"
 #include "prt/scene.h"
+#include "prt/method.h"
 #include "prt/transfer.h"
 #include "prt/render.h"
 #include "prt/reference.h"

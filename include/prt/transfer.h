@@ -1,7 +1,10 @@
-/* prt/transfer.h - baked radiance transfer, its .prt file, and relighting.
+/* prt/transfer.h - baked radiance transfer, its .prt file, and spherical-harmonic relighting.
  *
- * A prt_transfer holds the (possibly subdivided) mesh it was baked on and one or more transfer
- * sets. An SH transfer set stores per vertex the vector T with exit radiance
+ * A prt_transfer holds the (possibly subdivided) mesh it was baked on, its materials and the
+ * lighting its scene named, and the transfer of one method (prt/method.h: every method is
+ * reached through the method table; the functions below that name SH are the SH method's own
+ * API and fail clearly on other methods' files). An SH transfer set stores per vertex the
+ * vector T with exit radiance
  *     L_out(p) = sum_i L_i T_i(p)
  * for SH lighting L (prt_sh_light). Sets with one channel exclude the albedo (it is applied at
  * relight time from the stored per-vertex albedo); three-channel sets include it, because
@@ -13,6 +16,7 @@
 #include "prt/brdf.h"
 #include "prt/image.h"
 #include "prt/lighting.h"
+#include "prt/method.h"
 #include "prt/scene.h"
 
 #ifdef __cplusplus
@@ -29,10 +33,7 @@ typedef enum prt_transfer_kind {
      * Stored lighting-coefficient-major: M[j][i] is the response of incident coefficient i to
      * lighting coefficient j. */
     PRT_TRANSFER_GLOSSY_SHADOWED = 8,
-    PRT_TRANSFER_GLOSSY_INTERREFLECTED = 16,  /* diffuse-to-glossy and glossy-to-glossy bounces */
-    /* The wavelet method's sparse transport (prt/wavelet.h, prt_bake_wavelet): direct light plus
-     * the interreflection passes baked; not a prt_bake_sh kind. */
-    PRT_TRANSFER_WAVELET = 32
+    PRT_TRANSFER_GLOSSY_INTERREFLECTED = 16   /* diffuse-to-glossy and glossy-to-glossy bounces */
 } prt_transfer_kind;
 
 #define PRT_TRANSFER_ALL_KINDS 31u
@@ -74,6 +75,8 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path);
 prt_status prt_transfer_load(prt_context *ctx, const char *path, prt_transfer **out);
 prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t size, prt_transfer **out);
 
+/* Method-independent facts plus, for SH files, the SH settings (order, kinds, samples, bounces,
+ * seed, texels; zero for other methods). prt_transfer_describe covers every method. */
 typedef struct prt_transfer_info {
     size_t vertex_count, triangle_count;
     int order;                /* SH order of the sets */
@@ -145,7 +148,7 @@ prt_status prt_relight_sh_texels(prt_context *ctx, const prt_transfer *t, prt_tr
 
 const char *prt_transfer_kind_name(prt_transfer_kind kind);
 /* Parses "unshadowed", "shadowed", "interreflected" (or their first letter), "glossy-shadowed",
- * "glossy-interreflected", "wavelet". */
+ * "glossy-interreflected". */
 prt_status prt_transfer_kind_parse(const char *name, prt_transfer_kind *out);
 
 #ifdef __cplusplus

@@ -3,7 +3,7 @@
 #define PRT_BAKE_INTERNAL_H
 
 #include "core/progress.h"
-#include "core/transfer_set.h"
+#include "method/sh.h"
 
 #include <embree3/rtcore.h>
 

@@ -27,7 +27,6 @@ typedef struct bake_job {
     bool need_hits;
     hit_entry **hits;     /* per vertex, for interreflection */
     uint32_t *hit_count;
-    prt__progress progress;
 } bake_job;
 
 prt_bake_desc prt_bake_desc_defaults(void)
@@ -126,10 +125,180 @@ static inline void gather_hit(const prt__mesh *m, const float *prev, int nc3, co
     for (int i = 0; i < nc3; ++i) acc[i] += b0 * t0[i] + b1 * t1[i] + b2 * t2[i];
 }
 
-prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_desc *desc_in, prt_transfer **out)
+/* The bake as stages (method/method.h): visibility per block of vertices, then either the
+ * coupled glossy bounce loop or one stage per diffuse bounce, then texels and the BRDF. */
+#define BLOCK 64
+
+typedef enum { ST_VISIBILITY, ST_GLOSSY_BOUNCES, ST_BOUNCE, ST_TEXELS, ST_BRDF_IN } stage_kind;
+
+typedef struct sh_bake {
+    prt__bake_job base;
+    prt_bake_desc d;
+    prt_transfer *t;
+    prt__sh_state *s;
+    bake_job job;
+    float *unsh, *shad, *gshad;
+    bool want_gsh, want_gir, coupled;
+    float *total, *prev, *next;    /* diffuse bounce buffers, [vertex][3][order^2] */
+    hit_entry **scratch;           /* per thread, one entry per sample */
+    int nscratch;
+    stage_kind plan[72];
+    int bounce_of[72];
+    int stages;
+} sh_bake;
+
+static uint64_t blocks(size_t nv) { return (nv + BLOCK - 1) / BLOCK; }
+
+static prt_status run_visibility(prt__bake_job *b, uint64_t unit, int thread)
 {
-    if (!ctx || !scene || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake_sh: ctx, scene and out are required");
-    *out = NULL;
+    sh_bake *sb = (sh_bake *)b;
+    bake_job *job = &sb->job;
+    const size_t nv = sb->t->mesh.vertex_count, nc = (size_t)job->ncoeff, nn = nc * nc;
+    for (size_t v = unit * BLOCK; v < nv && v < (unit + 1) * BLOCK; ++v)
+        if (!visibility_vertex(job, v, sb->unsh ? sb->unsh + v * nc : NULL, sb->shad ? sb->shad + v * nc : NULL, sb->gshad ? sb->gshad + v * nn : NULL,
+                               job->need_hits ? sb->scratch[thread] : NULL, job->need_hits ? &job->hits[v] : NULL,
+                               job->need_hits ? &job->hit_count[v] : NULL))
+            return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory recording ray hits");
+    return PRT_OK;
+}
+
+static prt_status run_bounce(prt__bake_job *b, uint64_t unit, int thread)
+{
+    (void)thread;
+    sh_bake *sb = (sh_bake *)b;
+    const prt__mesh *m = &sb->t->mesh;
+    const int nc = sb->job.ncoeff, nc3 = 3 * nc;
+    for (size_t v = unit * BLOCK; v < m->vertex_count && v < (unit + 1) * BLOCK; ++v) {
+        float acc[3 * PRT_SH_MAX_COEFFS];
+        memset(acc, 0, (size_t)nc3 * sizeof(float));
+        for (uint32_t h = 0; h < sb->job.hit_count[v]; ++h) gather_hit(m, sb->prev, nc3, &sb->job.hits[v][h], acc);
+        for (int c = 0; c < 3; ++c) {
+            float k = m->albedo[v * 3 + c] / (float)PRT_PI;
+            for (int i = 0; i < nc; ++i) {
+                float x = k * acc[c * nc + i];
+                sb->next[v * nc3 + c * nc + i] = x;
+                sb->total[v * nc3 + c * nc + i] += x;
+            }
+        }
+    }
+    return PRT_OK;
+}
+
+static prt_status run_glossy_bounces(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    sh_bake *sb = (sh_bake *)b;
+    prt_transfer *t = sb->t;
+    prt__bounce_input bi = {&t->mesh, sb->d.order, sb->d.samples, sb->job.basis, sb->job.hits, sb->job.hit_count, sb->shad, sb->gshad,
+                            t->brdfs, t->brdf_count, sb->d.bounces, sb->want_gir, p};
+    float *dtot = NULL, *gtot = NULL;
+    prt_status st = prt__bake_glossy_bounces(ctx, &bi, &dtot, sb->want_gir ? &gtot : NULL);
+    if (st) return st;
+    if (sb->d.kinds & PRT_TRANSFER_INTERREFLECTED) { sb->s->sets[2].channels = 3; sb->s->sets[2].coeffs = dtot; }
+    else free(dtot);
+    if (sb->want_gir) { sb->s->sets[4].channels = 3; sb->s->sets[4].coeffs = gtot; }
+    return PRT_OK;
+}
+
+static prt_status run_texels(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    sh_bake *sb = (sh_bake *)b;
+    prt_transfer *t = sb->t;
+    prt__texel_input ti = {&t->mesh, t->source, sb->d.order, sb->d.samples, sb->job.dirs, sb->job.basis, sb->job.rc.scene, sb->job.offset,
+                           sb->s->sets[2].coeffs, sb->d.kinds & 7u, sb->d.texels, sb->d.texels, sb->d.normal_map, p};
+    return prt__bake_texels(ctx, &ti, &sb->s->texels);
+}
+
+static prt_status run_brdf_in(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    (void)p;
+    sh_bake *sb = (sh_bake *)b;
+    return prt__bake_brdf_in(ctx, sb->t, sb->d.glossy_brdf);
+}
+
+static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
+{
+    sh_bake *sb = (sh_bake *)b;
+    const size_t nv = sb->t->mesh.vertex_count;
+    const int nc = sb->job.ncoeff, nc3 = 3 * nc;
+    if (index > 0 && sb->plan[index - 1] == ST_VISIBILITY) {
+        /* Visibility is done: hand its sets over, and start the diffuse bounces from it. */
+        prt__sh_state *s = sb->s;
+        if (sb->d.kinds & PRT_TRANSFER_UNSHADOWED) { s->sets[0].channels = 1; s->sets[0].coeffs = sb->unsh; sb->unsh = NULL; }
+        if (!sb->coupled && (sb->d.kinds & PRT_TRANSFER_INTERREFLECTED)) {
+            sb->total = prt__calloc(nv * nc3, sizeof(float));
+            sb->prev = prt__calloc(nv * nc3, sizeof(float));
+            sb->next = prt__calloc(nv * nc3, sizeof(float));
+            if (!sb->total || !sb->prev || !sb->next) return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory for interreflection");
+            /* Bounce 0 is the shadowed transfer times the (coloured) albedo. */
+            for (size_t v = 0; v < nv; ++v)
+                for (int c = 0; c < 3; ++c)
+                    for (int i = 0; i < nc; ++i)
+                        sb->prev[v * nc3 + c * nc + i] = sb->total[v * nc3 + c * nc + i] = sb->t->mesh.albedo[v * 3 + c] * sb->shad[v * nc + i];
+        }
+    }
+    if (index > 0 && sb->plan[index - 1] == ST_BOUNCE) {
+        float *tmp = sb->prev; sb->prev = sb->next; sb->next = tmp;
+    }
+    if (index > 0 && (index == sb->stages || sb->plan[index] != ST_BOUNCE) && sb->plan[index - 1] == ST_BOUNCE) {
+        sb->s->sets[2].channels = 3;
+        sb->s->sets[2].coeffs = sb->total;
+        sb->total = NULL;
+    }
+    if (index > 0 && (index == sb->stages || sb->plan[index] == ST_TEXELS || sb->plan[index] == ST_BRDF_IN) && sb->shad) {
+        /* Every stage that reads the shadowed and glossy-shadowed sets has run. */
+        if (sb->d.kinds & PRT_TRANSFER_SHADOWED) { sb->s->sets[1].channels = 1; sb->s->sets[1].coeffs = sb->shad; sb->shad = NULL; }
+        if (sb->want_gsh) { sb->s->sets[3].channels = 1; sb->s->sets[3].coeffs = sb->gshad; sb->gshad = NULL; }
+    }
+    if (index >= sb->stages) return PRT_OK;
+    switch (sb->plan[index]) {
+    case ST_VISIBILITY: {
+        snprintf(out->name, sizeof out->name, "visibility");
+        if (sb->job.need_hits && !sb->scratch) {
+            sb->scratch = prt__calloc((size_t)b->threads, sizeof *sb->scratch);
+            if (!sb->scratch) return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+            sb->nscratch = b->threads;
+            for (int i = 0; i < b->threads; ++i)
+                if (!(sb->scratch[i] = malloc((size_t)sb->d.samples * sizeof(hit_entry)))) return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        }
+        out->units = blocks(nv);
+        out->run = run_visibility;
+        break;
+    }
+    case ST_GLOSSY_BOUNCES: snprintf(out->name, sizeof out->name, "glossy bounces"); out->whole = run_glossy_bounces; break;
+    case ST_BOUNCE:
+        snprintf(out->name, sizeof out->name, "bounce %d/%d", sb->bounce_of[index], sb->d.bounces);
+        out->units = blocks(nv);
+        out->run = run_bounce;
+        break;
+    case ST_TEXELS: snprintf(out->name, sizeof out->name, "texels"); out->whole = run_texels; break;
+    case ST_BRDF_IN: snprintf(out->name, sizeof out->name, "bake BRDF in"); out->whole = run_brdf_in; break;
+    }
+    return PRT_OK;
+}
+
+static prt_status sh_finish(prt__bake_job *b, prt_transfer *t)
+{
+    (void)b;
+    (void)t;
+    return PRT_OK;   /* every stage wrote into the state already */
+}
+
+static void sh_release(prt__bake_job *b)
+{
+    sh_bake *sb = (sh_bake *)b;
+    bake_job *job = &sb->job;
+    prt__raycaster_release(&job->rc);
+    if (job->hits)
+        for (size_t v = 0; v < sb->t->mesh.vertex_count; ++v) free(job->hits[v]);
+    for (int i = 0; i < sb->nscratch; ++i) free(sb->scratch[i]);
+    free(sb->scratch);
+    free(job->hits); free(job->hit_count); free(job->origins); free(job->dirs); free(job->basis);
+    free(sb->unsh); free(sb->shad); free(sb->gshad); free(sb->total); free(sb->prev); free(sb->next);
+    free(sb);
+}
+
+prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *desc_in, prt_transfer *t, prt__bake_job **out)
+{
     prt_bake_desc d = desc_in ? *desc_in : (prt_bake_desc){0};
     prt_bake_desc def = prt_bake_desc_defaults();
     if (d.order == 0) d.order = def.order;
@@ -153,163 +322,90 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the normal map is empty");
     if (d.glossy_exit && !(d.kinds & (PRT_TRANSFER_GLOSSY_SHADOWED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "baking a BRDF in needs a glossy kind (glossy-shadowed or glossy-interreflected)");
-
     if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
 
-    double t_start = prt__now();
-    prt_transfer *t = prt__calloc(1, sizeof *t);
-    if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    const prt__mesh *sm = &scene->mesh;
-    prt_status st = prt__mesh_copy(&t->mesh, sm);
-    if (st) { prt_transfer_release(t); return st; }
-    t->order = d.order;
-    t->samples = d.samples;
-    t->bounces = (d.kinds & (PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)) ? d.bounces : 0;
-    t->seed = d.seed;
-    t->threads = prt__threads(ctx);
-    snprintf(t->source, sizeof t->source, "%s", scene->source);
-    t->has_env = scene->has_env;
-    t->env = scene->env;
-    t->brdf_count = scene->brdf_count;
-    memcpy(t->brdfs, scene->brdfs, sizeof t->brdfs);
+    sh_bake *sb = prt__calloc(1, sizeof *sb);
+    prt__sh_state *s = prt__sh_state_new();
+    if (!sb || !s) { free(sb); free(s); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    sb->base.stage = sh_stage;
+    sb->base.finish = sh_finish;
+    sb->base.release = sh_release;
+    sb->d = d;
+    sb->t = t;
+    sb->s = s;
+    t->state = s;   /* owned by t from here on, so a failed bake frees it with t */
+    s->order = d.order;
+    s->samples = d.samples;
+    s->bounces = (d.kinds & (PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)) ? d.bounces : 0;
+    s->seed = d.seed;
     bool scene_glossy = false;   /* some vertex has a material with a glossy part */
     for (size_t v = 0; v < t->mesh.vertex_count && !scene_glossy; ++v) {
         uint8_t k = t->mesh.material[v];
         scene_glossy = k && k <= t->brdf_count && prt_brdf_is_glossy(&t->brdfs[k - 1]);
     }
-    const bool want_gsh = d.kinds & PRT_TRANSFER_GLOSSY_SHADOWED, want_gir = d.kinds & PRT_TRANSFER_GLOSSY_INTERREFLECTED;
+    sb->want_gsh = d.kinds & PRT_TRANSFER_GLOSSY_SHADOWED;
+    sb->want_gir = d.kinds & PRT_TRANSFER_GLOSSY_INTERREFLECTED;
     const bool want_ir = d.kinds & (PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED);
     /* Glossy surfaces in the scene or glossy receivers put the glossy matrices into the bounce loop. */
-    const bool coupled = want_ir && (want_gir || scene_glossy);
-    const bool need_glossy_sh = want_gsh || coupled;
+    sb->coupled = want_ir && (sb->want_gir || scene_glossy);
+    const bool need_glossy_sh = sb->want_gsh || sb->coupled;
 
     const size_t nv = t->mesh.vertex_count;
-    bake_job job = {0};
-    job.mesh = &t->mesh;
-    job.order = d.order;
-    job.ncoeff = d.order * d.order;
-    job.samples = d.samples;
-    job.offset = d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh);
-    job.need_hits = want_ir;
-    job.progress.fn = d.progress;
-    job.progress.user = d.progress_user;
-    const int nc = job.ncoeff;
-    bool want_unsh = d.kinds & PRT_TRANSFER_UNSHADOWED;
-    bool want_sh = d.kinds & (PRT_TRANSFER_SHADOWED | PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED);
+    bake_job *job = &sb->job;
+    job->mesh = &t->mesh;
+    job->order = d.order;
+    job->ncoeff = d.order * d.order;
+    job->samples = d.samples;
+    job->offset = d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh);
+    job->need_hits = want_ir;
+    const int nc = job->ncoeff;
+    const bool want_unsh = d.kinds & PRT_TRANSFER_UNSHADOWED;
+    const bool want_sh = d.kinds & (PRT_TRANSFER_SHADOWED | PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED);
     const size_t nn = (size_t)nc * nc;
-
-    job.dirs = prt__calloc((size_t)d.samples * 3, sizeof(float));
-    job.basis = prt__calloc((size_t)d.samples * nc, sizeof(float));
-    float *unsh = want_unsh ? prt__calloc(nv * nc, sizeof(float)) : NULL;
-    float *shad = want_sh ? prt__calloc(nv * nc, sizeof(float)) : NULL;
-    float *gshad = need_glossy_sh ? prt__calloc(nv * nn, sizeof(float)) : NULL;
-    if (job.need_hits) {
-        job.hits = prt__calloc(nv, sizeof *job.hits);
-        job.hit_count = prt__calloc(nv, sizeof *job.hit_count);
+    job->dirs = prt__calloc((size_t)d.samples * 3, sizeof(float));
+    job->basis = prt__calloc((size_t)d.samples * nc, sizeof(float));
+    sb->unsh = want_unsh ? prt__calloc(nv * nc, sizeof(float)) : NULL;
+    sb->shad = want_sh ? prt__calloc(nv * nc, sizeof(float)) : NULL;
+    sb->gshad = need_glossy_sh ? prt__calloc(nv * nn, sizeof(float)) : NULL;
+    if (job->need_hits) {
+        job->hits = prt__calloc(nv, sizeof *job->hits);
+        job->hit_count = prt__calloc(nv, sizeof *job->hit_count);
     }
-    if (!job.dirs || !job.basis || (want_unsh && !unsh) || (want_sh && !shad) || (need_glossy_sh && !gshad) || (job.need_hits && (!job.hits || !job.hit_count))) {
+    prt_status st = PRT_OK;
+    if (!job->dirs || !job->basis || (want_unsh && !sb->unsh) || (want_sh && !sb->shad) || (need_glossy_sh && !sb->gshad) ||
+        (job->need_hits && (!job->hits || !job->hit_count)))
         st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for a bake of %zu vertices", nv);
-        goto done;
-    }
-    for (int j = 0; j < d.samples; ++j) {
+    for (int j = 0; j < d.samples && !st; ++j) {
         double u, v, dir[3], y[PRT_SH_MAX_COEFFS];
         prt__sobol2((uint32_t)j, d.seed, &u, &v);
         prt__sphere_dir(u, v, dir);
         prt_sh_eval(d.order, dir, y);
-        for (int c = 0; c < 3; ++c) job.dirs[(size_t)j * 3 + c] = (float)dir[c];
-        for (int i = 0; i < nc; ++i) job.basis[(size_t)j * nc + i] = (float)y[i];
+        for (int c = 0; c < 3; ++c) job->dirs[(size_t)j * 3 + c] = (float)dir[c];
+        for (int i = 0; i < nc; ++i) job->basis[(size_t)j * nc + i] = (float)y[i];
     }
-    if ((st = prt__raycaster_create(ctx, &t->mesh, &job.rc))) goto done;
-    if ((st = prt__vertex_origins(&t->mesh, job.offset, &job.origins))) goto done;
+    if (!st) st = prt__raycaster_create(ctx, &t->mesh, &job->rc);
+    if (!st) st = prt__vertex_origins(&t->mesh, job->offset, &job->origins);
+    if (st) { sh_release(&sb->base); return st; }
+    sb->plan[sb->stages++] = ST_VISIBILITY;
+    if (sb->coupled) sb->plan[sb->stages++] = ST_GLOSSY_BOUNCES;
+    else if (d.kinds & PRT_TRANSFER_INTERREFLECTED)
+        for (int bnc = 1; bnc <= d.bounces; ++bnc) { sb->bounce_of[sb->stages] = bnc; sb->plan[sb->stages++] = ST_BOUNCE; }
+    if (d.texels) sb->plan[sb->stages++] = ST_TEXELS;
+    if (d.glossy_exit) sb->plan[sb->stages++] = ST_BRDF_IN;
+    *out = &sb->base;
+    return PRT_OK;
+}
 
-    int alloc_failed = 0;
-    prt__progress_begin(&job.progress, "visibility", nv);
-#pragma omp parallel num_threads(prt__threads(ctx))
-    {
-        hit_entry *scratch = job.need_hits ? malloc((size_t)d.samples * sizeof(hit_entry)) : NULL;
-        if (job.need_hits && !scratch) __atomic_store_n(&alloc_failed, 1, __ATOMIC_RELAXED);
-#pragma omp for schedule(dynamic, 32)
-        for (size_t v = 0; v < nv; ++v) {
-            if (prt__progress_cancelled(&job.progress) || __atomic_load_n(&alloc_failed, __ATOMIC_RELAXED)) continue;
-            bool ok = visibility_vertex(&job, v, unsh ? unsh + v * nc : NULL, shad ? shad + v * nc : NULL,
-                                        gshad ? gshad + v * nn : NULL, scratch,
-                                        job.need_hits ? &job.hits[v] : NULL, job.need_hits ? &job.hit_count[v] : NULL);
-            if (!ok) __atomic_store_n(&alloc_failed, 1, __ATOMIC_RELAXED);
-            prt__progress_add(&job.progress, 1);
-        }
-        free(scratch);
-    }
-    prt__progress_end(&job.progress);
-    if (alloc_failed) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory recording ray hits"); goto done; }
-    if (prt__progress_cancelled(&job.progress)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled"); goto done; }
-
-    if (want_unsh) { t->sets[0].channels = 1; t->sets[0].coeffs = unsh; unsh = NULL; }
-    if (coupled) {
-        prt__bounce_input bi = {&t->mesh, d.order, d.samples, job.basis, job.hits, job.hit_count, shad, gshad,
-                                t->brdfs, t->brdf_count, d.bounces, want_gir, &job.progress};
-        float *dtot = NULL, *gtot = NULL;
-        if ((st = prt__bake_glossy_bounces(ctx, &bi, &dtot, want_gir ? &gtot : NULL))) goto done;
-        if (d.kinds & PRT_TRANSFER_INTERREFLECTED) { t->sets[2].channels = 3; t->sets[2].coeffs = dtot; }
-        else free(dtot);
-        if (want_gir) { t->sets[4].channels = 3; t->sets[4].coeffs = gtot; }
-    } else if (d.kinds & PRT_TRANSFER_INTERREFLECTED) {
-        const int nc3 = 3 * nc;
-        float *total = prt__calloc(nv * nc3, sizeof(float)), *prev = prt__calloc(nv * nc3, sizeof(float)),
-              *next = prt__calloc(nv * nc3, sizeof(float));
-        if (!total || !prev || !next) {
-            free(total); free(prev); free(next);
-            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for interreflection");
-            goto done;
-        }
-        /* Bounce 0 is the shadowed transfer times the (coloured) albedo. */
-        for (size_t v = 0; v < nv; ++v)
-            for (int c = 0; c < 3; ++c)
-                for (int i = 0; i < nc; ++i)
-                    prev[v * nc3 + c * nc + i] = total[v * nc3 + c * nc + i] = t->mesh.albedo[v * 3 + c] * shad[v * nc + i];
-        char stage[32];
-        for (int b = 1; b <= d.bounces; ++b) {
-            snprintf(stage, sizeof stage, "bounce %d/%d", b, d.bounces);
-            prt__progress_begin(&job.progress, stage, nv);
-#pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ctx))
-            for (size_t v = 0; v < nv; ++v) {
-                if (prt__progress_cancelled(&job.progress)) continue;
-                float acc[3 * PRT_SH_MAX_COEFFS];
-                memset(acc, 0, (size_t)nc3 * sizeof(float));
-                for (uint32_t h = 0; h < job.hit_count[v]; ++h) gather_hit(&t->mesh, prev, nc3, &job.hits[v][h], acc);
-                for (int c = 0; c < 3; ++c) {
-                    float k = t->mesh.albedo[v * 3 + c] / (float)PRT_PI;
-                    for (int i = 0; i < nc; ++i) {
-                        float x = k * acc[c * nc + i];
-                        next[v * nc3 + c * nc + i] = x;
-                        total[v * nc3 + c * nc + i] += x;
-                    }
-                }
-                if ((v & 255) == 0) prt__progress_add(&job.progress, 256);
-            }
-            prt__progress_end(&job.progress);
-            float *tmp = prev; prev = next; next = tmp;
-            if (prt__progress_cancelled(&job.progress)) break;
-        }
-        free(prev); free(next);
-        if (prt__progress_cancelled(&job.progress)) { free(total); st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled"); goto done; }
-        t->sets[2].channels = 3;
-        t->sets[2].coeffs = total;
-    }
-    if (d.kinds & PRT_TRANSFER_SHADOWED) { t->sets[1].channels = 1; t->sets[1].coeffs = shad; shad = NULL; }
-    if (want_gsh) { t->sets[3].channels = 1; t->sets[3].coeffs = gshad; gshad = NULL; }
-    if (d.texels) {
-        prt__texel_input ti = {&t->mesh, t->source, d.order, d.samples, job.dirs, job.basis, job.rc.scene, job.offset,
-                               t->sets[2].coeffs, d.kinds & 7u, d.texels, d.texels, d.normal_map, &job.progress};
-        if ((st = prt__bake_texels(ctx, &ti, &t->texels))) goto done;
-    }
-    if (d.glossy_exit && (st = prt__bake_brdf_in(ctx, t, d.glossy_brdf))) goto done;
-    t->bake_seconds = prt__now() - t_start;
-
-done:
-    prt__raycaster_release(&job.rc);
-    if (job.hits)
-        for (size_t v = 0; v < nv; ++v) free(job.hits[v]);
-    free(job.hits); free(job.hit_count); free(job.origins); free(job.dirs); free(job.basis); free(unsh); free(shad); free(gshad);
+prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_desc *desc, prt_transfer **out)
+{
+    if (!ctx || !scene || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake_sh: ctx, scene and out are required");
+    *out = NULL;
+    prt_transfer *t = NULL;
+    prt_status st = prt__transfer_from_scene(ctx, &prt__method_sh, scene, &t);
+    prt__bake_job *job = NULL;
+    if (!st) st = prt__sh_bake_begin(ctx, desc, t, &job);
+    prt_bake_run_desc run = {desc ? desc->progress : NULL, desc ? desc->progress_user : NULL};
+    if (!st) st = prt__bake_drive(ctx, job, &run, t);
     if (st) { prt_transfer_release(t); return st; }
     *out = t;
     return PRT_OK;

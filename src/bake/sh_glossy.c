@@ -200,13 +200,14 @@ done:
 
 prt_status prt__bake_brdf_in(prt_context *ctx, prt_transfer *t, const prt_brdf *override)
 {
-    const int n = t->order * t->order;
+    prt__sh_state *sh = t->state;
+    const int n = sh->order * sh->order;
     const size_t nn = (size_t)n * n, nv = t->mesh.vertex_count;
     float *Bmat[PRT__MAX_BRDFS] = {0};
-    prt_status st = override ? prt__brdf_matrices(ctx, override, 1, t->order, Bmat)
-                             : prt__brdf_matrices(ctx, t->brdfs, t->brdf_count, t->order, Bmat);
+    prt_status st = override ? prt__brdf_matrices(ctx, override, 1, sh->order, Bmat)
+                             : prt__brdf_matrices(ctx, t->brdfs, t->brdf_count, sh->order, Bmat);
     for (int k = 3; k < PRT__KIND_COUNT && !st; ++k) {
-        prt__sh_set *s = &t->sets[k];
+        prt__sh_set *s = &sh->sets[k];
         if (!s->channels) continue;
         float *out = prt__calloc(nv * 3 * nn, sizeof(float));
         if (!out) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory baking the BRDF in"); break; }
@@ -217,10 +218,10 @@ prt_status prt__bake_brdf_in(prt_context *ctx, prt_transfer *t, const prt_brdf *
             const float *B = override ? Bmat[0] : (mat && mat <= t->brdf_count ? Bmat[mat - 1] : NULL);
             if (!B) continue;
             prt__frame_rot fr;
-            if (prt__frame_rot_create(t->order, t->mesh.normals + v * 3, &fr)) { __atomic_store_n(&failed, 1, __ATOMIC_RELAXED); continue; }
+            if (prt__frame_rot_create(sh->order, t->mesh.normals + v * 3, &fr)) { __atomic_store_n(&failed, 1, __ATOMIC_RELAXED); continue; }
             for (int c = 0; c < 3; ++c) {
                 const float *M = s->coeffs + v * s->channels * nn + (s->channels == 3 ? (size_t)c * nn : 0);
-                prt__apply_brdf(&fr, B, c, t->order, M, out + v * 3 * nn + (size_t)c * nn, n);
+                prt__apply_brdf(&fr, B, c, sh->order, M, out + v * 3 * nn + (size_t)c * nn, n);
             }
             prt__frame_rot_release(&fr);
         }
@@ -229,7 +230,7 @@ prt_status prt__bake_brdf_in(prt_context *ctx, prt_transfer *t, const prt_brdf *
         s->coeffs = out;
         s->channels = 3;
     }
-    if (!st) t->glossy_exit = true;
+    if (!st) sh->glossy_exit = true;
     for (int k = 0; k < PRT__MAX_BRDFS; ++k) free(Bmat[k]);
     return st;
 }

@@ -6,6 +6,7 @@
  * Every vertex depends only on its own rays and the previous pass, so results are identical for
  * any thread count. */
 #include "bake/bake_internal.h"
+#include "method/wavelet.h"
 #include "core/cubemap.h"
 #include "core/haar.h"
 #include "geom/raycast.h"
@@ -59,7 +60,6 @@ typedef struct wjob {
     const size_t *vec_start;
     int kmax;
     dir_table direct, gather;
-    prt__progress progress;
 } wjob;
 
 static const prt_brdf_factors *vertex_factors(const wjob *j, size_t v)
@@ -258,48 +258,150 @@ static void add_pass(const wjob *j, size_t v, const prt__sparse_store *a, const 
     encode_terms(out, j->vec_start[v], planes, K, false, w);
 }
 
-typedef enum { STEP_DIRECT, STEP_BOUNCE, STEP_SUM } step_kind;
+/* The bake as stages (method/method.h): the direct pass, then per bounce a gathering pass and
+ * a truncated running sum, each over blocks of vertices. */
+#define BLOCK 16
 
-static prt_status run_step(prt_context *ctx, wjob *j, step_kind kind, const char *stage, const prt__sparse_store *a,
-                           const prt__sparse_store *b, prt__sparse_store *out)
+typedef enum { ST_DIRECT, ST_BOUNCE, ST_SUM } stage_kind;
+
+typedef struct thread_scratch {
+    float *planes;
+    prt__sparse_scratch w;
+    gather_state gs;
+} thread_scratch;
+
+typedef struct wbake {
+    prt__bake_job base;
+    prt_wavelet_bake_desc d;
+    prt_transfer *t;
+    prt__wavelet_set *ws;
+    wjob j;
+    size_t vectors;
+    prt__sparse_store direct, prev, next, total, sum;
+    thread_scratch *scratch;
+    int nscratch;
+    stage_kind current;
+    int bounce;               /* the pass the current stage belongs to */
+    const prt__sparse_store *from, *a, *b;
+    prt__sparse_store *out;
+} wbake;
+
+static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
 {
-    const size_t nv = j->mesh->vertex_count;
-    int failed = 0;
-    prt__progress_begin(&j->progress, stage, nv);
-#pragma omp parallel num_threads(prt__threads(ctx))
-    {
-        float *planes = malloc((size_t)j->kmax * 3 * DIM * sizeof(float));
-        prt__sparse_scratch w = {0};
-        gather_state gs = {0};
-        bool ok = planes && prt__sparse_scratch_init(&w, DIM);
-        if (ok && kind == STEP_BOUNCE) {
-            gs.slot_of = malloc(nv * sizeof(int32_t));
-            if (gs.slot_of) memset(gs.slot_of, 0xff, nv * sizeof(int32_t));
-            else ok = false;
-        }
-        if (!ok) __atomic_store_n(&failed, 1, __ATOMIC_RELAXED);
-#pragma omp for schedule(dynamic, 16)
-        for (size_t v = 0; v < nv; ++v) {
-            if (!ok || __atomic_load_n(&failed, __ATOMIC_RELAXED) || prt__progress_cancelled(&j->progress)) continue;
-            if (kind == STEP_DIRECT) direct_vertex(j, v, planes, out, &w);
-            else if (kind == STEP_SUM) add_pass(j, v, a, b, planes, out, &w);
-            else if (!bounce_vertex(j, v, a, planes, &gs, out, &w)) __atomic_store_n(&failed, 1, __ATOMIC_RELAXED);
-            prt__progress_add(&j->progress, 1);
-        }
-        free(planes);
-        prt__sparse_scratch_free(&w);
-        free(gs.slot_of); free(gs.touched); free(gs.weights);
+    wbake *wb = (wbake *)base;
+    thread_scratch *sc = &wb->scratch[thread];
+    const size_t nv = wb->t->mesh.vertex_count;
+    for (size_t v = unit * BLOCK; v < nv && v < (unit + 1) * BLOCK; ++v) {
+        if (wb->current == ST_DIRECT) direct_vertex(&wb->j, v, sc->planes, wb->out, &sc->w);
+        else if (wb->current == ST_SUM) add_pass(&wb->j, v, wb->a, wb->b, sc->planes, wb->out, &sc->w);
+        else if (!bounce_vertex(&wb->j, v, wb->a, sc->planes, &sc->gs, wb->out, &sc->w))
+            return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory in the wavelet bake (bounce %d)", wb->bounce);
     }
-    prt__progress_end(&j->progress);
-    if (failed) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory in the wavelet bake (%s)", stage);
-    if (prt__progress_cancelled(&j->progress)) return prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     return PRT_OK;
 }
 
-prt_status prt_bake_wavelet(prt_context *ctx, const prt_scene *scene, const prt_wavelet_bake_desc *desc_in, prt_transfer **out)
+static prt_status scratch_init(wbake *wb, int threads)
 {
-    if (!ctx || !scene || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake_wavelet: ctx, scene and out are required");
-    *out = NULL;
+    const size_t nv = wb->t->mesh.vertex_count;
+    wb->scratch = prt__calloc((size_t)threads, sizeof *wb->scratch);
+    if (!wb->scratch) return prt__fail(wb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    wb->nscratch = threads;
+    for (int i = 0; i < threads; ++i) {
+        thread_scratch *sc = &wb->scratch[i];
+        sc->planes = malloc((size_t)wb->j.kmax * 3 * DIM * sizeof(float));
+        bool ok = sc->planes && prt__sparse_scratch_init(&sc->w, DIM);
+        if (ok && wb->d.bounces) {
+            sc->gs.slot_of = malloc(nv * sizeof(int32_t));
+            if (sc->gs.slot_of) memset(sc->gs.slot_of, 0xff, nv * sizeof(int32_t));
+            else ok = false;
+        }
+        if (!ok) return prt__fail(wb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    }
+    return PRT_OK;
+}
+
+static prt_status wavelet_stage(prt__bake_job *base, int index, prt__stage *out)
+{
+    wbake *wb = (wbake *)base;
+    const prt_wavelet_bake_desc *d = &wb->d;
+    prt_status st;
+    if (index == 0 && (st = scratch_init(wb, base->threads))) return st;
+    /* Finish the previous stage's bookkeeping. */
+    if (index > 0 && wb->current == ST_SUM) {
+        /* Running total, truncated after each pass (as the paper does); next becomes the source
+         * of the following pass. */
+        if (wb->bounce > 1) prt__sparse_free(&wb->total);
+        wb->total = wb->sum;
+        memset(&wb->sum, 0, sizeof wb->sum);
+        prt__sparse_store tmp = wb->prev;
+        wb->prev = wb->next;
+        wb->next = tmp;
+        wb->from = &wb->prev;
+    }
+    if (index > 0 && wb->current == ST_DIRECT) wb->from = &wb->direct;
+    if (index == 0) {
+        wb->current = ST_DIRECT;
+        wb->out = d->bounces ? &wb->direct : &wb->ws->store;
+        if ((st = prt__sparse_alloc(wb->out, wb->vectors, d->coefficients, d->bounces ? PASS_BITS : d->bits, DIM))) return st;
+        snprintf(out->name, sizeof out->name, "wavelet direct");
+    } else if (wb->current == ST_DIRECT || wb->current == ST_SUM) {
+        if (wb->bounce == d->bounces) return PRT_OK;   /* done */
+        wb->bounce++;
+        wb->current = ST_BOUNCE;
+        wb->a = wb->from;
+        wb->out = &wb->next;
+        if (!wb->next.index && (st = prt__sparse_alloc(&wb->next, wb->vectors, d->coefficients, PASS_BITS, DIM))) return st;
+        snprintf(out->name, sizeof out->name, "wavelet bounce %d/%d", wb->bounce, d->bounces);
+    } else {
+        const bool last = wb->bounce == d->bounces;
+        wb->current = ST_SUM;
+        wb->a = wb->bounce == 1 ? &wb->direct : &wb->total;
+        wb->b = &wb->next;
+        wb->out = &wb->sum;
+        if ((st = prt__sparse_alloc(&wb->sum, wb->vectors, d->coefficients, last ? d->bits : PASS_BITS, DIM))) return st;
+        snprintf(out->name, sizeof out->name, "wavelet sum");
+    }
+    out->units = (wb->t->mesh.vertex_count + BLOCK - 1) / BLOCK;
+    out->run = run_unit;
+    return PRT_OK;
+}
+
+static prt_status wavelet_finish(prt__bake_job *base, prt_transfer *t)
+{
+    (void)t;
+    wbake *wb = (wbake *)base;
+    if (wb->d.bounces) {
+        wb->ws->store = wb->total;
+        memset(&wb->total, 0, sizeof wb->total);
+    }
+    return PRT_OK;
+}
+
+static void wavelet_release(prt__bake_job *base)
+{
+    wbake *wb = (wbake *)base;
+    prt__raycaster_release(&wb->j.rc);
+    free(wb->j.origins);
+    free(wb->j.frames);
+    dir_table_free(&wb->j.direct);
+    dir_table_free(&wb->j.gather);
+    for (int i = 0; i < wb->nscratch; ++i) {
+        thread_scratch *sc = &wb->scratch[i];
+        free(sc->planes);
+        prt__sparse_scratch_free(&sc->w);
+        free(sc->gs.slot_of); free(sc->gs.touched); free(sc->gs.weights);
+    }
+    free(wb->scratch);
+    prt__sparse_free(&wb->direct);
+    prt__sparse_free(&wb->prev);
+    prt__sparse_free(&wb->next);
+    prt__sparse_free(&wb->total);
+    prt__sparse_free(&wb->sum);
+    free(wb);
+}
+
+prt_status prt__wavelet_bake_begin(prt_context *ctx, const prt_wavelet_bake_desc *desc_in, prt_transfer *t, prt__bake_job **out)
+{
     prt_wavelet_bake_desc d = desc_in ? *desc_in : (prt_wavelet_bake_desc){0};
     if (!d.terms) d.terms = 4;
     if (!d.coefficients) d.coefficients = 128;
@@ -313,25 +415,25 @@ prt_status prt_bake_wavelet(prt_context *ctx, const prt_scene *scene, const prt_
     if (d.supersample < 1 || d.supersample > 4) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "supersampling %d out of range 1..4", d.supersample);
     if (d.bounces < 0 || d.bounces > 8) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range 0..8", d.bounces);
     if (d.gather_resolution < 4 || d.gather_resolution > 64) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "gather resolution %d out of range 4..64", d.gather_resolution);
+    if (d.brdf_resolution < 4 || d.brdf_resolution > 96) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "BRDF resolution %d out of range 4..96", d.brdf_resolution);
+    if (d.param > PRT_BRDF_PARAM_POLAR) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown BRDF parameterization %d", (int)d.param);
     if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
     if (d.brdf) {
         prt_status bst = prt_brdf_validate(d.brdf);
         if (bst) return prt__fail(ctx, bst, "BRDF: %s", prt_last_error());
     }
-
-    double t_start = prt__now();
-    prt_transfer *t = prt__calloc(1, sizeof *t);
+    wbake *wb = prt__calloc(1, sizeof *wb);
     prt__wavelet_set *ws = prt__calloc(1, sizeof *ws);
-    if (!t || !ws) { free(t); free(ws); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
-    t->wavelet = ws;
-    prt_status st = prt__mesh_copy(&t->mesh, &scene->mesh);
-    if (st) { prt_transfer_release(t); return st; }
+    if (!wb || !ws) { free(wb); free(ws); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    wb->base.stage = wavelet_stage;
+    wb->base.finish = wavelet_finish;
+    wb->base.release = wavelet_release;
+    wb->base.ctx = ctx;
+    wb->d = d;
+    wb->t = t;
+    wb->ws = ws;
+    t->state = ws;   /* owned by t from here on */
     const size_t nv = t->mesh.vertex_count;
-    snprintf(t->source, sizeof t->source, "%s", scene->source);
-    t->has_env = scene->has_env;
-    t->env = scene->env;
-    t->brdf_count = scene->brdf_count;
-    memcpy(t->brdfs, scene->brdfs, sizeof t->brdfs);
     if (d.brdf) {   /* one BRDF everywhere: it becomes the only material, its kd the albedo */
         t->brdf_count = 1;
         t->brdfs[0] = *d.brdf;
@@ -342,20 +444,15 @@ prt_status prt_bake_wavelet(prt_context *ctx, const prt_scene *scene, const prt_
             memcpy(t->mesh.albedo + v * 3, kd, sizeof kd);
         }
     }
-    t->bounces = d.bounces;
-    t->threads = prt__threads(ctx);
     ws->terms = d.terms;
     ws->supersample = d.supersample;
     ws->bounces = d.bounces;
     ws->gather_resolution = d.gather_resolution;
     ws->brdf_resolution = d.brdf_resolution;
     ws->param = d.param;
-
-    wjob j = {0};
-    j.mesh = &t->mesh;
-    j.progress.fn = d.progress;
-    j.progress.user = d.progress_user;
-    prt__sparse_store direct = {0}, prev = {0}, next = {0}, total = {0};
+    wjob *j = &wb->j;
+    j->mesh = &t->mesh;
+    prt_status st = PRT_OK;
     /* Factor every material with a glossy part that some vertex uses. */
     bool used[PRT__MAX_BRDFS + 1] = {false};
     for (size_t v = 0; v < nv; ++v) used[t->mesh.material[v]] = true;
@@ -366,73 +463,43 @@ prt_status prt_bake_wavelet(prt_context *ctx, const prt_scene *scene, const prt_
     }
     ws->term_count = prt__calloc(nv, 1);
     ws->vec_start = prt__calloc(nv + 1, sizeof(size_t));
-    j.frames = prt__calloc(nv * 9, sizeof(float));
-    if (!st && (!ws->term_count || !ws->vec_start || !j.frames)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    if (st) goto done;
-    j.factors = ws->factors;
-    j.kmax = 1;
-    for (size_t v = 0; v < nv; ++v) {
-        uint8_t mat = t->mesh.material[v];
-        ws->term_count[v] = (uint8_t)(mat && ws->factors[mat - 1] ? d.terms : 1);
-        if (ws->term_count[v] > j.kmax) j.kmax = ws->term_count[v];
-        float *fr = j.frames + v * 9;
-        memcpy(fr + 6, t->mesh.normals + v * 3, 3 * sizeof(float));
-        prt_brdf_frame(fr + 6, fr, fr + 3);
-    }
-    ws->terms = j.kmax;   /* K-vectors are this long: 1 when every vertex is Lambertian */
-    size_t vectors = 0;
-    prt__wavelet_index(ws, nv, &vectors);
-    j.term_count = ws->term_count;
-    j.vec_start = ws->vec_start;
-    if (!dir_table_build(&j.direct, FACE, d.supersample) || (d.bounces && !dir_table_build(&j.gather, d.gather_resolution, 1))) {
-        st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        goto done;
-    }
-    if ((st = prt__raycaster_create(ctx, &t->mesh, &j.rc))) goto done;
-    if ((st = prt__vertex_origins(&t->mesh, d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh), &j.origins))) goto done;
-
-    if (!d.bounces) {
-        if ((st = prt__sparse_alloc(&ws->store, vectors, d.coefficients, d.bits, DIM))) goto done;
-        if ((st = run_step(ctx, &j, STEP_DIRECT, "wavelet direct", NULL, NULL, &ws->store))) goto done;
-    } else {
-        if ((st = prt__sparse_alloc(&direct, vectors, d.coefficients, PASS_BITS, DIM))) goto done;
-        if ((st = run_step(ctx, &j, STEP_DIRECT, "wavelet direct", NULL, NULL, &direct))) goto done;
-        if ((st = prt__sparse_alloc(&next, vectors, d.coefficients, PASS_BITS, DIM))) goto done;
-        const prt__sparse_store *from = &direct;
-        for (int b = 1; b <= d.bounces; ++b) {
-            char stage[32];
-            snprintf(stage, sizeof stage, "wavelet bounce %d/%d", b, d.bounces);
-            if ((st = run_step(ctx, &j, STEP_BOUNCE, stage, from, NULL, &next))) goto done;
-            /* Running total, truncated after each pass (as the paper does). */
-            const bool last = b == d.bounces;
-            prt__sparse_store sum = {0};
-            if ((st = prt__sparse_alloc(&sum, vectors, d.coefficients, last ? d.bits : PASS_BITS, DIM))) goto done;
-            st = run_step(ctx, &j, STEP_SUM, "wavelet sum", b == 1 ? &direct : &total, &next, &sum);
-            if (st) { prt__sparse_free(&sum); goto done; }
-            if (b > 1) prt__sparse_free(&total);
-            total = sum;
-            /* next becomes the source of the following pass. */
-            prt__sparse_store tmp = prev;
-            prev = next;
-            next = tmp;
-            if (!next.index && b < d.bounces && (st = prt__sparse_alloc(&next, vectors, d.coefficients, PASS_BITS, DIM))) goto done;
-            from = &prev;
+    j->frames = prt__calloc(nv * 9, sizeof(float));
+    if (!st && (!ws->term_count || !ws->vec_start || !j->frames)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!st) {
+        j->factors = ws->factors;
+        j->kmax = 1;
+        for (size_t v = 0; v < nv; ++v) {
+            uint8_t mat = t->mesh.material[v];
+            ws->term_count[v] = (uint8_t)(mat && ws->factors[mat - 1] ? d.terms : 1);
+            if (ws->term_count[v] > j->kmax) j->kmax = ws->term_count[v];
+            float *fr = j->frames + v * 9;
+            memcpy(fr + 6, t->mesh.normals + v * 3, 3 * sizeof(float));
+            prt_brdf_frame(fr + 6, fr, fr + 3);
         }
-        ws->store = total;
-        memset(&total, 0, sizeof total);
+        ws->terms = j->kmax;   /* K-vectors are this long: 1 when every vertex is Lambertian */
+        prt__wavelet_index(ws, nv, &wb->vectors);
+        j->term_count = ws->term_count;
+        j->vec_start = ws->vec_start;
+        if (!dir_table_build(&j->direct, FACE, d.supersample) || (d.bounces && !dir_table_build(&j->gather, d.gather_resolution, 1)))
+            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
-    t->bake_seconds = prt__now() - t_start;
+    if (!st) st = prt__raycaster_create(ctx, &t->mesh, &j->rc);
+    if (!st) st = prt__vertex_origins(&t->mesh, d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh), &j->origins);
+    if (st) { wavelet_release(&wb->base); return st; }
+    *out = &wb->base;
+    return PRT_OK;
+}
 
-done:
-    prt__raycaster_release(&j.rc);
-    free(j.origins);
-    free(j.frames);
-    dir_table_free(&j.direct);
-    dir_table_free(&j.gather);
-    prt__sparse_free(&direct);
-    prt__sparse_free(&prev);
-    prt__sparse_free(&next);
-    prt__sparse_free(&total);
+prt_status prt_bake_wavelet(prt_context *ctx, const prt_scene *scene, const prt_wavelet_bake_desc *desc, prt_transfer **out)
+{
+    if (!ctx || !scene || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake_wavelet: ctx, scene and out are required");
+    *out = NULL;
+    prt_transfer *t = NULL;
+    prt_status st = prt__transfer_from_scene(ctx, &prt__method_wavelet, scene, &t);
+    prt__bake_job *job = NULL;
+    if (!st) st = prt__wavelet_bake_begin(ctx, desc, t, &job);
+    prt_bake_run_desc run = {desc ? desc->progress : NULL, desc ? desc->progress_user : NULL};
+    if (!st) st = prt__bake_drive(ctx, job, &run, t);
     if (st) { prt_transfer_release(t); return st; }
     *out = t;
     return PRT_OK;

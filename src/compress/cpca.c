@@ -2,7 +2,7 @@
  * matrices are eigen-decomposed with LAPACKE; vertices are reassigned in parallel, each
  * independently, so results never depend on the thread count. */
 #include "core/progress.h"
-#include "core/transfer_set.h"
+#include "compress/cpca.h"
 
 #include <cblas.h>
 #include <lapacke.h>

@@ -51,6 +51,7 @@ void prt_envmap_release(prt_envmap *e)
     if (!e) return;
     prt_image_free(&e->img);
     free(e->cube_cache);
+    for (int i = 0; i <= PRT_SH_MAX_ORDER; ++i) free(e->sh_cache[i]);
     free(e);
 }
 
@@ -230,5 +231,21 @@ prt_status prt_envmap_project_sh(const prt_envmap *e, int order, prt_sh_light *o
                 for (int c = 0; c < 3; ++c) out->coeffs[c][l * (l + 1) + m] = (float)(out->coeffs[c][l * (l + 1) + m] * sinc);
             }
     }
+    return PRT_OK;
+}
+
+prt_status prt__envmap_project_sh_cached(const prt_envmap *e, int order, prt_sh_light *out)
+{
+    if (order < 1 || order > PRT_SH_MAX_ORDER)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "SH order %d out of range 1..%d", order, PRT_SH_MAX_ORDER);
+    prt_sh_light *cached = __atomic_load_n(&e->sh_cache[order], __ATOMIC_ACQUIRE);
+    if (cached) { *out = *cached; return PRT_OK; }
+    prt_status st = prt_envmap_project_sh(e, order, out);
+    if (st) return st;
+    prt_sh_light *c = malloc(sizeof *c), *expected = NULL;
+    if (!c) return PRT_OK;   /* no cache this time; the result stands */
+    *c = *out;
+    /* Concurrent first calls may both project; one copy wins and the other is dropped. */
+    if (!__atomic_compare_exchange_n(&((prt_envmap *)e)->sh_cache[order], &expected, c, false, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE)) free(c);
     return PRT_OK;
 }

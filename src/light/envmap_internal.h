@@ -10,7 +10,13 @@ struct prt_envmap {
     /* The map box-filtered into a 6 x 256 x 256 RGB cube, built on the first wavelet lighting
      * (light/wavelet_light.c) and published atomically: rotations resample it, not the map. */
     float *cube_cache;
+    /* The map's SH projection per order, built on first use and published atomically: every
+     * lighting change of an SH relight rotates it instead of projecting the map again. */
+    prt_sh_light *sh_cache[PRT_SH_MAX_ORDER + 1];
 };
+
+/* prt_envmap_project_sh through the map's cache (thread-safe). */
+prt_status prt__envmap_project_sh_cached(const prt_envmap *e, int order, prt_sh_light *out);
 
 /* Direction at continuous image coordinates (pixels, (0,0) = top-left corner) and the solid
  * angle per unit pixel area there; false outside the map (angular rim, empty cross cells). */

@@ -4,7 +4,7 @@
  * vector width. Each vertex is done with full 8-wide multiply-adds plus a scalar tail; the
  * kernels are instantiated per order so the compiler unrolls them completely. Vertices are split
  * statically across threads. */
-#include "core/transfer_set.h"
+#include "method/sh.h"
 
 #include <omp.h>
 #include <string.h>
@@ -83,8 +83,8 @@ static inline __attribute__((always_inline)) void relight3(const float *restrict
 /* Instantiates both kernels for a compile-time n. */
 #define DISPATCH(N)                                                               \
     case N:                                                                       \
-        if (ch == 1) relight1(coeffs, albedo, light, stride, N, v0, v1, out_rgb); \
-        else relight3(coeffs, light, stride, N, v0, v1, out_rgb);                 \
+        if (ch == 1) relight1(coeffs, albedo, (const float (*)[PRT_SH_MAX_COEFFS + 8])lt, stride, N, v0, v1, out_rgb); \
+        else relight3(coeffs, (const float (*)[PRT_SH_MAX_COEFFS + 8])lt, stride, N, v0, v1, out_rgb);                 \
         break;
 
 /* Compressed sets: project every cluster mean and PCA vector on the lighting once (a few
@@ -93,7 +93,8 @@ static prt_status relight_cpca(prt_context *ctx, const prt_transfer *t, const pr
                                int n, float *out)
 {
     const prt__cpca *c = set->cpca;
-    const int stride = t->order * t->order, ch = set->channels;
+    const prt__sh_state *sh = t->state;
+    const int stride = sh->order * sh->order, ch = set->channels;
     const size_t rows = (size_t)c->clusters + c->vectors_total;
     v4 *proj = malloc(rows * sizeof(v4));   /* [cluster means..., vectors...] x {r, g, b, 0} */
     if (!proj) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
@@ -134,26 +135,28 @@ static prt_status relight_cpca(prt_context *ctx, const prt_transfer *t, const pr
     return PRT_OK;
 }
 
-prt_status prt_relight_sh(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *sh, float *out_rgb)
+prt_status prt_relight_sh(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light, float *out_rgb)
 {
-    if (!t || !sh || !out_rgb) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_sh: transfer, light and output are required");
+    if (!t || !light || !out_rgb) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_sh: transfer, light and output are required");
+    const prt__sh_state *sh = prt__sh_need(ctx, t);
+    if (!sh) return PRT_ERR_INVALID_ARG;
     int k = prt__kind_index(kind);
-    if (k < 0 || !t->sets[k].channels)
+    if (k < 0 || !sh->sets[k].channels)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the transfer holds no %s set", prt_transfer_kind_name(kind));
     if (prt__kind_glossy(k))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s is view-dependent: relight it with prt_relight_sh_glossy", prt_transfer_kind_name(kind));
-    if (sh->order < 1 || sh->order > PRT_SH_MAX_ORDER)
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "lighting SH order %d out of range", sh->order);
-    const int stride = t->order * t->order;
-    const int order = sh->order < t->order ? sh->order : t->order;
-    const int n = order * order, ch = t->sets[k].channels;
-    const float *coeffs = t->sets[k].coeffs, *albedo = t->mesh.albedo;
+    if (light->order < 1 || light->order > PRT_SH_MAX_ORDER)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "lighting SH order %d out of range", light->order);
+    const int stride = sh->order * sh->order;
+    const int order = light->order < sh->order ? light->order : sh->order;
+    const int n = order * order, ch = sh->sets[k].channels;
+    const float *coeffs = sh->sets[k].coeffs, *albedo = t->mesh.albedo;
     const long nv = (long)t->mesh.vertex_count;
     /* Zero-padded so vector loads of the lighting may run past n. */
-    float light[3][PRT_SH_MAX_COEFFS + 8];
-    memset(light, 0, sizeof light);
-    for (int c = 0; c < 3; ++c) memcpy(light[c], sh->coeffs[c], (size_t)n * sizeof(float));
-    if (t->sets[k].cpca) return relight_cpca(ctx, t, &t->sets[k], light, n, out_rgb);
+    float lt[3][PRT_SH_MAX_COEFFS + 8];
+    memset(lt, 0, sizeof lt);
+    for (int c = 0; c < 3; ++c) memcpy(lt[c], light->coeffs[c], (size_t)n * sizeof(float));
+    if (sh->sets[k].cpca) return relight_cpca(ctx, t, &sh->sets[k], lt, n, out_rgb);
     const int threads = prt__threads(ctx);
     /* Below a few thousand vertices a thread team costs more than it saves. */
     const int team = nv < 4096 ? 1 : threads;

@@ -5,7 +5,7 @@
  * are relit as Sloan et al. 2003 do: the cluster means and PCA vectors meet the lighting once,
  * then each vertex sums a few n-vectors. The view factor - evaluating e at a direction - is the
  * renderer's, per pixel (prt_glossy_eval on the CPU). */
-#include "core/transfer_set.h"
+#include "method/sh.h"
 
 #include <string.h>
 
@@ -50,7 +50,7 @@ static void apply_light(const float *X, int channels, int n, int nl, const prt_s
 }
 
 /* Per-vertex lobe factors (3 x order) or NULL for vertices without a glossy lobe. */
-static prt_status lobe_factors(const prt_transfer *t, const prt_brdf *brdf, float (*table)[3 * PRT_SH_MAX_ORDER], bool *has)
+static prt_status lobe_factors(const prt_transfer *t, int order, const prt_brdf *brdf, float (*table)[3 * PRT_SH_MAX_ORDER], bool *has)
 {
     const int count = brdf ? 1 : t->brdf_count;
     for (int k = 0; k < count; ++k) {
@@ -58,10 +58,10 @@ static prt_status lobe_factors(const prt_transfer *t, const prt_brdf *brdf, floa
         has[k] = prt_brdf_is_glossy(b);
         if (!has[k]) continue;
         double a[PRT_SH_MAX_ORDER];
-        prt_status st = prt_brdf_lobe_bands(b, t->order, a);
+        prt_status st = prt_brdf_lobe_bands(b, order, a);
         if (st) return st;
         for (int c = 0; c < 3; ++c)
-            for (int l = 0; l < t->order; ++l) table[k][c * PRT_SH_MAX_ORDER + l] = (float)(b->specular[c] * a[l]);
+            for (int l = 0; l < order; ++l) table[k][c * PRT_SH_MAX_ORDER + l] = (float)(b->specular[c] * a[l]);
     }
     return PRT_OK;
 }
@@ -70,26 +70,28 @@ prt_status prt_relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_tr
                                  const prt_brdf *brdf, float *out_exit)
 {
     if (!t || !light || !out_exit) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_sh_glossy: transfer, light and output are required");
+    const prt__sh_state *sh = prt__sh_need(ctx, t);
+    if (!sh) return PRT_ERR_INVALID_ARG;
     int k = prt__kind_index(kind);
     if (k < 0 || !prt__kind_glossy(k)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s is not a glossy kind", prt_transfer_kind_name(kind));
-    const prt__sh_set *s = &t->sets[k];
+    const prt__sh_set *s = &sh->sets[k];
     if (!s->channels) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the transfer holds no %s set (bake it with --kinds %s)",
                                        prt_transfer_kind_name(kind), prt_transfer_kind_name(kind));
     if (light->order < 1 || light->order > PRT_SH_MAX_ORDER) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "light order %d out of range", light->order);
-    if (t->glossy_exit && brdf)
+    if (sh->glossy_exit && brdf)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this transfer has its BRDF baked in; a run-time BRDF cannot replace it (re-bake without --brdf)");
     float table[PRT__MAX_BRDFS][3 * PRT_SH_MAX_ORDER];   /* 30 KB; shared by the worker threads */
     bool has[PRT__MAX_BRDFS] = {false};
-    if (!t->glossy_exit) {
+    if (!sh->glossy_exit) {
         if (brdf && prt_brdf_validate(brdf)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "BRDF: %s", prt_last_error());
-        prt_status st = lobe_factors(t, brdf, table, has);
+        prt_status st = lobe_factors(t, sh->order, brdf, table, has);
         if (st) return prt__fail(ctx, st, "%s", prt_last_error());
         bool any = false;
         for (int i = 0; i < (brdf ? 1 : t->brdf_count); ++i) any |= has[i];
         if (!any) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "no glossy material to convolve with: name a BRDF (--brdf phong:N) or give the scene glossy materials");
     }
-    const int n = t->order * t->order, nl = light->order < t->order ? light->order * light->order : n;
-    const size_t nv = t->mesh.vertex_count, dim = prt__set_dim(t, k);
+    const int n = sh->order * sh->order, nl = light->order < sh->order ? light->order * light->order : n;
+    const size_t nv = t->mesh.vertex_count, dim = prt__set_dim(sh, k);
     const prt__cpca *cp = s->cpca;
     /* Compressed: every mean and PCA vector meets the lighting once. */
     float *proj_mean = NULL, *proj_basis = NULL;
@@ -107,7 +109,7 @@ prt_status prt_relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_tr
     for (size_t v = 0; v < nv; ++v) {
         float *e = out_exit + v * 3 * n;
         int mat = brdf ? 1 : (t->mesh.material ? t->mesh.material[v] : 0);
-        if (!t->glossy_exit && (!mat || !has[mat - 1])) { memset(e, 0, (size_t)3 * n * sizeof(float)); continue; }
+        if (!sh->glossy_exit && (!mat || !has[mat - 1])) { memset(e, 0, (size_t)3 * n * sizeof(float)); continue; }
         if (cp) {
             const uint32_t cl = cp->cluster_of[v], cnt = cp->counts[cl];
             const float *restrict mean = proj_mean + (size_t)cl * 3 * n, *restrict B = proj_basis + cp->basis_start[cl] * 3 * n;
@@ -131,10 +133,10 @@ prt_status prt_relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_tr
         } else {
             apply_light(s->coeffs + v * dim, s->channels, n, nl, light, e);
         }
-        if (!t->glossy_exit) {
+        if (!sh->glossy_exit) {
             const float *f = table[mat - 1];
             for (int c = 0; c < 3; ++c)
-                for (int l = 0; l < t->order; ++l)
+                for (int l = 0; l < sh->order; ++l)
                     for (int m = -l; m <= l; ++m) e[c * n + l * (l + 1) + m] *= f[c * PRT_SH_MAX_ORDER + l];
         }
     }

@@ -1,7 +1,7 @@
 /* Wavelet relighting: the light-dependent K-vector g_k = T_k . L per lighting change (sparse
  * transport against the dense, truncated light), and the view factor sum_k h_k(wo) g_k per view
  * change. */
-#include "core/transfer_set.h"
+#include "method/wavelet.h"
 
 #include <string.h>
 
@@ -100,9 +100,9 @@ SCALAR_DOT(dot_16, int16_t)
 
 prt_status prt_relight_wavelet(prt_context *ctx, const prt_transfer *t, const prt_wavelet_light *light, float *out_kvec)
 {
-    if (t && !t->wavelet) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this .prt holds no wavelet transfer (bake with --method wavelet)");
+    if (t && !prt__wavelet(t)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this .prt holds no wavelet transfer (bake with --method wavelet)");
     if (!t || !light || !out_kvec) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_wavelet: transfer, light and output are required");
-    const prt__wavelet_set *w = t->wavelet;
+    const prt__wavelet_set *w = prt__wavelet(t);
     const size_t nv = t->mesh.vertex_count;
     const int K = w->terms, n = w->store.n;
     const float *L = prt_wavelet_light_coeffs(light);
@@ -125,7 +125,7 @@ prt_status prt_relight_wavelet(prt_context *ctx, const prt_transfer *t, const pr
 prt_status prt_wavelet_shade(prt_context *ctx, const prt_transfer *t, const float *kvec, const float eye[3], float *out_rgb)
 {
     if (!t || !kvec || !out_rgb) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_wavelet_shade: transfer, K-vectors and output are required");
-    const prt__wavelet_set *w = t->wavelet;
+    const prt__wavelet_set *w = prt__wavelet(t);
     if (!w) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this .prt holds no wavelet transfer (bake with --method wavelet)");
     const prt__mesh *m = &t->mesh;
     const size_t nv = m->vertex_count;

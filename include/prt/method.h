@@ -1,0 +1,192 @@
+/* prt/method.h - the method table: every PRT technique prt implements, behind one interface.
+ *
+ * A method is one entry of one table (docs/ARCHITECTURE.md). It declares its name, its bake
+ * options (the command line's parser and --help both come from the declarations), the lighting
+ * it relights (PRT_LIGHTS_* of prt/lighting.h), and the run-time controls a viewer can bind to
+ * keys. Through it a program bakes a scene, describes a .prt file, and relights it under a
+ * prt_lighting into a prt_relit - what the renderer draws - without naming the method:
+ *
+ *     const prt_method *m = prt_method_find("sh");
+ *     prt_options *o; prt_options_create(m, &o); prt_options_set(o, "order", "6");
+ *     prt_transfer *t; prt_bake(ctx, scene, m, o, &bake_desc, &t);
+ *     prt_relit r; prt_relight(ctx, t, lighting, NULL, &r);
+ *     prt_render_mesh mesh; prt_relit_render_mesh(t, &r, &mesh); prt_render(renderer, &mesh, ...);
+ *
+ * Method entries are static: the pointers stay valid for the life of the process. */
+#ifndef PRT_METHOD_H
+#define PRT_METHOD_H
+
+#include "prt/base.h"
+#include "prt/brdf.h"
+#include "prt/lighting.h"
+#include "prt/render.h"
+#include "prt/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct prt_method prt_method;
+typedef struct prt_transfer prt_transfer;
+
+int prt_method_count(void);
+const prt_method *prt_method_at(int index);                /* NULL out of range */
+const prt_method *prt_method_find(const char *name);       /* NULL when no method has that name */
+const prt_method *prt_method_default(void);                /* the first entry: "sh" */
+const char *prt_method_name(const prt_method *m);          /* "sh", "wavelet", ... */
+const char *prt_method_title(const prt_method *m);         /* "spherical-harmonic PRT" */
+const char *prt_method_summary(const prt_method *m);       /* one line for --help texts */
+/* PRT_LIGHTS_* bits of the lighting the method relights. */
+unsigned prt_method_lighting(const prt_method *m);
+/* Checks that m relights everything `what` (PRT_LIGHTS_* bits) holds. On failure the error names
+ * what is missing and the methods of the table that relight it, or says that none does. */
+prt_status prt_method_check_lighting(const prt_method *m, unsigned what);
+/* Names of the methods relighting every bit of `what`, comma separated, into buf ("" if none). */
+void prt_methods_relighting(unsigned what, char *buf, size_t size);
+
+/* ---- Bake options, declared once per method ---- */
+typedef enum prt_option_type {
+    PRT_OPTION_FLAG = 1,   /* no value */
+    PRT_OPTION_INT,        /* min..max */
+    PRT_OPTION_FLOAT,      /* min..max */
+    PRT_OPTION_CHOICE,     /* one of `choices` ("cpca|pca|vq") */
+    PRT_OPTION_LIST,       /* comma list of `choices` items */
+    PRT_OPTION_TEXT        /* free text: a file name, a BRDF spec, ... */
+} prt_option_type;
+
+typedef struct prt_option_desc {
+    const char *name;      /* the long option without dashes: "order" */
+    const char *arg;       /* placeholder in help texts ("N", "SPEC"); NULL for flags */
+    prt_option_type type;
+    double min, max;       /* INT and FLOAT ranges, inclusive */
+    const char *choices;   /* CHOICE and LIST: items separated by '|' */
+    const char *help;      /* what it does and its default; lines separated by '\n' */
+} prt_option_desc;
+
+/* The method's bake options: *out points at count entries. */
+int prt_method_options(const prt_method *m, const prt_option_desc **out);
+/* The option of m called name, or NULL. */
+const prt_option_desc *prt_method_option(const prt_method *m, const char *name);
+
+/* A set of option values for one method, as a user gave them. */
+typedef struct prt_options prt_options;
+prt_status prt_options_create(const prt_method *m, prt_options **out);
+void prt_options_release(prt_options *o);
+/* Checks value against the declaration and stores it (a later value replaces an earlier one).
+ * value is NULL for flags. Errors name the option: "--order must be an integer in 1..10". An
+ * option m does not declare is an error that names the methods declaring it. */
+prt_status prt_options_set(prt_options *o, const char *name, const char *value);
+/* The value given for name, NULL when not given ("" for a given flag). */
+const char *prt_options_get(const prt_options *o, const char *name);
+const prt_method *prt_options_method(const prt_options *o);
+
+/* ---- Baking ---- */
+typedef struct prt_bake_run_desc {
+    prt_progress_fn progress;   /* stage names and done/total units; return non-zero to cancel */
+    void *progress_user;
+} prt_bake_run_desc;
+
+/* Bakes scene with method m (o may be NULL for its defaults). The method runs as stages of
+ * independent work units; results do not depend on the thread count. */
+prt_status prt_bake(prt_context *ctx, const prt_scene *scene, const prt_method *m, const prt_options *o,
+                    const prt_bake_run_desc *run, prt_transfer **out);
+
+/* ---- What a file holds ---- */
+const prt_method *prt_transfer_method(const prt_transfer *t);
+/* A description of t: human-readable lines ("label:  value") or, with json != 0, a JSON object
+ * (method-independent fields - file, method, vertices, triangles, transfer_bytes,
+ * bytes_per_vertex, bake_seconds, bake_threads, source, materials, lights - plus the method's
+ * own). The string is malloc'd: free() it. `name` is shown as the file name. */
+prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int json, char **out);
+
+/* Text lines the method shows once after a bake (for example the separable BRDF fit error per
+ * number of terms); *out is malloc'd (free it) and "" when there is nothing to say. */
+prt_status prt_transfer_bake_report(const prt_transfer *t, char **out);
+
+/* Variants: what a file can be relit as (for SH: its transfer kinds; one for single-variant
+ * methods). Index 0..count-1. */
+int prt_transfer_variant_count(const prt_transfer *t);
+const char *prt_transfer_variant_name(const prt_transfer *t, int index);
+/* The variant a command uses when none is asked for: the richest view-independent one
+ * (drawing = 0) or the richest to draw (drawing != 0: glossy where present). */
+int prt_transfer_default_variant(const prt_transfer *t, int drawing);
+/* Index of the variant called name (a method may accept abbreviations), or -1 after recording an
+ * error that lists the file's variants. */
+int prt_transfer_find_variant(const prt_transfer *t, const char *name);
+
+/* Run-time controls the method offers (a viewer binds them to keys; scripts name them). */
+typedef struct prt_control_desc {
+    const char *name;      /* "order", "light-coefficients" */
+    const char *help;
+    int key_down, key_up;  /* suggested keys (GLFW codes: upper-case ASCII, '[', ']') */
+    int multiplicative;    /* non-zero: keys halve and double the value; else -1 and +1 */
+} prt_control_desc;
+#define PRT_MAX_CONTROLS 8
+int prt_transfer_controls(const prt_transfer *t, const prt_control_desc **out);
+/* Range and default of control i for this file. */
+void prt_transfer_control_range(const prt_transfer *t, int index, int *lo, int *hi, int *def);
+
+/* ---- Relighting ---- */
+enum { PRT_COMPONENT_ALL = 0, PRT_COMPONENT_DIRECT, PRT_COMPONENT_INDIRECT };
+
+typedef struct prt_relight_desc {
+    int variant;            /* 0..count-1; -1 = prt_transfer_default_variant(t, 1) */
+    int component;          /* PRT_COMPONENT_*: all light, only direct, only the bounced part */
+    int per_vertex;         /* no per-texel maps: shade from the vertex sets */
+    int with_indirect;      /* also fill prt_relit.indirect when the method can separate it */
+    /* Values of the method's controls (prt_transfer_controls); NULL = their defaults. */
+    const int *controls;
+    /* A BRDF for view-dependent evaluation where the method lets the renderer choose it (SH sets
+     * holding incident radiance); NULL = each vertex's material. Other methods refuse it. */
+    const prt_brdf *brdf;
+} prt_relight_desc;
+
+/* What relighting produced: everything the renderer draws. Arrays are owned by the result
+ * (prt_relit_free) except view_maps/view_set, which are borrowed from the transfer. */
+typedef struct prt_relit {
+    size_t vertex_count;
+    float *radiance;          /* 3 per vertex, linear: the view-independent part */
+    float *indirect;          /* 3 per vertex: light that bounced at least once; NULL when not asked or not separable */
+    /* View-dependent part as SH exit vectors (3 x exit_order^2 per vertex), evaluated at the view
+     * direction or at its mirror (exit_mirror). */
+    float *exit_sh;
+    int exit_order, exit_mirror;
+    /* Per-texel radiance over the mesh's UVs (width x height RGB, row 0 at v near 0), drawn in
+     * place of `radiance`. */
+    float *texels;
+    int texel_width, texel_height;
+    /* View-dependent part as separable view factors: per vertex kvec_terms RGB light-dependent
+     * terms and the view maps of its material (see prt_render_mesh). */
+    float *kvec;
+    int kvec_terms;
+    const uint8_t *view_set;
+    const float *view_maps;
+    int view_map_sets, view_map_resolution, view_map_polar;
+} prt_relit;
+
+/* Relights t under lighting. The method refuses lighting it cannot relight (the error names the
+ * methods that can). desc NULL = defaults. */
+prt_status prt_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *lighting, const prt_relight_desc *desc,
+                       prt_relit *out);
+void prt_relit_free(prt_relit *r);
+/* The mesh of t with what r holds, for prt_render or a prt_window (borrowed pointers). */
+void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render_mesh *out);
+/* Exit radiance per vertex towards the world position eye (3 floats per vertex): the
+ * view-independent part plus the view-dependent part evaluated on the CPU, as the renderer does
+ * per pixel. eye may be NULL when r has no view-dependent part. Per-texel maps are not used. */
+prt_status prt_relit_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *out_rgb);
+/* 1 when r's radiance depends on the view. */
+int prt_relit_view_dependent(const prt_relit *r);
+
+/* The lighting the baked scene named (environment, lights, emissive surfaces), loaded: what
+ * commands relight with when the user gives no lighting. */
+prt_status prt_transfer_lighting(prt_context *ctx, const prt_transfer *t, prt_lighting **out);
+/* The scene's local lights and emission, as baked. */
+int prt_transfer_light_count(const prt_transfer *t);
+const prt_light *prt_transfer_light(const prt_transfer *t, int index);
+const float *prt_transfer_emission(const prt_transfer *t);   /* 3 per vertex; NULL when nothing emits */
+
+#ifdef __cplusplus
+}
+#endif
+#endif

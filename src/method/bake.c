@@ -1,0 +1,64 @@
+/* The bake driver shared by every method: stages of independent work units on all threads, with
+ * progress, cancellation and timing written once (see prt__bake_job in method/method.h). */
+#include "method/method.h"
+
+#include <omp.h>
+
+prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt_transfer *t)
+{
+    const double start = prt__now();
+    prt__progress prog = {run ? run->progress : NULL, run ? run->progress_user : NULL, NULL, 0, 0, 0.0, 0};
+    job->ctx = ctx;
+    job->threads = prt__threads(ctx);
+    prt_status st = PRT_OK;
+    for (int index = 0; !st; ++index) {
+        prt__stage s;
+        memset(&s, 0, sizeof s);
+        if ((st = job->stage(job, index, &s))) break;
+        if (!s.units && !s.whole) break;
+        prt__progress_begin(&prog, s.name, s.whole ? 1 : s.units);
+        if (s.whole) {
+            st = s.whole(job, ctx, &prog);
+        } else {
+            int failed = 0;
+            prt_status first = PRT_OK;
+            /* Units are claimed in order by whichever thread is free; each writes only its own
+             * outputs, so the result is the same for any thread count and schedule. */
+#pragma omp parallel for schedule(dynamic, 1) num_threads(job->threads)
+            for (uint64_t u = 0; u < s.units; ++u) {
+                if (__atomic_load_n(&failed, __ATOMIC_RELAXED) || prt__progress_cancelled(&prog)) continue;
+                prt_status r = s.run(job, u, omp_get_thread_num());
+                if (r && !__atomic_exchange_n(&failed, 1, __ATOMIC_RELAXED)) first = r;
+                prt__progress_add(&prog, 1);
+            }
+            st = first;
+        }
+        if (!st) prt__progress_end(&prog);
+        if (!st && prt__progress_cancelled(&prog)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    }
+    if (!st) st = job->finish(job, t);
+    job->release(job);
+    if (!st) {
+        t->bake_seconds = prt__now() - start;
+        t->threads = prt__threads(ctx);
+    }
+    return st;
+}
+
+prt_status prt_bake(prt_context *ctx, const prt_scene *scene, const prt_method *m, const prt_options *o, const prt_bake_run_desc *run,
+                    prt_transfer **out)
+{
+    if (!ctx || !scene || !m || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake: context, scene, method and out are required");
+    *out = NULL;
+    if (o && prt_options_method(o) != m)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake: options made for method %s, not %s", prt_method_name(prt_options_method(o)), m->name);
+    prt_transfer *t = NULL;
+    prt_status st = prt__transfer_from_scene(ctx, m, scene, &t);
+    if (st) return st;
+    prt__bake_job *job = NULL;
+    st = m->bake_begin(ctx, scene, o, t, &job);
+    if (!st) st = prt__bake_drive(ctx, job, run, t);
+    if (st) { prt_transfer_release(t); return st; }
+    *out = t;
+    return PRT_OK;
+}

@@ -1,0 +1,233 @@
+/* prt_transfer: the method-independent parts (mesh, materials, lighting, bookkeeping) and the
+ * dispatch of variants, controls and relighting to the method's table entry. */
+#include "method/method.h"
+
+prt_status prt__mesh_copy(prt__mesh *dst, const prt__mesh *src)
+{
+    prt_status st = prt__mesh_append(dst, src->positions, src->normals, src->albedo, (float[3]){0, 0, 0}, src->vertex_count,
+                                     src->indices, src->triangle_count);
+    if (!st && src->material) memcpy(dst->material, src->material, src->vertex_count);
+    if (!st && src->uv) memcpy(dst->uv, src->uv, src->vertex_count * 2 * sizeof(float));
+    if (!st && src->emission) {
+        dst->emission = malloc(src->vertex_count * 3 * sizeof(float));
+        if (!dst->emission) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+        memcpy(dst->emission, src->emission, src->vertex_count * 3 * sizeof(float));
+    }
+    return st;
+}
+
+static prt_status copy_lights(prt_transfer *t, const prt_light *lights, int count)
+{
+    if (!count) return PRT_OK;
+    t->lights = malloc((size_t)count * sizeof *lights);
+    if (!t->lights) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(t->lights, lights, (size_t)count * sizeof *lights);
+    t->light_count = count;
+    return PRT_OK;
+}
+
+prt_status prt__transfer_from_scene(prt_context *ctx, const prt__method *m, const prt_scene *scene, prt_transfer **out)
+{
+    prt_transfer *t = prt__calloc(1, sizeof *t);
+    if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    t->method = m;
+    prt_status st = prt__mesh_copy(&t->mesh, &scene->mesh);
+    if (!st) st = copy_lights(t, scene->lights, scene->light_count);
+    if (st) { prt_transfer_release(t); return prt__fail(ctx, st, "%s", prt_last_error()); }
+    t->brdf_count = scene->brdf_count;
+    memcpy(t->brdfs, scene->brdfs, sizeof t->brdfs);
+    t->has_env = scene->has_env;
+    t->env = scene->env;
+    snprintf(t->source, sizeof t->source, "%s", scene->source);
+    *out = t;
+    return PRT_OK;
+}
+
+prt_status prt__transfer_copy_frame(prt_context *ctx, const prt_transfer *src, prt_transfer **out)
+{
+    prt_transfer *t = prt__calloc(1, sizeof *t);
+    if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    *t = *src;
+    memset(&t->mesh, 0, sizeof t->mesh);
+    t->lights = NULL;
+    t->light_count = 0;
+    t->state = NULL;
+    prt_status st = prt__mesh_copy(&t->mesh, &src->mesh);
+    if (!st) st = copy_lights(t, src->lights, src->light_count);
+    if (st) { prt_transfer_release(t); return prt__fail(ctx, st, "%s", prt_last_error()); }
+    *out = t;
+    return PRT_OK;
+}
+
+void prt_transfer_release(prt_transfer *t)
+{
+    if (!t) return;
+    if (t->state && t->method) t->method->free_state(t->state);
+    prt__mesh_free(&t->mesh);
+    free(t->lights);
+    free(t);
+}
+
+const prt_method *prt_transfer_method(const prt_transfer *t) { return t ? t->method : NULL; }
+size_t prt_transfer_vertex_count(const prt_transfer *t) { return t->mesh.vertex_count; }
+size_t prt_transfer_triangle_count(const prt_transfer *t) { return t->mesh.triangle_count; }
+const float *prt_transfer_positions(const prt_transfer *t) { return t->mesh.positions; }
+const float *prt_transfer_normals(const prt_transfer *t) { return t->mesh.normals; }
+const float *prt_transfer_albedo(const prt_transfer *t) { return t->mesh.albedo; }
+const uint32_t *prt_transfer_indices(const prt_transfer *t) { return t->mesh.indices; }
+const float *prt_transfer_uvs(const prt_transfer *t) { return prt__mesh_has_uv(&t->mesh) ? t->mesh.uv : NULL; }
+int prt_transfer_brdf_count(const prt_transfer *t) { return t->brdf_count; }
+const prt_brdf *prt_transfer_brdf(const prt_transfer *t, int k) { return k >= 1 && k <= t->brdf_count ? &t->brdfs[k - 1] : NULL; }
+const uint8_t *prt_transfer_materials(const prt_transfer *t) { return t->mesh.material; }
+const float *prt_transfer_emission(const prt_transfer *t) { return t->mesh.emission; }
+int prt_transfer_light_count(const prt_transfer *t) { return t->light_count; }
+const prt_light *prt_transfer_light(const prt_transfer *t, int i) { return i >= 0 && i < t->light_count ? &t->lights[i] : NULL; }
+
+int prt_transfer_environment(const prt_transfer *t, prt_environment_desc *out)
+{
+    if (t->has_env) *out = t->env;
+    return t->has_env;
+}
+
+prt_status prt_transfer_lighting(prt_context *ctx, const prt_transfer *t, prt_lighting **out)
+{
+    if (!t || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_lighting: transfer and out are required");
+    prt_lighting *l = NULL;
+    prt_status st = prt_lighting_create(&l);
+    /* A scene that names no environment is lit by the procedural sky, unless it brings lights of
+     * its own (a room lit by its lamps). */
+    prt_environment_desc env = {0};
+    if (t->has_env) env = t->env;
+    else env.none = t->light_count > 0 || t->mesh.emission != NULL;
+    if (!st) st = prt_lighting_set_environment(l, &env);
+    for (int i = 0; i < t->light_count && !st; ++i) st = prt_lighting_add(l, &t->lights[i], NULL);
+    if (st) { prt_lighting_release(l); return prt__fail(ctx, st, "%s", prt_last_error()); }
+    *out = l;
+    return PRT_OK;
+}
+
+/* ---- variants and controls ---- */
+int prt_transfer_variant_count(const prt_transfer *t) { return t->method->variant_count(t); }
+
+const char *prt_transfer_variant_name(const prt_transfer *t, int i)
+{
+    return i >= 0 && i < t->method->variant_count(t) ? t->method->variant_name(t, i) : "";
+}
+
+int prt_transfer_default_variant(const prt_transfer *t, int drawing) { return t->method->default_variant(t, drawing); }
+
+int prt_transfer_find_variant(const prt_transfer *t, const char *name)
+{
+    const int n = t->method->variant_count(t);
+    int found = t->method->find_variant ? t->method->find_variant(t, name) : -1;
+    for (int i = 0; i < n && found < 0; ++i)
+        if (!strcmp(t->method->variant_name(t, i), name)) found = i;
+    if (found >= 0) return found;
+    char list[512] = "";
+    size_t at = 0;
+    for (int i = 0; i < n && at < sizeof list; ++i) at += (size_t)snprintf(list + at, sizeof list - at, "%s%s", i ? ", " : "", t->method->variant_name(t, i));
+    prt__fail(NULL, PRT_ERR_INVALID_ARG, "this %s file holds no '%s' (it holds %s)", t->method->name, name, list);
+    return -1;
+}
+
+int prt_transfer_controls(const prt_transfer *t, const prt_control_desc **out)
+{
+    if (out) *out = t->method->controls;
+    return t->method->control_count;
+}
+
+void prt_transfer_control_range(const prt_transfer *t, int i, int *lo, int *hi, int *def)
+{
+    int a = 0, b = 0, c = 0;
+    if (i >= 0 && i < t->method->control_count) t->method->control_range(t, i, &a, &b, &c);
+    if (lo) *lo = a;
+    if (hi) *hi = b;
+    if (def) *def = c;
+}
+
+/* ---- relighting ---- */
+prt_status prt__relit_alloc(prt_context *ctx, const prt_transfer *t, prt_relit *r, bool indirect)
+{
+    const size_t nv = t->mesh.vertex_count;
+    r->vertex_count = nv;
+    r->radiance = prt__calloc(nv * 3, sizeof(float));
+    if (indirect) r->indirect = prt__calloc(nv * 3, sizeof(float));
+    if (!r->radiance || (indirect && !r->indirect)) { prt_relit_free(r); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    return PRT_OK;
+}
+
+void prt_relit_free(prt_relit *r)
+{
+    if (!r) return;
+    free(r->radiance);
+    free(r->indirect);
+    free(r->exit_sh);
+    free(r->texels);
+    free(r->kvec);
+    memset(r, 0, sizeof *r);
+}
+
+prt_status prt_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *desc, prt_relit *out)
+{
+    if (!t || !l || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight: transfer, lighting and out are required");
+    memset(out, 0, sizeof *out);
+    prt_relight_desc d = desc ? *desc : (prt_relight_desc){.variant = -1};
+    if (!desc) d.variant = -1;
+    if (d.variant < 0) d.variant = t->method->default_variant(t, 1);
+    if (d.variant >= t->method->variant_count(t))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "variant %d out of range (the file has %d)", d.variant, t->method->variant_count(t));
+    if (d.component < PRT_COMPONENT_ALL || d.component > PRT_COMPONENT_INDIRECT) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown light component %d", d.component);
+    unsigned what = prt_lighting_content(l) & ~(unsigned)PRT_LIGHTS_EMISSIVE;
+    if (t->mesh.emission && prt_lighting_emission(l) > 0) what |= PRT_LIGHTS_EMISSIVE;
+    prt_status st = prt_method_check_lighting(t->method, what);
+    if (st) return prt__fail(ctx, st, "%s", prt_last_error());
+    st = t->method->relight(ctx, t, l, &d, out);
+    if (st) prt_relit_free(out);
+    return st;
+}
+
+int prt_relit_view_dependent(const prt_relit *r) { return r && (r->exit_sh || r->kvec); }
+
+void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render_mesh *m)
+{
+    memset(m, 0, sizeof *m);
+    m->positions = t->mesh.positions;
+    m->normals = t->mesh.normals;
+    m->indices = t->mesh.indices;
+    m->vertex_count = t->mesh.vertex_count;
+    m->triangle_count = t->mesh.triangle_count;
+    m->uv = prt__mesh_has_uv(&t->mesh) ? t->mesh.uv : NULL;
+    m->radiance = r->radiance;
+    m->exit_sh = r->exit_sh;
+    m->exit_order = r->exit_sh ? r->exit_order : 0;
+    m->exit_mirror = r->exit_mirror;
+    m->texel_radiance = r->texels;
+    m->texel_width = r->texel_width;
+    m->texel_height = r->texel_height;
+    m->kvec = r->kvec;
+    m->kvec_terms = r->kvec ? r->kvec_terms : 0;
+    m->view_set = r->view_set;
+    m->view_maps = r->view_maps;
+    m->view_map_sets = r->view_map_sets;
+    m->view_map_resolution = r->view_map_resolution;
+    m->view_map_polar = r->view_map_polar;
+}
+
+prt_status prt_relit_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb)
+{
+    if (!t || !r || !rgb || r->vertex_count != t->mesh.vertex_count) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relit_shade: a result of this transfer is required");
+    if (prt_relit_view_dependent(r) && !eye) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this result is view-dependent: an eye position is required");
+    const size_t nv = t->mesh.vertex_count;
+    memcpy(rgb, r->radiance, nv * 3 * sizeof(float));
+    if (r->exit_sh) {
+        const size_t stride = 3 * (size_t)r->exit_order * r->exit_order;
+        const float *P = t->mesh.positions, *N = t->mesh.normals;
+        for (size_t v = 0; v < nv; ++v) {
+            float to_eye[3] = {eye[0] - P[v * 3], eye[1] - P[v * 3 + 1], eye[2] - P[v * 3 + 2]}, g[3];
+            prt_glossy_eval(r->exit_order, r->exit_sh + v * stride, r->exit_mirror, N + v * 3, to_eye, g);
+            for (int c = 0; c < 3; ++c) rgb[v * 3 + c] += g[c];
+        }
+    }
+    if (r->kvec && t->method->shade) return t->method->shade(ctx, t, r, eye, rgb);
+    return PRT_OK;
+}
