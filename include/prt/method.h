@@ -181,6 +181,9 @@ int prt_relit_view_dependent(const prt_relit *r);
 /* The lighting the baked scene named (environment, lights, emissive surfaces), loaded: what
  * commands relight with when the user gives no lighting. */
 prt_status prt_transfer_lighting(prt_context *ctx, const prt_transfer *t, prt_lighting **out);
+/* The baked mesh as a scene (materials, UVs, emission, lights, environment; no cleaning or
+ * subdivision, so vertices match t's one for one): what the reference path tracer traces. */
+prt_status prt_transfer_scene(prt_context *ctx, const prt_transfer *t, prt_scene **out);
 /* The scene's local lights and emission, as baked. */
 int prt_transfer_light_count(const prt_transfer *t);
 const prt_light *prt_transfer_light(const prt_transfer *t, int index);

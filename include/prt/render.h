@@ -94,7 +94,7 @@ typedef enum prt_event_type {
 enum { PRT_MOD_SHIFT = 1, PRT_MOD_CTRL = 2, PRT_MOD_ALT = 4 };
 enum { PRT_ACTION_RELEASE = 0, PRT_ACTION_PRESS = 1, PRT_ACTION_REPEAT = 2 };
 /* Key codes are GLFW's: printable keys are their upper-case ASCII code, PRT_KEY_ESCAPE etc. */
-enum { PRT_KEY_ESCAPE = 256, PRT_KEY_F12 = 301 };
+enum { PRT_KEY_ESCAPE = 256, PRT_KEY_TAB = 258, PRT_KEY_F12 = 301 };
 
 typedef struct prt_event {
     prt_event_type type;

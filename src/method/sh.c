@@ -201,8 +201,8 @@ static const prt_option_desc options[] = {
     {"compress", "M", PRT_OPTION_CHOICE, 0, 0, "cpca|pca|vq",
      "store the sets compressed: clustered PCA, one cluster (pca), or clusters only (vq);\n"
      "relighting reads them directly"},
-    {"clusters", "K", PRT_OPTION_INT, 1, 65536, NULL, "clusters for cpca (default 64) and vq (default 256)"},
-    {"vectors", "N", PRT_OPTION_INT, 1, 300, NULL, "average PCA vectors per cluster for cpca and pca (default 8)"},
+    {"clusters", "K", PRT_OPTION_INT, 1, 65536, NULL, "clusters for cpca (default 64) and vq (default 256); alone: cpca"},
+    {"vectors", "N", PRT_OPTION_INT, 1, 300, NULL, "average PCA vectors per cluster for cpca and pca (default 8); alone: cpca"},
     {"quantize", "B", PRT_OPTION_CHOICE, 0, 0, "8|16", "store uncompressed sets as 8- or 16-bit integers (scale and bias per coefficient)"},
 };
 
@@ -337,14 +337,13 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
         if (!d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--normal-map needs --texels N");
         else if (!(st = load_normal_map(ctx, prt__opt(o, "normal-map"), &j->normal_map))) d.normal_map = &j->normal_map;
     }
-    j->compressing = prt__opt(o, "compress") != NULL;
+    /* --clusters or --vectors alone ask for clustered PCA. */
+    j->compressing = prt__opt(o, "compress") || prt__opt(o, "clusters") || prt__opt(o, "vectors");
     j->compress.method = (prt_compress_method)prt__opt_choice(o, "compress", 0);
     j->compress.clusters = prt__opt_int(o, "clusters", 0);
     j->compress.vectors = prt__opt_int(o, "vectors", 0);
     j->compress.seed = d.seed;
     j->quantize = prt__opt_int(o, "quantize", 0);
-    if (!st && !j->compressing && (prt__opt(o, "clusters") || prt__opt(o, "vectors")))
-        st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--clusters and --vectors need --compress");
     if (!st && j->compressing && j->quantize)
         st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--quantize applies to uncompressed sets; drop --compress or --quantize");
     if (!st && j->compressing && (st = prt__compress_desc_check(ctx, &j->compress))) {}

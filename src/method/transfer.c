@@ -106,6 +106,27 @@ prt_status prt_transfer_lighting(prt_context *ctx, const prt_transfer *t, prt_li
     return PRT_OK;
 }
 
+prt_status prt_transfer_scene(prt_context *ctx, const prt_transfer *t, prt_scene **out)
+{
+    if (!t || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_scene: transfer and out are required");
+    *out = NULL;
+    prt_scene *s = prt__calloc(1, sizeof *s);
+    if (!s) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    prt_status st = prt__mesh_copy(&s->mesh, &t->mesh);
+    if (!st && t->light_count) {
+        if (!(s->lights = malloc((size_t)t->light_count * sizeof *s->lights))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        else { memcpy(s->lights, t->lights, (size_t)t->light_count * sizeof *s->lights); s->light_count = t->light_count; }
+    }
+    if (st) { prt_scene_release(s); return st; }
+    s->brdf_count = t->brdf_count;
+    memcpy(s->brdfs, t->brdfs, sizeof s->brdfs);
+    s->has_env = t->has_env;
+    s->env = t->env;
+    snprintf(s->source, sizeof s->source, "%s", t->source);
+    *out = s;
+    return PRT_OK;
+}
+
 /* ---- variants and controls ---- */
 int prt_transfer_variant_count(const prt_transfer *t) { return t->method->variant_count(t); }
 

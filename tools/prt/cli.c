@@ -214,7 +214,11 @@ int cli_scene_option(const cli *c, prt_scene_desc *sd, int opt, const char *arg)
 int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
 {
     switch (opt) {
-    case OPT_ENV: l->env_path = arg; l->set_source = true; return 1;
+    case OPT_ENV:
+        l->set_source = true;
+        l->env_none = !strcasecmp(arg, "none");
+        l->env_path = l->env_none ? NULL : arg;
+        return 1;
     case OPT_LAYOUT:
         if (!strcasecmp(arg, "auto")) l->layout = PRT_ENV_AUTO;
         else if (!strcasecmp(arg, "latlong")) l->layout = PRT_ENV_LATLONG;
@@ -246,159 +250,178 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
     case OPT_SUN:
         if (!cli_parse_vec3(arg, false, l->sun_dir)) { cli_usage(c, "--sun takes X,Y,Z"); return -1; }
         l->set_source = true;
+        l->env_none = false;
+        l->env_path = NULL;
+        return 1;
+    case OPT_LIGHT:
+        l->set_lights = true;
+        if (!strcasecmp(arg, "none")) { l->light_count = 0; return 1; }
+        if (l->light_count == CLI_MAX_LIGHTS) { cli_usage(c, "at most %d --light options", CLI_MAX_LIGHTS); return -1; }
+        if (prt_light_parse(arg, &l->lights[l->light_count])) { cli_usage(c, "--light: %s", prt_last_error()); return -1; }
+        l->light_count++;
+        return 1;
+    case OPT_EMISSION:
+        if (!cli_parse_float(arg, &l->emission) || l->emission < 0) { cli_usage(c, "--emission must be a number >= 0"); return -1; }
+        l->set_emission = true;
         return 1;
     }
     return 0;
 }
 
-void cli_light_defaults_from(cli_light *l, const prt_transfer *t)
+/* The environment desc: the file's (or scene's), with the command line's overrides. */
+static prt_environment_desc environment(const cli_light *l, bool has_env, const prt_environment_desc *file_env, bool has_lights)
 {
     prt_environment_desc e;
-    if (prt_transfer_environment(t, &e)) cli_light_defaults_from_env(l, &e);
-}
-
-void cli_light_defaults_from_scene(cli_light *l, const prt_scene *s)
-{
-    prt_environment_desc e;
-    if (prt_scene_environment(s, &e)) cli_light_defaults_from_env(l, &e);
-}
-
-void cli_light_defaults_from_env(cli_light *l, const prt_environment_desc *e)
-{
-    if (!l->set_source) {
-        if (e->path[0]) {
-            snprintf(l->path_buf, sizeof l->path_buf, "%s", e->path);
-            l->env_path = l->path_buf;
-            l->layout = e->layout;
-        }
-        memcpy(l->sun_dir, e->sun_dir, sizeof l->sun_dir);
+    memset(&e, 0, sizeof e);
+    if (has_env) e = *file_env;
+    else e.none = has_lights;   /* a scene with lights of its own and no environment is lit by them alone */
+    if (l->set_source) {
+        e.none = l->env_none;
+        memset(e.path, 0, sizeof e.path);
+        e.layout = l->layout;
+        memcpy(e.sun_dir, l->sun_dir, sizeof e.sun_dir);
+        if (l->env_path) snprintf(e.path, sizeof e.path, "%s", l->env_path);
     }
-    if (!l->set_rotate) memcpy(l->rotate, e->rotate_deg, sizeof l->rotate);
-    if (!l->set_intensity && e->intensity > 0) l->intensity = e->intensity;
+    if (l->set_rotate) memcpy(e.rotate_deg, l->rotate, sizeof e.rotate_deg);
+    if (l->set_intensity) e.intensity = l->intensity;
+    return e;
 }
 
-prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh_light *out, prt_envmap **env_out)
+prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t, const prt_scene *s, prt_lighting **out)
 {
     (void)c;
-    prt_envmap *env = NULL;
-    prt_status st;
-    if (l->env_path) {
-        st = prt_envmap_load(l->env_path, l->layout, &env);
-    } else {
-        prt_sky_desc sky = {0};
-        memcpy(sky.sun_dir, l->sun_dir, sizeof sky.sun_dir);
-        st = prt_sky_create(&sky, &env);
-    }
-    if (st) return st;
-    st = prt_envmap_project_sh(env, order < 1 ? 1 : order, out);   /* wavelet-only files have no SH order */
+    *out = NULL;
+    prt_environment_desc file_env;
+    memset(&file_env, 0, sizeof file_env);
+    bool has_env = t ? prt_transfer_environment(t, &file_env) : s ? prt_scene_environment(s, &file_env) : false;
+    const int nfile = t ? prt_transfer_light_count(t) : s ? prt_scene_light_count(s) : 0;
+    const bool emits = t ? prt_transfer_emission(t) != NULL : s ? prt_scene_emission(s) != NULL : false;
+    prt_environment_desc e = environment(l, has_env, &file_env, nfile > 0 || emits);
+    prt_lighting *lighting = NULL;
+    prt_status st = prt_lighting_create(&lighting);
+    if (!st) st = prt_lighting_set_environment(lighting, &e);
+    if (l->set_lights)
+        for (int i = 0; i < l->light_count && !st; ++i) st = prt_lighting_add(lighting, &l->lights[i], NULL);
+    else
+        for (int i = 0; i < nfile && !st; ++i) st = prt_lighting_add(lighting, t ? prt_transfer_light(t, i) : prt_scene_light(s, i), NULL);
+    if (l->set_emission) prt_lighting_set_emission(lighting, l->emission);
+    if (st) { prt_lighting_release(lighting); return st; }
+    *out = lighting;
+    return PRT_OK;
+}
+
+prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh_light *out, prt_env_layout *layout)
+{
+    (void)c;
+    prt_environment_desc e = environment(l, false, NULL, false);
+    if (e.none) { cli_error(c, "--env none leaves nothing to project"); return PRT_ERR_INVALID_ARG; }
+    prt_lighting *lighting = NULL;
+    prt_status st = prt_lighting_create(&lighting);
+    if (!st) st = prt_lighting_set_environment(lighting, &e);
+    if (!st) st = prt_envmap_project_sh(prt_lighting_envmap(lighting), order, out);
+    if (!st && layout) *layout = prt_envmap_layout(prt_lighting_envmap(lighting));
     if (!st && (l->rotate[0] != 0 || l->rotate[1] != 0 || l->rotate[2] != 0)) {
         double rot[9];
         prt_rotation_from_euler_deg(l->rotate[0], l->rotate[1], l->rotate[2], rot);
         st = prt_sh_light_rotate(out, rot);
     }
     if (!st) prt_sh_light_scale(out, l->intensity);
-    if (env_out && !st) *env_out = env;
-    else prt_envmap_release(env);
+    prt_lighting_release(lighting);
     return st;
 }
 
-prt_transfer_kind cli_default_kind(const prt_transfer *t)
+/* ---- variants and relighting ---- */
+bool cli_relight_kinds(cli_kinds *r, char *list)
 {
-    prt_transfer_info info;
-    prt_transfer_get_info(t, &info);
-    if (info.kinds == PRT_TRANSFER_WAVELET) return PRT_TRANSFER_WAVELET;
-    if (prt_transfer_channels(t, PRT_TRANSFER_INTERREFLECTED)) return PRT_TRANSFER_INTERREFLECTED;
-    if (prt_transfer_channels(t, PRT_TRANSFER_SHADOWED)) return PRT_TRANSFER_SHADOWED;
-    return PRT_TRANSFER_UNSHADOWED;
+    r->count = 0;
+    char *save = NULL;
+    for (char *tok = strtok_r(list, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+        if (r->count == (int)(sizeof r->variants / sizeof r->variants[0])) return false;
+        r->variants[r->count++] = tok;
+    }
+    return r->count > 0;
 }
 
-prt_transfer_kind cli_default_view_kind(const prt_transfer *t)
+int cli_relight_resolve(const cli *c, const cli_kinds *r, const prt_transfer *t, int drawing, int *indices, int max)
 {
-    if (prt_transfer_channels(t, PRT_TRANSFER_WAVELET)) return PRT_TRANSFER_WAVELET;
-    if (prt_transfer_channels(t, PRT_TRANSFER_GLOSSY_INTERREFLECTED)) return PRT_TRANSFER_GLOSSY_INTERREFLECTED;
-    if (prt_transfer_channels(t, PRT_TRANSFER_GLOSSY_SHADOWED)) return PRT_TRANSFER_GLOSSY_SHADOWED;
-    return cli_default_kind(t);
+    int n = 0;
+    if (!r->count) {
+        indices[n++] = prt_transfer_default_variant(t, drawing);
+        return n;
+    }
+    for (int i = 0; i < r->count; ++i) {
+        if (!strcasecmp(r->variants[i], "all")) {
+            for (int v = 0; v < prt_transfer_variant_count(t) && n < max; ++v) indices[n++] = v;
+            continue;
+        }
+        int v = prt_transfer_find_variant(t, r->variants[i]);
+        if (v < 0) { cli_error(c, "%s", prt_last_error()); return -1; }
+        if (n == max) { cli_error(c, "--kind takes at most %d names", max); return -1; }
+        indices[n++] = v;
+    }
+    return n;
 }
 
-prt_status cli_relight(const cli *c, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *sh, const cli_light *l,
-                       const float eye[3], float *rgb, float **exit)
+prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,
+                       bool with_indirect, prt_relit *out)
 {
-    *exit = NULL;
-    if (kind == PRT_TRANSFER_WAVELET) return cli_relight_wavelet(c, t, l, eye, rgb);
-    if (!prt_transfer_kind_is_glossy(kind)) return prt_relight_sh(c->ctx, t, kind, sh, rgb);
-    const size_t nv = prt_transfer_vertex_count(t);
-    prt_transfer_info info;
-    prt_transfer_get_info(t, &info);
-    prt_transfer_kind diffuse = prt_transfer_kind_diffuse_part(kind);
-    prt_status st = PRT_OK;
-    if (prt_transfer_channels(t, diffuse)) st = prt_relight_sh(c->ctx, t, diffuse, sh, rgb);
-    else memset(rgb, 0, nv * 3 * sizeof(float));
-    if (st) return st;
-    float *e = malloc(nv * 3 * (size_t)info.order * info.order * sizeof(float));
-    if (!e) return PRT_ERR_NO_MEMORY;
-    st = prt_relight_sh_glossy(c->ctx, t, kind, sh, l && l->have_brdf ? &l->brdf : NULL, e);
-    if (st) { free(e); return st; }
-    *exit = e;
-    return PRT_OK;
+    prt_relight_desc d;
+    memset(&d, 0, sizeof d);
+    d.variant = variant;
+    d.per_vertex = per_vertex;
+    d.with_indirect = with_indirect;
+    d.brdf = l && l->have_brdf ? &l->brdf : NULL;
+    return prt_relight(c->ctx, t, lighting, &d, out);
 }
 
-void cli_report_factors(const prt_transfer *t)
+/* ---- methods ---- */
+const prt_method *cli_method_from_argv(const cli *c, int argc, char **argv)
 {
-    for (int k = 1; k <= prt_transfer_brdf_count(t); ++k) {
-        const prt_brdf_factors *f = prt_transfer_wavelet_factors(t, k);
-        if (!f) continue;
-        double rms[PRT_BRDF_MAX_TERMS], rel[PRT_BRDF_MAX_TERMS];
-        char spec[128];
-        prt_brdf_format(prt_transfer_brdf(t, k), spec, sizeof spec);
-        if (prt_brdf_factors_error(f, prt_transfer_brdf(t, k), 0, rms, rel)) continue;
-        fprintf(stderr, "prt bake: material %d (%s), %d terms used; cosine-weighted RMS error by terms:\n", k, spec, prt_brdf_factors_terms(f));
-        for (int K = 1; K <= prt_brdf_factors_computed(f); ++K)
-            fprintf(stderr, "  K=%-2d %.4g (%.1f%%)%s\n", K, rms[K - 1], 100.0 * rel[K - 1], K == prt_brdf_factors_terms(f) ? "  <- used" : "");
+    const char *name = NULL;
+    for (int i = 1; i < argc; ++i) {
+        if (!strcmp(argv[i], "--")) break;
+        if (!strcmp(argv[i], "--method") && i + 1 < argc) name = argv[++i];
+        else if (!strncmp(argv[i], "--method=", 9)) name = argv[i] + 9;
+    }
+    if (!name) return prt_method_default();
+    const prt_method *m = prt_method_find(name);
+    if (!m) {
+        char list[256] = "";
+        for (int i = 0; i < prt_method_count(); ++i)
+            snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", prt_method_name(prt_method_at(i)));
+        cli_usage(c, "--method must be one of %s (got '%s')", list, name);
+    }
+    return m;
+}
+
+void cli_print_method_options(FILE *f, const prt_method *m)
+{
+    const prt_option_desc *o;
+    int n = prt_method_options(m, &o);
+    fprintf(f, "Method %s: %s\n", prt_method_name(m), prt_method_summary(m));
+    for (int i = 0; i < n; ++i) {
+        char head[64];
+        snprintf(head, sizeof head, "--%s%s%s", o[i].name, o[i].arg ? " " : "", o[i].arg ? o[i].arg : "");
+        const char *h = o[i].help;
+        bool first = true;
+        while (h && *h) {
+            const char *nl = strchr(h, '\n');
+            int len = nl ? (int)(nl - h) : (int)strlen(h);
+            if (first && strlen(head) <= 18) fprintf(f, "      %-18s %.*s\n", head, len, h);
+            else if (first) fprintf(f, "      %s\n      %-18s %.*s\n", head, "", len, h);
+            else fprintf(f, "      %-18s %.*s\n", "", len, h);
+            first = false;
+            h = nl ? nl + 1 : NULL;
+        }
     }
 }
 
-prt_status cli_light_wavelet(const cli *c, const cli_light *l, prt_wavelet_light **out)
+void cli_print_lines(FILE *f, const char *prefix, const char *text)
 {
-    prt_envmap *env = NULL;
-    prt_status st;
-    if (l->env_path) {
-        st = prt_envmap_load(l->env_path, l->layout, &env);
-    } else {
-        prt_sky_desc sky = {0};
-        memcpy(sky.sun_dir, l->sun_dir, sizeof sky.sun_dir);
-        st = prt_sky_create(&sky, &env);
+    for (const char *p = text; p && *p;) {
+        const char *nl = strchr(p, '\n');
+        int len = nl ? (int)(nl - p) : (int)strlen(p);
+        fprintf(f, "%s%.*s\n", prefix, len, p);
+        p = nl ? nl + 1 : NULL;
     }
-    if (st) return st;
-    prt_wavelet_light_desc d = {0};
-    d.intensity = l->intensity;
-    if (l->rotate[0] != 0 || l->rotate[1] != 0 || l->rotate[2] != 0) prt_rotation_from_euler_deg(l->rotate[0], l->rotate[1], l->rotate[2], d.rotation);
-    st = prt_wavelet_light_create(c->ctx, env, &d, out);
-    prt_envmap_release(env);
-    return st;
-}
-
-prt_status cli_wavelet_kvec(const cli *c, const prt_transfer *t, const cli_light *l, float **kvec)
-{
-    *kvec = NULL;
-    prt_wavelet_info wi;
-    if (!prt_transfer_wavelet_info(t, &wi)) return prt_relight_wavelet(c->ctx, t, NULL, NULL);   /* reports the missing set */
-    prt_wavelet_light *wl = NULL;
-    prt_status st = cli_light_wavelet(c, l, &wl);
-    if (st) return st;
-    float *k = malloc(prt_transfer_vertex_count(t) * (size_t)wi.terms * 3 * sizeof(float));
-    if (!k) st = PRT_ERR_NO_MEMORY;
-    if (!st) st = prt_relight_wavelet(c->ctx, t, wl, k);
-    prt_wavelet_light_release(wl);
-    if (st) { free(k); return st; }
-    *kvec = k;
-    return PRT_OK;
-}
-
-prt_status cli_relight_wavelet(const cli *c, const prt_transfer *t, const cli_light *l, const float eye[3], float *rgb)
-{
-    float *kvec = NULL;
-    prt_status st = cli_wavelet_kvec(c, t, l, &kvec);
-    if (!st) st = prt_wavelet_shade(c->ctx, t, kvec, eye, rgb);
-    free(kvec);
-    return st;
 }

@@ -4,6 +4,7 @@
 
 #include <prt/prt.h>
 #include <stdbool.h>
+#include <stdio.h>
 
 /* Exit codes, documented in docs/CLI.md and every --help. */
 enum {
@@ -46,51 +47,71 @@ int cli_progress(void *user, const char *stage, uint64_t done, uint64_t total);
 void cli_catch_interrupt(void);
 bool cli_interrupted(void);
 
-/* Distant lighting options shared by relight, render and env. */
+/* Lighting options shared by relight, render, view, compare, reference, sweep and env. The
+ * command line overrides what the file or scene names: --env replaces its environment (keeping
+ * its rotation and intensity unless --rotate/--intensity are given), --light replaces its lights. */
+#define CLI_MAX_LIGHTS 64
 typedef struct cli_light {
     const char *env_path;     /* NULL: the procedural sky */
+    bool env_none;            /* --env none: no environment light */
     prt_env_layout layout;
     float rotate[3];          /* yaw, pitch, roll in degrees */
     float intensity;          /* multiplier; commands start it at 1 */
     float sun_dir[3];         /* sky only; zero = default */
     bool set_source, set_rotate, set_intensity;   /* what the command line gave explicitly */
+    prt_light lights[CLI_MAX_LIGHTS];
+    int light_count;
+    bool set_lights;          /* --light given: replaces the scene's lights (--light none: no lights) */
+    float emission;           /* scale of emissive surfaces */
+    bool set_emission;
     bool have_brdf;           /* --brdf: the reflection lobe for glossy sets */
     prt_brdf brdf;
     char path_buf[1024];
 } cli_light;
 
 #define CLI_LIGHT_OPTIONS_HELP \
-    "Lighting:\n" \
-    "  --env FILE            environment probe (.hdr .pfm .exr .png); default: procedural sky\n" \
+    "Lighting (defaults: what the baked scene named; else the procedural sky):\n" \
+    "  --env FILE|none       environment probe (.hdr .pfm .exr .png), or no environment light\n" \
     "  --layout L            latlong | angular | cross | auto (default auto, from aspect ratio)\n" \
-    "  --rotate Y[,P[,R]]    rotate the lighting: yaw about +y, pitch, roll in degrees\n" \
-    "  --intensity S         scale the lighting (default 1)\n" \
+    "  --rotate Y[,P[,R]]    rotate the environment: yaw about +y, pitch, roll in degrees\n" \
+    "  --intensity S         scale the environment (default 1)\n" \
     "  --sun X,Y,Z           sun direction of the procedural sky\n" \
-    "  --brdf SPEC           reflection lobe for glossy kinds: phong:N[:KS] or blinn:N[:KS]\n" \
+    "  --light SPEC          a light, repeatable; replaces the scene's lights ('none': no lights):\n" \
+    "                        point:X,Y,Z:R,G,B (W/sr)  spot:X,Y,Z:DX,DY,DZ:ANGLE[,FALLOFF]:R,G,B\n" \
+    "                        directional:DX,DY,DZ:R,G,B (towards the light, W/m^2)\n" \
+    "                        sphere:X,Y,Z:RADIUS:R,G,B (radiance)\n" \
+    "  --emission S          scale the scene's emissive surfaces (0 turns them off; default 1)\n" \
+    "  --brdf SPEC           reflection lobe for SH glossy sets: phong:N[:KS] or blinn:N[:KS]\n" \
     "                        (default: the scene's materials; not with a BRDF baked in)\n"
 
 /* Returns 1 if the option was a lighting option (consumed), 0 if not, -1 on a bad value. */
 int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg);
-enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN, OPT_BRDF };
+enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN, OPT_BRDF, OPT_LIGHT, OPT_EMISSION };
 #define CLI_LIGHT_LONG_OPTIONS \
     {"env", required_argument, 0, OPT_ENV}, {"layout", required_argument, 0, OPT_LAYOUT}, \
     {"rotate", required_argument, 0, OPT_ROTATE}, {"intensity", required_argument, 0, OPT_INTENSITY}, \
-    {"sun", required_argument, 0, OPT_SUN}, {"brdf", required_argument, 0, OPT_BRDF}
-/* Fills what the command line left unset from the lighting a .prt's scene named. */
-void cli_light_defaults_from(cli_light *l, const prt_transfer *t);
-void cli_light_defaults_from_scene(cli_light *l, const prt_scene *s);
-void cli_light_defaults_from_env(cli_light *l, const prt_environment_desc *e);
-/* Loads the environment (or builds the sky) and projects it to SH of the given order. */
-prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh_light *out, prt_envmap **env_out);
+    {"sun", required_argument, 0, OPT_SUN}, {"brdf", required_argument, 0, OPT_BRDF}, \
+    {"light", required_argument, 0, OPT_LIGHT}, {"emission", required_argument, 0, OPT_EMISSION}
+/* The lighting to use: what t (or, without t, the scene s; with neither, nothing) names, with the
+ * command line's overrides. */
+prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t, const prt_scene *s, prt_lighting **out);
+/* The environment as the command line and file name it, projected to SH (prt env). */
+prt_status cli_light_project(const cli *c, const cli_light *l, int order, prt_sh_light *out, prt_env_layout *layout);
 
-/* Prints each factored material's cosine-weighted RMS error per number of terms (stderr). */
-void cli_report_factors(const prt_transfer *t);
-/* Wavelet files: the lighting as a wavelet light (rotation and intensity applied). */
-prt_status cli_light_wavelet(const cli *c, const cli_light *l, prt_wavelet_light **out);
-/* Wavelet files: the light-dependent K-vectors under l (a new array: free it). */
-prt_status cli_wavelet_kvec(const cli *c, const prt_transfer *t, const cli_light *l, float **kvec);
-/* Wavelet files: exit radiance per vertex towards eye, lighting from l. */
-prt_status cli_relight_wavelet(const cli *c, const prt_transfer *t, const cli_light *l, const float eye[3], float *rgb);
+/* Relight options shared by relight, render, compare and view: which variant, and the method's
+ * run-time settings. */
+typedef struct cli_kinds {
+    const char *variants[16];   /* names given with --kind, in order; none = the file's default */
+    int count;
+} cli_kinds;
+/* Parses a comma list of variant names into r ('all' = every variant of the file, resolved later). */
+bool cli_relight_kinds(cli_kinds *r, char *list);
+/* Resolves r's names against t into indices (all variants for 'all', the default when empty);
+ * returns the count or -1 after reporting. */
+int cli_relight_resolve(const cli *c, const cli_kinds *r, const prt_transfer *t, int drawing, int *indices, int max);
+/* Relights t into out with l (variant index, per-vertex only when asked). */
+prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,
+                       bool with_indirect, prt_relit *out);
 
 /* Scene options shared by bake, reference and sweep. */
 #define CLI_SCENE_OPTIONS_HELP \
@@ -128,8 +149,9 @@ typedef struct cli_result {
     prt_transfer *transfer;   /* when loaded from a .prt: its mesh draws error images */
     char what[256];
 } cli_result;
-/* Loads path; a .prt is relit with `light` and `kind` (0 = its richest). */
-prt_status cli_result_load(cli *c, const char *path, const cli_light *light, prt_transfer_kind kind, cli_result *out);
+/* Loads path; a .prt is relit with `light` and the variant called `kind` (NULL = its richest
+ * view-independent one; view-dependent results are seen from the auto-framed camera). */
+prt_status cli_result_load(cli *c, const char *path, const cli_light *light, const char *kind, cli_result *out);
 void cli_result_free(cli_result *r);
 
 /* Camera and image options shared by render and reference. */
@@ -160,16 +182,13 @@ int cli_view_option(const cli *c, cli_view *v, int opt, const char *arg);
 /* The camera for a mesh's positions: auto framing unless --eye/--target were given. */
 void cli_view_camera(const cli_view *v, const float *positions, size_t nv, float aspect, prt_camera *cam);
 
-/* The richest diffuse kind a file holds, for commands where --kind is optional. */
-prt_transfer_kind cli_default_kind(const prt_transfer *t);
-/* For drawing commands: the richest glossy kind when the file has one, else as above. */
-prt_transfer_kind cli_default_view_kind(const prt_transfer *t);
-/* Relights one kind for drawing: rgb (3 per vertex) gets the view-independent part; for glossy
- * kinds *exit gets a new array of exit SH (3 x order^2 per vertex; free it) and rgb the diffuse
- * kind beside it (zero when the file lacks it). For diffuse kinds *exit is NULL. The wavelet
- * kind shades each vertex towards eye (a world position) on the CPU: rgb gets all of it. */
-prt_status cli_relight(const cli *c, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *sh, const cli_light *l,
-                       const float eye[3], float *rgb, float **exit);
+/* The method a command line names with --method NAME (or --method=NAME) before parsing it,
+ * the default method when it names none; NULL after reporting an unknown name. */
+const prt_method *cli_method_from_argv(const cli *c, int argc, char **argv);
+/* Prints a method's bake options as help text. */
+void cli_print_method_options(FILE *f, const prt_method *m);
+/* Prints a library-made text (describe, bake report) to f, each line prefixed. */
+void cli_print_lines(FILE *f, const char *prefix, const char *text);
 
 int cmd_bake(int argc, char **argv);
 int cmd_relight(int argc, char **argv);

@@ -14,9 +14,10 @@ static const char *HELP =
     "images (.exr .hdr .pfm .png). Metrics over every channel of every vertex or pixel: RMSE,\n"
     "relative L2 (||A - B|| / ||B||), mean and max absolute error, PSNR for images (peak = max B),\n"
     "and for a reference with error bars the reference's own relative noise.\n\n"
-    "  -k, --kind K           kind to relight .prt inputs with (default: the richest held)\n"
+    "  -k, --kind K           what to relight .prt inputs as (default: the richest held)\n"
     "      --indirect         compare only light that bounced at least once (a .prt's\n"
-    "                         inter-reflected minus shadowed; a reference's \"indirect\")\n"
+    "                         indirect part where its method separates it - SH: inter-reflected\n"
+    "                         minus shadowed; a reference's \"indirect\")\n"
     "      --json FILE        also write the metrics as JSON ('-' for standard output)\n"
     "      --error-image FILE false-colour |A - B| (blue = 0 ... red = scale); for per-vertex\n"
     "                         results drawn on the mesh of the .prt input (needs one)\n"
@@ -92,14 +93,12 @@ int cmd_compare(int argc, char **argv)
         }
     }
     if (optind != argc - 2) return cli_usage(&c, "expected two results, A and B (the reference)");
-    prt_transfer_kind kind = 0;
-    if (kind_name && prt_transfer_kind_parse(kind_name, &kind)) return cli_usage(&c, "%s", prt_last_error());
     int rc = cli_make_context(&c);
     if (rc) return rc;
     cli_result a, b;
     memset(&b, 0, sizeof b);
-    prt_status st = cli_result_load(&c, argv[optind], &light, kind, &a);
-    if (!st) st = cli_result_load(&c, argv[optind + 1], &light, kind, &b);
+    prt_status st = cli_result_load(&c, argv[optind], &light, kind_name, &a);
+    if (!st) st = cli_result_load(&c, argv[optind + 1], &light, kind_name, &b);
     if (st) { cli_result_free(&a); prt_context_release(c.ctx); return cli_exit_code(st); }
 
     const float *va = NULL, *vb = NULL, *eb = NULL;

@@ -63,12 +63,14 @@ int cmd_env(int argc, char **argv)
     if (optind < argc - 1) return cli_usage(&c, "expected at most one PROBE argument");
     if (optind == argc - 1) light.env_path = argv[optind];
     if (irradiance && !image) return cli_usage(&c, "--irradiance needs --image FILE");
+    if (light.set_lights || light.set_emission || light.have_brdf) return cli_usage(&c, "--light, --emission and --brdf do not apply: prt env projects an environment");
+    if (light.env_none) return cli_usage(&c, "--env none leaves nothing to project");
     int rc = cli_make_context(&c);
     if (rc) return rc;
     prt_sh_light sh;
-    prt_envmap *env = NULL;
+    prt_env_layout layout = PRT_ENV_AUTO;
     prt_image img = {0};
-    prt_status st = cli_light_project(&c, &light, order, &sh, &env);
+    prt_status st = cli_light_project(&c, &light, order, &sh, &layout);
     if (!st && image) st = prt_sh_light_to_image(&sh, width, irradiance, &img);
     if (!st && image) st = prt_image_save(image, &img, NULL);
     if (st) {
@@ -76,7 +78,7 @@ int cmd_env(int argc, char **argv)
     } else {
         cJSON *root = cJSON_CreateObject();
         cJSON_AddStringToObject(root, "source", light.env_path ? light.env_path : "procedural sky");
-        cJSON_AddStringToObject(root, "layout", layout_name(prt_envmap_layout(env)));
+        cJSON_AddStringToObject(root, "layout", layout_name(layout));
         cJSON_AddNumberToObject(root, "order", order);
         cJSON_AddStringToObject(root, "basis", "real orthonormal SH, index l*(l+1)+m; y(1,-1), y(1,0), y(1,1) ~ y, z, x; +y is up");
         cJSON *arr = cJSON_AddArrayToObject(root, "coefficients");
@@ -101,7 +103,6 @@ int cmd_env(int argc, char **argv)
         if (!rc && image && !c.quiet) fprintf(stderr, "prt env: wrote %s\n", image);
     }
     prt_image_free(&img);
-    prt_envmap_release(env);
     prt_context_release(c.ctx);
     return rc;
 }

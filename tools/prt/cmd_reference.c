@@ -13,8 +13,10 @@ static const char *HELP =
     "into direct and indirect light with standard errors, and/or an image from a camera.\n"
     "INPUT is a .prt (its baked mesh, so results match the file vertex for vertex, and the\n"
     "lighting its scene named) or a scene, read with the same options as prt bake.\n"
-    "Surfaces are one-sided Lambertian; light comes from the environment, importance-sampled\n"
-    "and combined with cosine sampling (MIS); paths end by Russian roulette.\n\n"
+    "Surfaces are one-sided and reflect with their material's BRDF (Lambert where none); light\n"
+    "comes from the environment, local lights and emissive surfaces, each sampled explicitly and\n"
+    "combined with BRDF sampling (MIS); paths end by Russian roulette. Glossy vertices are seen\n"
+    "from the camera (--eye, or the auto-framed view prt render uses).\n\n"
     "  -o, --output FILE      per-vertex result: .json (radiance, direct, indirect, std_error,\n"
     "                         std_error_indirect) or .ply (radiance as float vertex colours)\n"
     "      --image FILE       image from the camera (.exr .png .hdr .pfm)\n"
@@ -85,33 +87,26 @@ int cmd_reference(int argc, char **argv)
     const char *in_ext = strrchr(input, '.');
     prt_scene *scene = NULL;
     prt_transfer *t = NULL;
-    prt_envmap *env = NULL;
+    prt_lighting *lighting = NULL;
     prt_reference_vertices res = {0};
     prt_image img = {0};
     prt_status st;
     if (in_ext && !strcasecmp(in_ext, ".prt")) {
         /* The baked mesh as it is: no cleaning or subdivision can change the vertex order. */
         st = prt_transfer_load(c.ctx, input, &t);
-        if (!st) {
-            cli_light_defaults_from(&light, t);
-            st = prt_scene_create_copy(c.ctx, prt_transfer_positions(t), prt_transfer_normals(t), prt_transfer_albedo(t),
-                                       prt_transfer_vertex_count(t), prt_transfer_indices(t), prt_transfer_triangle_count(t), NULL, &scene);
-        }
-        if (!st && prt_scene_vertex_count(scene) != prt_transfer_vertex_count(t))
-            st = PRT_ERR_FORMAT;
+        if (!st) st = prt_transfer_scene(c.ctx, t, &scene);
     } else {
         st = prt_scene_load(c.ctx, input, &sd, &scene);
-        if (!st) cli_light_defaults_from_scene(&light, scene);
     }
-    prt_sh_light unused;
-    if (!st) st = cli_light_project(&c, &light, 1, &unused, &env);
-    double rot[9];
-    prt_rotation_from_euler_deg(light.rotate[0], light.rotate[1], light.rotate[2], rot);
-    rd.rotation = rot;
-    rd.intensity = light.intensity;
+    if (!st) st = cli_lighting(&c, &light, t, scene, &lighting);
+    rd.lighting = lighting;
     rd.progress = cli_progress;
     rd.progress_user = &c;
-    if (!st && output) st = prt_reference_trace_vertices(c.ctx, scene, env, &rd, &res);
+    /* View-dependent surfaces are seen from the camera, as prt relight and compare see them. */
+    prt_camera cam;
+    if (!st) cli_view_camera(&view, prt_scene_positions(scene), prt_scene_vertex_count(scene), (float)view.width / view.height, &cam);
+    rd.eye = cam.eye;
+    if (!st && output) st = prt_reference_trace_vertices(c.ctx, scene, NULL, &rd, &res);
     if (!st && output) {
         size_t nv = res.vertex_count;
         if (json) {
@@ -134,16 +129,14 @@ int cmd_reference(int argc, char **argv)
         }
     }
     if (!st && !rc && image) {
-        prt_camera cam;
-        cli_view_camera(&view, prt_scene_positions(scene), prt_scene_vertex_count(scene), (float)view.width / view.height, &cam);
-        st = prt_reference_trace_image(c.ctx, scene, env, &rd, &cam, view.width, view.height, view.background, &img, NULL);
+        st = prt_reference_trace_image(c.ctx, scene, NULL, &rd, &cam, view.width, view.height, view.background, &img, NULL);
         if (!st) st = prt_image_save(image, &img, &view.save);
         if (!st && !c.quiet) fprintf(stderr, "prt reference: wrote %s\n", image);
     }
     if (st && !rc) rc = cli_fail(&c, st);
     prt_image_free(&img);
     prt_reference_vertices_free(&res);
-    prt_envmap_release(env);
+    prt_lighting_release(lighting);
     prt_scene_release(scene);
     prt_transfer_release(t);
     prt_context_release(c.ctx);

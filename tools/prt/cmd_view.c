@@ -18,17 +18,23 @@ static const char *HELP =
     "display - run under xvfb-run without one). The first frame equals prt render with the same\n"
     "size, camera and lighting.\n\n"
     "Mouse: left-drag orbits, right-drag (or shift+left) pans, wheel zooms,\n"
-    "       ctrl+left-drag rotates the environment lighting.\n"
-    "Keys:  h lists them all; k transfer kind, [ ] SH order, d full/direct/indirect,\n"
+    "       ctrl+left-drag rotates the environment lighting,\n"
+    "       alt+left-drag moves the selected light in the view plane (turns a directional one),\n"
+    "       alt+right-drag or alt+wheel moves it in depth.\n"
+    "Keys:  h lists them all; k what the file is relit as, d full/direct/indirect, the method's\n"
+    "       controls ([ ] SH order or the wavelet lighting's coefficients), n add a light,\n"
+    "       tab select the next, x remove it, , . dim/brighten, c recolour,\n"
     "       + - exposure, t tone mapping, l reload probe, p screenshot, 0 reset, q quit.\n"
-    "       Wavelet files (--method wavelet): [ ] halve or double the lighting's Haar\n"
-    "       coefficients; lighting changes recompute the K-vectors, camera moves the view factor.\n\n"
+    "       Lighting changes relight; camera moves only redraw (view-dependent parts are\n"
+    "       evaluated per pixel).\n\n"
     "      --width N --height N   window size (default 1024 x 768)\n"
     "      --exposure STOPS       initial exposure (default 0)\n"
     "      --script FILE          replay timed input and exit when it ends: lines\n"
     "                             'SECONDS VERB ARGS' with verbs orbit DYAW DPITCH, pan DX DY,\n"
     "                             zoom F, env-rotate YAW PITCH, key NAME, drag left|right DX DY\n"
-    "                             [ctrl|shift], screenshot FILE (.png .exr), quit\n"
+    "                             [ctrl|shift|alt], light-add TYPE [X Y Z], light-select N,\n"
+    "                             light-move DX DY DZ, light-scale F, light-colour R G B,\n"
+    "                             light-remove, screenshot FILE (.png .exr), quit\n"
     "      --stats                print frame and relight times as JSON on exit\n"
     CLI_LIGHT_OPTIONS_HELP
     "  -j, --threads N            relighting threads\n"
@@ -106,83 +112,30 @@ void view_rotate_env(viewer *v, float dyaw, float dpitch)
 }
 
 /* ---- relight worker ---- */
-static void relight_wavelet(viewer *v, const relight_job *job, float *out)
+/* The job's lighting: the viewer's rotation on top of the lighting's own, and the job's lights. */
+static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
 {
-    /* The viewer's rotation on top of the file's (or command line's), as for SH lighting. */
-    double rj[9], rf[9];
+    double rj[9], r[9];
     prt_rotation_from_euler_deg(job->env_yaw, job->env_pitch, 0, rj);
-    prt_rotation_from_euler_deg(v->light.rotate[0], v->light.rotate[1], v->light.rotate[2], rf);
-    prt_wavelet_light_desc d = {0};
     for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) d.rotation[i * 3 + j] = rj[i * 3] * rf[j] + rj[i * 3 + 1] * rf[3 + j] + rj[i * 3 + 2] * rf[6 + j];
-    d.coefficients = job->light_coefficients;
-    d.intensity = v->light.intensity;
-    prt_wavelet_light *wl = NULL;
-    if (prt_wavelet_light_create(v->worker_ctx, v->env, &d, &wl)) return;
-    prt_relight_wavelet(v->worker_ctx, v->t, wl, out);
-    prt_wavelet_light_release(wl);
-}
-
-static void relight(viewer *v, const relight_job *job, float *out, float *exit, float *texels, bool *used_texels)
-{
-    if (job->kind == PRT_TRANSFER_WAVELET) {
-        *used_texels = false;
-        relight_wavelet(v, job, out);
-        return;
-    }
-    prt_sh_light sh = v->sh;
-    sh.order = job->order;
-    if (job->env_yaw != 0 || job->env_pitch != 0) {
-        double rot[9];
-        prt_rotation_from_euler_deg(job->env_yaw, job->env_pitch, 0, rot);
-        prt_sh_light_rotate(&sh, rot);
-    }
-    size_t nv = prt_transfer_vertex_count(v->t);
-    if (exit) memset(exit, 0, nv * v->exit_floats * sizeof(float));
-    *used_texels = texels && !job->component && prt_transfer_texel_coeffs(v->t, job->kind, NULL) &&
-                   !prt_relight_sh_texels(v->worker_ctx, v->t, job->kind, &sh, texels);
-    if (prt_transfer_kind_is_glossy(job->kind)) {
-        /* The diffuse kind of the same shadowing plus the view-dependent part; direct only is the
-         * shadowed pair, indirect only the inter-reflected pair minus it. */
-        const prt_brdf *lobe = v->light.have_brdf ? &v->light.brdf : NULL;
-        prt_transfer_kind g = job->component == 1 ? PRT_TRANSFER_GLOSSY_SHADOWED : job->kind;
-        prt_transfer_kind d = prt_transfer_kind_diffuse_part(g);
-        if (prt_transfer_channels(v->t, d)) prt_relight_sh(v->worker_ctx, v->t, d, &sh, out);
-        else memset(out, 0, nv * 3 * sizeof(float));
-        if (prt_relight_sh_glossy(v->worker_ctx, v->t, g, &sh, lobe, exit)) return;
-        if (job->component == 2) {
-            float *direct = malloc(nv * v->exit_floats * sizeof(float)), *ddiff = malloc(nv * 3 * sizeof(float));
-            if (direct && ddiff && !prt_relight_sh_glossy(v->worker_ctx, v->t, PRT_TRANSFER_GLOSSY_SHADOWED, &sh, lobe, direct)) {
-                for (size_t i = 0; i < nv * v->exit_floats; ++i) exit[i] -= direct[i];
-                if (!prt_relight_sh(v->worker_ctx, v->t, PRT_TRANSFER_SHADOWED, &sh, ddiff))
-                    for (size_t i = 0; i < nv * 3; ++i) out[i] -= ddiff[i];
-            }
-            free(direct);
-            free(ddiff);
-        }
-        return;
-    }
-    prt_transfer_kind kind = job->component ? PRT_TRANSFER_INTERREFLECTED : job->kind;
-    if (prt_relight_sh(v->worker_ctx, v->t, kind, &sh, out)) return;
-    if (job->component) {
-        /* direct = shadowed; indirect = inter-reflected - shadowed */
-        float *direct = malloc(nv * 3 * sizeof(float));
-        if (!direct) return;
-        prt_relight_sh(v->worker_ctx, v->t, PRT_TRANSFER_SHADOWED, &sh, direct);
-        for (size_t i = 0; i < nv * 3; ++i) out[i] = job->component == 1 ? direct[i] : out[i] - direct[i];
-        free(direct);
-    }
+        for (int j = 0; j < 3; ++j) r[i * 3 + j] = rj[i * 3] * v->base_rot[j] + rj[i * 3 + 1] * v->base_rot[3 + j] + rj[i * 3 + 2] * v->base_rot[6 + j];
+    prt_lighting_set_rotation(v->lighting, r);
+    prt_lighting_clear_lights(v->lighting);
+    prt_status st = PRT_OK;
+    for (int i = 0; i < job->light_count && !st; ++i) st = prt_lighting_add(v->lighting, &job->lights[i], NULL);
+    prt_relight_desc d;
+    memset(&d, 0, sizeof d);
+    d.variant = job->variant;
+    d.component = job->component;
+    d.controls = job->controls;
+    d.brdf = v->light.have_brdf ? &v->light.brdf : NULL;
+    if (!st) st = prt_relight(v->worker_ctx, v->t, v->lighting, &d, out);
+    return st;
 }
 
 static void *worker(void *arg)
 {
     viewer *v = arg;
-    const size_t floats = prt_transfer_vertex_count(v->t) * 3 * (size_t)(v->kterms ? v->kterms : 1);
-    float *buf = malloc(floats * sizeof(float));
-    float *ebuf = v->exit_floats ? malloc(prt_transfer_vertex_count(v->t) * v->exit_floats * sizeof(float)) : NULL;
-    if (v->exit_floats && !ebuf) { free(buf); buf = NULL; }
-    float *tbuf = v->result_texels ? malloc((size_t)v->texel_width * v->texel_height * 3 * sizeof(float)) : NULL;
-    bool used_texels = false;
     pthread_mutex_lock(&v->lock);
     while (!v->quit_worker) {
         if (!v->job_posted) { pthread_cond_wait(&v->wake, &v->lock); continue; }
@@ -190,24 +143,20 @@ static void *worker(void *arg)
         v->job_posted = false;
         pthread_mutex_unlock(&v->lock);
         double t0 = now();
-        if (buf) relight(v, &job, buf, ebuf, tbuf, &used_texels);
+        prt_relit r;
+        prt_status st = relight(v, &job, &r);
         double ms = (now() - t0) * 1e3;
         pthread_mutex_lock(&v->lock);
-        if (buf) {
-            memcpy(v->result, buf, floats * sizeof(float));
-            if (ebuf) memcpy(v->result_exit, ebuf, prt_transfer_vertex_count(v->t) * v->exit_floats * sizeof(float));
-            v->result_has_texels = used_texels;
-            if (used_texels) memcpy(v->result_texels, tbuf, (size_t)v->texel_width * v->texel_height * 3 * sizeof(float));
-            v->result_version = job.version;
-            v->result_ready = true;
-            v->relight_ms = ms;
-        }
+        prt_relit_free(&v->result);
+        v->result = r;
+        v->result_status = st;
+        if (st) snprintf(v->result_error, sizeof v->result_error, "%s", prt_last_error());
+        v->result_version = job.version;
+        v->result_ready = true;
+        v->relight_ms = ms;
         pthread_cond_broadcast(&v->wake);
     }
     pthread_mutex_unlock(&v->lock);
-    free(buf);
-    free(ebuf);
-    free(tbuf);
     return NULL;
 }
 
@@ -221,30 +170,42 @@ void view_request_relight(viewer *v)
     pthread_mutex_unlock(&v->lock);
 }
 
-/* Wavelet files: the new K-vectors go to the GPU, which evaluates the view factor per pixel;
- * Lambertian vertices' radiance (view-independent) is uploaded as vertex radiance. */
-static void shade(viewer *v)
+/* Uploads a relit result: the whole mesh when what it holds changed, else only the arrays. */
+static void show(viewer *v, prt_relit *r)
 {
-    if (prt_wavelet_shade(v->c->ctx, v->t, v->kvec, NULL, v->shaded)) return;
-    prt_window_set_radiance(v->win, v->shaded, prt_transfer_vertex_count(v->t));
-    prt_window_set_kvec(v->win, v->kvec, prt_transfer_vertex_count(v->t));
+    const size_t nv = prt_transfer_vertex_count(v->t);
+    const prt_relit *o = &v->shown;
+    const bool same = o->radiance && (o->exit_sh != NULL) == (r->exit_sh != NULL) && o->exit_order == r->exit_order &&
+                      (o->texels != NULL) == (r->texels != NULL) && o->texel_width == r->texel_width && o->texel_height == r->texel_height &&
+                      (o->kvec != NULL) == (r->kvec != NULL) && o->kvec_terms == r->kvec_terms && o->exit_mirror == r->exit_mirror;
+    if (same) {
+        prt_window_set_radiance(v->win, r->radiance, nv);
+        if (r->exit_sh) prt_window_set_exit(v->win, r->exit_sh, nv);
+        if (r->texels) prt_window_set_texels(v->win, r->texels, r->texel_width, r->texel_height);
+        if (r->kvec) prt_window_set_kvec(v->win, r->kvec, nv);
+    } else {
+        prt_render_mesh mesh;
+        prt_relit_render_mesh(v->t, r, &mesh);
+        prt_window_set_mesh(v->win, &mesh);
+    }
+    prt_relit_free(&v->shown);
+    v->shown = *r;
+    memset(r, 0, sizeof *r);
 }
 
-/* Takes a finished result, if any; returns true when new radiance was uploaded. */
+/* Takes a finished result, if any; returns true when something new is shown. */
 static bool take_result(viewer *v)
 {
     bool got = false;
     pthread_mutex_lock(&v->lock);
-    if (v->result_ready && v->kvec) {
-        memcpy(v->kvec, v->result, prt_transfer_vertex_count(v->t) * 3 * (size_t)v->kterms * sizeof(float));
-        shade(v);
-    } else if (v->result_ready) {
-        prt_window_set_radiance(v->win, v->result, prt_transfer_vertex_count(v->t));
-        if (v->exit_floats) prt_window_set_exit(v->win, v->result_exit, prt_transfer_vertex_count(v->t));
-        if (v->result_texels)
-            prt_window_set_texels(v->win, v->result_has_texels ? v->result_texels : NULL, v->texel_width, v->texel_height);
-    }
     if (v->result_ready) {
+        if (v->result_status) {
+            /* Refused (a component the method cannot separate, say): say why and go back. */
+            snprintf(v->message, sizeof v->message, "%s", v->result_error);
+            if (v->want.component) { v->want.component = 0; v->job = v->want; v->want.version++; v->job.version = v->want.version; v->job_posted = true; pthread_cond_broadcast(&v->wake); }
+        } else {
+            show(v, &v->result);
+        }
         v->shown_version = v->result_version;
         v->result_ready = false;
         v->relight_ms_sum += v->relight_ms;
@@ -269,13 +230,21 @@ static void status_line(const viewer *v, char *buf, size_t n)
     static const char *component[3] = {"", " (direct only)", " (indirect only)"};
     double frames = v->frames ? (double)v->frames : 1.0, draws = v->draws ? (double)v->draws : 1.0;
     double relights = v->relights ? (double)v->relights : 1.0;
-    int len = v->kvec ? snprintf(buf, n, "wavelet, up to %d terms, %d light coefficients, %zu vertices, exposure %+.1f, light at %.0f, %.0f deg\nframe %.2f ms  draw %.2f ms  relight %.2f ms  (h: help)",
-                                 v->kterms, v->want.light_coefficients, prt_transfer_vertex_count(v->t), v->exposure, v->want.env_yaw, v->want.env_pitch,
-                                 v->frame_ms_sum / frames, v->draw_ms_sum / draws, v->relight_ms_sum / relights)
-                      : snprintf(buf, n, "SH %s%s, order %d, %zu vertices, exposure %+.1f, light at %.0f, %.0f deg\nframe %.2f ms  draw %.2f ms  relight %.2f ms  (h: help)",
-                       prt_transfer_kind_name(v->want.component ? PRT_TRANSFER_INTERREFLECTED : v->want.kind), component[v->want.component],
-                       v->want.order, prt_transfer_vertex_count(v->t), v->exposure, v->want.env_yaw, v->want.env_pitch,
-                       v->frame_ms_sum / frames, v->draw_ms_sum / draws, v->relight_ms_sum / relights);
+    char settings[256] = "";
+    const prt_control_desc *cd;
+    int nc = prt_transfer_controls(v->t, &cd);
+    for (int i = 0, at = 0; i < nc && at < (int)sizeof settings; ++i)
+        at += snprintf(settings + at, sizeof settings - (size_t)at, ", %s %d", cd[i].name, v->want.controls[i]);
+    int len = snprintf(buf, n, "%s %s%s%s, %zu vertices, exposure %+.1f, light at %.0f, %.0f deg\nframe %.2f ms  draw %.2f ms  relight %.2f ms  (h: help)",
+                       prt_method_name(prt_transfer_method(v->t)), prt_transfer_variant_name(v->t, v->want.variant), component[v->want.component], settings,
+                       prt_transfer_vertex_count(v->t), v->exposure, v->want.env_yaw, v->want.env_pitch, v->frame_ms_sum / frames, v->draw_ms_sum / draws,
+                       v->relight_ms_sum / relights);
+    for (int i = 0; i < v->want.light_count && len > 0 && (size_t)len < n; ++i) {
+        char spec[256];
+        prt_light_format(&v->want.lights[i], spec, sizeof spec);
+        len += snprintf(buf + len, n - (size_t)len, "\n%s light %d: %s", i == v->selected ? ">" : " ", i + 1, spec);
+    }
+    if (v->message[0] && len > 0 && (size_t)len < n) len += snprintf(buf + len, n - (size_t)len, "\n%s", v->message);
     if (v->help)
         for (int i = 0; i < v->ncontrols && len > 0 && (size_t)len < n; ++i)
             len += snprintf(buf + len, n - (size_t)len, "\n  %-7s %s", v->controls[i].name, v->controls[i].help);
@@ -328,12 +297,20 @@ static void handle(viewer *v, const prt_event *e)
         v->last_x = e->x;
         v->last_y = e->y;
         if (!v->drag_button) break;
-        if (v->drag_mods & PRT_MOD_CTRL) view_rotate_env(v, (float)dx * 0.25f, (float)dy * 0.25f);
+        if (v->drag_mods & PRT_MOD_ALT) {
+            /* Lights follow the cursor: a pixel moves them by the view's extent at the target. */
+            const float px = v->dist > 0 ? v->dist * 0.0015f : 0.01f;
+            if (v->drag_button == 2) view_light_move(v, 0, 0, (float)dy * px);
+            else view_light_move(v, (float)dx * px, (float)-dy * px, 0);
+        } else if (v->drag_mods & PRT_MOD_CTRL) view_rotate_env(v, (float)dx * 0.25f, (float)dy * 0.25f);
         else if (v->drag_button == 2 || (v->drag_mods & PRT_MOD_SHIFT)) view_pan(v, (float)dx / 400.0f, (float)dy / 400.0f);
         else view_orbit(v, (float)-dx * 0.3f, (float)dy * 0.3f);
         break;
     }
-    case PRT_EVENT_SCROLL: view_zoom(v, powf(0.9f, (float)e->y)); break;
+    case PRT_EVENT_SCROLL:
+        if (v->drag_mods & PRT_MOD_ALT) view_light_move(v, 0, 0, (float)e->y * (v->dist > 0 ? v->dist : 1.0f) * 0.05f);
+        else view_zoom(v, powf(0.9f, (float)e->y));
+        break;
     case PRT_EVENT_NONE: break;
     }
 }
@@ -381,18 +358,30 @@ int cmd_view(int argc, char **argv)
     if (rc) return rc;
     if ((rc = cli_make_context(&c))) { view_script_free(script); return rc; }
     prt_status st = prt_transfer_load(c.ctx, argv[optind], &v.t);
-    prt_transfer_info info;
-    if (!st) {
-        prt_transfer_get_info(v.t, &info);
-        cli_light_defaults_from(&v.light, v.t);
-        st = cli_light_project(&c, &v.light, info.order, &v.sh, prt_transfer_channels(v.t, PRT_TRANSFER_WAVELET) ? &v.env : NULL);
-    }
+    if (!st) st = cli_lighting(&c, &v.light, v.t, NULL, &v.lighting);
     if (!st) st = prt_context_create(&(prt_context_desc){c.threads, NULL, NULL}, &v.worker_ctx);
+    if (!st) {
+        /* The file's lights become the viewer's to edit; the worker relights with a copy per job. */
+        prt_lighting_rotation(v.lighting, v.base_rot);
+        v.want.light_count = prt_lighting_count(v.lighting);
+        for (int i = 0; i < v.want.light_count && i < CLI_MAX_LIGHTS; ++i) v.want.lights[i] = *prt_lighting_light(v.lighting, i);
+        v.selected = v.want.light_count ? 0 : -1;
+        v.want.variant = prt_transfer_default_variant(v.t, 1);
+        const prt_control_desc *cd;
+        for (int i = 0; i < prt_transfer_controls(v.t, &cd); ++i) prt_transfer_control_range(v.t, i, NULL, NULL, &v.want.controls[i]);
+        /* The first frame is lit before the window opens, so a bad lighting fails at once. */
+        prt_relit first;
+        v.job = v.want;
+        st = relight(&v, &v.want, &first);
+        if (!st) v.shown = first;
+    }
     char title[600];
     snprintf(title, sizeof title, "prt view - %s", argv[optind]);
     if (!st) st = prt_window_create(c.ctx, &(prt_window_desc){width, height, 0, title}, &v.win);
     if (st) {
         rc = cli_fail(&c, st);
+        prt_relit_free(&v.shown);
+        prt_lighting_release(v.lighting);
         prt_transfer_release(v.t);
         prt_context_release(v.worker_ctx);
         prt_context_release(c.ctx);
@@ -400,50 +389,14 @@ int cmd_view(int argc, char **argv)
         return rc;
     }
     view_register_core(&v);
-    size_t nv = prt_transfer_vertex_count(v.t);
-    if (v.env) {
-        prt_wavelet_info wi;
-        prt_transfer_wavelet_info(v.t, &wi);
-        v.kterms = wi.terms;
-        v.kvec = calloc(nv * 3 * (size_t)v.kterms, sizeof(float));
-        v.shaded = calloc(nv * 3, sizeof(float));
-        v.want.light_coefficients = 4096;
-        view_register_wavelet(&v);
-    } else {
-        view_register_sh(&v);
+    view_register_method(&v);
+    view_register_lights(&v);
+    const size_t nv = prt_transfer_vertex_count(v.t);
+    {
+        prt_render_mesh mesh;
+        prt_relit_render_mesh(v.t, &v.shown, &mesh);
+        prt_window_set_mesh(v.win, &mesh);
     }
-    v.result = calloc(nv * 3 * (size_t)(v.kterms ? v.kterms : 1), sizeof(float));
-    if (v.env && (!v.kvec || !v.shaded)) { free(v.result); v.result = NULL; }
-    if (prt_transfer_channels(v.t, PRT_TRANSFER_GLOSSY_SHADOWED) || prt_transfer_channels(v.t, PRT_TRANSFER_GLOSSY_INTERREFLECTED)) {
-        v.exit_floats = 3 * (size_t)info.order * info.order;
-        v.result_exit = calloc(nv * v.exit_floats, sizeof(float));
-    }
-    if (prt_transfer_texel_size(v.t, &v.texel_width, &v.texel_height))
-        v.result_texels = calloc((size_t)v.texel_width * v.texel_height * 3, sizeof(float));
-    if (!v.result || (v.exit_floats && !v.result_exit) || (v.texel_width && !v.result_texels)) {
-        cli_error(&c, "out of memory");
-        free(v.result);
-        free(v.result_exit);
-        free(v.result_texels);
-        prt_window_release(v.win);
-        prt_transfer_release(v.t);
-        prt_context_release(v.worker_ctx);
-        prt_context_release(c.ctx);
-        view_script_free(script);
-        return EXIT_NO_MEMORY;
-    }
-    prt_render_mesh mesh = {.positions = prt_transfer_positions(v.t), .radiance = v.result, .vertex_count = nv,
-                            .indices = prt_transfer_indices(v.t), .triangle_count = prt_transfer_triangle_count(v.t),
-                            .normals = prt_transfer_normals(v.t), .exit_sh = v.result_exit, .exit_order = v.exit_floats ? info.order : 0,
-                            .exit_mirror = prt_transfer_glossy_mirror(v.t), .uv = prt_transfer_uvs(v.t)};
-    if (v.kvec) {
-        mesh.radiance = v.shaded;
-        if (prt_wavelet_view_maps(v.t, &mesh.view_maps, &mesh.view_map_sets, &mesh.view_map_resolution, &mesh.view_map_polar, &mesh.view_set)) {
-            mesh.kvec = v.kvec;
-            mesh.kvec_terms = v.kterms;
-        }
-    }
-    prt_window_set_mesh(v.win, &mesh);
     int fw, fh;
     prt_window_size(v.win, &fw, &fh);
     prt_camera_frame((float[3]){0, 0, 0}, (float[3]){0, 0, 0}, NULL, 40, 1, &v.start_cam);
@@ -451,13 +404,10 @@ int cmd_view(int argc, char **argv)
         cli_view view = CLI_VIEW_DEFAULTS;   /* the same framing as prt render */
         cli_view_camera(&view, prt_transfer_positions(v.t), nv, (float)fw / fh, &v.start_cam);
     }
-    v.want.kind = cli_default_view_kind(v.t);
-    v.want.order = info.order;
+    v.result_version = v.shown_version = v.want.version;
     pthread_mutex_init(&v.lock, NULL);
     pthread_cond_init(&v.wake, NULL);
     pthread_create(&v.thread, NULL, worker, &v);
-    view_request_relight(&v);
-    view_sync(&v);   /* the first frame is lit */
 
     double start = now();
     v.dirty = true;
@@ -491,12 +441,9 @@ int cmd_view(int argc, char **argv)
     prt_window_release(v.win);
     pthread_mutex_destroy(&v.lock);
     pthread_cond_destroy(&v.wake);
-    free(v.result);
-    free(v.result_exit);
-    free(v.result_texels);
-    free(v.kvec);
-    free(v.shaded);
-    prt_envmap_release(v.env);
+    prt_relit_free(&v.result);
+    prt_relit_free(&v.shown);
+    prt_lighting_release(v.lighting);
     prt_transfer_release(v.t);
     prt_context_release(v.worker_ctx);
     prt_context_release(c.ctx);

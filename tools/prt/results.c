@@ -108,44 +108,36 @@ static prt_status read_field(const cJSON *root, const char *name, size_t nv, con
     return PRT_OK;
 }
 
-/* A .prt relit under the lighting and kind asked for. */
-static prt_status relight_file(cli *c, const char *path, const cli_light *light_in, prt_transfer_kind kind, cli_result *out)
+/* A .prt relit under the lighting and variant asked for. */
+static prt_status relight_file(cli *c, const char *path, const cli_light *light, const char *kind, cli_result *out)
 {
     prt_status st;
     if ((st = prt_transfer_load(c->ctx, path, &out->transfer))) return st;
     prt_transfer *t = out->transfer;
-    cli_light light = *light_in;
-    cli_light_defaults_from(&light, t);
-    if (!kind) kind = cli_default_kind(t);
-    prt_transfer_info info;
-    prt_transfer_get_info(t, &info);
-    prt_sh_light sh;
-    if ((st = cli_light_project(c, &light, info.order, &sh, NULL))) return st;
+    int variant = kind ? prt_transfer_find_variant(t, kind) : prt_transfer_default_variant(t, 0);
+    if (variant < 0) return PRT_ERR_INVALID_ARG;
+    prt_lighting *lighting = NULL;
+    if ((st = cli_lighting(c, light, t, NULL, &lighting))) return st;
+    prt_relit r;
+    st = cli_relight(c, t, lighting, light, variant, true, true, &r);
+    prt_lighting_release(lighting);
+    if (st) return st;
     out->nv = prt_transfer_vertex_count(t);
     out->radiance = malloc(out->nv * 3 * sizeof(float));
-    if (!out->radiance) return PRT_ERR_NO_MEMORY;
-    if (kind == PRT_TRANSFER_WAVELET) {
-        /* View-dependent vertices are seen from the auto-framed camera that render uses. */
-        cli_view view = CLI_VIEW_DEFAULTS;
-        prt_camera cam;
-        cli_view_camera(&view, prt_transfer_positions(t), out->nv, (float)view.width / view.height, &cam);
-        if ((st = cli_relight_wavelet(c, t, &light, cam.eye, out->radiance))) return st;
-        snprintf(out->what, sizeof out->what, "%s (%s)", path, prt_transfer_kind_name(kind));
-        return PRT_OK;
-    }
-    if ((st = prt_relight_sh(c->ctx, t, kind, &sh, out->radiance))) return st;
-    if (kind == PRT_TRANSFER_INTERREFLECTED && prt_transfer_channels(t, PRT_TRANSFER_SHADOWED)) {
-        /* Inter-reflected minus shadowed is the light that bounced at least once. */
-        out->indirect = malloc(out->nv * 3 * sizeof(float));
-        if (!out->indirect) return PRT_ERR_NO_MEMORY;
-        if ((st = prt_relight_sh(c->ctx, t, PRT_TRANSFER_SHADOWED, &sh, out->indirect))) return st;
-        for (size_t i = 0; i < out->nv * 3; ++i) out->indirect[i] = out->radiance[i] - out->indirect[i];
-    }
-    snprintf(out->what, sizeof out->what, "%s (%s)", path, prt_transfer_kind_name(kind));
-    return PRT_OK;
+    if (!out->radiance) { prt_relit_free(&r); return PRT_ERR_NO_MEMORY; }
+    /* View-dependent vertices are seen from the auto-framed camera that render uses. */
+    cli_view view = CLI_VIEW_DEFAULTS;
+    prt_camera cam;
+    cli_view_camera(&view, prt_transfer_positions(t), out->nv, (float)view.width / view.height, &cam);
+    st = prt_relit_shade(c->ctx, t, &r, cam.eye, out->radiance);
+    out->indirect = r.indirect;   /* the result takes it over */
+    r.indirect = NULL;
+    prt_relit_free(&r);
+    snprintf(out->what, sizeof out->what, "%s (%s)", path, prt_transfer_variant_name(t, variant));
+    return st;
 }
 
-static prt_status load(cli *c, const char *path, const cli_light *light_in, prt_transfer_kind kind, cli_result *out)
+static prt_status load(cli *c, const char *path, const cli_light *light_in, const char *kind, cli_result *out)
 {
     memset(out, 0, sizeof *out);
     snprintf(out->what, sizeof out->what, "%s", path);
@@ -190,7 +182,7 @@ static prt_status load(cli *c, const char *path, const cli_light *light_in, prt_
     return st;
 }
 
-prt_status cli_result_load(cli *c, const char *path, const cli_light *light, prt_transfer_kind kind, cli_result *out)
+prt_status cli_result_load(cli *c, const char *path, const cli_light *light, const char *kind, cli_result *out)
 {
     /* Every failure is reported once, where it happens. */
     prt_status st = load(c, path, light, kind, out);

@@ -15,18 +15,20 @@ typedef struct view_control {
     int key;                   /* GLFW key code: upper-case ASCII for letters, '[', ']', '=', '-' ... */
     const char *name;          /* how scripts and the help overlay name the key */
     const char *help;
-    void (*fn)(viewer *v);
+    void (*fn)(viewer *v, int arg);
+    int arg;                   /* passed to fn: lets one function serve several keys */
 } view_control;
 
 #define VIEW_MAX_CONTROLS 64
 
-/* What the relight worker computes: everything that changes the per-vertex radiance. */
+/* What the relight worker computes from: everything that changes what relighting produces. */
 typedef struct relight_job {
-    prt_transfer_kind kind;
-    int order;
-    int component;             /* 0 full, 1 direct only, 2 indirect only */
-    float env_yaw, env_pitch;  /* degrees */
-    int light_coefficients;    /* wavelet: Haar coefficients of the lighting kept */
+    int variant;
+    int component;             /* PRT_COMPONENT_*: all, direct only, indirect only */
+    int controls[PRT_MAX_CONTROLS];   /* the method's run-time controls */
+    float env_yaw, env_pitch;  /* degrees, on top of the file's rotation */
+    prt_light lights[CLI_MAX_LIGHTS];
+    int light_count;
     unsigned version;
 } relight_job;
 
@@ -35,7 +37,6 @@ struct viewer {
     prt_window *win;
     prt_transfer *t;
     cli_light light;
-    prt_sh_light sh;            /* the environment projected at the file's order, unrotated */
     /* camera: the auto-framed start until the user moves it, then an orbit */
     prt_camera start_cam;
     bool moved;
@@ -45,28 +46,25 @@ struct viewer {
     int tonemap;
     float background[3];
     bool hud, help;
+    char message[256];          /* one line shown under the status (a refused action) */
     /* lighting and method state */
     relight_job want;
-    /* relight worker */
+    int selected;               /* the light the light controls act on, -1 = none */
+    /* relight worker: owns `lighting` (the file's, with the command line's overrides) */
     pthread_t thread;
     pthread_mutex_t lock;
     pthread_cond_t wake;
     bool quit_worker, job_posted, result_ready;
     relight_job job;
-    float *result;              /* written by the worker under lock */
-    float *result_exit;         /* glossy exit SH per vertex, when the file has glossy sets */
-    size_t exit_floats;         /* per vertex: 3 x order^2, or 0 */
-    /* wavelet files: the worker returns light-dependent K-vectors (result, kterms x 3 per
-     * vertex); the GPU applies the view factor per pixel, so camera moves relight nothing. */
-    prt_envmap *env;
-    int kterms;
-    float *kvec, *shaded;
-    float *result_texels;       /* per-texel radiance map, when the file has texel sets */
-    bool result_has_texels;     /* the latest result used them (its kind has a texel set) */
-    int texel_width, texel_height;
+    prt_lighting *lighting;
+    double base_rot[9];         /* the lighting's own rotation, under the viewer's */
+    prt_relit result;           /* written by the worker under lock */
+    prt_status result_status;
+    char result_error[256];
     unsigned result_version, shown_version;
     double relight_ms;
     prt_context *worker_ctx;
+    prt_relit shown;            /* what the window draws now */
     /* input */
     view_control controls[VIEW_MAX_CONTROLS];
     int ncontrols;
@@ -81,8 +79,10 @@ struct viewer {
 
 void view_register(viewer *v, const view_control *table, int count);
 void view_register_core(viewer *v);
-void view_register_sh(viewer *v);
-void view_register_wavelet(viewer *v);
+/* The method's run-time controls (prt_transfer_controls), bound to the keys it suggests. */
+void view_register_method(viewer *v);
+/* Light editing, for the light types the file's method relights. */
+void view_register_lights(viewer *v);
 /* Looks a key up by its script name ("k", "[", "escape"); returns 0 if unknown. */
 int view_key_code(const viewer *v, const char *name);
 /* Runs the control bound to key, if any. */
@@ -93,6 +93,18 @@ void view_orbit(viewer *v, float dyaw_deg, float dpitch_deg);
 void view_pan(viewer *v, float dx, float dy);
 void view_zoom(viewer *v, float factor);
 void view_rotate_env(viewer *v, float dyaw_deg, float dpitch_deg);
+/* Light editing, shared by keys, mouse and scripts; each returns false (with v->message set)
+ * when the action does not apply. */
+bool view_light_add(viewer *v, prt_light_type type, const float *position);
+bool view_light_select(viewer *v, int index);
+bool view_light_remove(viewer *v);
+/* Moves the selected light: point, spot and sphere lights by (dx, dy) of the view plane and dz
+ * along the view direction (world units); directional lights turn by dx, dy degrees. */
+bool view_light_move(viewer *v, float dx, float dy, float dz);
+bool view_light_scale(viewer *v, float factor);
+bool view_light_colour(viewer *v, const float rgb[3]);
+/* The light types the file's method relights (PRT_LIGHTS_* bits). */
+unsigned view_light_types(const viewer *v);
 void view_camera(const viewer *v, prt_camera *cam);
 /* Posts the wanted relight to the worker. */
 void view_request_relight(viewer *v);

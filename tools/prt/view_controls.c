@@ -1,7 +1,9 @@
-/* The viewer's key bindings, one table per concern: core (camera, display, files) here, and a
- * table per method. Adding a method adds a table and a view_register call, not a case. */
+/* The viewer's key bindings, one table per concern: core (camera, display, files), the
+ * method's run-time controls as the method table declares them, and light editing for the
+ * light types the method relights. The viewer never switches on the method. */
 #include "view.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
@@ -22,126 +24,286 @@ void view_press(viewer *v, int key)
 {
     for (int i = 0; i < v->ncontrols; ++i)
         if (v->controls[i].key == key) {
-            v->controls[i].fn(v);
+            v->message[0] = 0;
+            v->controls[i].fn(v, v->controls[i].arg);
             v->dirty = true;
             return;
         }
 }
 
 /* ---- core ---- */
-static void quit(viewer *v) { v->quit = true; }
-static void toggle_help(viewer *v) { v->help = !v->help; }
-static void toggle_hud(viewer *v) { v->hud = !v->hud; }
-static void brighter(viewer *v) { v->exposure += 0.5f; }
-static void darker(viewer *v) { v->exposure -= 0.5f; }
-static void cycle_tonemap(viewer *v) { v->tonemap = v->tonemap == 2 ? 1 : 2; }
-static void reset_view(viewer *v)
+static void quit(viewer *v, int arg) { (void)arg; v->quit = true; }
+static void toggle_help(viewer *v, int arg) { (void)arg; v->help = !v->help; }
+static void toggle_hud(viewer *v, int arg) { (void)arg; v->hud = !v->hud; }
+static void exposure(viewer *v, int arg) { v->exposure += 0.5f * (float)arg; }
+static void cycle_tonemap(viewer *v, int arg) { (void)arg; v->tonemap = v->tonemap == 2 ? 1 : 2; }
+static void reset_view(viewer *v, int arg)
 {
+    (void)arg;
     v->moved = false;
     v->want.env_yaw = v->want.env_pitch = 0;
     view_request_relight(v);
 }
-static void reload_probe(viewer *v)
+static void reload_probe(viewer *v, int arg)
 {
-    prt_transfer_info info;
-    prt_transfer_get_info(v->t, &info);
-    prt_sh_light sh;
-    prt_envmap *env = NULL;
-    if (cli_light_project(v->c, &v->light, info.order, &sh, v->env ? &env : NULL)) {
-        cli_error(v->c, "reload failed: %s", prt_last_error());
+    (void)arg;
+    prt_lighting *l = NULL;
+    if (cli_lighting(v->c, &v->light, v->t, NULL, &l)) {
+        snprintf(v->message, sizeof v->message, "reload failed: %s", prt_last_error());
         return;
     }
-    if (env) {   /* the worker reads the map: swap it while the worker is idle */
-        view_sync(v);
-        prt_envmap_release(v->env);
-        v->env = env;
-    }
-    /* cli_light_project applies the file's rotation and intensity; the viewer's own rotation
-     * is applied by the worker on top. */
-    v->sh = sh;
+    /* The worker reads the lighting: swap it while the worker is idle. */
+    view_sync(v);
+    prt_lighting_release(v->lighting);
+    v->lighting = l;
+    prt_lighting_rotation(l, v->base_rot);
     view_request_relight(v);
 }
-static void screenshot(viewer *v)
+static void screenshot(viewer *v, int arg)
 {
+    (void)arg;
     char path[64];
     snprintf(path, sizeof path, "prt-screenshot-%d.png", ++v->screenshots);
-    if (view_screenshot(v, path)) cli_error(v->c, "screenshot failed: %s", prt_last_error());
+    if (view_screenshot(v, path)) snprintf(v->message, sizeof v->message, "screenshot failed: %s", prt_last_error());
     else if (!v->c->quiet) fprintf(stderr, "prt view: wrote %s\n", path);
+}
+static void next_variant(viewer *v, int arg)
+{
+    (void)arg;
+    v->want.variant = (v->want.variant + 1) % prt_transfer_variant_count(v->t);
+    view_request_relight(v);
+}
+static void next_component(viewer *v, int arg)
+{
+    (void)arg;
+    v->want.component = (v->want.component + 1) % 3;   /* a method that cannot separate them says so */
+    view_request_relight(v);
 }
 
 static const view_control core[] = {
-    {PRT_KEY_ESCAPE, "escape", "quit", quit},
-    {'Q', "q", "quit", quit},
-    {'H', "h", "show or hide this help", toggle_help},
-    {'I', "i", "show or hide the status line", toggle_hud},
-    {'=', "+", "exposure +1/2 stop", brighter},
-    {'-', "-", "exposure -1/2 stop", darker},
-    {'T', "t", "tone mapping: Reinhard / clamp", cycle_tonemap},
-    {'0', "0", "reset camera and lighting rotation", reset_view},
-    {'L', "l", "reload the environment probe", reload_probe},
-    {'P', "p", "screenshot (prt-screenshot-N.png)", screenshot},
+    {PRT_KEY_ESCAPE, "escape", "quit", quit, 0},
+    {'Q', "q", "quit", quit, 0},
+    {'H', "h", "show or hide this help", toggle_help, 0},
+    {'I', "i", "show or hide the status line", toggle_hud, 0},
+    {'=', "+", "exposure +1/2 stop", exposure, 1},
+    {'-', "-", "exposure -1/2 stop", exposure, -1},
+    {'T', "t", "tone mapping: Reinhard / clamp", cycle_tonemap, 0},
+    {'0', "0", "reset camera and lighting rotation", reset_view, 0},
+    {'L', "l", "reload the lighting (probe and lights) from disk", reload_probe, 0},
+    {'P', "p", "screenshot (prt-screenshot-N.png)", screenshot, 0},
+    {'K', "k", "relight the file as its next kind (prt info lists them)", next_variant, 0},
+    {'D', "d", "full / direct only / indirect only", next_component, 0},
 };
 
 void view_register_core(viewer *v) { view_register(v, core, (int)(sizeof core / sizeof core[0])); }
 
-/* ---- spherical-harmonic PRT ---- */
-static void next_kind(viewer *v)
+/* ---- the method's controls ---- */
+static void control_step(viewer *v, int arg)
 {
-    for (int step = 1; step <= 5; ++step) {
-        int i = 0;
-        while ((1u << i) != (unsigned)v->want.kind) ++i;
-        prt_transfer_kind k = (prt_transfer_kind)(1u << ((i + step) % 5));
-        if (prt_transfer_channels(v->t, k)) {
-            v->want.kind = k;
-            break;
+    const int i = (arg < 0 ? -arg : arg) - 1;
+    const prt_control_desc *cd;
+    prt_transfer_controls(v->t, &cd);
+    int lo, hi, value = v->want.controls[i];
+    prt_transfer_control_range(v->t, i, &lo, &hi, NULL);
+    if (cd[i].multiplicative) value = arg < 0 ? value / 2 : value * 2;
+    else value += arg < 0 ? -1 : 1;
+    v->want.controls[i] = value < lo ? lo : value > hi ? hi : value;
+    view_request_relight(v);
+}
+
+void view_register_method(viewer *v)
+{
+    static char help[PRT_MAX_CONTROLS][2][96];
+    static char names[PRT_MAX_CONTROLS][2][4];
+    const prt_control_desc *cd;
+    const int n = prt_transfer_controls(v->t, &cd);
+    for (int i = 0; i < n && i < PRT_MAX_CONTROLS; ++i)
+        for (int up = 0; up < 2; ++up) {
+            const int key = up ? cd[i].key_up : cd[i].key_down;
+            snprintf(names[i][up], sizeof names[i][up], "%c", (char)(key >= 'A' && key <= 'Z' ? key - 'A' + 'a' : key));
+            snprintf(help[i][up], sizeof help[i][up], "%s %s: %s", cd[i].name, cd[i].multiplicative ? (up ? "x2" : "/2") : (up ? "+1" : "-1"), cd[i].help);
+            view_control c = {key, names[i][up], help[i][up], control_step, up ? i + 1 : -(i + 1)};
+            view_register(v, &c, 1);
         }
+}
+
+/* ---- lights ---- */
+unsigned view_light_types(const viewer *v)
+{
+    return prt_method_lighting(prt_transfer_method(v->t)) & (PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_DIRECTIONAL | PRT_LIGHTS_SPHERE);
+}
+
+static void scene_frame(const viewer *v, float centre[3], float *size)
+{
+    const float *p = prt_transfer_positions(v->t);
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < prt_transfer_vertex_count(v->t) * 3; ++i) {
+        lo[i % 3] = fminf(lo[i % 3], p[i]);
+        hi[i % 3] = fmaxf(hi[i % 3], p[i]);
     }
-    view_request_relight(v);
-}
-static void order_down(viewer *v)
-{
-    if (v->want.order > 1) v->want.order--;
-    view_request_relight(v);
-}
-static void order_up(viewer *v)
-{
-    prt_transfer_info info;
-    prt_transfer_get_info(v->t, &info);
-    if (v->want.order < info.order) v->want.order++;
-    view_request_relight(v);
-}
-static void next_component(viewer *v)
-{
-    /* Direct and indirect are separable when the file holds shadowed and inter-reflected sets. */
-    bool split = prt_transfer_channels(v->t, PRT_TRANSFER_SHADOWED) && prt_transfer_channels(v->t, PRT_TRANSFER_INTERREFLECTED);
-    v->want.component = split ? (v->want.component + 1) % 3 : 0;
-    view_request_relight(v);
+    *size = 0;
+    for (int k = 0; k < 3; ++k) {
+        centre[k] = 0.5f * (lo[k] + hi[k]);
+        *size = fmaxf(*size, hi[k] - lo[k]);
+    }
 }
 
-static const view_control sh[] = {
-    {'K', "k", "next transfer kind (unshadowed, shadowed, inter-reflected, glossy ones)", next_kind},
-    {'[', "[", "SH order -1", order_down},
-    {']', "]", "SH order +1", order_up},
-    {'D', "d", "full / direct only / indirect only", next_component},
+bool view_light_add(viewer *v, prt_light_type type, const float *position)
+{
+    if (!(view_light_types(v) & prt_light_type_bit(type))) {
+        char names[128];
+        prt_methods_relighting(prt_light_type_bit(type), names, sizeof names);
+        snprintf(v->message, sizeof v->message, "method %s cannot relight %s%s%s", prt_method_name(prt_transfer_method(v->t)),
+                 prt_lights_bit_name(prt_light_type_bit(type)), names[0] ? "; bake with --method " : " (no method of this prt can yet)", names);
+        return false;
+    }
+    if (v->want.light_count == CLI_MAX_LIGHTS) { snprintf(v->message, sizeof v->message, "at most %d lights", CLI_MAX_LIGHTS); return false; }
+    float centre[3], size;
+    scene_frame(v, centre, &size);
+    prt_light l;
+    memset(&l, 0, sizeof l);
+    l.type = type;
+    /* A new light sits above the scene's centre, aimed at it, bright enough to see at once. */
+    const float above[3] = {centre[0], centre[1] + 0.75f * size, centre[2]};
+    memcpy(l.position, position ? position : above, sizeof l.position);
+    const float d[3] = {0.3f, 0.9f, 0.3f};
+    if (type == PRT_LIGHT_DIRECTIONAL) {
+        memcpy(l.direction, d, sizeof d);
+        l.irradiance[0] = l.irradiance[1] = l.irradiance[2] = 3.0f;
+    } else if (type == PRT_LIGHT_SPHERE) {
+        l.radius = 0.05f * size;
+        l.radiance[0] = l.radiance[1] = l.radiance[2] = 20.0f;
+    } else {
+        for (int k = 0; k < 3; ++k) l.direction[k] = centre[k] - l.position[k];
+        l.intensity[0] = l.intensity[1] = l.intensity[2] = size * size;
+        l.angle_deg = type == PRT_LIGHT_SPOT ? 30.0f : 0.0f;
+    }
+    if (prt_light_validate(&l)) { snprintf(v->message, sizeof v->message, "%s", prt_last_error()); return false; }
+    v->want.lights[v->want.light_count] = l;
+    v->selected = v->want.light_count++;
+    view_request_relight(v);
+    return true;
+}
+
+bool view_light_select(viewer *v, int index)
+{
+    if (index < 0 || index >= v->want.light_count) {
+        snprintf(v->message, sizeof v->message, "no light %d (there %s %d)", index + 1, v->want.light_count == 1 ? "is" : "are", v->want.light_count);
+        return false;
+    }
+    v->selected = index;
+    return true;
+}
+
+static prt_light *selected(viewer *v)
+{
+    if (v->selected < 0 || v->selected >= v->want.light_count) {
+        snprintf(v->message, sizeof v->message, "no light selected (n adds one, tab selects)");
+        return NULL;
+    }
+    return &v->want.lights[v->selected];
+}
+
+bool view_light_remove(viewer *v)
+{
+    if (!selected(v)) return false;
+    memmove(&v->want.lights[v->selected], &v->want.lights[v->selected + 1], (size_t)(v->want.light_count - v->selected - 1) * sizeof(prt_light));
+    v->want.light_count--;
+    if (v->selected >= v->want.light_count) v->selected = v->want.light_count - 1;
+    view_request_relight(v);
+    return true;
+}
+
+bool view_light_move(viewer *v, float dx, float dy, float dz)
+{
+    prt_light *l = selected(v);
+    if (!l) return false;
+    prt_camera cam;
+    view_camera(v, &cam);
+    float f[3] = {cam.target[0] - cam.eye[0], cam.target[1] - cam.eye[1], cam.target[2] - cam.eye[2]}, up[3] = {0, 1, 0}, r[3], u[3];
+    float fl = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+    for (int k = 0; k < 3; ++k) f[k] /= fl > 0 ? fl : 1;
+    r[0] = f[1] * up[2] - f[2] * up[1]; r[1] = f[2] * up[0] - f[0] * up[2]; r[2] = f[0] * up[1] - f[1] * up[0];
+    float rl = sqrtf(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    for (int k = 0; k < 3; ++k) r[k] /= rl > 0 ? rl : 1;
+    u[0] = r[1] * f[2] - r[2] * f[1]; u[1] = r[2] * f[0] - r[0] * f[2]; u[2] = r[0] * f[1] - r[1] * f[0];
+    prt_light moved = *l;
+    if (l->type == PRT_LIGHT_DIRECTIONAL) {
+        /* Turn the direction: dx about the view's up, dy about its right (degrees). */
+        float a = dx * 3.14159265f / 180.0f * 20.0f, b = dy * 3.14159265f / 180.0f * 20.0f, *d = moved.direction;
+        for (int k = 0; k < 3; ++k) d[k] += a * r[k] + b * u[k];
+    } else {
+        for (int k = 0; k < 3; ++k) moved.position[k] += dx * r[k] + dy * u[k] + dz * f[k];
+    }
+    if (prt_light_validate(&moved)) { snprintf(v->message, sizeof v->message, "%s", prt_last_error()); return false; }
+    *l = moved;
+    view_request_relight(v);
+    return true;
+}
+
+static float *colour_of(prt_light *l)
+{
+    return l->type == PRT_LIGHT_DIRECTIONAL ? l->irradiance : l->type == PRT_LIGHT_SPHERE ? l->radiance : l->intensity;
+}
+
+bool view_light_scale(viewer *v, float factor)
+{
+    prt_light *l = selected(v);
+    if (!l || !(factor >= 0) || !isfinite(factor)) return false;
+    float *c = colour_of(l);
+    for (int k = 0; k < 3; ++k) c[k] *= factor;
+    view_request_relight(v);
+    return true;
+}
+
+bool view_light_colour(viewer *v, const float rgb[3])
+{
+    prt_light *l = selected(v);
+    if (!l) return false;
+    for (int k = 0; k < 3; ++k)
+        if (!(rgb[k] >= 0) || !isfinite(rgb[k])) { snprintf(v->message, sizeof v->message, "a light's colour is three numbers >= 0"); return false; }
+    /* Keep the power, change the hue: the new colour is scaled to the old luminance. */
+    float *c = colour_of(l);
+    const float old = 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2], neu = 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
+    for (int k = 0; k < 3; ++k) c[k] = neu > 0 && old > 0 ? rgb[k] * old / neu : rgb[k];
+    view_request_relight(v);
+    return true;
+}
+
+static void add_light(viewer *v, int arg)
+{
+    (void)arg;
+    /* The first type the method relights, in the order users reach for them. */
+    static const prt_light_type order[] = {PRT_LIGHT_POINT, PRT_LIGHT_SPOT, PRT_LIGHT_SPHERE, PRT_LIGHT_DIRECTIONAL};
+    for (size_t i = 0; i < sizeof order / sizeof order[0]; ++i)
+        if (view_light_types(v) & prt_light_type_bit(order[i])) { view_light_add(v, order[i], NULL); return; }
+}
+static void next_light(viewer *v, int arg)
+{
+    (void)arg;
+    if (v->want.light_count) v->selected = (v->selected + 1) % v->want.light_count;
+    else snprintf(v->message, sizeof v->message, "no lights (n adds one)");
+}
+static void remove_light(viewer *v, int arg) { (void)arg; view_light_remove(v); }
+static void scale_light(viewer *v, int arg) { view_light_scale(v, arg > 0 ? 1.25f : 0.8f); }
+static void recolour_light(viewer *v, int arg)
+{
+    (void)arg;
+    static const float palette[6][3] = {{1, 1, 1}, {1, 0.8f, 0.6f}, {0.6f, 0.8f, 1}, {1, 0.3f, 0.3f}, {0.3f, 1, 0.3f}, {0.3f, 0.3f, 1}};
+    static int next;
+    view_light_colour(v, palette[next++ % 6]);
+}
+
+static const view_control lights[] = {
+    {'N', "n", "add a light", add_light, 0},
+    {PRT_KEY_TAB, "tab", "select the next light", next_light, 0},
+    {'X', "x", "remove the selected light", remove_light, 0},
+    {',', ",", "dim the selected light", scale_light, -1},
+    {'.', ".", "brighten the selected light", scale_light, 1},
+    {'C', "c", "recolour the selected light", recolour_light, 0},
 };
 
-void view_register_sh(viewer *v) { view_register(v, sh, (int)(sizeof sh / sizeof sh[0])); }
-
-/* ---- wavelet PRT ---- */
-static void fewer_light_coefficients(viewer *v)
+void view_register_lights(viewer *v)
 {
-    if (v->want.light_coefficients > 64) v->want.light_coefficients /= 2;
-    view_request_relight(v);
+    if (view_light_types(v)) view_register(v, lights, (int)(sizeof lights / sizeof lights[0]));
 }
-static void more_light_coefficients(viewer *v)
-{
-    if (v->want.light_coefficients < PRT_WAVELET_DIM) v->want.light_coefficients = v->want.light_coefficients * 2 > PRT_WAVELET_DIM ? PRT_WAVELET_DIM : v->want.light_coefficients * 2;
-    view_request_relight(v);
-}
-
-static const view_control wavelet[] = {
-    {'[', "[", "keep half the lighting's Haar coefficients", fewer_light_coefficients},
-    {']', "]", "keep twice the lighting's Haar coefficients", more_light_coefficients},
-};
-
-void view_register_wavelet(viewer *v) { view_register(v, wavelet, (int)(sizeof wavelet / sizeof wavelet[0])); }

@@ -6,13 +6,15 @@
 #include <stdlib.h>
 #include <string.h>
 
-typedef enum { EV_ORBIT, EV_PAN, EV_ZOOM, EV_ENV, EV_KEY, EV_DRAG, EV_SCREENSHOT, EV_QUIT } ev_kind;
+typedef enum { EV_ORBIT, EV_PAN, EV_ZOOM, EV_ENV, EV_KEY, EV_DRAG, EV_SCREENSHOT, EV_QUIT, EV_LIGHT_ADD, EV_LIGHT_SELECT, EV_LIGHT_MOVE,
+               EV_LIGHT_SCALE, EV_LIGHT_COLOUR, EV_LIGHT_REMOVE } ev_kind;
 
 typedef struct ev {
     double time;
     ev_kind kind;
-    float a, b;
+    float a, b, c;
     int button, mods;
+    bool has_position;
     char text[512];    /* key name or screenshot path */
 } ev;
 
@@ -23,8 +25,23 @@ struct view_script {
 
 static const struct { const char *name; ev_kind kind; int nargs; } verbs[] = {
     {"orbit", EV_ORBIT, 2}, {"pan", EV_PAN, 2}, {"zoom", EV_ZOOM, 1}, {"env-rotate", EV_ENV, 2}, {"key", EV_KEY, -1},
-    {"drag", EV_DRAG, 3}, {"screenshot", EV_SCREENSHOT, -1}, {"quit", EV_QUIT, 0},
+    {"drag", EV_DRAG, 3}, {"screenshot", EV_SCREENSHOT, -1}, {"quit", EV_QUIT, 0}, {"light-add", EV_LIGHT_ADD, 1},
+    {"light-select", EV_LIGHT_SELECT, 1}, {"light-move", EV_LIGHT_MOVE, 3}, {"light-scale", EV_LIGHT_SCALE, 1},
+    {"light-colour", EV_LIGHT_COLOUR, 3}, {"light-color", EV_LIGHT_COLOUR, 3}, {"light-remove", EV_LIGHT_REMOVE, 0},
 };
+
+static const char *VERBS = "verbs: orbit DYAW DPITCH, pan DX DY, zoom F, env-rotate YAW PITCH, key NAME, drag left|right DX DY [ctrl|shift|alt], "
+                           "light-add point|spot|directional|sphere [X Y Z], light-select N, light-move DX DY DZ, light-scale F, "
+                           "light-colour R G B, light-remove, screenshot FILE, quit";
+
+static bool light_type(const char *name, prt_light_type *out)
+{
+    static const struct { const char *name; prt_light_type type; } types[] = {
+        {"point", PRT_LIGHT_POINT}, {"spot", PRT_LIGHT_SPOT}, {"directional", PRT_LIGHT_DIRECTIONAL}, {"sphere", PRT_LIGHT_SPHERE}};
+    for (size_t i = 0; i < sizeof types / sizeof types[0]; ++i)
+        if (!strcmp(name, types[i].name)) { *out = types[i].type; return true; }
+    return false;
+}
 
 int view_script_load(const cli *c, const char *path, view_script **out)
 {
@@ -39,17 +56,18 @@ int view_script_load(const cli *c, const char *path, view_script **out)
         lineno++;
         char *hash = strchr(line, '#');
         if (hash) *hash = 0;
-        char verb[32] = "", arg[3][512] = {"", "", ""};
+        char verb[32] = "", arg[4][512] = {"", "", "", ""};
         double t;
-        int n = sscanf(line, "%lf %31s %511s %511s %511s", &t, verb, arg[0], arg[1], arg[2]);
+        int n = sscanf(line, "%lf %31s %511s %511s %511s %511s", &t, verb, arg[0], arg[1], arg[2], arg[3]);
         if (n <= 0) continue;   /* blank or comment */
         int k = -1;
         for (int i = 0; i < (int)(sizeof verbs / sizeof verbs[0]); ++i)
             if (n >= 2 && !strcmp(verb, verbs[i].name)) k = i;
         bool ok = k >= 0 && t >= last && (verbs[k].nargs < 0 ? n == 3 : n - 2 >= verbs[k].nargs);
+        prt_light_type type = PRT_LIGHT_POINT;
+        if (ok && verbs[k].kind == EV_LIGHT_ADD) ok = light_type(arg[0], &type) && (n == 3 || n == 6);
         if (!ok) {
-            cli_error(c, "%s:%d: expected 'SECONDS VERB ARGS' with times in order; verbs: orbit DYAW DPITCH, pan DX DY, zoom F, "
-                         "env-rotate YAW PITCH, key NAME, drag left|right DX DY [ctrl|shift], screenshot FILE, quit", path, lineno);
+            cli_error(c, "%s:%d: expected 'SECONDS VERB ARGS' with times in order; %s", path, lineno, VERBS);
             fclose(f);
             view_script_free(s);
             return EXIT_USAGE;
@@ -65,13 +83,21 @@ int view_script_load(const cli *c, const char *path, view_script **out)
         e->time = last = t;
         e->kind = verbs[k].kind;
         if (e->kind == EV_KEY || e->kind == EV_SCREENSHOT) snprintf(e->text, sizeof e->text, "%s", arg[0]);
+        else if (e->kind == EV_LIGHT_ADD) {
+            e->button = (int)type;
+            e->has_position = n == 6;
+            if (e->has_position) { e->a = strtof(arg[1], NULL); e->b = strtof(arg[2], NULL); e->c = strtof(arg[3], NULL); }
+        } else if (verbs[k].nargs == 3 && e->kind != EV_DRAG) {
+            e->a = strtof(arg[0], NULL); e->b = strtof(arg[1], NULL); e->c = strtof(arg[2], NULL);
+        }
         else if (e->kind == EV_DRAG) {
             e->button = !strcmp(arg[0], "right") ? 1 : 0;
             e->a = strtof(arg[1], NULL);
             e->b = strtof(arg[2], NULL);
             char mod[32] = "";   /* an optional modifier after the deltas */
-            if (sscanf(line, "%*f %*s %*s %*s %*s %31s", mod) == 1) e->mods = !strcmp(mod, "ctrl") ? PRT_MOD_CTRL : !strcmp(mod, "shift") ? PRT_MOD_SHIFT : 0;
-        } else if (verbs[k].nargs >= 1) {
+            if (sscanf(line, "%*f %*s %*s %*s %*s %31s", mod) == 1)
+                e->mods = !strcmp(mod, "ctrl") ? PRT_MOD_CTRL : !strcmp(mod, "shift") ? PRT_MOD_SHIFT : !strcmp(mod, "alt") ? PRT_MOD_ALT : 0;
+        } else if (verbs[k].nargs >= 1 && verbs[k].nargs < 3) {
             e->a = strtof(arg[0], NULL);
             if (verbs[k].nargs == 2) e->b = strtof(arg[1], NULL);
         }
@@ -80,6 +106,13 @@ int view_script_load(const cli *c, const char *path, view_script **out)
     if (!s) { cli_error(c, "out of memory reading '%s'", path); return EXIT_NO_MEMORY; }
     *out = s;
     return EXIT_OK;
+}
+
+/* A scripted action that does not apply is an error: scripts are tests and recordings. */
+static int script_refused(viewer *v)
+{
+    cli_error(v->c, "script: %s", v->message[0] ? v->message : "the light action does not apply");
+    return EXIT_USAGE;
 }
 
 int view_script_step(view_script *s, viewer *v, double elapsed)
@@ -92,8 +125,13 @@ int view_script_step(view_script *s, viewer *v, double elapsed)
         case EV_ZOOM: view_zoom(v, e->a); break;
         case EV_ENV: view_rotate_env(v, e->a - v->want.env_yaw, e->b - v->want.env_pitch); break;
         case EV_DRAG:
-            /* The same path as a mouse drag: ctrl rotates the lighting, right pans, left orbits. */
-            if (e->mods & PRT_MOD_CTRL) view_rotate_env(v, e->a * 0.25f, e->b * 0.25f);
+            /* The same path as a mouse drag: alt moves the selected light, ctrl rotates the
+             * lighting, right pans, left orbits. */
+            if (e->mods & PRT_MOD_ALT) {
+                const float px = v->dist > 0 ? v->dist * 0.0015f : 0.01f;
+                if (e->button == 1) view_light_move(v, 0, 0, e->b * px);
+                else view_light_move(v, e->a * px, -e->b * px, 0);
+            } else if (e->mods & PRT_MOD_CTRL) view_rotate_env(v, e->a * 0.25f, e->b * 0.25f);
             else if (e->button == 1 || (e->mods & PRT_MOD_SHIFT)) view_pan(v, e->a / 400.0f, e->b / 400.0f);
             else view_orbit(v, -e->a * 0.3f, e->b * 0.3f);
             break;
@@ -108,6 +146,20 @@ int view_script_step(view_script *s, viewer *v, double elapsed)
             if (!v->c->quiet) fprintf(stderr, "prt view: wrote %s\n", e->text);
             break;
         case EV_QUIT: v->quit = true; break;
+        case EV_LIGHT_ADD: {
+            float p[3] = {e->a, e->b, e->c};
+            if (!view_light_add(v, (prt_light_type)e->button, e->has_position ? p : NULL)) return script_refused(v);
+            break;
+        }
+        case EV_LIGHT_SELECT: if (!view_light_select(v, (int)e->a - 1)) return script_refused(v); break;
+        case EV_LIGHT_MOVE: if (!view_light_move(v, e->a, e->b, e->c)) return script_refused(v); break;
+        case EV_LIGHT_SCALE: if (!view_light_scale(v, e->a)) return script_refused(v); break;
+        case EV_LIGHT_COLOUR: {
+            float rgb[3] = {e->a, e->b, e->c};
+            if (!view_light_colour(v, rgb)) return script_refused(v);
+            break;
+        }
+        case EV_LIGHT_REMOVE: if (!view_light_remove(v)) return script_refused(v); break;
         }
         v->dirty = true;
     }
