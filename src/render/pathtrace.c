@@ -307,9 +307,10 @@ static float mis(float a, float b) { return a * a / (a * a + b * b); }
 
 static bool nonzero(const float *v) { return v[0] > 0 || v[1] > 0 || v[2] > 0; }
 
-/* Adds beta f cos value w for light arriving along world wi at surface s seen from wo (local),
- * when nothing blocks it up to tfar; pdf_l = 0 for delta lights. */
-static void add_light(const pt_job *j, const surface *s, const float wo[3], const float beta[3], const float wi[3], float tfar,
+/* Adds beta f cos value w for light arriving along world wi from distance dist (INFINITY for
+ * distant light) at surface s seen from wo (local), when nothing blocks it; pdf_l = 0 for delta
+ * lights. */
+static void add_light(const pt_job *j, const surface *s, const float wo[3], const float beta[3], const float wi[3], float dist,
                       const float value[3], float pdf_l, float *acc)
 {
     float cl = prt__v3_dot(s->n, wi);
@@ -318,13 +319,19 @@ static void add_light(const pt_job *j, const surface *s, const float wo[3], cons
     to_local(s, wi, wil);
     brdf_eval(j, s, wil, wo, f);
     if (!nonzero(f)) return;
-    if (occluded(j, s->o, wi, tfar)) return;
+    if (isfinite(dist)) {
+        /* The shadow ray leaves from the offset origin and stops just short of the light's point,
+         * so that an emitting triangle does not shadow itself. */
+        float d[3];
+        for (int c = 0; c < 3; ++c) d[c] = s->p[c] + wi[c] * dist - s->o[c];
+        float len = prt__v3_len(d);
+        if (len > 0.0f && prt__v3_normalize(d) && occluded(j, s->o, d, len * (1.0f - 1e-4f))) return;
+    } else if (occluded(j, s->o, wi, INFINITY)) {
+        return;
+    }
     float w = pdf_l > 0.0f ? mis(pdf_l, (float)brdf_pdf(&j->mats[s->mat], wo, wil)) : 1.0f;
     for (int c = 0; c < 3; ++c) acc[c] += beta[c] * f[c] * cl * value[c] * w;
 }
-
-/* Shadow rays towards a light at distance d from the surface stop just short of it. */
-static float short_of(const pt_job *j, float d) { return isfinite(d) ? d * (1.0f - 1e-4f) - j->offset : INFINITY; }
 
 /* Radiance that sphere lights add along o + t d for t < tmax, MIS-weighted against pdf_b (0 = no MIS). */
 static void spheres_along(const pt_job *j, const float p[3], const float o[3], const float d[3], float tmax, float pdf_b, float out[3])
@@ -364,12 +371,12 @@ static void path(const pt_job *j, const surface *start, const float wo_world[3],
         for (int i = 0; i < j->light_count; ++i) {
             double u1 = uniform(r), u2 = uniform(r);
             if (prt__light_sample_from(&j->lights[i], s.p, u1, u2, &ls))
-                add_light(j, &s, wo, beta, ls.wi, short_of(j, ls.dist), ls.value, ls.pdf, acc);
+                add_light(j, &s, wo, beta, ls.wi, ls.dist, ls.value, ls.pdf, acc);
         }
         if (j->emit.count) {
             double u1 = uniform(r), u2 = uniform(r), u3 = uniform(r);
             if (prt__emitters_sample(&j->emit, j->mesh, s.p, u1, u2, u3, &ls))
-                add_light(j, &s, wo, beta, ls.wi, short_of(j, ls.dist), ls.value, ls.pdf, acc);
+                add_light(j, &s, wo, beta, ls.wi, ls.dist, ls.value, ls.pdf, acc);
         }
         /* Continue along a BRDF sample. */
         const pt_material *m = &j->mats[s.mat];
