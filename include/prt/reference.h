@@ -7,7 +7,9 @@
  * constant over its pixels (as the SH projection sees it), local lights (point, spot,
  * directional, sphere) and the scene's emissive surfaces, all sampled explicitly (next-event
  * estimation) and combined by multiple importance sampling with BRDF sampling where paths can
- * also hit them (environment, spheres, emissive triangles). Paths end by Russian roulette. Results are
+ * also hit them (environment, spheres, emissive triangles). Sphere lights are not scene geometry:
+ * they are transparent emitters that add their radiance to the rays crossing them and occlude
+ * nothing (neither other light nor surfaces behind them). Paths end by Russian roulette. Results are
  * deterministic for a seed whatever the thread count: each (vertex or pixel, sample) pair has its
  * own random stream. */
 #ifndef PRT_REFERENCE_H
@@ -32,7 +34,8 @@ typedef struct prt_reference_desc {
     const double *rotation;    /* row-major 3x3 applied to the environment; NULL = identity */
     float intensity;           /* environment scale; 0 = 1 */
     /* The lighting to trace under. When set, the env argument of the trace functions must be
-     * NULL and rotation/intensity are ignored (the lighting carries its own). */
+     * NULL and rotation/intensity are ignored (the lighting carries its own). NULL: the env
+     * argument with rotation/intensity, and the scene's emissive surfaces at scale 1. */
     const prt_lighting *lighting;
     /* Per-vertex results: exit radiance towards this world position (glossy surfaces are
      * view-dependent); NULL = along the vertex normal. */

@@ -5,7 +5,7 @@
 
 void prt__mesh_free(prt__mesh *m)
 {
-    free(m->positions); free(m->normals); free(m->albedo); free(m->material); free(m->uv); free(m->indices);
+    free(m->positions); free(m->normals); free(m->albedo); free(m->material); free(m->uv); free(m->emission); free(m->indices);
     memset(m, 0, sizeof *m);
 }
 
@@ -26,12 +26,14 @@ prt_status prt__mesh_append(prt__mesh *m, const float *pos, const float *nrm, co
     if (nv2 > UINT32_MAX || nt2 > UINT32_MAX / 3)
         return prt__fail(NULL, PRT_ERR_NO_MEMORY, "mesh too large (%zu vertices)", nv2);
     if (!grow((void **)&m->positions, nv2 * 3, sizeof(float)) || !grow((void **)&m->normals, nv2 * 3, sizeof(float)) ||
-        !grow((void **)&m->albedo, nv2 * 3, sizeof(float)) || !grow((void **)&m->material, nv2, 1) || !grow((void **)&m->uv, nv2 * 2, sizeof(float)) || !grow((void **)&m->indices, nt2 * 3, sizeof(uint32_t)))
+        !grow((void **)&m->albedo, nv2 * 3, sizeof(float)) || !grow((void **)&m->material, nv2, 1) || !grow((void **)&m->uv, nv2 * 2, sizeof(float)) || !grow((void **)&m->indices, nt2 * 3, sizeof(uint32_t)) ||
+        (m->emission && !grow((void **)&m->emission, nv2 * 3, sizeof(float))))
         return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory growing mesh");
     memcpy(m->positions + v0 * 3, pos, nv * 3 * sizeof(float));
     if (nrm) memcpy(m->normals + v0 * 3, nrm, nv * 3 * sizeof(float));
     else memset(m->normals + v0 * 3, 0, nv * 3 * sizeof(float));
     memset(m->material + v0, 0, nv);
+    if (m->emission) memset(m->emission + v0 * 3, 0, nv * 3 * sizeof(float));
     for (size_t i = 0; i < nv * 2; ++i) m->uv[v0 * 2 + i] = NAN;
     for (size_t i = 0; i < nv; ++i)
         for (int c = 0; c < 3; ++c) m->albedo[(v0 + i) * 3 + c] = albedo ? albedo[i * 3 + c] : rgb_default[c];
@@ -55,6 +57,8 @@ prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *wha
             return prt__fail(ctx, PRT_ERR_FORMAT, "%s: vertex %zu has a non-finite coordinate", what, i / 3);
         if (!isfinite(m->albedo[i]) || m->albedo[i] < 0.0f || m->albedo[i] > 1.0f)
             return prt__fail(ctx, PRT_ERR_FORMAT, "%s: vertex %zu has albedo %g outside [0, 1]", what, i / 3, m->albedo[i]);
+        if (m->emission && !(isfinite(m->emission[i]) && m->emission[i] >= 0.0f))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "%s: vertex %zu has emission %g (must be finite and >= 0)", what, i / 3, m->emission[i]);
         lo[i % 3] = fminf(lo[i % 3], m->positions[i]);
         hi[i % 3] = fmaxf(hi[i % 3], m->positions[i]);
     }
@@ -125,6 +129,7 @@ prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *wha
             memcpy(m->albedo + nv * 3, m->albedo + v * 3, 3 * sizeof(float));
             m->material[nv] = m->material[v];
             memcpy(m->uv + nv * 2, m->uv + v * 2, 2 * sizeof(float));
+            if (m->emission) memcpy(m->emission + nv * 3, m->emission + v * 3, 3 * sizeof(float));
         }
         nv++;
     }
@@ -132,6 +137,12 @@ prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *wha
     m->vertex_count = nv;
     free(face_n); free(acc); free(remap);
     return PRT_OK;
+}
+
+float *prt__mesh_emission(prt__mesh *m)
+{
+    if (!m->emission) m->emission = prt__calloc(m->vertex_count ? m->vertex_count * 3 : 1, sizeof(float));
+    return m->emission;
 }
 
 void prt__mesh_set_uv(prt__mesh *m, size_t first, size_t count, const float *uv)

@@ -22,6 +22,9 @@ void prt__mesh_free(prt__mesh *m);
  * NULL (then zero, meaning "compute"); albedo may be NULL (then rgb_default). */
 prt_status prt__mesh_append(prt__mesh *m, const float *pos, const float *nrm, const float *albedo,
                             const float rgb_default[3], size_t nv, const uint32_t *idx, size_t nt);
+/* The per-vertex emission array, allocated as zeros on first use (emission stays NULL while
+ * nothing emits); NULL when out of memory. */
+float *prt__mesh_emission(prt__mesh *m);
 /* Sets texture coordinates of vertices [first, first + count). */
 void prt__mesh_set_uv(prt__mesh *m, size_t first, size_t count, const float *uv);
 /* True when every vertex has texture coordinates. */

@@ -105,6 +105,7 @@ void prt_scene_release(prt_scene *s)
 {
     if (!s) return;
     prt__mesh_free(&s->mesh);
+    free(s->lights);
     free(s);
 }
 
@@ -119,6 +120,39 @@ int prt_scene_environment(const prt_scene *s, prt_environment_desc *out)
 {
     if (s->has_env) *out = s->env;
     return s->has_env;
+}
+
+int prt_scene_light_count(const prt_scene *s) { return s ? s->light_count : 0; }
+
+const prt_light *prt_scene_light(const prt_scene *s, int index)
+{
+    return s && index >= 0 && index < s->light_count ? &s->lights[index] : NULL;
+}
+
+const float *prt_scene_emission(const prt_scene *s) { return s ? s->mesh.emission : NULL; }
+
+prt_status prt_scene_lighting(prt_context *ctx, const prt_scene *s, prt_lighting **out)
+{
+    if (!s || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_scene_lighting: scene and out are required");
+    *out = NULL;
+    prt_lighting *l = NULL;
+    prt_status st = prt_lighting_create(&l);
+    if (st) return st;
+    /* A scene lit by its own lamps or emitters gets no sky unless it asks for one. */
+    prt_environment_desc env;
+    memset(&env, 0, sizeof env);
+    if (s->has_env) env = s->env;
+    else env.none = s->light_count > 0 || s->mesh.emission != NULL;
+    st = prt_lighting_set_environment(l, &env);
+    for (int i = 0; i < s->light_count && !st; ++i) st = prt_lighting_add(l, &s->lights[i], NULL);
+    if (st) {
+        char msg[900];
+        snprintf(msg, sizeof msg, "%s", prt_last_error());
+        prt_lighting_release(l);
+        return prt__fail(ctx, st, "%s: %s", s->source, msg);
+    }
+    *out = l;
+    return PRT_OK;
 }
 
 void prt_scene_bounds(const prt_scene *s, float lo[3], float hi[3])

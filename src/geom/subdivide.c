@@ -72,8 +72,10 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
         if (mat) m->material = mat;
         float *uvs = mat ? realloc(m->uv, max_v * 2 * sizeof(float)) : NULL;
         if (uvs) m->uv = uvs;
+        float *emi = uvs && m->emission ? realloc(m->emission, max_v * 3 * sizeof(float)) : NULL;
+        if (emi) m->emission = emi;
         uint32_t *out = prt__calloc(new_tris * 3, sizeof(uint32_t));
-        if (!em.keys || !em.values || !uvs || !out || max_v > UINT32_MAX) {
+        if (!em.keys || !em.values || !uvs || (m->emission && !emi) || !out || max_v > UINT32_MAX) {
             free(em.keys); free(em.values); free(out);
             return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory subdividing the mesh");
         }
@@ -95,6 +97,7 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
                         m->positions[nv * 3 + c] = 0.5f * (m->positions[a * 3 + c] + m->positions[b * 3 + c]);
                         m->normals[nv * 3 + c] = m->normals[a * 3 + c] + m->normals[b * 3 + c];
                         m->albedo[nv * 3 + c] = 0.5f * (m->albedo[a * 3 + c] + m->albedo[b * 3 + c]);
+                        if (m->emission) m->emission[nv * 3 + c] = 0.5f * (m->emission[a * 3 + c] + m->emission[b * 3 + c]);
                     }
                     m->material[nv] = m->material[a];   /* edges never join two objects */
                     for (int c = 0; c < 2; ++c) m->uv[nv * 2 + c] = 0.5f * (m->uv[a * 2 + c] + m->uv[b * 2 + c]);

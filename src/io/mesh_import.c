@@ -35,6 +35,20 @@ static void material_albedo(const struct aiMaterial *mat, const prt_scene_desc *
     }
 }
 
+/* Emitted radiance of a material: Ke in MTL, emissiveFactor in glTF (assimp maps both to the
+ * emissive colour), times the emissive strength where the file gives one. */
+static void material_emission(const struct aiMaterial *mat, bool has_materials, float out[3])
+{
+    out[0] = out[1] = out[2] = 0.0f;
+    if (!mat || !has_materials) return;
+    struct aiColor4D c;
+    if (aiGetMaterialColor(mat, AI_MATKEY_COLOR_EMISSIVE, &c) != aiReturn_SUCCESS) return;
+    ai_real strength = 1;
+    unsigned one = 1;
+    if (aiGetMaterialFloatArray(mat, AI_MATKEY_EMISSIVE_INTENSITY, &strength, &one) != aiReturn_SUCCESS || one != 1) strength = 1;
+    out[0] = c.r * strength; out[1] = c.g * strength; out[2] = c.b * strength;
+}
+
 typedef struct edge_key { uint64_t key; } edge_key;
 
 static uint64_t hash_pos(const struct aiVector3D *p)
@@ -196,6 +210,13 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
         const size_t first = m->vertex_count;
         st = prt__mesh_append(m, pos, nrm, NULL, rgb, nv, idx, nt);
         free(pos); free(nrm); free(idx);
+        float le[3];
+        material_emission(am->mMaterialIndex < sc->mNumMaterials ? sc->mMaterials[am->mMaterialIndex] : NULL, format_has_materials(path), le);
+        if (st == PRT_OK && (le[0] != 0 || le[1] != 0 || le[2] != 0)) {
+            float *e = prt__mesh_emission(m);
+            if (!e) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory importing '%s'", path); break; }
+            for (size_t v = first; v < first + nv; ++v) memcpy(e + v * 3, le, sizeof le);
+        }
         if (st == PRT_OK && am->mTextureCoords[0]) {
             float *uv = prt__calloc(nv * 2, sizeof(float));
             if (!uv) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory importing '%s'", path); break; }

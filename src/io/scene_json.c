@@ -1,4 +1,5 @@
-/* JSON scene files: a list of meshes with transforms and materials (docs/SCENE.md). */
+/* JSON scene files: a list of meshes with transforms and materials, an environment and local
+ * lights (docs/SCENE.md). */
 #include "geom/mesh.h"
 
 #include <cjson/cJSON.h>
@@ -34,8 +35,14 @@ static void make_xform(const float s[3], const float r[3], const float t[3], flo
 static prt_status read_environment(const prt_context *ctx, const cJSON *e, const char *dir, prt_environment_desc *out)
 {
     memset(out, 0, sizeof *out);
-    if (!cJSON_IsObject(e)) return prt__fail(ctx, PRT_ERR_FORMAT, "scene: \"environment\" must be an object");
+    /* "none" (or {"none": true}): a scene lit only by its lamps and emitters. */
+    if (cJSON_IsString(e) && !strcmp(e->valuestring, "none")) { out->none = 1; return PRT_OK; }
+    if (!cJSON_IsObject(e)) return prt__fail(ctx, PRT_ERR_FORMAT, "scene: \"environment\" must be an object or \"none\"");
     const cJSON *v;
+    if ((v = cJSON_GetObjectItemCaseSensitive(e, "none"))) {
+        if (!cJSON_IsBool(v)) return prt__fail(ctx, PRT_ERR_FORMAT, "scene: environment \"none\" must be true or false");
+        if (cJSON_IsTrue(v)) { out->none = 1; return PRT_OK; }
+    }
     if ((v = cJSON_GetObjectItemCaseSensitive(e, "file"))) {
         if (!cJSON_IsString(v)) return prt__fail(ctx, PRT_ERR_FORMAT, "scene: environment \"file\" must be a string");
         snprintf(out->path, sizeof out->path, "%s%s", v->valuestring[0] == '/' ? "" : dir, v->valuestring);
@@ -53,6 +60,97 @@ static prt_status read_environment(const prt_context *ctx, const cJSON *e, const
     if ((v = cJSON_GetObjectItemCaseSensitive(e, "intensity"))) {
         if (!cJSON_IsNumber(v) || !(v->valuedouble >= 0)) return prt__fail(ctx, PRT_ERR_FORMAT, "scene: environment intensity must be a number >= 0");
         out->intensity = (float)v->valuedouble;
+    }
+    return PRT_OK;
+}
+
+/* A colour: a number (grey) or [r, g, b], finite and >= 0. */
+static prt_status read_colour(const prt_context *ctx, const cJSON *item, const char *what, float out[3])
+{
+    prt_status st = read_vec3(ctx, item, what, out);
+    if (st) return st;
+    for (int c = 0; c < 3; ++c)
+        if (!(out[c] >= 0) || !isfinite(out[c])) return prt__fail(ctx, PRT_ERR_FORMAT, "scene: '%s' must be finite and >= 0", what);
+    return PRT_OK;
+}
+
+/* One entry of "lights": exactly the keys its type documents (docs/SCENE.md). */
+static prt_status read_light(const prt_context *ctx, const char *path, int i, const cJSON *o, prt_light *out)
+{
+    memset(out, 0, sizeof *out);
+    if (!cJSON_IsObject(o)) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': lights[%d] must be an object", path, i);
+    const cJSON *type = cJSON_GetObjectItemCaseSensitive(o, "type");
+    if (!cJSON_IsString(type))
+        return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': lights[%d] needs a \"type\": point, spot, directional or sphere", path, i);
+    static const struct { const char *name; prt_light_type type; const char *keys[6]; } kinds[] = {
+        {"point", PRT_LIGHT_POINT, {"position", "intensity"}},
+        {"spot", PRT_LIGHT_SPOT, {"position", "direction", "angle", "falloff", "intensity"}},
+        {"directional", PRT_LIGHT_DIRECTIONAL, {"direction", "irradiance"}},
+        {"sphere", PRT_LIGHT_SPHERE, {"position", "radius", "radiance"}},
+    };
+    int k = -1;
+    for (int j = 0; j < 4; ++j)
+        if (!strcmp(type->valuestring, kinds[j].name)) k = j;
+    if (k < 0)
+        return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': lights[%d]: unknown type '%s' (point, spot, directional or sphere)", path, i,
+                         type->valuestring);
+    out->type = kinds[k].type;
+    const cJSON *v;
+    cJSON_ArrayForEach(v, o) {
+        bool known = !strcmp(v->string, "type");
+        for (int j = 0; j < 6 && kinds[k].keys[j]; ++j) known |= !strcmp(v->string, kinds[k].keys[j]);
+        if (!known) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': lights[%d]: a %s light has no \"%s\"", path, i, kinds[k].name, v->string);
+        if (!strcmp(v->string, "type")) continue;
+        bool vector = !strcmp(v->string, "position") || !strcmp(v->string, "direction");
+        bool scalar = !strcmp(v->string, "angle") || !strcmp(v->string, "falloff") || !strcmp(v->string, "radius");
+        if (vector && !cJSON_IsArray(v))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': lights[%d]: \"%s\" must be [x, y, z]", path, i, v->string);
+        if (scalar) {
+            if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble))
+                return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': lights[%d]: \"%s\" must be a number", path, i, v->string);
+            float x = (float)v->valuedouble;
+            if (!strcmp(v->string, "angle")) out->angle_deg = x;
+            else if (!strcmp(v->string, "falloff")) out->falloff_deg = x;
+            else out->radius = x;
+            continue;
+        }
+        float *dst = !strcmp(v->string, "position") ? out->position : !strcmp(v->string, "direction") ? out->direction
+                   : !strcmp(v->string, "intensity") ? out->intensity : !strcmp(v->string, "irradiance") ? out->irradiance : out->radiance;
+        prt_status st = vector ? read_vec3(ctx, v, v->string, dst) : read_colour(ctx, v, v->string, dst);
+        if (st) {
+            char msg[256];
+            snprintf(msg, sizeof msg, "%s", prt_last_error());
+            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': lights[%d]: %s", path, i, msg + (strncmp(msg, "scene: ", 7) ? 0 : 7));
+        }
+    }
+    for (int j = 0; j < 6 && kinds[k].keys[j]; ++j)
+        if (strcmp(kinds[k].keys[j], "angle") && strcmp(kinds[k].keys[j], "falloff") && !cJSON_GetObjectItemCaseSensitive(o, kinds[k].keys[j]))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': lights[%d]: a %s light needs \"%s\"", path, i, kinds[k].name, kinds[k].keys[j]);
+    if (out->type == PRT_LIGHT_SPOT && cJSON_GetObjectItemCaseSensitive(o, "angle") && !(out->angle_deg > 0))
+        return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': lights[%d]: spot angle must be in (0, 90] degrees", path, i);
+    prt_status st = prt_light_validate(out);
+    if (st) {
+        char msg[256];
+        snprintf(msg, sizeof msg, "%s", prt_last_error());
+        return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': lights[%d]: %s", path, i, msg);
+    }
+    return PRT_OK;
+}
+
+static prt_status read_lights(const prt_context *ctx, const char *path, const cJSON *arr, prt_scene *scene)
+{
+    if (!cJSON_IsArray(arr)) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': \"lights\" must be an array", path);
+    int n = cJSON_GetArraySize(arr);
+    if (n > 65536) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': %d lights; at most 65536", path, n);
+    if (n == 0) return PRT_OK;
+    scene->lights = prt__calloc((size_t)n, sizeof *scene->lights);
+    if (!scene->lights) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %d lights", n);
+    const cJSON *o;
+    int i = 0;
+    cJSON_ArrayForEach(o, arr) {
+        prt_status st = read_light(ctx, path, i, o, &scene->lights[i]);
+        if (st) return st;
+        scene->light_count = ++i;
     }
     return PRT_OK;
 }
@@ -83,6 +181,8 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         if ((st = read_environment(ctx, env, dir, &scene->env))) { cJSON_Delete(root); return st; }
         scene->has_env = true;
     }
+    const cJSON *lights = cJSON_GetObjectItemCaseSensitive(root, "lights");
+    if (lights && (st = read_lights(ctx, path, lights, scene))) { cJSON_Delete(root); return st; }
     const cJSON *item;
     int index = 0;
     cJSON_ArrayForEach(item, meshes) {
@@ -98,16 +198,26 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         if ((v = cJSON_GetObjectItemCaseSensitive(item, "translate")) && (st = read_vec3(ctx, v, "translate", t))) break;
         prt_brdf brdf;
         bool has_brdf = false;
-        const cJSON *a = NULL, *b = NULL;
+        const cJSON *a = NULL, *b = NULL, *e = NULL;
         if ((v = cJSON_GetObjectItemCaseSensitive(item, "material"))) {
             const cJSON *mat = cJSON_IsString(v) ? cJSON_GetObjectItemCaseSensitive(materials, v->valuestring) : NULL;
             if (!mat) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d] names a material that \"materials\" does not define", path, index); break; }
             a = cJSON_GetObjectItemCaseSensitive(mat, "albedo");
             b = cJSON_GetObjectItemCaseSensitive(mat, "brdf");
-            if (!a && !b) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s' needs an \"albedo\" or a \"brdf\"", path, v->valuestring); break; }
+            e = cJSON_GetObjectItemCaseSensitive(mat, "emission");
+            if (!a && !b && !e) {
+                st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s' needs an \"albedo\", a \"brdf\" or an \"emission\"", path, v->valuestring);
+                break;
+            }
         }
         if ((v = cJSON_GetObjectItemCaseSensitive(item, "albedo"))) a = v;
         if ((v = cJSON_GetObjectItemCaseSensitive(item, "brdf"))) b = v;
+        if ((v = cJSON_GetObjectItemCaseSensitive(item, "emission"))) e = v;
+        float le[3];
+        if (e && (st = read_colour(ctx, e, "emission", le))) {
+            st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d]: \"emission\" must be a number or [r, g, b], finite and >= 0", path, index);
+            break;
+        }
         if (a && b) {
             st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d]: give an albedo or a brdf, not both (the BRDF's kd is its albedo)", path, index);
             break;
@@ -131,6 +241,12 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
             int id = prt__scene_brdf_id(scene, &brdf);
             if (!id) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDF materials", path, PRT__MAX_BRDFS); break; }
             memset(m->material + first_vertex, id, m->vertex_count - first_vertex);
+        }
+        /* A JSON emission replaces whatever the mesh file's materials emit. */
+        if (e && (m->emission || le[0] > 0 || le[1] > 0 || le[2] > 0)) {
+            float *em = prt__mesh_emission(m);
+            if (!em) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+            for (size_t k = first_vertex; k < m->vertex_count; ++k) memcpy(em + k * 3, le, sizeof le);
         }
         index++;
     }

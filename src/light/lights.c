@@ -49,6 +49,17 @@ const char *prt_lights_bit_name(unsigned bit)
 static bool finite3(const float *v) { return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
 static bool colour_ok(const float *v) { return finite3(v) && v[0] >= 0 && v[1] >= 0 && v[2] >= 0; }
 
+/* Normalises in double and leaves vectors that are unit to float precision alone, so that
+ * validating twice (format, then parse) changes nothing. */
+static bool unit(float *v)
+{
+    double len = sqrt((double)v[0] * v[0] + (double)v[1] * v[1] + (double)v[2] * v[2]);
+    if (!(len > 1e-30) || !isfinite(len)) return false;
+    if (fabs(len - 1.0) > 1e-6)
+        for (int k = 0; k < 3; ++k) v[k] = (float)(v[k] / len);
+    return true;
+}
+
 prt_status prt_light_validate(prt_light *l)
 {
     if (!l) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_light_validate: light is required");
@@ -59,7 +70,7 @@ prt_status prt_light_validate(prt_light *l)
     if (t != PRT_LIGHT_DIRECTIONAL && !finite3(l->position))
         return prt__fail(NULL, PRT_ERR_INVALID_ARG, "%s light: position must be finite", name);
     if (t == PRT_LIGHT_SPOT || t == PRT_LIGHT_DIRECTIONAL) {
-        if (!finite3(l->direction) || !prt__v3_normalize(l->direction))
+        if (!finite3(l->direction) || !unit(l->direction))
             return prt__fail(NULL, PRT_ERR_INVALID_ARG, "%s light: direction must be finite and non-zero", name);
     }
     if ((t == PRT_LIGHT_POINT || t == PRT_LIGHT_SPOT) && !colour_ok(l->intensity))
