@@ -155,7 +155,7 @@ expect 0 "wavelet compare" -- "$PRT" compare -q "$T/wavelet.prt" "$T/glossy.prt"
 expect 2 "run-time lobe on wavelet" -- $NOLEAK "$PRT" render "$T/wavelet.prt" -o "$T/x.png" --brdf phong:10
 says "baked in"
 expect 2 "SH option with wavelet" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --order 3
-says "SH options"
+says "option of method sh"
 expect 2 "wavelet option without wavelet" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --terms 3
 says "method wavelet"
 expect 2 "bad method" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method fourier

@@ -244,10 +244,10 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
         sb->s->sets[2].coeffs = sb->total;
         sb->total = NULL;
     }
-    if (index > 0 && (index == sb->stages || sb->plan[index] == ST_TEXELS || sb->plan[index] == ST_BRDF_IN) && sb->shad) {
+    if (index > 0 && (index == sb->stages || sb->plan[index] == ST_TEXELS || sb->plan[index] == ST_BRDF_IN)) {
         /* Every stage that reads the shadowed and glossy-shadowed sets has run. */
-        if (sb->d.kinds & PRT_TRANSFER_SHADOWED) { sb->s->sets[1].channels = 1; sb->s->sets[1].coeffs = sb->shad; sb->shad = NULL; }
-        if (sb->want_gsh) { sb->s->sets[3].channels = 1; sb->s->sets[3].coeffs = sb->gshad; sb->gshad = NULL; }
+        if (sb->shad && (sb->d.kinds & PRT_TRANSFER_SHADOWED)) { sb->s->sets[1].channels = 1; sb->s->sets[1].coeffs = sb->shad; sb->shad = NULL; }
+        if (sb->gshad && sb->want_gsh) { sb->s->sets[3].channels = 1; sb->s->sets[3].coeffs = sb->gshad; sb->gshad = NULL; }
     }
     if (index >= sb->stages) return PRT_OK;
     switch (sb->plan[index]) {

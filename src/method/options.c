@@ -42,6 +42,19 @@ static bool in_choices(const char *choices, const char *item, size_t len)
     return false;
 }
 
+/* "a, b or c" from "a|b|c". */
+static void readable_choices(const char *choices, char *out, size_t size)
+{
+    size_t at = 0;
+    out[0] = 0;
+    for (const char *c = choices; c && *c && at < size;) {
+        const char *bar = strchr(c, '|');
+        int n = bar ? (int)(bar - c) : (int)strlen(c);
+        at += (size_t)snprintf(out + at, size - at, "%s%.*s", at ? (bar ? ", " : " or ") : "", n, c);
+        c = bar ? bar + 1 : NULL;
+    }
+}
+
 static prt_status check(const prt_option_desc *d, const char *v)
 {
     char *end;
@@ -64,9 +77,8 @@ static prt_status check(const prt_option_desc *d, const char *v)
     }
     case PRT_OPTION_CHOICE: {
         char list[256];
-        snprintf(list, sizeof list, "%s", d->choices);
-        for (char *c = list; *c; ++c) if (*c == '|') *c = ',';
-        if (!v || !in_choices(d->choices, v, strlen(v))) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "--%s must be one of %s", d->name, list);
+        readable_choices(d->choices, list, sizeof list);
+        if (!v || !in_choices(d->choices, v, strlen(v))) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "--%s must be %s (got '%s')", d->name, list, v ? v : "");
         return PRT_OK;
     }
     case PRT_OPTION_LIST: {
@@ -76,8 +88,7 @@ static prt_status check(const prt_option_desc *d, const char *v)
             size_t n = comma ? (size_t)(comma - s) : strlen(s);
             if (!in_choices(d->choices, s, n)) {
                 char list[256];
-                snprintf(list, sizeof list, "%s", d->choices);
-                for (char *c = list; *c; ++c) if (*c == '|') *c = ',';
+                readable_choices(d->choices, list, sizeof list);
                 return prt__fail(NULL, PRT_ERR_INVALID_ARG, "--%s: '%.*s' is not one of %s", d->name, (int)n, s, list);
             }
             s = comma ? comma + 1 : NULL;

@@ -74,6 +74,16 @@ prt_transfer_kind prt_transfer_kind_diffuse_part(prt_transfer_kind glossy)
 }
 
 /* ---- the SH public accessors ---- */
+static size_t texel_bytes(const prt__sh_state *s)
+{
+    const prt__texel_sets *tx = &s->texels;
+    if (!tx->width) return 0;
+    const size_t ntex = (size_t)tx->width * tx->height;
+    size_t bytes = ntex * (3 * sizeof(float) + 1);
+    for (int k = 0; k < 3; ++k) bytes += ntex * (size_t)tx->channels[k] * s->order * s->order * sizeof(float);
+    return bytes;
+}
+
 void prt_transfer_get_info(const prt_transfer *t, prt_transfer_info *info)
 {
     memset(info, 0, sizeof *info);
@@ -94,11 +104,7 @@ void prt_transfer_get_info(const prt_transfer *t, prt_transfer_info *info)
     const prt__texel_sets *tx = &s->texels;
     info->texel_width = tx->width;
     info->texel_height = tx->height;
-    if (tx->width) {
-        size_t ntex = (size_t)tx->width * tx->height;
-        info->texel_bytes = ntex * (3 * sizeof(float) + 1);
-        for (int k = 0; k < 3; ++k) info->texel_bytes += ntex * (size_t)tx->channels[k] * s->order * s->order * sizeof(float);
-    }
+    info->texel_bytes = texel_bytes(s);
 }
 
 int prt_transfer_channels(const prt_transfer *t, prt_transfer_kind kind)
@@ -247,7 +253,9 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
         j->inner->ctx = b->ctx;
         j->inner->threads = b->threads;
         prt_status st = j->inner->stage(j->inner, index, out);
+        if (!out->job) out->job = j->inner;
         if (st || out->units || out->whole) return st;
+        out->job = NULL;
         /* The bake proper has finished: its results move into the state, then post-processing. */
         j->inner_stages = index;
         if ((st = j->inner->finish(j->inner, j->t))) return st;
@@ -603,9 +611,7 @@ static size_t sh_bytes(const prt_transfer *t)
             prt_transfer_compress_info(t, prt__kind_from_index(i), &ci);
             bytes += ci.bytes;
         }
-    prt_transfer_info info;
-    prt_transfer_get_info(t, &info);
-    return bytes + info.texel_bytes;
+    return bytes + texel_bytes(s);
 }
 
 static void sh_describe(const prt_transfer *t, prt__describe *d)
@@ -792,8 +798,10 @@ static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_
     const size_t nv = t->mesh.vertex_count;
     int k = set_of_variant(s, d->variant);
     const int order = d->controls && d->controls[0] >= 1 && d->controls[0] < s->order ? d->controls[0] : s->order;
-    if (d->brdf && (!prt__kind_glossy(k) || s->glossy_exit))
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a BRDF at relight time applies to glossy sets holding incident radiance only");
+    if (d->brdf && s->glossy_exit)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this transfer has its BRDF baked in; a run-time BRDF cannot replace it (re-bake without --brdf)");
+    if (d->brdf && !prt__kind_glossy(k))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a BRDF at relight time applies to glossy kinds only (this is %s)", prt_transfer_kind_name(prt__kind_from_index(k)));
     prt_sh_light sh;
     prt_status st = project(ctx, l, s->order, &sh);
     if (st) return st;

@@ -8,11 +8,8 @@ prt_status prt__mesh_copy(prt__mesh *dst, const prt__mesh *src)
                                      src->indices, src->triangle_count);
     if (!st && src->material) memcpy(dst->material, src->material, src->vertex_count);
     if (!st && src->uv) memcpy(dst->uv, src->uv, src->vertex_count * 2 * sizeof(float));
-    if (!st && src->emission) {
-        dst->emission = malloc(src->vertex_count * 3 * sizeof(float));
-        if (!dst->emission) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
-        memcpy(dst->emission, src->emission, src->vertex_count * 3 * sizeof(float));
-    }
+    if (!st && src->emission && !prt__mesh_emission(dst)) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory copying a mesh");
+    if (!st && src->emission) memcpy(dst->emission, src->emission, src->vertex_count * 3 * sizeof(float));
     return st;
 }
 

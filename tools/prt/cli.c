@@ -387,9 +387,10 @@ const prt_method *cli_method_from_argv(const cli *c, int argc, char **argv)
     const prt_method *m = prt_method_find(name);
     if (!m) {
         char list[256] = "";
-        for (int i = 0; i < prt_method_count(); ++i)
-            snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", prt_method_name(prt_method_at(i)));
-        cli_usage(c, "--method must be one of %s (got '%s')", list, name);
+        const int n = prt_method_count();
+        for (int i = 0; i < n; ++i)
+            snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i == 0 ? "" : i == n - 1 ? " or " : ", ", prt_method_name(prt_method_at(i)));
+        cli_usage(c, "--method must be %s (got '%s')", list, name);
     }
     return m;
 }

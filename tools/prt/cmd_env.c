@@ -61,7 +61,7 @@ int cmd_env(int argc, char **argv)
         }
     }
     if (optind < argc - 1) return cli_usage(&c, "expected at most one PROBE argument");
-    if (optind == argc - 1) light.env_path = argv[optind];
+    if (optind == argc - 1) { light.env_path = argv[optind]; light.set_source = true; }
     if (irradiance && !image) return cli_usage(&c, "--irradiance needs --image FILE");
     if (light.set_lights || light.set_emission || light.have_brdf) return cli_usage(&c, "--light, --emission and --brdf do not apply: prt env projects an environment");
     if (light.env_none) return cli_usage(&c, "--env none leaves nothing to project");
