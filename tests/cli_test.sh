@@ -24,6 +24,12 @@ expect() {
     rc=$?
     if [ "$rc" -eq "$code" ]; then ok; else bad "$what: exit $rc, expected $code"; sed 's/^/    /' "$T/err"; fi
 }
+# same A B TOL WHAT: two results (per-vertex JSON or images) differ by at most TOL anywhere.
+same() {
+    if ! "$PRT" compare "$1" "$2" --json - -q >"$T/cmp" 2>"$T/err"; then bad "$4: compare failed"; sed 's/^/    /' "$T/err"; return; fi
+    m=$(sed -n 's/.*"max_abs":[[:space:]]*\([0-9.eE+-]*\).*/\1/p' "$T/cmp")
+    if awk -v m="$m" -v t="$3" 'BEGIN { exit !(m != "" && m + 0 <= t + 0) }'; then ok; else bad "$4: max |A-B| = $m, more than $3"; fi
+}
 # The last stderr holds one clear line mentioning WORD.
 says() {
     if grep -qi -- "$1" "$T/err"; then ok; else bad "stderr does not mention '$1':"; sed 's/^/    /' "$T/err"; fi
@@ -194,6 +200,62 @@ wait "$pid"
 rc=$?
 [ "$rc" -eq 130 ] && ok || bad "interrupted bake exited $rc, expected 130"
 ls "$T" | grep -q long && bad "interrupted bake left a file: $(ls "$T" | grep long)" || ok
+
+# Files written by prt 0.1 (before the method table) load and relight to the numbers that
+# version wrote (tests/data/v0.1/README.md).
+FX=$(dirname "$0")/data/v0.1
+for k in unshadowed shadowed interreflected; do
+    expect 0 "0.1 file as $k" -- "$PRT" relight "$FX/sh.prt" -k "$k" -o "$T/fx.json"
+    same "$T/fx.json" "$FX/sh_$k.json" 1e-5 "0.1 sh.prt as $k"
+done
+for k in glossy-shadowed glossy-interreflected; do
+    expect 0 "0.1 file as $k" -- "$PRT" relight "$FX/sh.prt" -k "$k" --eye 3,2,4 -o "$T/fx.json"
+    same "$T/fx.json" "$FX/sh_$k.json" 1e-5 "0.1 sh.prt as $k"
+done
+expect 0 "0.1 compressed file" -- "$PRT" relight "$FX/shc.prt" -o "$T/fx.json"
+same "$T/fx.json" "$FX/shc.json" 1e-5 "0.1 shc.prt"
+expect 0 "0.1 quantized file" -- "$PRT" relight "$FX/shq.prt" -k shadowed -o "$T/fx.json"
+same "$T/fx.json" "$FX/shq.json" 1e-5 "0.1 shq.prt"
+expect 0 "0.1 quantized glossy file" -- "$PRT" relight "$FX/shq.prt" -k glossy-shadowed --eye 3,2,4 -o "$T/fx.json"
+same "$T/fx.json" "$FX/shq_g.json" 1e-5 "0.1 shq.prt glossy"
+expect 0 "0.1 texel map" -- "$PRT" relight "$FX/sh.prt" --texels -o "$T/fx.pfm"
+same "$T/fx.pfm" "$FX/sh_texels.pfm" 1e-5 "0.1 sh.prt texels"
+expect 0 "0.1 wavelet file" -- "$PRT" relight "$FX/wav.prt" --eye 3,2,4 -o "$T/fx.json"
+same "$T/fx.json" "$FX/wav.json" 1e-5 "0.1 wav.prt"
+for f in sh shc shq wav; do expect 0 "info of the 0.1 $f.prt" -- "$PRT" info "$FX/$f.prt"; done
+
+# The method table: --help from the declarations, options of another method named as such,
+# every method's variants by name.
+expect 0 "bake --method wavelet --help" -- "$PRT" bake --method wavelet --help
+grep -q -- "--terms" "$T/out" && ! grep -q -- "--order" "$T/out" && ok || bad "bake --method wavelet --help shows other methods' options"
+expect 0 "bake --help" -- "$PRT" bake --help
+grep -q "Method sh" "$T/out" && grep -q "Method wavelet" "$T/out" && ok || bad "bake --help does not list every method's options"
+expect 2 "another method's option" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --kinds shadowed
+says "option of method sh"
+expect 2 "a kind the file lacks" -- "$PRT" relight "$FX/wav.prt" -k shadowed -o "$T/x.json"
+says "holds wavelet"
+
+# Local lights: parsed strictly, relit by the methods that can, refused clearly by the others.
+expect 2 "bad light" -- "$PRT" relight "$T/demo.prt" --light point:1,2 -o "$T/x.json"
+says "expected point:X,Y,Z"
+expect 2 "point light on SH" -- "$PRT" relight "$T/demo.prt" --light point:0,2,0:10,10,10 -o "$T/x.json"
+says "cannot relight point lights"
+expect 0 "directional light, no environment" -- "$PRT" relight "$T/demo.prt" --env none --light directional:0.3,1,0.2:3,3,3 -o "$T/dir.json"
+expect 0 "nothing but a directional light renders" -- $NOLEAK "$PRT" render "$T/demo.prt" --env none --light directional:0.3,1,0.2:3,3,3 -o "$T/dir.png" --width 64 --height 48
+expect 0 "no light at all" -- "$PRT" relight "$T/demo.prt" --env none -o "$T/dark.json"
+grep -q '"radiance": \[\[0, 0, 0\]' "$T/dark.json" && ok || bad "no lighting should give zero radiance"
+cat >"$T/lamp.json" <<EOF
+{ "meshes": [ { "file": "demo.obj" } ],
+  "lights": [ { "type": "point", "position": [0, 3, 0], "intensity": [20, 20, 20] },
+              { "type": "directional", "direction": [0, 1, 0.2], "irradiance": 2 } ] }
+EOF
+expect 0 "bake a scene with lights" -- "$PRT" bake "$T/lamp.json" -o "$T/lamp.prt" --order 3 --samples 64 -q
+expect 0 "info lists the scene's lights" -- "$PRT" info "$T/lamp.prt"
+grep -q "point:0,3,0" "$T/out" && grep -q "directional:" "$T/out" && ok || bad "info does not list the lights"
+expect 2 "the scene's point light on SH" -- "$PRT" relight "$T/lamp.prt" -o "$T/x.json"
+says "cannot relight point lights"
+expect 0 "the scene's lights replaced" -- "$PRT" relight "$T/lamp.prt" --light directional:0,1,0:1,1,1 -o "$T/x.json"
+expect 0 "reference under the scene's lights" -- "$PRT" reference "$T/lamp.prt" -o "$T/lampref.json" --samples 4 -q
 
 # Real probes from ../shared/data, when present.
 if [ -n "$DATA" ] && [ -f "$DATA/envmaps/probulator_ict/grace.hdr" ]; then
