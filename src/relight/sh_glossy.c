@@ -60,8 +60,12 @@ static prt_status lobe_factors(const prt_transfer *t, int order, const prt_brdf 
         double a[PRT_SH_MAX_ORDER];
         prt_status st = prt_brdf_lobe_bands(b, order, a);
         if (st) return st;
+        /* The lobe integrates to one; the BRDF's own normalisation and its cosine (n.v at the mirror
+         * direction, applied where the exit vector is evaluated) make it the library's Phong or
+         * Blinn-Phong: (n+2)/(n+1) and, for Blinn-Phong's mirror lobe of exponent n/4, (n+8)/(n+4). */
+        const double n = b->exponent, norm = b->model == PRT_BRDF_BLINN_PHONG ? (n + 8.0) / (n + 4.0) : (n + 2.0) / (n + 1.0);
         for (int c = 0; c < 3; ++c)
-            for (int l = 0; l < order; ++l) table[k][c * PRT_SH_MAX_ORDER + l] = (float)(b->specular[c] * a[l]);
+            for (int l = 0; l < order; ++l) table[k][c * PRT_SH_MAX_ORDER + l] = (float)(b->specular[c] * a[l] * norm);
     }
     return PRT_OK;
 }
@@ -152,12 +156,16 @@ void prt_glossy_eval(int order, const float *exit_coeffs, int mirror, const floa
         float k = 2.0f * prt__v3_dot(normal, to_eye);
         for (int c = 0; c < 3; ++c) d[c] = k * normal[c] - to_eye[c];
     }
+    /* Run-time lobes leave out the BRDF's cosine: near the mirror direction it is n.v. */
+    float v[3] = {to_eye[0], to_eye[1], to_eye[2]};
+    prt__v3_normalize(v);
+    const float cosine = mirror ? fmaxf(prt__v3_dot(normal, v), 0.0f) : 1.0f;
     prt__v3_normalize(d);
     prt_sh_eval_f(order, d, y);
     const int n = order * order;
     for (int c = 0; c < 3; ++c) {
         float s = 0.0f;
         for (int i = 0; i < n; ++i) s += exit_coeffs[c * n + i] * y[i];
-        rgb[c] = s > 0.0f ? s : 0.0f;   /* truncated SH rings below zero near sharp features */
+        rgb[c] = s > 0.0f ? cosine * s : 0.0f;   /* truncated SH rings below zero near sharp features */
     }
 }

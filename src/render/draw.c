@@ -85,7 +85,9 @@ static const char *FS_G =
     "      else acc += k * re * coeff(c + m) + k * im * coeff(c - m);\n"
     "    }\n"
     "  }\n"
-    "  color = vec4(f_rad + max(acc, vec3(0.0)), 1.0);\n"
+    "  // Run-time lobes leave out the BRDF's cosine: near the mirror direction it is n.v.\n"
+    "  float cosine = mirror != 0 ? max(dot(n, v), 0.0) : 1.0;\n"
+    "  color = vec4(f_rad + cosine * max(acc, vec3(0.0)), 1.0);\n"
     "}\n";
 
 /* Separable view factor (wavelet PRT): the same geometry shader; each corner's K-vector (texel
