@@ -91,7 +91,7 @@ static inline float minf(float a, float b) { return a < b ? a : b; }
 static inline float maxf(float a, float b) { return a > b ? a : b; }
 
 /* Sutherland-Hodgman: the part of polygon in[n] with sign * (coordinate axis - c) >= 0. */
-static int clip_half(const pt2 *in, int n, pt2 *out, int axis, float c, float sign)
+static inline int clip_half(const pt2 *in, int n, pt2 *out, int axis, float c, float sign)
 {
     int m = 0;
     for (int i = 0; i < n; ++i) {
@@ -123,6 +123,22 @@ static float poly_weight(const pt2 *p, int n, int size)
     if (s == 0) return 0;
     const float k = 2.0f / size, ca = (ox + mx / (3 * s)) * k - 1.0f, cb = (oy + my / (3 * s)) * k - 1.0f, r2 = 1.0f + ca * ca + cb * cb;
     return 0.5f * fabsf(s) / (r2 * sqrtf(r2));
+}
+
+/* poly_weight with the solid angle per area linearized about (xr, yr), where its logarithmic
+ * gradient is (gx, gy): no division or root per piece, for the many small pieces of a rotation. */
+static inline float poly_weight_lin(const pt2 *p, int n, float xr, float yr, float gx, float gy)
+{
+    const float ox = p[0].x, oy = p[0].y;
+    float s = 0, mx = 0, my = 0;
+    for (int i = 1; i + 1 < n; ++i) {
+        const float ax = p[i].x - ox, ay = p[i].y - oy, bx = p[i + 1].x - ox, by = p[i + 1].y - oy, c = ax * by - bx * ay;
+        s += c;
+        mx += (ax + bx) * c;
+        my += (ay + by) * c;
+    }
+    const float w = 0.5f * s * (1.0f + gx * (ox - xr) + gy * (oy - yr)) + (gx * mx + gy * my) * (1.0f / 6.0f);
+    return s < 0 ? -w : w;
 }
 
 /* Calls out(cell, area) for each texel of face g (n x n, texel units) that quad q overlaps. */
@@ -290,6 +306,9 @@ static inline void deposit_fast(float *acc, int n, int channels, const float *d0
         }
         if (cx1 - cx0 <= 2 && cy1 - cy0 <= 2) {
             pt2 q[4] = {{c[0].u, c[0].v}, {c[1].u, c[1].v}, {c[2].u, c[2].v}, {c[3].u, c[3].v}};
+            /* d ln((1 + a^2 + b^2)^-3/2) per texel, at the corner c[0]. */
+            const float kt = 2.0f / n, ra = c[0].u * kt - 1.0f, rb = c[0].v * kt - 1.0f, f = -3.0f * kt / (1.0f + ra * ra + rb * rb);
+            const float gx = f * ra, gy = f * rb;
             pt2 b0[MAX_POLY], b1[MAX_POLY], b2[MAX_POLY], b3[MAX_POLY];
             float area[9], total = 0;
             int cell[9], k = 0;
@@ -304,7 +323,7 @@ static inline void deposit_fast(float *acc, int n, int channels, const float *d0
                     if (cy > cy0) { j = clip_half(p, j, b2, 1, (float)cy, 1.0f); p = b2; }
                     if (cy < cy1) { j = clip_half(p, j, b3, 1, (float)(cy + 1), -1.0f); p = b3; }
                     if (j < 3) continue;
-                    area[k] = poly_weight(p, j, n);
+                    area[k] = poly_weight_lin(p, j, c[0].u, c[0].v, gx, gy);
                     total += area[k];
                     cell[k++] = cy * n + cx;
                 }
@@ -473,19 +492,21 @@ static void deposit_rotated(prt_context *ctx, const float *src, const double R[9
         float edge[2][HALF + 1][3];   /* rotated quad corners (not unit) along two row edges */
         corner cn[2][HALF + 1];
         for (int y = 0; y < HALF; ++y) {
-            for (int r = 0; r < 2; ++r) {
+            const int lo = y & 1, hi = lo ^ 1;   /* the row edge below was the one above last row */
+            for (int r = y ? 1 : 0; r < 2; ++r) {
+                const int slot = r ? hi : lo;
                 const float b = 2.0f * (y + r) / HALF - 1.0f;
                 for (int x = 0; x <= HALF; ++x) {
                     const float a = 2.0f * x / HALF - 1.0f;
-                    for (int i = 0; i < 3; ++i) edge[r][x][i] = ra[i] + a * rr[i] + b * ru[i];
-                    cn[r][x] = corner_of(edge[r][x], FACE);
+                    for (int i = 0; i < 3; ++i) edge[slot][x][i] = ra[i] + a * rr[i] + b * ru[i];
+                    cn[slot][x] = corner_of(edge[slot][x], FACE);
                 }
             }
             for (int x = 0; x < HALF; ++x) {
                 const float *e0 = fsrc + ((size_t)(2 * y) * SRC + 2 * x) * 3, *e1 = e0 + (size_t)SRC * 3;
                 const float val[3] = {e0[0] + e0[3] + e1[0] + e1[3], e0[1] + e0[4] + e1[1] + e1[4], e0[2] + e0[5] + e1[2] + e1[5]};
-                const corner c[4] = {cn[0][x], cn[0][x + 1], cn[1][x + 1], cn[1][x]};
-                deposit_fast(acc, FACE, 3, edge[0][x], edge[0][x + 1], edge[1][x + 1], edge[1][x], c, val);
+                const corner c[4] = {cn[lo][x], cn[lo][x + 1], cn[hi][x + 1], cn[hi][x]};
+                deposit_fast(acc, FACE, 3, edge[lo][x], edge[lo][x + 1], edge[hi][x + 1], edge[hi][x], c, val);
             }
         }
     }
