@@ -3,9 +3,7 @@
 
 #include <math.h>
 
-/* Per face: the major axis, then the directions a and b grow along (OpenGL cube map layout,
- * with b pointing up the face rather than down the texture). */
-static const float AXES[6][3][3] = {
+const float prt__cube_axes[6][3][3] = {
     {{1, 0, 0}, {0, 0, -1}, {0, 1, 0}},  {{-1, 0, 0}, {0, 0, 1}, {0, 1, 0}},
     {{0, 1, 0}, {1, 0, 0}, {0, 0, -1}},  {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}},
     {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}},   {{0, 0, -1}, {-1, 0, 0}, {0, 1, 0}},
@@ -13,7 +11,7 @@ static const float AXES[6][3][3] = {
 
 void prt__cube_dir(int face, float a, float b, float dir[3])
 {
-    const float(*ax)[3] = AXES[face];
+    const float(*ax)[3] = prt__cube_axes[face];
     for (int i = 0; i < 3; ++i) dir[i] = ax[0][i] + a * ax[1][i] + b * ax[2][i];
 }
 
@@ -28,18 +26,4 @@ void prt__cube_texel(int n, int face, int x, int y, float dir[3], float *solid_a
     float l = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
     for (int i = 0; i < 3; ++i) dir[i] /= l;
     if (solid_angle) *solid_angle = (float)(area(a1, b1) - area(a0, b1) - area(a1, b0) + area(a0, b0));
-}
-
-int prt__cube_face(const float d[3], float *a, float *b)
-{
-    float ax = fabsf(d[0]), ay = fabsf(d[1]), az = fabsf(d[2]);
-    int face;
-    if (ax >= ay && ax >= az) face = d[0] >= 0 ? 0 : 1;
-    else if (ay >= az) face = d[1] >= 0 ? 2 : 3;
-    else face = d[2] >= 0 ? 4 : 5;
-    const float(*axes)[3] = AXES[face];
-    float m = d[0] * axes[0][0] + d[1] * axes[0][1] + d[2] * axes[0][2];
-    *a = (d[0] * axes[1][0] + d[1] * axes[1][1] + d[2] * axes[1][2]) / m;
-    *b = (d[0] * axes[2][0] + d[1] * axes[2][1] + d[2] * axes[2][2]) / m;
-    return face;
 }
