@@ -186,6 +186,26 @@ static void test_directional_light(void **state)
         for (size_t v = 0; v < prt_transfer_vertex_count(t); ++v) assert_float_equal(r.radiance[v * 3], exact, 0.03f * 0.5f / (float)M_PI * E);
         prt_relit_free(&r);
     }
+    /* The wavelet method puts a directional light into the texel its direction falls in. */
+    prt_wavelet_bake_desc wd = {0};
+    wd.coefficients = PRT_WAVELET_DIM;
+    wd.bits = 16;
+    wd.supersample = 1;
+    prt_transfer *w = NULL;
+    assert_int_equal(prt_bake_wavelet(ctx, scene, &wd, &w), PRT_OK);
+    for (int deg = 0; deg <= 60; deg += 30) {
+        prt_lighting_clear_lights(l);
+        const float th = (float)deg * (float)M_PI / 180.0f, E = 2.0f;
+        prt_light sun = {.type = PRT_LIGHT_DIRECTIONAL, .direction = {sinf(th), cosf(th), 0.1f}, .irradiance = {E, E, E}};
+        assert_int_equal(prt_lighting_add(l, &sun, NULL), PRT_OK);
+        const float *dn = prt_lighting_light(l, 0)->direction;
+        prt_relit r;
+        assert_int_equal(prt_relight(ctx, w, l, NULL, &r), PRT_OK);
+        const float exact = 0.5f / (float)M_PI * E * dn[1];
+        for (size_t v = 0; v < prt_transfer_vertex_count(w); ++v) assert_float_equal(r.radiance[v * 3], exact, 0.02f * exact);
+        prt_relit_free(&r);
+    }
+    prt_transfer_release(w);
     /* Point lights are local: SH refuses them and says who can. */
     prt_light bulb = {.type = PRT_LIGHT_POINT, .position = {0, 1, 0}, .intensity = {1, 1, 1}};
     assert_int_equal(prt_lighting_add(l, &bulb, NULL), PRT_OK);
@@ -194,8 +214,9 @@ static void test_directional_light(void **state)
     assert_non_null(strstr(prt_last_error(), "cannot relight point lights"));
     assert_non_null(strstr(prt_last_error(), "prt reference"));
     assert_null(r.radiance);
-    assert_int_equal(prt_method_check_lighting(prt_method_find("wavelet"), PRT_LIGHTS_DIRECTIONAL), PRT_ERR_INVALID_ARG);
-    assert_non_null(strstr(prt_last_error(), "method sh can"));
+    assert_int_equal(prt_method_check_lighting(prt_method_find("wavelet"), PRT_LIGHTS_DIRECTIONAL), PRT_OK);
+    assert_int_equal(prt_method_check_lighting(prt_method_find("wavelet"), PRT_LIGHTS_SPHERE), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "method 'wavelet' cannot relight sphere lights"));
     prt_lighting_release(l);
     prt_transfer_release(t);
     prt_scene_release(scene);

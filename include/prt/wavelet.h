@@ -64,17 +64,21 @@ typedef struct prt_wavelet_light_desc {
     int coefficients;      /* largest Haar coefficients kept, 1..24576; 0 = 4096 */
     int bits;              /* 16, or 32 for unquantized floats; 0 = 16 */
     double rotation[9];    /* lighting from d now arrives from R d; all zero = none */
-    float intensity;       /* radiance scale; 0 = 1 */
-    int supersample;       /* samples per texel side of a 6 x 256 x 256 pre-filtered cube (built
-                              once per map, then resampled under rotations); 0 = 2, which
-                              averages the 4 x 4 fine texels under each texel */
+    float intensity;       /* radiance scale of the environment; 0 = 1 */
+    int supersample;       /* no longer used (areas are exact); 0..16 accepted */
+    /* Directional lights (world frame, not rotated, not scaled): each adds its irradiance as a
+     * delta, E over the solid angle of the texel its direction falls in. */
+    const prt_light *lights;
+    int light_count;
 } prt_wavelet_light_desc;
 
 typedef struct prt_wavelet_light prt_wavelet_light;
 
-/* Samples env into the cube map (box filter over each texel, through a finer cube the map keeps
- * after the first call, so later rotations are cheap), transforms each face, keeps the largest
- * coefficients and quantizes them. */
+/* Integrates env into the cube map, each map pixel's energy split among the texels it covers by
+ * exact area (through a finer 6 x 256 x 256 cube the map keeps after the first call, whose texels
+ * a rotation splits the same way), so small bright sources keep their energy under any rotation;
+ * adds the directional lights; transforms each face, keeps the largest coefficients and
+ * quantizes them. env may be NULL when desc names directional lights. */
 prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, const prt_wavelet_light_desc *desc,
                                     prt_wavelet_light **out);
 void prt_wavelet_light_release(prt_wavelet_light *l);

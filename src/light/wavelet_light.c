@@ -538,7 +538,8 @@ static void lighting_solid_angles(float *table)
 prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, const prt_wavelet_light_desc *desc,
                                     prt_wavelet_light **out)
 {
-    if (!env || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_wavelet_light_create: env and out are required");
+    if (!out || (!env && !(desc && desc->light_count > 0)))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_wavelet_light_create: an environment or directional lights, and out, are required");
     *out = NULL;
     prt_wavelet_light_desc d = desc ? *desc : (prt_wavelet_light_desc){0};
     if (d.coefficients == 0) d.coefficients = 4096;
@@ -555,7 +556,10 @@ prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, con
     for (int i = 0; i < 9; ++i) any |= d.rotation[i] != 0;
     if (any) memcpy(R, d.rotation, sizeof R);
     const bool identity = !any || (R[0] == 1 && R[4] == 1 && R[8] == 1 && R[1] == 0 && R[2] == 0 && R[3] == 0 && R[5] == 0 && R[6] == 0 && R[7] == 0);
-    const float *src = source_cube(ctx, env);
+    for (int i = 0; i < d.light_count; ++i)
+        if (!d.lights || d.lights[i].type != PRT_LIGHT_DIRECTIONAL)
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "wavelet lighting takes directional lights only (light %d is not)", i + 1);
+    const float *src = env ? source_cube(ctx, env) : NULL;
 
     prt_wavelet_light *l = prt__calloc(1, sizeof *l);
     float *planes = prt__calloc((size_t)3 * DIM, sizeof(float)), *mag = prt__calloc(DIM, sizeof(float));
@@ -564,7 +568,7 @@ prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, con
         l->cube = prt__calloc((size_t)DIM * 3, sizeof(float));
         l->coeffs = prt__calloc((size_t)DIM * 4, sizeof(float));
     }
-    if (!src || !l || !planes || !mag || !l->cube || !l->coeffs || (!identity && !rot)) {
+    if ((env && !src) || !l || !planes || !mag || !l->cube || !l->coeffs || (env && !identity && !rot)) {
         prt_wavelet_light_release(l); free(planes); free(mag); free(rot);
         return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
@@ -574,9 +578,10 @@ prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, con
     float omega[FACE * FACE];
     lighting_solid_angles(omega);
     const int n = identity ? SRC : FACE, fine = n / FACE;
-    if (!identity) deposit_rotated(ctx, src, R, rot, rot + (size_t)6 * DIM * 3);
-#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
+    if (env && !identity) deposit_rotated(ctx, src, R, rot, rot + (size_t)6 * DIM * 3);
+#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx)) if (env)
     for (int t = 0; t < DIM; ++t) {
+        if (!env) continue;
         int face = t / (FACE * FACE), y = t / FACE % FACE, x = t % FACE;
         double acc[3] = {0, 0, 0};
         for (int sy = 0; sy < fine; ++sy)
@@ -591,6 +596,21 @@ prt_status prt_wavelet_light_create(prt_context *ctx, const prt_envmap *env, con
         }
     }
     free(rot);
+    /* A directional light is a delta: all of its irradiance E in the texel its direction falls
+     * in, as radiance E over that texel's solid angle. */
+    for (int i = 0; i < d.light_count; ++i) {
+        float a, b, dir[3] = {d.lights[i].direction[0], d.lights[i].direction[1], d.lights[i].direction[2]};
+        const int face = prt__cube_face(dir, &a, &b);
+        int x = (int)((a + 1.0f) * 0.5f * FACE), y = (int)((b + 1.0f) * 0.5f * FACE);
+        x = x < 0 ? 0 : x >= FACE ? FACE - 1 : x;
+        y = y < 0 ? 0 : y >= FACE ? FACE - 1 : y;
+        const int t = (face * FACE + y) * FACE + x;
+        for (int c = 0; c < 3; ++c) {
+            const float v = d.lights[i].irradiance[c] / omega[t % (FACE * FACE)];
+            l->cube[(size_t)t * 3 + c] += v;
+            planes[(size_t)c * DIM + t] += v;
+        }
+    }
     for (int c = 0; c < 3; ++c)
         for (int f = 0; f < 6; ++f) prt__haar2d_forward(planes + (size_t)c * DIM + (size_t)f * FACE * FACE, FACE);
     for (int j = 0; j < DIM; ++j) {

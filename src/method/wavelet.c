@@ -388,11 +388,13 @@ static prt_status wavelet_relight(prt_context *ctx, const prt_transfer *t, const
     if (!r->kvec) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     r->kvec_terms = w->terms;
     const prt_envmap *env = prt_lighting_envmap(l);
-    if (env) {
+    if (env || prt_lighting_count(l)) {
         prt_wavelet_light_desc ld = {0};
         prt_lighting_rotation(l, ld.rotation);
         ld.intensity = prt_lighting_intensity(l);
         ld.coefficients = d->controls ? d->controls[0] : 0;
+        ld.lights = prt_lighting_count(l) ? prt_lighting_light(l, 0) : NULL;   /* directional only: checked by the table */
+        ld.light_count = prt_lighting_count(l);
         prt_wavelet_light *wl = NULL;
         if ((st = prt_wavelet_light_create(ctx, env, &ld, &wl))) return st;
         st = prt_relight_wavelet(ctx, t, wl, r->kvec);
@@ -420,7 +422,7 @@ const prt__method prt__method_wavelet = {
     .name = "wavelet",
     .title = "all-frequency wavelet PRT",
     .summary = "all-frequency glossy PRT (Wang, Tran & Luebke): Haar cube maps, separable BRDFs, sharp shadows",
-    .lighting = PRT_LIGHTS_ENVIRONMENT,
+    .lighting = PRT_LIGHTS_ENVIRONMENT | PRT_LIGHTS_DIRECTIONAL,
     .options = options,
     .option_count = (int)(sizeof options / sizeof options[0]),
     .controls = controls,
