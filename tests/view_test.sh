@@ -106,6 +106,31 @@ within "$T/t1.exr" "$T/rt1.exr" 0.002
 r=$(field relative_l2 "$T/cmp")
 awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.005) }' && ok || bad "per-texel and per-vertex drawings are identical (relative L2 $r)"
 
+# Lights: the viewer adds the light types the method relights, draws them exactly as prt render
+# does with the same --light, moves, dims, recolours and removes them; other types are refused.
+printf '%s\n' "0 light-add directional" "0 screenshot $T/l1.exr" "0 light-move 2 1 0" "0 light-scale 2" "0 light-colour 1 0.5 0.25" \
+    "0 screenshot $T/l2.exr" "0 light-remove" "0 screenshot $T/l3.exr" "0.1 quit" >"$T/lscript.txt"
+xvfb-run -a -s "-screen 0 1024x768x24" "$PRT" view "$T/demo.prt" --width 320 --height 240 --script "$T/lscript.txt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 0 ] && ok || { bad "light script exited $rc"; cat "$T/err"; }
+"$PRT" render -q "$T/demo.prt" -o "$T/rl1.exr" --width 320 --height 240 --light directional:0.3,0.9,0.3:3,3,3
+within "$T/l1.exr" "$T/rl1.exr" 0.002
+within "$T/l3.exr" "$T/render_first.exr" 0.002
+"$PRT" compare --json - -q "$T/l1.exr" "$T/l2.exr" >"$T/cmp"
+r=$(field relative_l2 "$T/cmp")
+awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "moving, dimming and recolouring the light changed nothing (relative L2 $r)"
+"$PRT" compare --json - -q "$T/l1.exr" "$T/render_first.exr" >"$T/cmp"
+r=$(field relative_l2 "$T/cmp")
+awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "adding a light changed nothing (relative L2 $r)"
+printf '0 light-add point\n' >"$T/point.txt"
+xvfb-run -a "$PRT" view "$T/demo.prt" --script "$T/point.txt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "cannot relight point lights" "$T/err" && ok || { bad "point light on SH in the viewer: exit $rc"; cat "$T/err"; }
+printf '0 light-scale 2\n' >"$T/nolight.txt"
+xvfb-run -a "$PRT" view "$T/demo.prt" --script "$T/nolight.txt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "no light selected" "$T/err" && ok || { bad "light action without a light: exit $rc"; cat "$T/err"; }
+
 printf '0 frobnicate 1 2\n' >"$T/bad.txt"
 xvfb-run -a "$PRT" view "$T/demo.prt" --script "$T/bad.txt" >/dev/null 2>"$T/err"
 rc=$?
