@@ -33,6 +33,7 @@ test-asan: deps
 bench: build
 	$(BUILD)/prt_bench
 	$(BUILD)/prt_bench_wavelet
+	$(BUILD)/prt_bench_lights
 
 # README's accuracy tables: PRT against the path-traced reference (several minutes).
 accuracy: build
