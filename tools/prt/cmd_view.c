@@ -22,7 +22,7 @@ static const char *HELP =
     "       alt+left-drag moves the selected light in the view plane (turns a directional one),\n"
     "       alt+right-drag or alt+wheel moves it in depth.\n"
     "Keys:  h lists them all; k what the file is relit as, d full/direct/indirect, the method's\n"
-    "       controls ([ ] SH order or the wavelet lighting's coefficients), n add a light,\n"
+    "       own controls (h lists them, e.g. [ ] for the SH order), n add a light,\n"
     "       tab select the next, x remove it, , . dim/brighten, c recolour,\n"
     "       + - exposure, t tone mapping, l reload probe, p screenshot, 0 reset, q quit.\n"
     "       Lighting changes relight; camera moves only redraw (view-dependent parts are\n"
