@@ -23,7 +23,7 @@ void cli_error(const cli *c, const char *fmt, ...)
 
 int cli_fail(const cli *c, prt_status st)
 {
-    cli_error(c, "%s", prt_last_error()[0] ? prt_last_error() : prt_status_string(st));
+    if (!c->reported) cli_error(c, "%s", prt_last_error()[0] ? prt_last_error() : prt_status_string(st));
     return cli_exit_code(st);
 }
 
@@ -289,14 +289,16 @@ static prt_environment_desc environment(const cli_light *l, bool has_env, const 
 
 prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t, const prt_scene *s, prt_lighting **out)
 {
-    (void)c;
     *out = NULL;
     prt_environment_desc file_env;
     memset(&file_env, 0, sizeof file_env);
     bool has_env = t ? prt_transfer_environment(t, &file_env) : s ? prt_scene_environment(s, &file_env) : false;
     const int nfile = t ? prt_transfer_light_count(t) : s ? prt_scene_light_count(s) : 0;
-    const bool emits = t ? prt_transfer_emission(t) != NULL : s ? prt_scene_emission(s) != NULL : false;
-    prt_environment_desc e = environment(l, has_env, &file_env, nfile > 0 || emits);
+    const bool emits = (t ? prt_transfer_emission(t) != NULL : s ? prt_scene_emission(s) != NULL : false) && !(l->set_emission && l->emission == 0);
+    /* A scene that names no environment is lit by its own lights and emitters when it has any
+     * (and they are in use), else by the procedural sky. */
+    const bool own_lights = (l->set_lights ? l->light_count : nfile) > 0 || emits;
+    prt_environment_desc e = environment(l, has_env, &file_env, own_lights);
     prt_lighting *lighting = NULL;
     prt_status st = prt_lighting_create(&lighting);
     if (!st) st = prt_lighting_set_environment(lighting, &e);
@@ -306,6 +308,8 @@ prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t,
         for (int i = 0; i < nfile && !st; ++i) st = prt_lighting_add(lighting, t ? prt_transfer_light(t, i) : prt_scene_light(s, i), NULL);
     if (l->set_emission) prt_lighting_set_emission(lighting, l->emission);
     if (st) { prt_lighting_release(lighting); return st; }
+    if (!prt_lighting_content(lighting) || (prt_lighting_content(lighting) == PRT_LIGHTS_EMISSIVE && !emits))
+        if (!c->quiet) fprintf(stderr, "prt %s: warning: nothing lights the scene (no environment, no lights, no emitters): the result is black\n", c->cmd);
     *out = lighting;
     return PRT_OK;
 }
@@ -371,7 +375,20 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     d.per_vertex = per_vertex;
     d.with_indirect = with_indirect;
     d.brdf = l && l->have_brdf ? &l->brdf : NULL;
-    return prt_relight(c->ctx, t, lighting, &d, out);
+    prt_status st = prt_relight(c->ctx, t, lighting, &d, out);
+    if (st == PRT_ERR_INVALID_ARG) {
+        /* Lighting the method refuses: say how to leave it out. */
+        unsigned what = prt_lighting_content(lighting) & ~(unsigned)PRT_LIGHTS_EMISSIVE;
+        if (prt_transfer_emission(t) && prt_lighting_emission(lighting) > 0) what |= PRT_LIGHTS_EMISSIVE;
+        const unsigned refused = what & ~prt_method_lighting(prt_transfer_method(t));
+        if (refused) {
+            const bool lights = refused & (PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_SPHERE | PRT_LIGHTS_DIRECTIONAL), emit = refused & PRT_LIGHTS_EMISSIVE;
+            cli_error(c, "%s (%s%s%s leave%s them out)", prt_last_error(), lights ? "--light none" : "", lights && emit ? " and " : "",
+                      emit ? "--emission 0" : "", lights && emit ? "" : "s");
+            ((cli *)c)->reported = true;
+        }
+    }
+    return st;
 }
 
 /* ---- methods ---- */

@@ -25,6 +25,7 @@ typedef struct cli {
     int threads;
     prt_context *ctx;
     const char *cmd;
+    bool reported;   /* the failure was already printed (cli_fail stays silent) */
 } cli;
 
 /* Prints "prt CMD: message" on stderr. */

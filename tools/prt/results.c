@@ -144,7 +144,7 @@ static prt_status load(cli *c, const char *path, const cli_light *light_in, cons
     prt_status st;
     if (has_ext(path, ".prt")) {
         st = relight_file(c, path, light_in, kind, out);
-        if (st) cli_error(c, "%s", st == PRT_ERR_NO_MEMORY ? "out of memory" : prt_last_error());
+        if (st && !c->reported) cli_error(c, "%s", st == PRT_ERR_NO_MEMORY ? "out of memory" : prt_last_error());
         return st;
     }
     if (has_ext(path, ".json")) {
