@@ -252,8 +252,14 @@ EOF
 expect 0 "bake a scene with lights" -- "$PRT" bake "$T/lamp.json" -o "$T/lamp.prt" --order 3 --samples 64 -q
 expect 0 "info lists the scene's lights" -- "$PRT" info "$T/lamp.prt"
 grep -q "point:0,3,0" "$T/out" && grep -q "directional:" "$T/out" && ok || bad "info does not list the lights"
-expect 2 "the scene's point light on SH" -- "$PRT" relight "$T/lamp.prt" -o "$T/x.json"
-says "cannot relight point lights"
+expect 0 "the scene's point light on SH" -- "$PRT" relight "$T/lamp.prt" -o "$T/x.json"
+says "cannot relight the scene's point lights: left out"
+expect 2 "an unknown option in one line" -- "$PRT" relight "$T/lamp.prt" -o "$T/x.json" --oder 3
+says "unknown option '--oder'"
+expect 2 "a missing value" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --order
+says "needs a value"
+expect 2 "an abbreviated method option" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --meth wavelet
+says "--method"
 expect 0 "the scene's lights replaced" -- "$PRT" relight "$T/lamp.prt" --light directional:0,1,0:1,1,1 -o "$T/x.json"
 expect 0 "reference under the scene's lights" -- "$PRT" reference "$T/lamp.prt" -o "$T/lampref.json" --samples 4 -q
 

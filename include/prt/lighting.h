@@ -158,6 +158,7 @@ prt_status prt_lighting_set_environment(prt_lighting *l, const prt_environment_d
  * intensity 0 = 1. */
 prt_status prt_lighting_set_envmap(prt_lighting *l, prt_envmap *env, const double rot[9], float intensity);
 void prt_lighting_set_rotation(prt_lighting *l, const double rot[9]);
+/* The environment's radiance scale, >= 0 (0 turns it off; other values are ignored). */
 void prt_lighting_set_intensity(prt_lighting *l, float intensity);
 /* NULL when the lighting has no environment. */
 const prt_envmap *prt_lighting_envmap(const prt_lighting *l);

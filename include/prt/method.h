@@ -164,6 +164,10 @@ typedef struct prt_relit {
     int view_map_sets, view_map_resolution, view_map_polar;
 } prt_relit;
 
+/* The PRT_LIGHTS_* bits relighting t under lighting needs: what the lighting holds, with
+ * PRT_LIGHTS_EMISSIVE only when t's scene emits and the emission scale is above zero. */
+unsigned prt_relight_needs(const prt_transfer *t, const prt_lighting *lighting);
+
 /* Relights t under lighting. The method refuses lighting it cannot relight (the error names the
  * methods that can). desc NULL = defaults. */
 prt_status prt_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *lighting, const prt_relight_desc *desc,

@@ -368,13 +368,12 @@ static prt_status wavelet_stage(prt__bake_job *base, int index, prt__stage *out)
 
 static prt_status wavelet_finish(prt__bake_job *base, prt_transfer *t)
 {
-    (void)t;
     wbake *wb = (wbake *)base;
     if (wb->d.bounces) {
         wb->ws->store = wb->total;
         memset(&wb->total, 0, sizeof wb->total);
     }
-    return PRT_OK;
+    return prt__wavelet_build_view_maps(t, wb->ws);
 }
 
 static void wavelet_release(prt__bake_job *base)

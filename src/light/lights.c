@@ -379,8 +379,9 @@ void prt_lighting_set_rotation(prt_lighting *l, const double rot[9])
 
 void prt_lighting_set_intensity(prt_lighting *l, float intensity)
 {
-    /* 0 means 1 as everywhere else; a void setter cannot refuse bad values, so they become 1 too. */
-    if (l) l->intensity = intensity > 0 && isfinite(intensity) ? intensity : 1.0f;
+    /* An explicit 0 turns the environment off; a void setter cannot refuse bad values, so
+     * negative or non-finite ones leave the intensity as it was. */
+    if (l && intensity >= 0 && isfinite(intensity)) l->intensity = intensity;
 }
 
 const prt_envmap *prt_lighting_envmap(const prt_lighting *l) { return l ? l->env : NULL; }

@@ -23,16 +23,20 @@ prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_
         } else {
             int failed = 0;
             prt_status first = PRT_OK;
+            char why[512] = "";   /* errors are recorded per thread: keep the failing unit's */
             /* Units are claimed in order by whichever thread is free; each writes only its own
              * outputs, so the result is the same for any thread count and schedule. */
 #pragma omp parallel for schedule(dynamic, 1) num_threads(job->threads)
             for (uint64_t u = 0; u < s.units; ++u) {
                 if (__atomic_load_n(&failed, __ATOMIC_RELAXED) || prt__progress_cancelled(&prog)) continue;
                 prt_status r = s.run(target, u, omp_get_thread_num());
-                if (r && !__atomic_exchange_n(&failed, 1, __ATOMIC_RELAXED)) first = r;
+                if (r && !__atomic_exchange_n(&failed, 1, __ATOMIC_RELAXED)) {
+                    first = r;
+                    snprintf(why, sizeof why, "%s", prt_last_error());
+                }
                 prt__progress_add(&prog, 1);
             }
-            st = first;
+            if (first) st = prt__fail(ctx, first, "%s", why[0] ? why : prt_status_string(first));
         }
         if (!st) prt__progress_end(&prog);
         if (!st && prt__progress_cancelled(&prog)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");

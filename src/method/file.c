@@ -232,8 +232,13 @@ static prt_status load(prt_context *ctx, prt__chunk_in *chunks, int count, prt_t
                 if (!(t->mesh.emission[i] >= 0 && t->mesh.emission[i] < 1e30f)) st = bad(ctx, "corrupt .prt file: invalid emission");
         }
     }
-    if (!st && (prt__chunk_take(chunks, count, CHUNK_META) || prt__chunk_take(chunks, count, CHUNK_MESH)))
-        st = bad(ctx, "corrupt .prt file: two metadata or mesh chunks");
+    static const uint32_t once[] = {CHUNK_META, CHUNK_MESH, CHUNK_MATL, CHUNK_UVS, CHUNK_EMIS};
+    for (size_t i = 0; !st && i < sizeof once / sizeof once[0]; ++i)
+        if (prt__chunk_take(chunks, count, once[i])) {
+            char name[5];
+            prt__chunk_name(once[i], name);
+            st = prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: two %s chunks", name);
+        }
     if (!st) st = m->load(ctx, t, meta, chunks, count);
     cJSON_Delete(meta);
     return st;

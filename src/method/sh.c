@@ -597,6 +597,7 @@ static prt_status sh_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, 
     while (!st && (in = prt__chunk_take(chunks, count, CHUNK_CPCA))) st = load_cpca(ctx, sh, in, t->mesh.vertex_count);
     if (!st && !sh->order) st = bad(ctx, ".prt file holds no transfer");
     if (!st) st = load_texels(ctx, sh, chunks, count);
+    if (!st && prt__chunk_take(chunks, count, CHUNK_TXAL)) st = bad(ctx, "corrupt .prt file: two texel albedo chunks");
     return st;
 }
 
@@ -798,10 +799,9 @@ static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_
     const size_t nv = t->mesh.vertex_count;
     int k = set_of_variant(s, d->variant);
     const int order = d->controls && d->controls[0] >= 1 && d->controls[0] < s->order ? d->controls[0] : s->order;
-    if (d->brdf && s->glossy_exit)
+    /* A run-time lobe shapes glossy kinds only; the diffuse kinds drawn beside them ignore it. */
+    if (d->brdf && prt__kind_glossy(k) && s->glossy_exit)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this transfer has its BRDF baked in; a run-time BRDF cannot replace it (re-bake without --brdf)");
-    if (d->brdf && !prt__kind_glossy(k))
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a BRDF at relight time applies to glossy kinds only (this is %s)", prt_transfer_kind_name(prt__kind_from_index(k)));
     prt_sh_light sh;
     prt_status st = project(ctx, l, s->order, &sh);
     if (st) return st;

@@ -195,13 +195,18 @@ prt_status prt_relight(prt_context *ctx, const prt_transfer *t, const prt_lighti
     if (d.variant >= t->method->variant_count(t))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "variant %d out of range (the file has %d)", d.variant, t->method->variant_count(t));
     if (d.component < PRT_COMPONENT_ALL || d.component > PRT_COMPONENT_INDIRECT) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown light component %d", d.component);
-    unsigned what = prt_lighting_content(l) & ~(unsigned)PRT_LIGHTS_EMISSIVE;
-    if (t->mesh.emission && prt_lighting_emission(l) > 0) what |= PRT_LIGHTS_EMISSIVE;
-    prt_status st = prt_method_check_lighting(t->method, what);
+    prt_status st = prt_method_check_lighting(t->method, prt_relight_needs(t, l));
     if (st) return prt__fail(ctx, st, "%s", prt_last_error());
     st = t->method->relight(ctx, t, l, &d, out);
     if (st) prt_relit_free(out);
     return st;
+}
+
+unsigned prt_relight_needs(const prt_transfer *t, const prt_lighting *l)
+{
+    unsigned what = prt_lighting_content(l) & ~(unsigned)PRT_LIGHTS_EMISSIVE;
+    if (t && t->mesh.emission && prt_lighting_emission(l) > 0) what |= PRT_LIGHTS_EMISSIVE;
+    return what;
 }
 
 int prt_relit_view_dependent(const prt_relit *r) { return r && (r->exit_sh || r->kvec); }

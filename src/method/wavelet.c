@@ -81,37 +81,43 @@ int prt_transfer_wavelet_vector(const prt_transfer *t, size_t v, int k, int *ind
     return w->store.n;
 }
 
+prt_status prt__wavelet_build_view_maps(const prt_transfer *t, prt__wavelet_set *w)
+{
+    /* Gather the factored materials' first `terms` view maps into one array; vertices point at
+     * their material's slot. Built when the set is made (bake or load), so reading it later from
+     * any number of threads needs no locking. */
+    int slot[PRT__MAX_BRDFS] = {0}, n = 0, res = 0;
+    for (int k = 0; k < PRT__MAX_BRDFS; ++k)
+        if (w->factors[k]) { slot[k] = ++n; res = w->factors[k]->resolution; }
+    if (!n) return PRT_OK;
+    const size_t cells = (size_t)res * res, per_set = (size_t)w->terms * 3 * cells;
+    float *m = prt__calloc((size_t)n * per_set, sizeof(float));
+    uint8_t *vs = prt__calloc(t->mesh.vertex_count, 1);
+    if (!m || !vs) { free(m); free(vs); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory"); }
+    for (int k = 0; k < PRT__MAX_BRDFS; ++k) {
+        const prt_brdf_factors *f = w->factors[k];
+        if (!f) continue;
+        for (int term = 0; term < f->terms && term < w->terms; ++term)
+            for (int c = 0; c < 3; ++c)
+                memcpy(m + (size_t)(slot[k] - 1) * per_set + ((size_t)term * 3 + c) * cells, f->view + ((size_t)c * f->computed + term) * cells,
+                       cells * sizeof(float));
+    }
+    for (size_t v = 0; v < t->mesh.vertex_count; ++v) {
+        uint8_t mat = t->mesh.material[v];
+        vs[v] = mat ? (uint8_t)slot[mat - 1] : 0;
+    }
+    free(w->view_maps);
+    free(w->vertex_set);
+    w->view_maps = m;
+    w->vertex_set = vs;
+    w->view_sets = n;
+    return PRT_OK;
+}
+
 int prt_wavelet_view_maps(const prt_transfer *t, const float **maps, int *sets, int *resolution, int *polar, const uint8_t **vertex_set)
 {
-    prt__wavelet_set *w = prt__wavelet(t);
-    if (!w) return 0;
-    if (!w->view_maps) {
-        /* Gather the factored materials' first `terms` view maps into one array; vertices point
-         * at their material's slot. Built once, kept with the (otherwise read-only) set. */
-        int slot[PRT__MAX_BRDFS] = {0}, n = 0, res = 0;
-        for (int k = 0; k < PRT__MAX_BRDFS; ++k)
-            if (w->factors[k]) { slot[k] = ++n; res = w->factors[k]->resolution; }
-        if (!n) return 0;
-        const size_t cells = (size_t)res * res, per_set = (size_t)w->terms * 3 * cells;
-        float *m = prt__calloc((size_t)n * per_set, sizeof(float));
-        uint8_t *vs = prt__calloc(t->mesh.vertex_count, 1);
-        if (!m || !vs) { free(m); free(vs); return 0; }
-        for (int k = 0; k < PRT__MAX_BRDFS; ++k) {
-            const prt_brdf_factors *f = w->factors[k];
-            if (!f) continue;
-            for (int term = 0; term < f->terms && term < w->terms; ++term)
-                for (int c = 0; c < 3; ++c)
-                    memcpy(m + (size_t)(slot[k] - 1) * per_set + ((size_t)term * 3 + c) * cells, f->view + ((size_t)c * f->computed + term) * cells,
-                           cells * sizeof(float));
-        }
-        for (size_t v = 0; v < t->mesh.vertex_count; ++v) {
-            uint8_t mat = t->mesh.material[v];
-            vs[v] = mat ? (uint8_t)slot[mat - 1] : 0;
-        }
-        w->view_maps = m;
-        w->vertex_set = vs;
-        w->view_sets = n;
-    }
+    const prt__wavelet_set *w = prt__wavelet(t);
+    if (!w || !w->view_maps) return 0;
     int res = 0;
     for (int k = 0; k < PRT__MAX_BRDFS && !res; ++k)
         if (w->factors[k]) res = w->factors[k]->resolution;
@@ -236,15 +242,18 @@ static prt_status load_params(prt_context *ctx, prt_transfer *t, const prt__chun
     return PRT_OK;
 }
 
-static prt_status load_factors(prt_context *ctx, prt__wavelet_set *w, const prt__chunk_in *c)
+static prt_status load_factors(prt_context *ctx, const prt_transfer *t, prt__wavelet_set *w, const prt__chunk_in *c)
 {
     const unsigned char *p = c->data;
     const uint64_t len = c->size;
     if (len < WBRF_HEADER) return bad(ctx, "corrupt .prt file: short BRDF factorization chunk");
     uint32_t k = prt__get32(p), terms = prt__get32(p + 4), computed = prt__get32(p + 8), res = prt__get32(p + 12), param = prt__get32(p + 16);
     uint64_t maps = (uint64_t)3 * computed * res * res * 4;
-    if (k < 1 || k > PRT__MAX_BRDFS || w->factors[k - 1] || terms < 1 || terms > computed || computed > PRT_BRDF_MAX_TERMS || res < 4 || res > 96 ||
-        param > PRT_BRDF_PARAM_POLAR || WBRF_HEADER + 2 * maps != len)
+    /* Every factorization has the file's resolution, parameterization and at most its terms: the
+     * renderer packs all of them into one array of that shape. */
+    if (k < 1 || k > (uint32_t)t->brdf_count || w->factors[k - 1] || terms < 1 || terms > computed || terms > (uint32_t)w->terms ||
+        computed > PRT_BRDF_MAX_TERMS || (int)res != w->brdf_resolution || res < 4 || res > 96 || param != (uint32_t)w->param ||
+        WBRF_HEADER + 2 * maps != len)
         return bad(ctx, "corrupt .prt file: invalid BRDF factorization chunk");
     prt_brdf_factors *f = prt__brdf_factors_alloc((int)terms, (int)computed, (int)res, (prt_brdf_param)param);
     if (!f) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
@@ -286,7 +295,7 @@ static prt_status wavelet_load(prt_context *ctx, prt_transfer *t, const cJSON *m
     prt__chunk_in *c = prt__chunk_take(chunks, count, CHUNK_WAVP);
     if (!c) return bad(ctx, "corrupt .prt file: wavelet parameter chunk missing");
     prt_status st = load_params(ctx, t, c);
-    while (!st && (c = prt__chunk_take(chunks, count, CHUNK_WBRF))) st = load_factors(ctx, w, c);
+    while (!st && (c = prt__chunk_take(chunks, count, CHUNK_WBRF))) st = load_factors(ctx, t, w, c);
     if (!st && !(c = prt__chunk_take(chunks, count, CHUNK_WAVT))) st = bad(ctx, "corrupt .prt file: wavelet transfer chunk missing");
     if (!st) st = load_transport(ctx, w, c);
     if (!st && prt__chunk_take(chunks, count, CHUNK_WAVP)) st = bad(ctx, "corrupt .prt file: two wavelet parameter chunks");
@@ -297,6 +306,7 @@ static prt_status wavelet_load(prt_context *ctx, prt_transfer *t, const cJSON *m
         const prt_brdf_factors *f = mat ? w->factors[mat - 1] : NULL;
         if (w->term_count[v] != (f ? f->terms : 1)) st = bad(ctx, "corrupt .prt file: wavelet term counts do not match the materials");
     }
+    if (!st) st = prt__wavelet_build_view_maps(t, w);
     return st;
 }
 

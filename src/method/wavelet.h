@@ -27,6 +27,8 @@ static inline prt__wavelet_set *prt__wavelet(const prt_transfer *t) { return prt
 void prt__wavelet_set_free(void *w);
 /* Fills vec_start from term_count; false if a count is 0 or above 16. */
 bool prt__wavelet_index(prt__wavelet_set *w, size_t vertex_count, size_t *vectors);
+/* Packs the factored materials' view maps for the renderer (prt_wavelet_view_maps). */
+prt_status prt__wavelet_build_view_maps(const prt_transfer *t, prt__wavelet_set *w);
 /* The wavelet bake (bake/wavelet.c) as stages of work units, for t holding the scene. */
 prt_status prt__wavelet_bake_begin(prt_context *ctx, const prt_wavelet_bake_desc *d, prt_transfer *t, prt__bake_job **job);
 

@@ -39,6 +39,14 @@ int cli_exit_code(prt_status st)
     }
 }
 
+int cli_bad_option(const cli *c, int opt, char **argv)
+{
+    extern int optind;
+    const char *arg = optind > 0 ? argv[optind - 1] : "";
+    if (opt == ':') return cli_usage(c, "option '%s' needs a value", arg);
+    return cli_usage(c, "unknown option '%s'", arg);
+}
+
 int cli_usage(const cli *c, const char *fmt, ...)
 {
     va_list ap;
@@ -294,20 +302,46 @@ prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t,
     memset(&file_env, 0, sizeof file_env);
     bool has_env = t ? prt_transfer_environment(t, &file_env) : s ? prt_scene_environment(s, &file_env) : false;
     const int nfile = t ? prt_transfer_light_count(t) : s ? prt_scene_light_count(s) : 0;
-    const bool emits = (t ? prt_transfer_emission(t) != NULL : s ? prt_scene_emission(s) != NULL : false) && !(l->set_emission && l->emission == 0);
+    /* What the scene names that the file's method cannot relight is left out, with a warning;
+     * what the command line asks for explicitly is refused later by the method, by name. */
+    const unsigned can = t ? prt_method_lighting(prt_transfer_method(t)) : ~0u;
+    bool emits = (t ? prt_transfer_emission(t) != NULL : s ? prt_scene_emission(s) != NULL : false) && !(l->set_emission && l->emission == 0);
+    unsigned dropped = 0;
+    if (emits && !l->set_emission && !(can & PRT_LIGHTS_EMISSIVE)) { emits = false; dropped |= PRT_LIGHTS_EMISSIVE; }
+    int kept = 0;
+    for (int i = 0; i < nfile; ++i) {
+        const prt_light *li = t ? prt_transfer_light(t, i) : prt_scene_light(s, i);
+        if (can & prt_light_type_bit(li->type)) kept++;
+        else if (!l->set_lights) dropped |= prt_light_type_bit(li->type);
+    }
     /* A scene that names no environment is lit by its own lights and emitters when it has any
-     * (and they are in use), else by the procedural sky. */
-    const bool own_lights = (l->set_lights ? l->light_count : nfile) > 0 || emits;
-    prt_environment_desc e = environment(l, has_env, &file_env, own_lights);
+     * the method relights (lights the command line puts in their place count as its own), else
+     * by the procedural sky: --light added to a plain scene adds to the sky. */
+    const bool own = (l->set_lights ? kept > 0 && l->light_count > 0 : kept > 0) || emits;
+    prt_environment_desc e = environment(l, has_env, &file_env, own);
     prt_lighting *lighting = NULL;
     prt_status st = prt_lighting_create(&lighting);
     if (!st) st = prt_lighting_set_environment(lighting, &e);
+    if (!st && l->set_intensity) prt_lighting_set_intensity(lighting, l->intensity);
     if (l->set_lights)
         for (int i = 0; i < l->light_count && !st; ++i) st = prt_lighting_add(lighting, &l->lights[i], NULL);
     else
-        for (int i = 0; i < nfile && !st; ++i) st = prt_lighting_add(lighting, t ? prt_transfer_light(t, i) : prt_scene_light(s, i), NULL);
+        for (int i = 0; i < nfile && !st; ++i) {
+            const prt_light *li = t ? prt_transfer_light(t, i) : prt_scene_light(s, i);
+            if (can & prt_light_type_bit(li->type)) st = prt_lighting_add(lighting, li, NULL);
+        }
     if (l->set_emission) prt_lighting_set_emission(lighting, l->emission);
+    else if (dropped & PRT_LIGHTS_EMISSIVE) prt_lighting_set_emission(lighting, 0);
     if (st) { prt_lighting_release(lighting); return st; }
+    if (dropped && !c->quiet) {
+        char names[256] = "", others[128];
+        size_t at = 0;
+        for (unsigned bit = 1; bit <= PRT_LIGHTS_EMISSIVE; bit <<= 1)
+            if ((dropped & bit) && at < sizeof names) at += (size_t)snprintf(names + at, sizeof names - at, "%s%s", at ? " and " : "", prt_lights_bit_name(bit));
+        prt_methods_relighting(dropped, others, sizeof others);
+        fprintf(stderr, "prt %s: warning: method %s cannot relight the scene's %s: left out (%s%sprt reference path-traces them)\n", c->cmd,
+                prt_method_name(prt_transfer_method(t)), names, others[0] ? others : "", others[0] ? " can; " : "");
+    }
     if (!prt_lighting_content(lighting) || (prt_lighting_content(lighting) == PRT_LIGHTS_EMISSIVE && !emits))
         if (!c->quiet) fprintf(stderr, "prt %s: warning: nothing lights the scene (no environment, no lights, no emitters): the result is black\n", c->cmd);
     *out = lighting;
@@ -378,9 +412,7 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     prt_status st = prt_relight(c->ctx, t, lighting, &d, out);
     if (st == PRT_ERR_INVALID_ARG) {
         /* Lighting the method refuses: say how to leave it out. */
-        unsigned what = prt_lighting_content(lighting) & ~(unsigned)PRT_LIGHTS_EMISSIVE;
-        if (prt_transfer_emission(t) && prt_lighting_emission(lighting) > 0) what |= PRT_LIGHTS_EMISSIVE;
-        const unsigned refused = what & ~prt_method_lighting(prt_transfer_method(t));
+        const unsigned refused = prt_relight_needs(t, lighting) & ~prt_method_lighting(prt_transfer_method(t));
         if (refused) {
             const bool lights = refused & (PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_SPHERE | PRT_LIGHTS_DIRECTIONAL), emit = refused & PRT_LIGHTS_EMISSIVE;
             cli_error(c, "%s (%s%s%s leave%s them out)", prt_last_error(), lights ? "--light none" : "", lights && emit ? " and " : "",

@@ -34,6 +34,9 @@ void cli_error(const cli *c, const char *fmt, ...) __attribute__((format(printf,
 int cli_fail(const cli *c, prt_status st);
 int cli_usage(const cli *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 int cli_make_context(cli *c);
+/* The usage error for what getopt_long returned as opt ('?' unknown, ':' missing value; opterr 0
+ * and an optstring starting with ':'), naming the argument. */
+int cli_bad_option(const cli *c, int opt, char **argv);
 /* The exit code for a status, when the message was already printed. */
 int cli_exit_code(prt_status st);
 

@@ -33,8 +33,9 @@ static void help(const prt_method *only)
 }
 
 /* Every method's options are accepted by the parser, so that an option of another method gets
- * an error naming the method it belongs to rather than "unknown option". */
-static int collect_options(struct option *opts, int max, const char **names)
+ * an error naming the method it belongs to rather than "unknown option"; the chosen method's
+ * come first, so a name two methods share is parsed as the chosen one declares it. */
+static int collect_options(const prt_method *chosen, struct option *opts, int max, const char **names, int max_names)
 {
     static const struct option fixed[] = {
         {"output", required_argument, 0, 'o'}, {"method", required_argument, 0, OPT_METHOD}, CLI_SCENE_LONG_OPTIONS,
@@ -42,10 +43,12 @@ static int collect_options(struct option *opts, int max, const char **names)
     int n = 0;
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; ++i) opts[n++] = fixed[i];
     int extra = 0;
-    for (int m = 0; m < prt_method_count(); ++m) {
+    for (int m = -1; m < prt_method_count(); ++m) {
+        const prt_method *method = m < 0 ? chosen : prt_method_at(m);
+        if (m >= 0 && method == chosen) continue;
         const prt_option_desc *o;
-        int count = prt_method_options(prt_method_at(m), &o);
-        for (int i = 0; i < count && n < max - 1; ++i) {
+        int count = prt_method_options(method, &o);
+        for (int i = 0; i < count && n < max - 1 && extra < max_names; ++i) {
             bool seen = false;
             for (int k = 0; k < extra && !seen; ++k) seen = !strcmp(names[k], o[i].name);
             if (seen) continue;
@@ -69,12 +72,13 @@ int cmd_bake(int argc, char **argv)
     for (int i = 1; i < argc; ++i) method_named |= !strcmp(argv[i], "--method") || !strncmp(argv[i], "--method=", 9);
     struct option opts[256];
     const char *names[200];
-    collect_options(opts, 256, names);
+    collect_options(method, opts, 256, names, 200);
     prt_options *o = NULL;
     if (prt_options_create(method, &o)) return cli_fail(&c, PRT_ERR_NO_MEMORY);
     int opt, rc = EXIT_OK;
     optind = 1;
-    while (!rc && (opt = getopt_long(argc, argv, "o:j:qh", opts, NULL)) != -1) {
+    opterr = 0;   /* one line of our own instead of getopt's */
+    while (!rc && (opt = getopt_long(argc, argv, ":o:j:qh", opts, NULL)) != -1) {
         int r = cli_scene_option(&c, &sd, opt, optarg);
         if (r < 0) { rc = EXIT_USAGE; break; }
         if (r) continue;
@@ -84,11 +88,15 @@ int cmd_bake(int argc, char **argv)
         }
         switch (opt) {
         case 'o': output = optarg; break;
-        case OPT_METHOD: break;   /* read before parsing */
+        case OPT_METHOD:
+            /* Read before parsing; getopt also accepts abbreviations such as --meth, which that
+             * scan does not see. */
+            if (prt_method_find(optarg) != method) rc = cli_usage(&c, "give the method as --method %s (or --method=%s)", optarg, optarg);
+            break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) rc = cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
         case 'h': help(method_named ? method : NULL); prt_options_release(o); return EXIT_OK;
-        default: rc = cli_usage(&c, "unknown option"); break;
+        default: rc = cli_bad_option(&c, opt, argv); break;
         }
     }
     if (!rc && optind != argc - 1) rc = cli_usage(&c, "expected exactly one SCENE argument");

@@ -76,7 +76,8 @@ int cmd_compare(int argc, char **argv)
         CLI_VIEW_LONG_OPTIONS, CLI_LIGHT_LONG_OPTIONS, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt;
     optind = 1;
-    while ((opt = getopt_long(argc, argv, "k:qh", opts, NULL)) != -1) {
+    opterr = 0;   /* one line of our own instead of getopt's */
+    while ((opt = getopt_long(argc, argv, ":k:qh", opts, NULL)) != -1) {
         int r = cli_light_option(&c, &light, opt, optarg);
         if (!r) r = cli_view_option(&c, &view, opt, optarg);
         if (r < 0) return EXIT_USAGE;
@@ -89,7 +90,7 @@ int cmd_compare(int argc, char **argv)
         case OPT_ERROR_SCALE: if (!cli_parse_float(optarg, &scale) || scale <= 0) return cli_usage(&c, "--error-scale must be > 0"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); return EXIT_OK;
-        default: return cli_usage(&c, "unknown option");
+        default: return cli_bad_option(&c, opt, argv);
         }
     }
     if (optind != argc - 2) return cli_usage(&c, "expected two results, A and B (the reference)");

@@ -17,10 +17,11 @@ int cmd_demo_scene(int argc, char **argv)
     int opt;
     static const struct option opts[] = {{"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     optind = 1;
-    while ((opt = getopt_long(argc, argv, "o:h", opts, NULL)) != -1) {
+    opterr = 0;   /* one line of our own instead of getopt's */
+    while ((opt = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
         if (opt == 'o') output = optarg;
         else if (opt == 'h') { fputs(HELP, stdout); return EXIT_OK; }
-        else return cli_usage(&c, "unknown option");
+        else return cli_bad_option(&c, opt, argv);
     }
     if (optind != argc || !output) return cli_usage(&c, "expected -o OUT.obj and no other arguments");
     prt_status st = prt_demo_scene_write(output);

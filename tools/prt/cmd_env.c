@@ -44,7 +44,8 @@ int cmd_env(int argc, char **argv)
         {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt;
     optind = 1;
-    while ((opt = getopt_long(argc, argv, "o:qh", opts, NULL)) != -1) {
+    opterr = 0;   /* one line of our own instead of getopt's */
+    while ((opt = getopt_long(argc, argv, ":o:qh", opts, NULL)) != -1) {
         if (opt == OPT_ENV) return cli_usage(&c, "give the probe as the argument: prt env PROBE");
         int r = cli_light_option(&c, &light, opt, optarg);
         if (r < 0) return EXIT_USAGE;
@@ -57,7 +58,7 @@ int cmd_env(int argc, char **argv)
         case OPT_IMAGE_WIDTH: if (!cli_parse_int(optarg, 2, 16384, &width) || width % 2) return cli_usage(&c, "--width must be even, 2..16384"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); return EXIT_OK;
-        default: return cli_usage(&c, "unknown option");
+        default: return cli_bad_option(&c, opt, argv);
         }
     }
     if (optind < argc - 1) return cli_usage(&c, "expected at most one PROBE argument");

@@ -18,10 +18,11 @@ int cmd_info(int argc, char **argv)
     int json = 0, opt;
     static const struct option opts[] = {{"json", no_argument, 0, 'J'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     optind = 1;
-    while ((opt = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
+    opterr = 0;   /* one line of our own instead of getopt's */
+    while ((opt = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
         if (opt == 'J') json = 1;
         else if (opt == 'h') { fputs(HELP, stdout); return EXIT_OK; }
-        else return cli_usage(&c, "unknown option");
+        else return cli_bad_option(&c, opt, argv);
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one FILE.prt argument");
     c.threads = 1;

@@ -41,7 +41,8 @@ int cmd_render(int argc, char **argv)
         {0, 0, 0, 0}};
     int opt;
     optind = 1;
-    while ((opt = getopt_long(argc, argv, "o:k:j:qh", opts, NULL)) != -1) {
+    opterr = 0;   /* one line of our own instead of getopt's */
+    while ((opt = getopt_long(argc, argv, ":o:k:j:qh", opts, NULL)) != -1) {
         int r = cli_light_option(&c, &light, opt, optarg);
         if (!r) r = cli_view_option(&c, &view, opt, optarg);
         if (r < 0) return EXIT_USAGE;
@@ -56,7 +57,7 @@ int cmd_render(int argc, char **argv)
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); return EXIT_OK;
-        default: return cli_usage(&c, "unknown option");
+        default: return cli_bad_option(&c, opt, argv);
         }
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one FILE.prt argument");

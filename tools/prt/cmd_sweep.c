@@ -110,7 +110,8 @@ int cmd_sweep(int argc, char **argv)
     if (prt_options_create(method, &fixed_opts)) return cli_fail(&c, PRT_ERR_NO_MEMORY);
     int opt, rc = EXIT_OK;
     optind = 1;
-    while (!rc && (opt = getopt_long(argc, argv, "o:j:qh", opts, NULL)) != -1) {
+    opterr = 0;   /* one line of our own instead of getopt's */
+    while (!rc && (opt = getopt_long(argc, argv, ":o:j:qh", opts, NULL)) != -1) {
         int r = cli_light_option(&c, &light, opt, optarg);
         if (!r) r = cli_scene_option(&c, &sd, opt, optarg);
         if (r < 0) { rc = EXIT_USAGE; break; }
@@ -126,11 +127,13 @@ int cmd_sweep(int argc, char **argv)
         case OPT_PARAM: param = optarg; break;
         case OPT_VALUES: values = optarg; break;
         case OPT_INDIRECT_ONLY: indirect = true; break;
-        case OPT_METHOD: break;
+        case OPT_METHOD:
+            if (prt_method_find(optarg) != method) rc = cli_usage(&c, "give the method as --method %s (or --method=%s)", optarg, optarg);
+            break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) rc = cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); prt_options_release(fixed_opts); return EXIT_OK;
-        default: rc = cli_usage(&c, "unknown option"); break;
+        default: rc = cli_bad_option(&c, opt, argv); break;
         }
     }
     const prt_option_desc *pd = NULL;

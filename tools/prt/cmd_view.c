@@ -112,6 +112,20 @@ void view_rotate_env(viewer *v, float dyaw, float dpitch)
 }
 
 /* ---- relight worker ---- */
+void view_take_lights(viewer *v)
+{
+    prt_lighting_rotation(v->lighting, v->base_rot);
+    int n = prt_lighting_count(v->lighting);
+    if (n > CLI_MAX_LIGHTS) {
+        snprintf(v->message, sizeof v->message, "the viewer edits at most %d lights: the first %d of %d are shown", CLI_MAX_LIGHTS, CLI_MAX_LIGHTS, n);
+        if (!v->c->quiet) fprintf(stderr, "prt view: warning: %s\n", v->message);
+        n = CLI_MAX_LIGHTS;
+    }
+    v->want.light_count = n;
+    for (int i = 0; i < n; ++i) v->want.lights[i] = *prt_lighting_light(v->lighting, i);
+    v->selected = n ? 0 : -1;
+}
+
 /* The job's lighting: the viewer's rotation on top of the lighting's own, and the job's lights. */
 static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
 {
@@ -336,7 +350,8 @@ int cmd_view(int argc, char **argv)
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt;
     optind = 1;
-    while ((opt = getopt_long(argc, argv, "j:qh", opts, NULL)) != -1) {
+    opterr = 0;   /* one line of our own instead of getopt's */
+    while ((opt = getopt_long(argc, argv, ":j:qh", opts, NULL)) != -1) {
         int r = cli_light_option(&c, &v.light, opt, optarg);
         if (r < 0) return EXIT_USAGE;
         if (r) continue;
@@ -349,7 +364,7 @@ int cmd_view(int argc, char **argv)
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); return EXIT_OK;
-        default: return cli_usage(&c, "unknown option");
+        default: return cli_bad_option(&c, opt, argv);
         }
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one FILE.prt argument");
@@ -362,10 +377,7 @@ int cmd_view(int argc, char **argv)
     if (!st) st = prt_context_create(&(prt_context_desc){c.threads, NULL, NULL}, &v.worker_ctx);
     if (!st) {
         /* The file's lights become the viewer's to edit; the worker relights with a copy per job. */
-        prt_lighting_rotation(v.lighting, v.base_rot);
-        v.want.light_count = prt_lighting_count(v.lighting);
-        for (int i = 0; i < v.want.light_count && i < CLI_MAX_LIGHTS; ++i) v.want.lights[i] = *prt_lighting_light(v.lighting, i);
-        v.selected = v.want.light_count ? 0 : -1;
+        view_take_lights(&v);
         v.want.variant = prt_transfer_default_variant(v.t, 1);
         const prt_control_desc *cd;
         for (int i = 0; i < prt_transfer_controls(v.t, &cd); ++i) prt_transfer_control_range(v.t, i, NULL, NULL, &v.want.controls[i]);

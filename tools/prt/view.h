@@ -103,6 +103,8 @@ bool view_light_remove(viewer *v);
 bool view_light_move(viewer *v, float dx, float dy, float dz);
 bool view_light_scale(viewer *v, float factor);
 bool view_light_colour(viewer *v, const float rgb[3]);
+/* Takes the lighting's rotation and lights as the viewer's starting point. */
+void view_take_lights(viewer *v);
 /* The light types the file's method relights (PRT_LIGHTS_* bits). */
 unsigned view_light_types(const viewer *v);
 void view_camera(const viewer *v, prt_camera *cam);

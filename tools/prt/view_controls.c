@@ -56,7 +56,7 @@ static void reload_probe(viewer *v, int arg)
     view_sync(v);
     prt_lighting_release(v->lighting);
     v->lighting = l;
-    prt_lighting_rotation(l, v->base_rot);
+    view_take_lights(v);
     view_request_relight(v);
 }
 static void screenshot(viewer *v, int arg)
@@ -150,11 +150,8 @@ static void scene_frame(const viewer *v, float centre[3], float *size)
 
 bool view_light_add(viewer *v, prt_light_type type, const float *position)
 {
-    if (!(view_light_types(v) & prt_light_type_bit(type))) {
-        char names[128];
-        prt_methods_relighting(prt_light_type_bit(type), names, sizeof names);
-        snprintf(v->message, sizeof v->message, "method %s cannot relight %s%s%s", prt_method_name(prt_transfer_method(v->t)),
-                 prt_lights_bit_name(prt_light_type_bit(type)), names[0] ? "; bake with --method " : " (no method of this prt can yet)", names);
+    if (prt_method_check_lighting(prt_transfer_method(v->t), prt_light_type_bit(type))) {
+        snprintf(v->message, sizeof v->message, "%s", prt_last_error());
         return false;
     }
     if (v->want.light_count == CLI_MAX_LIGHTS) { snprintf(v->message, sizeof v->message, "at most %d lights", CLI_MAX_LIGHTS); return false; }

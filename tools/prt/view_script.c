@@ -2,6 +2,7 @@
  * their time has come. Scripts make the viewer testable and record fly-throughs. */
 #include "view.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -33,6 +34,13 @@ static const struct { const char *name; ev_kind kind; int nargs; } verbs[] = {
 static const char *VERBS = "verbs: orbit DYAW DPITCH, pan DX DY, zoom F, env-rotate YAW PITCH, key NAME, drag left|right DX DY [ctrl|shift|alt], "
                            "light-add point|spot|directional|sphere [X Y Z], light-select N, light-move DX DY DZ, light-scale F, "
                            "light-colour R G B, light-remove, screenshot FILE, quit";
+
+static bool number(const char *text, float *out)
+{
+    char *end;
+    *out = strtof(text, &end);
+    return end != text && !*end && isfinite(*out);
+}
 
 static bool light_type(const char *name, prt_light_type *out)
 {
@@ -74,32 +82,40 @@ int view_script_load(const cli *c, const char *path, view_script **out)
         }
         if (s->count == cap) {
             cap = cap ? cap * 2 : 16;
-            ev *e = realloc(s->events, (size_t)cap * sizeof *e);
-            if (!e) break;
-            s->events = e;
+            ev *grown = realloc(s->events, (size_t)cap * sizeof *grown);
+            if (!grown) {
+                cli_error(c, "out of memory reading '%s'", path);
+                fclose(f);
+                view_script_free(s);
+                return EXIT_NO_MEMORY;
+            }
+            s->events = grown;
         }
         ev *e = &s->events[s->count++];
         memset(e, 0, sizeof *e);
         e->time = last = t;
         e->kind = verbs[k].kind;
+        bool numbers = true;
         if (e->kind == EV_KEY || e->kind == EV_SCREENSHOT) snprintf(e->text, sizeof e->text, "%s", arg[0]);
         else if (e->kind == EV_LIGHT_ADD) {
             e->button = (int)type;
             e->has_position = n == 6;
-            if (e->has_position) { e->a = strtof(arg[1], NULL); e->b = strtof(arg[2], NULL); e->c = strtof(arg[3], NULL); }
-        } else if (verbs[k].nargs == 3 && e->kind != EV_DRAG) {
-            e->a = strtof(arg[0], NULL); e->b = strtof(arg[1], NULL); e->c = strtof(arg[2], NULL);
-        }
-        else if (e->kind == EV_DRAG) {
+            if (e->has_position) numbers = number(arg[1], &e->a) && number(arg[2], &e->b) && number(arg[3], &e->c);
+        } else if (e->kind == EV_DRAG) {
             e->button = !strcmp(arg[0], "right") ? 1 : 0;
-            e->a = strtof(arg[1], NULL);
-            e->b = strtof(arg[2], NULL);
+            numbers = number(arg[1], &e->a) && number(arg[2], &e->b);
             char mod[32] = "";   /* an optional modifier after the deltas */
             if (sscanf(line, "%*f %*s %*s %*s %*s %31s", mod) == 1)
                 e->mods = !strcmp(mod, "ctrl") ? PRT_MOD_CTRL : !strcmp(mod, "shift") ? PRT_MOD_SHIFT : !strcmp(mod, "alt") ? PRT_MOD_ALT : 0;
-        } else if (verbs[k].nargs >= 1 && verbs[k].nargs < 3) {
-            e->a = strtof(arg[0], NULL);
-            if (verbs[k].nargs == 2) e->b = strtof(arg[1], NULL);
+        } else {
+            float *dst[3] = {&e->a, &e->b, &e->c};
+            for (int i = 0; i < verbs[k].nargs && numbers; ++i) numbers = number(arg[i], dst[i]);
+        }
+        if (!numbers) {
+            cli_error(c, "%s:%d: '%s' takes finite numbers", path, lineno, verb);
+            fclose(f);
+            view_script_free(s);
+            return EXIT_USAGE;
         }
     }
     fclose(f);
