@@ -250,8 +250,11 @@ static void test_lighting_object(void **state)
     snprintf(d.path, sizeof d.path, "%s/missing.hdr", test_dir);
     assert_int_not_equal(prt_lighting_set_environment(c, &d), PRT_OK);
     assert_non_null(prt_lighting_envmap(c));   /* a failed load keeps what was there */
-    prt_lighting_set_intensity(c, 0);
-    assert_true(prt_lighting_intensity(c) == 1.0f);
+    prt_lighting_set_intensity(c, 0);   /* an explicit 0 turns the environment off */
+    assert_true(prt_lighting_intensity(c) == 0.0f);
+    prt_lighting_set_intensity(c, -1);  /* refused: unchanged */
+    prt_lighting_set_intensity(c, NAN);
+    assert_true(prt_lighting_intensity(c) == 0.0f);
     prt_lighting_release(c);
     prt_lighting_release(NULL);
 }
