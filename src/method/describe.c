@@ -71,7 +71,11 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
             prt_light_format(&t->lights[i], l, sizeof l);
             cJSON_AddItemToArray(lights, cJSON_CreateString(l));
         }
-        if (t->mesh.emission) cJSON_AddBoolToObject(j, "emissive_surfaces", 1);
+        size_t emitting = 0;
+        for (size_t v = 0; t->mesh.emission && v < nv; ++v)
+            emitting += t->mesh.emission[v * 3] > 0 || t->mesh.emission[v * 3 + 1] > 0 || t->mesh.emission[v * 3 + 2] > 0;
+        cJSON_AddNumberToObject(j, "emissive_vertices", (double)emitting);
+        if (t->has_env) cJSON_AddStringToObject(j, "environment", t->env.none ? "none" : t->env.path[0] ? t->env.path : "procedural sky");
         char *text = cJSON_Print(j);
         cJSON_Delete(j);
         if (!text) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
