@@ -129,7 +129,7 @@ static inline void gather_hit(const prt__mesh *m, const float *prev, int nc3, co
  * coupled glossy bounce loop or one stage per diffuse bounce, then texels and the BRDF. */
 #define BLOCK 64
 
-typedef enum { ST_VISIBILITY, ST_GLOSSY_BOUNCES, ST_BOUNCE, ST_TEXELS, ST_BRDF_IN } stage_kind;
+typedef enum { ST_VISIBILITY, ST_GLOSSY_BOUNCES, ST_BOUNCE, ST_TEXELS, ST_BRDF_IN, ST_COMPRESS, ST_QUANTIZE } stage_kind;
 
 typedef struct sh_bake {
     prt__bake_job base;
@@ -142,9 +142,12 @@ typedef struct sh_bake {
     float *total, *prev, *next;    /* diffuse bounce buffers, [vertex][3][order^2] */
     hit_entry **scratch;           /* per thread, one entry per sample */
     int nscratch;
-    stage_kind plan[72];
-    int bounce_of[72];
+    stage_kind plan[80];
+    int bounce_of[80];            /* ST_BOUNCE: its number; ST_COMPRESS: the set it compresses */
     int stages;
+    prt__sh_extra extra;          /* compression, quantization, the normal map (owned) */
+    prt_brdf brdf;                /* d.glossy_brdf points here */
+    int compressing_set;
 } sh_bake;
 
 static uint64_t blocks(size_t nv) { return (nv + BLOCK - 1) / BLOCK; }
@@ -215,6 +218,20 @@ static prt_status run_brdf_in(prt__bake_job *b, prt_context *ctx, prt__progress 
     return prt__bake_brdf_in(ctx, sb->t, sb->d.glossy_brdf);
 }
 
+static prt_status run_compress(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    sh_bake *sb = (sh_bake *)b;
+    p->total = (uint64_t)sb->extra.compress.iterations;
+    return prt__sh_compress_set(ctx, sb->s, sb->t->mesh.vertex_count, sb->compressing_set, &sb->extra.compress, p);
+}
+
+static prt_status run_quantize(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    (void)p;
+    sh_bake *sb = (sh_bake *)b;
+    return prt__sh_quantize(ctx, sb->s, sb->t->mesh.vertex_count, sb->extra.quantize);
+}
+
 static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
 {
     sh_bake *sb = (sh_bake *)b;
@@ -244,7 +261,7 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
         sb->s->sets[2].coeffs = sb->total;
         sb->total = NULL;
     }
-    if (index > 0 && (index == sb->stages || sb->plan[index] == ST_TEXELS || sb->plan[index] == ST_BRDF_IN)) {
+    if (index > 0 && (index == sb->stages || sb->plan[index] >= ST_TEXELS)) {
         /* Every stage that reads the shadowed and glossy-shadowed sets has run. */
         if (sb->shad && (sb->d.kinds & PRT_TRANSFER_SHADOWED)) { sb->s->sets[1].channels = 1; sb->s->sets[1].coeffs = sb->shad; sb->shad = NULL; }
         if (sb->gshad && sb->want_gsh) { sb->s->sets[3].channels = 1; sb->s->sets[3].coeffs = sb->gshad; sb->gshad = NULL; }
@@ -272,6 +289,12 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
         break;
     case ST_TEXELS: snprintf(out->name, sizeof out->name, "texels"); out->whole = run_texels; break;
     case ST_BRDF_IN: snprintf(out->name, sizeof out->name, "bake BRDF in"); out->whole = run_brdf_in; break;
+    case ST_COMPRESS:
+        sb->compressing_set = sb->bounce_of[index];
+        snprintf(out->name, sizeof out->name, "compress %s", prt_transfer_kind_name(prt__kind_from_index(sb->compressing_set)));
+        out->whole = run_compress;
+        break;
+    case ST_QUANTIZE: snprintf(out->name, sizeof out->name, "quantize"); out->whole = run_quantize; break;
     }
     return PRT_OK;
 }
@@ -294,12 +317,14 @@ static void sh_release(prt__bake_job *b)
     free(sb->scratch);
     free(job->hits); free(job->hit_count); free(job->origins); free(job->dirs); free(job->basis);
     free(sb->unsh); free(sb->shad); free(sb->gshad); free(sb->total); free(sb->prev); free(sb->next);
+    prt_image_free(&sb->extra.normal_map);
     free(sb);
 }
 
-prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *desc_in, prt_transfer *t, prt__bake_job **out)
+prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *desc_in, prt__sh_extra *extra, prt_transfer *t, prt__bake_job **out)
 {
     prt_bake_desc d = desc_in ? *desc_in : (prt_bake_desc){0};
+    if (extra && extra->normal_map.rgb) d.normal_map = &extra->normal_map;
     prt_bake_desc def = prt_bake_desc_defaults();
     if (d.order == 0) d.order = def.order;
     if (d.samples == 0) d.samples = def.samples;
@@ -330,6 +355,12 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *desc_in, pr
     sb->base.stage = sh_stage;
     sb->base.finish = sh_finish;
     sb->base.release = sh_release;
+    if (extra) {   /* the job owns the normal map from here on */
+        sb->extra = *extra;
+        memset(&extra->normal_map, 0, sizeof extra->normal_map);
+        if (d.normal_map == &extra->normal_map) d.normal_map = &sb->extra.normal_map;
+    }
+    if (d.glossy_brdf) { sb->brdf = *d.glossy_brdf; d.glossy_brdf = &sb->brdf; }
     sb->d = d;
     sb->t = t;
     sb->s = s;
@@ -392,6 +423,10 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *desc_in, pr
         for (int bnc = 1; bnc <= d.bounces; ++bnc) { sb->bounce_of[sb->stages] = bnc; sb->plan[sb->stages++] = ST_BOUNCE; }
     if (d.texels) sb->plan[sb->stages++] = ST_TEXELS;
     if (d.glossy_exit) sb->plan[sb->stages++] = ST_BRDF_IN;
+    if (sb->extra.compressing)
+        for (int k = 0; k < PRT__KIND_COUNT; ++k)
+            if (d.kinds & prt__kind_from_index(k)) { sb->bounce_of[sb->stages] = k; sb->plan[sb->stages++] = ST_COMPRESS; }
+    if (sb->extra.quantize) sb->plan[sb->stages++] = ST_QUANTIZE;
     *out = &sb->base;
     return PRT_OK;
 }
@@ -403,7 +438,7 @@ prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_
     prt_transfer *t = NULL;
     prt_status st = prt__transfer_from_scene(ctx, &prt__method_sh, scene, &t);
     prt__bake_job *job = NULL;
-    if (!st) st = prt__sh_bake_begin(ctx, desc, t, &job);
+    if (!st) st = prt__sh_bake_begin(ctx, desc, NULL, t, &job);
     prt_bake_run_desc run = {desc ? desc->progress : NULL, desc ? desc->progress_user : NULL};
     if (!st) st = prt__bake_drive(ctx, job, &run, t);
     if (st) { prt_transfer_release(t); return st; }

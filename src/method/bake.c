@@ -17,9 +17,8 @@ prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_
         if ((st = job->stage(job, index, &s))) break;
         if (!s.units && !s.whole) break;
         prt__progress_begin(&prog, s.name, s.whole ? 1 : s.units);
-        prt__bake_job *target = s.job ? s.job : job;
         if (s.whole) {
-            st = s.whole(target, ctx, &prog);
+            st = s.whole(job, ctx, &prog);
         } else {
             int failed = 0;
             prt_status first = PRT_OK;
@@ -29,7 +28,7 @@ prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_
 #pragma omp parallel for schedule(dynamic, 1) num_threads(job->threads)
             for (uint64_t u = 0; u < s.units; ++u) {
                 if (__atomic_load_n(&failed, __ATOMIC_RELAXED) || prt__progress_cancelled(&prog)) continue;
-                prt_status r = s.run(target, u, omp_get_thread_num());
+                prt_status r = s.run(job, u, omp_get_thread_num());
                 if (r && !__atomic_exchange_n(&failed, 1, __ATOMIC_RELAXED)) {
                     first = r;
                     snprintf(why, sizeof why, "%s", prt_last_error());

@@ -29,8 +29,6 @@ typedef struct prt__stage {
     /* A step with parallel loops of its own (k-means, a BRDF fit), run once instead of units;
      * it reports through p and checks p for cancellation. */
     prt_status (*whole)(prt__bake_job *job, prt_context *ctx, prt__progress *p);
-    /* The job run and whole receive, when a job delegates stages to another; NULL = the job. */
-    prt__bake_job *job;
 } prt__stage;
 
 struct prt__bake_job {

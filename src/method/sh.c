@@ -216,84 +216,6 @@ static const prt_control_desc controls[] = {
     {"order", "SH order used for lighting (truncates the file's)", '[', ']', 0},
 };
 
-/* The SH bake followed by the optional compression or quantization, as one job. */
-typedef struct sh_job {
-    prt__bake_job base;
-    prt__bake_job *inner;          /* bake/sh_diffuse.c's job */
-    int inner_stages;              /* stages the inner job ran; -1 while it still runs */
-    prt_transfer *t;
-    prt_compress_desc compress;
-    bool compressing;
-    int quantize;
-    prt_image normal_map;
-    prt_brdf brdf;
-    int set;                       /* the set the current compression stage works on */
-} sh_job;
-
-static prt_status compress_set_stage(prt__bake_job *b, prt_context *ctx, prt__progress *p)
-{
-    sh_job *j = (sh_job *)b;
-    prt__sh_state *s = j->t->state;
-    prt_compress_desc d = j->compress;
-    p->total = (uint64_t)(d.iterations ? d.iterations : 20);
-    return prt__sh_compress_set(ctx, s, j->t->mesh.vertex_count, j->set, &d, p);
-}
-
-static prt_status quantize_stage(prt__bake_job *b, prt_context *ctx, prt__progress *p)
-{
-    (void)p;
-    sh_job *j = (sh_job *)b;
-    return prt__sh_quantize(ctx, j->t->state, j->t->mesh.vertex_count, j->quantize);
-}
-
-static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
-{
-    sh_job *j = (sh_job *)b;
-    if (j->inner_stages < 0) {
-        j->inner->ctx = b->ctx;
-        j->inner->threads = b->threads;
-        prt_status st = j->inner->stage(j->inner, index, out);
-        if (!out->job) out->job = j->inner;
-        if (st || out->units || out->whole) return st;
-        out->job = NULL;
-        /* The bake proper has finished: its results move into the state, then post-processing. */
-        j->inner_stages = index;
-        if ((st = j->inner->finish(j->inner, j->t))) return st;
-    }
-    int post = index - j->inner_stages;
-    prt__sh_state *s = j->t->state;
-    if (j->compressing) {
-        for (int k = 0, n = 0; k < PRT__KIND_COUNT; ++k) {
-            if (!s->sets[k].channels) continue;
-            if (n++ == post) {
-                j->set = k;
-                snprintf(out->name, sizeof out->name, "compress %s", prt_transfer_kind_name(prt__kind_from_index(k)));
-                out->whole = compress_set_stage;
-                return PRT_OK;
-            }
-        }
-    } else if (j->quantize && post == 0) {
-        snprintf(out->name, sizeof out->name, "quantize");
-        out->whole = quantize_stage;
-    }
-    return PRT_OK;
-}
-
-static prt_status sh_finish(prt__bake_job *b, prt_transfer *t)
-{
-    (void)b;
-    (void)t;
-    return PRT_OK;   /* the inner job handed its results over before post-processing */
-}
-
-static void sh_release(prt__bake_job *b)
-{
-    sh_job *j = (sh_job *)b;
-    if (j->inner) j->inner->release(j->inner);
-    prt_image_free(&j->normal_map);
-    free(j);
-}
-
 static prt_status load_normal_map(prt_context *ctx, const char *path, prt_image *out)
 {
     prt_status st = prt_image_load(path, out);
@@ -311,14 +233,10 @@ static prt_status load_normal_map(prt_context *ctx, const char *path, prt_image 
 static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **out)
 {
     (void)scene;
-    sh_job *j = prt__calloc(1, sizeof *j);
-    if (!j) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    j->base.stage = sh_stage;
-    j->base.finish = sh_finish;
-    j->base.release = sh_release;
-    j->inner_stages = -1;
-    j->t = t;
     prt_bake_desc d = {0};
+    prt__sh_extra extra;
+    memset(&extra, 0, sizeof extra);
+    prt_brdf brdf;
     d.order = prt__opt_int(o, "order", 0);
     d.samples = prt__opt_int(o, "samples", 0);
     d.bounces = prt__opt_int(o, "bounces", 0);
@@ -336,29 +254,28 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
         }
     }
     if (prt__opt(o, "brdf")) {
-        if ((st = prt_brdf_parse(prt__opt(o, "brdf"), &j->brdf))) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf: %s", prt_last_error());
-        d.glossy_brdf = &j->brdf;
+        if ((st = prt_brdf_parse(prt__opt(o, "brdf"), &brdf))) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf: %s", prt_last_error());
+        d.glossy_brdf = &brdf;
         d.glossy_exit = 1;
     }
     if (prt__opt_flag(o, "bake-materials")) d.glossy_exit = 1;
     if (!st && prt__opt(o, "normal-map")) {
         if (!d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--normal-map needs --texels N");
-        else if (!(st = load_normal_map(ctx, prt__opt(o, "normal-map"), &j->normal_map))) d.normal_map = &j->normal_map;
+        else st = load_normal_map(ctx, prt__opt(o, "normal-map"), &extra.normal_map);
     }
     /* --clusters or --vectors alone ask for clustered PCA. */
-    j->compressing = prt__opt(o, "compress") || prt__opt(o, "clusters") || prt__opt(o, "vectors");
-    j->compress.method = (prt_compress_method)prt__opt_choice(o, "compress", 0);
-    j->compress.clusters = prt__opt_int(o, "clusters", 0);
-    j->compress.vectors = prt__opt_int(o, "vectors", 0);
-    j->compress.seed = d.seed;
-    j->quantize = prt__opt_int(o, "quantize", 0);
-    if (!st && j->compressing && j->quantize)
+    extra.compressing = prt__opt(o, "compress") || prt__opt(o, "clusters") || prt__opt(o, "vectors");
+    extra.compress.method = (prt_compress_method)prt__opt_choice(o, "compress", 0);
+    extra.compress.clusters = prt__opt_int(o, "clusters", 0);
+    extra.compress.vectors = prt__opt_int(o, "vectors", 0);
+    extra.compress.seed = d.seed;
+    extra.quantize = prt__opt_int(o, "quantize", 0);
+    if (!st && extra.compressing && extra.quantize)
         st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--quantize applies to uncompressed sets; drop --compress or --quantize");
-    if (!st && j->compressing && (st = prt__compress_desc_check(ctx, &j->compress))) {}
-    if (!st) st = prt__sh_bake_begin(ctx, &d, t, &j->inner);
-    if (st) { sh_release(&j->base); return st; }
-    *out = &j->base;
-    return PRT_OK;
+    if (!st && extra.compressing) st = prt__compress_desc_check(ctx, &extra.compress);
+    if (!st) st = prt__sh_bake_begin(ctx, &d, &extra, t, out);
+    prt_image_free(&extra.normal_map);   /* empty when the job took it */
+    return st;
 }
 
 /* ---- files ---- */

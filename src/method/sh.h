@@ -56,9 +56,18 @@ static inline size_t prt__set_dim(const prt__sh_state *s, int k)
 int prt__kind_index(prt_transfer_kind kind);
 prt_transfer_kind prt__kind_from_index(int index);
 
+/* What the SH bake does after transfer: compression or quantization (the bake's last stages),
+ * and a normal map the job takes over. */
+typedef struct prt__sh_extra {
+    bool compressing;
+    prt_compress_desc compress;   /* defaults filled in (prt__compress_desc_check) */
+    int quantize;                 /* 0, 8 or 16 */
+    prt_image normal_map;         /* moved into the job when it holds pixels */
+} prt__sh_extra;
+
 /* The SH bake (bake/sh_diffuse.c) as stages of work units: validates d (defaults filled in),
- * and sets up the job for t (which holds the scene's mesh and materials). */
-prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *d, prt_transfer *t, prt__bake_job **job);
+ * and sets up the job for t (which holds the scene's mesh and materials). extra may be NULL. */
+prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *d, prt__sh_extra *extra, prt_transfer *t, prt__bake_job **job);
 
 /* Compression steps (compress/compress.c): defaults filled in and checked; one set compressed in
  * place; every set quantized in place. */
