@@ -7,6 +7,8 @@
 #include "core/progress.h"
 #include "geom/raycast.h"
 
+#include <unistd.h>
+
 /* Traces, from origins[v] of every stride-th vertex, each of the `count` directions above its
  * normal in packets of 16 (rtcIntersect16 or rtcOccluded16) with nothing else around them;
  * returns the time taken and the rays traced in *rays. */
@@ -67,6 +69,27 @@ static inline double bench_read_bandwidth(size_t bytes, int threads)
     free(buf);
     if (sink == 42.0) fputs("", stderr);   /* keep the sums alive */
     return (double)n * sizeof(float) / best;
+}
+
+/* The mesh a benchmark runs on: the one given, else ../shared/data's bunny when present, else the
+ * procedural demo scene; loaded with a context of `threads` threads (0 = all). Returns false
+ * after saying why. */
+static inline bool bench_load(const char *mesh, int threads, prt_context **ctx, prt_scene **scene, const char **used)
+{
+    static const char *bunny = "../shared/data/meshes/bunny/bun_zipper.ply";
+    static char demo[] = "/tmp/prt_bench_demo.obj";
+    if (!mesh) {
+        if (access(bunny, R_OK) == 0) mesh = bunny;
+        else {
+            fprintf(stderr, "bench: %s not found; using the procedural demo scene\n", bunny);
+            if (prt_demo_scene_write(demo)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return false; }
+            mesh = demo;
+        }
+    }
+    *used = mesh;
+    if (prt_context_create(&(prt_context_desc){threads, NULL, NULL}, ctx)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return false; }
+    if (prt_scene_load(*ctx, mesh, NULL, scene)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return false; }
+    return true;
 }
 
 #endif

@@ -38,21 +38,10 @@ int main(int argc, char **argv)
         else if (argv[i][0] != '-') mesh = argv[i];
         else { fprintf(stderr, "usage: prt_bench [MESH] [--samples N] [--order N] [--threads N]\n"); return 2; }
     }
-    static const char *bunny = "../shared/data/meshes/bunny/bun_zipper.ply";
-    char demo[] = "/tmp/prt_bench_demo.obj";
-    if (!mesh) {
-        if (access(bunny, R_OK) == 0) mesh = bunny;
-        else {
-            fprintf(stderr, "bench: %s not found; using the procedural demo scene\n", bunny);
-            if (prt_demo_scene_write(demo)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return 1; }
-            mesh = demo;
-        }
-    }
-    prt_context *ctx;
-    if (prt_context_create(&(prt_context_desc){threads, NULL, NULL}, &ctx)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return 1; }
+    prt_context *ctx = NULL;
+    prt_scene *s = NULL;
+    if (!bench_load(mesh, threads, &ctx, &s, &mesh)) return 1;
     threads = prt_context_threads(ctx);
-    prt_scene *s;
-    if (prt_scene_load(ctx, mesh, NULL, &s)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return 1; }
 
     rays r = {malloc((size_t)samples * 3 * sizeof(float)), samples, prt__ray_offset(&s->mesh)};
     for (int j = 0; j < samples; ++j) {

@@ -431,17 +431,14 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *desc_in, pr
     return PRT_OK;
 }
 
+static prt_status begin_from_desc(prt_context *ctx, const prt_scene *scene, const void *desc, prt_transfer *t, prt__bake_job **job)
+{
+    (void)scene;
+    return prt__sh_bake_begin(ctx, desc, NULL, t, job);
+}
+
 prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_desc *desc, prt_transfer **out)
 {
-    if (!ctx || !scene || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake_sh: ctx, scene and out are required");
-    *out = NULL;
-    prt_transfer *t = NULL;
-    prt_status st = prt__transfer_from_scene(ctx, &prt__method_sh, scene, &t);
-    prt__bake_job *job = NULL;
-    if (!st) st = prt__sh_bake_begin(ctx, desc, NULL, t, &job);
     prt_bake_run_desc run = {desc ? desc->progress : NULL, desc ? desc->progress_user : NULL};
-    if (!st) st = prt__bake_drive(ctx, job, &run, t);
-    if (st) { prt_transfer_release(t); return st; }
-    *out = t;
-    return PRT_OK;
+    return prt__bake_with(ctx, scene, &prt__method_sh, begin_from_desc, desc, &run, out);
 }

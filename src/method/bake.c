@@ -49,20 +49,32 @@ prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_
     return st;
 }
 
-prt_status prt_bake(prt_context *ctx, const prt_scene *scene, const prt_method *m, const prt_options *o, const prt_bake_run_desc *run,
-                    prt_transfer **out)
+prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__method *m, prt__bake_begin_fn begin, const void *desc,
+                          const prt_bake_run_desc *run, prt_transfer **out)
 {
-    if (!ctx || !scene || !m || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake: context, scene, method and out are required");
+    if (!ctx || !scene || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bake: context, scene and out are required");
     *out = NULL;
-    if (o && prt_options_method(o) != m)
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake: options made for method %s, not %s", prt_method_name(prt_options_method(o)), m->name);
     prt_transfer *t = NULL;
     prt_status st = prt__transfer_from_scene(ctx, m, scene, &t);
-    if (st) return st;
     prt__bake_job *job = NULL;
-    st = m->bake_begin(ctx, scene, o, t, &job);
+    if (!st) st = begin(ctx, scene, desc, t, &job);
     if (!st) st = prt__bake_drive(ctx, job, run, t);
     if (st) { prt_transfer_release(t); return st; }
     *out = t;
     return PRT_OK;
+}
+
+/* The table entry's begin, with the options as its desc. */
+static prt_status begin_from_options(prt_context *ctx, const prt_scene *scene, const void *desc, prt_transfer *t, prt__bake_job **job)
+{
+    return t->method->bake_begin(ctx, scene, desc, t, job);
+}
+
+prt_status prt_bake(prt_context *ctx, const prt_scene *scene, const prt_method *m, const prt_options *o, const prt_bake_run_desc *run,
+                    prt_transfer **out)
+{
+    if (!m) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake: a method is required");
+    if (o && prt_options_method(o) != m)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake: options made for method %s, not %s", prt_method_name(prt_options_method(o)), m->name);
+    return prt__bake_with(ctx, scene, m, begin_from_options, o, run, out);
 }

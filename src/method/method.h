@@ -46,6 +46,12 @@ struct prt__bake_job {
  * functions (prt_bake_sh, prt_bake_wavelet). */
 prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt_transfer *t);
 
+/* The frame every bake entry point shares: a transfer of method m made from the scene, the job
+ * `begin` sets up from desc, the driver. */
+typedef prt_status (*prt__bake_begin_fn)(prt_context *ctx, const prt_scene *scene, const void *desc, prt_transfer *t, prt__bake_job **job);
+prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__method *m, prt__bake_begin_fn begin, const void *desc,
+                          const prt_bake_run_desc *run, prt_transfer **out);
+
 /* ---- Options (method/options.c) ---- */
 const char *prt__opt(const prt_options *o, const char *name);   /* NULL when not given */
 int prt__opt_int(const prt_options *o, const char *name, int fallback);
