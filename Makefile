@@ -2,10 +2,11 @@
 # (scripts/setup-deps.sh, silent when all is present), then configure, build and run.
 BUILD ?= build
 ASAN_BUILD ?= build-asan
+CLANG_BUILD ?= build-clang
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-asan bench accuracy install clean
+.PHONY: all deps build clang-build demo test test-asan bench accuracy install clean
 
 all: build
 
@@ -21,8 +22,13 @@ build: deps $(BUILD)/CMakeCache.txt
 demo: build
 	@sh scripts/demo.sh $(BUILD)/prt out/demo
 
-test: build
+test: build clang-build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+# The same sources with clang and -Werror: prt stays portable C11 + intrinsics (libFuzzer needs clang).
+clang-build: deps
+	cmake -S . -B $(CLANG_BUILD) -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF $(CMAKE_FLAGS) >/dev/null
+	cmake --build $(CLANG_BUILD) -j $(JOBS)
 
 # AddressSanitizer + UndefinedBehaviorSanitizer build running the same tests.
 test-asan: deps
@@ -43,4 +49,4 @@ install: build
 	cmake --install $(BUILD)
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD) out
+	rm -rf $(BUILD) $(ASAN_BUILD) $(CLANG_BUILD) out

@@ -60,8 +60,15 @@ static inline double bench_read_bandwidth(size_t bytes, int threads)
     for (int pass = 0; pass < passes; ++pass) {
         double t0 = prt__now();
         float s = 0;
-#pragma omp parallel for simd schedule(static) num_threads(threads) reduction(+ : s)
-        for (size_t i = 0; i < n; ++i) s += buf[i];
+        /* Sixteen running sums per thread: vectorizes with gcc and clang alike, no pragma needed. */
+#pragma omp parallel num_threads(threads) reduction(+ : s)
+        {
+            float acc[16] = {0};
+#pragma omp for schedule(static)
+            for (size_t b = 0; b < n / 16; ++b)
+                for (int k = 0; k < 16; ++k) acc[k] += buf[b * 16 + k];
+            for (int k = 0; k < 16; ++k) s += acc[k];
+        }
         double dt = prt__now() - t0;
         sink += s;
         if (dt < best) best = dt;

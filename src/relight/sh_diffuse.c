@@ -6,6 +6,7 @@
  * statically across threads. */
 #include "method/sh.h"
 
+#include <immintrin.h>
 #include <omp.h>
 #include <string.h>
 
@@ -19,7 +20,6 @@ static inline v8 load8(const float *p)
 }
 
 typedef float v4 __attribute__((vector_size(16)));
-typedef int v4i __attribute__((vector_size(16)));
 
 static inline v4 fold8(v8 v)
 {
@@ -29,13 +29,14 @@ static inline v4 fold8(v8 v)
     return lo + hi;
 }
 
-/* Horizontal sums of three vectors at once: {sum r, sum g, sum b, 0}, sharing the shuffles. */
+/* Horizontal sums of three vectors at once: {sum r, sum g, sum b, 0}, sharing the shuffles
+ * (SSE unpacks rather than a compiler's generic shuffle, so gcc and clang both build it). */
 static inline v4 hsum8x3(v8 r, v8 g, v8 b)
 {
-    v4 r4 = fold8(r), g4 = fold8(g), b4 = fold8(b), z = {0, 0, 0, 0};
-    v4 rg = __builtin_shuffle(r4, g4, (v4i){0, 4, 1, 5}) + __builtin_shuffle(r4, g4, (v4i){2, 6, 3, 7});   /* r0+r2 g0+g2 r1+r3 g1+g3 */
-    v4 bz = __builtin_shuffle(b4, z, (v4i){0, 4, 1, 5}) + __builtin_shuffle(b4, z, (v4i){2, 6, 3, 7});
-    return __builtin_shuffle(rg, bz, (v4i){0, 1, 4, 5}) + __builtin_shuffle(rg, bz, (v4i){2, 3, 6, 7});
+    const __m128 r4 = (__m128)fold8(r), g4 = (__m128)fold8(g), b4 = (__m128)fold8(b), z = _mm_setzero_ps();
+    const __m128 rg = _mm_add_ps(_mm_unpacklo_ps(r4, g4), _mm_unpackhi_ps(r4, g4));   /* r0+r2 g0+g2 r1+r3 g1+g3 */
+    const __m128 bz = _mm_add_ps(_mm_unpacklo_ps(b4, z), _mm_unpackhi_ps(b4, z));
+    return (v4)_mm_add_ps(_mm_movelh_ps(rg, bz), _mm_movehl_ps(bz, rg));
 }
 
 /* One-channel sets: the same n coefficients dot three lighting vectors, times albedo. */
