@@ -148,6 +148,93 @@ static void test_damaged_files(void **state)
     prt_context_release(ctx);
 }
 
+#include <zlib.h>
+
+/* Overwrites bytes of chunk `id` at `offset` and fixes every checksum, so that only the loader's
+ * own checks can catch the change. */
+static void patch_chunk(unsigned char *file, const char *id, size_t offset, const void *bytes, size_t n)
+{
+    uint32_t count;
+    memcpy(&count, file + 12, 4);
+    for (uint32_t i = 0; i < count; ++i) {
+        unsigned char *e = file + 24 + 24 * (size_t)i;
+        if (memcmp(e, id, 4)) continue;
+        uint64_t off, len;
+        memcpy(&off, e + 8, 8);
+        memcpy(&len, e + 16, 8);
+        assert_true(offset + n <= len);
+        memcpy(file + off + offset, bytes, n);
+        uint32_t crc = (uint32_t)crc32(0L, file + off, (uInt)len);
+        memcpy(e + 4, &crc, 4);
+        uint32_t zero = 0;
+        memcpy(file + 20, &zero, 4);
+        crc = (uint32_t)crc32(0L, file, (uInt)(24 + 24 * (size_t)count));
+        memcpy(file + 20, &crc, 4);
+        return;
+    }
+    fail_msg("no chunk %s", id);
+}
+
+/* A file whose checksums are right but whose contents are not: each is refused by name. */
+static void test_crafted_contents(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    prt_transfer *t = small_bake(ctx), *u = NULL;
+    char path[512];
+    path_in(path, sizeof path, "c.prt");
+    assert_int_equal(prt_transfer_save(t, path), PRT_OK);
+    const size_t nv = prt_transfer_vertex_count(t);
+    size_t size;
+    unsigned char *orig = slurp(path, &size), *f = malloc(size);
+    const float zero3[3] = {0, 0, 0}, huge = 3e38f, too_bright = 1.5f;
+    struct { const char *chunk; size_t offset; const void *bytes; size_t n; const char *says; } cases[] = {
+        {"MESH", 16 + nv * 12, zero3, sizeof zero3, "normal"},          /* a zeroed normal */
+        {"MESH", 16, &huge, sizeof huge, "position"},                   /* a coordinate near FLT_MAX */
+        {"MESH", 16 + nv * 24 + 4, &too_bright, sizeof too_bright, "albedo"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        memcpy(f, orig, size);
+        patch_chunk(f, cases[i].chunk, cases[i].offset, cases[i].bytes, cases[i].n);
+        assert_int_equal(prt_transfer_load_memory(ctx, f, size, &u), PRT_ERR_FORMAT);
+        assert_non_null(strstr(prt_last_error(), cases[i].says));
+        assert_null(u);
+    }
+    free(f);
+    free(orig);
+    prt_transfer_release(t);
+    /* A wavelet file whose declared terms disagree with its vertices' term counts (the K-vector
+     * buffers are sized from the former). */
+    test_mesh m = {0};
+    tm_sphere(&m, (float[3]){0, 0, 0}, 1.0f, 6, 8);
+    prt_scene *s = tm_scene(ctx, &m, 0.5f);
+    prt_brdf phong;
+    assert_int_equal(prt_brdf_parse("phong:10:0.5:0.3", &phong), PRT_OK);
+    assert_int_equal(prt_scene_set_brdf(s, 0, prt_scene_vertex_count(s), &phong), PRT_OK);
+    prt_wavelet_bake_desc wd = {0};
+    wd.terms = 2;
+    wd.coefficients = 16;
+    wd.supersample = 1;
+    wd.brdf_resolution = 8;
+    assert_int_equal(prt_bake_wavelet(ctx, s, &wd, &t), PRT_OK);
+    assert_int_equal(prt_transfer_save(t, path), PRT_OK);
+    orig = slurp(path, &size);
+    const uint32_t one = 1, tiny = 4;
+    patch_chunk(orig, "WAVP", 0, &one, sizeof one);
+    assert_int_equal(prt_transfer_load_memory(ctx, orig, size, &u), PRT_ERR_FORMAT);
+    assert_non_null(strstr(prt_last_error(), "terms"));
+    free(orig);
+    orig = slurp(path, &size);
+    patch_chunk(orig, "WBRF", 12, &tiny, sizeof tiny);   /* a factorization of another resolution */
+    assert_int_equal(prt_transfer_load_memory(ctx, orig, size, &u), PRT_ERR_FORMAT);
+    assert_non_null(strstr(prt_last_error(), "factorization"));
+    free(orig);
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 static void test_failed_save_leaves_nothing(void **state)
 {
     (void)state;
@@ -174,6 +261,7 @@ int main(void)
         cmocka_unit_test(test_round_trip),
         cmocka_unit_test(test_damaged_files),
         cmocka_unit_test(test_failed_save_leaves_nothing),
+        cmocka_unit_test(test_crafted_contents),
     };
     return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

@@ -174,6 +174,16 @@ static prt_status read_mesh(prt_context *ctx, const prt__chunk_in *c, prt__mesh 
         if (m->indices[k] >= nv) return bad(ctx, "corrupt .prt file: a triangle index is out of range");
     if (!(prt__all_finite(m->positions, nv * 3) && prt__all_finite(m->normals, nv * 3) && prt__all_finite(m->albedo, nv * 3)))
         return bad(ctx, "corrupt .prt file: non-finite vertex data");
+    /* Bounded coordinates, unit normals and albedo in [0, 1], as scenes are made: every later
+     * computation (frames, BRDF maps, ray offsets) relies on them. */
+    for (uint64_t v = 0; v < nv; ++v) {
+        const float *p = m->positions + v * 3, *n = m->normals + v * 3, *a = m->albedo + v * 3;
+        const float len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (fabsf(p[0]) > 1e15f || fabsf(p[1]) > 1e15f || fabsf(p[2]) > 1e15f) return bad(ctx, "corrupt .prt file: a vertex position is out of range");
+        if (!(fabsf(len - 1.0f) < 1e-3f)) return bad(ctx, "corrupt .prt file: a vertex normal is not of unit length");
+        for (int c = 0; c < 3; ++c)
+            if (!(a[c] >= 0.0f && a[c] <= 1.0f)) return bad(ctx, "corrupt .prt file: an albedo is outside [0, 1]");
+    }
     return PRT_OK;
 }
 
