@@ -111,6 +111,14 @@ printf 'PF\n2 1\n-1.0\n' >"$T/nan.pfm"
 printf '\000\000\300\177\000\000\200\077\000\000\200\077\000\000\200\077\000\000\200\077\000\000\200\077' >>"$T/nan.pfm"
 expect 1 "NaN probe" -- "$PRT" env "$T/nan.pfm"
 says "not finite"
+# Pixels near the float limit: the sums overflow, so the probe is refused (never 'null' or 'inf').
+printf 'PF\n2 1\n-1.0\n' >"$T/huge.pfm"
+for i in 1 2 3 4 5 6; do printf '\231\357\177\177' >>"$T/huge.pfm"; done
+expect 1 "probe near FLT_MAX" -- "$PRT" env "$T/huge.pfm"
+says "too bright"
+expect 2 "lights near FLT_MAX" -- "$PRT" relight "$T/demo.prt" -o "$T/inf.json" --light directional:0,1,0:3e38,3e38,3e38
+says "at most 1e30"
+[ ! -e "$T/inf.json" ] && ok || bad "an overflowing relight wrote its output"
 expect 1 "NaN probe in render" -- $NOLEAK "$PRT" render "$T/demo.prt" -o "$T/n.png" --env "$T/nan.pfm"
 [ ! -e "$T/n.png" ] && ok || bad "render with a bad probe wrote an image"
 

@@ -12,6 +12,9 @@
 #include <string.h>
 
 #define PRT_PI 3.14159265358979323846
+/* The brightest radiance prt accepts in its inputs: sums over many pixels and samples stay far
+ * from float overflow (3.4e38). */
+#define PRT__MAX_RADIANCE 1e30f
 
 struct prt_context {
     int threads;

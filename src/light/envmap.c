@@ -18,9 +18,15 @@ prt_status prt_envmap_from_image(prt_image *img, prt_env_layout layout, prt_envm
     }
     if ((layout == PRT_ENV_LATLONG && w < 2) || (layout == PRT_ENV_VCROSS && (w % 3 || h != w / 3 * 4)) || layout > PRT_ENV_VCROSS)
         return prt__fail(NULL, PRT_ERR_FORMAT, "environment image %dx%d does not fit the requested layout", w, h);
-    for (size_t i = 0; i < (size_t)w * h * 3; ++i)
+    for (size_t i = 0; i < (size_t)w * h * 3; ++i) {
         if (!isfinite(img->rgb[i]) || img->rgb[i] < 0.0f)
             return prt__fail(NULL, PRT_ERR_FORMAT, "environment pixel %zu is negative or not finite", i / 3);
+        /* Projections and relighting sum millions of these times solid angles and basis values:
+         * beyond this they overflow to infinity instead of giving an answer. */
+        if (img->rgb[i] > PRT__MAX_RADIANCE)
+            return prt__fail(NULL, PRT_ERR_FORMAT, "environment pixel %zu is too bright (%g; at most %g, or sums overflow)", i / 3, (double)img->rgb[i],
+                             (double)PRT__MAX_RADIANCE);
+    }
     prt_envmap *e = prt__calloc(1, sizeof *e);
     if (!e) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
     e->img = *img;

@@ -47,7 +47,11 @@ const char *prt_lights_bit_name(unsigned bit)
 }
 
 static bool finite3(const float *v) { return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
-static bool colour_ok(const float *v) { return finite3(v) && v[0] >= 0 && v[1] >= 0 && v[2] >= 0; }
+/* Finite, >= 0 and at most PRT__MAX_RADIANCE, so that sums over lights and samples cannot overflow. */
+static bool colour_ok(const float *v)
+{
+    return finite3(v) && v[0] >= 0 && v[1] >= 0 && v[2] >= 0 && v[0] <= PRT__MAX_RADIANCE && v[1] <= PRT__MAX_RADIANCE && v[2] <= PRT__MAX_RADIANCE;
+}
 
 /* Normalises in double and leaves vectors that are unit to float precision alone, so that
  * validating twice (format, then parse) changes nothing. */
@@ -74,11 +78,11 @@ prt_status prt_light_validate(prt_light *l)
             return prt__fail(NULL, PRT_ERR_INVALID_ARG, "%s light: direction must be finite and non-zero", name);
     }
     if ((t == PRT_LIGHT_POINT || t == PRT_LIGHT_SPOT) && !colour_ok(l->intensity))
-        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "%s light: intensity must be finite and >= 0", name);
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "%s light: intensity must be finite, >= 0 and at most 1e30", name);
     if (t == PRT_LIGHT_DIRECTIONAL && !colour_ok(l->irradiance))
-        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "directional light: irradiance must be finite and >= 0");
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "directional light: irradiance must be finite, >= 0 and at most 1e30");
     if (t == PRT_LIGHT_SPHERE) {
-        if (!colour_ok(l->radiance)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "sphere light: radiance must be finite and >= 0");
+        if (!colour_ok(l->radiance)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "sphere light: radiance must be finite, >= 0 and at most 1e30");
         if (!(l->radius > 0) || !isfinite(l->radius))
             return prt__fail(NULL, PRT_ERR_INVALID_ARG, "sphere light: radius must be finite and > 0 (got %g)", l->radius);
     }

@@ -198,6 +198,13 @@ prt_status prt_relight(prt_context *ctx, const prt_transfer *t, const prt_lighti
     prt_status st = prt_method_check_lighting(t->method, prt_relight_needs(t, l));
     if (st) return prt__fail(ctx, st, "%s", prt_last_error());
     st = t->method->relight(ctx, t, l, &d, out);
+    /* Overflow anywhere (lights of 1e38) is an error, never infinities handed on. */
+    const size_t nv = t->mesh.vertex_count;
+    if (!st && (!prt__all_finite(out->radiance, nv * 3) || (out->indirect && !prt__all_finite(out->indirect, nv * 3)) ||
+                (out->exit_sh && !prt__all_finite(out->exit_sh, nv * 3 * (size_t)out->exit_order * out->exit_order)) ||
+                (out->texels && !prt__all_finite(out->texels, (size_t)out->texel_width * out->texel_height * 3)) ||
+                (out->kvec && !prt__all_finite(out->kvec, nv * 3 * (size_t)out->kvec_terms))))
+        st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "relighting overflowed (the result is not finite): the lighting is too bright");
     if (st) prt_relit_free(out);
     return st;
 }
