@@ -111,6 +111,14 @@ printf 'PF\n2 1\n-1.0\n' >"$T/nan.pfm"
 printf '\000\000\300\177\000\000\200\077\000\000\200\077\000\000\200\077\000\000\200\077\000\000\200\077' >>"$T/nan.pfm"
 expect 1 "NaN probe" -- "$PRT" env "$T/nan.pfm"
 says "not finite"
+# A directory, and a header promising more pixels than the file holds: refused at once.
+mkdir -p "$T/adir"
+for cmd in info env; do expect 1 "$cmd of a directory" -- "$PRT" $cmd "$T/adir"; says "is a directory"; done
+expect 1 "bake of a directory" -- "$PRT" bake "$T/adir" -o "$T/x.prt"
+says "is a directory"
+printf 'PF\n100000 40000\n-1.0\n\000\000\000\000' >"$T/liar.pfm"
+expect 1 "a PFM promising 12 GiB" -- "$PRT" env "$T/liar.pfm"
+says "truncated"
 # Pixels near the float limit: the sums overflow, so the probe is refused (never 'null' or 'inf').
 printf 'PF\n2 1\n-1.0\n' >"$T/huge.pfm"
 for i in 1 2 3 4 5 6; do printf '\231\357\177\177' >>"$T/huge.pfm"; done
@@ -270,6 +278,14 @@ expect 2 "an abbreviated method option" -- "$PRT" bake "$T/demo.obj" -o "$T/x.pr
 says "--method"
 expect 0 "the scene's lights replaced" -- "$PRT" relight "$T/lamp.prt" --light directional:0,1,0:1,1,1 -o "$T/x.json"
 expect 0 "reference under the scene's lights" -- "$PRT" reference "$T/lamp.prt" -o "$T/lampref.json" --samples 4 -q
+
+# A writer killed mid-write leaves "NAME.tmp.PID"; the next write of NAME removes it (that
+# process is gone) and leaves other files alone.
+sh -c 'exit 0' & dead=$!; wait $dead
+: >"$T/stale.prt.tmp.$dead"
+: >"$T/stale.prt.keep"
+expect 0 "a write after a killed one" -- "$PRT" bake "$T/demo.obj" -o "$T/stale.prt" --order 2 --samples 16 --bounces 1 -q
+[ ! -e "$T/stale.prt.tmp.$dead" ] && [ -e "$T/stale.prt.keep" ] && ok || bad "a stale temporary was not removed, or too much was"
 
 # Real probes from ../shared/data, when present.
 if [ -n "$DATA" ] && [ -f "$DATA/envmaps/probulator_ict/grace.hdr" ]; then

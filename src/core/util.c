@@ -1,6 +1,11 @@
 /* Allocation with overflow checks, CRC (zlib), whole-file reads and atomic writes. */
 #include "core/internal.h"
 
+#include <dirent.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+
 #include <errno.h>
 #include <stdio.h>
 #include <string.h>
@@ -40,6 +45,12 @@ prt_status prt__read_file(const char *path, void **data, size_t *size)
     *size = 0;
     FILE *fp = fopen(path, "rb");
     if (!fp) return prt__fail(NULL, PRT_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+    struct stat sb;
+    if (fstat(fileno(fp), &sb) != 0 || !S_ISREG(sb.st_mode)) {
+        const bool dir = S_ISDIR(sb.st_mode);
+        fclose(fp);
+        return prt__fail(NULL, PRT_ERR_IO, "'%s' is %s, not a file", path, dir ? "a directory" : "not a regular file");
+    }
     if (fseek(fp, 0, SEEK_END) != 0) { fclose(fp); return prt__fail(NULL, PRT_ERR_IO, "cannot seek '%s'", path); }
     long len = ftell(fp);
     if (len < 0) { fclose(fp); return prt__fail(NULL, PRT_ERR_IO, "cannot read '%s' (not a regular file?)", path); }
@@ -55,9 +66,39 @@ prt_status prt__read_file(const char *path, void **data, size_t *size)
     return PRT_OK;
 }
 
+/* Temporaries "<path>.tmp.<pid>" of writers that died (kill -9 mid-write) are removed before the
+ * next write of the same path: a process of that id no longer exists. */
+static void remove_stale_temps(const char *path)
+{
+    char dir[1024];
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    if (slash) snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    else snprintf(dir, sizeof dir, ".");
+    if (!dir[0]) snprintf(dir, sizeof dir, "/");
+    DIR *d = opendir(dir);
+    if (!d) return;
+    const size_t bl = strlen(base);
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (strncmp(e->d_name, base, bl) || strncmp(e->d_name + bl, ".tmp.", 5)) continue;
+        const char *digits = e->d_name + bl + 5;
+        char *end;
+        errno = 0;
+        long pid = strtol(digits, &end, 10);
+        if (end == digits || *end || errno || pid <= 0 || pid == (long)getpid()) continue;
+        if (kill((pid_t)pid, 0) == 0 || errno != ESRCH) continue;   /* alive, or not ours to judge */
+        char full[2048];
+        snprintf(full, sizeof full, "%s/%s", dir, e->d_name);
+        remove(full);
+    }
+    closedir(d);
+}
+
 prt_status prt__atomic_open(prt__atomic_file *f, const char *path)
 {
     memset(f, 0, sizeof *f);
+    remove_stale_temps(path);
     size_t n = strlen(path);
     f->final_path = malloc(n + 1);
     f->temp_path = malloc(n + 32);

@@ -1,7 +1,9 @@
 /* prt_scene: loading, cleaning and subdividing input geometry. */
 #include "geom/mesh.h"
 
+#include <errno.h>
 #include <stdio.h>
+#include <sys/stat.h>
 #include <string.h>
 #include <strings.h>
 
@@ -38,6 +40,9 @@ prt_status prt_scene_load(prt_context *ctx, const char *path, const prt_scene_de
     for (int c = 0; c < 3; ++c)
         if (!(d.default_albedo[c] >= 0 && d.default_albedo[c] <= 1))
             return prt__fail(ctx, PRT_ERR_INVALID_ARG, "albedo must lie in [0, 1]");
+    struct stat sb;
+    if (stat(path, &sb) != 0) return prt__fail(ctx, PRT_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+    if (!S_ISREG(sb.st_mode)) return prt__fail(ctx, PRT_ERR_IO, "'%s' is %s, not a file", path, S_ISDIR(sb.st_mode) ? "a directory" : "not a regular file");
     prt_scene *s = prt__calloc(1, sizeof *s);
     if (!s) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     prt_status st = ends_with(path, ".json") ? prt__import_scene_json(ctx, path, &d, s)

@@ -60,10 +60,11 @@ static prt_status load_pfm(const unsigned char *data, size_t size, prt_image *ou
         return prt__fail(NULL, PRT_ERR_FORMAT, "malformed PFM header");
     size_t offset = (size_t)used + 1;   /* exactly one whitespace byte ends the header */
     int ch = kind == 'F' ? 3 : 1;
+    /* The pixels must be in the file before the header may size an allocation. */
+    if (w < 1 || h < 1 || (size_t)w > (size - offset) / 4 || (size_t)h > (size - offset) / ((size_t)w * 4 * (size_t)ch))
+        return prt__fail(NULL, PRT_ERR_FORMAT, "PFM file is truncated (its header promises %ld x %ld pixels)", w, h);
     prt_status st = alloc_image(out, w, h);
     if (st) return st;
-    size_t need = (size_t)w * (size_t)h * (size_t)ch * 4;
-    if (size - offset < need) { prt_image_free(out); return prt__fail(NULL, PRT_ERR_FORMAT, "PFM file is truncated"); }
     bool swap = scale > 0;   /* big endian data on a little-endian host */
     const unsigned char *p = data + offset;
     for (long y = 0; y < h; ++y)
