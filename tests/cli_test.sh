@@ -111,6 +111,9 @@ printf 'PF\n2 1\n-1.0\n' >"$T/nan.pfm"
 printf '\000\000\300\177\000\000\200\077\000\000\200\077\000\000\200\077\000\000\200\077\000\000\200\077' >>"$T/nan.pfm"
 expect 1 "NaN probe" -- "$PRT" env "$T/nan.pfm"
 says "not finite"
+# A --max-edge that would make billions of triangles is refused before any work.
+expect 2 "a tiny --max-edge" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --max-edge 1e-9
+says "would make at least"
 # A directory, and a header promising more pixels than the file holds: refused at once.
 mkdir -p "$T/adir"
 for cmd in info env; do expect 1 "$cmd of a directory" -- "$PRT" $cmd "$T/adir"; says "is a directory"; done

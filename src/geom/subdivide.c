@@ -43,6 +43,17 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
     if (!(max_edge > 0.0f) || !isfinite(max_edge))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "max edge length must be positive and finite (got %g)", max_edge);
     const float max2 = max_edge * max_edge;
+    /* Refuse at once what would take minutes and gigabytes to refuse later: a triangle whose
+     * longest edge is L ends with at least (L / max_edge)^2 / 4 triangles. */
+    double estimate = 0;
+    for (size_t t = 0; t < m->triangle_count; ++t) {
+        const uint32_t *v = m->indices + t * 3;
+        double l2 = fmax(edge_len2(m, v[0], v[1]), fmax(edge_len2(m, v[1], v[2]), edge_len2(m, v[2], v[0])));
+        estimate += fmax(1.0, l2 / ((double)max_edge * max_edge) / 4.0);
+    }
+    if (estimate > MAX_TRIANGLES)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "subdividing to max edge %g would make at least %.3g triangles (the limit is %u); choose a larger --max-edge",
+                         max_edge, estimate, MAX_TRIANGLES);
     for (int pass = 0; pass < 64; ++pass) {
         size_t split_edges = 0, new_tris = 0;
         for (size_t t = 0; t < m->triangle_count; ++t) {
