@@ -382,6 +382,84 @@ static void test_glossy_sphere_vs_reference(void **state)
     prt_context_release(ctx);
 }
 
+/* The bytes of every chunk but META (which holds the thread count and the bake time). */
+static unsigned char *chunks_but_meta(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    size_t size = (size_t)ftell(f);
+    rewind(f);
+    unsigned char *b = malloc(size), *out = malloc(size);
+    assert_int_equal(fread(b, 1, size, f), size);
+    fclose(f);
+    uint32_t count;
+    memcpy(&count, b + 12, 4);
+    *n = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        const unsigned char *e = b + 24 + 24 * (size_t)i;
+        uint64_t off, len;
+        memcpy(&off, e + 8, 8);
+        memcpy(&len, e + 16, 8);
+        if (!memcmp(e, "META", 4)) continue;
+        memcpy(out + *n, e, 8);   /* id and CRC */
+        memcpy(out + *n + 8, b + off, len);
+        *n += 8 + len;
+    }
+    free(b);
+    return out;
+}
+
+/* Every method, through the table: the file is the same, byte for byte outside META, whatever
+ * the thread count (compression included). */
+static void test_files_independent_of_threads(void **state)
+{
+    (void)state;
+    prt_context *one = test_context(1), *two = test_context(2);
+    test_mesh m = {0};
+    tm_quad(&m, (float[3]){-1, 0, 1}, (float[3]){2, 0, 0}, (float[3]){0, 0, -2}, 8);
+    tm_sphere(&m, (float[3]){0, 0.45f, 0}, 0.4f, 6, 10);
+    prt_scene *scene = tm_scene(two, &m, 0.6f);
+    prt_brdf phong;
+    assert_int_equal(prt_brdf_parse("phong:12:0.4:0.3", &phong), PRT_OK);
+    assert_int_equal(prt_scene_set_brdf(scene, 81, prt_scene_vertex_count(scene) - 81, &phong), PRT_OK);
+    for (int mi = 0; mi < prt_method_count(); ++mi) {
+        const prt_method *method = prt_method_at(mi);
+        prt_options *o = NULL;
+        assert_int_equal(prt_options_create(method, &o), PRT_OK);
+        if (prt_method_option(method, "samples")) assert_int_equal(prt_options_set(o, "samples", "128"), PRT_OK);
+        if (prt_method_option(method, "compress")) assert_int_equal(prt_options_set(o, "compress", "cpca"), PRT_OK);
+        if (prt_method_option(method, "clusters")) assert_int_equal(prt_options_set(o, "clusters", "4"), PRT_OK);
+        if (prt_method_option(method, "supersample")) assert_int_equal(prt_options_set(o, "supersample", "1"), PRT_OK);
+        if (prt_method_option(method, "brdf-res")) assert_int_equal(prt_options_set(o, "brdf-res", "8"), PRT_OK);
+        if (prt_method_option(method, "bounces") && prt_method_option(method, "gather-res")) {
+            assert_int_equal(prt_options_set(o, "bounces", "1"), PRT_OK);
+            assert_int_equal(prt_options_set(o, "gather-res", "8"), PRT_OK);
+        }
+        char pa[512], pb[512];
+        snprintf(pa, sizeof pa, "%s/j1_%s.prt", test_dir, prt_method_name(method));
+        snprintf(pb, sizeof pb, "%s/j2_%s.prt", test_dir, prt_method_name(method));
+        prt_transfer *a = NULL, *b = NULL;
+        assert_int_equal(prt_bake(one, scene, method, o, NULL, &a), PRT_OK);
+        assert_int_equal(prt_bake(two, scene, method, o, NULL, &b), PRT_OK);
+        assert_int_equal(prt_transfer_save(a, pa), PRT_OK);
+        assert_int_equal(prt_transfer_save(b, pb), PRT_OK);
+        size_t na, nb;
+        unsigned char *ca = chunks_but_meta(pa, &na), *cb = chunks_but_meta(pb, &nb);
+        assert_int_equal(na, nb);
+        assert_memory_equal(ca, cb, na);
+        free(ca);
+        free(cb);
+        prt_transfer_release(a);
+        prt_transfer_release(b);
+        prt_options_release(o);
+    }
+    prt_scene_release(scene);
+    tm_free(&m);
+    prt_context_release(one);
+    prt_context_release(two);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -391,6 +469,7 @@ int main(void)
         cmocka_unit_test(test_directional_light),
         cmocka_unit_test(test_file_keeps_lighting),
         cmocka_unit_test(test_glossy_sphere_vs_reference),
+        cmocka_unit_test(test_files_independent_of_threads),
     };
     return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

@@ -174,15 +174,16 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
         for (int i = 0; i < dim; ++i) M[0].mean[i] = X[c0 * dim + i];
         for (size_t v = 0; v < nv; ++v) best[v] = INFINITY;
         for (int k = 1; k <= K; ++k) {
-            double total = 0;
             const int prev = k - 1;
-#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx)) reduction(+ : total)
+#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
             for (size_t v = 0; v < nv; ++v) {
                 double e = 0;
                 for (int i = 0; i < dim; ++i) { double t = X[v * dim + i] - M[prev].mean[i]; e += t * t; }
                 if (e < best[v]) { best[v] = e; assign[v] = (uint32_t)prev; }
-                total += best[v];
             }
+            /* Summed in vertex order, not per thread: the pick must not depend on the thread count. */
+            double total = 0;
+            for (size_t v = 0; v < nv; ++v) total += best[v];
             if (k == K) break;
             double u = (double)(mix(d->seed * 0x9e3779b97f4a7c15ULL + (uint64_t)k * 7919 + 2) >> 11) / 9007199254740992.0 * total, acc = 0;
             size_t pick = nv - 1;
@@ -361,8 +362,11 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
     c->weights_total = wt;
     c->weights = prt__calloc(wt ? wt : 1, sizeof(float));
     if (!c->weights || !prt__cpca_index(c, nv)) { prt__cpca_free(c); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
-    double err = 0, norm = 0;
-#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx)) reduction(+ : err, norm)
+    /* Per-vertex errors summed in vertex order afterwards: the reported errors are bytes of the
+     * file, the same for any thread count. */
+    double *verr = prt__calloc(2 * nv, sizeof(double));
+    if (!verr) { prt__cpca_free(c); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
     for (size_t v = 0; v < nv; ++v) {
         uint32_t k = c->cluster_of[v];
         const float *x = X + v * dim, *m = c->means + (size_t)k * dim;
@@ -375,9 +379,14 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
             c->weights[c->weight_start[v] + j] = (float)p;
             for (int i = 0; i < dim; ++i) rec[i] += (float)p * b[i];
         }
-        err += dist2(x, rec, dim);
-        for (int i = 0; i < dim; ++i) norm += (double)x[i] * x[i];
+        verr[v] = dist2(x, rec, dim);
+        double n2 = 0;
+        for (int i = 0; i < dim; ++i) n2 += (double)x[i] * x[i];
+        verr[nv + v] = n2;
     }
+    double err = 0, norm = 0;
+    for (size_t v = 0; v < nv; ++v) { err += verr[v]; norm += verr[nv + v]; }
+    free(verr);
     c->rms_error = sqrt(err / (double)nv);
     c->relative_error = norm > 0 ? sqrt(err / norm) : 0;
     *out = c;
