@@ -134,16 +134,29 @@ int cli_progress(void *user, const char *stage, uint64_t done, uint64_t total)
     const cli *c = user;
     static char current[64];
     static double start;
-    if (c->quiet || !isatty(STDERR_FILENO)) return interrupted;
+    static int logged;   /* plain lines: the last tenth reported */
+    if (c->quiet) return interrupted;
     double t = now_seconds();
-    if (strcmp(current, stage) != 0) {
+    const bool fresh = strcmp(current, stage) != 0;
+    if (fresh) {
         snprintf(current, sizeof current, "%s", stage);
         start = t;
+        logged = -1;
     }
     double frac = total ? (double)done / (double)total : 1.0, elapsed = t - start;
     char eta[32] = "--";
     if (frac > 0.01 && frac < 1.0) snprintf(eta, sizeof eta, "%.0f s", elapsed * (1.0 - frac) / frac);
     else if (frac >= 1.0) snprintf(eta, sizeof eta, "done");
+    if (!isatty(STDERR_FILENO)) {
+        /* Logs, CI, nohup: a line when a stage starts and at every tenth, no control characters. */
+        const int tenth = (int)(frac * 10.0);
+        if (tenth > logged) {
+            logged = tenth;
+            fprintf(stderr, "prt %s: %s %3.0f%%  %.1f s  ETA %s\n", c->cmd, stage, 100.0 * frac, elapsed, eta);
+            fflush(stderr);
+        }
+        return interrupted;
+    }
     int width = 30, filled = (int)(frac * width);
     char bar[32];
     for (int i = 0; i < width; ++i) bar[i] = i < filled ? '#' : '.';
