@@ -1,6 +1,9 @@
-/* Images: stb for .hdr/.png/.jpg, a PFM codec (no listed library reads PFM), OpenEXR's C API
- * for .exr. Everything decodes from memory; the file variants are thin wrappers. */
+/* Images: prt's own Radiance .hdr and PFM readers, stb for .png/.jpg only, OpenEXR's C API for
+ * .exr. The format is chosen by the file's signature before anything decodes it, so stb never
+ * sees the formats prt does not document (PNM, BMP, TGA, PSD, GIF: stb's weakest readers).
+ * Everything decodes from memory; the file variants are thin wrappers. */
 #include "core/internal.h"
+#include "io/rgbe.h"
 
 #include <OpenEXR/openexr.h>
 #include <ctype.h>
@@ -179,17 +182,19 @@ prt_status prt_image_load_memory(const void *data, size_t size, prt_image *out)
         st = load_exr(b, size, out);
     } else if (size >= 3 && b[0] == 'P' && (b[1] == 'F' || b[1] == 'f') && isspace(b[2])) {
         st = load_pfm(b, size, out);
-    } else {
+    } else if (prt__is_rgbe(b, size)) {
+        st = prt__load_rgbe(b, size, MAX_DIM, out);
+    } else if ((size >= 8 && !memcmp(b, "\x89PNG\r\n\x1a\n", 8)) || (size >= 3 && b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff)) {
         if (size > INT32_MAX) return prt__fail(NULL, PRT_ERR_FORMAT, "image too large");
         int w, h, n;
         if (!stbi_info_from_memory(b, (int)size, &w, &h, &n))
-            return prt__fail(NULL, PRT_ERR_FORMAT, "not an image prt can read (.hdr, .pfm, .exr, .png, .jpg): %s", stbi_failure_reason());
+            return prt__fail(NULL, PRT_ERR_FORMAT, "corrupt image: %s", stbi_failure_reason());
         if ((st = alloc_image(out, w, h))) return st;
-        bool hdr = stbi_is_hdr_from_memory(b, (int)size);
-        if (hdr) {
-            float *px = stbi_loadf_from_memory(b, (int)size, &w, &h, &n, 3);
-            if (!px) { prt_image_free(out); return prt__fail(NULL, PRT_ERR_FORMAT, "corrupt .hdr image: %s", stbi_failure_reason()); }
-            memcpy(out->rgb, px, (size_t)w * h * 3 * sizeof(float));
+        if (stbi_is_16_bit_from_memory(b, (int)size)) {
+            /* 16-bit PNGs decode at 16 bits: no conversion inside stb. */
+            stbi_us *px = stbi_load_16_from_memory(b, (int)size, &w, &h, &n, 3);
+            if (!px) { prt_image_free(out); return prt__fail(NULL, PRT_ERR_FORMAT, "corrupt image: %s", stbi_failure_reason()); }
+            for (size_t i = 0; i < (size_t)w * h * 3; ++i) out->rgb[i] = srgb_to_linear(px[i] / 65535.0f);
             stbi_image_free(px);
         } else {
             unsigned char *px = stbi_load_from_memory(b, (int)size, &w, &h, &n, 3);
@@ -198,6 +203,8 @@ prt_status prt_image_load_memory(const void *data, size_t size, prt_image *out)
             stbi_image_free(px);
         }
         st = PRT_OK;
+    } else {
+        return prt__fail(NULL, PRT_ERR_FORMAT, "not an image prt can read (.hdr, .pfm, .exr, .png, .jpg: none of their signatures)");
     }
     return st ? st : check_finite(out);
 }
