@@ -3,10 +3,12 @@
 BUILD ?= build
 ASAN_BUILD ?= build-asan
 CLANG_BUILD ?= build-clang
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 60
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build clang-build demo test test-asan bench accuracy install clean
+.PHONY: all deps build clang-build demo test test-asan fuzz fuzz-regress bench accuracy install clean
 
 all: build
 
@@ -36,6 +38,17 @@ test-asan: deps
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j $(JOBS)
 
+# libFuzzer (clang, ASan + UBSan; no -Werror: instrumented code cannot honour every simd pragma) on
+# every harness in fuzz/ for FUZZ_SECONDS each; crashes land in
+# fuzz/crashes/NAME/ (copy them into fuzz/regress/NAME/ once fixed).
+fuzz: deps
+	cmake -S . -B $(FUZZ_BUILD) -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPRT_SANITIZE=ON -DPRT_FUZZ=ON -DPRT_WERROR=OFF -DBUILD_TESTING=OFF >/dev/null
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_image fuzz_prt fuzz_scene
+	@sh scripts/fuzz.sh $(FUZZ_BUILD) $(FUZZ_SECONDS)
+
+fuzz-regress: build
+	cd $(BUILD) && ctest -R fuzz-regress --output-on-failure
+
 bench: build
 	$(BUILD)/prt_bench
 	$(BUILD)/prt_bench_wavelet
@@ -49,4 +62,4 @@ install: build
 	cmake --install $(BUILD)
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD) $(CLANG_BUILD) out
+	rm -rf $(BUILD) $(ASAN_BUILD) $(CLANG_BUILD) $(FUZZ_BUILD) out

@@ -1,0 +1,43 @@
+/* libFuzzer harness: scene JSON (materials, BRDF specs, lights, emission, environment) over a
+ * small mesh file beside it, through loading, cleaning and subdivision. */
+#include <prt/prt.h>
+
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+static prt_context *ctx;
+static char dir[64], json[128];
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    if (!ctx) {
+        if (prt_context_create(&(prt_context_desc){1, NULL, NULL}, &ctx) != PRT_OK) abort();
+        snprintf(dir, sizeof dir, "/tmp/prt_fuzz_scene_%ld", (long)getpid());
+        char cmd[256], obj[128];
+        snprintf(cmd, sizeof cmd, "mkdir -p %s", dir);
+        if (system(cmd) != 0) abort();
+        snprintf(obj, sizeof obj, "%s/tri.obj", dir);
+        FILE *f = fopen(obj, "w");
+        if (!f) abort();
+        fputs("v 0 0 0\nv 1 0 0\nv 0 0 -1\nv 1 0 -1\nf 1 2 3\nf 2 4 3\n", f);
+        fclose(f);
+        snprintf(json, sizeof json, "%s/scene.json", dir);
+    }
+    FILE *f = fopen(json, "wb");
+    if (!f) abort();
+    fwrite(data, 1, size, f);
+    fclose(f);
+    prt_scene_desc d = {0};
+    d.max_edge = 0.25f;
+    prt_scene *s = NULL;
+    if (prt_scene_load(ctx, json, &d, &s) == PRT_OK) {
+        prt_lighting *l = NULL;
+        if (prt_scene_lighting(ctx, s, &l) == PRT_OK) prt_lighting_release(l);
+        prt_scene_release(s);
+    }
+    return 0;
+}
