@@ -109,17 +109,25 @@ static inline int clip_half(const pt2 *in, int n, pt2 *out, int axis, float c, f
 /* The solid angle of polygon p on the plane of a face of n x n texels (texel units), up to a
  * constant factor: its area times the solid angle per area at its centroid, (1 + a^2 + b^2)^-3/2
  * (exact to second order; plane areas alone err by about 1% across a texel). */
-static float poly_weight(const pt2 *p, int n, int size)
+/* Twice the signed area of polygon p (s) and its first moments relative to p[0] (times 6 s). */
+static inline void poly_moments(const pt2 *p, int n, float *s, float *mx, float *my)
 {
     /* Relative to the first vertex: products of coordinates up to 256 would cancel to 1e-2. */
     const float ox = p[0].x, oy = p[0].y;
-    float s = 0, mx = 0, my = 0;
+    *s = *mx = *my = 0;
     for (int i = 1; i + 1 < n; ++i) {
         const float ax = p[i].x - ox, ay = p[i].y - oy, bx = p[i + 1].x - ox, by = p[i + 1].y - oy, c = ax * by - bx * ay;
-        s += c;
-        mx += (ax + bx) * c;
-        my += (ay + by) * c;
+        *s += c;
+        *mx += (ax + bx) * c;
+        *my += (ay + by) * c;
     }
+}
+
+static float poly_weight(const pt2 *p, int n, int size)
+{
+    const float ox = p[0].x, oy = p[0].y;
+    float s, mx, my;
+    poly_moments(p, n, &s, &mx, &my);
     if (s == 0) return 0;
     const float k = 2.0f / size, ca = (ox + mx / (3 * s)) * k - 1.0f, cb = (oy + my / (3 * s)) * k - 1.0f, r2 = 1.0f + ca * ca + cb * cb;
     return 0.5f * fabsf(s) / (r2 * sqrtf(r2));
@@ -130,13 +138,8 @@ static float poly_weight(const pt2 *p, int n, int size)
 static inline float poly_weight_lin(const pt2 *p, int n, float xr, float yr, float gx, float gy)
 {
     const float ox = p[0].x, oy = p[0].y;
-    float s = 0, mx = 0, my = 0;
-    for (int i = 1; i + 1 < n; ++i) {
-        const float ax = p[i].x - ox, ay = p[i].y - oy, bx = p[i + 1].x - ox, by = p[i + 1].y - oy, c = ax * by - bx * ay;
-        s += c;
-        mx += (ax + bx) * c;
-        my += (ay + by) * c;
-    }
+    float s, mx, my;
+    poly_moments(p, n, &s, &mx, &my);
     const float w = 0.5f * s * (1.0f + gx * (ox - xr) + gy * (oy - yr)) + (gx * mx + gy * my) * (1.0f / 6.0f);
     return s < 0 ? -w : w;
 }
