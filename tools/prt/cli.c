@@ -67,6 +67,9 @@ static void log_to_stderr(void *user, prt_log_level level, const char *msg)
 
 int cli_make_context(cli *c)
 {
+    /* Every command honours Ctrl-C: long work through its progress callback, and every command
+     * checks before it writes (cli_check_interrupt), so an interrupted run writes nothing. */
+    cli_catch_interrupt();
     prt_context_desc d = {0};
     d.threads = c->threads;
     d.log = log_to_stderr;
@@ -121,6 +124,14 @@ void cli_catch_interrupt(void)
     sigaction(SIGTERM, &sa, NULL);
 }
 bool cli_interrupted(void) { return interrupted != 0; }
+
+prt_status cli_check_interrupt(cli *c)
+{
+    if (!interrupted) return PRT_OK;
+    cli_error(c, "interrupted: nothing written");
+    c->reported = true;
+    return PRT_ERR_CANCELLED;
+}
 
 static double now_seconds(void)
 {

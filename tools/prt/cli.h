@@ -50,6 +50,8 @@ int cli_progress(void *user, const char *stage, uint64_t done, uint64_t total);
 /* Installs a SIGINT handler that makes cli_progress cancel the running operation. */
 void cli_catch_interrupt(void);
 bool cli_interrupted(void);
+/* PRT_ERR_CANCELLED after saying so when SIGINT or SIGTERM arrived: call it before writing. */
+prt_status cli_check_interrupt(cli *c);
 
 /* Lighting options shared by relight, render, view, compare, reference, sweep and env. The
  * command line overrides what the file or scene names: --env replaces its environment (keeping

@@ -103,7 +103,6 @@ int cmd_bake(int argc, char **argv)
     if (!rc && !output) rc = cli_usage(&c, "an output file is required (-o OUT.prt)");
     if (!rc) rc = cli_make_context(&c);
     if (rc) { prt_options_release(o); return rc; }
-    cli_catch_interrupt();
     prt_scene *scene = NULL;
     prt_transfer *t = NULL;
     prt_status st = prt_scene_load(c.ctx, argv[optind], &sd, &scene);
@@ -127,6 +126,7 @@ int cmd_bake(int argc, char **argv)
         if (!prt_transfer_bake_report(t, &report)) cli_print_lines(stderr, "prt bake: ", report);
         free(report);
     }
+    if (!st) st = cli_check_interrupt(&c);
     if (!st) st = prt_transfer_save(t, output);
     if (!st && !c.quiet) {
         char *text = NULL;

@@ -131,6 +131,7 @@ int cmd_compare(int argc, char **argv)
         n = a.nv * 3;
     }
     metrics m = {0};
+    if (!rc && cli_check_interrupt(&c)) rc = EXIT_INTERRUPTED;
     if (!rc) {
         m = measure(va, vb, eb, n);
         if (!c.quiet) {

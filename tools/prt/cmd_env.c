@@ -73,6 +73,7 @@ int cmd_env(int argc, char **argv)
     prt_image img = {0};
     prt_status st = cli_light_project(&c, &light, order, &sh, &layout);
     if (!st && image) st = prt_sh_light_to_image(&sh, width, irradiance, &img);
+    if (!st) st = cli_check_interrupt(&c);
     if (!st && image) st = prt_image_save(image, &img, NULL);
     if (st) {
         rc = cli_fail(&c, st);

@@ -82,7 +82,6 @@ int cmd_reference(int argc, char **argv)
     if (light.set_intensity && light.intensity == 0) return cli_usage(&c, "--intensity 0 leaves nothing to trace");
     int rc = cli_make_context(&c);
     if (rc) return rc;
-    cli_catch_interrupt();
 
     const char *input = argv[optind];
     const char *in_ext = strrchr(input, '.');
@@ -108,6 +107,7 @@ int cmd_reference(int argc, char **argv)
     if (!st) cli_view_camera(&view, prt_scene_positions(scene), prt_scene_vertex_count(scene), (float)view.width / view.height, &cam);
     rd.eye = cam.eye;
     if (!st && output) st = prt_reference_trace_vertices(c.ctx, scene, NULL, &rd, &res);
+    if (!st && output) st = cli_check_interrupt(&c);
     if (!st && output) {
         size_t nv = res.vertex_count;
         if (json) {
@@ -131,6 +131,7 @@ int cmd_reference(int argc, char **argv)
     }
     if (!st && !rc && image) {
         st = prt_reference_trace_image(c.ctx, scene, NULL, &rd, &cam, view.width, view.height, view.background, &img, NULL);
+        if (!st) st = cli_check_interrupt(&c);
         if (!st) st = prt_image_save(image, &img, &view.save);
         if (!st && !c.quiet) fprintf(stderr, "prt reference: wrote %s\n", image);
     }

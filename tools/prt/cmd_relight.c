@@ -88,6 +88,7 @@ int cmd_relight(int argc, char **argv)
     }
     if (!st && !rc) st = cli_lighting(&c, &light, t, NULL, &lighting);
     if (!st && !rc) st = cli_relight(&c, t, lighting, &light, variant, !texels, json && !texels, &r);
+    if (!st && !rc) st = cli_check_interrupt(&c);
     if (!st && !rc && texels) {
         if (!r.texels) {
             cli_error(&c, "'%s' has no per-texel %s transfer (bake with --texels N)", argv[optind], prt_transfer_variant_name(t, variant));
@@ -108,6 +109,7 @@ int cmd_relight(int argc, char **argv)
         const size_t nv = prt_transfer_vertex_count(t);
         if (!rc && !(rgb = malloc(nv * 3 * sizeof(float)))) st = PRT_ERR_NO_MEMORY;
         if (!rc && !st) st = prt_relit_shade(c.ctx, t, &r, eye, rgb);
+        if (!rc && !st) st = cli_check_interrupt(&c);
         if (!rc && !st) {
             if (json) {
                 cli_vertex_field f[2] = {{"radiance", rgb}, {"indirect", r.indirect}};

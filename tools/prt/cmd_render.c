@@ -107,6 +107,7 @@ int cmd_render(int argc, char **argv)
                    (size_t)width * 3 * sizeof(float));
         prt_image_free(&panel);
     }
+    if (!st && !rc) st = cli_check_interrupt(&c);
     if (!st && !rc) st = prt_image_save(output, &sheet, &view.save);
     if (!st && !rc && !c.quiet) {
         fprintf(stderr, "prt render: wrote %s (", output);

@@ -170,7 +170,6 @@ int cmd_sweep(int argc, char **argv)
     }
     if (!rc) rc = cli_make_context(&c);
     if (rc) { prt_options_release(fixed_opts); return rc; }
-    cli_catch_interrupt();
     cli_result ref;
     prt_status st = cli_result_load(&c, reference, &light, NULL, &ref);
     if (st) { prt_options_release(fixed_opts); prt_context_release(c.ctx); return cli_exit_code(st); }

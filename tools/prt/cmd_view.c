@@ -424,6 +424,7 @@ int cmd_view(int argc, char **argv)
     double start = now();
     v.dirty = true;
     while (!v.quit && !rc) {
+        if (cli_interrupted()) break;   /* Ctrl-C in the terminal closes the window */
         double iteration = now();   /* a frame's time covers input, uploads and drawing */
         prt_event e;
         while (prt_window_next_event(v.win, &e)) handle(&v, &e);
