@@ -286,9 +286,12 @@ static void test_hdr_reader_and_signatures(void **state)
     assert_int_equal(prt_image_load_memory(buf, n, &flipped), PRT_ERR_FORMAT);
     assert_non_null(strstr(prt_last_error(), "shorter"));
     /* Formats prt does not document never reach stb. */
-    const char *others[] = {"P5\n2 2\n65535\n\0\1\0\2\0\3\0\4", "BM\0\0\0\0\0\0\0\0", "GIF89a\1\0\1\0", "8BPS\0\1"};
+#define BYTES(s) {s, sizeof s - 1}
+    const struct { const char *data; size_t n; } others[] = {
+        BYTES("P5\n2 2\n65535\n\0\1\0\2\0\3\0\4"), BYTES("BM\0\0\0\0\0\0\0\0"), BYTES("GIF89a\1\0\1\0"), BYTES("8BPS\0\1")};
+#undef BYTES
     for (size_t i = 0; i < sizeof others / sizeof others[0]; ++i) {
-        assert_int_equal(prt_image_load_memory(others[i], strlen(others[i]) + 8, &flipped), PRT_ERR_FORMAT);
+        assert_int_equal(prt_image_load_memory(others[i].data, others[i].n, &flipped), PRT_ERR_FORMAT);
         assert_non_null(strstr(prt_last_error(), "not an image prt can read"));
     }
     /* Mutations of a valid file: bytes flipped, cut, repeated; every one loads or fails cleanly
