@@ -171,6 +171,16 @@ static inline int test_dir_teardown(void **state)
     return system(cmd) == 0 ? 0 : -1;
 }
 
+/* Writes text into the scratch directory as name; path gets the full path. */
+static inline void write_text(const char *name, const char *text, char *path, size_t n)
+{
+    snprintf(path, n, "%s/%s", test_dir, name);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+}
+
 /* Writes the procedural demo scene into the scratch directory and loads it. */
 static inline prt_scene *load_demo_scene(prt_context *ctx)
 {

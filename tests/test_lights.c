@@ -2,15 +2,6 @@
  * integration, the lighting object, and lights and emission in scene files. */
 #include "common.h"
 
-static void write_text(const char *name, const char *text, char *path, size_t n)
-{
-    snprintf(path, n, "%s/%s", test_dir, name);
-    FILE *f = fopen(path, "wb");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
 static void test_parse_format_round_trip(void **state)
 {
     (void)state;

@@ -4,15 +4,6 @@
 #include <unistd.h>
 
 
-static void write_text(const char *name, const char *text, char *path, size_t n)
-{
-    snprintf(path, n, "%s/%s", test_dir, name);
-    FILE *f = fopen(path, "wb");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
 static void test_obj_with_materials(void **state)
 {
     (void)state;

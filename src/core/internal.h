@@ -50,6 +50,10 @@ void prt__atomic_abort(prt__atomic_file *f);          /* closes and deletes the 
 
 /* Reads a whole file; *data must be freed. */
 prt_status prt__read_file(const char *path, void **data, size_t *size);
+/* The file variant of a from-memory loader: reads path, hands its bytes to load, and puts the
+ * path in front of a failure's message. */
+typedef prt_status (*prt__bytes_fn)(void *user, const void *data, size_t size);
+prt_status prt__load_path(const prt_context *ctx, const char *path, prt__bytes_fn load, void *user);
 
 /* Low-discrepancy points: element i of the 2D Hammersley-like sequence (Sobol' first two
  * dimensions) scrambled by seed; results in [0,1). */

@@ -66,6 +66,22 @@ prt_status prt__read_file(const char *path, void **data, size_t *size)
     return PRT_OK;
 }
 
+prt_status prt__load_path(const prt_context *ctx, const char *path, prt__bytes_fn load, void *user)
+{
+    void *data;
+    size_t size;
+    prt_status st = prt__read_file(path, &data, &size);
+    if (st) return prt__fail(ctx, st, "%s", prt_last_error());
+    st = load(user, data, size);
+    free(data);
+    if (st) {
+        char msg[900];
+        snprintf(msg, sizeof msg, "%s", prt_last_error());
+        return prt__fail(ctx, st, "'%s': %s", path, msg);
+    }
+    return PRT_OK;
+}
+
 /* Temporaries "<path>.tmp.<pid>" of writers that died (kill -9 mid-write) are removed before the
  * next write of the same path: a process of that id no longer exists. */
 static void remove_stale_temps(const char *path)

@@ -209,21 +209,12 @@ prt_status prt_image_load_memory(const void *data, size_t size, prt_image *out)
     return st ? st : check_finite(out);
 }
 
+static prt_status load_bytes(void *user, const void *data, size_t size) { return prt_image_load_memory(data, size, user); }
+
 prt_status prt_image_load(const char *path, prt_image *out)
 {
-    void *data;
-    size_t size;
     if (out) memset(out, 0, sizeof *out);
-    prt_status st = prt__read_file(path, &data, &size);
-    if (st) return st;
-    st = prt_image_load_memory(data, size, out);
-    free(data);
-    if (st) {
-        char msg[900];
-        snprintf(msg, sizeof msg, "%s", prt_last_error());
-        return prt__fail(NULL, st, "'%s': %s", path, msg);
-    }
-    return PRT_OK;
+    return prt__load_path(NULL, path, load_bytes, out);
 }
 
 /* ---- Saving. */

@@ -271,19 +271,17 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
     return PRT_OK;
 }
 
+typedef struct load_target { prt_context *ctx; prt_transfer **out; } load_target;
+
+static prt_status load_bytes(void *user, const void *data, size_t size)
+{
+    load_target *l = user;
+    return prt_transfer_load_memory(l->ctx, data, size, l->out);
+}
+
 prt_status prt_transfer_load(prt_context *ctx, const char *path, prt_transfer **out)
 {
-    void *data;
-    size_t size;
     if (out) *out = NULL;
-    prt_status st = prt__read_file(path, &data, &size);
-    if (st) return prt__fail(ctx, st, "%s", prt_last_error());
-    st = prt_transfer_load_memory(ctx, data, size, out);
-    free(data);
-    if (st) {
-        char msg[900];
-        snprintf(msg, sizeof msg, "%s", prt_last_error());
-        return prt__fail(ctx, st, "'%s': %s", path, msg);
-    }
-    return PRT_OK;
+    load_target l = {ctx, out};
+    return prt__load_path(ctx, path, load_bytes, &l);
 }
