@@ -94,7 +94,7 @@ static inline bool bench_load(const char *mesh, int threads, prt_context **ctx, 
         }
     }
     *used = mesh;
-    if (prt_context_create(&(prt_context_desc){threads, NULL, NULL}, ctx)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return false; }
+    if (prt_context_create(&(prt_context_desc){.threads = threads}, ctx)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return false; }
     if (prt_scene_load(*ctx, mesh, NULL, scene)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return false; }
     return true;
 }

@@ -19,7 +19,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         prt_sky_desc sky = {0};
         sky.width = 32;
         prt_envmap *env = NULL;
-        if (prt_context_create(&(prt_context_desc){1, NULL, NULL}, &ctx) != PRT_OK || prt_lighting_create(&l) != PRT_OK ||
+        if (prt_context_create(&(prt_context_desc){.threads = 1}, &ctx) != PRT_OK || prt_lighting_create(&l) != PRT_OK ||
             prt_sky_create(&sky, &env) != PRT_OK || prt_lighting_set_envmap(l, env, NULL, 1.0f) != PRT_OK)
             abort();
     }

@@ -15,7 +15,7 @@ static char dir[64], json[128];
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (!ctx) {
-        if (prt_context_create(&(prt_context_desc){1, NULL, NULL}, &ctx) != PRT_OK) abort();
+        if (prt_context_create(&(prt_context_desc){.threads = 1}, &ctx) != PRT_OK) abort();
         snprintf(dir, sizeof dir, "/tmp/prt_fuzz_scene_%ld", (long)getpid());
         char cmd[256], obj[128];
         snprintf(cmd, sizeof cmd, "mkdir -p %s", dir);
@@ -33,6 +33,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     fclose(f);
     prt_scene_desc d = {0};
     d.max_edge = 0.25f;
+    d.import_in_process = 1;   /* the JSON is under test, not assimp: no process per input */
     prt_scene *s = NULL;
     if (prt_scene_load(ctx, json, &d, &s) == PRT_OK) {
         prt_lighting *l = NULL;

@@ -382,34 +382,6 @@ static void test_glossy_sphere_vs_reference(void **state)
     prt_context_release(ctx);
 }
 
-/* The bytes of every chunk but META (which holds the thread count and the bake time). */
-static unsigned char *chunks_but_meta(const char *path, size_t *n)
-{
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    size_t size = (size_t)ftell(f);
-    rewind(f);
-    unsigned char *b = malloc(size), *out = malloc(size);
-    assert_int_equal(fread(b, 1, size, f), size);
-    fclose(f);
-    uint32_t count;
-    memcpy(&count, b + 12, 4);
-    *n = 0;
-    for (uint32_t i = 0; i < count; ++i) {
-        const unsigned char *e = b + 24 + 24 * (size_t)i;
-        uint64_t off, len;
-        memcpy(&off, e + 8, 8);
-        memcpy(&len, e + 16, 8);
-        if (!memcmp(e, "META", 4)) continue;
-        memcpy(out + *n, e, 8);   /* id and CRC */
-        memcpy(out + *n + 8, b + off, len);
-        *n += 8 + len;
-    }
-    free(b);
-    return out;
-}
-
 /* Every method, through the table: the file is the same, byte for byte outside META, whatever
  * the thread count (compression included). */
 static void test_files_independent_of_threads(void **state)

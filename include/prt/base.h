@@ -41,12 +41,20 @@ typedef void (*prt_log_fn)(void *user, prt_log_level level, const char *message)
  * returns PRT_ERR_CANCELLED and writes nothing. Called from one thread only. */
 typedef int (*prt_progress_fn)(void *user, const char *stage, uint64_t done, uint64_t total);
 
+/* Polled by every long operation made from the context (import, subdivision, bakes, compression,
+ * rendering, file writes) at least every 100 ms of work, from any thread; return non-zero to
+ * stop it: it returns PRT_ERR_CANCELLED and writes nothing. Must be thread-safe and cheap (read
+ * a flag that a signal handler sets). */
+typedef int (*prt_cancel_fn)(void *user);
+
 typedef struct prt_context prt_context;
 
 typedef struct prt_context_desc {
     int threads;          /* worker threads for bakes and relighting; 0 = all cores */
     prt_log_fn log;       /* receives warnings and errors; NULL = silent */
     void *log_user;
+    prt_cancel_fn cancel; /* NULL = nothing is cancelled from outside (progress callbacks still can) */
+    void *cancel_user;
 } prt_context_desc;
 
 prt_status prt_context_create(const prt_context_desc *desc, prt_context **out);

@@ -84,10 +84,21 @@ const prt_method *prt_options_method(const prt_options *o);
 typedef struct prt_bake_run_desc {
     prt_progress_fn progress;   /* stage names and done/total units; return non-zero to cancel */
     void *progress_user;
+    /* Resumable bakes: the results of every finished work unit are appended to this file as the
+     * unit completes (each record checksummed, so a process killed at any moment leaves a usable
+     * file); the file is deleted when the bake succeeds. NULL = no checkpoint. */
+    const char *checkpoint;
+    /* Non-zero: take every unit the checkpoint already holds instead of computing it (a checkpoint
+     * of another bake - other scene, method, options or prt version - is an error; a missing one
+     * is an empty one). The result is byte-identical to an uninterrupted bake. */
+    int resume;
+    /* Filled in when not NULL: work units taken from the checkpoint, and units of every stage run. */
+    uint64_t *recovered_units, *total_units;
 } prt_bake_run_desc;
 
 /* Bakes scene with method m (o may be NULL for its defaults). The method runs as stages of
- * independent work units; results do not depend on the thread count. */
+ * independent work units; results do not depend on the thread count. Restored units are
+ * announced through the log hook (PRT_LOG_INFO) and counted as done in the progress. */
 prt_status prt_bake(prt_context *ctx, const prt_scene *scene, const prt_method *m, const prt_options *o,
                     const prt_bake_run_desc *run, prt_transfer **out);
 

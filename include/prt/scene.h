@@ -35,6 +35,12 @@ typedef struct prt_scene_desc {
     int override_albedo;     /* non-zero: use default_albedo for every material */
     float crease_angle_deg;  /* when normals are computed: split at dihedral angles above this; 0 = 45 */
     prt_winding winding;     /* triangle orientation of imported files; 0 = PRT_WINDING_AUTO */
+    /* Mesh files are parsed by assimp in a child process, so that a file that makes it loop or
+     * abort ends in an error instead of taking the caller with it (and a failed import leaks
+     * nothing into the caller). Time limit of one file's import in seconds; 0 = 60 s plus 10 s
+     * per MB of the file. The context's cancel hook stops an import within 100 ms. */
+    float import_seconds;
+    int import_in_process;   /* non-zero: call assimp in this process (no time limit, no containment) */
 } prt_scene_desc;
 
 /* path: a mesh file, or a .json scene file (see docs/SCENE.md). */

@@ -187,6 +187,136 @@ static prt_status run_bounce(prt__bake_job *b, uint64_t unit, int thread)
     return PRT_OK;
 }
 
+/* Checkpoint records (method/checkpoint.h): a unit's rows of every array it wrote, and for
+ * visibility the hit lists the bounces gather over. */
+typedef struct rows { float *base; size_t per_vertex; } rows;
+
+static int visibility_rows(const sh_bake *sb, rows r[3])
+{
+    const size_t nc = (size_t)sb->job.ncoeff;
+    int n = 0;
+    if (sb->unsh) r[n++] = (rows){sb->unsh, nc};
+    if (sb->shad) r[n++] = (rows){sb->shad, nc};
+    if (sb->gshad) r[n++] = (rows){sb->gshad, nc * nc};
+    return n;
+}
+
+static int bounce_rows(const sh_bake *sb, rows r[3])
+{
+    const size_t nc3 = 3 * (size_t)sb->job.ncoeff;
+    r[0] = (rows){sb->next, nc3};
+    r[1] = (rows){sb->total, nc3};
+    return 2;
+}
+
+static void unit_range(const sh_bake *sb, uint64_t unit, size_t *v0, size_t *v1)
+{
+    const size_t nv = sb->t->mesh.vertex_count;
+    *v0 = unit * BLOCK;
+    *v1 = *v0 + BLOCK < nv ? *v0 + BLOCK : nv;
+}
+
+static void save_rows(const rows *r, int n, size_t v0, size_t v1, prt__bytes *out)
+{
+    for (int i = 0; i < n; ++i) prt__bytes_put(out, r[i].base + v0 * r[i].per_vertex, (v1 - v0) * r[i].per_vertex * sizeof(float));
+}
+
+/* Reads the rows back; false (having written nothing) when the record is too short. */
+static bool load_rows(const rows *r, int n, size_t v0, size_t v1, const unsigned char **data, size_t *size)
+{
+    size_t need = 0;
+    for (int i = 0; i < n; ++i) need += (v1 - v0) * r[i].per_vertex * sizeof(float);
+    if (need > *size) return false;
+    for (int i = 0; i < n; ++i) {
+        size_t bytes = (v1 - v0) * r[i].per_vertex * sizeof(float);
+        memcpy(r[i].base + v0 * r[i].per_vertex, *data, bytes);
+        *data += bytes;
+        *size -= bytes;
+    }
+    return true;
+}
+
+static void save_visibility(prt__bake_job *b, uint64_t unit, prt__bytes *out)
+{
+    sh_bake *sb = (sh_bake *)b;
+    rows r[3];
+    size_t v0, v1;
+    unit_range(sb, unit, &v0, &v1);
+    save_rows(r, visibility_rows(sb, r), v0, v1, out);
+    if (!sb->job.need_hits) return;
+    for (size_t v = v0; v < v1; ++v) {
+        prt__bytes_put(out, &sb->job.hit_count[v], sizeof(uint32_t));
+        prt__bytes_put(out, sb->job.hits[v], sb->job.hit_count[v] * sizeof(hit_entry));
+    }
+}
+
+static bool load_visibility(prt__bake_job *b, uint64_t unit, const unsigned char *data, size_t size)
+{
+    sh_bake *sb = (sh_bake *)b;
+    const prt__mesh *m = &sb->t->mesh;
+    rows r[3];
+    size_t v0, v1;
+    unit_range(sb, unit, &v0, &v1);
+    /* Check the hit lists before anything is written: a unit is restored whole or not at all. */
+    const unsigned char *p = data;
+    size_t left = size, fixed = 0;
+    const int n = visibility_rows(sb, r);
+    for (int i = 0; i < n; ++i) fixed += (v1 - v0) * r[i].per_vertex * sizeof(float);
+    if (fixed > left) return false;
+    if (sb->job.need_hits) {
+        const unsigned char *q = p + fixed;
+        size_t rest = left - fixed;
+        for (size_t v = v0; v < v1; ++v) {
+            uint32_t count;
+            if (rest < sizeof count) return false;
+            memcpy(&count, q, sizeof count);
+            q += sizeof count; rest -= sizeof count;
+            if (count > (uint32_t)sb->d.samples || (size_t)count * sizeof(hit_entry) > rest) return false;
+            for (uint32_t h = 0; h < count; ++h) {
+                hit_entry e;
+                memcpy(&e, q + (size_t)h * sizeof e, sizeof e);
+                if (e.prim >= m->triangle_count || e.sample >= (uint32_t)sb->d.samples) return false;   /* the bounces index with them */
+            }
+            q += (size_t)count * sizeof(hit_entry); rest -= (size_t)count * sizeof(hit_entry);
+        }
+        if (rest) return false;
+    } else if (fixed != left) {
+        return false;
+    }
+    load_rows(r, n, v0, v1, &p, &left);
+    for (size_t v = v0; sb->job.need_hits && v < v1; ++v) {
+        uint32_t count;
+        memcpy(&count, p, sizeof count);
+        p += sizeof count;
+        free(sb->job.hits[v]);
+        sb->job.hits[v] = count ? malloc((size_t)count * sizeof(hit_entry)) : NULL;
+        if (count && !sb->job.hits[v]) { sb->job.hit_count[v] = 0; return false; }
+        memcpy(sb->job.hits[v], p, (size_t)count * sizeof(hit_entry));
+        sb->job.hit_count[v] = count;
+        p += (size_t)count * sizeof(hit_entry);
+    }
+    return true;
+}
+
+static void save_bounce(prt__bake_job *b, uint64_t unit, prt__bytes *out)
+{
+    sh_bake *sb = (sh_bake *)b;
+    rows r[3];
+    size_t v0, v1;
+    unit_range(sb, unit, &v0, &v1);
+    save_rows(r, bounce_rows(sb, r), v0, v1, out);
+}
+
+static bool load_bounce(prt__bake_job *b, uint64_t unit, const unsigned char *data, size_t size)
+{
+    sh_bake *sb = (sh_bake *)b;
+    rows r[3];
+    size_t v0, v1;
+    unit_range(sb, unit, &v0, &v1);
+    const int n = bounce_rows(sb, r);
+    return size == 2 * (v1 - v0) * r[0].per_vertex * sizeof(float) && load_rows(r, n, v0, v1, &data, &size);
+}
+
 static prt_status run_glossy_bounces(prt__bake_job *b, prt_context *ctx, prt__progress *p)
 {
     sh_bake *sb = (sh_bake *)b;
@@ -279,6 +409,8 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
         }
         out->units = blocks(nv);
         out->run = run_visibility;
+        out->save_unit = save_visibility;
+        out->load_unit = load_visibility;
         break;
     }
     case ST_GLOSSY_BOUNCES: snprintf(out->name, sizeof out->name, "glossy bounces"); out->whole = run_glossy_bounces; break;
@@ -286,6 +418,8 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
         snprintf(out->name, sizeof out->name, "bounce %d/%d", sb->bounce_of[index], sb->d.bounces);
         out->units = blocks(nv);
         out->run = run_bounce;
+        out->save_unit = save_bounce;
+        out->load_unit = load_bounce;
         break;
     case ST_TEXELS: snprintf(out->name, sizeof out->name, "texels"); out->whole = run_texels; break;
     case ST_BRDF_IN: snprintf(out->name, sizeof out->name, "bake BRDF in"); out->whole = run_brdf_in; break;
@@ -439,6 +573,6 @@ static prt_status begin_from_desc(prt_context *ctx, const prt_scene *scene, cons
 
 prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_desc *desc, prt_transfer **out)
 {
-    prt_bake_run_desc run = {desc ? desc->progress : NULL, desc ? desc->progress_user : NULL};
+    prt_bake_run_desc run = {.progress = desc ? desc->progress : NULL, .progress_user = desc ? desc->progress_user : NULL};
     return prt__bake_with(ctx, scene, &prt__method_sh, begin_from_desc, desc, &run, out);
 }

@@ -300,6 +300,30 @@ static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
     return PRT_OK;
 }
 
+/* Checkpoint records: the unit's vectors of the pass it wrote. */
+static void unit_vectors(const wbake *wb, uint64_t unit, size_t *first, size_t *count)
+{
+    const size_t nv = wb->t->mesh.vertex_count, v0 = unit * BLOCK, v1 = v0 + BLOCK < nv ? v0 + BLOCK : nv;
+    *first = wb->j.vec_start[v0];
+    *count = wb->j.vec_start[v1 - 1] + (size_t)wb->j.term_count[v1 - 1] - *first;
+}
+
+static void save_unit(prt__bake_job *base, uint64_t unit, prt__bytes *out)
+{
+    wbake *wb = (wbake *)base;
+    size_t first, count;
+    unit_vectors(wb, unit, &first, &count);
+    prt__sparse_save(wb->out, first, count, out);
+}
+
+static bool load_unit(prt__bake_job *base, uint64_t unit, const unsigned char *data, size_t size)
+{
+    wbake *wb = (wbake *)base;
+    size_t first, count;
+    unit_vectors(wb, unit, &first, &count);
+    return prt__sparse_load(wb->out, first, count, data, size);
+}
+
 static prt_status scratch_init(wbake *wb, int threads)
 {
     const size_t nv = wb->t->mesh.vertex_count;
@@ -363,6 +387,8 @@ static prt_status wavelet_stage(prt__bake_job *base, int index, prt__stage *out)
     }
     out->units = (wb->t->mesh.vertex_count + BLOCK - 1) / BLOCK;
     out->run = run_unit;
+    out->save_unit = save_unit;
+    out->load_unit = load_unit;
     return PRT_OK;
 }
 
@@ -497,6 +523,6 @@ static prt_status begin_from_desc(prt_context *ctx, const prt_scene *scene, cons
 
 prt_status prt_bake_wavelet(prt_context *ctx, const prt_scene *scene, const prt_wavelet_bake_desc *desc, prt_transfer **out)
 {
-    prt_bake_run_desc run = {desc ? desc->progress : NULL, desc ? desc->progress_user : NULL};
+    prt_bake_run_desc run = {.progress = desc ? desc->progress : NULL, .progress_user = desc ? desc->progress_user : NULL};
     return prt__bake_with(ctx, scene, &prt__method_wavelet, begin_from_desc, desc, &run, out);
 }

@@ -91,7 +91,7 @@ prt_status prt_transfer_compress(prt_context *ctx, const prt_transfer *in, const
     prt__sh_state *n = NULL;
     if ((st = copy_without_sets(ctx, in, s, &t, &n))) return st;
     const size_t nv = in->mesh.vertex_count;
-    prt__progress prog = {d.progress, d.progress_user, NULL, 0, 0, 0.0, 0};
+    prt__progress prog = {d.progress, d.progress_user, NULL, 0, 0, 0.0, 0, ctx};
     for (int k = 0; k < PRT__KIND_COUNT && !st; ++k) {
         if (!s->sets[k].channels) continue;
         char stage[48];

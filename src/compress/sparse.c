@@ -23,6 +23,30 @@ prt_status prt__sparse_alloc(prt__sparse_store *s, size_t vectors, int n, int bi
     return PRT_OK;
 }
 
+void prt__sparse_save(const prt__sparse_store *s, size_t first, size_t count, prt__bytes *out)
+{
+    const size_t n = (size_t)s->n, vb = (size_t)s->bits / 8;
+    prt__bytes_put(out, s->index + first * n, count * n * sizeof(uint16_t));
+    prt__bytes_put(out, (const unsigned char *)s->values + first * n * 3 * vb, count * n * 3 * vb);
+    prt__bytes_put(out, s->scale + first * 3, count * 3 * sizeof(float));
+}
+
+bool prt__sparse_load(prt__sparse_store *s, size_t first, size_t count, const unsigned char *data, size_t size)
+{
+    const size_t n = (size_t)s->n, vb = (size_t)s->bits / 8;
+    const size_t ib = count * n * sizeof(uint16_t), valb = count * n * 3 * vb, sb = count * 3 * sizeof(float);
+    if (first > s->vectors || count > s->vectors - first || size != ib + valb + sb) return false;
+    for (size_t i = 0; i < count * n; ++i) {   /* readers index dense vectors of dim with them */
+        uint16_t k;
+        memcpy(&k, data + i * sizeof k, sizeof k);
+        if (k >= s->dim) return false;
+    }
+    memcpy(s->index + first * n, data, ib);
+    memcpy((unsigned char *)s->values + first * n * 3 * vb, data + ib, valb);
+    memcpy(s->scale + first * 3, data + ib + valb, sb);
+    return true;
+}
+
 void prt__sparse_free(prt__sparse_store *s)
 {
     free(s->index);

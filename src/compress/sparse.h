@@ -16,6 +16,10 @@ typedef struct prt__sparse_store {
 
 prt_status prt__sparse_alloc(prt__sparse_store *s, size_t vectors, int n, int bits, int dim);
 void prt__sparse_free(prt__sparse_store *s);
+/* Vectors [first, first + count) as bytes (indices, values, scales) for checkpoints, and back;
+ * load writes nothing and returns false when the bytes do not fit. */
+void prt__sparse_save(const prt__sparse_store *s, size_t first, size_t count, prt__bytes *out);
+bool prt__sparse_load(prt__sparse_store *s, size_t first, size_t count, const unsigned char *data, size_t size);
 size_t prt__sparse_bytes(const prt__sparse_store *s);
 
 /* The k-th largest (0-based) of x[0..n), reordering x (Hoare's selection, expected linear time). */

@@ -20,6 +20,8 @@ prt_status prt_context_create(const prt_context_desc *desc, prt_context **out)
     ctx->threads = d.threads > 0 ? d.threads : omp_get_num_procs();
     ctx->log = d.log;
     ctx->log_user = d.log_user;
+    ctx->cancel = d.cancel;
+    ctx->cancel_user = d.cancel_user;
     char cfg[64];
     snprintf(cfg, sizeof cfg, "threads=%d", ctx->threads);
     ctx->device = rtcNewDevice(cfg);
@@ -42,3 +44,5 @@ void prt_context_release(prt_context *ctx)
 int prt_context_threads(const prt_context *ctx) { return ctx ? ctx->threads : 1; }
 
 int prt__threads(const prt_context *ctx) { return ctx && ctx->threads > 0 ? ctx->threads : 1; }
+
+bool prt__cancelled(const prt_context *ctx) { return ctx && ctx->cancel && ctx->cancel(ctx->cancel_user) != 0; }

@@ -20,8 +20,13 @@ struct prt_context {
     int threads;
     prt_log_fn log;
     void *log_user;
+    prt_cancel_fn cancel;
+    void *cancel_user;
     RTCDevice device;
 };
+
+/* True when the context's cancel hook asks to stop (ctx may be NULL). */
+bool prt__cancelled(const prt_context *ctx);
 
 /* Records the failure message for prt_last_error(), sends it to the log hook (ctx may be NULL)
  * and returns status, so that callers can write `return prt__fail(ctx, PRT_ERR_IO, "...")`. */
@@ -34,6 +39,16 @@ void prt__log(const prt_context *ctx, prt_log_level level, const char *fmt, ...)
 void *prt__calloc(size_t n, size_t size);
 /* Sets *out = n*size when it does not overflow. */
 bool prt__mul_ok(size_t n, size_t size, size_t *out);
+
+/* A growable byte string (messages between processes, checkpoint records). After a failed
+ * allocation every put is ignored and `failed` stays set. */
+typedef struct prt__bytes {
+    unsigned char *data;
+    size_t size, capacity;
+    bool failed;
+} prt__bytes;
+bool prt__bytes_put(prt__bytes *b, const void *p, size_t n);
+void prt__bytes_free(prt__bytes *b);
 
 uint32_t prt__crc32(const void *data, size_t size);
 

@@ -32,7 +32,13 @@ bool prt__progress_add(prt__progress *p, uint64_t n)
     return prt__progress_cancelled(p);
 }
 
-bool prt__progress_cancelled(prt__progress *p) { return __atomic_load_n(&p->cancelled, __ATOMIC_RELAXED) != 0; }
+bool prt__progress_cancelled(prt__progress *p)
+{
+    if (__atomic_load_n(&p->cancelled, __ATOMIC_RELAXED)) return true;
+    if (!prt__cancelled(p->ctx)) return false;
+    __atomic_store_n(&p->cancelled, 1, __ATOMIC_RELAXED);
+    return true;
+}
 
 void prt__progress_end(prt__progress *p)
 {

@@ -1,5 +1,6 @@
 /* Progress reporting from parallel loops: workers count finished units; only OpenMP thread 0
- * calls the user's callback, at most every 100 ms, so the callback needs no locking. */
+ * calls the user's callback, at most every 100 ms, so the callback needs no locking.
+ * Cancellation comes from the callback or from the context's cancel hook. */
 #ifndef PRT_CORE_PROGRESS_H
 #define PRT_CORE_PROGRESS_H
 
@@ -12,6 +13,7 @@ typedef struct prt__progress {
     uint64_t done, total;    /* done is updated atomically */
     double last_report;
     int cancelled;           /* read and written atomically */
+    const prt_context *ctx;  /* its cancel hook stops the work too; may be NULL */
 } prt__progress;
 
 void prt__progress_begin(prt__progress *p, const char *stage, uint64_t total);

@@ -1,7 +1,11 @@
-/* Mesh import through assimp's C API. Assimp triangulates, flattens the node hierarchy and
- * generates smooth normals split at the crease angle where the file has none; prt then takes
- * per-material diffuse albedo and hands everything to prt__mesh_clean. */
+/* Mesh import through assimp's C API, in a child process (io/isolate.h): assimp can loop or
+ * abort on malformed files. Assimp triangulates, flattens the node hierarchy and generates
+ * smooth normals split at the crease angle where the file has none; the child takes per-material
+ * diffuse albedo and emission and hands everything back as a mesh message (io/mesh_message.h),
+ * which the caller validates and later cleans (prt__mesh_clean). */
 #include "geom/mesh.h"
+#include "io/isolate.h"
+#include "io/mesh_message.h"
 
 #include <assimp/cimport.h>
 #include <assimp/material.h>
@@ -12,6 +16,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 /* PLY and STL have no materials; assimp's readers invent a white one, which would make a
  * scanned mesh a perfect reflector. Such files get the default albedo. */
@@ -116,13 +121,28 @@ static bool looks_inside_out(const struct aiScene *sc)
     return e > 0 && open * 20 < e && vol < -0.5 * absvol;
 }
 
-prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform,
-                            const float *albedo_override, const prt_scene_desc *desc, prt__mesh *m)
-{
-    FILE *probe = fopen(path, "rb");
-    if (!probe) return prt__fail(ctx, PRT_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
-    fclose(probe);
+/* Everything prt__import_mesh needs, as the child process sees it. */
+typedef struct import_job {
+    const char *path;
+    const float *xform, *albedo_override;
+    const prt_scene_desc *desc;
+} import_job;
 
+static void fail_message(prt__bytes *out, prt_status st, const char *fmt, const char *path, const char *why)
+{
+    char msg[1024];
+    snprintf(msg, sizeof msg, fmt, path, why ? why : "");
+    prt__mesh_message_begin(out, st, 0, msg);
+}
+
+/* The assimp side of an import: the file's triangles as a mesh message (io/mesh_message.h).
+ * Runs in a child process unless the caller asked otherwise. */
+static void import_with_assimp(void *arg, prt__bytes *out)
+{
+    const import_job *job = arg;
+    const char *path = job->path;
+    const float *xform = job->xform;
+    const prt_scene_desc *desc = job->desc;
     struct aiPropertyStore *props = aiCreatePropertyStore();
     aiSetImportPropertyFloat(props, AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, desc->crease_angle_deg);
     /* Points and lines are dropped; only triangles take part in transport. */
@@ -130,19 +150,17 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
     unsigned flags = aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
     const struct aiScene *sc = aiImportFileExWithProperties(path, flags, NULL, props);
     aiReleasePropertyStore(props);
-    if (!sc) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s' is not a mesh prt can read: %s", path, aiGetErrorString());
+    if (!sc) { fail_message(out, PRT_ERR_FORMAT, "'%s' is not a mesh prt can read: %s", path, aiGetErrorString()); return; }
     if (sc->mNumMeshes == 0) {
         aiReleaseImport(sc);
-        return prt__fail(ctx, PRT_ERR_EMPTY, "'%s' holds no triangle meshes", path);
+        fail_message(out, PRT_ERR_EMPTY, "'%s' holds no triangle meshes%s", path, NULL);
+        return;
     }
     /* Orientation is settled before normals are generated from the winding. */
     bool file_normals = false;
     for (unsigned i = 0; i < sc->mNumMeshes; ++i) file_normals |= sc->mMeshes[i]->mNormals != NULL;
-    bool flip = desc->winding == PRT_WINDING_FLIP;
-    if (desc->winding == PRT_WINDING_AUTO && !file_normals && looks_inside_out(sc)) {
-        flip = true;
-        prt__log(ctx, PRT_LOG_WARN, "%s: closed mesh wound clockwise (normals would point inwards); flipped it (--winding keep to prevent)", path);
-    }
+    bool flip = desc->winding == PRT_WINDING_FLIP, flipped_auto = false;
+    if (desc->winding == PRT_WINDING_AUTO && !file_normals && looks_inside_out(sc)) flip = flipped_auto = true;
     if (flip) {
         /* The scene belongs to us until aiReleaseImport; assimp's C API only hands it out const. */
         struct aiScene *msc = (struct aiScene *)sc;
@@ -161,7 +179,7 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
         }
     }
     sc = aiApplyPostProcessing(sc, aiProcess_GenSmoothNormals | aiProcess_JoinIdenticalVertices);
-    if (!sc) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': assimp post-processing failed: %s", path, aiGetErrorString());
+    if (!sc) { fail_message(out, PRT_ERR_FORMAT, "'%s': assimp post-processing failed: %s", path, aiGetErrorString()); return; }
 
     /* Normals transform by the inverse transpose of the linear part. */
     float nmat[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
@@ -174,21 +192,22 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
         memcpy(nmat, cof, sizeof cof);
     }
 
-    prt_status st = PRT_OK;
-    size_t before = m->triangle_count;
-    for (unsigned i = 0; i < sc->mNumMeshes && st == PRT_OK; ++i) {
+    prt__mesh_message_begin(out, PRT_OK, flipped_auto ? PRT__IMPORT_FLIPPED : 0, NULL);
+    for (unsigned i = 0; i < sc->mNumMeshes; ++i) {
         const struct aiMesh *am = sc->mMeshes[i];
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) || am->mNumFaces == 0) continue;
-        float rgb[3];
-        if (albedo_override) memcpy(rgb, albedo_override, sizeof rgb);
-        else material_albedo(am->mMaterialIndex < sc->mNumMaterials ? sc->mMaterials[am->mMaterialIndex] : NULL, desc,
-                             format_has_materials(path), rgb);
+        const struct aiMaterial *mat = am->mMaterialIndex < sc->mNumMaterials ? sc->mMaterials[am->mMaterialIndex] : NULL;
+        float rgb[3], le[3];
+        if (job->albedo_override) memcpy(rgb, job->albedo_override, sizeof rgb);
+        else material_albedo(mat, desc, format_has_materials(path), rgb);
+        material_emission(mat, format_has_materials(path), le);
         size_t nv = am->mNumVertices, nt = 0;
         float *pos = prt__calloc(nv * 3, sizeof(float)), *nrm = prt__calloc(nv * 3, sizeof(float));
+        float *uv = am->mTextureCoords[0] ? prt__calloc(nv * 2, sizeof(float)) : NULL;
         uint32_t *idx = prt__calloc((size_t)am->mNumFaces * 3, sizeof(uint32_t));
-        if (!pos || !nrm || !idx) {
-            free(pos); free(nrm); free(idx);
-            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory importing '%s'", path);
+        if (!pos || !nrm || !idx || (am->mTextureCoords[0] && !uv)) {
+            free(pos); free(nrm); free(uv); free(idx);
+            out->failed = true;
             break;
         }
         for (size_t v = 0; v < nv; ++v) {
@@ -200,6 +219,7 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
                 nrm[v * 3 + r] = nmat[r * 3] * n[0] + nmat[r * 3 + 1] * n[1] + nmat[r * 3 + 2] * n[2];
             }
             if (xform) prt__v3_normalize(nrm + v * 3);  /* a zero normal stays zero: "recompute" */
+            if (uv) { uv[v * 2] = am->mTextureCoords[0][v].x; uv[v * 2 + 1] = am->mTextureCoords[0][v].y; }
         }
         for (unsigned f = 0; f < am->mNumFaces; ++f) {
             const struct aiFace *face = &am->mFaces[f];
@@ -207,26 +227,42 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
             memcpy(idx + nt * 3, face->mIndices, 3 * sizeof(uint32_t));
             nt++;
         }
-        const size_t first = m->vertex_count;
-        st = prt__mesh_append(m, pos, nrm, NULL, rgb, nv, idx, nt);
-        free(pos); free(nrm); free(idx);
-        float le[3];
-        material_emission(am->mMaterialIndex < sc->mNumMaterials ? sc->mMaterials[am->mMaterialIndex] : NULL, format_has_materials(path), le);
-        if (st == PRT_OK && (le[0] != 0 || le[1] != 0 || le[2] != 0)) {
-            float *e = prt__mesh_emission(m);
-            if (!e) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory importing '%s'", path); break; }
-            for (size_t v = first; v < first + nv; ++v) memcpy(e + v * 3, le, sizeof le);
-        }
-        if (st == PRT_OK && am->mTextureCoords[0]) {
-            float *uv = prt__calloc(nv * 2, sizeof(float));
-            if (!uv) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory importing '%s'", path); break; }
-            for (size_t v = 0; v < nv; ++v) { uv[v * 2] = am->mTextureCoords[0][v].x; uv[v * 2 + 1] = am->mTextureCoords[0][v].y; }
-            prt__mesh_set_uv(m, first, nv, uv);
-            free(uv);
-        }
+        prt__mesh_message_part(out, rgb, le, nv, pos, nrm, uv, nt, idx);
+        free(pos); free(nrm); free(uv); free(idx);
     }
     aiReleaseImport(sc);
-    if (st == PRT_OK && m->triangle_count == before)
-        return prt__fail(ctx, PRT_ERR_EMPTY, "'%s' holds no triangles", path);
+}
+
+/* Default time limit: generous for assimp's slowest readers on real files (tens of MB/s). */
+static double import_seconds(const char *path, const prt_scene_desc *desc)
+{
+    if (desc->import_seconds > 0) return desc->import_seconds;
+    struct stat sb;
+    double mb = stat(path, &sb) == 0 ? (double)sb.st_size / 1e6 : 0.0;
+    return 60.0 + 10.0 * mb;
+}
+
+prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform,
+                            const float *albedo_override, const prt_scene_desc *desc, prt__mesh *m)
+{
+    FILE *probe = fopen(path, "rb");
+    if (!probe) return prt__fail(ctx, PRT_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+    fclose(probe);
+    import_job job = {path, xform, albedo_override, desc};
+    prt__bytes msg = {0};
+    prt_status st = PRT_OK;
+    if (desc->import_in_process) {
+        import_with_assimp(&job, &msg);
+        if (msg.failed) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory importing '%s'", path);
+    } else {
+        char what[600];
+        snprintf(what, sizeof what, "assimp reading '%s'", path);
+        st = prt__run_isolated(ctx, import_with_assimp, &job, import_seconds(path, desc), what, &msg);
+    }
+    uint32_t flags = 0;
+    if (!st) st = prt__mesh_message_read(ctx, msg.data, msg.size, path, &flags, m);
+    prt__bytes_free(&msg);
+    if (!st && (flags & PRT__IMPORT_FLIPPED))
+        prt__log(ctx, PRT_LOG_WARN, "%s: closed mesh wound clockwise (normals would point inwards); flipped it (--winding keep to prevent)", path);
     return st;
 }

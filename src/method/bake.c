@@ -1,16 +1,49 @@
 /* The bake driver shared by every method: stages of independent work units on all threads, with
- * progress, cancellation and timing written once (see prt__bake_job in method/method.h). */
+ * progress, cancellation, checkpoints and timing written once (see prt__bake_job in
+ * method/method.h and method/checkpoint.h). */
 #include "method/method.h"
+#include "method/checkpoint.h"
 
 #include <omp.h>
 
-prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt_transfer *t)
+/* Puts back the units of stage `index` that the checkpoint holds; marks them in restored. */
+static prt_status restore_units(prt_context *ctx, prt__bake_job *job, const prt__stage *s, int index, prt__checkpoint *cp,
+                                unsigned char *restored, uint64_t *count)
+{
+    int bad = 0;
+    uint64_t n = 0, bad_unit = 0;
+#pragma omp parallel num_threads(job->threads) reduction(+ : n)
+    {
+        prt__bytes buf = {0};
+#pragma omp for schedule(dynamic, 16)
+        for (uint64_t u = 0; u < s->units; ++u) {
+            if (__atomic_load_n(&bad, __ATOMIC_RELAXED) || !prt__checkpoint_find(cp, index, u, &buf)) continue;
+            if (!s->load_unit(job, u, buf.data, buf.size)) {
+                if (!__atomic_exchange_n(&bad, 1, __ATOMIC_RELAXED)) bad_unit = u;
+                continue;
+            }
+            restored[u] = 1;
+            n++;
+        }
+        prt__bytes_free(&buf);
+    }
+    *count = n;
+    if (bad)
+        return prt__fail(ctx, PRT_ERR_FORMAT, "the checkpoint's record of %s, unit %llu, does not fit this bake (a damaged file?); "
+                         "delete the checkpoint, or bake without resuming", s->name, (unsigned long long)bad_unit);
+    return PRT_OK;
+}
+
+prt_status prt__bake_drive_checkpointed(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt__checkpoint *cp,
+                                        prt_transfer *t)
 {
     const double start = prt__now();
-    prt__progress prog = {run ? run->progress : NULL, run ? run->progress_user : NULL, NULL, 0, 0, 0.0, 0};
+    prt__progress prog = {run ? run->progress : NULL, run ? run->progress_user : NULL, NULL, 0, 0, 0.0, 0, ctx};
     job->ctx = ctx;
     job->threads = prt__threads(ctx);
-    prt_status st = PRT_OK;
+    uint64_t recovered = 0, total = 0;
+    prt__bytes *out = cp ? prt__calloc((size_t)job->threads, sizeof *out) : NULL;
+    prt_status st = cp && !out ? prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory") : PRT_OK;
     for (int index = 0; !st; ++index) {
         prt__stage s;
         memset(&s, 0, sizeof s);
@@ -20,6 +53,17 @@ prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_
         if (s.whole) {
             st = s.whole(job, ctx, &prog);
         } else {
+            total += s.units;
+            unsigned char *restored = NULL;
+            uint64_t from_checkpoint = 0;
+            if (cp && s.load_unit && prt__checkpoint_count(cp, index)) {
+                if (!(restored = prt__calloc((size_t)s.units, 1))) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+                if ((st = restore_units(ctx, job, &s, index, cp, restored, &from_checkpoint))) { free(restored); break; }
+                prt__log(ctx, PRT_LOG_INFO, "%s: %llu of %llu work units recovered from the checkpoint", s.name,
+                         (unsigned long long)from_checkpoint, (unsigned long long)s.units);
+                recovered += from_checkpoint;
+                prt__progress_add(&prog, from_checkpoint);
+            }
             int failed = 0;
             prt_status first = PRT_OK;
             char why[512] = "";   /* errors are recorded per thread: keep the failing unit's */
@@ -27,14 +71,21 @@ prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_
              * outputs, so the result is the same for any thread count and schedule. */
 #pragma omp parallel for schedule(dynamic, 1) num_threads(job->threads)
             for (uint64_t u = 0; u < s.units; ++u) {
-                if (__atomic_load_n(&failed, __ATOMIC_RELAXED) || prt__progress_cancelled(&prog)) continue;
-                prt_status r = s.run(job, u, omp_get_thread_num());
+                if ((restored && restored[u]) || __atomic_load_n(&failed, __ATOMIC_RELAXED) || prt__progress_cancelled(&prog)) continue;
+                const int thread = omp_get_thread_num();
+                prt_status r = s.run(job, u, thread);
                 if (r && !__atomic_exchange_n(&failed, 1, __ATOMIC_RELAXED)) {
                     first = r;
                     snprintf(why, sizeof why, "%s", prt_last_error());
                 }
+                if (!r && cp && s.save_unit) {
+                    out[thread].size = 0;
+                    s.save_unit(job, u, &out[thread]);
+                    if (!out[thread].failed) prt__checkpoint_append(cp, index, u, out[thread].data, out[thread].size);
+                }
                 prt__progress_add(&prog, 1);
             }
+            free(restored);
             if (first) st = prt__fail(ctx, first, "%s", why[0] ? why : prt_status_string(first));
         }
         if (!st) prt__progress_end(&prog);
@@ -42,11 +93,50 @@ prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_
     }
     if (!st) st = job->finish(job, t);
     job->release(job);
+    for (int i = 0; out && i < job->threads; ++i) prt__bytes_free(&out[i]);
+    free(out);
+    if (run && run->recovered_units) *run->recovered_units = recovered;
+    if (run && run->total_units) *run->total_units = total;
     if (!st) {
         t->bake_seconds = prt__now() - start;
         t->threads = prt__threads(ctx);
     }
     return st;
+}
+
+prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt_transfer *t)
+{
+    return prt__bake_drive_checkpointed(ctx, job, run, NULL, t);
+}
+
+/* Everything a bake's results depend on, so that a checkpoint is only ever resumed by the same
+ * bake: the library version, the method and its options, and the scene as the transfer holds it. */
+static void fingerprint(const prt__method *m, const prt_options *o, const prt_transfer *t, prt__fingerprint *fp)
+{
+    memset(fp, 0, sizeof *fp);
+    const char *v = prt_version_string();
+    prt__fingerprint_add(fp, v, strlen(v) + 1);
+    prt__fingerprint_add(fp, m->name, strlen(m->name) + 1);
+    prt__options_fingerprint(o, fp);
+    const prt__mesh *mesh = &t->mesh;
+    const size_t nv = mesh->vertex_count, nt = mesh->triangle_count;
+    prt__fingerprint_add(fp, &nv, sizeof nv);
+    prt__fingerprint_add(fp, &nt, sizeof nt);
+    prt__fingerprint_add(fp, mesh->positions, nv * 3 * sizeof(float));
+    prt__fingerprint_add(fp, mesh->normals, nv * 3 * sizeof(float));
+    prt__fingerprint_add(fp, mesh->albedo, nv * 3 * sizeof(float));
+    prt__fingerprint_add(fp, mesh->material, nv);
+    if (mesh->uv) prt__fingerprint_add(fp, mesh->uv, nv * 2 * sizeof(float));
+    if (mesh->emission) prt__fingerprint_add(fp, mesh->emission, nv * 3 * sizeof(float));
+    prt__fingerprint_add(fp, mesh->indices, nt * 3 * sizeof(uint32_t));
+    prt__fingerprint_add(fp, &t->brdf_count, sizeof t->brdf_count);
+    for (int i = 0; i < t->brdf_count; ++i) {
+        char spec[256];   /* the model's parameters, not the struct's padding or unused lobes */
+        prt_brdf_format(&t->brdfs[i], spec, sizeof spec);
+        prt__fingerprint_add(fp, spec, strlen(spec));
+        prt__fingerprint_add(fp, t->brdfs[i].diffuse, sizeof t->brdfs[i].diffuse);
+        prt__fingerprint_add(fp, t->brdfs[i].specular, sizeof t->brdfs[i].specular);
+    }
 }
 
 prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__method *m, prt__bake_begin_fn begin, const void *desc,
@@ -57,8 +147,16 @@ prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__m
     prt_transfer *t = NULL;
     prt_status st = prt__transfer_from_scene(ctx, m, scene, &t);
     prt__bake_job *job = NULL;
+    prt__checkpoint *cp = NULL;
+    if (!st && run && run->checkpoint) {
+        /* Only prt_bake passes options as desc (checkpoints need them for the fingerprint). */
+        prt__fingerprint fp;
+        fingerprint(m, desc, t, &fp);
+        st = prt__checkpoint_open(ctx, run->checkpoint, &fp, run->resume != 0, &cp);
+    }
     if (!st) st = begin(ctx, scene, desc, t, &job);
-    if (!st) st = prt__bake_drive(ctx, job, run, t);
+    if (!st) st = prt__bake_drive_checkpointed(ctx, job, run, cp, t);
+    prt__checkpoint_close(cp, false);
     if (st) { prt_transfer_release(t); return st; }
     *out = t;
     return PRT_OK;

@@ -7,6 +7,7 @@
 
 #include "core/progress.h"
 #include "io/container.h"
+#include "method/checkpoint.h"
 #include "method/transfer.h"
 
 #include <cjson/cJSON.h>
@@ -29,6 +30,11 @@ typedef struct prt__stage {
     /* A step with parallel loops of its own (k-means, a BRDF fit), run once instead of units;
      * it reports through p and checks p for cancellation. */
     prt_status (*whole)(prt__bake_job *job, prt_context *ctx, prt__progress *p);
+    /* Resumable bakes (method/checkpoint.h): writes everything unit `unit` produced into out, and
+     * puts it back from those bytes (false when they do not fit the job: a corrupt checkpoint).
+     * NULL: the stage's units run again on resume. */
+    void (*save_unit)(prt__bake_job *job, uint64_t unit, prt__bytes *out);
+    bool (*load_unit)(prt__bake_job *job, uint64_t unit, const unsigned char *data, size_t size);
 } prt__stage;
 
 struct prt__bake_job {
@@ -45,6 +51,9 @@ struct prt__bake_job {
  * it; t's bake_seconds and threads are filled in. Used by prt_bake and the methods' own bake
  * functions (prt_bake_sh, prt_bake_wavelet). */
 prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt_transfer *t);
+/* The same with a checkpoint (NULL = none); the driver takes units from it and adds to it. */
+prt_status prt__bake_drive_checkpointed(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt__checkpoint *cp,
+                                        prt_transfer *t);
 
 /* The frame every bake entry point shares: a transfer of method m made from the scene, the job
  * `begin` sets up from desc, the driver. */
@@ -59,6 +68,8 @@ float prt__opt_float(const prt_options *o, const char *name, float fallback);
 bool prt__opt_flag(const prt_options *o, const char *name);
 /* Index of the given item of a CHOICE option's choices, or fallback. */
 int prt__opt_choice(const prt_options *o, const char *name, int fallback);
+/* Adds the options as given (sorted by name, so the order on a command line does not matter). */
+void prt__options_fingerprint(const prt_options *o, prt__fingerprint *fp);
 
 /* ---- Descriptions (method/describe.c) ----
  * One code path writes both forms: text lines for people, fields for JSON. */

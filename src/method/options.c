@@ -165,3 +165,19 @@ int prt__opt_choice(const prt_options *o, const char *name, int fallback)
     }
     return fallback;
 }
+
+void prt__options_fingerprint(const prt_options *o, prt__fingerprint *fp)
+{
+    if (!o) return;
+    int order[MAX_VALUES];
+    for (int i = 0; i < o->count; ++i) order[i] = i;
+    for (int i = 1; i < o->count; ++i)   /* a handful of options: insertion sort */
+        for (int k = i; k > 0 && strcmp(o->desc[order[k - 1]]->name, o->desc[order[k]]->name) > 0; --k) {
+            int tmp = order[k]; order[k] = order[k - 1]; order[k - 1] = tmp;
+        }
+    for (int i = 0; i < o->count; ++i) {
+        const char *name = o->desc[order[i]]->name, *value = o->value[order[i]];
+        prt__fingerprint_add(fp, name, strlen(name) + 1);
+        prt__fingerprint_add(fp, value, strlen(value) + 1);
+    }
+}

@@ -548,7 +548,7 @@ prt_status prt_reference_trace_vertices(prt_context *ctx, const prt_scene *scene
         free(m); prt_reference_vertices_free(out); job_free(&j);
         return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %zu reference vertices", nv);
     }
-    prt__progress prog = {d.progress, d.progress_user, NULL, 0, 0, 0.0, 0};
+    prt__progress prog = {d.progress, d.progress_user, NULL, 0, 0, 0.0, 0, ctx};
     /* Batches double the sample count of the vertices that have not converged yet. A vertex's
      * k-th sample always uses stream (vertex, k), so batching never changes the result. */
     for (int target = first, pass = 0;; target *= 2, ++pass) {
@@ -613,7 +613,7 @@ prt_status prt_reference_trace_image(prt_context *ctx, const prt_scene *scene, c
     prt__v3_normalize(s);
     prt__v3_cross(s, f, u);
     const float th = tanf(0.5f * (cam->fov_y_deg > 0 ? cam->fov_y_deg : 40.0f) * (float)PRT_PI / 180.0f), aspect = (float)width / height;
-    prt__progress prog = {d.progress, d.progress_user, NULL, 0, 0, 0.0, 0};
+    prt__progress prog = {d.progress, d.progress_user, NULL, 0, 0, 0.0, 0, ctx};
     prt__progress_begin(&prog, "reference image", (uint64_t)height);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(prt__threads(ctx))
     for (int y = 0; y < height; ++y) {

@@ -63,6 +63,7 @@ static void log_to_stderr(void *user, prt_log_level level, const char *msg)
     const cli *c = user;
     /* Errors are reported once, by the command, from prt_last_error(). */
     if (level == PRT_LOG_WARN && !c->quiet) fprintf(stderr, "prt %s: warning: %s\n", c->cmd, msg);
+    if (level == PRT_LOG_INFO && !c->quiet) fprintf(stderr, "prt %s: %s\n", c->cmd, msg);
 }
 
 int cli_make_context(cli *c)
@@ -74,6 +75,7 @@ int cli_make_context(cli *c)
     d.threads = c->threads;
     d.log = log_to_stderr;
     d.log_user = c;
+    d.cancel = cli_cancel_hook;
     prt_status st = prt_context_create(&d, &c->ctx);
     return st ? cli_fail(c, st) : EXIT_OK;
 }
@@ -124,6 +126,7 @@ void cli_catch_interrupt(void)
     sigaction(SIGTERM, &sa, NULL);
 }
 bool cli_interrupted(void) { return interrupted != 0; }
+int cli_cancel_hook(void *user) { (void)user; return interrupted != 0; }
 
 prt_status cli_check_interrupt(cli *c)
 {
@@ -237,6 +240,12 @@ int cli_scene_option(const cli *c, prt_scene_desc *sd, int opt, const char *arg)
         else if (!strcasecmp(arg, "keep")) sd->winding = PRT_WINDING_KEEP;
         else if (!strcasecmp(arg, "flip")) sd->winding = PRT_WINDING_FLIP;
         else { cli_usage(c, "--winding must be auto, keep or flip"); return -1; }
+        return 1;
+    case OPT_IMPORT_TIMEOUT:
+        if (!cli_parse_float(arg, &sd->import_seconds) || !(sd->import_seconds > 0) || sd->import_seconds > 1e6f) {
+            cli_usage(c, "--import-timeout must be seconds in (0, 1e6]");
+            return -1;
+        }
         return 1;
     }
     return 0;

@@ -50,6 +50,8 @@ int cli_progress(void *user, const char *stage, uint64_t done, uint64_t total);
 /* Installs a SIGINT handler that makes cli_progress cancel the running operation. */
 void cli_catch_interrupt(void);
 bool cli_interrupted(void);
+/* The context's cancel hook (prt_context_desc.cancel): true once Ctrl-C or SIGTERM arrived. */
+int cli_cancel_hook(void *user);
 /* PRT_ERR_CANCELLED after saying so when SIGINT or SIGTERM arrived: call it before writing. */
 prt_status cli_check_interrupt(cli *c);
 
@@ -126,12 +128,14 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     "      --default-albedo R,G,B  albedo where the file has no material (default 0.7)\n" \
     "      --crease-angle D   split computed normals above D degrees (default 45)\n" \
     "      --winding W        auto | keep | flip: which side of imported triangles faces out\n" \
-    "                         (auto flips closed meshes without normals that are wound inside out)\n"
-enum { OPT_MAX_EDGE = 1100, OPT_ALBEDO, OPT_DEFAULT_ALBEDO, OPT_CREASE, OPT_WINDING };
+    "                         (auto flips closed meshes without normals that are wound inside out)\n" \
+    "      --import-timeout S  give up on a mesh file that the importer has not read in S seconds\n" \
+    "                         (default 60 + 10 per MB; a malformed file can make it loop)\n"
+enum { OPT_MAX_EDGE = 1100, OPT_ALBEDO, OPT_DEFAULT_ALBEDO, OPT_CREASE, OPT_WINDING, OPT_IMPORT_TIMEOUT };
 #define CLI_SCENE_LONG_OPTIONS \
     {"max-edge", required_argument, 0, OPT_MAX_EDGE}, {"albedo", required_argument, 0, OPT_ALBEDO}, \
     {"default-albedo", required_argument, 0, OPT_DEFAULT_ALBEDO}, {"crease-angle", required_argument, 0, OPT_CREASE}, \
-    {"winding", required_argument, 0, OPT_WINDING}
+    {"winding", required_argument, 0, OPT_WINDING}, {"import-timeout", required_argument, 0, OPT_IMPORT_TIMEOUT}
 /* Returns 1 if consumed, 0 if not a scene option, -1 after reporting a bad value. */
 int cli_scene_option(const cli *c, prt_scene_desc *sd, int opt, const char *arg);
 

@@ -5,12 +5,19 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static const char *HELP_HEAD =
     "usage: prt bake SCENE -o OUT.prt [--method M] [options]\n"
     "Precomputes radiance transfer for every vertex of SCENE (a mesh file assimp reads,\n"
     "or a .json scene, see docs/SCENE.md) and writes it to OUT.prt.\n\n"
     "  -o, --output FILE      the .prt file to write (required; written atomically)\n"
+    "      --resume           continue an interrupted bake (Ctrl-C, kill, power cut) from\n"
+    "                         FILE.checkpoint: finished work is taken, not redone, and the\n"
+    "                         result is the same file an uninterrupted bake writes\n"
+    "      --no-checkpoint    do not keep FILE.checkpoint while baking (it holds every finished\n"
+    "                         work unit, can be as large as the bake's memory, and is deleted\n"
+    "                         once FILE is written)\n"
     "      --method M         the PRT method (default sh); each has the options listed below\n"
     "                         (prt bake --method M --help shows one method's)\n";
 
@@ -19,7 +26,7 @@ static const char *HELP_TAIL =
     "  -q, --quiet            no progress or warnings\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
-enum { OPT_METHOD = 1500, OPT_METHOD_OPTION = 3000 };
+enum { OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_METHOD_OPTION = 3000 };
 
 static void help(const prt_method *only)
 {
@@ -38,7 +45,8 @@ static void help(const prt_method *only)
 static int collect_options(const prt_method *chosen, struct option *opts, int max, const char **names, int max_names)
 {
     static const struct option fixed[] = {
-        {"output", required_argument, 0, 'o'}, {"method", required_argument, 0, OPT_METHOD}, CLI_SCENE_LONG_OPTIONS,
+        {"output", required_argument, 0, 'o'}, {"method", required_argument, 0, OPT_METHOD}, {"resume", no_argument, 0, OPT_RESUME},
+        {"no-checkpoint", no_argument, 0, OPT_NO_CHECKPOINT}, CLI_SCENE_LONG_OPTIONS,
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}};
     int n = 0;
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; ++i) opts[n++] = fixed[i];
@@ -66,6 +74,7 @@ int cmd_bake(int argc, char **argv)
     cli c = {.cmd = "bake"};
     prt_scene_desc sd = {0};
     const char *output = NULL;
+    bool resume = false, checkpoint = true;
     const prt_method *method = cli_method_from_argv(&c, argc, argv);
     if (!method) return EXIT_USAGE;
     bool method_named = false;
@@ -88,6 +97,8 @@ int cmd_bake(int argc, char **argv)
         }
         switch (opt) {
         case 'o': output = optarg; break;
+        case OPT_RESUME: resume = true; break;
+        case OPT_NO_CHECKPOINT: checkpoint = false; break;
         case OPT_METHOD:
             /* Read before parsing; getopt also accepts abbreviations such as --meth, which that
              * scan does not see. */
@@ -101,6 +112,12 @@ int cmd_bake(int argc, char **argv)
     }
     if (!rc && optind != argc - 1) rc = cli_usage(&c, "expected exactly one SCENE argument");
     if (!rc && !output) rc = cli_usage(&c, "an output file is required (-o OUT.prt)");
+    if (!rc && resume && !checkpoint) rc = cli_usage(&c, "--resume needs the checkpoint that --no-checkpoint turns off");
+    char checkpoint_path[4096] = "";
+    if (!rc && checkpoint && snprintf(checkpoint_path, sizeof checkpoint_path, "%s.checkpoint", output) >= (int)sizeof checkpoint_path)
+        rc = cli_usage(&c, "the output path is too long");
+    if (!rc && resume && access(checkpoint_path, F_OK) != 0 && !c.quiet)
+        fprintf(stderr, "prt bake: no checkpoint %s to resume from: baking from the start\n", checkpoint_path);
     if (!rc) rc = cli_make_context(&c);
     if (rc) { prt_options_release(o); return rc; }
     prt_scene *scene = NULL;
@@ -118,8 +135,13 @@ int cmd_bake(int argc, char **argv)
         }
     }
     if (!st) {
-        prt_bake_run_desc run = {cli_progress, &c};
+        uint64_t recovered = 0, total = 0;
+        prt_bake_run_desc run = {.progress = cli_progress, .progress_user = &c, .checkpoint = checkpoint ? checkpoint_path : NULL,
+                                 .resume = resume, .recovered_units = &recovered, .total_units = &total};
         st = prt_bake(c.ctx, scene, method, o, &run, &t);
+        if (!st && resume && !c.quiet && total)
+            fprintf(stderr, "prt bake: resumed: %llu of %llu work units (%.0f%%) came from %s\n", (unsigned long long)recovered,
+                    (unsigned long long)total, 100.0 * (double)recovered / (double)total, checkpoint_path);
     }
     if (!st && !c.quiet) {
         char *report = NULL;
@@ -128,6 +150,7 @@ int cmd_bake(int argc, char **argv)
     }
     if (!st) st = cli_check_interrupt(&c);
     if (!st) st = prt_transfer_save(t, output);
+    if (!st && checkpoint) remove(checkpoint_path);   /* the result is safe: nothing to resume */
     if (!st && !c.quiet) {
         char *text = NULL;
         if (!prt_transfer_describe(t, output, 0, &text)) {
@@ -136,7 +159,12 @@ int cmd_bake(int argc, char **argv)
         }
         free(text);
     }
-    rc = st ? cli_fail(&c, st) : EXIT_OK;
+    if (st == PRT_ERR_CANCELLED && checkpoint && access(checkpoint_path, F_OK) == 0) {
+        cli_error(&c, "interrupted: nothing written; finished work is kept in %s (the same command with --resume continues)", checkpoint_path);
+        rc = EXIT_INTERRUPTED;
+    } else {
+        rc = st ? cli_fail(&c, st) : EXIT_OK;
+    }
     prt_transfer_release(t);
     prt_scene_release(scene);
     prt_options_release(o);

@@ -205,7 +205,7 @@ int cmd_sweep(int argc, char **argv)
                 st = prt_options_set(o, mo[k].name, mo[k].type == PRT_OPTION_FLAG ? NULL : prt_options_get(fixed_opts, mo[k].name));
         if (!st) st = prt_options_set(o, pd->name, list_text[i]);
         prt_transfer *t = NULL;
-        prt_bake_run_desc run = {cli_progress, &c};
+        prt_bake_run_desc run = {.progress = cli_progress, .progress_user = &c};
         if (!st) st = prt_bake(c.ctx, scene, method, o, &run, &t);
         prt_options_release(o);
         if (st) break;

@@ -374,7 +374,7 @@ int cmd_view(int argc, char **argv)
     if ((rc = cli_make_context(&c))) { view_script_free(script); return rc; }
     prt_status st = prt_transfer_load(c.ctx, argv[optind], &v.t);
     if (!st) st = cli_lighting(&c, &v.light, v.t, NULL, &v.lighting);
-    if (!st) st = prt_context_create(&(prt_context_desc){c.threads, NULL, NULL}, &v.worker_ctx);
+    if (!st) st = prt_context_create(&(prt_context_desc){.threads = c.threads}, &v.worker_ctx);
     if (!st) {
         /* The file's lights become the viewer's to edit; the worker relights with a copy per job. */
         view_take_lights(&v);
