@@ -270,6 +270,8 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
         if (!tmp) lapack_failed = 1;
         free(tmp);
         if (lapack_failed) { st = prt__fail(ctx, PRT_ERR_BACKEND, "LAPACK eigen decomposition failed"); break; }
+        /* Half an iteration can take a second on large meshes: look before reassigning too. */
+        if (prog && prt__progress_cancelled(prog)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); break; }
         for (int k = 0; k < K; ++k)
             if ((size_t)counts[k] > M[k].members) { total_vectors -= counts[k] - M[k].members; counts[k] = (uint32_t)M[k].members; }
         if (it == iterations) break;   /* the last pass only refits the final clusters */

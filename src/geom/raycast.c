@@ -4,6 +4,12 @@
 
 #include <string.h>
 
+static bool build_progress(void *ctx, double done)
+{
+    (void)done;
+    return !prt__cancelled(ctx);
+}
+
 prt_status prt__raycaster_create(const prt_context *ctx, const prt__mesh *m, prt__raycaster *out)
 {
     memset(out, 0, sizeof *out);
@@ -27,10 +33,18 @@ prt_status prt__raycaster_create(const prt_context *ctx, const prt__mesh *m, prt
     rtcAttachGeometry(scene, geom);
     rtcReleaseGeometry(geom);
     rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+    /* A build of tens of millions of triangles takes seconds: the cancel hook can stop it. */
+    rtcSetSceneProgressMonitorFunction(scene, build_progress, (void *)ctx);
     rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);   /* no rays slip through shared edges */
-    rtcCommitScene(scene);
-    if (rtcGetDeviceError(ctx->device) != RTC_ERROR_NONE) {
+    if (prt__cancelled(ctx)) {
         rtcReleaseScene(scene);
+        return prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled while building the ray-tracing structure");
+    }
+    rtcCommitScene(scene);
+    enum RTCError err = rtcGetDeviceError(ctx->device);
+    if (err != RTC_ERROR_NONE) {
+        rtcReleaseScene(scene);
+        if (err == RTC_ERROR_CANCELLED || prt__cancelled(ctx)) return prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled while building the ray-tracing structure");
         return prt__fail(ctx, PRT_ERR_BACKEND, "Embree failed to build the scene");
     }
     out->scene = scene;

@@ -55,6 +55,7 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "subdividing to max edge %g would make at least %.3g triangles (the limit is %u); choose a larger --max-edge",
                          max_edge, estimate, MAX_TRIANGLES);
     for (int pass = 0; pass < 64; ++pass) {
+        if (prt__cancelled(ctx)) return prt__fail(ctx, PRT_ERR_CANCELLED, "subdivision cancelled");
         size_t split_edges = 0, new_tris = 0;
         for (size_t t = 0; t < m->triangle_count; ++t) {
             const uint32_t *v = m->indices + t * 3;
@@ -92,6 +93,10 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
         }
         size_t nt = 0;
         for (size_t t = 0; t < m->triangle_count; ++t) {
+            if ((t & 0xffff) == 0 && prt__cancelled(ctx)) {   /* a few ms between looks */
+                free(em.keys); free(em.values); free(out);
+                return prt__fail(ctx, PRT_ERR_CANCELLED, "subdivision cancelled");
+            }
             uint32_t v[3], mid[3];
             memcpy(v, m->indices + t * 3, sizeof v);
             int count = 0;

@@ -148,6 +148,8 @@ prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__m
     prt_status st = prt__transfer_from_scene(ctx, m, scene, &t);
     prt__bake_job *job = NULL;
     prt__checkpoint *cp = NULL;
+    /* Setting up a bake of tens of millions of triangles takes seconds a step: look between steps. */
+    if (!st && prt__cancelled(ctx)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     if (!st && run && run->checkpoint) {
         /* Only prt_bake passes options as desc (checkpoints need them for the fingerprint). */
         prt__fingerprint fp;
@@ -155,6 +157,10 @@ prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__m
         st = prt__checkpoint_open(ctx, run->checkpoint, &fp, run->resume != 0, &cp);
     }
     if (!st) st = begin(ctx, scene, desc, t, &job);
+    if (!st && prt__cancelled(ctx)) {
+        job->release(job);
+        st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    }
     if (!st) st = prt__bake_drive_checkpointed(ctx, job, run, cp, t);
     prt__checkpoint_close(cp, false);
     if (st) { prt_transfer_release(t); return st; }
