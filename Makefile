@@ -5,10 +5,13 @@ ASAN_BUILD ?= build-asan
 CLANG_BUILD ?= build-clang
 FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 60
+# Only definite leaks and memory errors count: OpenMP and TBB keep their thread stacks to the end.
+VALGRIND_OPTIONS = --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite --show-possibly-lost=no -q
+ASAN_TESTS ?=
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build clang-build demo test test-asan fuzz fuzz-regress bench accuracy install clean
+.PHONY: all deps build clang-build demo test test-asan test-valgrind fuzz fuzz-regress bench accuracy install clean
 
 all: build
 
@@ -24,8 +27,11 @@ build: deps $(BUILD)/CMakeCache.txt
 demo: build
 	@sh scripts/demo.sh $(BUILD)/prt out/demo
 
+# Every test, then the quick ones (label "quick") again under valgrind and under ASan+UBSan.
 test: build clang-build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+	$(MAKE) --no-print-directory test-valgrind VALGRIND_TESTS="-L quick"
+	$(MAKE) --no-print-directory test-asan ASAN_TESTS="-L quick"
 
 # The same sources with clang and -Werror: prt stays portable C11 + intrinsics (libFuzzer needs clang).
 clang-build: deps
@@ -36,7 +42,13 @@ clang-build: deps
 test-asan: deps
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=Debug -DPRT_SANITIZE=ON >/dev/null
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
-	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j $(JOBS)
+	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j $(JOBS) $(ASAN_TESTS)
+
+# valgrind memcheck over the tests of the normal build (portable -march=x86-64-v3 code: valgrind
+# cannot run AVX-512). VALGRIND_TESTS="-L quick" narrows it, as `make test` does.
+test-valgrind: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) -T memcheck $(VALGRIND_TESTS) --overwrite MemoryCheckCommand=$$(command -v valgrind) \
+		--overwrite "MemoryCheckCommandOptions=$(VALGRIND_OPTIONS)"
 
 # libFuzzer (clang, ASan + UBSan; no -Werror: instrumented code cannot honour every simd pragma) on
 # every harness in fuzz/ for FUZZ_SECONDS each; crashes land in
