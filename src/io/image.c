@@ -128,7 +128,12 @@ static prt_status load_exr(const unsigned char *data, size_t size, prt_image *ou
         st = prt__fail(NULL, PRT_ERR_FORMAT, "only scanline OpenEXR images are supported (this one is tiled or deep)");
     } else {
         long w = (long)dw.max.x - dw.min.x + 1, h = (long)dw.max.y - dw.min.y + 1;
-        st = alloc_image(out, w, h);
+        st = lines < 1 || lines > 256 ? prt__fail(NULL, PRT_ERR_FORMAT, "OpenEXR chunks of %d scanlines are not a valid layout", lines)
+                                      : alloc_image(out, w, h);
+        /* Channels prt does not use are decoded into scratch: OpenEXRCore 3.1's fast unpackers
+         * write through a NULL decode_to_ptr (found by fuzzing: fuzz/regress/image/exr_unused_channel). */
+        float *scratch = st == PRT_OK ? prt__calloc((size_t)w * (size_t)lines, sizeof(float)) : NULL;
+        if (st == PRT_OK && !scratch) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory decoding OpenEXR");
         exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
         bool have_rgb[3] = {false, false, false}, initialised = false;
         for (int32_t y = dw.min.y; st == PRT_OK && y <= dw.max.y; y += lines) {
@@ -146,11 +151,11 @@ static prt_status load_exr(const unsigned char *data, size_t size, prt_image *ou
                 if (dot) name = dot + 1;
                 int k = !strcasecmp(name, "R") ? 0 : !strcasecmp(name, "G") ? 1 : !strcasecmp(name, "B") ? 2 :
                         !strcasecmp(name, "Y") ? 0 : -1;
-                if (k < 0 || chan->x_samples != 1 || chan->y_samples != 1) { chan->decode_to_ptr = NULL; continue; }
-                have_rgb[k] = true;
-                chan->decode_to_ptr = (uint8_t *)(out->rgb + ((size_t)(ci.start_y - dw.min.y) * (size_t)w) * 3 + k);
-                chan->user_pixel_stride = 3 * sizeof(float);
-                chan->user_line_stride = (int32_t)(w * 3 * (long)sizeof(float));
+                const bool used = k >= 0 && chan->x_samples == 1 && chan->y_samples == 1;
+                if (used) have_rgb[k] = true;
+                chan->decode_to_ptr = used ? (uint8_t *)(out->rgb + ((size_t)(ci.start_y - dw.min.y) * (size_t)w) * 3 + k) : (uint8_t *)scratch;
+                chan->user_pixel_stride = used ? 3 * sizeof(float) : sizeof(float);
+                chan->user_line_stride = (int32_t)(w * (used ? 3 : 1) * (long)sizeof(float));
                 chan->user_data_type = EXR_PIXEL_FLOAT;
                 chan->user_bytes_per_element = sizeof(float);
             }
@@ -158,6 +163,7 @@ static prt_status load_exr(const unsigned char *data, size_t size, prt_image *ou
                 st = prt__fail(NULL, PRT_ERR_FORMAT, "OpenEXR data at line %d is corrupt: %s", y, exr_message);
         }
         if (initialised) exr_decoding_destroy(ctx, &dec);
+        free(scratch);
         if (st == PRT_OK && !have_rgb[0])
             st = prt__fail(NULL, PRT_ERR_FORMAT, "OpenEXR image has no R, G, B or Y channel");
         if (st == PRT_OK)   /* single-channel images become grey */
