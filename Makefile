@@ -27,11 +27,12 @@ build: deps $(BUILD)/CMakeCache.txt
 demo: build
 	@sh scripts/demo.sh $(BUILD)/prt out/demo
 
-# Every test, then the quick ones (label "quick") again under valgrind and under ASan+UBSan.
+# Every test, then the quick ones (label "quick") again under valgrind, and those and a few more
+# (label "asan": resumed bakes, bakes through the table) under ASan+UBSan.
 test: build clang-build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 	$(MAKE) --no-print-directory test-valgrind VALGRIND_TESTS="-L quick"
-	$(MAKE) --no-print-directory test-asan ASAN_TESTS="-L quick"
+	$(MAKE) --no-print-directory test-asan ASAN_TESTS="-L 'quick|asan'"
 
 # The same sources with clang and -Werror: prt stays portable C11 + intrinsics (libFuzzer needs clang).
 clang-build: deps

@@ -240,6 +240,10 @@ wait "$pid" 2>/dev/null
 cp "$T/killed.prt.checkpoint" "$T/other.prt.checkpoint"
 expect 2 "resume another bake's checkpoint" -- "$PRT" bake "$T/demo.obj" -o "$T/other.prt" --samples 64 --order 3 --resume
 says "another bake"
+expect 2 "a bake over a checkpoint it was not told to resume" -- "$PRT" bake "$T/demo.obj" -o "$T/other.prt" --samples 64 --order 3
+says "add --resume"
+[ -s "$T/other.prt.checkpoint" ] && ok || bad "a refused bake touched the checkpoint"
+rm -f "$T/other.prt.checkpoint"
 expect 0 "resume a killed bake" -- "$PRT" bake "$T/demo.obj" -o "$T/killed.prt" --samples 512 --order 3 --resume
 says "recovered from the checkpoint"
 [ -e "$T/killed.prt.checkpoint" ] && bad "a finished bake kept its checkpoint" || ok
@@ -277,6 +281,19 @@ wait "$pid"
 rc=$?
 [ "$rc" -eq 130 ] && ok || bad "Ctrl-C during an import exited $rc, expected 130"
 [ $(( $(date +%s) - start )) -le 2 ] && ok || bad "Ctrl-C took more than a second to stop an import"
+# kill -9 of prt takes the importer with it: no parser left spinning.
+"$PRT" bake "$T/hang.ply" -o "$T/x.prt" >/dev/null 2>&1 &
+pid=$!
+sleep 1
+child=$(pgrep -P "$pid" | head -n 1)
+kill -KILL "$pid"
+wait "$pid" 2>/dev/null
+sleep 0.5
+# (a zombie waiting for whoever inherited it to reap it is dead enough)
+if [ -n "$child" ]; then
+    state=$(ps -o stat= -p "$child" 2>/dev/null | cut -c1)
+    case "$state" in ""|Z) ok ;; *) bad "the importer outlived a killed prt (state $state)"; kill -KILL "$child" ;; esac
+else bad "no importer process seen"; fi
 
 # Files written by prt 0.1 (before the method table) load and relight to the numbers that
 # version wrote (tests/data/v0.1/README.md).

@@ -41,10 +41,10 @@ typedef void (*prt_log_fn)(void *user, prt_log_level level, const char *message)
  * returns PRT_ERR_CANCELLED and writes nothing. Called from one thread only. */
 typedef int (*prt_progress_fn)(void *user, const char *stage, uint64_t done, uint64_t total);
 
-/* Polled by every long operation made from the context (import, subdivision, bakes, compression,
- * rendering, file writes) at least every 100 ms of work, from any thread; return non-zero to
- * stop it: it returns PRT_ERR_CANCELLED and writes nothing. Must be thread-safe and cheap (read
- * a flag that a signal handler sets). */
+/* Polled by the long operations made from the context (mesh import, subdivision, the ray-tracing
+ * build, bakes, compression, the path tracer) about every 100 ms of work, from any thread;
+ * return non-zero to stop them: they return PRT_ERR_CANCELLED and write nothing (a bake keeps its
+ * checkpoint). Must be thread-safe and cheap (read a flag that a signal handler sets). */
 typedef int (*prt_cancel_fn)(void *user);
 
 typedef struct prt_context prt_context;

@@ -86,7 +86,12 @@ typedef struct prt_bake_run_desc {
     void *progress_user;
     /* Resumable bakes: the results of every finished work unit are appended to this file as the
      * unit completes (each record checksummed, so a process killed at any moment leaves a usable
-     * file); the file is deleted when the bake succeeds. NULL = no checkpoint. */
+     * file). prt_bake leaves it in place when it succeeds (delete it once the result is saved) or
+     * stops in a way a later run can continue (cancelled, out of memory, I/O, backend), and
+     * deletes it when it fails on its input or options. Without resume an
+     * existing file is started afresh. Two bakes cannot share one (the second fails). NULL = none.
+     * A checkpoint names its bake by the prt version, method, options as given and the scene;
+     * resuming it with a build of other code of the same version is not detected. */
     const char *checkpoint;
     /* Non-zero: take every unit the checkpoint already holds instead of computing it (a checkpoint
      * of another bake - other scene, method, options or prt version - is an error; a missing one

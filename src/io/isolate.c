@@ -6,11 +6,14 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <poll.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -43,7 +46,10 @@ static const char *last_line(char *tail, size_t len)
 {
     while (len && (tail[len - 1] == '\n' || tail[len - 1] == '\r' || tail[len - 1] == ' ')) tail[--len] = 0;
     char *nl = strrchr(tail, '\n');
-    return nl ? nl + 1 : tail;
+    char *line = nl ? nl + 1 : tail;
+    for (char *p = line; *p; ++p)   /* errors are one printable line */
+        if ((unsigned char)*p < 0x20 || *p == 0x7f) *p = ' ';
+    return line;
 }
 
 static void reap(pid_t pid, int *status)
@@ -51,7 +57,8 @@ static void reap(pid_t pid, int *status)
     while (waitpid(pid, status, 0) < 0 && errno == EINTR) {}
 }
 
-prt_status prt__run_isolated(const prt_context *ctx, prt__isolated_fn fn, void *arg, double seconds, const char *what, prt__bytes *out)
+prt_status prt__run_isolated(const prt_context *ctx, prt__isolated_fn fn, void *arg, double seconds, size_t max_bytes, const char *what,
+                             prt__bytes *out)
 {
     memset(out, 0, sizeof *out);
     int data[2], err[2];
@@ -61,25 +68,36 @@ prt_status prt__run_isolated(const prt_context *ctx, prt__isolated_fn fn, void *
         return prt__fail(ctx, PRT_ERR_BACKEND, "%s: cannot create a pipe: %s", what, strerror(errno));
     }
     fflush(NULL);   /* nothing buffered is written twice */
+    const pid_t parent = getpid();
     pid_t pid = fork();
     if (pid < 0) {
         close(data[0]); close(data[1]); close(err[0]); close(err[1]);
         return prt__fail(ctx, PRT_ERR_BACKEND, "%s: cannot start a process: %s", what, strerror(errno));
     }
     if (pid == 0) {
-        /* The child: default signal dispositions (the parent decides when to stop it), stderr
-         * into the parent's hands, the result down the data pipe, then out without running the
-         * parent's atexit handlers or flushing its buffers. */
-        signal(SIGINT, SIG_DFL);
-        signal(SIGTERM, SIG_DFL);
-        signal(SIGPIPE, SIG_DFL);
-        close(data[0]);
-        close(err[0]);
-        dup2(err[1], STDERR_FILENO);
+        /* The child dies with the parent (kill -9 of prt must not leave a parser spinning). */
+        prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (getppid() != parent) _exit(4);
+        /* Default dispositions and no blocked signals: the caller's crash handlers must not run
+         * inside a crashing parser, and the parent decides when to stop it. No core files. */
+        static const int sigs[] = {SIGINT, SIGTERM, SIGPIPE, SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT, SIGHUP, SIGQUIT};
+        for (size_t i = 0; i < sizeof sigs / sizeof sigs[0]; ++i) signal(sigs[i], SIG_DFL);
+        sigset_t none;
+        sigemptyset(&none);
+        sigprocmask(SIG_SETMASK, &none, NULL);
+        struct rlimit no_core = {0, 0};
+        setrlimit(RLIMIT_CORE, &no_core);
+        /* stdin and stdout from /dev/null, stderr into the parent's hands, the result on fd 3;
+         * every other descriptor (other threads' pipes, the caller's files) closed. */
+        int null = open("/dev/null", O_RDWR);
+        if (null < 0 || dup2(null, STDIN_FILENO) < 0 || dup2(null, STDOUT_FILENO) < 0 || dup2(err[1], STDERR_FILENO) < 0 ||
+            dup2(data[1], 3) < 0)
+            _exit(5);
+        close_range(4, ~0U, 0);
         prt__bytes result = {0};
         fn(arg, &result);
         if (result.failed) _exit(3);
-        write_all(data[1], result.data, result.size);
+        write_all(3, result.data, result.size);
         _exit(0);
     }
     close(data[1]);
@@ -100,7 +118,11 @@ prt_status prt__run_isolated(const prt_context *ctx, prt__isolated_fn fn, void *
             ssize_t n = read(fds[i].fd, buf, sizeof buf);
             if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
             if (n <= 0) { close(fds[i].fd); fds[i].fd = -1; open_fds--; continue; }
-            if (i == 0 && !prt__bytes_put(out, buf, (size_t)n)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "%s: out of memory for its result", what);
+            if (i == 0 && out->size + (size_t)n > max_bytes)
+                st = prt__fail(ctx, PRT_ERR_FORMAT, "%s: its result passed %zu MB, far more than the file could describe; stopped it", what,
+                               max_bytes >> 20);
+            else if (i == 0 && !prt__bytes_put(out, buf, (size_t)n))
+                st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "%s: out of memory for its result", what);
             if (i == 1) keep_tail(tail, sizeof tail, &tail_len, (const char *)buf, (size_t)n);
         }
         if (st) break;
@@ -118,12 +140,14 @@ prt_status prt__run_isolated(const prt_context *ctx, prt__isolated_fn fn, void *
         prt__bytes_free(out);
         return st;
     }
-    /* Both pipes closed: the child is exiting (or closed them and hangs; it gets the rest of its time). */
+    /* Both pipes closed: the child is exiting (tearing down a large address space can take a
+     * moment, so it gets a grace period past the limit; one that hangs after closing them is killed). */
+    const double exit_deadline = fmax(deadline, prt__now()) + 10.0;
     for (;;) {
         pid_t w = waitpid(pid, &status, WNOHANG);
         if (w == pid) break;
         if (w < 0 && errno == ECHILD) { status = 0; break; }   /* the caller reaps children itself (SIGCHLD ignored) */
-        if (prt__cancelled(ctx) || prt__now() > deadline) {
+        if (prt__cancelled(ctx) || prt__now() > exit_deadline) {
             kill(pid, SIGKILL);
             reap(pid, &status);
             prt__bytes_free(out);

@@ -12,9 +12,13 @@ typedef void (*prt__isolated_fn)(void *arg, prt__bytes *out);
 
 /* Runs fn(arg) in a child process and returns what it produced in out (caller frees).
  * what names the work in errors ("assimp reading 'x.ply'"). Fails with PRT_ERR_FORMAT when the
- * child dies by a signal or overruns `seconds` (it is killed; its last line on stderr is quoted),
- * PRT_ERR_CANCELLED when the context's cancel hook fires (within 100 ms), PRT_ERR_BACKEND when no
- * child can be started. */
-prt_status prt__run_isolated(const prt_context *ctx, prt__isolated_fn fn, void *arg, double seconds, const char *what, prt__bytes *out);
+ * child dies by a signal, overruns `seconds` or hands back more than max_bytes (it is killed; its
+ * last line on stderr is quoted), PRT_ERR_CANCELLED when the context's cancel hook fires (within
+ * 100 ms), PRT_ERR_BACKEND when no child can be started. The child dies with the caller, runs
+ * with default signal handlers, no core files and only its two pipes open. A caller that reaps
+ * every child itself (SIGCHLD ignored, waitpid(-1)) loses the child's exit status: then a result
+ * is judged by its bytes alone. */
+prt_status prt__run_isolated(const prt_context *ctx, prt__isolated_fn fn, void *arg, double seconds, size_t max_bytes, const char *what,
+                             prt__bytes *out);
 
 #endif

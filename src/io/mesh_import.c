@@ -16,6 +16,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
+#include <dirent.h>
 #include <sys/stat.h>
 
 /* PLY and STL have no materials; assimp's readers invent a white one, which would make a
@@ -132,6 +133,8 @@ static void fail_message(prt__bytes *out, prt_status st, const char *fmt, const 
 {
     char msg[1024];
     snprintf(msg, sizeof msg, fmt, path, why ? why : "");
+    for (char *p = msg; *p; ++p)   /* assimp's messages may hold newlines: errors are one line */
+        if ((unsigned char)*p < 0x20 || *p == 0x7f) *p = ' ';
     prt__mesh_message_begin(out, st, 0, msg);
 }
 
@@ -233,13 +236,41 @@ static void import_with_assimp(void *arg, prt__bytes *out)
     aiReleaseImport(sc);
 }
 
-/* Default time limit: generous for assimp's slowest readers on real files (tens of MB/s). */
-static double import_seconds(const char *path, const prt_scene_desc *desc)
+/* Bytes the import reads: the file, and for a .gltf the files beside it (its external buffers). */
+static double input_bytes(const char *path)
 {
-    if (desc->import_seconds > 0) return desc->import_seconds;
     struct stat sb;
-    double mb = stat(path, &sb) == 0 ? (double)sb.st_size / 1e6 : 0.0;
-    return 60.0 + 10.0 * mb;
+    double bytes = stat(path, &sb) == 0 ? (double)sb.st_size : 0.0;
+    const char *ext = strrchr(path, '.');
+    if (!ext || strcasecmp(ext, ".gltf") != 0) return bytes;
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", path);
+    char *slash = strrchr(dir, '/');
+    if (slash) *slash = 0;
+    else snprintf(dir, sizeof dir, ".");
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    while (d && (e = readdir(d))) {
+        char full[8192];
+        snprintf(full, sizeof full, "%s/%s", dir, e->d_name);
+        if (e->d_name[0] != '.' && stat(full, &sb) == 0 && S_ISREG(sb.st_mode) && strcmp(full, path) != 0) bytes += (double)sb.st_size;
+    }
+    if (d) closedir(d);
+    return bytes;
+}
+
+/* Default time limit: generous for assimp's slowest readers on real files (tens of MB/s). */
+static double import_seconds(double bytes, const prt_scene_desc *desc)
+{
+    return desc->import_seconds > 0 ? desc->import_seconds : 60.0 + 10.0 * bytes / 1e6;
+}
+
+/* What the child may hand back: a mesh message holds at most ~40 bytes a vertex and 12 a
+ * triangle, and no format spends less than a few bytes of file on either; 256 MB for small files. */
+static size_t import_max_bytes(double bytes)
+{
+    double cap = 256e6 + 100.0 * bytes;
+    return cap >= (double)SIZE_MAX ? SIZE_MAX : (size_t)cap;
 }
 
 prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform,
@@ -257,7 +288,8 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
     } else {
         char what[600];
         snprintf(what, sizeof what, "assimp reading '%s'", path);
-        st = prt__run_isolated(ctx, import_with_assimp, &job, import_seconds(path, desc), what, &msg);
+        const double bytes = input_bytes(path);
+        st = prt__run_isolated(ctx, import_with_assimp, &job, import_seconds(bytes, desc), import_max_bytes(bytes), what, &msg);
     }
     uint32_t flags = 0;
     if (!st) st = prt__mesh_message_read(ctx, msg.data, msg.size, path, &flags, m);

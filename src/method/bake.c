@@ -80,6 +80,7 @@ prt_status prt__bake_drive_checkpointed(prt_context *ctx, prt__bake_job *job, co
                 }
                 if (!r && cp && s.save_unit) {
                     out[thread].size = 0;
+                    out[thread].failed = false;   /* out of memory loses this unit's record, not the rest */
                     s.save_unit(job, u, &out[thread]);
                     if (!out[thread].failed) prt__checkpoint_append(cp, index, u, out[thread].data, out[thread].size);
                 }
@@ -92,8 +93,9 @@ prt_status prt__bake_drive_checkpointed(prt_context *ctx, prt__bake_job *job, co
         if (!st && prt__progress_cancelled(&prog)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     }
     if (!st) st = job->finish(job, t);
+    const int threads = job->threads;   /* release frees the job */
     job->release(job);
-    for (int i = 0; out && i < job->threads; ++i) prt__bytes_free(&out[i]);
+    for (int i = 0; out && i < threads; ++i) prt__bytes_free(&out[i]);
     free(out);
     if (run && run->recovered_units) *run->recovered_units = recovered;
     if (run && run->total_units) *run->total_units = total;
@@ -131,11 +133,20 @@ static void fingerprint(const prt__method *m, const prt_options *o, const prt_tr
     prt__fingerprint_add(fp, mesh->indices, nt * 3 * sizeof(uint32_t));
     prt__fingerprint_add(fp, &t->brdf_count, sizeof t->brdf_count);
     for (int i = 0; i < t->brdf_count; ++i) {
-        char spec[256];   /* the model's parameters, not the struct's padding or unused lobes */
-        prt_brdf_format(&t->brdfs[i], spec, sizeof spec);
-        prt__fingerprint_add(fp, spec, strlen(spec));
-        prt__fingerprint_add(fp, t->brdfs[i].diffuse, sizeof t->brdfs[i].diffuse);
-        prt__fingerprint_add(fp, t->brdfs[i].specular, sizeof t->brdfs[i].specular);
+        /* Field by field at full precision: not the struct's padding, not lobes it does not use. */
+        const prt_brdf *b = &t->brdfs[i];
+        const int model = (int)b->model, lobes = b->lobes > 0 && b->lobes <= PRT_BRDF_MAX_LOBES ? b->lobes : 0;
+        prt__fingerprint_add(fp, &model, sizeof model);
+        prt__fingerprint_add(fp, b->diffuse, sizeof b->diffuse);
+        prt__fingerprint_add(fp, b->specular, sizeof b->specular);
+        prt__fingerprint_add(fp, &b->exponent, sizeof b->exponent);
+        prt__fingerprint_add(fp, &b->exponent_v, sizeof b->exponent_v);
+        prt__fingerprint_add(fp, &lobes, sizeof lobes);
+        for (int l = 0; l < lobes; ++l) {
+            prt__fingerprint_add(fp, b->cxy[l], sizeof b->cxy[l]);
+            prt__fingerprint_add(fp, b->cz[l], sizeof b->cz[l]);
+            prt__fingerprint_add(fp, b->n[l], sizeof b->n[l]);
+        }
     }
 }
 
@@ -162,7 +173,11 @@ prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__m
         st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     }
     if (!st) st = prt__bake_drive_checkpointed(ctx, job, run, cp, t);
-    prt__checkpoint_close(cp, false);
+    /* A checkpoint stays when its bake can go on later: cancelled, or stopped by memory, I/O or a
+     * backend. One without a finished unit, or of a bake that would fail the same way again (bad
+     * options, bad input), goes, so that the next bake is not asked whether to resume it. */
+    const bool worth_keeping = st == PRT_ERR_CANCELLED || st == PRT_ERR_NO_MEMORY || st == PRT_ERR_IO || st == PRT_ERR_BACKEND;
+    prt__checkpoint_close(cp, st != PRT_OK && (!worth_keeping || prt__checkpoint_records(cp) == 0));
     if (st) { prt_transfer_release(t); return st; }
     *out = t;
     return PRT_OK;

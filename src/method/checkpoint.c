@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -55,6 +56,7 @@ struct prt__checkpoint {
     pthread_mutex_t lock;
     record *records;        /* sorted by (stage, unit) */
     size_t count;
+    uint64_t appended;      /* records written by this process */
 };
 
 static int cmp_record(const void *x, const void *y)
@@ -62,6 +64,15 @@ static int cmp_record(const void *x, const void *y)
     const record *a = x, *b = y;
     if (a->stage != b->stage) return a->stage < b->stage ? -1 : 1;
     return a->unit < b->unit ? -1 : a->unit > b->unit;
+}
+
+/* The same order, then by position in the file, so that of duplicates the first one sorts first. */
+static int cmp_record_offset(const void *x, const void *y)
+{
+    int c = cmp_record(x, y);
+    if (c) return c;
+    const record *a = x, *b = y;
+    return a->offset < b->offset ? -1 : a->offset > b->offset;
 }
 
 static bool read_at(int fd, void *buf, size_t n, uint64_t offset)
@@ -140,7 +151,7 @@ static prt_status scan(prt__checkpoint *c, const prt__fingerprint *fp, uint64_t 
         at += RECORD_BYTES + size;
     }
     prt__bytes_free(&payload);
-    qsort(c->records, c->count, sizeof *c->records, cmp_record);
+    qsort(c->records, c->count, sizeof *c->records, cmp_record_offset);
     /* A unit recorded twice (cannot happen from prt; a hand-made file) keeps its first record. */
     size_t out = 0;
     for (size_t i = 0; i < c->count; ++i)
@@ -167,15 +178,23 @@ prt_status prt__checkpoint_open(const prt_context *ctx, const char *path, const 
         return prt__fail(ctx, PRT_ERR_IO, "checkpoint '%s' is not a regular file", path);
     }
     prt_status st = PRT_OK;
-    if (resume && exists) {
-        c->fd = open(path, O_RDWR | O_CLOEXEC);
-        if (c->fd < 0) st = prt__fail(ctx, PRT_ERR_IO, "cannot open checkpoint '%s': %s", path, strerror(errno));
-        else st = scan(c, fp, (uint64_t)sb.st_size);
+    /* A checkpoint shorter than its header was cut off before its first record: nothing to
+     * resume. A short file that is not the start of one is someone else's: refused, not emptied. */
+    const bool usable = resume && exists && sb.st_size >= HEADER_BYTES;
+    c->fd = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    unsigned char head[8];
+    const size_t have = exists && sb.st_size < 8 ? (size_t)sb.st_size : 8;
+    if (c->fd < 0) st = prt__fail(ctx, PRT_ERR_IO, "cannot open checkpoint '%s': %s", path, strerror(errno));
+    else if (resume && exists && !usable && (!read_at(c->fd, head, have, 0) || memcmp(head, "PRTCKPT1", have) != 0))
+        st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s' is not a prt checkpoint (delete it, or bake without --resume)", path);
+    else if (flock(c->fd, LOCK_EX | LOCK_NB) != 0)
+        st = prt__fail(ctx, PRT_ERR_IO, "checkpoint '%s' is in use by another bake of the same output", path);
+    else if (usable) {
+        st = scan(c, fp, (uint64_t)sb.st_size);
     } else {
-        c->fd = open(path, O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
         unsigned char h[HEADER_BYTES];
         header_bytes(fp, h);
-        if (c->fd < 0 || !write_all(c->fd, h, sizeof h))
+        if (ftruncate(c->fd, 0) != 0 || !write_all(c->fd, h, sizeof h))
             st = prt__fail(ctx, PRT_ERR_IO, "cannot write checkpoint '%s': %s", path, strerror(errno));
     }
     if (st) {
@@ -225,12 +244,16 @@ void prt__checkpoint_append(prt__checkpoint *c, int stage, uint64_t unit, const 
     uint32_t hcrc = prt__crc32(r, 28);
     memcpy(r + 28, &hcrc, 4);
     pthread_mutex_lock(&c->lock);
-    if (!c->broken && (!write_all(c->fd, r, sizeof r) || !write_all(c->fd, data, size))) {
+    if (!c->broken && write_all(c->fd, r, sizeof r) && write_all(c->fd, data, size)) {
+        c->appended++;
+    } else if (!c->broken) {
         c->broken = true;
         prt__log(c->ctx, PRT_LOG_WARN, "cannot write checkpoint '%s' (%s): the bake goes on without one", c->path, strerror(errno));
     }
     pthread_mutex_unlock(&c->lock);
 }
+
+uint64_t prt__checkpoint_records(const prt__checkpoint *c) { return c ? c->count + c->appended : 0; }
 
 void prt__checkpoint_close(prt__checkpoint *c, bool remove)
 {

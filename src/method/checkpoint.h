@@ -29,6 +29,8 @@ uint64_t prt__checkpoint_count(const prt__checkpoint *c, int stage);
 bool prt__checkpoint_find(prt__checkpoint *c, int stage, uint64_t unit, prt__bytes *out);
 /* Appends a record; thread-safe. A failure to write turns checkpointing off with one warning. */
 void prt__checkpoint_append(prt__checkpoint *c, int stage, uint64_t unit, const void *data, size_t size);
+/* Records the file holds (read at open plus appended since). */
+uint64_t prt__checkpoint_records(const prt__checkpoint *c);
 /* Closes; remove deletes the file (the bake finished and its result is the caller's now). */
 void prt__checkpoint_close(prt__checkpoint *c, bool remove);
 

@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static const char *HELP_HEAD =
@@ -116,6 +117,11 @@ int cmd_bake(int argc, char **argv)
     char checkpoint_path[4096] = "";
     if (!rc && checkpoint && snprintf(checkpoint_path, sizeof checkpoint_path, "%s.checkpoint", output) >= (int)sizeof checkpoint_path)
         rc = cli_usage(&c, "the output path is too long");
+    /* Never throw finished work away unasked: a bake rerun after an interruption must say which it wants. */
+    struct stat cps;
+    if (!rc && checkpoint && !resume && stat(checkpoint_path, &cps) == 0 && cps.st_size > 36)   /* 36: its header alone */
+        rc = cli_usage(&c, "%s holds the finished work of an interrupted bake: add --resume to continue it, or delete it to start over",
+                       checkpoint_path);
     if (!rc && resume && access(checkpoint_path, F_OK) != 0 && !c.quiet)
         fprintf(stderr, "prt bake: no checkpoint %s to resume from: baking from the start\n", checkpoint_path);
     if (!rc) rc = cli_make_context(&c);
