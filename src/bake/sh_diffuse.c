@@ -291,7 +291,7 @@ static bool load_visibility(prt__bake_job *b, uint64_t unit, const unsigned char
         free(sb->job.hits[v]);
         sb->job.hits[v] = count ? malloc((size_t)count * sizeof(hit_entry)) : NULL;
         if (count && !sb->job.hits[v]) { sb->job.hit_count[v] = 0; return false; }
-        memcpy(sb->job.hits[v], p, (size_t)count * sizeof(hit_entry));
+        if (count) memcpy(sb->job.hits[v], p, (size_t)count * sizeof(hit_entry));
         sb->job.hit_count[v] = count;
         p += (size_t)count * sizeof(hit_entry);
     }
