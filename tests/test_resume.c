@@ -61,8 +61,14 @@ static int child_bake(int method_index, const char *checkpoint, int kill_at, con
         prt_options *o = make_options(method, "256");
         prt_bake_run_desc run = {.progress = progress_to_pipe, .progress_user = &fds[1], .checkpoint = checkpoint, .resume = 1};
         prt_transfer *t = NULL;
-        if (prt_bake(ctx, scene, method, o, &run, &t) != PRT_OK) _exit(1);
-        _exit(save && prt_transfer_save(t, save) != PRT_OK ? 1 : 0);
+        int rc = prt_bake(ctx, scene, method, o, &run, &t) != PRT_OK || (save && prt_transfer_save(t, save) != PRT_OK);
+        /* Freed before leaving: valgrind checks the child for leaks too. */
+        prt_transfer_release(t);
+        prt_options_release(o);
+        prt_scene_release(scene);
+        tm_free(&m);
+        prt_context_release(ctx);
+        _exit(rc);
     }
     close(fds[1]);
     int events = 0;
