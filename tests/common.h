@@ -209,6 +209,28 @@ static inline unsigned char *chunks_but_meta(const char *path, size_t *n)
     return out;
 }
 
+/* The two files hold the same bytes in every chunk but META. */
+static inline void assert_same_chunks(const char *pa, const char *pb)
+{
+    size_t na, nb;
+    unsigned char *ca = chunks_but_meta(pa, &na), *cb = chunks_but_meta(pb, &nb);
+    assert_int_equal(na, nb);
+    assert_memory_equal(ca, cb, na);
+    free(ca);
+    free(cb);
+}
+
+/* Saves a and b into the scratch directory (names from tag) and compares them as above. */
+static inline void assert_same_file(prt_transfer *a, prt_transfer *b, const char *tag)
+{
+    char pa[512], pb[512];
+    snprintf(pa, sizeof pa, "%s/%s_a.prt", test_dir, tag);
+    snprintf(pb, sizeof pb, "%s/%s_b.prt", test_dir, tag);
+    assert_int_equal(prt_transfer_save(a, pa), PRT_OK);
+    assert_int_equal(prt_transfer_save(b, pb), PRT_OK);
+    assert_same_chunks(pa, pb);
+}
+
 /* Writes the procedural demo scene into the scratch directory and loads it. */
 static inline prt_scene *load_demo_scene(prt_context *ctx)
 {

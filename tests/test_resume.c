@@ -84,21 +84,6 @@ static int child_bake(int method_index, const char *checkpoint, int kill_at, con
     return events;
 }
 
-static void assert_same_file(prt_transfer *a, prt_transfer *b, const char *tag)
-{
-    char pa[512], pb[512];
-    snprintf(pa, sizeof pa, "%s/%s_a.prt", test_dir, tag);
-    snprintf(pb, sizeof pb, "%s/%s_b.prt", test_dir, tag);
-    assert_int_equal(prt_transfer_save(a, pa), PRT_OK);
-    assert_int_equal(prt_transfer_save(b, pb), PRT_OK);
-    size_t na, nb;
-    unsigned char *ca = chunks_but_meta(pa, &na), *cb = chunks_but_meta(pb, &nb);
-    assert_int_equal(na, nb);
-    assert_memory_equal(ca, cb, na);
-    free(ca);
-    free(cb);
-}
-
 static void test_killed_bakes_resume(void **state)
 {
     (void)state;
@@ -140,13 +125,8 @@ static void test_killed_bakes_resume(void **state)
         char pp[512];
         snprintf(pp, sizeof pp, "%s/%s_plain.prt", test_dir, prt_method_name(method));
         assert_int_equal(prt_transfer_save(plain, pp), PRT_OK);
-        size_t na, nb;
-        unsigned char *ca = chunks_but_meta(pp, &na), *cb = chunks_but_meta(resumed_path[mi], &nb);
         print_message("%s: killed %d times, resumed to the same bytes\n", prt_method_name(method), kills[mi]);
-        assert_int_equal(na, nb);
-        assert_memory_equal(ca, cb, na);
-        free(ca);
-        free(cb);
+        assert_same_chunks(pp, resumed_path[mi]);
         prt_transfer_release(plain);
         prt_options_release(o);
     }
