@@ -37,8 +37,9 @@ typedef struct prt_reference_desc {
      * NULL and rotation/intensity are ignored (the lighting carries its own). NULL: the env
      * argument with rotation/intensity, and the scene's emissive surfaces at scale 1. */
     const prt_lighting *lighting;
-    /* Per-vertex results: exit radiance towards this world position (glossy surfaces are
-     * view-dependent); NULL = along the vertex normal. */
+    /* Per-vertex results: exit radiance of glossy vertices towards this world position (zero when
+     * it lies behind them); NULL = along the vertex normal. Lambertian vertices are seen along
+     * their normal whatever the eye. */
     const float *eye;
     prt_progress_fn progress;
     void *progress_user;

@@ -524,8 +524,12 @@ static void vertex_surface(const pt_job *j, size_t v, surface *s, float wo[3])
     set_frame(s);
     if (j->emit.count && m->emission)
         for (int c = 0; c < 3; ++c) s->le[c] = j->emit.scale * m->emission[v * 3 + c];
-    if (j->eye) prt__v3_sub(j->eye, s->p, wo);
-    if (!j->eye || !prt__v3_normalize(wo)) memcpy(wo, s->n, 3 * sizeof(float));
+    /* Only glossy vertices depend on the eye. A Lambertian one leaves the same radiance every way
+     * its front faces, so it is seen along its normal: an eye behind it (a room's ceiling seen
+     * from a camera above) must not turn it black. */
+    const bool glossy = j->mats[s->mat].brdf && prt_brdf_is_glossy(j->mats[s->mat].brdf);
+    if (j->eye && glossy) prt__v3_sub(j->eye, s->p, wo);
+    if (!j->eye || !glossy || !prt__v3_normalize(wo)) memcpy(wo, s->n, 3 * sizeof(float));
 }
 
 prt_status prt_reference_trace_vertices(prt_context *ctx, const prt_scene *scene, const prt_envmap *env, const prt_reference_desc *desc,
