@@ -184,7 +184,7 @@ says "option of method sh"
 expect 2 "wavelet option without wavelet" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --terms 3
 says "method wavelet"
 expect 2 "bad method" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method fourier
-says "sh or wavelet"
+says "sh, wavelet or spectral"
 expect 2 "bad bits" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --bits 12
 says "8 or 16"
 expect 2 "too many wavelet bounces" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --bounces 9
@@ -356,6 +356,25 @@ expect 2 "an abbreviated method option" -- "$PRT" bake "$T/demo.obj" -o "$T/x.pr
 says "--method"
 expect 0 "the scene's lights replaced" -- "$PRT" relight "$T/lamp.prt" --light directional:0,1,0:1,1,1 -o "$T/x.json"
 expect 0 "reference under the scene's lights" -- "$PRT" reference "$T/lamp.prt" -o "$T/lampref.json" --samples 4 -q
+
+# The spectral method: local lights with bounces, colours changed without a rebake, controls.
+expect 0 "spectral bake" -- "$PRT" bake -q "$T/lamp.json" -o "$T/spec.prt" --method spectral --functions 64 --samples 64
+expect 0 "spectral info" -- "$PRT" info "$T/spec.prt"
+grep -q "partitions" "$T/out" && grep -q "red_wall" "$T/out" && grep -q "bounces 0..16" "$T/out" && ok || bad "info lacks partitions, surfaces or controls"
+expect 0 "spectral relight with the scene's lights" -- "$PRT" relight -q "$T/spec.prt" -o "$T/spec.json"
+expect 0 "spectral relight, recoloured" -- "$PRT" relight -q "$T/spec.prt" -o "$T/spec_red.json" --albedo-of floor=0.9,0.1,0.1 --control bounces=1
+cmp -s "$T/spec.json" "$T/spec_red.json" && bad "--albedo-of changed nothing" || ok
+expect 0 "spectral render, lights per pixel" -- $NOLEAK "$PRT" render -q "$T/spec.prt" -o "$T/spec.png" --width 64 --height 48 --light sphere:0,2,0:0.2:30
+expect 2 "an unknown surface" -- "$PRT" relight "$T/spec.prt" -o "$T/x.json" --albedo-of carpet=0.5
+says "no surface is called 'carpet'"
+expect 2 "albedo above 1" -- "$PRT" relight "$T/spec.prt" -o "$T/x.json" --albedo-of floor=2
+says "\[0, 1\]"
+expect 2 "a control out of range" -- "$PRT" relight "$T/spec.prt" -o "$T/x.json" --control bounces=99
+says "out of range 0..16"
+expect 2 "a control the method lacks" -- "$PRT" relight "$T/spec.prt" -o "$T/x.json" --control order=3
+says "no setting 'order'"
+expect 2 "colours of a method that bakes them" -- "$PRT" relight "$T/lamp.prt" -o "$T/x.json" --albedo-of floor=0.5
+says "needs a rebake"
 
 # A writer killed mid-write leaves "NAME.tmp.PID"; the next write of NAME removes it (that
 # process is gone) and leaves other files alone.

@@ -38,6 +38,9 @@ const char *prt_method_title(const prt_method *m);         /* "spherical-harmoni
 const char *prt_method_summary(const prt_method *m);       /* one line for --help texts */
 /* PRT_LIGHTS_* bits of the lighting the method relights. */
 unsigned prt_method_lighting(const prt_method *m);
+/* 1 when m's files can be relit with other surface albedos than they were baked with
+ * (prt_relight_desc.albedo). */
+int prt_method_runtime_albedo(const prt_method *m);
 /* Checks that m relights everything `what` (PRT_LIGHTS_* bits) holds. On failure the error names
  * what is missing and the methods of the table that relight it, or says that none does. */
 prt_status prt_method_check_lighting(const prt_method *m, unsigned what);
@@ -155,10 +158,15 @@ typedef struct prt_relight_desc {
     /* A BRDF for view-dependent evaluation where the method lets the renderer choose it (SH sets
      * holding incident radiance); NULL = each vertex's material. Other methods refuse it. */
     const prt_brdf *brdf;
+    /* Diffuse albedo per vertex (3 floats each, linear RGB in [0, 1]) replacing the baked one, for
+     * methods that let surface colours change without a rebake (prt_method_runtime_albedo); NULL
+     * = as baked. Other methods refuse it. */
+    const float *albedo;
 } prt_relight_desc;
 
 /* What relighting produced: everything the renderer draws. Arrays are owned by the result
  * (prt_relit_free) except view_maps/view_set, which are borrowed from the transfer. */
+#define PRT_MAX_PIXEL_LIGHTS 8   /* lights a renderer draws per pixel; the rest stay per vertex */
 typedef struct prt_relit {
     size_t vertex_count;
     float *radiance;          /* 3 per vertex, linear: the view-independent part */
@@ -178,6 +186,13 @@ typedef struct prt_relit {
     const uint8_t *view_set;
     const float *view_maps;
     int view_map_sets, view_map_resolution, view_map_polar;
+    /* Local lights whose direct light the renderer draws per pixel with shadow maps, left out
+     * of `radiance` (methods that relight local lights do this when relit for drawing, that is
+     * per_vertex = 0), and the albedo they shade, 3 per vertex. prt_relit_shade adds them per
+     * vertex with shadow rays. NULL / 0 when radiance holds all the light. */
+    prt_light *pixel_lights;
+    int pixel_light_count;
+    float *pixel_albedo;
 } prt_relit;
 
 /* The PRT_LIGHTS_* bits relighting t under lighting needs: what the lighting holds, with

@@ -17,5 +17,6 @@
 #include "prt/reference.h"
 #include "prt/compress.h"
 #include "prt/wavelet.h"
+#include "prt/spectral.h"
 
 #endif

@@ -56,6 +56,14 @@ typedef struct prt_render_mesh {
     const uint8_t *view_set;
     const float *view_maps;
     int view_map_sets, view_map_resolution, view_map_polar;
+    /* Optional local lights drawn per pixel (methods that relight local lights leave their
+     * direct light out of radiance): each pixel is shaded as a Lambertian surface of the
+     * interpolated albedo (3 per vertex) under these lights (at most 8; units of prt/lighting.h),
+     * with shadows from shadow maps (cube maps for point, spot and sphere lights, soft edges for
+     * spheres; an orthographic map for directional ones), added to radiance. Needs normals. */
+    const struct prt_light *lights;
+    int light_count;
+    const float *albedo;
 } prt_render_mesh;
 
 prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, prt_renderer **out);
@@ -111,6 +119,9 @@ void prt_window_wait(prt_window *w, double timeout);
 /* Geometry and radiance to draw (copied to the GPU); set_radiance replaces the colours only. */
 void prt_window_set_mesh(prt_window *w, const prt_render_mesh *mesh);
 void prt_window_set_radiance(prt_window *w, const float *rgb, size_t vertex_count);
+/* Replaces the lights drawn per pixel and their albedo (mesh's lights, light_count, albedo and
+ * positions; the geometry must be the one given to set_mesh). */
+void prt_window_set_lights(prt_window *w, const prt_render_mesh *mesh);
 /* Replaces the per-texel radiance map (needs the mesh's uv); NULL switches back to vertex radiance. */
 void prt_window_set_texels(prt_window *w, const float *rgb, int width, int height);
 /* Replaces the glossy exit coefficients (same layout and order as given to set_mesh). */

@@ -57,6 +57,12 @@ void prt_scene_release(prt_scene *scene);
  * material; their albedo becomes the BRDF's Lambertian part. */
 prt_status prt_scene_set_brdf(prt_scene *scene, size_t first, size_t count, const prt_brdf *brdf);
 int prt_scene_brdf_count(const prt_scene *scene);
+/* Sets the albedo of every vertex of the surface called name (a material of the mesh files or
+ * of the JSON scene) to rgb in [0, 1]; an unknown name is an error listing the names. */
+prt_status prt_scene_paint_albedo(prt_scene *scene, const char *name, const float rgb[3]);
+/* Makes vertices [first, first + count) emit radiance rgb (W / (m^2 sr), from the front of their
+ * triangles; 0 turns emission off), as an emissive material of a mesh file does. */
+prt_status prt_scene_set_emission(prt_scene *scene, size_t first, size_t count, const float rgb[3]);
 /* Sets texture coordinates (2 per vertex) of vertices [first, first + count); mesh files bring
  * their own (the first UV channel). Per-texel transfer needs them on every vertex. */
 prt_status prt_scene_set_uv(prt_scene *scene, size_t first, size_t count, const float *uv);

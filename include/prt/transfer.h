@@ -132,6 +132,16 @@ int prt_transfer_kind_is_glossy(prt_transfer_kind kind);
 int prt_transfer_brdf_count(const prt_transfer *t);
 const prt_brdf *prt_transfer_brdf(const prt_transfer *t, int k);
 const uint8_t *prt_transfer_materials(const prt_transfer *t);   /* per vertex; 0 = plain diffuse */
+/* Named surfaces: the materials of the mesh files (usemtl in OBJ, glTF materials) or of a JSON
+ * scene, in order of first appearance. Count, the name of surface k (1..count; NULL out of
+ * range), and per vertex its surface (0 = unnamed; NULL when nothing is named). */
+int prt_transfer_surface_count(const prt_transfer *t);
+const char *prt_transfer_surface_name(const prt_transfer *t, int k);
+const uint16_t *prt_transfer_surfaces(const prt_transfer *t);
+/* Sets the albedo (3 floats per vertex, for example a copy of prt_transfer_albedo) of every
+ * vertex of the surface called name to rgb, in [0, 1]: what prt_relight_desc.albedo takes for
+ * methods that change colours at run time. An unknown name is an error that lists the names. */
+prt_status prt_transfer_paint_albedo(const prt_transfer *t, const char *name, const float rgb[3], float *albedo);
 /* CPU evaluation of glossy exit coefficients (as prt_relight_sh_glossy returns) for one vertex:
  * to_eye points from the surface to the viewer; normal is the shading normal. */
 void prt_glossy_eval(int order, const float *exit_coeffs, int mirror, const float normal[3], const float to_eye[3], float rgb[3]);

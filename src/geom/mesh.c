@@ -6,6 +6,7 @@
 void prt__mesh_free(prt__mesh *m)
 {
     free(m->positions); free(m->normals); free(m->albedo); free(m->material); free(m->uv); free(m->emission); free(m->indices);
+    free(m->surface); free(m->surface_names);
     memset(m, 0, sizeof *m);
 }
 
@@ -26,13 +27,14 @@ prt_status prt__mesh_append(prt__mesh *m, const float *pos, const float *nrm, co
     if (nv2 > UINT32_MAX || nt2 > UINT32_MAX / 3)
         return prt__fail(NULL, PRT_ERR_NO_MEMORY, "mesh too large (%zu vertices)", nv2);
     if (!grow((void **)&m->positions, nv2 * 3, sizeof(float)) || !grow((void **)&m->normals, nv2 * 3, sizeof(float)) ||
-        !grow((void **)&m->albedo, nv2 * 3, sizeof(float)) || !grow((void **)&m->material, nv2, 1) || !grow((void **)&m->uv, nv2 * 2, sizeof(float)) || !grow((void **)&m->indices, nt2 * 3, sizeof(uint32_t)) ||
+        !grow((void **)&m->albedo, nv2 * 3, sizeof(float)) || !grow((void **)&m->material, nv2, 1) || !grow((void **)&m->uv, nv2 * 2, sizeof(float)) || !grow((void **)&m->indices, nt2 * 3, sizeof(uint32_t)) || !grow((void **)&m->surface, nv2, sizeof(uint16_t)) ||
         (m->emission && !grow((void **)&m->emission, nv2 * 3, sizeof(float))))
         return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory growing mesh");
     memcpy(m->positions + v0 * 3, pos, nv * 3 * sizeof(float));
     if (nrm) memcpy(m->normals + v0 * 3, nrm, nv * 3 * sizeof(float));
     else memset(m->normals + v0 * 3, 0, nv * 3 * sizeof(float));
     memset(m->material + v0, 0, nv);
+    memset(m->surface + v0, 0, nv * sizeof(uint16_t));
     if (m->emission) memset(m->emission + v0 * 3, 0, nv * 3 * sizeof(float));
     for (size_t i = 0; i < nv * 2; ++i) m->uv[v0 * 2 + i] = NAN;
     for (size_t i = 0; i < nv; ++i)
@@ -128,6 +130,7 @@ prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *wha
             memcpy(m->normals + nv * 3, m->normals + v * 3, 3 * sizeof(float));
             memcpy(m->albedo + nv * 3, m->albedo + v * 3, 3 * sizeof(float));
             m->material[nv] = m->material[v];
+            if (m->surface) m->surface[nv] = m->surface[v];
             memcpy(m->uv + nv * 2, m->uv + v * 2, 2 * sizeof(float));
             if (m->emission) memcpy(m->emission + nv * 3, m->emission + v * 3, 3 * sizeof(float));
         }
@@ -137,6 +140,47 @@ prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *wha
     m->vertex_count = nv;
     free(face_n); free(acc); free(remap);
     return PRT_OK;
+}
+
+int prt__mesh_surface_id(prt__mesh *m, const char *name)
+{
+    char clean[PRT__SURFACE_NAME];
+    size_t n = 0;
+    for (; name && name[n] && n < PRT__SURFACE_NAME - 1; ++n) clean[n] = (unsigned char)name[n] < 32 || name[n] == 127 ? '_' : name[n];
+    clean[n] = 0;
+    if (!n) return 0;
+    for (int k = 0; k < m->surface_count; ++k)
+        if (!strcmp(m->surface_names[k], clean)) return k + 1;
+    if (m->surface_count >= PRT__MAX_SURFACES) return -1;
+    char (*names)[PRT__SURFACE_NAME] = realloc(m->surface_names, (size_t)(m->surface_count + 1) * PRT__SURFACE_NAME);
+    if (!names) return -1;
+    m->surface_names = names;
+    memcpy(names[m->surface_count], clean, n + 1);
+    return ++m->surface_count;
+}
+
+prt_status prt__mesh_paint(const prt__mesh *m, const char *name, const float rgb[3], float *albedo)
+{
+    for (int c = 0; c < 3; ++c)
+        if (!(rgb[c] >= 0.0f && rgb[c] <= 1.0f)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "albedo of '%s' must lie in [0, 1]", name);
+    bool found = false;
+    for (int k = 0; k < m->surface_count; ++k) {
+        if (strcmp(m->surface_names[k], name)) continue;
+        found = true;
+        for (size_t v = 0; v < m->vertex_count; ++v)
+            if (m->surface[v] == k + 1) memcpy(albedo + v * 3, rgb, 3 * sizeof(float));
+    }
+    if (found) return PRT_OK;
+    if (!m->surface_count) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "no surface is called '%s': none is named (the meshes had no materials)", name);
+    char list[512] = "";
+    for (int k = 0; k < m->surface_count && strlen(list) < sizeof list - 80; ++k)
+        snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", k ? ", " : "", m->surface_names[k]);
+    return prt__fail(NULL, PRT_ERR_INVALID_ARG, "no surface is called '%s' (there are %s%s)", name, list, strlen(list) >= sizeof list - 80 ? ", ..." : "");
+}
+
+void prt__mesh_set_surface(prt__mesh *m, size_t first, size_t count, int id)
+{
+    for (size_t v = first; v < first + count; ++v) m->surface[v] = (uint16_t)id;
 }
 
 float *prt__mesh_emission(prt__mesh *m)

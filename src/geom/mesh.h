@@ -13,15 +13,30 @@ typedef struct prt__mesh {
     float *uv;            /* 2 per vertex; NaN where the input had no texture coordinates */
     float *emission;      /* 3 per vertex, emitted radiance; NULL when nothing emits */
     uint32_t *indices;
+    /* Named surfaces (the materials of mesh files, the materials of scene JSON): per vertex 0 =
+     * unnamed, k = surface_names[k - 1]. What --albedo-of NAME recolours at run time. */
+    uint16_t *surface;
+    int surface_count;
+    char (*surface_names)[64];
 } prt__mesh;
 
 #define PRT__MAX_BRDFS 255
+#define PRT__MAX_SURFACES 65535
+#define PRT__SURFACE_NAME 64   /* bytes per name, the terminating NUL included */
 
 void prt__mesh_free(prt__mesh *m);
 /* Appends vertices/triangles; indices are relative to the appended vertices. normals may be
  * NULL (then zero, meaning "compute"); albedo may be NULL (then rgb_default). */
 prt_status prt__mesh_append(prt__mesh *m, const float *pos, const float *nrm, const float *albedo,
                             const float rgb_default[3], size_t nv, const uint32_t *idx, size_t nt);
+/* The id (1-based) of the surface called name, added if new: control characters become '_',
+ * names are cut to 63 bytes; "" is 0 (unnamed). -1 when the table is full or memory ran out. */
+int prt__mesh_surface_id(prt__mesh *m, const char *name);
+/* Sets albedo (3 per vertex) of the vertices of every surface called name; fails listing the
+ * names when none is. */
+prt_status prt__mesh_paint(const prt__mesh *m, const char *name, const float rgb[3], float *albedo);
+/* Gives vertices [first, first + count) surface id. */
+void prt__mesh_set_surface(prt__mesh *m, size_t first, size_t count, int id);
 /* The per-vertex emission array, allocated as zeros on first use (emission stays NULL while
  * nothing emits); NULL when out of memory. */
 float *prt__mesh_emission(prt__mesh *m);

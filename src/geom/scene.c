@@ -95,6 +95,25 @@ prt_status prt_scene_set_brdf(prt_scene *s, size_t first, size_t count, const pr
 
 int prt_scene_brdf_count(const prt_scene *s) { return s->brdf_count; }
 
+prt_status prt_scene_paint_albedo(prt_scene *s, const char *name, const float rgb[3])
+{
+    if (!s || !name || !rgb) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_paint_albedo: scene, name and colour are required");
+    return prt__mesh_paint(&s->mesh, name, rgb, s->mesh.albedo);
+}
+
+prt_status prt_scene_set_emission(prt_scene *s, size_t first, size_t count, const float rgb[3])
+{
+    if (!s || !rgb) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_emission: scene and rgb are required");
+    if (first > s->mesh.vertex_count || count > s->mesh.vertex_count - first)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "vertex range %zu+%zu exceeds the scene's %zu vertices", first, count, s->mesh.vertex_count);
+    for (int c = 0; c < 3; ++c)
+        if (!(rgb[c] >= 0.0f && rgb[c] <= PRT__MAX_RADIANCE)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "emission must be finite and >= 0");
+    float *e = prt__mesh_emission(&s->mesh);
+    if (!e) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    for (size_t v = first; v < first + count; ++v) memcpy(e + v * 3, rgb, 3 * sizeof(float));
+    return PRT_OK;
+}
+
 prt_status prt_scene_set_uv(prt_scene *s, size_t first, size_t count, const float *uv)
 {
     if (!s || !uv) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_uv: scene and uv are required");

@@ -82,7 +82,9 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
         if (alb) m->albedo = alb;
         uint8_t *mat = alb ? realloc(m->material, max_v) : NULL;
         if (mat) m->material = mat;
-        float *uvs = mat ? realloc(m->uv, max_v * 2 * sizeof(float)) : NULL;
+        uint16_t *surf = mat ? realloc(m->surface, max_v * sizeof(uint16_t)) : NULL;
+        if (surf) m->surface = surf;
+        float *uvs = surf ? realloc(m->uv, max_v * 2 * sizeof(float)) : NULL;
         if (uvs) m->uv = uvs;
         float *emi = uvs && m->emission ? realloc(m->emission, max_v * 3 * sizeof(float)) : NULL;
         if (emi) m->emission = emi;
@@ -116,6 +118,7 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
                         if (m->emission) m->emission[nv * 3 + c] = 0.5f * (m->emission[a * 3 + c] + m->emission[b * 3 + c]);
                     }
                     m->material[nv] = m->material[a];   /* edges never join two objects */
+                    m->surface[nv] = m->surface[a];
                     for (int c = 0; c < 2; ++c) m->uv[nv * 2 + c] = 0.5f * (m->uv[a * 2 + c] + m->uv[b * 2 + c]);
                     if (!prt__v3_normalize(m->normals + nv * 3)) memcpy(m->normals + nv * 3, m->normals + a * 3, 3 * sizeof(float));
                     *slot = nv;

@@ -41,6 +41,17 @@ static void material_albedo(const struct aiMaterial *mat, const prt_scene_desc *
     }
 }
 
+/* What a part is called: its material's name (assimp's stand-in for "no material" is none),
+ * else the mesh's own name; NULL for formats without materials (PLY, STL). */
+static const char *surface_name(const struct aiMaterial *mat, const struct aiMesh *am, bool has_materials)
+{
+    static struct aiString name;
+    if (!has_materials) return NULL;
+    if (mat && aiGetMaterialString(mat, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS && name.length && strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) != 0)
+        return name.data;
+    return am->mName.length ? am->mName.data : NULL;
+}
+
 /* Emitted radiance of a material: Ke in MTL, emissiveFactor in glTF (assimp maps both to the
  * emissive colour), times the emissive strength where the file gives one. */
 static void material_emission(const struct aiMaterial *mat, bool has_materials, float out[3])
@@ -230,7 +241,7 @@ static void import_with_assimp(void *arg, prt__bytes *out)
             memcpy(idx + nt * 3, face->mIndices, 3 * sizeof(uint32_t));
             nt++;
         }
-        prt__mesh_message_part(out, rgb, le, nv, pos, nrm, uv, nt, idx);
+        prt__mesh_message_part(out, surface_name(mat, am, format_has_materials(path)), rgb, le, nv, pos, nrm, uv, nt, idx);
         free(pos); free(nrm); free(uv); free(idx);
     }
     aiReleaseImport(sc);

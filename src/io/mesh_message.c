@@ -1,14 +1,14 @@
 /* Imported meshes as bytes (see mesh_message.h). Layout, native byte order (both ends are the same
  * program on the same machine):
  *   "PRTMESH1", u32 status, u32 flags, u32 message length L, L bytes of message, then parts:
- *   f32 albedo[3], f32 emission[3], u64 nv, u64 nt, u32 has_uv, u32 0,
- *   f32 positions[nv][3], f32 normals[nv][3], (has_uv) f32 uv[nv][2], u32 indices[nt][3]. */
+ *   f32 albedo[3], f32 emission[3], u64 nv, u64 nt, u32 has_uv, u32 name length N (< 64),
+ *   N bytes of the part's name (its material), f32 positions[nv][3], f32 normals[nv][3], (has_uv) f32 uv[nv][2], u32 indices[nt][3]. */
 #include "io/mesh_message.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-static const char MAGIC[8] = {'P', 'R', 'T', 'M', 'E', 'S', 'H', '1'};
+static const char MAGIC[8] = {'P', 'R', 'T', 'M', 'E', 'S', 'H', '2'};
 
 void prt__mesh_message_begin(prt__bytes *b, prt_status status, uint32_t flags, const char *message)
 {
@@ -18,15 +18,16 @@ void prt__mesh_message_begin(prt__bytes *b, prt_status status, uint32_t flags, c
     if (head[2]) prt__bytes_put(b, message, head[2]);
 }
 
-void prt__mesh_message_part(prt__bytes *b, const float albedo[3], const float emission[3], size_t nv, const float *pos,
+void prt__mesh_message_part(prt__bytes *b, const char *name, const float albedo[3], const float emission[3], size_t nv, const float *pos,
                             const float *nrm, const float *uv, size_t nt, const uint32_t *idx)
 {
     float colours[6] = {albedo[0], albedo[1], albedo[2], emission[0], emission[1], emission[2]};
     uint64_t counts[2] = {nv, nt};
-    uint32_t has_uv[2] = {uv != NULL, 0};
+    uint32_t has_uv[2] = {uv != NULL, name ? (uint32_t)strnlen(name, PRT__SURFACE_NAME - 1) : 0};
     prt__bytes_put(b, colours, sizeof colours);
     prt__bytes_put(b, counts, sizeof counts);
     prt__bytes_put(b, has_uv, sizeof has_uv);
+    if (has_uv[1]) prt__bytes_put(b, name, has_uv[1]);
     prt__bytes_put(b, pos, nv * 3 * sizeof(float));
     prt__bytes_put(b, nrm, nv * 3 * sizeof(float));
     if (uv) prt__bytes_put(b, uv, nv * 2 * sizeof(float));
@@ -84,8 +85,9 @@ prt_status prt__mesh_message_read(const prt_context *ctx, const unsigned char *d
         float colours[6];
         uint64_t counts[2];
         uint32_t has_uv[2];
+        char name[PRT__SURFACE_NAME] = "";
         if (!take(&r, colours, sizeof colours) || !take(&r, counts, sizeof counts) || !take(&r, has_uv, sizeof has_uv) || has_uv[0] > 1 ||
-            has_uv[1] != 0 || counts[0] > UINT32_MAX || counts[1] > UINT32_MAX / 3) {
+            has_uv[1] >= PRT__SURFACE_NAME || !take(&r, name, has_uv[1]) || counts[0] > UINT32_MAX || counts[1] > UINT32_MAX / 3) {
             st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': the importer's mesh part %zu is malformed", path, part);
             break;
         }
@@ -106,6 +108,12 @@ prt_status prt__mesh_message_read(const prt_context *ctx, const unsigned char *d
                 for (size_t v = first; v < first + nv; ++v) memcpy(e + v * 3, colours + 3, 3 * sizeof(float));
         }
         if (!st && uv) prt__mesh_set_uv(m, first, nv, uv);
+        if (!st) {
+            name[has_uv[1]] = 0;
+            const int id = prt__mesh_surface_id(m, name);
+            if (id < 0) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d named surfaces", path, PRT__MAX_SURFACES);
+            else prt__mesh_set_surface(m, first, nv, id);
+        }
         if (st == PRT_ERR_FORMAT && !short_message) st = prt__fail(ctx, st, "'%s': %s", path, prt_last_error());
         free(pos); free(nrm); free(uv); free(idx);
     }

@@ -11,9 +11,9 @@
 
 /* Starts a message: the importer's status and, on failure, its one-line reason. */
 void prt__mesh_message_begin(prt__bytes *b, prt_status status, uint32_t flags, const char *message);
-/* Adds one part (one material): nv vertices with positions, normals (zero = compute), optional
+/* Adds one part (one material, called name; NULL or "" = unnamed): nv vertices with positions, normals (zero = compute), optional
  * UVs (NULL), nt triangles indexing the part's own vertices. Parts are counted by the reader. */
-void prt__mesh_message_part(prt__bytes *b, const float albedo[3], const float emission[3], size_t nv, const float *pos,
+void prt__mesh_message_part(prt__bytes *b, const char *name, const float albedo[3], const float emission[3], size_t nv, const float *pos,
                             const float *nrm, const float *uv, size_t nt, const uint32_t *idx);
 
 /* Appends the message's parts to m; path names the file in errors. Returns the importer's own

@@ -199,7 +199,9 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         prt_brdf brdf;
         bool has_brdf = false;
         const cJSON *a = NULL, *b = NULL, *e = NULL;
+        const char *material_name = NULL;
         if ((v = cJSON_GetObjectItemCaseSensitive(item, "material"))) {
+            material_name = cJSON_IsString(v) ? v->valuestring : NULL;
             const cJSON *mat = cJSON_IsString(v) ? cJSON_GetObjectItemCaseSensitive(materials, v->valuestring) : NULL;
             if (!mat) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d] names a material that \"materials\" does not define", path, index); break; }
             a = cJSON_GetObjectItemCaseSensitive(mat, "albedo");
@@ -241,6 +243,12 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
             int id = prt__scene_brdf_id(scene, &brdf);
             if (!id) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDF materials", path, PRT__MAX_BRDFS); break; }
             memset(m->material + first_vertex, id, m->vertex_count - first_vertex);
+        }
+        /* The JSON material names the surface (what --albedo-of recolours), else the file's own. */
+        if (material_name) {
+            const int id = prt__mesh_surface_id(m, material_name);
+            if (id < 0) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d named surfaces", path, PRT__MAX_SURFACES); break; }
+            prt__mesh_set_surface(m, first_vertex, m->vertex_count - first_vertex, id);
         }
         /* A JSON emission replaces whatever the mesh file's materials emit. */
         if (e && (m->emission || le[0] > 0 || le[1] > 0 || le[2] > 0)) {

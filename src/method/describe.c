@@ -31,6 +31,16 @@ static size_t mesh_bytes(const prt_transfer *t)
     return t->mesh.vertex_count * 36 + t->mesh.triangle_count * 12;
 }
 
+/* Vertices per named surface (count + 1 entries, [0] = unnamed); NULL when none are named. */
+static size_t *surface_sizes(const prt_transfer *t)
+{
+    const prt__mesh *m = &t->mesh;
+    if (!m->surface_count || !m->surface) return NULL;
+    size_t *n = prt__calloc((size_t)m->surface_count + 1, sizeof(size_t));
+    for (size_t v = 0; n && v < m->vertex_count; ++v) n[m->surface[v]]++;
+    return n;
+}
+
 prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int json, char **out)
 {
     if (!t || !out) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_transfer_describe: transfer and out are required");
@@ -76,6 +86,26 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
             emitting += t->mesh.emission[v * 3] > 0 || t->mesh.emission[v * 3 + 1] > 0 || t->mesh.emission[v * 3 + 2] > 0;
         cJSON_AddNumberToObject(j, "emissive_vertices", (double)emitting);
         if (t->has_env) cJSON_AddStringToObject(j, "environment", t->env.none ? "none" : t->env.path[0] ? t->env.path : "procedural sky");
+        cJSON *surfaces = cJSON_AddArrayToObject(j, "surfaces");
+        size_t *sizes = surface_sizes(t);
+        for (int k = 0; sizes && k < t->mesh.surface_count; ++k) {
+            cJSON *o = cJSON_CreateObject();
+            cJSON_AddStringToObject(o, "name", t->mesh.surface_names[k]);
+            cJSON_AddNumberToObject(o, "vertices", (double)sizes[k + 1]);
+            cJSON_AddItemToArray(surfaces, o);
+        }
+        free(sizes);
+        cJSON *controls = cJSON_AddArrayToObject(j, "controls");
+        for (int i = 0; i < t->method->control_count; ++i) {
+            int lo, hi, def;
+            prt_transfer_control_range(t, i, &lo, &hi, &def);
+            cJSON *o = cJSON_CreateObject();
+            cJSON_AddStringToObject(o, "name", t->method->controls[i].name);
+            cJSON_AddNumberToObject(o, "min", lo);
+            cJSON_AddNumberToObject(o, "max", hi);
+            cJSON_AddNumberToObject(o, "default", def);
+            cJSON_AddItemToArray(controls, o);
+        }
         char *text = cJSON_Print(j);
         cJSON_Delete(j);
         if (!text) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
@@ -95,6 +125,15 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
     }
     if (t->has_env)
         prt__describe_line(&d, "environment:", "%s", t->env.none ? "none" : t->env.path[0] ? t->env.path : "procedural sky");
+    size_t *sizes = surface_sizes(t);
+    for (int k = 0; sizes && k < t->mesh.surface_count; ++k)
+        prt__describe_line(&d, k ? "" : "surfaces:", "%s (%zu vertices)", t->mesh.surface_names[k], sizes[k + 1]);
+    free(sizes);
+    for (int i = 0; i < t->method->control_count; ++i) {
+        int lo, hi, def;
+        prt_transfer_control_range(t, i, &lo, &hi, &def);
+        prt__describe_line(&d, i ? "" : "controls:", "%s %d..%d (default %d): %s", t->method->controls[i].name, lo, hi, def, t->method->controls[i].help);
+    }
     prt__describe_line(&d, "storage:", "%.2f MiB transfer, %.0f bytes per vertex", bytes / 1048576.0, (double)bytes / (double)nv);
     prt__describe_line(&d, "bake time:", "%.2f s on %d threads", t->bake_seconds, t->threads);
     prt__describe_line(&d, "source:", "%s", t->source);

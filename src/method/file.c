@@ -7,6 +7,7 @@
 #define CHUNK_MATL PRT__FOURCC('M', 'A', 'T', 'L')
 #define CHUNK_UVS PRT__FOURCC('U', 'V', 'S', '0')
 #define CHUNK_EMIS PRT__FOURCC('E', 'M', 'I', 'S')
+#define CHUNK_SURF PRT__FOURCC('S', 'U', 'R', 'F')
 #define BRDF_RECORD 160   /* model, lobes, then 38 floats: see put_brdf */
 
 static void put_brdf(unsigned char *p, const prt_brdf *b)
@@ -101,6 +102,15 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
     }
     if (prt__mesh_has_uv(m)) prt__chunks_add(&l, CHUNK_UVS, m->uv, m->vertex_count * 2 * sizeof(float), NULL);
     if (m->emission) prt__chunks_add(&l, CHUNK_EMIS, m->emission, v3, NULL);
+    if (m->surface_count && m->surface) {
+        /* count, pad, the names (64 bytes each, NUL-padded), one id per vertex padded to 4 bytes. */
+        static const unsigned char zero4[4] = {0};
+        unsigned char *head = prt__chunks_alloc(&l, 8);
+        if (head) prt__put32(head, (uint32_t)m->surface_count);
+        const size_t ids = m->vertex_count * sizeof(uint16_t);
+        prt__chunks_add(&l, CHUNK_SURF, head, (size_t)8, m->surface_names, (size_t)m->surface_count * PRT__SURFACE_NAME, m->surface, ids, zero4,
+                        ((ids + 3) & ~(size_t)3) - ids, NULL);
+    }
     prt_status st = t->method->save(t, &l);
     if (!st) st = prt__container_write(path, &l);
     prt__chunks_free(&l);
@@ -161,9 +171,10 @@ static prt_status read_mesh(prt_context *ctx, const prt__chunk_in *c, prt__mesh 
     m->positions = malloc(nv * 12); m->normals = malloc(nv * 12); m->albedo = malloc(nv * 12);
     m->indices = malloc(nt * 12);
     m->material = calloc(nv, 1);
+    m->surface = calloc(nv, sizeof(uint16_t));
     m->uv = malloc(nv * 8);
     if (m->uv) for (uint64_t k = 0; k < nv * 2; ++k) m->uv[k] = NAN;
-    if (!m->positions || !m->normals || !m->albedo || !m->indices || !m->material || !m->uv) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!m->positions || !m->normals || !m->albedo || !m->indices || !m->material || !m->surface || !m->uv) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     memcpy(m->positions, p + 16, nv * 12);
     memcpy(m->normals, p + 16 + nv * 12, nv * 12);
     memcpy(m->albedo, p + 16 + nv * 24, nv * 12);
@@ -184,6 +195,32 @@ static prt_status read_mesh(prt_context *ctx, const prt__chunk_in *c, prt__mesh 
         for (int c = 0; c < 3; ++c)
             if (!(a[c] >= 0.0f && a[c] <= 1.0f)) return bad(ctx, "corrupt .prt file: an albedo is outside [0, 1]");
     }
+    return PRT_OK;
+}
+
+/* Surface names: each NUL-terminated inside its 64 bytes, not empty, no control characters, no
+ * matter if two are alike (they are recoloured together); every vertex's id at most the count. */
+static prt_status read_surfaces(prt_context *ctx, const prt__chunk_in *c, prt__mesh *m)
+{
+    const unsigned char *p = c->data;
+    const uint64_t nv = m->vertex_count, len = c->size;
+    const uint32_t n = len >= 8 ? prt__get32(p) : 0;
+    const uint64_t ids = nv * 2;
+    if (n == 0 || n > PRT__MAX_SURFACES || 8 + (uint64_t)n * PRT__SURFACE_NAME + ((ids + 3) & ~3ull) != len)
+        return bad(ctx, "corrupt .prt file: invalid surface name chunk");
+    if (!(m->surface_names = malloc((size_t)n * PRT__SURFACE_NAME))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(m->surface_names, p + 8, (size_t)n * PRT__SURFACE_NAME);
+    m->surface_count = (int)n;
+    for (uint32_t k = 0; k < n; ++k) {
+        const char *name = m->surface_names[k];
+        const size_t l = strnlen(name, PRT__SURFACE_NAME);
+        if (l == 0 || l == PRT__SURFACE_NAME) return bad(ctx, "corrupt .prt file: a surface name is empty or unterminated");
+        for (size_t i = 0; i < l; ++i)
+            if ((unsigned char)name[i] < 32 || name[i] == 127) return bad(ctx, "corrupt .prt file: a surface name holds control characters");
+    }
+    memcpy(m->surface, p + 8 + (size_t)n * PRT__SURFACE_NAME, nv * sizeof(uint16_t));
+    for (uint64_t v = 0; v < nv; ++v)
+        if (m->surface[v] > n) return bad(ctx, "corrupt .prt file: a surface id is out of range");
     return PRT_OK;
 }
 
@@ -226,6 +263,7 @@ static prt_status load(prt_context *ctx, prt__chunk_in *chunks, int count, prt_t
     if (!st && !(c = prt__chunk_take(chunks, count, CHUNK_MESH))) st = bad(ctx, "corrupt .prt file: mesh chunk missing");
     if (!st) st = read_mesh(ctx, c, &t->mesh);
     if (!st && (c = prt__chunk_take(chunks, count, CHUNK_MATL))) st = read_materials(ctx, c, t);
+    if (!st && (c = prt__chunk_take(chunks, count, CHUNK_SURF))) st = read_surfaces(ctx, c, &t->mesh);
     if (!st && (c = prt__chunk_take(chunks, count, CHUNK_UVS))) {
         if (c->size != t->mesh.vertex_count * 8) st = bad(ctx, "corrupt .prt file: texture coordinate chunk size mismatch");
         else {

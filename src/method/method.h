@@ -91,6 +91,7 @@ struct prt_method {
     const char *title;      /* "spherical-harmonic PRT" */
     const char *summary;    /* one line */
     unsigned lighting;      /* PRT_LIGHTS_* it relights */
+    bool runtime_albedo;    /* relight honours prt_relight_desc.albedo */
     const prt_option_desc *options;
     int option_count;
     const prt_control_desc *controls;
@@ -121,7 +122,8 @@ struct prt_method {
 
     /* Relight: lighting (already checked against `lighting`) + desc (defaults filled) -> out.
      * shade (may be NULL) adds the view-dependent part of r that only the method can evaluate on
-     * the CPU (beyond exit_sh, which is generic) to rgb. */
+     * the CPU (beyond exit_sh, which is generic), and the direct light of r's pixel_lights, to
+     * rgb. */
     prt_status (*relight)(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *out);
     prt_status (*shade)(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb);
 };

@@ -1,11 +1,13 @@
 /* The method table: the one place that lists prt's methods. Adding a method = its own files
  * plus one line here (docs/ARCHITECTURE.md). */
 #include "method/sh.h"
+#include "method/spectral.h"
 #include "method/wavelet.h"
 
 static const prt__method *const table[] = {
     &prt__method_sh,
     &prt__method_wavelet,
+    &prt__method_spectral,
 };
 
 #define COUNT ((int)(sizeof table / sizeof table[0]))
@@ -25,6 +27,7 @@ const char *prt_method_name(const prt_method *m) { return m ? m->name : ""; }
 const char *prt_method_title(const prt_method *m) { return m ? m->title : ""; }
 const char *prt_method_summary(const prt_method *m) { return m ? m->summary : ""; }
 unsigned prt_method_lighting(const prt_method *m) { return m ? m->lighting : 0; }
+int prt_method_runtime_albedo(const prt_method *m) { return m && m->runtime_albedo; }
 
 int prt_method_options(const prt_method *m, const prt_option_desc **out)
 {

@@ -10,6 +10,15 @@ prt_status prt__mesh_copy(prt__mesh *dst, const prt__mesh *src)
     if (!st && src->uv) memcpy(dst->uv, src->uv, src->vertex_count * 2 * sizeof(float));
     if (!st && src->emission && !prt__mesh_emission(dst)) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory copying a mesh");
     if (!st && src->emission) memcpy(dst->emission, src->emission, src->vertex_count * 3 * sizeof(float));
+    /* Surface names: dst is empty here, so ids stay as they are. */
+    if (!st && src->surface_count) {
+        if (!(dst->surface_names = malloc((size_t)src->surface_count * PRT__SURFACE_NAME))) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory copying a mesh");
+        else {
+            memcpy(dst->surface_names, src->surface_names, (size_t)src->surface_count * PRT__SURFACE_NAME);
+            dst->surface_count = src->surface_count;
+        }
+    }
+    if (!st && src->surface) memcpy(dst->surface, src->surface, src->vertex_count * sizeof(uint16_t));
     return st;
 }
 
@@ -76,6 +85,15 @@ const float *prt_transfer_uvs(const prt_transfer *t) { return prt__mesh_has_uv(&
 int prt_transfer_brdf_count(const prt_transfer *t) { return t->brdf_count; }
 const prt_brdf *prt_transfer_brdf(const prt_transfer *t, int k) { return k >= 1 && k <= t->brdf_count ? &t->brdfs[k - 1] : NULL; }
 const uint8_t *prt_transfer_materials(const prt_transfer *t) { return t->mesh.material; }
+int prt_transfer_surface_count(const prt_transfer *t) { return t ? t->mesh.surface_count : 0; }
+const char *prt_transfer_surface_name(const prt_transfer *t, int k) { return t && k >= 1 && k <= t->mesh.surface_count ? t->mesh.surface_names[k - 1] : NULL; }
+const uint16_t *prt_transfer_surfaces(const prt_transfer *t) { return t && t->mesh.surface_count ? t->mesh.surface : NULL; }
+
+prt_status prt_transfer_paint_albedo(const prt_transfer *t, const char *name, const float rgb[3], float *albedo)
+{
+    if (!t || !name || !rgb || !albedo) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_transfer_paint_albedo: transfer, name, colour and albedo are required");
+    return prt__mesh_paint(&t->mesh, name, rgb, albedo);
+}
 const float *prt_transfer_emission(const prt_transfer *t) { return t->mesh.emission; }
 int prt_transfer_light_count(const prt_transfer *t) { return t->light_count; }
 const prt_light *prt_transfer_light(const prt_transfer *t, int i) { return i >= 0 && i < t->light_count ? &t->lights[i] : NULL; }
@@ -182,6 +200,8 @@ void prt_relit_free(prt_relit *r)
     free(r->exit_sh);
     free(r->texels);
     free(r->kvec);
+    free(r->pixel_lights);
+    free(r->pixel_albedo);
     memset(r, 0, sizeof *r);
 }
 
@@ -195,6 +215,11 @@ prt_status prt_relight(prt_context *ctx, const prt_transfer *t, const prt_lighti
     if (d.variant >= t->method->variant_count(t))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "variant %d out of range (the file has %d)", d.variant, t->method->variant_count(t));
     if (d.component < PRT_COMPONENT_ALL || d.component > PRT_COMPONENT_INDIRECT) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown light component %d", d.component);
+    if (d.albedo && !t->method->runtime_albedo)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the %s method bakes surface colours in: changing them needs a rebake", t->method->name);
+    if (d.albedo)
+        for (size_t i = 0; i < t->mesh.vertex_count * 3; ++i)
+            if (!(d.albedo[i] >= 0.0f && d.albedo[i] <= 1.0f)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "albedo must lie in [0, 1]");
     prt_status st = prt_method_check_lighting(t->method, prt_relight_needs(t, l));
     if (st) return prt__fail(ctx, st, "%s", prt_last_error());
     st = t->method->relight(ctx, t, l, &d, out);
@@ -241,6 +266,9 @@ void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render
     m->view_map_sets = r->view_map_sets;
     m->view_map_resolution = r->view_map_resolution;
     m->view_map_polar = r->view_map_polar;
+    m->lights = r->pixel_lights;
+    m->light_count = r->pixel_lights ? r->pixel_light_count : 0;
+    m->albedo = r->pixel_albedo;
 }
 
 prt_status prt_relit_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb)
@@ -258,6 +286,6 @@ prt_status prt_relit_shade(prt_context *ctx, const prt_transfer *t, const prt_re
             for (int c = 0; c < 3; ++c) rgb[v * 3 + c] += g[c];
         }
     }
-    if (r->kvec && t->method->shade) return t->method->shade(ctx, t, r, eye, rgb);
+    if ((r->kvec || r->pixel_lights) && t->method->shade) return t->method->shade(ctx, t, r, eye, rgb);
     return PRT_OK;
 }

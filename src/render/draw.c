@@ -180,6 +180,14 @@ prt_status prt__draw_init(prt__draw *d)
         d->program = d->program_g = d->program_t = 0;
         return PRT_ERR_BACKEND;
     }
+    if (prt__pixel_lights_init(&d->lights)) {
+        glDeleteProgram(d->program);
+        glDeleteProgram(d->program_g);
+        glDeleteProgram(d->program_t);
+        glDeleteProgram(d->program_s);
+        d->program = d->program_g = d->program_t = d->program_s = 0;
+        return PRT_ERR_BACKEND;
+    }
     d->us_mvp = glGetUniformLocation(d->program_s, "mvp");
     d->us_eye = glGetUniformLocation(d->program_s, "eye");
     d->us_terms = glGetUniformLocation(d->program_s, "terms");
@@ -212,6 +220,7 @@ prt_status prt__draw_init(prt__draw *d)
 
 void prt__draw_free(prt__draw *d)
 {
+    prt__pixel_lights_free(&d->lights);
     if (d->program) glDeleteProgram(d->program);
     if (d->program_g) glDeleteProgram(d->program_g);
     if (d->program_t) glDeleteProgram(d->program_t);
@@ -249,7 +258,8 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     d->exit_mirror = m->exit_mirror;
     d->kvec_terms = m->kvec && m->normals && m->view_set && m->view_maps && m->kvec_terms >= 1 && m->view_map_sets >= 1 &&
                             m->view_map_resolution >= 1 ? m->kvec_terms : 0;
-    if (d->exit_order || d->kvec_terms) {
+    const bool lights = m->lights && m->light_count > 0 && m->albedo && m->normals;
+    if (m->normals) {   /* also for lights set later (prt_window_set_lights) */
         glBindBuffer(GL_ARRAY_BUFFER, d->vbo_nrm);
         glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(m->vertex_count * 3 * sizeof(float)), m->normals, GL_STATIC_DRAW);
         glEnableVertexAttribArray(2);
@@ -269,6 +279,8 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     }
     glBindVertexArray(0);
     d->index_count = m->triangle_count * 3;
+    prt__draw_set_lights(d, m->positions, m->albedo, m->vertex_count, lights ? m->lights : NULL, lights ? m->light_count : 0);
+    d->lights.dirty = true;   /* new geometry casts new shadows */
     if (d->exit_order) prt__draw_upload_exit(d, m->exit_sh, m->vertex_count);
     if (d->kvec_terms) {
         free(d->view_set);
@@ -298,6 +310,11 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
         prt__draw_upload_kvec(d, m->kvec, m->vertex_count);
     }
     if (m->texel_radiance && m->texel_width > 0 && m->texel_height > 0) prt__draw_upload_texels(d, m->texel_radiance, m->texel_width, m->texel_height);
+}
+
+void prt__draw_set_lights(prt__draw *d, const float *positions, const float *albedo, size_t nv, const prt_light *lights, int count)
+{
+    prt__pixel_lights_set(&d->lights, d->vao, positions, albedo, nv, lights, count);
 }
 
 void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int height)
@@ -389,8 +406,9 @@ void prt__camera_matrix(const prt_camera *cam, float aspect, float near_far[2], 
         }
 }
 
-void prt__draw_mesh(const prt__draw *d, const prt_camera *cam, int w, int h, const float background[3])
+void prt__draw_mesh(prt__draw *d, const prt_camera *cam, int w, int h, const float background[3])
 {
+    prt__pixel_lights_shadows(&d->lights, d->vao, d->index_count);
     float mvp[16];
     prt__camera_matrix(cam, (float)w / (float)h, NULL, mvp);
     glViewport(0, 0, w, h);
@@ -435,6 +453,7 @@ void prt__draw_mesh(const prt__draw *d, const prt_camera *cam, int w, int h, con
     glBindVertexArray(d->vao);
     glDrawElements(GL_TRIANGLES, (GLsizei)d->index_count, GL_UNSIGNED_INT, NULL);
     glBindVertexArray(0);
+    prt__pixel_lights_draw(&d->lights, d->vao, d->index_count, mvp);
 }
 
 void prt_camera_frame(const float lo[3], const float hi[3], const float *from, float fov_y_deg, float aspect, prt_camera *out)
@@ -467,10 +486,12 @@ prt_status prt__target_init(prt__target *t, int width, int height, int samples)
     /* Half floats: radiance to 3 significant digits, half the memory traffic of RGBA32F. */
     glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA16F, width, height);
     glBindRenderbuffer(GL_RENDERBUFFER, t->depth_ms);
-    glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, width, height);
+    /* Stencil: the per-pixel lights pass lights each sample once, even where a mesh has two
+     * coincident copies of a face (the Cornell box's boxes do). */
+    glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH24_STENCIL8, width, height);
     glBindFramebuffer(GL_FRAMEBUFFER, t->fbo_ms);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, t->color_ms);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t->depth_ms);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, t->depth_ms);
     GLenum ms_status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
     glGenFramebuffers(1, &t->fbo);
     glGenTextures(1, &t->color_tex);
@@ -498,7 +519,7 @@ void prt__target_free(prt__target *t)
     memset(t, 0, sizeof *t);
 }
 
-void prt__target_draw(prt__target *t, const prt__draw *d, const prt_camera *cam, const float background[3])
+void prt__target_draw(prt__target *t, prt__draw *d, const prt_camera *cam, const float background[3])
 {
     glBindFramebuffer(GL_FRAMEBUFFER, t->fbo_ms);
     prt__draw_mesh(d, cam, t->width, t->height, background);

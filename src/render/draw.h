@@ -4,6 +4,7 @@
 #define PRT_RENDER_DRAW_H
 
 #include "core/internal.h"
+#include "render/pixel_lights.h"
 
 #include <epoxy/gl.h>
 
@@ -30,12 +31,16 @@ typedef struct prt__draw {
     uint8_t *view_set;               /* a copy, for K-vector updates */
     float *kpack;
     size_t kpack_vertices;
+    /* Local lights drawn per pixel with shadow maps, added after the main pass. */
+    prt__pixel_lights lights;
 } prt__draw;
 
 prt_status prt__draw_init(prt__draw *d);
 void prt__draw_free(prt__draw *d);
 /* Uploads geometry and radiance (re-uploads everything; the radiance changes per relight). */
 void prt__draw_upload(prt__draw *d, const prt_render_mesh *mesh);
+/* Replaces the lights drawn per pixel and the albedo they shade (count 0: none). */
+void prt__draw_set_lights(prt__draw *d, const float *positions, const float *albedo, size_t vertex_count, const prt_light *lights, int count);
 /* Replaces the per-texel radiance map; NULL turns the per-texel path off (vertex radiance). */
 void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int height);
 /* Replaces the glossy exit coefficients (mesh layout: vertex, channel, coefficient). */
@@ -43,7 +48,7 @@ void prt__draw_upload_exit(prt__draw *d, const float *exit_sh, size_t vertex_cou
 /* Replaces the wavelet K-vectors (prt_render_mesh.kvec layout). */
 void prt__draw_upload_kvec(prt__draw *d, const float *kvec, size_t vertex_count);
 /* Draws into the bound framebuffer of size w x h. */
-void prt__draw_mesh(const prt__draw *d, const prt_camera *cam, int w, int h, const float background[3]);
+void prt__draw_mesh(prt__draw *d, const prt_camera *cam, int w, int h, const float background[3]);
 /* An offscreen multisampled float framebuffer, resolved into a float texture that can be read
  * back (screenshots, prt_render) or drawn to a window with tone mapping. */
 typedef struct prt__target {
@@ -54,7 +59,7 @@ typedef struct prt__target {
 prt_status prt__target_init(prt__target *t, int width, int height, int samples);
 void prt__target_free(prt__target *t);
 /* Draws the mesh into the target and resolves it. */
-void prt__target_draw(prt__target *t, const prt__draw *d, const prt_camera *cam, const float background[3]);
+void prt__target_draw(prt__target *t, prt__draw *d, const prt_camera *cam, const float background[3]);
 /* Reads the resolved linear radiance, top row first. */
 prt_status prt__target_read(const prt__target *t, prt_image *out);
 

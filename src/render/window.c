@@ -188,6 +188,13 @@ void prt_window_set_mesh(prt_window *w, const prt_render_mesh *mesh)
     prt__draw_upload(&w->draw, mesh);
 }
 
+void prt_window_set_lights(prt_window *w, const prt_render_mesh *mesh)
+{
+    glfwMakeContextCurrent(w->win);
+    const bool ok = mesh->lights && mesh->light_count > 0 && mesh->albedo && mesh->normals;
+    prt__draw_set_lights(&w->draw, mesh->positions, mesh->albedo, mesh->vertex_count, ok ? mesh->lights : NULL, ok ? mesh->light_count : 0);
+}
+
 void prt_window_set_radiance(prt_window *w, const float *rgb, size_t nv)
 {
     glfwMakeContextCurrent(w->win);

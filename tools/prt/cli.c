@@ -284,6 +284,34 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
         if (!cli_parse_float(arg, &l->intensity) || l->intensity < 0) { cli_usage(c, "--intensity must be a number >= 0"); return -1; }
         l->set_intensity = true;
         return 1;
+    case OPT_ALBEDO_OF: {
+        const char *eq = strrchr(arg, '=');
+        if (!eq || eq == arg || l->paint_count == CLI_MAX_LIGHTS ||
+            !cli_parse_vec3(eq + 1, true, l->paint[l->paint_count].rgb)) {
+            cli_usage(c, "--albedo-of takes NAME=R,G,B (or NAME=V for grey), at most %d times", CLI_MAX_LIGHTS);
+            return -1;
+        }
+        const float *rgb = l->paint[l->paint_count].rgb;
+        for (int k = 0; k < 3; ++k)
+            if (!(rgb[k] >= 0.0f && rgb[k] <= 1.0f)) { cli_usage(c, "--albedo-of %s: albedo must lie in [0, 1]", arg); return -1; }
+        char *name = strndup(arg, (size_t)(eq - arg));   /* lives as long as the command */
+        if (!name) { cli_error(c, "out of memory"); return -1; }
+        l->paint[l->paint_count++].name = name;
+        return 1;
+    }
+    case OPT_CONTROL: {
+        const char *eq = strchr(arg, '=');
+        float v;
+        if (!eq || eq == arg || l->control_count == PRT_MAX_CONTROLS || !cli_parse_float(eq + 1, &v) || v != (float)(int)v) {
+            cli_usage(c, "--control takes NAME=INTEGER (for example bounces=8)");
+            return -1;
+        }
+        char *name = strndup(arg, (size_t)(eq - arg));
+        if (!name) { cli_error(c, "out of memory"); return -1; }
+        l->control[l->control_count].name = name;
+        l->control[l->control_count++].value = (int)v;
+        return 1;
+    }
     case OPT_BRDF:
         if (prt_brdf_parse(arg, &l->brdf)) { cli_usage(c, "--brdf: %s", prt_last_error()); return -1; }
         l->have_brdf = true;
@@ -433,6 +461,44 @@ int cli_relight_resolve(const cli *c, const cli_kinds *r, const prt_transfer *t,
     return n;
 }
 
+prt_status cli_painted_albedo(const cli *c, const cli_light *l, const prt_transfer *t, float **out)
+{
+    *out = NULL;
+    if (!l || !l->paint_count) return PRT_OK;
+    const size_t nv = prt_transfer_vertex_count(t);
+    float *a = malloc(nv * 3 * sizeof(float));
+    if (!a) { cli_error(c, "out of memory"); return PRT_ERR_NO_MEMORY; }
+    memcpy(a, prt_transfer_albedo(t), nv * 3 * sizeof(float));
+    for (int i = 0; i < l->paint_count; ++i) {
+        prt_status st = prt_transfer_paint_albedo(t, l->paint[i].name, l->paint[i].rgb, a);
+        if (st) { cli_error(c, "--albedo-of: %s", prt_last_error()); ((cli *)c)->reported = true; free(a); return st; }
+    }
+    *out = a;
+    return PRT_OK;
+}
+
+int cli_controls(const cli *c, const cli_light *l, const prt_transfer *t, int values[PRT_MAX_CONTROLS])
+{
+    const prt_control_desc *cd;
+    const int n = prt_transfer_controls(t, &cd);
+    for (int i = 0; i < n; ++i) prt_transfer_control_range(t, i, NULL, NULL, &values[i]);
+    for (int k = 0; l && k < l->control_count; ++k) {
+        int i = 0;
+        while (i < n && strcmp(cd[i].name, l->control[k].name)) ++i;
+        char names[256] = "";
+        for (int j = 0; j < n; ++j) snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", j ? ", " : "", cd[j].name);
+        if (i == n) { cli_error(c, "--control: the file's method has no setting '%s' (it has %s)", l->control[k].name, n ? names : "none"); return -1; }
+        int lo, hi, def;
+        prt_transfer_control_range(t, i, &lo, &hi, &def);
+        if (l->control[k].value < lo || l->control[k].value > hi) {
+            cli_error(c, "--control %s=%d: out of range %d..%d for this file", cd[i].name, l->control[k].value, lo, hi);
+            return -1;
+        }
+        values[i] = l->control[k].value;
+    }
+    return n;
+}
+
 prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,
                        bool with_indirect, prt_relit *out)
 {
@@ -442,7 +508,16 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     d.per_vertex = per_vertex;
     d.with_indirect = with_indirect;
     d.brdf = l && l->have_brdf ? &l->brdf : NULL;
-    prt_status st = prt_relight(c->ctx, t, lighting, &d, out);
+    int controls[PRT_MAX_CONTROLS];
+    const int nc = cli_controls(c, l, t, controls);
+    if (nc < 0) { ((cli *)c)->reported = true; return PRT_ERR_INVALID_ARG; }
+    d.controls = nc ? controls : NULL;
+    float *albedo = NULL;
+    prt_status st = cli_painted_albedo(c, l, t, &albedo);
+    if (st) return st;
+    d.albedo = albedo;
+    st = prt_relight(c->ctx, t, lighting, &d, out);
+    free(albedo);
     if (st == PRT_ERR_INVALID_ARG) {
         /* Lighting the method refuses: say how to leave it out. */
         const unsigned refused = prt_relight_needs(t, lighting) & ~prt_method_lighting(prt_transfer_method(t));

@@ -74,6 +74,12 @@ typedef struct cli_light {
     bool set_emission;
     bool have_brdf;           /* --brdf: the reflection lobe for glossy sets */
     prt_brdf brdf;
+    /* --albedo-of NAME=R,G,B: surface colours at run time (methods that allow it). */
+    struct { const char *name; float rgb[3]; } paint[CLI_MAX_LIGHTS];
+    int paint_count;
+    /* --control NAME=V: the method's run-time settings (prt_transfer_controls). */
+    struct { const char *name; int value; } control[PRT_MAX_CONTROLS];
+    int control_count;
     char path_buf[1024];
 } cli_light;
 
@@ -90,16 +96,21 @@ typedef struct cli_light {
     "                        sphere:X,Y,Z:RADIUS:R,G,B (radiance)\n" \
     "  --emission S          scale the scene's emissive surfaces (0 turns them off; default 1)\n" \
     "  --brdf SPEC           reflection lobe for SH glossy sets: phong:N[:KS] or blinn:N[:KS]\n" \
-    "                        (default: the scene's materials; not with a BRDF baked in)\n"
+    "                        (default: the scene's materials; not with a BRDF baked in)\n" \
+    "  --albedo-of NAME=R,G,B  recolour the surface NAME (prt info lists them), repeatable;\n" \
+    "                        for methods that change colours without a rebake (spectral)\n" \
+    "  --control NAME=V      a run-time setting of the file's method (prt info lists them:\n" \
+    "                        SH order, wavelet light-coefficients, spectral bounces)\n"
 
 /* Returns 1 if the option was a lighting option (consumed), 0 if not, -1 on a bad value. */
 int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg);
-enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN, OPT_BRDF, OPT_LIGHT, OPT_EMISSION };
+enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN, OPT_BRDF, OPT_LIGHT, OPT_EMISSION, OPT_ALBEDO_OF, OPT_CONTROL };
 #define CLI_LIGHT_LONG_OPTIONS \
     {"env", required_argument, 0, OPT_ENV}, {"layout", required_argument, 0, OPT_LAYOUT}, \
     {"rotate", required_argument, 0, OPT_ROTATE}, {"intensity", required_argument, 0, OPT_INTENSITY}, \
     {"sun", required_argument, 0, OPT_SUN}, {"brdf", required_argument, 0, OPT_BRDF}, \
-    {"light", required_argument, 0, OPT_LIGHT}, {"emission", required_argument, 0, OPT_EMISSION}
+    {"light", required_argument, 0, OPT_LIGHT}, {"emission", required_argument, 0, OPT_EMISSION}, \
+    {"albedo-of", required_argument, 0, OPT_ALBEDO_OF}, {"control", required_argument, 0, OPT_CONTROL}
 /* The lighting to use: what t (or, without t, the scene s; with neither, nothing) names, with the
  * command line's overrides. */
 prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t, const prt_scene *s, prt_lighting **out);
@@ -117,6 +128,10 @@ bool cli_relight_kinds(cli_kinds *r, char *list);
 /* Resolves r's names against t into indices (all variants for 'all', the default when empty);
  * returns the count or -1 after reporting. */
 int cli_relight_resolve(const cli *c, const cli_kinds *r, const prt_transfer *t, int drawing, int *indices, int max);
+/* The albedo array --albedo-of asks for (malloc'd; NULL and PRT_OK when it asks nothing). */
+prt_status cli_painted_albedo(const cli *c, const cli_light *l, const prt_transfer *t, float **out);
+/* The method's control values with --control applied (defaults elsewhere); count is returned. */
+int cli_controls(const cli *c, const cli_light *l, const prt_transfer *t, int values[PRT_MAX_CONTROLS]);
 /* Relights t into out with l (variant index, per-vertex only when asked). */
 prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,
                        bool with_indirect, prt_relit *out);

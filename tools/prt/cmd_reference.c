@@ -98,6 +98,8 @@ int cmd_reference(int argc, char **argv)
     } else {
         st = prt_scene_load(c.ctx, input, &sd, &scene);
     }
+    for (int i = 0; !st && i < light.paint_count; ++i)
+        st = prt_scene_paint_albedo(scene, light.paint[i].name, light.paint[i].rgb);
     if (!st) st = cli_lighting(&c, &light, t, scene, &lighting);
     rd.lighting = lighting;
     rd.progress = cli_progress;

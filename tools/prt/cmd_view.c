@@ -143,6 +143,7 @@ static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
     d.component = job->component;
     d.controls = job->controls;
     d.brdf = v->light.have_brdf ? &v->light.brdf : NULL;
+    d.albedo = v->albedo;
     if (!st) st = prt_relight(v->worker_ctx, v->t, v->lighting, &d, out);
     return st;
 }
@@ -197,6 +198,9 @@ static void show(viewer *v, prt_relit *r)
         if (r->exit_sh) prt_window_set_exit(v->win, r->exit_sh, nv);
         if (r->texels) prt_window_set_texels(v->win, r->texels, r->texel_width, r->texel_height);
         if (r->kvec) prt_window_set_kvec(v->win, r->kvec, nv);
+        prt_render_mesh mesh;
+        prt_relit_render_mesh(v->t, r, &mesh);
+        prt_window_set_lights(v->win, &mesh);   /* shadow maps are redrawn only when the lights moved */
     } else {
         prt_render_mesh mesh;
         prt_relit_render_mesh(v->t, r, &mesh);
@@ -379,8 +383,10 @@ int cmd_view(int argc, char **argv)
         /* The file's lights become the viewer's to edit; the worker relights with a copy per job. */
         view_take_lights(&v);
         v.want.variant = prt_transfer_default_variant(v.t, 1);
-        const prt_control_desc *cd;
-        for (int i = 0; i < prt_transfer_controls(v.t, &cd); ++i) prt_transfer_control_range(v.t, i, NULL, NULL, &v.want.controls[i]);
+        if (cli_controls(&c, &v.light, v.t, v.want.controls) < 0) { c.reported = true; st = PRT_ERR_INVALID_ARG; }
+        if (!st) st = cli_painted_albedo(&c, &v.light, v.t, &v.albedo);
+    }
+    if (!st) {
         /* The first frame is lit before the window opens, so a bad lighting fails at once. */
         prt_relit first;
         v.job = v.want;
@@ -394,7 +400,8 @@ int cmd_view(int argc, char **argv)
         rc = cli_fail(&c, st);
         prt_relit_free(&v.shown);
         prt_lighting_release(v.lighting);
-        prt_transfer_release(v.t);
+        free(v.albedo);
+    prt_transfer_release(v.t);
         prt_context_release(v.worker_ctx);
         prt_context_release(c.ctx);
         view_script_free(script);
@@ -457,6 +464,7 @@ int cmd_view(int argc, char **argv)
     prt_relit_free(&v.result);
     prt_relit_free(&v.shown);
     prt_lighting_release(v.lighting);
+    free(v.albedo);
     prt_transfer_release(v.t);
     prt_context_release(v.worker_ctx);
     prt_context_release(c.ctx);

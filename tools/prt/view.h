@@ -37,6 +37,7 @@ struct viewer {
     prt_window *win;
     prt_transfer *t;
     cli_light light;
+    float *albedo;              /* --albedo-of applied to the file's albedo; NULL = as baked */
     /* camera: the auto-framed start until the user moves it, then an orbit */
     prt_camera start_cam;
     bool moved;

@@ -1,0 +1,101 @@
+/* The spectral method's state (Wang, Zhu & Humphreys 2007: direct-to-indirect transfer in a
+ * spectral mesh basis). bake/spectral_basis.c, bake/spectral.c, relight/spectral.c and the table
+ * entry method/spectral.c look inside.
+ *
+ * The mesh is cut into partitions; partition p carries count[p] basis functions, the lowest
+ * frequencies of its own topological Laplacian, numbered first[p] .. first[p + 1] - 1. Vertex v
+ * stores the values of its partition's functions at v. The transfer row of vertex v holds, for
+ * basis function l, the irradiance at v when the surfaces emit radiance s_l (eq. 7), quantized to
+ * 16 bits against one scale for the whole matrix; entries that round to zero are not stored. */
+#ifndef PRT_METHOD_SPECTRAL_H
+#define PRT_METHOD_SPECTRAL_H
+
+#include "geom/raycast.h"
+#include "light/light_sample.h"
+#include "method/method.h"
+
+#include <pthread.h>
+
+#define PRT__SPECTRAL_MAX_FUNCTIONS 65535   /* indices are stored in 16 bits */
+#define PRT__SPECTRAL_MAX_PARTITION 4096    /* vertices per partition: its eigen problem is dense */
+
+typedef struct prt__spectral_basis {
+    uint32_t partitions, functions;
+    uint32_t *part_of;       /* [vertex] */
+    uint32_t *count;         /* [partition] basis functions */
+    /* derived by prt__spectral_basis_index: */
+    uint32_t *first;         /* [partition + 1] first function of each partition */
+    uint64_t *offset;        /* [vertex + 1] where vertex v's values start in `values` */
+    uint32_t *members;       /* vertices grouped by partition, ascending within each */
+    uint32_t *member_start;  /* [partition + 1] */
+    float *values;           /* [offset[v] + j] = s_{first[part_of[v]] + j}(v) */
+} prt__spectral_basis;
+
+/* Run-time helpers built on first use (ray casting for shadow rays, the emitters' direct light),
+ * guarded by `lock` so that relighting from several threads stays safe. */
+typedef struct prt__spectral_cache {
+    pthread_mutex_t lock;
+    bool ready;
+    prt_status failed;
+    prt__raycaster rc;
+    float *origins;          /* [vertex][3] shadow-ray origins */
+} prt__spectral_cache;
+
+typedef struct prt__spectral_set {
+    prt__spectral_basis basis;
+    int samples;             /* gathering rays per vertex at bake time */
+    int partition_size;      /* what the bake asked for */
+    float ray_offset;
+    /* Sparse transfer rows: vertex v's entries are [row_start[v], row_start[v + 1]). */
+    uint64_t *row_start;     /* [vertex + 1] */
+    uint16_t *index;         /* basis function */
+    int16_t *value;          /* times scale */
+    float scale;
+    /* Direct light from the environment: shadowed irradiance transfer per vertex in SH of
+     * env_order (the gathering rays that escaped), E = sum_i L_i env[v][i]. */
+    int env_order;
+    float *env;              /* [vertex][env_order^2] */
+    /* Direct irradiance from the scene's emissive surfaces at emission scale 1 (their geometry
+     * is static, so it is baked); NULL when nothing emits. */
+    float *emit;             /* [vertex][3] */
+    prt__spectral_cache *cache;
+} prt__spectral_set;
+
+extern const prt__method prt__method_spectral;
+
+static inline prt__spectral_set *prt__spectral(const prt_transfer *t) { return prt__state_of(t, &prt__method_spectral); }
+void prt__spectral_set_free(void *state);
+void prt__spectral_basis_free(prt__spectral_basis *b);
+/* Derives first, offset, members and member_start from part_of and count; false (nothing
+ * allocated that b does not own) when they are inconsistent: a partition id out of range, a
+ * partition without vertices, more functions than vertices or none, a total that does not
+ * match `functions`. */
+bool prt__spectral_basis_index(prt__spectral_basis *b, size_t vertex_count);
+
+/* Partitions m with METIS into pieces of about partition_size vertices and gives each the
+ * lowest-frequency eigenvectors of its Laplacian, about `functions` in all (bake/spectral_basis.c). */
+prt_status prt__spectral_basis_build(prt_context *ctx, const prt__mesh *m, int partition_size, int functions, prt__progress *p,
+                                     prt__spectral_basis *out);
+/* Coefficients of a per-vertex RGB signal (3 floats per vertex) on the basis: 3 per function. */
+void prt__spectral_project(const prt__spectral_basis *b, const float *signal, float *coeffs);
+/* The signal back from its coefficients (3 floats per vertex). */
+void prt__spectral_reconstruct(const prt__spectral_basis *b, size_t vertex_count, const float *coeffs, float *signal);
+
+/* The bake (bake/spectral.c) as stages of work units. */
+typedef struct prt__spectral_bake_desc {
+    int partition_size, functions, samples, env_order;
+    float ray_offset;
+} prt__spectral_bake_desc;
+prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_desc *d, prt_transfer *t, prt__bake_job **job);
+
+/* Run time (relight/spectral.c). Per-vertex irradiance from the lighting's direct light; when
+ * pixel is not NULL it also gets the part from the lighting's first pixel_count local lights. */
+prt_status prt__spectral_direct(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, float *irradiance, float *pixel, int pixel_count);
+/* Per-vertex irradiance from count local lights, shadowed (adds to irradiance). */
+prt_status prt__spectral_lights(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *irradiance);
+/* N bounces from outgoing radiance `direct_out` (3 per vertex) with per-vertex albedo: fills
+ * indirect_out (3 per vertex) with the radiance that bounced at least once. */
+prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct_out, int bounces,
+                                 float *indirect_out);
+
+#endif

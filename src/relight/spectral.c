@@ -1,0 +1,191 @@
+/* Run time of the spectral method: direct light per vertex from every kind of light, then
+ * bounces through the spectral basis (Wang, Zhu & Humphreys 2007, eq. 4 and the multi-bounce
+ * gathering after it): project the outgoing radiance onto the basis, multiply by the sparse
+ * T^s, apply each vertex's albedo / pi, repeat.
+ *
+ * Direct light: point, spot and directional lights with one shadow ray per vertex; sphere lights
+ * exactly unoccluded times the visible fraction of their cone (16 rays); emissive surfaces and the
+ * environment through what the bake stored per vertex (emitters' irradiance at scale 1, shadowed
+ * SH transfer). Shadow rays need the mesh in Embree: built on first use and kept. */
+#include "method/spectral.h"
+#include "light/envmap_internal.h"
+
+#include <omp.h>
+
+#define SPHERE_RAYS 16
+
+static prt_status cache_ready(prt_context *ctx, const prt_transfer *t, prt__spectral_cache *c)
+{
+    pthread_mutex_lock(&c->lock);
+    if (!c->ready && !c->failed) {
+        const prt__spectral_set *s = t->state;
+        prt_status st = prt__raycaster_create(ctx, &t->mesh, &c->rc);
+        if (!st) st = prt__vertex_origins(&t->mesh, s->ray_offset, &c->origins);
+        if (st) c->failed = st;
+        else c->ready = true;
+    }
+    prt_status st = c->failed;
+    pthread_mutex_unlock(&c->lock);
+    return st ? prt__fail(ctx, st, "spectral relighting: %s", prt_last_error()) : PRT_OK;
+}
+
+static bool occluded(const prt__spectral_cache *c, const float o[3], const float d[3], float tfar)
+{
+    struct RTCIntersectContext ictx;
+    rtcInitIntersectContext(&ictx);
+    struct RTCRay r;
+    memset(&r, 0, sizeof r);
+    r.org_x = o[0]; r.org_y = o[1]; r.org_z = o[2];
+    r.dir_x = d[0]; r.dir_y = d[1]; r.dir_z = d[2];
+    r.tnear = 0.0f;
+    r.tfar = tfar;
+    r.mask = 0xFFFFFFFFu;
+    rtcOccluded1(c->rc.scene, &ictx, &r);
+    return r.tfar < 0.0f;
+}
+
+/* Whether the light point p + wi dist is hidden from the ray origin o (the vertex moved off its
+ * surface); dist INFINITY for distant light. */
+static bool shadowed(const prt__spectral_cache *c, const float p[3], const float o[3], const float wi[3], float dist)
+{
+    if (!isfinite(dist)) return occluded(c, o, wi, INFINITY);
+    float d[3];
+    for (int k = 0; k < 3; ++k) d[k] = p[k] + wi[k] * dist - o[k];
+    const float len = prt__v3_len(d);
+    return len > 0.0f && prt__v3_normalize(d) && occluded(c, o, d, len * (1.0f - 1e-4f));
+}
+
+/* Irradiance at vertex v from local light l, shadowed: evaluated at the vertex itself, shadow
+ * rays from its origin. */
+static void light_at(const prt__spectral_cache *c, const prt_transfer *t, size_t v, const prt_light *l, float e[3])
+{
+    const float *p = t->mesh.positions + v * 3, *o = c->origins + v * 3, *n = t->mesh.normals + v * 3;
+    e[0] = e[1] = e[2] = 0.0f;
+    if (l->type != PRT_LIGHT_SPHERE) {
+        prt__light_sample s;
+        if (!prt__light_sample_from(l, p, 0.5, 0.5, &s)) return;
+        const float cosine = prt__v3_dot(s.wi, n);
+        if (cosine <= 0.0f || shadowed(c, p, o, s.wi, s.dist)) return;
+        for (int k = 0; k < 3; ++k) e[k] = cosine * s.value[k];
+        return;
+    }
+    float exact[3];
+    prt_light_irradiance(l, p, n, exact);
+    if (exact[0] <= 0 && exact[1] <= 0 && exact[2] <= 0) return;
+    double seen = 0.0, all = 0.0;
+    for (int i = 0; i < SPHERE_RAYS; ++i) {
+        double u1, u2;
+        prt__sobol2((uint32_t)i, (uint32_t)v * 2654435761u, &u1, &u2);
+        prt__light_sample s;
+        if (!prt__light_sample_from(l, p, u1, u2, &s)) continue;
+        const float cosine = prt__v3_dot(s.wi, n);
+        if (cosine <= 0.0f) continue;
+        all += cosine;
+        if (!shadowed(c, p, o, s.wi, s.dist)) seen += cosine;
+    }
+    const float f = all > 0 ? (float)(seen / all) : 0.0f;
+    for (int k = 0; k < 3; ++k) e[k] = exact[k] * f;
+}
+
+prt_status prt__spectral_lights(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *E)
+{
+    const prt__spectral_set *s = t->state;
+    prt_status st = cache_ready(ctx, t, s->cache);
+    if (st) return st;
+    const prt__spectral_cache *c = s->cache;
+    const size_t nv = t->mesh.vertex_count;
+#pragma omp parallel for schedule(dynamic, 256) num_threads(prt__threads(ctx))
+    for (size_t v = 0; v < nv; ++v)
+        for (int i = 0; i < count; ++i) {
+            float e[3];
+            light_at(c, t, v, &lights[i], e);
+            for (int k = 0; k < 3; ++k) E[v * 3 + k] += e[k];
+        }
+    return PRT_OK;
+}
+
+prt_status prt__spectral_direct(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, float *E, float *pixel, int pixel_count)
+{
+    const prt__spectral_set *s = t->state;
+    const size_t nv = t->mesh.vertex_count;
+    prt_status st = cache_ready(ctx, t, s->cache);
+    if (st) return st;
+    const prt__spectral_cache *c = s->cache;
+    memset(E, 0, nv * 3 * sizeof(float));
+    /* The environment through the baked visibility. */
+    const prt_envmap *env = prt_lighting_envmap(l);
+    if (env && prt_lighting_intensity(l) > 0) {
+        prt_sh_light sh;
+        if ((st = prt__envmap_project_sh_cached(env, s->env_order, &sh))) return prt__fail(ctx, st, "%s", prt_last_error());
+        double rot[9];
+        prt_lighting_rotation(l, rot);
+        if (!(rot[0] == 1 && rot[4] == 1 && rot[8] == 1) && (st = prt_sh_light_rotate(&sh, rot))) return st;
+        prt_sh_light_scale(&sh, prt_lighting_intensity(l));
+        const int nc = s->env_order * s->env_order;
+#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
+        for (size_t v = 0; v < nv; ++v) {
+            const float *tv = s->env + v * (size_t)nc;
+            for (int k = 0; k < 3; ++k) {
+                float sum = 0.0f;
+                for (int i = 0; i < nc; ++i) sum += sh.coeffs[k][i] * tv[i];
+                E[v * 3 + k] = sum > 0.0f ? sum : 0.0f;   /* ringing of the truncated SH can dip below zero */
+            }
+        }
+    }
+    const int count = prt_lighting_count(l);
+    if (count) {
+#pragma omp parallel for schedule(dynamic, 256) num_threads(prt__threads(ctx))
+        for (size_t v = 0; v < nv; ++v)
+            for (int i = 0; i < count; ++i) {
+                float e[3];
+                light_at(c, t, v, prt_lighting_light(l, i), e);
+                for (int k = 0; k < 3; ++k) E[v * 3 + k] += e[k];
+                if (pixel && i < pixel_count)
+                    for (int k = 0; k < 3; ++k) pixel[v * 3 + k] += e[k];
+            }
+    }
+    const float emission = prt_lighting_emission(l);
+    if (s->emit && emission > 0)
+        for (size_t i = 0; i < nv * 3; ++i) E[i] += emission * s->emit[i];
+    return prt__cancelled(ctx) ? prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled") : PRT_OK;
+}
+
+prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct_out, int bounces,
+                                 float *indirect_out)
+{
+    const prt__spectral_set *s = t->state;
+    const prt__spectral_basis *b = &s->basis;
+    const size_t nv = t->mesh.vertex_count;
+    memset(indirect_out, 0, nv * 3 * sizeof(float));
+    if (bounces <= 0) return PRT_OK;
+    float *coeffs = prt__calloc((size_t)b->functions * 3, sizeof(float));
+    float *cur = prt__calloc(nv * 3, sizeof(float));
+    if (!coeffs || !cur) { free(coeffs); free(cur); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    const float *from = direct_out;
+    const float k = s->scale / (float)PRT_PI;
+    for (int bounce = 0; bounce < bounces; ++bounce) {
+        prt__spectral_project(b, from, coeffs);
+        /* Each vertex gathers its row of T^s; the next bounce starts from what it reflects. */
+#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
+        for (size_t v = 0; v < nv; ++v) {
+            float e0 = 0, e1 = 0, e2 = 0;
+            for (uint64_t i = s->row_start[v]; i < s->row_start[v + 1]; ++i) {
+                const float q = s->value[i];
+                const float *c = coeffs + (size_t)s->index[i] * 3;
+                e0 += q * c[0];
+                e1 += q * c[1];
+                e2 += q * c[2];
+            }
+            const float *rho = albedo + v * 3;
+            cur[v * 3 + 0] = rho[0] * k * (e0 > 0 ? e0 : 0);
+            cur[v * 3 + 1] = rho[1] * k * (e1 > 0 ? e1 : 0);
+            cur[v * 3 + 2] = rho[2] * k * (e2 > 0 ? e2 : 0);
+        }
+        for (size_t i = 0; i < nv * 3; ++i) indirect_out[i] += cur[i];
+        from = cur;
+        if (prt__cancelled(ctx)) break;
+    }
+    free(coeffs);
+    free(cur);
+    return prt__cancelled(ctx) ? prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled") : PRT_OK;
+}

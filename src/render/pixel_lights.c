@@ -1,0 +1,393 @@
+/* Shadow-mapped local lights drawn per pixel (render/pixel_lights.h). The shading follows
+ * light/lights.c to the letter (inverse square, the spot's smoothstep, the sphere's exact
+ * horizon-clipped cap), so a pixel at a vertex matches what prt_relit_shade computes there with
+ * shadow rays, up to the shadow map's resolution at shadow edges. */
+#include "render/draw.h"
+
+#include <string.h>
+
+#define CUBE_RES 1024
+#define PLANE_RES 2048
+
+static const char *VS_DEPTH =
+    "#version 330 core\n"
+    "layout(location = 0) in vec3 pos;\n"
+    "uniform mat4 vp;\n"
+    "out vec3 w;\n"
+    "void main() { w = pos; gl_Position = vp * vec4(pos, 1.0); }\n";
+/* Distance from the light (cube maps) or along the light's travel (directional). */
+static const char *FS_CUBE =
+    "#version 330 core\n"
+    "in vec3 w; uniform vec3 light; out vec4 dist;\n"
+    "void main() { dist = vec4(length(w - light)); }\n";
+static const char *FS_PLANE =
+    "#version 330 core\n"
+    "in vec3 w; uniform vec3 dir; out vec4 dist;\n"
+    "void main() { dist = vec4(dot(w, -dir)); }\n";
+
+static const char *VS_ADD =
+    "#version 330 core\n"
+    "layout(location = 0) in vec3 pos;\n"
+    "layout(location = 2) in vec3 normal;\n"
+    "layout(location = 4) in vec3 albedo;\n"
+    "uniform mat4 mvp;\n"
+    "out vec3 f_pos; out vec3 f_nrm; out vec3 f_alb;\n"
+    "void main() { f_pos = pos; f_nrm = normal; f_alb = albedo; gl_Position = mvp * vec4(pos, 1.0); }\n";
+static const char *FS_ADD =
+    "#version 330 core\n"
+    "in vec3 f_pos; in vec3 f_nrm; in vec3 f_alb;\n"
+    "uniform int type;          // 1 point, 2 spot, 3 directional, 4 sphere (prt_light_type)\n"
+    "uniform vec3 lpos, ldir, colour; uniform vec2 cosang; uniform float radius;\n"
+    "uniform samplerCube cube; uniform sampler2D plane; uniform mat4 light_vp;\n"
+    "uniform float texel;       // shadow-map texel: radians (cube) or world units (plane)\n"
+    "uniform float bias;        // world units, on top of the texel-sized part\n"
+    "out vec4 color;\n"
+    "const float PI = 3.14159265358979;\n"
+    "float cap(float cos_t, float sin2_s) {\n"
+    "  if (sin2_s >= 1.0) return PI;\n"
+    "  if (cos_t * cos_t >= sin2_s) return cos_t > 0.0 ? PI * sin2_s * cos_t : 0.0;\n"
+    "  float sin_t = sqrt(max(0.0, 1.0 - cos_t * cos_t));\n"
+    "  float x = sqrt(1.0 / sin2_s - 1.0);\n"
+    "  float y = clamp(-x * cos_t / sin_t, -1.0, 1.0);\n"
+    "  float s = sin_t * sqrt(max(0.0, 1.0 - y * y));\n"
+    "  return max(0.0, (cos_t * acos(y) - x * s) * sin2_s + atan(s, x));\n"
+    "}\n"
+    "// Fraction of a kernel x kernel grid of cube-map samples around the direction to p that see\n"
+    "// the light: samples step `step` world units across, at p's distance.\n"
+    "float cube_lit(vec3 d, float dist, float step, int n) {\n"
+    "  vec3 w = d / dist;\n"
+    "  vec3 t = normalize(abs(w.x) < 0.6 ? cross(w, vec3(1.0, 0.0, 0.0)) : cross(w, vec3(0.0, 1.0, 0.0)));\n"
+    "  vec3 b = cross(w, t);\n"
+    "  float lit = 0.0, h = 0.5 * float(n - 1), eps = 1.5 * dist * texel + bias;\n"
+    "  for (int i = 0; i < n; ++i) for (int j = 0; j < n; ++j) {\n"
+    "    vec3 q = d + ((float(i) - h) * t + (float(j) - h) * b) * step;\n"
+    "    lit += dist - eps <= texture(cube, q).r ? 1.0 : 0.0;\n"
+    "  }\n"
+    "  return lit / float(n * n);\n"
+    "}\n"
+    "void main() {\n"
+    "  vec3 n = normalize(f_nrm), E = vec3(0.0);\n"
+    "  float lit = 1.0;\n"
+    "  if (type == 3) {\n"
+    "    float c = dot(n, ldir);\n"
+    "    if (c <= 0.0) discard;\n"
+    "    E = colour * c;\n"
+    "    vec3 p = f_pos + n * 1.5 * texel;   // normal offset against acne\n"
+    "    vec4 q = light_vp * vec4(p, 1.0);\n"
+    "    vec2 uv = q.xy * 0.5 + 0.5;\n"
+    "    float depth = dot(p, -ldir), sum = 0.0;\n"
+    "    vec2 px = vec2(1.0) / vec2(textureSize(plane, 0));\n"
+    "    for (int i = -1; i <= 1; ++i) for (int j = -1; j <= 1; ++j)\n"
+    "      sum += depth - (1.5 * texel + bias) <= texture(plane, uv + vec2(i, j) * px).r ? 1.0 : 0.0;\n"
+    "    lit = sum / 9.0;\n"
+    "  } else {\n"
+    "    vec3 d0 = lpos - f_pos;\n"
+    "    float r2 = dot(d0, d0), r = sqrt(r2);\n"
+    "    if (r <= 0.0) discard;\n"
+    "    vec3 wi = d0 / r;\n"
+    "    float c = dot(n, wi);\n"
+    "    if (type == 4) {\n"
+    "      E = colour * cap(c, r > radius ? radius * radius / r2 : 1.0);\n"
+    "    } else {\n"
+    "      if (c <= 0.0) discard;\n"
+    "      float s = 1.0;\n"
+    "      if (type == 2) { float k = dot(ldir, -wi); s = k >= cosang.y ? 1.0 : k <= cosang.x ? 0.0 : smoothstep(0.0, 1.0, (k - cosang.x) / (cosang.y - cosang.x)); }\n"
+    "      E = colour * c / r2 * s;\n"
+    "    }\n"
+    "    if (E.r + E.g + E.b <= 0.0) discard;\n"
+    "    vec3 p = f_pos + n * 1.5 * r * texel;   // normal offset: a texel's width at this distance\n"
+    "    vec3 d = p - lpos;\n"
+    "    float dist = length(d);\n"
+    "    float step = 1.0 * dist * texel;\n"
+    "    if (type == 4 && radius > 0.0) {\n"
+    "      // Penumbra from the average blocker distance (percentage-closer soft shadows).\n"
+    "      vec3 w = d / dist;\n"
+    "      vec3 t = normalize(abs(w.x) < 0.6 ? cross(w, vec3(1.0, 0.0, 0.0)) : cross(w, vec3(0.0, 1.0, 0.0)));\n"
+    "      vec3 b = cross(w, t);\n"
+    "      float blockers = 0.0, count = 0.0, eps = 1.5 * dist * texel + bias;\n"
+    "      for (int i = -2; i <= 2; ++i) for (int j = -2; j <= 2; ++j) {\n"
+    "        float s = texture(cube, d + (float(i) * t + float(j) * b) * radius * 0.5).r;\n"
+    "        if (s < dist - eps) { blockers += s; count += 1.0; }\n"
+    "      }\n"
+    "      if (count > 0.0) {\n"
+    "        float db = blockers / count;\n"
+    "        step = max(step, radius * (dist - db) / max(db, 1e-6) / 3.0);\n"
+    "      }\n"
+    "      lit = cube_lit(d, dist, step, 7);\n"
+    "    } else {\n"
+    "      lit = cube_lit(d, dist, step, 3);\n"
+    "    }\n"
+    "  }\n"
+    "  color = vec4(f_alb / PI * E * lit, 1.0);\n"
+    "}\n";
+
+static GLuint compile(GLenum type, const char *src, char *log, size_t size)
+{
+    GLuint s = glCreateShader(type);
+    glShaderSource(s, 1, &src, NULL);
+    glCompileShader(s);
+    GLint ok;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) { glGetShaderInfoLog(s, (GLsizei)size, NULL, log); glDeleteShader(s); return 0; }
+    return s;
+}
+
+static GLuint program(const char *vs_src, const char *fs_src)
+{
+    char log[1024] = "";
+    GLuint vs = compile(GL_VERTEX_SHADER, vs_src, log, sizeof log), fs = vs ? compile(GL_FRAGMENT_SHADER, fs_src, log, sizeof log) : 0;
+    if (!vs || !fs) {
+        if (vs) glDeleteShader(vs);
+        prt__fail(NULL, PRT_ERR_BACKEND, "shadow shader compilation failed: %s", log);
+        return 0;
+    }
+    GLuint p = glCreateProgram();
+    glAttachShader(p, vs);
+    glAttachShader(p, fs);
+    glLinkProgram(p);
+    glDeleteShader(vs);
+    glDeleteShader(fs);
+    GLint ok;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        glGetProgramInfoLog(p, sizeof log, NULL, log);
+        glDeleteProgram(p);
+        prt__fail(NULL, PRT_ERR_BACKEND, "shadow shader link failed: %s", log);
+        return 0;
+    }
+    return p;
+}
+
+prt_status prt__pixel_lights_init(prt__pixel_lights *p)
+{
+    memset(p, 0, sizeof *p);
+    p->program_cube = program(VS_DEPTH, FS_CUBE);
+    p->program_plane = p->program_cube ? program(VS_DEPTH, FS_PLANE) : 0;
+    p->program_add = p->program_plane ? program(VS_ADD, FS_ADD) : 0;
+    if (!p->program_add) { prt__pixel_lights_free(p); return PRT_ERR_BACKEND; }
+    p->uc_vp = glGetUniformLocation(p->program_cube, "vp");
+    p->uc_light = glGetUniformLocation(p->program_cube, "light");
+    p->up_vp = glGetUniformLocation(p->program_plane, "vp");
+    p->up_dir = glGetUniformLocation(p->program_plane, "dir");
+    const GLuint a = p->program_add;
+    p->ua_mvp = glGetUniformLocation(a, "mvp");
+    p->ua_type = glGetUniformLocation(a, "type");
+    p->ua_pos = glGetUniformLocation(a, "lpos");
+    p->ua_dir = glGetUniformLocation(a, "ldir");
+    p->ua_colour = glGetUniformLocation(a, "colour");
+    p->ua_cos = glGetUniformLocation(a, "cosang");
+    p->ua_radius = glGetUniformLocation(a, "radius");
+    p->ua_cube = glGetUniformLocation(a, "cube");
+    p->ua_plane = glGetUniformLocation(a, "plane");
+    p->ua_light_vp = glGetUniformLocation(a, "light_vp");
+    p->ua_texel = glGetUniformLocation(a, "texel");
+    p->ua_bias = glGetUniformLocation(a, "bias");
+    glGenFramebuffers(1, &p->fbo);
+    glGenRenderbuffers(1, &p->depth_rb);
+    glBindRenderbuffer(GL_RENDERBUFFER, p->depth_rb);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, CUBE_RES, CUBE_RES);
+    glGenRenderbuffers(1, &p->plane_depth_rb);
+    glBindRenderbuffer(GL_RENDERBUFFER, p->plane_depth_rb);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, PLANE_RES, PLANE_RES);
+    glBindRenderbuffer(GL_RENDERBUFFER, 0);
+    glGenBuffers(1, &p->vbo_albedo);
+    return PRT_OK;
+}
+
+void prt__pixel_lights_free(prt__pixel_lights *p)
+{
+    if (p->program_cube) glDeleteProgram(p->program_cube);
+    if (p->program_plane) glDeleteProgram(p->program_plane);
+    if (p->program_add) glDeleteProgram(p->program_add);
+    if (p->fbo) glDeleteFramebuffers(1, &p->fbo);
+    if (p->depth_rb) glDeleteRenderbuffers(1, &p->depth_rb);
+    if (p->plane_depth_rb) glDeleteRenderbuffers(1, &p->plane_depth_rb);
+    if (p->vbo_albedo) glDeleteBuffers(1, &p->vbo_albedo);
+    for (int i = 0; i < PRT__PIXEL_LIGHTS; ++i) {
+        if (p->cube[i]) glDeleteTextures(1, &p->cube[i]);
+        if (p->plane[i]) glDeleteTextures(1, &p->plane[i]);
+    }
+    memset(p, 0, sizeof *p);
+}
+
+void prt__pixel_lights_set(prt__pixel_lights *p, GLuint vao, const float *positions, const float *albedo, size_t nv, const prt_light *lights,
+                           int count)
+{
+    const int n = lights && albedo && count > 0 ? (count < PRT__PIXEL_LIGHTS ? count : PRT__PIXEL_LIGHTS) : 0;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; n && v < nv; ++v)
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = fminf(lo[k], positions[v * 3 + k]);
+            hi[k] = fmaxf(hi[k], positions[v * 3 + k]);
+        }
+    /* The same lights over the same bounds keep their shadow maps (a viewer relights often). */
+    const bool same = n == p->count && !memcmp(p->lights, lights, (size_t)n * sizeof *lights) && !memcmp(lo, p->lo, sizeof lo) &&
+                      !memcmp(hi, p->hi, sizeof hi);
+    p->count = n;
+    if (!n) return;
+    memcpy(p->lights, lights, (size_t)n * sizeof *lights);
+    memcpy(p->lo, lo, sizeof lo);
+    memcpy(p->hi, hi, sizeof hi);
+    glBindVertexArray(vao);
+    glBindBuffer(GL_ARRAY_BUFFER, p->vbo_albedo);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(nv * 3 * sizeof(float)), albedo, GL_DYNAMIC_DRAW);
+    glEnableVertexAttribArray(4);
+    glVertexAttribPointer(4, 3, GL_FLOAT, GL_FALSE, 0, NULL);
+    glBindVertexArray(0);
+    if (!same) p->dirty = true;
+}
+
+static void new_texture(GLuint *tex, GLenum target, int res)
+{
+    if (*tex) return;
+    glGenTextures(1, tex);
+    glBindTexture(target, *tex);
+    if (target == GL_TEXTURE_CUBE_MAP)
+        for (int f = 0; f < 6; ++f) glTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f, 0, GL_R32F, res, res, 0, GL_RED, GL_FLOAT, NULL);
+    else
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, res, res, 0, GL_RED, GL_FLOAT, NULL);
+    glTexParameteri(target, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(target, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTexParameteri(target, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(target, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    if (target == GL_TEXTURE_CUBE_MAP) glTexParameteri(target, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+    glBindTexture(target, 0);
+}
+
+/* Column-major orthographic view-projection looking along -dir at the bounds. */
+static void ortho_towards(const float dir[3], const float lo[3], const float hi[3], float out[16])
+{
+    float c[3], ext[3];
+    for (int k = 0; k < 3; ++k) c[k] = 0.5f * (lo[k] + hi[k]);
+    prt__v3_sub(hi, lo, ext);
+    const float R = fmaxf(0.5f * prt__v3_len(ext), 1e-6f);
+    float f[3] = {-dir[0], -dir[1], -dir[2]}, up[3] = {0, 1, 0}, s[3], u[3];
+    if (fabsf(f[1]) > 0.99f) { up[1] = 0; up[2] = 1; }
+    prt__v3_cross(f, up, s);
+    prt__v3_normalize(s);
+    prt__v3_cross(s, f, u);
+    const float eye[3] = {c[0] - f[0] * 2 * R, c[1] - f[1] * 2 * R, c[2] - f[2] * 2 * R};
+    /* x = s.(p - eye) / R, y = u.(p - eye) / R, z from depth f.(p - eye) in [R, 3R] to [-1, 1]. */
+    const float n = R * 0.5f, fa = 3.5f * R;
+    const float zs = 2.0f / (fa - n), zo = -(fa + n) / (fa - n);
+    const float ez[3] = {prt__v3_dot(s, eye), prt__v3_dot(u, eye), prt__v3_dot(f, eye)};
+    float m[16] = {s[0] / R, u[0] / R, f[0] * zs, 0, s[1] / R, u[1] / R, f[1] * zs, 0, s[2] / R, u[2] / R, f[2] * zs, 0,
+                   -ez[0] / R, -ez[1] / R, -ez[2] * zs + zo, 1};
+    memcpy(out, m, sizeof m);
+}
+
+void prt__pixel_lights_shadows(prt__pixel_lights *p, GLuint vao, size_t index_count)
+{
+    if (!p->count || !p->dirty) return;
+    GLint prev_fbo = 0, prev_vp[4];
+    glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &prev_fbo);
+    glGetIntegerv(GL_VIEWPORT, prev_vp);
+    glBindFramebuffer(GL_FRAMEBUFFER, p->fbo);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_BLEND);
+    glBindVertexArray(vao);
+    float ext[3];
+    prt__v3_sub(p->hi, p->lo, ext);
+    const float diag = fmaxf(prt__v3_len(ext), 1e-6f);
+    /* +x, -x, +y, -y, +z, -z with GL's cube-map orientation. */
+    static const float look[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    static const float ups[6][3] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
+    for (int i = 0; i < p->count; ++i) {
+        const prt_light *l = &p->lights[i];
+        if (l->type == PRT_LIGHT_DIRECTIONAL) {
+            new_texture(&p->plane[i], GL_TEXTURE_2D, PLANE_RES);
+            ortho_towards(l->direction, p->lo, p->hi, p->light_vp[i]);
+            glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, p->plane_depth_rb);
+            glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, p->plane[i], 0);
+            glViewport(0, 0, PLANE_RES, PLANE_RES);
+            glClearColor(1e30f, 1e30f, 1e30f, 1e30f);
+            glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+            glUseProgram(p->program_plane);
+            glUniformMatrix4fv(p->up_vp, 1, GL_FALSE, p->light_vp[i]);
+            glUniform3fv(p->up_dir, 1, l->direction);
+            glDrawElements(GL_TRIANGLES, (GLsizei)index_count, GL_UNSIGNED_INT, NULL);
+            continue;
+        }
+        new_texture(&p->cube[i], GL_TEXTURE_CUBE_MAP, CUBE_RES);
+        float far = 0;
+        for (int corner = 0; corner < 8; ++corner) {
+            float q[3] = {corner & 1 ? p->hi[0] : p->lo[0], corner & 2 ? p->hi[1] : p->lo[1], corner & 4 ? p->hi[2] : p->lo[2]}, d[3];
+            prt__v3_sub(q, l->position, d);
+            far = fmaxf(far, prt__v3_len(d));
+        }
+        float nf[2] = {diag * 1e-4f, far * 1.01f + diag * 1e-3f};
+        glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, p->depth_rb);
+        glViewport(0, 0, CUBE_RES, CUBE_RES);
+        glUseProgram(p->program_cube);
+        glUniform3fv(p->uc_light, 1, l->position);
+        for (int f = 0; f < 6; ++f) {
+            glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X + f, p->cube[i], 0);
+            glClearColor(1e30f, 1e30f, 1e30f, 1e30f);
+            glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+            prt_camera cam = {{l->position[0], l->position[1], l->position[2]},
+                              {l->position[0] + look[f][0], l->position[1] + look[f][1], l->position[2] + look[f][2]},
+                              {ups[f][0], ups[f][1], ups[f][2]}, 90.0f};
+            float vp[16];
+            prt__camera_matrix(&cam, 1.0f, nf, vp);
+            glUniformMatrix4fv(p->uc_vp, 1, GL_FALSE, vp);
+            glDrawElements(GL_TRIANGLES, (GLsizei)index_count, GL_UNSIGNED_INT, NULL);
+        }
+    }
+    glBindVertexArray(0);
+    glBindFramebuffer(GL_FRAMEBUFFER, (GLuint)prev_fbo);
+    glViewport(prev_vp[0], prev_vp[1], prev_vp[2], prev_vp[3]);
+    p->dirty = false;
+}
+
+void prt__pixel_lights_draw(const prt__pixel_lights *p, GLuint vao, size_t index_count, const float mvp[16])
+{
+    if (!p->count) return;
+    float ext[3];
+    prt__v3_sub(p->hi, p->lo, ext);
+    const float diag = fmaxf(prt__v3_len(ext), 1e-6f);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_ONE, GL_ONE);
+    glDepthFunc(GL_LEQUAL);
+    glDepthMask(GL_FALSE);
+    glEnable(GL_TEXTURE_CUBE_MAP_SEAMLESS);
+    glUseProgram(p->program_add);
+    glUniformMatrix4fv(p->ua_mvp, 1, GL_FALSE, mvp);
+    glUniform1i(p->ua_cube, 0);
+    glUniform1i(p->ua_plane, 1);
+    glUniform1f(p->ua_bias, diag * 2e-4f);
+    glBindVertexArray(vao);
+    /* Each sample takes a light once: coincident duplicate faces pass the depth test together. */
+    glEnable(GL_STENCIL_TEST);
+    glStencilFunc(GL_EQUAL, 0, 0xFF);
+    glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
+    for (int i = 0; i < p->count; ++i) {
+        glClear(GL_STENCIL_BUFFER_BIT);
+        const prt_light *l = &p->lights[i];
+        const float *colour = l->type == PRT_LIGHT_DIRECTIONAL ? l->irradiance : l->type == PRT_LIGHT_SPHERE ? l->radiance : l->intensity;
+        glUniform1i(p->ua_type, (int)l->type);
+        glUniform3fv(p->ua_pos, 1, l->position);
+        glUniform3fv(p->ua_dir, 1, l->direction);
+        glUniform3fv(p->ua_colour, 1, colour);
+        glUniform2f(p->ua_cos, cosf(l->angle_deg * (float)PRT_PI / 180.0f), cosf(l->falloff_deg * (float)PRT_PI / 180.0f));
+        glUniform1f(p->ua_radius, l->type == PRT_LIGHT_SPHERE ? l->radius : 0.0f);
+        if (l->type == PRT_LIGHT_DIRECTIONAL) {
+            glUniformMatrix4fv(p->ua_light_vp, 1, GL_FALSE, p->light_vp[i]);
+            glUniform1f(p->ua_texel, diag / PLANE_RES);
+            glActiveTexture(GL_TEXTURE1);
+            glBindTexture(GL_TEXTURE_2D, p->plane[i]);
+        } else {
+            glUniform1f(p->ua_texel, 2.0f / CUBE_RES);
+            glActiveTexture(GL_TEXTURE0);
+            glBindTexture(GL_TEXTURE_CUBE_MAP, p->cube[i]);
+        }
+        glDrawElements(GL_TRIANGLES, (GLsizei)index_count, GL_UNSIGNED_INT, NULL);
+    }
+    glBindVertexArray(0);
+    glDisable(GL_STENCIL_TEST);
+    glActiveTexture(GL_TEXTURE0);
+    glDisable(GL_BLEND);
+    glDepthMask(GL_TRUE);
+    glDepthFunc(GL_LESS);
+}

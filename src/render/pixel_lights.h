@@ -1,0 +1,42 @@
+/* Local lights drawn per pixel with shadow maps: what methods that relight local lights leave out
+ * of their per-vertex radiance (the paper of the spectral method draws direct light this way and
+ * indirect light per vertex). Point, spot and sphere lights get a cube map of distances from the
+ * light, directional lights an orthographic map; an additive pass shades each pixel as a
+ * Lambertian surface of the interpolated albedo, with percentage-closer filtering (and a blocker
+ * search that widens the penumbra for sphere lights). Requires a current OpenGL 3.3 context. */
+#ifndef PRT_RENDER_PIXEL_LIGHTS_H
+#define PRT_RENDER_PIXEL_LIGHTS_H
+
+#include "core/internal.h"
+
+#include <epoxy/gl.h>
+
+#define PRT__PIXEL_LIGHTS PRT_MAX_PIXEL_LIGHTS
+
+typedef struct prt__pixel_lights {
+    GLuint program_cube, program_plane, program_add;
+    GLint uc_vp, uc_light, up_vp, up_dir;
+    GLint ua_mvp, ua_type, ua_pos, ua_dir, ua_colour, ua_cos, ua_radius, ua_cube, ua_plane, ua_light_vp, ua_texel, ua_bias;
+    GLuint fbo, depth_rb, plane_depth_rb, vbo_albedo;
+    GLuint cube[PRT__PIXEL_LIGHTS], plane[PRT__PIXEL_LIGHTS];
+    int count;
+    prt_light lights[PRT__PIXEL_LIGHTS];
+    float light_vp[PRT__PIXEL_LIGHTS][16];
+    float lo[3], hi[3];        /* the mesh's bounds: shadow map ranges */
+    bool dirty;                /* shadow maps need drawing */
+} prt__pixel_lights;
+
+prt_status prt__pixel_lights_init(prt__pixel_lights *p);
+void prt__pixel_lights_free(prt__pixel_lights *p);
+/* Takes the lights (the first PRT__PIXEL_LIGHTS) and the per-vertex albedo into vao's attribute 4;
+ * count 0 turns the pass off. positions give the bounds. */
+void prt__pixel_lights_set(prt__pixel_lights *p, GLuint vao, const float *positions, const float *albedo, size_t vertex_count,
+                           const prt_light *lights, int count);
+/* Draws the shadow maps if the lights or geometry changed (binds its own framebuffer and restores
+ * the caller's framebuffer and viewport). */
+void prt__pixel_lights_shadows(prt__pixel_lights *p, GLuint vao, size_t index_count);
+/* Adds every light's shaded, shadowed direct light to what is drawn (depth test LEQUAL against
+ * the main pass, additive blending). mvp as the main pass. */
+void prt__pixel_lights_draw(const prt__pixel_lights *p, GLuint vao, size_t index_count, const float mvp[16]);
+
+#endif
