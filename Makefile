@@ -66,6 +66,8 @@ bench: build
 	$(BUILD)/prt_bench
 	$(BUILD)/prt_bench_wavelet
 	$(BUILD)/prt_bench_lights
+	$(BUILD)/prt_bench_spectral --room
+	$(BUILD)/prt_bench_spectral
 
 # README's accuracy tables: PRT against the path-traced reference (several minutes).
 accuracy: build

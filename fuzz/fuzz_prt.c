@@ -12,6 +12,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 static prt_context *ctx;
 static prt_lighting *l;   /* made once: its map keeps the projections and cubes it builds */
+static prt_lighting *local;   /* the sky plus one light of every local kind, for methods that relight them */
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -20,18 +21,27 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         sky.width = 32;
         prt_envmap *env = NULL;
         if (prt_context_create(&(prt_context_desc){.threads = 1}, &ctx) != PRT_OK || prt_lighting_create(&l) != PRT_OK ||
-            prt_sky_create(&sky, &env) != PRT_OK || prt_lighting_set_envmap(l, env, NULL, 1.0f) != PRT_OK)
+            prt_sky_create(&sky, &env) != PRT_OK || prt_lighting_set_envmap(l, env, NULL, 1.0f) != PRT_OK ||
+            prt_lighting_copy(l, &local) != PRT_OK)
             abort();
+        const char *specs[4] = {"point:0,2,0:5", "spot:0,2,0:0,-1,0:40,20:5", "directional:0.2,1,0.3:2", "sphere:1,2,0:0.3:10"};
+        for (int i = 0; i < 4; ++i) {
+            prt_light li;
+            if (prt_light_parse(specs[i], &li) != PRT_OK || prt_lighting_add(local, &li, NULL) != PRT_OK) abort();
+        }
     }
     prt_transfer *t = NULL;
     if (prt_transfer_load_memory(ctx, data, size, &t) != PRT_OK) return 0;
     char *text = NULL;
     if (prt_transfer_describe(t, "fuzz", 1, &text) == PRT_OK) free(text);
     {
-        for (int v = 0; v < prt_transfer_variant_count(t) && v < 5; ++v) {
-            prt_relight_desc d = {.variant = v};
+        const prt_lighting *lighting = prt_method_lighting(prt_transfer_method(t)) & PRT_LIGHTS_POINT ? local : l;
+        /* Drawn (local lights left for the renderer, then shaded on the CPU) and per vertex. */
+        for (int k = 0; k < 2 * prt_transfer_variant_count(t) && k < 6; ++k) {
+            const int v = k / 2;
+            prt_relight_desc d = {.variant = v, .per_vertex = k & 1, .with_indirect = 1};
             prt_relit r;
-            if (prt_relight(ctx, t, l, &d, &r) != PRT_OK) continue;
+            if (prt_relight(ctx, t, lighting, &d, &r) != PRT_OK) continue;
             float *rgb = malloc(prt_transfer_vertex_count(t) * 3 * sizeof(float));
             const float eye[3] = {1, 2, 3};
             if (rgb) prt_relit_shade(ctx, t, &r, eye, rgb);

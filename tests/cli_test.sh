@@ -358,7 +358,7 @@ expect 0 "the scene's lights replaced" -- "$PRT" relight "$T/lamp.prt" --light d
 expect 0 "reference under the scene's lights" -- "$PRT" reference "$T/lamp.prt" -o "$T/lampref.json" --samples 4 -q
 
 # The spectral method: local lights with bounces, colours changed without a rebake, controls.
-expect 0 "spectral bake" -- "$PRT" bake -q "$T/lamp.json" -o "$T/spec.prt" --method spectral --functions 64 --samples 64
+expect 0 "spectral bake" -- "$PRT" bake -q "$T/lamp.json" -o "$T/spec.prt" --method spectral --basis 64 --samples 64
 expect 0 "spectral info" -- "$PRT" info "$T/spec.prt"
 grep -q "partitions" "$T/out" && grep -q "red_wall" "$T/out" && grep -q "bounces 0..16" "$T/out" && ok || bad "info lacks partitions, surfaces or controls"
 expect 0 "spectral relight with the scene's lights" -- "$PRT" relight -q "$T/spec.prt" -o "$T/spec.json"

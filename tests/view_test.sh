@@ -139,6 +139,21 @@ xrun -a "$PRT" view "$T/demo.prt" --script "$T/nolight.txt" >/dev/null 2>"$T/err
 rc=$?
 [ "$rc" -eq 2 ] && grep -q "no light selected" "$T/err" && ok || { bad "light action without a light: exit $rc"; cat "$T/err"; }
 
+# Spectral transfer: the scene's point light drawn per pixel with shadow maps exactly as prt render
+# draws it; a surface recoloured from the keyboard equals prt render --albedo-of.
+"$PRT" bake -q "$T/demo.obj" -o "$T/spec.prt" --method spectral --basis 64 --samples 64 || bad "spectral bake"
+printf '%s\n' "0 screenshot $T/s1.exr" "0 key m" "0 key a" "0 screenshot $T/s2.exr" "0.1 quit" >"$T/sscript.txt"
+xrun -a -s "-screen 0 1024x768x24" "$PRT" view "$T/spec.prt" --env none --light point:0.3,1.5,0.4:4 --width 320 --height 240 --script "$T/sscript.txt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 0 ] && ok || { bad "spectral script exited $rc"; cat "$T/err"; }
+"$PRT" render -q "$T/spec.prt" -o "$T/rs1.exr" --width 320 --height 240 --env none --light point:0.3,1.5,0.4:4
+"$PRT" render -q "$T/spec.prt" -o "$T/rs2.exr" --width 320 --height 240 --env none --light point:0.3,1.5,0.4:4 --albedo-of floor=0.8,0.8,0.8
+within "$T/s1.exr" "$T/rs1.exr" 0.002
+within "$T/s2.exr" "$T/rs2.exr" 0.002
+"$PRT" compare --json - -q "$T/s1.exr" "$T/s2.exr" >"$T/cmp"
+r=$(field relative_l2 "$T/cmp")
+awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.005) }' && ok || bad "recolouring the floor changed nothing (relative L2 $r)"
+
 printf '0 frobnicate 1 2\n' >"$T/bad.txt"
 xrun -a "$PRT" view "$T/demo.prt" --script "$T/bad.txt" >/dev/null 2>"$T/err"
 rc=$?

@@ -90,6 +90,10 @@ prt_status prt_scene_lighting(prt_context *ctx, const prt_scene *scene, prt_ligh
 /* Writes the procedural demo scene (a ribbed bowl and a torus knot-like ring of spheres over a
  * ground plane between a red and a green wall) as OBJ+MTL. */
 prt_status prt_demo_scene_write(const char *obj_path);
+/* Writes a closed 6 x 3 x 4 m room with a 1.2 x 1 m window in its front wall (z = 2), a box and a
+ * shelf, every surface a grid of squares of side `cell` metres (0.0625 gives about 30,000
+ * vertices), as OBJ+MTL: indirect light dominates once a light shines in through the window. */
+prt_status prt_demo_room_write(const char *obj_path, float cell);
 
 #ifdef __cplusplus
 }

@@ -28,6 +28,8 @@ typedef struct thread_scratch {
     float *weight;           /* [vertex] hit weight, zero between uses */
     uint32_t *touched;       /* vertices with a weight */
     float *row;              /* [function] */
+    uint16_t *index;         /* [BLOCK * function]: a unit's rows before they are copied out */
+    float *value;
 } thread_scratch;
 
 typedef struct sbake {
@@ -168,10 +170,8 @@ static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
     const int nc = sb->d.env_order * sb->d.env_order;
     thread_scratch *sc = &sb->scratch[thread];
     unit_rows *u = &sb->units[unit];
-    /* Worst case every function of every vertex; shrunk after. */
-    uint16_t *index = malloc((v1 - v0) * F * sizeof(uint16_t));
-    float *value = malloc((v1 - v0) * F * sizeof(float));
-    if (!index || !value) { free(index); free(value); return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    uint16_t *index = sc->index;
+    float *value = sc->value;
     size_t at = 0;
     for (size_t v = v0; v < v1; ++v) {
         gather_vertex(sb, v, sc, sb->s->env + v * (size_t)nc, sb->s->emit ? sb->s->emit + v * 3 : NULL);
@@ -182,10 +182,11 @@ static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
     }
     free(u->index);
     free(u->value);
-    u->index = realloc(index, at ? at * sizeof(uint16_t) : 1);
-    u->value = realloc(value, at ? at * sizeof(float) : 1);
-    if (!u->index) u->index = index;
-    if (!u->value) u->value = value;
+    u->index = malloc(at ? at * sizeof(uint16_t) : 1);
+    u->value = malloc(at ? at * sizeof(float) : 1);
+    if (!u->index || !u->value) return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(u->index, index, at * sizeof(uint16_t));
+    memcpy(u->value, value, at * sizeof(float));
     return PRT_OK;
 }
 
@@ -253,6 +254,7 @@ static bool load_unit(prt__bake_job *base, uint64_t unit, const unsigned char *d
 static prt_status basis_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
 {
     sbake *sb = (sbake *)base;
+    if (sb->d.full) return prt__spectral_basis_full(ctx, sb->t->mesh.vertex_count, &sb->s->basis);
     return prt__spectral_basis_build(ctx, &sb->t->mesh, sb->d.partition_size, sb->d.functions, p, &sb->s->basis);
 }
 
@@ -268,7 +270,9 @@ static prt_status scratch_init(sbake *sb)
         sc->weight = prt__calloc(nv, sizeof(float));
         sc->touched = prt__calloc(nv, sizeof(uint32_t));
         sc->row = prt__calloc(sb->s->basis.functions, sizeof(float));
-        if (!sc->weight || !sc->touched || !sc->row) return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        sc->index = prt__calloc((size_t)BLOCK * sb->s->basis.functions, sizeof(uint16_t));
+        sc->value = prt__calloc((size_t)BLOCK * sb->s->basis.functions, sizeof(float));
+        if (!sc->weight || !sc->touched || !sc->row || !sc->index || !sc->value) return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
     return PRT_OK;
 }
@@ -313,6 +317,7 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
     s->value = malloc(total ? total * sizeof(int16_t) : 1);
     if (!s->row_start || !s->index || !s->value) return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory");
     const float inv = 1.0f / s->scale;
+    const long keep = sb->d.drop_below > 0 ? lroundf(sb->d.drop_below * 32767.0f) : 1;
     size_t at = 0;
     for (uint64_t u = 0; u < sb->unit_count; ++u) {
         const unit_rows *r = &sb->units[u];
@@ -320,7 +325,7 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
         for (size_t v = u * BLOCK; v < nv && v < (u + 1) * BLOCK; ++v) {
             for (uint32_t i = 0; i < r->count[v - u * BLOCK]; ++i, ++e) {
                 const long q = lroundf(r->value[e] * inv);
-                if (!q) continue;
+                if (labs(q) < keep || !q) continue;
                 s->index[at] = r->index[e];
                 s->value[at++] = (int16_t)(q > 32767 ? 32767 : q < -32767 ? -32767 : q);
             }
@@ -339,7 +344,10 @@ static void spectral_release(prt__bake_job *base)
     if (sb->units)
         for (uint64_t u = 0; u < sb->unit_count; ++u) { free(sb->units[u].index); free(sb->units[u].value); }
     free(sb->units);
-    for (int i = 0; i < sb->nscratch; ++i) { free(sb->scratch[i].weight); free(sb->scratch[i].touched); free(sb->scratch[i].row); }
+    for (int i = 0; i < sb->nscratch; ++i) {
+        thread_scratch *sc = &sb->scratch[i];
+        free(sc->weight); free(sc->touched); free(sc->row); free(sc->index); free(sc->value);
+    }
     free(sb->scratch);
     free(sb);
 }
@@ -358,6 +366,7 @@ prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_d
     if (d.samples < 16 || d.samples > 1 << 20) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "samples %d out of range 16..1048576", d.samples);
     if (d.env_order < 1 || d.env_order > PRT_SH_MAX_ORDER) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "environment SH order %d out of range 1..%d", d.env_order, PRT_SH_MAX_ORDER);
     if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
+    if (!(d.drop_below >= 0 && d.drop_below <= 0.1f)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--drop-below must lie in 0..0.1");
     const size_t nv = t->mesh.vertex_count;
     sbake *sb = prt__calloc(1, sizeof *sb);
     prt__spectral_set *s = prt__calloc(1, sizeof *s);
@@ -371,7 +380,7 @@ prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_d
     sb->s = s;
     t->state = s;   /* owned by t from here on */
     s->samples = d.samples;
-    s->partition_size = d.partition_size;
+    s->partition_size = d.full ? 1 : d.partition_size;
     s->env_order = d.env_order;
     s->ray_offset = d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh);
     sb->unit_count = (nv + BLOCK - 1) / BLOCK;

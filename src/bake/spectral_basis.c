@@ -275,6 +275,21 @@ prt_status prt__spectral_basis_build(prt_context *ctx, const prt__mesh *m, int p
     return st;
 }
 
+prt_status prt__spectral_basis_full(prt_context *ctx, size_t nv, prt__spectral_basis *b)
+{
+    memset(b, 0, sizeof *b);
+    if (nv > PRT__SPECTRAL_MAX_FUNCTIONS)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--full-basis: %zu vertices, at most %d (one function each)", nv, PRT__SPECTRAL_MAX_FUNCTIONS);
+    b->partitions = b->functions = (uint32_t)nv;
+    b->part_of = prt__calloc(nv, sizeof *b->part_of);
+    b->count = prt__calloc(nv, sizeof *b->count);
+    b->values = prt__calloc(nv, sizeof(float));
+    if (!b->part_of || !b->count || !b->values) { prt__spectral_basis_free(b); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    for (size_t v = 0; v < nv; ++v) { b->part_of[v] = (uint32_t)v; b->count[v] = 1; b->values[v] = 1.0f; }
+    if (!prt__spectral_basis_index(b, nv)) { prt__spectral_basis_free(b); return prt__fail(ctx, PRT_ERR_BACKEND, "spectral basis: inconsistent partitions"); }
+    return PRT_OK;
+}
+
 void prt__spectral_project(const prt__spectral_basis *b, const float *signal, float *coeffs)
 {
 #pragma omp parallel for schedule(dynamic, 4)

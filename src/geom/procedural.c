@@ -150,3 +150,52 @@ prt_status prt_demo_scene_write(const char *obj_path)
     for (int i = 0; i < 5; ++i) { free(s[i].pos); free(s[i].nrm); free(s[i].idx); free(s[i].uv); }
     return st;
 }
+
+static int cells(float length, float cell) { int n = (int)ceilf(length / cell); return n < 1 ? 1 : n; }
+
+prt_status prt_demo_room_write(const char *obj_path, float cell)
+{
+    if (!(cell >= 0.005f && cell <= 1.0f)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "room cell size %g out of range 0.005..1", cell);
+    /* A 6 x 3 x 4 m room, inward normals, a 1.2 x 1 m window in the front wall (z = 2), and two
+     * boxes; every surface a grid of about cell-sized squares (the paper's Fig. 6 scene). */
+    enum { N = 15 };
+    shape s[N] = {{.material = "floor", .rgb = {0.6f, 0.45f, 0.3f}}, {.material = "ceiling", .rgb = {0.8f, 0.8f, 0.8f}},
+                  {.material = "back_wall", .rgb = {0.75f, 0.72f, 0.65f}}, {.material = "front_wall", .rgb = {0.75f, 0.72f, 0.65f}},
+                  {.material = "front_wall", .rgb = {0.75f, 0.72f, 0.65f}}, {.material = "front_wall", .rgb = {0.75f, 0.72f, 0.65f}},
+                  {.material = "front_wall", .rgb = {0.75f, 0.72f, 0.65f}},
+                  {.material = "left_wall", .rgb = {0.7f, 0.25f, 0.2f}}, {.material = "right_wall", .rgb = {0.75f, 0.72f, 0.65f}},
+                  {.material = "box", .rgb = {0.2f, 0.3f, 0.65f}}, {.material = "box", .rgb = {0.2f, 0.3f, 0.65f}},
+                  {.material = "box", .rgb = {0.2f, 0.3f, 0.65f}}, {.material = "box", .rgb = {0.2f, 0.3f, 0.65f}},
+                  {.material = "box", .rgb = {0.2f, 0.3f, 0.65f}}, {.material = "shelf", .rgb = {0.8f, 0.75f, 0.6f}}};
+    for (int i = 0; i < N; ++i) { s[i].chart[2] = 1; s[i].chart[3] = 1; }
+    const float W = 6, H = 3, D = 4, x0 = -3, z0 = -2;
+    /* origin, edge u, edge v (normal u x v points into the room) */
+    const float args[N][9] = {
+        {x0, 0, -z0, W, 0, 0, 0, 0, -D},            /* floor, up */
+        {x0, H, z0, W, 0, 0, 0, 0, D},              /* ceiling, down */
+        {x0, 0, z0, W, 0, 0, 0, H, 0},              /* back wall z = -2, facing +z */
+        /* front wall z = +2, facing -z, in four pieces around the window x in [-0.6, 0.6], y in [1, 2] */
+        {-x0, 0, -z0, -W, 0, 0, 0, 1, 0},
+        {-x0, 2, -z0, -W, 0, 0, 0, 1, 0},
+        {-0.6f, 1, -z0, x0 + 0.6f, 0, 0, 0, 1, 0},
+        {-x0, 1, -z0, 0.6f + x0, 0, 0, 0, 1, 0},
+        {x0, 0, -z0, 0, 0, -D, 0, H, 0},            /* left wall x = -3, facing +x */
+        {-x0, 0, z0, 0, 0, D, 0, H, 0},             /* right wall x = +3, facing -x */
+        /* a 1.2 x 0.9 x 1.0 box at x in [-2, -0.8], z in [-1.2, -0.2]: top and four sides */
+        {-2.0f, 0.9f, -0.2f, 1.2f, 0, 0, 0, 0, -1.0f},
+        {-2.0f, 0, -0.2f, 1.2f, 0, 0, 0, 0.9f, 0},
+        {-0.8f, 0, -1.2f, -1.2f, 0, 0, 0, 0.9f, 0},
+        {-2.0f, 0, -1.2f, 0, 0, 1.0f, 0, 0.9f, 0},
+        {-0.8f, 0, -0.2f, 0, 0, -1.0f, 0, 0.9f, 0},
+        /* a shelf board 1.5 m up on the right wall, facing up */
+        {1.8f, 1.5f, 0.5f, 1.2f, 0, 0, 0, 0, -1.5f},
+    };
+    bool ok = true;
+    for (int i = 0; i < N && ok; ++i) {
+        const float lu = prt__v3_len(args[i] + 3), lv = prt__v3_len(args[i] + 6);
+        ok = shape_grid(&s[i], cells(lu, cell), cells(lv, cell), plane_param, args[i]);
+    }
+    prt_status st = ok ? write_obj(obj_path, s, N) : prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    for (int i = 0; i < N; ++i) { free(s[i].pos); free(s[i].nrm); free(s[i].idx); free(s[i].uv); }
+    return st;
+}

@@ -39,26 +39,33 @@ void prt__spectral_set_free(void *state)
 
 /* ---- bake options ---- */
 static const prt_option_desc options[] = {
-    {"functions", "N", PRT_OPTION_INT, 1, PRT__SPECTRAL_MAX_FUNCTIONS, NULL,
+    {"basis", "N", PRT_OPTION_INT, 1, PRT__SPECTRAL_MAX_FUNCTIONS, NULL,
      "spectral basis functions in all, spread over the partitions by vertex count\n(default 1024)"},
+    {"full-basis", NULL, PRT_OPTION_FLAG, 0, 0, NULL,
+     "no truncation: every vertex its own basis function (the same space as all\neigenvectors; at most 65535 vertices): the reference for the basis error"},
     {"partition", "V", PRT_OPTION_INT, 16, PRT__SPECTRAL_MAX_PARTITION / 2, NULL, "vertices per METIS partition, 16..2048 (default 1000)"},
     {"samples", "N", PRT_OPTION_INT, 16, 1 << 20, NULL, "gathering rays per vertex (default 4096; the paper uses 128x128)"},
+    {"drop-below", "E", PRT_OPTION_FLOAT, 0, 0.1, NULL,
+     "also drop transfer entries below E x the largest (default 0: only what rounds to zero\nat 16 bits, as the paper); 1e-3 keeps about a fifth of the entries of a closed room\nfor 2% error"},
     {"env-order", "N", PRT_OPTION_INT, 1, PRT_SH_MAX_ORDER, NULL, "SH order of the environment's shadowed direct light, 1..10 (default 4)"},
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "ray origin offset (default 1e-4 x scene diagonal)"},
 };
 
 static const prt_control_desc controls[] = {
-    {"bounces", "light bounces through the basis (0 = direct light only)", ',', '.', 0},
+    {"bounces", "light bounces through the basis (0 = direct light only)", '[', ']', 0},
 };
 
 static prt_status spectral_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job)
 {
     (void)scene;
     prt__spectral_bake_desc d = {0};
-    d.functions = prt__opt_int(o, "functions", 0);
+    d.functions = prt__opt_int(o, "basis", 0);
+    d.full = prt__opt_flag(o, "full-basis");
+    if (d.full && prt__opt(o, "basis")) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--basis and --full-basis exclude each other");
     d.partition_size = prt__opt_int(o, "partition", 0);
     d.samples = prt__opt_int(o, "samples", 0);
     d.env_order = prt__opt_int(o, "env-order", 0);
+    d.drop_below = prt__opt_float(o, "drop-below", 0.0f);
     d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
     prt_status st = prt__spectral_bake_begin(ctx, &d, t, job);
     if (!st && !(((prt__spectral_set *)t->state)->cache = cache_new())) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");

@@ -76,6 +76,9 @@ bool prt__spectral_basis_index(prt__spectral_basis *b, size_t vertex_count);
  * lowest-frequency eigenvectors of its Laplacian, about `functions` in all (bake/spectral_basis.c). */
 prt_status prt__spectral_basis_build(prt_context *ctx, const prt__mesh *m, int partition_size, int functions, prt__progress *p,
                                      prt__spectral_basis *out);
+/* The untruncated basis: vertex v alone is partition v with the one function 1 (it spans what all
+ * eigenvectors span); at most PRT__SPECTRAL_MAX_FUNCTIONS vertices. */
+prt_status prt__spectral_basis_full(prt_context *ctx, size_t vertex_count, prt__spectral_basis *out);
 /* Coefficients of a per-vertex RGB signal (3 floats per vertex) on the basis: 3 per function. */
 void prt__spectral_project(const prt__spectral_basis *b, const float *signal, float *coeffs);
 /* The signal back from its coefficients (3 floats per vertex). */
@@ -84,6 +87,8 @@ void prt__spectral_reconstruct(const prt__spectral_basis *b, size_t vertex_count
 /* The bake (bake/spectral.c) as stages of work units. */
 typedef struct prt__spectral_bake_desc {
     int partition_size, functions, samples, env_order;
+    bool full;   /* every vertex its own function: no truncation */
+    float drop_below;   /* entries below this times the largest are dropped too */
     float ray_offset;
 } prt__spectral_bake_desc;
 prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_desc *d, prt_transfer *t, prt__bake_job **job);

@@ -7,7 +7,7 @@
 #include <string.h>
 
 #define CUBE_RES 1024
-#define PLANE_RES 2048
+#define PLANE_RES 4096
 
 static const char *VS_DEPTH =
     "#version 330 core\n"
@@ -15,15 +15,29 @@ static const char *VS_DEPTH =
     "uniform mat4 vp;\n"
     "out vec3 w;\n"
     "void main() { w = pos; gl_Position = vp * vec4(pos, 1.0); }\n";
-/* Distance from the light (cube maps) or along the light's travel (directional). */
+/* Distance from the light (cube maps) or along the light's travel (directional). Faces turned
+ * towards the light are stored pushed back by two texels plus their slope over the filter's
+ * reach (slope-scaled, from the face's own derivatives): a lit surface then never shadows itself
+ * (no acne), while faces turned away - a room's ceiling seen from the sun outside - are stored
+ * where they are, so a wall right under them needs no depth bias and no light leaks in along the
+ * seam. Every face still casts: a one-sided shelf shadows what lies below it. */
 static const char *FS_CUBE =
     "#version 330 core\n"
-    "in vec3 w; uniform vec3 light; out vec4 dist;\n"
-    "void main() { dist = vec4(length(w - light)); }\n";
+    "in vec3 w; uniform vec3 light; uniform float texel; out vec4 dist;\n"
+    "void main() {\n"
+    "  float d = length(w - light);\n"
+    "  vec3 ng = normalize(cross(dFdx(w), dFdy(w)));\n"
+    "  float c = abs(dot(ng, (w - light) / d)), t = sqrt(max(0.0, 1.0 - c * c)) / max(c, 0.1);\n"
+    "  dist = vec4(d + (gl_FrontFacing ? (2.0 + 2.0 * t) * d * texel : 0.0));\n"
+    "}\n";
 static const char *FS_PLANE =
     "#version 330 core\n"
-    "in vec3 w; uniform vec3 dir; out vec4 dist;\n"
-    "void main() { dist = vec4(dot(w, -dir)); }\n";
+    "in vec3 w; uniform vec3 dir; uniform float texel; out vec4 dist;\n"
+    "void main() {\n"
+    "  vec3 ng = normalize(cross(dFdx(w), dFdy(w)));\n"
+    "  float c = abs(dot(ng, dir)), t = sqrt(max(0.0, 1.0 - c * c)) / max(c, 0.1);\n"
+    "  dist = vec4(dot(w, -dir) + (gl_FrontFacing ? (2.0 + 2.0 * t) * texel : 0.0));\n"
+    "}\n";
 
 static const char *VS_ADD =
     "#version 330 core\n"
@@ -31,11 +45,13 @@ static const char *VS_ADD =
     "layout(location = 2) in vec3 normal;\n"
     "layout(location = 4) in vec3 albedo;\n"
     "uniform mat4 mvp;\n"
-    "out vec3 f_pos; out vec3 f_nrm; out vec3 f_alb;\n"
+    "// centroid: with multisampling an edge pixel's centre may lie off the triangle, and a point\n"
+    "// extrapolated past a room's seam would be lit from outside.\n"
+    "centroid out vec3 f_pos; centroid out vec3 f_nrm; centroid out vec3 f_alb;\n"
     "void main() { f_pos = pos; f_nrm = normal; f_alb = albedo; gl_Position = mvp * vec4(pos, 1.0); }\n";
 static const char *FS_ADD =
     "#version 330 core\n"
-    "in vec3 f_pos; in vec3 f_nrm; in vec3 f_alb;\n"
+    "centroid in vec3 f_pos; centroid in vec3 f_nrm; centroid in vec3 f_alb;\n"
     "uniform int type;          // 1 point, 2 spot, 3 directional, 4 sphere (prt_light_type)\n"
     "uniform vec3 lpos, ldir, colour; uniform vec2 cosang; uniform float radius;\n"
     "uniform samplerCube cube; uniform sampler2D plane; uniform mat4 light_vp;\n"
@@ -55,10 +71,10 @@ static const char *FS_ADD =
     "// Fraction of a kernel x kernel grid of cube-map samples around the direction to p that see\n"
     "// the light: samples step `step` world units across, at p's distance.\n"
     "float cube_lit(vec3 d, float dist, float step, int n) {\n"
-    "  vec3 w = d / dist;\n"
+    "  vec3 w = normalize(d);\n"
     "  vec3 t = normalize(abs(w.x) < 0.6 ? cross(w, vec3(1.0, 0.0, 0.0)) : cross(w, vec3(0.0, 1.0, 0.0)));\n"
     "  vec3 b = cross(w, t);\n"
-    "  float lit = 0.0, h = 0.5 * float(n - 1), eps = 1.5 * dist * texel + bias;\n"
+    "  float lit = 0.0, h = 0.5 * float(n - 1), eps = 0.25 * dist * texel + bias;\n"
     "  for (int i = 0; i < n; ++i) for (int j = 0; j < n; ++j) {\n"
     "    vec3 q = d + ((float(i) - h) * t + (float(j) - h) * b) * step;\n"
     "    lit += dist - eps <= texture(cube, q).r ? 1.0 : 0.0;\n"
@@ -72,13 +88,17 @@ static const char *FS_ADD =
     "    float c = dot(n, ldir);\n"
     "    if (c <= 0.0) discard;\n"
     "    E = colour * c;\n"
-    "    vec3 p = f_pos + n * 1.5 * texel;   // normal offset against acne\n"
-    "    vec4 q = light_vp * vec4(p, 1.0);\n"
+    "    // The map is read a few texels off the surface along its normal (so that taps near a seam\n"
+    "    // stay on the occluder's side), but compared with the surface point's own depth: moving\n"
+    "    // towards the light would let an occluder right at a seam (a ceiling over a wall) through.\n"
+    "    vec4 q = light_vp * vec4(f_pos + n * 4.0 * texel, 1.0);\n"
     "    vec2 uv = q.xy * 0.5 + 0.5;\n"
-    "    float depth = dot(p, -ldir), sum = 0.0;\n"
+    "    float depth = dot(f_pos, -ldir), sum = 0.0;\n"
     "    vec2 px = vec2(1.0) / vec2(textureSize(plane, 0));\n"
+    "    // 3 x 3 taps a texel apart: smooth edges; the normal offset keeps them on an occluder's side\n"
+    "    // of a seam.\n"
     "    for (int i = -1; i <= 1; ++i) for (int j = -1; j <= 1; ++j)\n"
-    "      sum += depth - (1.5 * texel + bias) <= texture(plane, uv + vec2(i, j) * px).r ? 1.0 : 0.0;\n"
+    "      sum += depth - (0.25 * texel + bias) <= texture(plane, uv + vec2(i, j) * px).r ? 1.0 : 0.0;\n"
     "    lit = sum / 9.0;\n"
     "  } else {\n"
     "    vec3 d0 = lpos - f_pos;\n"
@@ -95,16 +115,16 @@ static const char *FS_ADD =
     "      E = colour * c / r2 * s;\n"
     "    }\n"
     "    if (E.r + E.g + E.b <= 0.0) discard;\n"
-    "    vec3 p = f_pos + n * 1.5 * r * texel;   // normal offset: a texel's width at this distance\n"
-    "    vec3 d = p - lpos;\n"
-    "    float dist = length(d);\n"
-    "    float step = 1.0 * dist * texel;\n"
+    "    // Looked up off the surface along its normal, compared at the surface point (as above).\n"
+    "    vec3 d = f_pos + n * 4.0 * r * texel - lpos;\n"
+    "    float dist = r;\n"
+    "    float step = dist * texel;\n"
     "    if (type == 4 && radius > 0.0) {\n"
     "      // Penumbra from the average blocker distance (percentage-closer soft shadows).\n"
-    "      vec3 w = d / dist;\n"
+    "      vec3 w = normalize(d);\n"
     "      vec3 t = normalize(abs(w.x) < 0.6 ? cross(w, vec3(1.0, 0.0, 0.0)) : cross(w, vec3(0.0, 1.0, 0.0)));\n"
     "      vec3 b = cross(w, t);\n"
-    "      float blockers = 0.0, count = 0.0, eps = 1.5 * dist * texel + bias;\n"
+    "      float blockers = 0.0, count = 0.0, eps = 0.25 * dist * texel + bias;\n"
     "      for (int i = -2; i <= 2; ++i) for (int j = -2; j <= 2; ++j) {\n"
     "        float s = texture(cube, d + (float(i) * t + float(j) * b) * radius * 0.5).r;\n"
     "        if (s < dist - eps) { blockers += s; count += 1.0; }\n"
@@ -167,6 +187,8 @@ prt_status prt__pixel_lights_init(prt__pixel_lights *p)
     if (!p->program_add) { prt__pixel_lights_free(p); return PRT_ERR_BACKEND; }
     p->uc_vp = glGetUniformLocation(p->program_cube, "vp");
     p->uc_light = glGetUniformLocation(p->program_cube, "light");
+    p->uc_texel = glGetUniformLocation(p->program_cube, "texel");
+    p->up_texel = glGetUniformLocation(p->program_plane, "texel");
     p->up_vp = glGetUniformLocation(p->program_plane, "vp");
     p->up_dir = glGetUniformLocation(p->program_plane, "dir");
     const GLuint a = p->program_add;
@@ -307,6 +329,7 @@ void prt__pixel_lights_shadows(prt__pixel_lights *p, GLuint vao, size_t index_co
             glUseProgram(p->program_plane);
             glUniformMatrix4fv(p->up_vp, 1, GL_FALSE, p->light_vp[i]);
             glUniform3fv(p->up_dir, 1, l->direction);
+            glUniform1f(p->up_texel, diag / PLANE_RES);
             glDrawElements(GL_TRIANGLES, (GLsizei)index_count, GL_UNSIGNED_INT, NULL);
             continue;
         }
@@ -322,6 +345,7 @@ void prt__pixel_lights_shadows(prt__pixel_lights *p, GLuint vao, size_t index_co
         glViewport(0, 0, CUBE_RES, CUBE_RES);
         glUseProgram(p->program_cube);
         glUniform3fv(p->uc_light, 1, l->position);
+        glUniform1f(p->uc_texel, 2.0f / CUBE_RES);
         for (int f = 0; f < 6; ++f) {
             glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X + f, p->cube[i], 0);
             glClearColor(1e30f, 1e30f, 1e30f, 1e30f);
@@ -356,7 +380,7 @@ void prt__pixel_lights_draw(const prt__pixel_lights *p, GLuint vao, size_t index
     glUniformMatrix4fv(p->ua_mvp, 1, GL_FALSE, mvp);
     glUniform1i(p->ua_cube, 0);
     glUniform1i(p->ua_plane, 1);
-    glUniform1f(p->ua_bias, diag * 2e-4f);
+    glUniform1f(p->ua_bias, diag * 2e-5f);
     glBindVertexArray(vao);
     /* Each sample takes a light once: coincident duplicate faces pass the depth test together. */
     glEnable(GL_STENCIL_TEST);

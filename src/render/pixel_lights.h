@@ -15,7 +15,7 @@
 
 typedef struct prt__pixel_lights {
     GLuint program_cube, program_plane, program_add;
-    GLint uc_vp, uc_light, up_vp, up_dir;
+    GLint uc_vp, uc_light, uc_texel, up_vp, up_dir, up_texel;
     GLint ua_mvp, ua_type, ua_pos, ua_dir, ua_colour, ua_cos, ua_radius, ua_cube, ua_plane, ua_light_vp, ua_texel, ua_bias;
     GLuint fbo, depth_rb, plane_depth_rb, vbo_albedo;
     GLuint cube[PRT__PIXEL_LIGHTS], plane[PRT__PIXEL_LIGHTS];

@@ -171,12 +171,16 @@ typedef struct cli_result {
     float *radiance;          /* 3 per vertex */
     float *indirect;          /* 3 per vertex, NULL when the source does not separate it */
     float *std_error;         /* reference JSON only */
+    float *std_error_indirect;
     prt_transfer *transfer;   /* when loaded from a .prt: its mesh draws error images */
     char what[256];
 } cli_result;
 /* Loads path; a .prt is relit with `light` and the variant called `kind` (NULL = its richest
  * view-independent one; view-dependent results are seen from the auto-framed camera). */
 prt_status cli_result_load(cli *c, const char *path, const cli_light *light, const char *kind, cli_result *out);
+/* Relative L2 of a against b with b's own noise taken out: sqrt(max(0, sum (a-b)^2 - sum err^2)
+ * / sum b^2), the error a would show against a noiseless b (err = b's standard errors). */
+double cli_rel_l2_above_noise(const float *a, const float *b, const float *err, size_t n);
 void cli_result_free(cli_result *r);
 
 /* Camera and image options shared by render and reference. */

@@ -127,7 +127,7 @@ int cmd_compare(int argc, char **argv)
         }
         va = indirect ? a.indirect : a.radiance;
         vb = indirect ? b.indirect : b.radiance;
-        eb = indirect ? NULL : b.std_error;
+        eb = indirect ? b.std_error_indirect : b.std_error;
         n = a.nv * 3;
     }
     metrics m = {0};
@@ -139,7 +139,7 @@ int cmd_compare(int argc, char **argv)
             printf("%s: %zu values\n", a.image ? "pixels" : "vertices", n / 3);
             printf("RMSE         %.6g\nrelative L2  %.6g\nmean |A-B|   %.6g\nmax |A-B|    %.6g\n", m.rmse, m.rel_l2, m.mean_abs, m.max_abs);
             if (a.image) printf("PSNR         %.2f dB\n", m.psnr);
-            if (!isnan(m.noise_rel)) printf("B's own relative noise %.6g\n", m.noise_rel);
+            if (!isnan(m.noise_rel)) printf("B's own relative noise %.6g\nrelative L2 above B's noise %.6g\n", m.noise_rel, cli_rel_l2_above_noise(va, vb, eb, n));
         }
         if (json) {
             cJSON *root = cJSON_CreateObject();
@@ -153,7 +153,10 @@ int cmd_compare(int argc, char **argv)
             cJSON_AddNumberToObject(root, "mean_abs", m.mean_abs);
             cJSON_AddNumberToObject(root, "max_abs", m.max_abs);
             if (a.image && isfinite(m.psnr)) cJSON_AddNumberToObject(root, "psnr_db", m.psnr);
-            if (!isnan(m.noise_rel)) cJSON_AddNumberToObject(root, "reference_relative_noise", m.noise_rel);
+            if (!isnan(m.noise_rel)) {
+                cJSON_AddNumberToObject(root, "reference_relative_noise", m.noise_rel);
+                cJSON_AddNumberToObject(root, "relative_l2_above_noise", cli_rel_l2_above_noise(va, vb, eb, n));
+            }
             char *text = cJSON_Print(root);
             cJSON_Delete(root);
             FILE *f = strcmp(json, "-") ? fopen(json, "w") : stdout;

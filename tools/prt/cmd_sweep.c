@@ -15,7 +15,9 @@ static const char *HELP =
     "on the same scene (prt reference SCENE -o REF.json with the same scene and lighting\n"
     "options). Writes one CSV row per value and kind, and with --plot a PNG of error and storage\n"
     "against the parameter (gnuplot).\n\n"
-    "  -o, --output FILE      the CSV (param,value,kind,rmse,relative_l2,max_abs,bytes_per_vertex,bake_seconds)\n"
+    "  -o, --output FILE      the CSV (param,value,kind,rmse,relative_l2,max_abs,bytes_per_vertex,bake_seconds,\n"
+    "                         relative_l2_above_noise: the error with the reference's own noise\n"
+    "                         taken out, when it has error bars)\n"
     "      --reference FILE   per-vertex reference JSON (required)\n"
     "      --plot FILE        PNG plot of relative L2 error and bytes per vertex\n"
     "      --method M         the method to bake with (default sh)\n"
@@ -192,7 +194,8 @@ int cmd_sweep(int argc, char **argv)
     snprintf(tmp, sizeof tmp, "%s.tmp.%ld", output, (long)getpid());
     FILE *csv = !st && !rc ? fopen(tmp, "w") : NULL;
     if (!st && !rc && !csv) { cli_error(&c, "cannot write '%s'", output); rc = EXIT_FAILURE_INPUT; }
-    if (csv) fprintf(csv, "param,value,kind,rmse,relative_l2,max_abs,bytes_per_vertex,bake_seconds\n");
+    if (csv) fprintf(csv, "param,value,kind,rmse,relative_l2,max_abs,bytes_per_vertex,bake_seconds,relative_l2_above_noise\n");
+    const float *ref_err = indirect ? ref.std_error_indirect : ref.std_error;
     float *rgb = !st && !rc ? malloc(ref.nv * 3 * sizeof(float)) : NULL;
     if (!st && !rc && !rgb) st = PRT_ERR_NO_MEMORY;
     char names[MAX_VARIANTS][64];
@@ -228,15 +231,18 @@ int cmd_sweep(int argc, char **argv)
                 sb += (double)b[k] * b[k];
                 mx = fmax(mx, fabs(diff));
             }
+            const double above = ref_err && !st ? cli_rel_l2_above_noise(a, b, ref_err, ref.nv * 3) : NAN;
             prt_relit_free(&r);
             if (st) break;
             const char *name = prt_transfer_variant_name(t, v);
             bool known = false;
             for (int k = 0; k < nnames && !known; ++k) known = !strcmp(names[k], name);
             if (!known && nnames < MAX_VARIANTS) snprintf(names[nnames++], sizeof names[0], "%s", name);
-            fprintf(csv, "%s,%s,%s,%.6g,%.6g,%.6g,%.0f,%.3f\n", pd->name, list_text[i], name, sqrt(se / (3.0 * ref.nv)), sb > 0 ? sqrt(se / sb) : INFINITY,
-                    mx, bytes, info.bake_seconds);
-            if (!c.quiet) fprintf(stderr, "prt sweep: %s %s %-21s relative L2 %.5f\n", pd->name, list_text[i], name, sb > 0 ? sqrt(se / sb) : INFINITY);
+            fprintf(csv, "%s,%s,%s,%.6g,%.6g,%.6g,%.0f,%.3f,%.6g\n", pd->name, list_text[i], name, sqrt(se / (3.0 * ref.nv)), sb > 0 ? sqrt(se / sb) : INFINITY,
+                    mx, bytes, info.bake_seconds, above);
+            if (!c.quiet)
+                fprintf(stderr, "prt sweep: %s %s %-21s relative L2 %.5f (%.5f above the reference's noise)\n", pd->name, list_text[i], name,
+                        sb > 0 ? sqrt(se / sb) : INFINITY, above);
         }
         prt_transfer_release(t);
     }

@@ -262,6 +262,7 @@ static void status_line(const viewer *v, char *buf, size_t n)
         prt_light_format(&v->want.lights[i], spec, sizeof spec);
         len += snprintf(buf + len, n - (size_t)len, "\n%s light %d: %s", i == v->selected ? ">" : " ", i + 1, spec);
     }
+    if (v->surface && len > 0 && (size_t)len < n) len += snprintf(buf + len, n - (size_t)len, "\nsurface: %s", prt_transfer_surface_name(v->t, v->surface));
     if (v->message[0] && len > 0 && (size_t)len < n) len += snprintf(buf + len, n - (size_t)len, "\n%s", v->message);
     if (v->help)
         for (int i = 0; i < v->ncontrols && len > 0 && (size_t)len < n; ++i)
@@ -410,6 +411,7 @@ int cmd_view(int argc, char **argv)
     view_register_core(&v);
     view_register_method(&v);
     view_register_lights(&v);
+    view_register_surfaces(&v);
     const size_t nv = prt_transfer_vertex_count(v.t);
     {
         prt_render_mesh mesh;

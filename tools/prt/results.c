@@ -3,6 +3,7 @@
 #include "cli.h"
 
 #include <cjson/cJSON.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -67,7 +68,7 @@ prt_status cli_write_vertex_ply(const char *path, const float *p, const float *n
 void cli_result_free(cli_result *r)
 {
     prt_image_free(&r->img);
-    free(r->radiance); free(r->indirect); free(r->std_error);
+    free(r->radiance); free(r->indirect); free(r->std_error); free(r->std_error_indirect);
     prt_transfer_release(r->transfer);
     memset(r, 0, sizeof *r);
 }
@@ -169,6 +170,7 @@ static prt_status load(cli *c, const char *path, const cli_light *light_in, cons
         st = read_field(root, "radiance", out->nv, path, &out->radiance);
         if (!st) st = read_field(root, "indirect", out->nv, path, &out->indirect);
         if (!st) st = read_field(root, "std_error", out->nv, path, &out->std_error);
+        if (!st) st = read_field(root, "std_error_indirect", out->nv, path, &out->std_error_indirect);
         cJSON_Delete(root);
         if (!st && !out->radiance) {
             fprintf(stderr, "prt %s: '%s' has no \"radiance\"\n", c->cmd, path);
@@ -188,4 +190,16 @@ prt_status cli_result_load(cli *c, const char *path, const cli_light *light, con
     prt_status st = load(c, path, light, kind, out);
     if (st) cli_result_free(out);
     return st;
+}
+
+double cli_rel_l2_above_noise(const float *a, const float *b, const float *err, size_t n)
+{
+    double se = 0, sb = 0, noise = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const double d = (double)a[i] - b[i];
+        se += d * d;
+        sb += (double)b[i] * b[i];
+        noise += (double)err[i] * err[i];
+    }
+    return sb > 0 ? sqrt(fmax(0.0, se - noise) / sb) : INFINITY;
 }

@@ -37,7 +37,8 @@ struct viewer {
     prt_window *win;
     prt_transfer *t;
     cli_light light;
-    float *albedo;              /* --albedo-of applied to the file's albedo; NULL = as baked */
+    float *albedo;              /* --albedo-of and surface edits applied to the file's albedo; NULL = as baked */
+    int surface;                /* the named surface the surface controls act on, 0 = none */
     /* camera: the auto-framed start until the user moves it, then an orbit */
     prt_camera start_cam;
     bool moved;
@@ -104,6 +105,12 @@ bool view_light_remove(viewer *v);
 bool view_light_move(viewer *v, float dx, float dy, float dz);
 bool view_light_scale(viewer *v, float factor);
 bool view_light_colour(viewer *v, const float rgb[3]);
+/* Surface colours (methods that change them at run time): select the next named surface; set
+ * its albedo (each channel in [0, 1]); scale it (clamped to 1). */
+bool view_surface_next(viewer *v);
+bool view_surface_albedo(viewer *v, const float rgb[3]);
+bool view_surface_scale(viewer *v, float factor);
+void view_register_surfaces(viewer *v);
 /* Takes the lighting's rotation and lights as the viewer's starting point. */
 void view_take_lights(viewer *v);
 /* The light types the file's method relights (PRT_LIGHTS_* bits). */

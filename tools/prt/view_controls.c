@@ -5,6 +5,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
@@ -303,4 +304,88 @@ static const view_control lights[] = {
 void view_register_lights(viewer *v)
 {
     if (view_light_types(v)) view_register(v, lights, (int)(sizeof lights / sizeof lights[0]));
+}
+
+/* ---- surface colours (methods that change albedo at run time) ---- */
+static bool surfaces_editable(viewer *v)
+{
+    if (prt_method_runtime_albedo(prt_transfer_method(v->t)) && prt_transfer_surface_count(v->t)) return true;
+    snprintf(v->message, sizeof v->message, "%s", prt_transfer_surface_count(v->t) ? "this method bakes colours in: changing them needs a rebake"
+                                                                                 : "the file names no surfaces");
+    return false;
+}
+
+bool view_surface_next(viewer *v)
+{
+    if (!surfaces_editable(v)) return false;
+    v->surface = v->surface % prt_transfer_surface_count(v->t) + 1;
+    return true;
+}
+
+/* Applies rgb to the selected surface; the worker reads the albedo, so it waits for the worker. */
+static bool paint(viewer *v, const float rgb[3])
+{
+    if (!surfaces_editable(v)) return false;
+    if (!v->surface) { snprintf(v->message, sizeof v->message, "no surface selected (m selects one)"); return false; }
+    const size_t nv = prt_transfer_vertex_count(v->t);
+    view_sync(v);
+    if (!v->albedo) {
+        if (!(v->albedo = malloc(nv * 3 * sizeof(float)))) { snprintf(v->message, sizeof v->message, "out of memory"); return false; }
+        memcpy(v->albedo, prt_transfer_albedo(v->t), nv * 3 * sizeof(float));
+    }
+    if (prt_transfer_paint_albedo(v->t, prt_transfer_surface_name(v->t, v->surface), rgb, v->albedo)) {
+        snprintf(v->message, sizeof v->message, "%s", prt_last_error());
+        return false;
+    }
+    view_request_relight(v);
+    return true;
+}
+
+/* The selected surface's albedo now: its first vertex's. */
+static bool surface_albedo(const viewer *v, float rgb[3])
+{
+    const uint16_t *s = prt_transfer_surfaces(v->t);
+    const float *a = v->albedo ? v->albedo : prt_transfer_albedo(v->t);
+    for (size_t i = 0; s && i < prt_transfer_vertex_count(v->t); ++i)
+        if (s[i] == v->surface) { memcpy(rgb, a + i * 3, 3 * sizeof(float)); return true; }
+    return false;
+}
+
+bool view_surface_albedo(viewer *v, const float rgb[3])
+{
+    for (int k = 0; k < 3; ++k)
+        if (!(rgb[k] >= 0.0f && rgb[k] <= 1.0f)) { snprintf(v->message, sizeof v->message, "an albedo is three numbers in [0, 1]"); return false; }
+    return paint(v, rgb);
+}
+
+bool view_surface_scale(viewer *v, float factor)
+{
+    float rgb[3];
+    if (!surfaces_editable(v)) return false;
+    if (!v->surface || !surface_albedo(v, rgb)) { snprintf(v->message, sizeof v->message, "no surface selected (m selects one)"); return false; }
+    for (int k = 0; k < 3; ++k) rgb[k] = fminf(1.0f, rgb[k] * factor);
+    return paint(v, rgb);
+}
+
+static void next_surface(viewer *v, int arg) { (void)arg; view_surface_next(v); }
+static void recolour_surface(viewer *v, int arg)
+{
+    (void)arg;
+    static const float palette[6][3] = {{0.8f, 0.8f, 0.8f}, {0.8f, 0.15f, 0.1f}, {0.15f, 0.6f, 0.15f}, {0.15f, 0.25f, 0.8f}, {0.85f, 0.75f, 0.2f}, {0.3f, 0.3f, 0.3f}};
+    static int next;
+    view_surface_albedo(v, palette[next++ % 6]);
+}
+static void scale_surface(viewer *v, int arg) { view_surface_scale(v, arg > 0 ? 1.25f : 0.8f); }
+
+static const view_control surfaces[] = {
+    {'M', "m", "select the next named surface", next_surface, 0},
+    {'A', "a", "recolour the selected surface (albedo, no rebake)", recolour_surface, 0},
+    {';', ";", "darken the selected surface", scale_surface, -1},
+    {'\'', "'", "lighten the selected surface", scale_surface, 1},
+};
+
+void view_register_surfaces(viewer *v)
+{
+    if (prt_method_runtime_albedo(prt_transfer_method(v->t)) && prt_transfer_surface_count(v->t))
+        view_register(v, surfaces, (int)(sizeof surfaces / sizeof surfaces[0]));
 }
