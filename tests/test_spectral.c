@@ -419,6 +419,73 @@ static void test_pixel_lights(void **state)
     prt_context_release(ctx);
 }
 
+/* The glossy final bounce (eq. 8): a glossy floor in front of a glowing wall reflects the wall
+ * view-dependently, as the path tracer sees it from the same eye (the floor's glossy part comes
+ * only through the bounce: the wall is its only light). */
+static void test_glossy_final_bounce(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_quad(&m, (float[3]){-1, 0, 1}, (float[3]){2, 0, 0}, (float[3]){0, 0, -2}, 16);   /* floor, up */
+    const size_t floor_nv = m.nv;
+    tm_quad(&m, (float[3]){-1, 0, -1}, (float[3]){2, 0, 0}, (float[3]){0, 1, 0}, 8);    /* wall at z = -1, facing +z */
+    float *albedo = malloc(m.nv * 3 * sizeof(float));
+    for (size_t i = 0; i < m.nv * 3; ++i) albedo[i] = i < floor_nv * 3 ? 0.3f : 0.0f;
+    prt_scene_desc sd = {0};
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_create_copy(ctx, m.pos, m.nrm, albedo, m.nv, m.idx, m.nt, &sd, &s), PRT_OK);
+    prt_brdf phong;
+    assert_int_equal(prt_brdf_parse("phong:8:0.3:0.5", &phong), PRT_OK);
+    assert_int_equal(prt_scene_set_brdf(s, 0, floor_nv, &phong), PRT_OK);
+    assert_int_equal(prt_scene_set_emission(s, floor_nv, prt_scene_vertex_count(s) - floor_nv, (float[3]){1, 1, 1}), PRT_OK);
+    prt_transfer *t = bake(ctx, s, "256", NULL, "2048");
+    char *text = NULL;
+    assert_int_equal(prt_transfer_describe(t, "glossy", 0, &text), PRT_OK);
+    assert_non_null(strstr(text, "glossy final bounce"));
+    free(text);
+    prt_lighting *l = NULL;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);   /* the wall alone */
+    const float eye[3] = {0, 0.6f, 2.5f};
+    prt_relit r;
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1}, &r), PRT_OK);
+    assert_true(prt_relit_view_dependent(&r));
+    const size_t nv = prt_transfer_vertex_count(t);
+    float *ours = malloc(nv * 3 * sizeof(float)), *flat = malloc(nv * 3 * sizeof(float));
+    assert_int_equal(prt_relit_shade(ctx, t, &r, eye, ours), PRT_OK);
+    memcpy(flat, r.radiance, nv * 3 * sizeof(float));
+    prt_scene *traced = NULL;
+    assert_int_equal(prt_transfer_scene(ctx, t, &traced), PRT_OK);
+    prt_reference_desc rd = {0};
+    rd.samples = 1024;
+    rd.lighting = l;
+    rd.eye = eye;
+    prt_reference_vertices ref;
+    assert_int_equal(prt_reference_trace_vertices(ctx, traced, NULL, &rd, &ref), PRT_OK);
+    double se = 0, sf = 0, sb = 0, sn = 0;
+    for (size_t i = 0; i < floor_nv * 3; ++i) {
+        se += ((double)ours[i] - ref.radiance[i]) * ((double)ours[i] - ref.radiance[i]);
+        sf += ((double)flat[i] - ref.radiance[i]) * ((double)flat[i] - ref.radiance[i]);
+        sb += (double)ref.radiance[i] * ref.radiance[i];
+        sn += (double)ref.std_error[i] * ref.std_error[i];
+    }
+    print_message("glossy floor vs path tracer: %.4f with the glossy bounce, %.4f without (reference noise %.4f)\n", sqrt(se / sb), sqrt(sf / sb),
+                  sqrt(sn / sb));
+    assert_true(sqrt(se / sb) < 0.5 * sqrt(sf / sb));   /* the glossy bounce is what the floor shows */
+    assert_true(sqrt(se / sb) < sqrt(sn / sb) + 0.08);
+    prt_reference_vertices_free(&ref);
+    prt_scene_release(traced);
+    free(ours);
+    free(flat);
+    free(albedo);
+    prt_relit_free(&r);
+    prt_lighting_release(l);
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 static double rel_l2(const float *a, const float *b, size_t n, const float *mask_src)
 {
     double se = 0, sb = 0;
@@ -509,6 +576,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_direct_closed_forms),
         cmocka_unit_test(test_white_furnace),
         cmocka_unit_test(test_albedo_at_run_time),
+        cmocka_unit_test(test_glossy_final_bounce),
         cmocka_unit_test_setup_teardown(test_file_round_trip, test_dir_setup, test_dir_teardown),
         cmocka_unit_test(test_cornell_vs_reference),
     };

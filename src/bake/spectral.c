@@ -18,17 +18,21 @@
 #define BLOCK 32
 #define PACKET 16
 
+/* Rows per vertex: the diffuse row, then the 16 glossy rows of a glossy vertex. */
+#define ROWS (1 + PRT__SPECTRAL_GLOSSY_N)
+
 typedef struct unit_rows {
-    uint32_t count[BLOCK];   /* entries per vertex of the block */
-    uint16_t *index;
+    uint32_t count[BLOCK * ROWS];   /* entries of row r of the block's vertex i at [i * ROWS + r] (glossy rows: 0 if not glossy) */
+    uint16_t *index;                /* every row's entries, in that order */
     float *value;
 } unit_rows;
 
 typedef struct thread_scratch {
     float *weight;           /* [vertex] hit weight, zero between uses */
+    float *gweight;          /* [vertex][16] hit weight times y_k / cos for glossy receivers */
     uint32_t *touched;       /* vertices with a weight */
-    float *row;              /* [function] */
-    uint16_t *index;         /* [BLOCK * function]: a unit's rows before they are copied out */
+    float *row;              /* [ROWS][function] */
+    uint16_t *index;         /* a unit's rows before they are copied out */
     float *value;
 } thread_scratch;
 
@@ -103,6 +107,7 @@ static void gather_vertex(const sbake *sb, size_t v, thread_scratch *sc, float *
     for (int k = 0; k < PACKET; ++k) idx[k] = k;
     memset(env, 0, (size_t)nc * sizeof(float));
     const int n_l = sb->emitters.count ? EMITTER_RAYS : 0;
+    const bool glossy = sb->s->glossy_of && sb->s->glossy_of[v] != UINT32_MAX;
     double e[3] = {0, 0, 0};
     for (int i0 = 0; i0 < N; i0 += PACKET) {
         const int lanes = N - i0 < PACKET ? N - i0 : PACKET;
@@ -146,19 +151,38 @@ static void gather_vertex(const sbake *sb, size_t v, thread_scratch *sc, float *
                 sc->weight[u] += c * w[a];
                 if (sc->weight[u] == 0.0f) sc->weight[u] = 1e-38f;   /* stays listed exactly once */
             }
+            if (glossy) {
+                /* Radiance from the hit projected on y_k: the cosine-weighted pdf is divided out. */
+                float y[PRT__SPECTRAL_GLOSSY_N];
+                prt_sh_eval_f(PRT__SPECTRAL_GLOSSY_ORDER, d, y);
+                const float cosine = fmaxf(prt__v3_dot(d, n), 1e-3f);
+                for (int a = 0; a < 3; ++a) {
+                    float *gw = sc->gweight + (size_t)tri[a] * PRT__SPECTRAL_GLOSSY_N;
+                    const float f = c * w[a] / cosine;
+                    for (int j = 0; j < PRT__SPECTRAL_GLOSSY_N; ++j) gw[j] += f * y[j];
+                }
+            }
         }
     }
     if (n_l) {
         emitter_samples(sb, v, N, n_l, e);
         for (int a = 0; a < 3; ++a) emit[a] = (float)e[a];
     }
-    memset(sc->row, 0, b->functions * sizeof(float));
+    const size_t F = b->functions;
+    memset(sc->row, 0, (glossy ? ROWS : 1) * F * sizeof(float));
     for (uint32_t i = 0; i < touched; ++i) {
         const uint32_t u = sc->touched[i], q = b->part_of[u], k = b->count[q];
         const float w = sc->weight[u], *s = b->values + b->offset[u];
         float *row = sc->row + b->first[q];
         for (uint32_t j = 0; j < k; ++j) row[j] += w * s[j];
         sc->weight[u] = 0.0f;
+        if (!glossy) continue;
+        float *gw = sc->gweight + (size_t)u * PRT__SPECTRAL_GLOSSY_N;
+        for (int r = 0; r < PRT__SPECTRAL_GLOSSY_N; ++r) {
+            float *grow = sc->row + (size_t)(1 + r) * F + b->first[q];
+            for (uint32_t j = 0; j < k; ++j) grow[j] += gw[r] * s[j];
+            gw[r] = 0.0f;
+        }
     }
 }
 
@@ -173,12 +197,17 @@ static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
     uint16_t *index = sc->index;
     float *value = sc->value;
     size_t at = 0;
+    memset(u->count, 0, sizeof u->count);
     for (size_t v = v0; v < v1; ++v) {
         gather_vertex(sb, v, sc, sb->s->env + v * (size_t)nc, sb->s->emit ? sb->s->emit + v * 3 : NULL);
-        uint32_t n = 0;
-        for (uint32_t l = 0; l < F; ++l)
-            if (sc->row[l] != 0.0f) { index[at] = (uint16_t)l; value[at++] = sc->row[l]; ++n; }
-        u->count[v - v0] = n;
+        const int rows = sb->s->glossy_of && sb->s->glossy_of[v] != UINT32_MAX ? ROWS : 1;
+        for (int r = 0; r < rows; ++r) {
+            const float *row = sc->row + (size_t)r * F;
+            uint32_t n = 0;
+            for (uint32_t l = 0; l < F; ++l)
+                if (row[l] != 0.0f) { index[at] = (uint16_t)l; value[at++] = row[l]; ++n; }
+            u->count[(v - v0) * ROWS + (size_t)r] = n;
+        }
     }
     free(u->index);
     free(u->value);
@@ -198,8 +227,8 @@ static void save_unit(prt__bake_job *base, uint64_t unit, prt__bytes *out)
     const int nc = sb->d.env_order * sb->d.env_order;
     const unit_rows *u = &sb->units[unit];
     size_t total = 0;
-    for (size_t v = v0; v < v1; ++v) total += u->count[v - v0];
-    prt__bytes_put(out, u->count, (v1 - v0) * sizeof(uint32_t));
+    for (size_t i = 0; i < (v1 - v0) * ROWS; ++i) total += u->count[i];
+    prt__bytes_put(out, u->count, (v1 - v0) * ROWS * sizeof(uint32_t));
     prt__bytes_put(out, u->index, total * sizeof(uint16_t));
     prt__bytes_put(out, u->value, total * sizeof(float));
     prt__bytes_put(out, sb->s->env + v0 * nc, (v1 - v0) * nc * sizeof(float));
@@ -212,17 +241,18 @@ static bool load_unit(prt__bake_job *base, uint64_t unit, const unsigned char *d
     const size_t nv = sb->t->mesh.vertex_count, v0 = unit * BLOCK, v1 = v0 + BLOCK < nv ? v0 + BLOCK : nv, n = v1 - v0;
     const uint32_t F = sb->s->basis.functions;
     const size_t nc = (size_t)sb->d.env_order * sb->d.env_order;
-    uint32_t count[BLOCK];
-    if (size < n * sizeof(uint32_t)) return false;
-    memcpy(count, data, n * sizeof(uint32_t));
+    uint32_t count[BLOCK * ROWS];
+    if (size < n * ROWS * sizeof(uint32_t)) return false;
+    memcpy(count, data, n * ROWS * sizeof(uint32_t));
     size_t total = 0;
-    for (size_t i = 0; i < n; ++i) {
-        if (count[i] > F) return false;
+    for (size_t i = 0; i < n * ROWS; ++i) {
+        const bool glossy = sb->s->glossy_of && sb->s->glossy_of[v0 + i / ROWS] != UINT32_MAX;
+        if (count[i] > F || (i % ROWS && !glossy && count[i])) return false;
         total += count[i];
     }
     const size_t ne = sb->s->emit ? n * 3 : 0;
-    if (size != n * sizeof(uint32_t) + total * (sizeof(uint16_t) + sizeof(float)) + (n * nc + ne) * sizeof(float)) return false;
-    const unsigned char *pi = data + n * sizeof(uint32_t), *pv = pi + total * sizeof(uint16_t), *pe = pv + total * sizeof(float);
+    if (size != n * ROWS * sizeof(uint32_t) + total * (sizeof(uint16_t) + sizeof(float)) + (n * nc + ne) * sizeof(float)) return false;
+    const unsigned char *pi = data + n * ROWS * sizeof(uint32_t), *pv = pi + total * sizeof(uint16_t), *pe = pv + total * sizeof(float);
     uint16_t *index = malloc(total ? total * sizeof(uint16_t) : 1);
     float *value = malloc(total ? total * sizeof(float) : 1);
     if (!index || !value) { free(index); free(value); return false; }
@@ -231,7 +261,7 @@ static bool load_unit(prt__bake_job *base, uint64_t unit, const unsigned char *d
     /* Indices ascend within each vertex and stay below the function count; values are finite. */
     size_t at = 0;
     bool ok = prt__all_finite(value, total);
-    for (size_t i = 0; i < n && ok; ++i)
+    for (size_t i = 0; i < n * ROWS && ok; ++i)
         for (uint32_t e = 0; e < count[i]; ++e, ++at)
             if (index[at] >= F || (e && index[at] <= index[at - 1])) ok = false;
     float env[BLOCK * PRT_SH_MAX_COEFFS], emit[BLOCK * 3];
@@ -245,7 +275,8 @@ static bool load_unit(prt__bake_job *base, uint64_t unit, const unsigned char *d
     free(u->value);
     u->index = index;
     u->value = value;
-    memcpy(u->count, count, n * sizeof(uint32_t));
+    memset(u->count, 0, sizeof u->count);
+    memcpy(u->count, count, n * ROWS * sizeof(uint32_t));
     memcpy(sb->s->env + v0 * nc, env, n * nc * sizeof(float));
     if (ne) memcpy(sb->s->emit + v0 * 3, emit, ne * sizeof(float));
     return true;
@@ -269,9 +300,12 @@ static prt_status scratch_init(sbake *sb)
         thread_scratch *sc = &sb->scratch[i];
         sc->weight = prt__calloc(nv, sizeof(float));
         sc->touched = prt__calloc(nv, sizeof(uint32_t));
-        sc->row = prt__calloc(sb->s->basis.functions, sizeof(float));
-        sc->index = prt__calloc((size_t)BLOCK * sb->s->basis.functions, sizeof(uint16_t));
-        sc->value = prt__calloc((size_t)BLOCK * sb->s->basis.functions, sizeof(float));
+        const size_t rows = sb->s->glossy_count ? ROWS : 1;
+        sc->row = prt__calloc(rows * sb->s->basis.functions, sizeof(float));
+        sc->index = prt__calloc((size_t)BLOCK * rows * sb->s->basis.functions, sizeof(uint16_t));
+        sc->value = prt__calloc((size_t)BLOCK * rows * sb->s->basis.functions, sizeof(float));
+        if (sb->s->glossy_count && !(sc->gweight = prt__calloc(nv * PRT__SPECTRAL_GLOSSY_N, sizeof(float))))
+            return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
         if (!sc->weight || !sc->touched || !sc->row || !sc->index || !sc->value) return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
     return PRT_OK;
@@ -296,40 +330,57 @@ static prt_status spectral_stage(prt__bake_job *base, int index, prt__stage *out
     return PRT_OK;
 }
 
-/* One scale for the whole matrix; entries that round to zero are dropped. */
+/* One scale for the whole diffuse matrix and one for the glossy rows; entries that round to zero
+ * (or fall below --drop-below) are dropped. */
 static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
 {
     sbake *sb = (sbake *)base;
     prt__spectral_set *s = sb->s;
     const size_t nv = t->mesh.vertex_count;
-    float big = 0.0f;
-    size_t total = 0;
+    float big[2] = {0.0f, 0.0f};   /* diffuse, glossy */
+    size_t total[2] = {0, 0};
     for (uint64_t u = 0; u < sb->unit_count; ++u) {
         const unit_rows *r = &sb->units[u];
-        size_t n = 0;
-        for (int i = 0; i < BLOCK; ++i) n += r->count[i];
-        for (size_t e = 0; e < n; ++e) big = fmaxf(big, fabsf(r->value[e]));
-        total += n;
+        size_t e = 0;
+        for (size_t i = 0; i < BLOCK * ROWS; ++i)
+            for (uint32_t k = 0; k < r->count[i]; ++k, ++e) {
+                const int g = i % ROWS != 0;
+                big[g] = fmaxf(big[g], fabsf(r->value[e]));
+                total[g]++;
+            }
     }
-    s->scale = big > 0 ? big / 32767.0f : 1.0f;
+    s->scale = big[0] > 0 ? big[0] / 32767.0f : 1.0f;
+    s->gscale = big[1] > 0 ? big[1] / 32767.0f : 1.0f;
+    const size_t ng = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N;
     s->row_start = prt__calloc(nv + 1, sizeof(uint64_t));
-    s->index = malloc(total ? total * sizeof(uint16_t) : 1);
-    s->value = malloc(total ? total * sizeof(int16_t) : 1);
-    if (!s->row_start || !s->index || !s->value) return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    const float inv = 1.0f / s->scale;
+    s->index = malloc(total[0] ? total[0] * sizeof(uint16_t) : 1);
+    s->value = malloc(total[0] ? total[0] * sizeof(int16_t) : 1);
+    s->grow_start = prt__calloc(ng + 1, sizeof(uint64_t));
+    s->gindex = malloc(total[1] ? total[1] * sizeof(uint16_t) : 1);
+    s->gvalue = malloc(total[1] ? total[1] * sizeof(int16_t) : 1);
+    if (!s->row_start || !s->index || !s->value || !s->grow_start || !s->gindex || !s->gvalue)
+        return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    const float inv[2] = {1.0f / s->scale, 1.0f / s->gscale};
     const long keep = sb->d.drop_below > 0 ? lroundf(sb->d.drop_below * 32767.0f) : 1;
-    size_t at = 0;
+    size_t at[2] = {0, 0};
     for (uint64_t u = 0; u < sb->unit_count; ++u) {
         const unit_rows *r = &sb->units[u];
         size_t e = 0;
         for (size_t v = u * BLOCK; v < nv && v < (u + 1) * BLOCK; ++v) {
-            for (uint32_t i = 0; i < r->count[v - u * BLOCK]; ++i, ++e) {
-                const long q = lroundf(r->value[e] * inv);
-                if (labs(q) < keep || !q) continue;
-                s->index[at] = r->index[e];
-                s->value[at++] = (int16_t)(q > 32767 ? 32767 : q < -32767 ? -32767 : q);
+            const uint32_t gv = s->glossy_of ? s->glossy_of[v] : UINT32_MAX;
+            for (int row = 0; row < ROWS; ++row) {
+                const int g = row != 0;
+                uint16_t *index = g ? s->gindex : s->index;
+                int16_t *value = g ? s->gvalue : s->value;
+                for (uint32_t i = 0; i < r->count[(v - u * BLOCK) * ROWS + (size_t)row]; ++i, ++e) {
+                    const long q = lroundf(r->value[e] * inv[g]);
+                    if (labs(q) < keep || !q) continue;
+                    index[at[g]] = r->index[e];
+                    value[at[g]++] = (int16_t)(q > 32767 ? 32767 : q < -32767 ? -32767 : q);
+                }
+                if (!g) s->row_start[v + 1] = at[0];
+                else if (gv != UINT32_MAX) s->grow_start[(size_t)gv * PRT__SPECTRAL_GLOSSY_N + (size_t)row] = at[1];
             }
-            s->row_start[v + 1] = at;
         }
     }
     return PRT_OK;
@@ -346,7 +397,7 @@ static void spectral_release(prt__bake_job *base)
     free(sb->units);
     for (int i = 0; i < sb->nscratch; ++i) {
         thread_scratch *sc = &sb->scratch[i];
-        free(sc->weight); free(sc->touched); free(sc->row); free(sc->index); free(sc->value);
+        free(sc->weight); free(sc->gweight); free(sc->touched); free(sc->row); free(sc->index); free(sc->value);
     }
     free(sb->scratch);
     free(sb);
@@ -388,6 +439,7 @@ prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_d
     s->env = prt__calloc(nv * (size_t)d.env_order * d.env_order, sizeof(float));
     prt_status st = !sb->units || !s->env ? prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory") : PRT_OK;
     if (!st && t->mesh.emission) st = prt__emitters_init(&sb->emitters, &t->mesh, 1.0f);
+    if (!st && !prt__spectral_glossy_index(t, s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st && sb->emitters.count && !(s->emit = prt__calloc(nv * 3, sizeof(float)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) st = prt__raycaster_create(ctx, &t->mesh, &sb->rc);
     if (!st) st = prt__vertex_origins(&t->mesh, s->ray_offset, &sb->origins);

@@ -178,6 +178,23 @@ prt_status prt__mesh_paint(const prt__mesh *m, const char *name, const float rgb
     return prt__fail(NULL, PRT_ERR_INVALID_ARG, "no surface is called '%s' (there are %s%s)", name, list, strlen(list) >= sizeof list - 80 ? ", ..." : "");
 }
 
+void prt__mesh_compact_surfaces(prt__mesh *m)
+{
+    if (!m->surface_count) return;
+    int *map = prt__calloc((size_t)m->surface_count + 1, sizeof(int));
+    if (!map) return;   /* unused names cost nothing but a line in prt info */
+    for (size_t v = 0; v < m->vertex_count; ++v) map[m->surface[v]] = 1;
+    int n = 0;
+    for (int k = 1; k <= m->surface_count; ++k) {
+        if (!map[k]) continue;
+        map[k] = ++n;
+        if (n != k) memcpy(m->surface_names[n - 1], m->surface_names[k - 1], PRT__SURFACE_NAME);
+    }
+    for (size_t v = 0; v < m->vertex_count; ++v) m->surface[v] = (uint16_t)(m->surface[v] ? map[m->surface[v]] : 0);
+    m->surface_count = n;
+    free(map);
+}
+
 void prt__mesh_set_surface(prt__mesh *m, size_t first, size_t count, int id)
 {
     for (size_t v = first; v < first + count; ++v) m->surface[v] = (uint16_t)id;

@@ -35,6 +35,8 @@ int prt__mesh_surface_id(prt__mesh *m, const char *name);
 /* Sets albedo (3 per vertex) of the vertices of every surface called name; fails listing the
  * names when none is. */
 prt_status prt__mesh_paint(const prt__mesh *m, const char *name, const float rgb[3], float *albedo);
+/* Drops surface names no vertex uses, renumbering the rest in order. */
+void prt__mesh_compact_surfaces(prt__mesh *m);
 /* Gives vertices [first, first + count) surface id. */
 void prt__mesh_set_surface(prt__mesh *m, size_t first, size_t count, int id);
 /* The per-vertex emission array, allocated as zeros on first use (emission stays NULL while

@@ -259,5 +259,6 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         index++;
     }
     cJSON_Delete(root);
+    if (!st) prt__mesh_compact_surfaces(m);   /* the files' names a JSON material replaced */
     return st;
 }

@@ -3,12 +3,14 @@
  * bounce control and relighting with run-time albedo. The basis is built in
  * bake/spectral_basis.c, the transfer in bake/spectral.c, the run time in relight/spectral.c. */
 #include "method/spectral.h"
+#include "bake/bake_internal.h"
 
 #define CHUNK_SPCP PRT__FOURCC('S', 'P', 'C', 'P')
 #define CHUNK_SPCB PRT__FOURCC('S', 'P', 'C', 'B')
 #define CHUNK_SPCT PRT__FOURCC('S', 'P', 'C', 'T')
 #define CHUNK_SPCE PRT__FOURCC('S', 'P', 'C', 'E')
 #define CHUNK_SPCM PRT__FOURCC('S', 'P', 'C', 'M')
+#define CHUNK_SPCG PRT__FOURCC('S', 'P', 'C', 'G')
 #define SPCP_HEADER 48
 
 static prt__spectral_cache *cache_new(void)
@@ -28,13 +30,35 @@ void prt__spectral_set_free(void *state)
     free(s->value);
     free(s->env);
     free(s->emit);
+    free(s->glossy_of);
+    free(s->grow_start);
+    free(s->gindex);
+    free(s->gvalue);
     if (s->cache) {
         prt__raycaster_release(&s->cache->rc);
         free(s->cache->origins);
+        for (int k = 0; k < 255; ++k) free(s->cache->brdf_matrix[k]);
+        prt__frame_rot *fr = s->cache->frames;
+        for (uint32_t g = 0; fr && g < s->glossy_count; ++g) prt__frame_rot_release(&fr[g]);
+        free(fr);
         pthread_mutex_destroy(&s->cache->lock);
         free(s->cache);
     }
     free(s);
+}
+
+bool prt__spectral_glossy_index(const prt_transfer *t, prt__spectral_set *s)
+{
+    const size_t nv = t->mesh.vertex_count;
+    free(s->glossy_of);
+    s->glossy_count = 0;
+    if (!(s->glossy_of = malloc(nv * sizeof(uint32_t)))) return false;
+    for (size_t v = 0; v < nv; ++v) {
+        const uint8_t k = t->mesh.material[v];
+        const bool glossy = k && k <= t->brdf_count && prt_brdf_is_glossy(&t->brdfs[k - 1]);
+        s->glossy_of[v] = glossy ? s->glossy_count++ : UINT32_MAX;
+    }
+    return true;
 }
 
 /* ---- bake options ---- */
@@ -96,6 +120,19 @@ static prt_status spectral_save(const prt_transfer *t, prt__chunk_list *l)
     prt__chunks_add(l, CHUNK_SPCT, counts, nv * sizeof(uint32_t), s->index, bytes, zero4, pad, s->value, bytes, zero4, pad, NULL);
     prt__chunks_add(l, CHUNK_SPCE, s->env, nv * (size_t)s->env_order * s->env_order * sizeof(float), NULL);
     if (s->emit) prt__chunks_add(l, CHUNK_SPCM, s->emit, nv * 3 * sizeof(float), NULL);
+    if (s->glossy_count) {
+        /* glossy vertex count, SH order, scale, 0, entries per row, indices, values */
+        const size_t rows = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N, gnnz = s->grow_start[rows], gb = gnnz * 2,
+                     gpad = ((gb + 3) & ~(size_t)3) - gb;
+        unsigned char *gh = prt__chunks_alloc(l, 16);
+        uint32_t *gcounts = prt__chunks_alloc(l, rows * sizeof(uint32_t));
+        if (!gh || !gcounts) return PRT_OK;
+        prt__put32(gh, s->glossy_count);
+        prt__put32(gh + 4, PRT__SPECTRAL_GLOSSY_ORDER);
+        memcpy(gh + 8, &s->gscale, 4);
+        for (size_t r = 0; r < rows; ++r) gcounts[r] = (uint32_t)(s->grow_start[r + 1] - s->grow_start[r]);
+        prt__chunks_add(l, CHUNK_SPCG, gh, (size_t)16, gcounts, rows * sizeof(uint32_t), s->gindex, gb, zero4, gpad, s->gvalue, gb, zero4, gpad, NULL);
+    }
     return PRT_OK;
 }
 
@@ -165,6 +202,35 @@ static prt_status load_transfer(prt_context *ctx, size_t nv, prt__spectral_set *
     return PRT_OK;
 }
 
+static prt_status load_glossy(prt_context *ctx, prt__spectral_set *s, const prt__chunk_in *c)
+{
+    const unsigned char *p = c->data;
+    const uint64_t len = c->size, rows = (uint64_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N;
+    if (len < 16 || prt__get32(p) != s->glossy_count || prt__get32(p + 4) != PRT__SPECTRAL_GLOSSY_ORDER || len < 16 + rows * 4)
+        return bad(ctx, "invalid spectral glossy chunk");
+    memcpy(&s->gscale, p + 8, 4);
+    if (!(s->gscale > 0) || !isfinite(s->gscale)) return bad(ctx, "spectral glossy scale out of range");
+    if (!(s->grow_start = malloc((rows + 1) * sizeof(uint64_t)))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    s->grow_start[0] = 0;
+    for (uint64_t r = 0; r < rows; ++r) {
+        const uint32_t n = prt__get32(p + 16 + r * 4);
+        if (n > s->basis.functions) return bad(ctx, "spectral glossy counts are inconsistent");
+        s->grow_start[r + 1] = s->grow_start[r] + n;
+    }
+    const uint64_t gnnz = s->grow_start[rows], gb = gnnz * 2, padded = (gb + 3) & ~3ull;
+    if (len != 16 + rows * 4 + 2 * padded) return bad(ctx, "spectral glossy chunk size mismatch");
+    s->gindex = malloc(gb ? gb : 1);
+    s->gvalue = malloc(gb ? gb : 1);
+    if (!s->gindex || !s->gvalue) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(s->gindex, p + 16 + rows * 4, gb);
+    memcpy(s->gvalue, p + 16 + rows * 4 + padded, gb);
+    for (uint64_t r = 0; r < rows; ++r)
+        for (uint64_t i = s->grow_start[r]; i < s->grow_start[r + 1]; ++i)
+            if (s->gindex[i] >= s->basis.functions || (i > s->grow_start[r] && s->gindex[i] <= s->gindex[i - 1]))
+                return bad(ctx, "a spectral glossy index is out of range or out of order");
+    return PRT_OK;
+}
+
 static prt_status spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count)
 {
     (void)meta;
@@ -202,8 +268,13 @@ static prt_status spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *
                 if (!(s->emit[i] >= 0.0f && s->emit[i] <= PRT__MAX_RADIANCE)) st = bad(ctx, "spectral emitter irradiance out of range");
         }
     }
-    static const uint32_t ids[5] = {CHUNK_SPCP, CHUNK_SPCB, CHUNK_SPCT, CHUNK_SPCE, CHUNK_SPCM};
-    for (int i = 0; i < 5 && !st; ++i)
+    /* The glossy final bounce: there exactly when some vertex's material has a glossy part. */
+    if (!st && !prt__spectral_glossy_index(t, s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    c = st ? NULL : prt__chunk_take(chunks, count, CHUNK_SPCG);
+    if (!st && !c != !s->glossy_count) st = bad(ctx, "the spectral glossy chunk does not match the glossy materials");
+    if (!st && c) st = load_glossy(ctx, s, c);
+    static const uint32_t ids[6] = {CHUNK_SPCP, CHUNK_SPCB, CHUNK_SPCT, CHUNK_SPCE, CHUNK_SPCM, CHUNK_SPCG};
+    for (int i = 0; i < 6 && !st; ++i)
         if (prt__chunk_take(chunks, count, ids[i])) st = bad(ctx, "a spectral chunk appears twice");
     return st;
 }
@@ -212,8 +283,8 @@ static prt_status spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *
 static size_t spectral_bytes(const prt_transfer *t)
 {
     const prt__spectral_set *s = t->state;
-    const size_t nv = t->mesh.vertex_count;
-    return s->row_start[nv] * 4 + nv * 4;
+    const size_t nv = t->mesh.vertex_count, rows = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N;
+    return s->row_start[nv] * 4 + nv * 4 + (s->glossy_count ? s->grow_start[rows] * 4 + rows * 4 : 0);
 }
 
 static size_t basis_bytes(const prt_transfer *t)
@@ -256,6 +327,8 @@ static void spectral_describe(const prt_transfer *t, prt__describe *d)
         cJSON_AddNumberToObject(j, "samples", s->samples);
         cJSON_AddNumberToObject(j, "partition_size", s->partition_size);
         cJSON_AddNumberToObject(j, "env_order", s->env_order);
+        cJSON_AddNumberToObject(j, "glossy_vertices", s->glossy_count);
+        cJSON_AddNumberToObject(j, "glossy_coefficients", s->glossy_count ? (double)s->grow_start[(size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N] : 0.0);
         return;
     }
     prt__describe_line(d, "basis:", "%u functions over %u partitions (%u..%u vertices, %u..%u functions each), %.2f MB", b->functions, b->partitions,
@@ -264,6 +337,9 @@ static void spectral_describe(const prt_transfer *t, prt__describe *d)
                        (unsigned long long)rmax, spectral_bytes(t) / 1048576.0);
     prt__describe_line(d, "bake:", "%d rays per vertex; environment through SH order %d (%d coefficients per vertex)", s->samples, s->env_order,
                        s->env_order * s->env_order);
+    if (s->glossy_count)
+        prt__describe_line(d, "glossy:", "%u vertices with a glossy final bounce (16 SH BRDF bases), %llu coefficients", s->glossy_count,
+                           (unsigned long long)s->grow_start[(size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N]);
 }
 
 /* ---- variants and controls ---- */
@@ -313,9 +389,9 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
             for (size_t i = 0; i < nv * 3; ++i) direct[i] -= albedo[i] / (float)PRT_PI * Ep[i];
         }
     }
+    const float emission = prt_lighting_emission(l);
+    const float *le = t->mesh.emission;
     if (!st) {
-        const float emission = prt_lighting_emission(l);
-        const float *le = t->mesh.emission;
         for (size_t i = 0; i < nv * 3; ++i) {
             const float own = le ? emission * le[i] : 0.0f;
             switch (d->component) {
@@ -324,6 +400,25 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
             default: r->radiance[i] = own + direct[i] + indirect[i]; break;
             }
         }
+    }
+    /* The glossy final bounce (eq. 8): glossy surfaces reflect, view-dependently, everything the
+     * other surfaces send out - emission, reflected direct light, the bounces - seen through the
+     * basis; the renderer evaluates it per pixel. */
+    const prt__spectral_set *s = t->state;
+    if (!st && s->glossy_count && d->component != PRT_COMPONENT_DIRECT) {
+        float *out = malloc(nv * 3 * sizeof(float));
+        r->exit_sh = malloc(nv * 3 * PRT__SPECTRAL_GLOSSY_N * sizeof(float));
+        if (!out || !r->exit_sh) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        else {
+            /* direct[] lacks the pixel lights' part: the surfaces' outgoing light needs all of it. */
+            for (size_t i = 0; i < nv * 3; ++i)
+                out[i] = (le && d->component != PRT_COMPONENT_INDIRECT ? emission * le[i] : 0.0f) + direct[i] +
+                         (Ep ? albedo[i] / (float)PRT_PI * Ep[i] : 0.0f) + indirect[i];
+            st = prt__spectral_glossy(ctx, t, out, r->exit_sh);
+            r->exit_order = PRT__SPECTRAL_GLOSSY_ORDER;
+            r->exit_mirror = 0;
+        }
+        free(out);
     }
     free(E);
     free(Ep);

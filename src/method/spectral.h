@@ -17,6 +17,8 @@
 #include <pthread.h>
 
 #define PRT__SPECTRAL_MAX_FUNCTIONS 65535   /* indices are stored in 16 bits */
+#define PRT__SPECTRAL_GLOSSY_ORDER 4        /* the glossy final bounce's SH: 16 BRDF bases, as the paper */
+#define PRT__SPECTRAL_GLOSSY_N 16
 #define PRT__SPECTRAL_MAX_PARTITION 4096    /* vertices per partition: its eigen problem is dense */
 
 typedef struct prt__spectral_basis {
@@ -39,6 +41,10 @@ typedef struct prt__spectral_cache {
     prt_status failed;
     prt__raycaster rc;
     float *origins;          /* [vertex][3] shadow-ray origins */
+    /* The glossy final bounce: each glossy material's local SH matrix and each glossy vertex's
+     * frame rotations (built with the rest on first use). */
+    float *brdf_matrix[255];
+    void *frames;            /* prt__frame_rot[glossy_count] */
 } prt__spectral_cache;
 
 typedef struct prt__spectral_set {
@@ -58,6 +64,18 @@ typedef struct prt__spectral_set {
     /* Direct irradiance from the scene's emissive surfaces at emission scale 1 (their geometry
      * is static, so it is baked); NULL when nothing emits. */
     float *emit;             /* [vertex][3] */
+    /* Glossy final bounce (eq. 8): vertices whose material has a glossy part also store, per SH
+     * basis function k of the incident direction (order 4, world frame), the sparse row
+     * Tg(x, l, k) = integral over x's hemisphere of s_l(y(x, w)) y_k(w) dw, so that the radiance
+     * arriving at x from the surfaces is sum_l Tg(x, l, k) c_l in SH; the material's BRDF matrix
+     * turns it into exit radiance seen from any view. Rows of glossy vertex g, function k:
+     * [grow_start[g * 16 + k], grow_start[g * 16 + k + 1]). */
+    uint32_t glossy_count;
+    uint32_t *glossy_of;     /* [vertex] g, or UINT32_MAX for vertices without a glossy material */
+    uint64_t *grow_start;    /* [glossy_count * 16 + 1] */
+    uint16_t *gindex;
+    int16_t *gvalue;
+    float gscale;
     prt__spectral_cache *cache;
 } prt__spectral_set;
 
@@ -92,6 +110,13 @@ typedef struct prt__spectral_bake_desc {
     float ray_offset;
 } prt__spectral_bake_desc;
 prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_desc *d, prt_transfer *t, prt__bake_job **job);
+
+/* Numbers the glossy vertices of t (a material whose BRDF has a glossy part) into s->glossy_of;
+ * false when out of memory. */
+bool prt__spectral_glossy_index(const prt_transfer *t, prt__spectral_set *s);
+/* Exit radiance SH (3 x 16 per vertex, world frame; zero where not glossy) of the glossy final
+ * bounce from the outgoing radiance `out` (3 per vertex) of every surface. */
+prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, float *exit_sh);
 
 /* Run time (relight/spectral.c). Per-vertex irradiance from the lighting's direct light; when
  * pixel is not NULL it also gets the part from the lighting's first pixel_count local lights. */

@@ -8,6 +8,7 @@
  * environment through what the bake stored per vertex (emitters' irradiance at scale 1, shadowed
  * SH transfer). Shadow rays need the mesh in Embree: built on first use and kept. */
 #include "method/spectral.h"
+#include "bake/bake_internal.h"
 #include "light/envmap_internal.h"
 
 #include <omp.h>
@@ -188,4 +189,67 @@ prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const 
     free(coeffs);
     free(cur);
     return prt__cancelled(ctx) ? prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled") : PRT_OK;
+}
+
+/* The glossy materials' SH matrices and the glossy vertices' frame rotations, built once. */
+static prt_status glossy_ready(prt_context *ctx, const prt_transfer *t, prt__spectral_cache *c)
+{
+    const prt__spectral_set *s = t->state;
+    pthread_mutex_lock(&c->lock);
+    prt_status st = PRT_OK;
+    if (!c->frames) {
+        float *B[PRT__MAX_BRDFS] = {0};
+        prt__frame_rot *fr = prt__calloc(s->glossy_count, sizeof *fr);
+        if (!fr) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        if (!st) st = prt__brdf_matrices(ctx, t->brdfs, t->brdf_count, PRT__SPECTRAL_GLOSSY_ORDER, B);
+        for (size_t v = 0; v < t->mesh.vertex_count && !st; ++v)
+            if (s->glossy_of[v] != UINT32_MAX && prt__frame_rot_create(PRT__SPECTRAL_GLOSSY_ORDER, t->mesh.normals + v * 3, &fr[s->glossy_of[v]]))
+                st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        if (st) {
+            for (uint32_t g = 0; fr && g < s->glossy_count; ++g) prt__frame_rot_release(&fr[g]);
+            free(fr);
+            for (int k = 0; k < PRT__MAX_BRDFS; ++k) free(B[k]);
+        } else {
+            memcpy(c->brdf_matrix, B, sizeof B);
+            c->frames = fr;
+        }
+    }
+    pthread_mutex_unlock(&c->lock);
+    return st;
+}
+
+prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, float *exit_sh)
+{
+    const prt__spectral_set *s = t->state;
+    const size_t nv = t->mesh.vertex_count, n = PRT__SPECTRAL_GLOSSY_N;
+    memset(exit_sh, 0, nv * 3 * n * sizeof(float));
+    if (!s->glossy_count) return PRT_OK;
+    prt_status st = glossy_ready(ctx, t, s->cache);
+    if (st) return st;
+    float *coeffs = prt__calloc((size_t)s->basis.functions * 3, sizeof(float));
+    if (!coeffs) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    prt__spectral_project(&s->basis, out, coeffs);
+    const prt__frame_rot *frames = s->cache->frames;
+#pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ctx))
+    for (size_t v = 0; v < nv; ++v) {
+        const uint32_t g = s->glossy_of[v];
+        if (g == UINT32_MAX) continue;
+        /* Incident radiance in SH (world frame), per channel, then the BRDF's exit radiance. */
+        float in[3][PRT__SPECTRAL_GLOSSY_N];
+        for (size_t k = 0; k < n; ++k) {
+            const size_t row = (size_t)g * n + k;
+            float a = 0, b = 0, d = 0;
+            for (uint64_t i = s->grow_start[row]; i < s->grow_start[row + 1]; ++i) {
+                const float q = s->gvalue[i], *x = coeffs + (size_t)s->gindex[i] * 3;
+                a += q * x[0]; b += q * x[1]; d += q * x[2];
+            }
+            in[0][k] = a * s->gscale;
+            in[1][k] = b * s->gscale;
+            in[2][k] = d * s->gscale;
+        }
+        const float *B = s->cache->brdf_matrix[t->mesh.material[v] - 1];
+        for (int c = 0; c < 3; ++c) prt__apply_brdf(&frames[g], B, c, PRT__SPECTRAL_GLOSSY_ORDER, in[c], exit_sh + (v * 3 + (size_t)c) * n, 1);
+    }
+    free(coeffs);
+    return PRT_OK;
 }
