@@ -557,6 +557,29 @@ static void test_cornell_vs_reference(void **state)
         prt_reference_vertices_free(&ref);
         prt_lighting_release(l);
     }
+    /* The back wall repainted at run time equals a bake of the box with that colour. */
+    const float blue[3] = {0.2f, 0.3f, 0.9f};
+    float *painted = malloc(nv * 3 * sizeof(float));
+    memcpy(painted, prt_transfer_albedo(t), nv * 3 * sizeof(float));
+    assert_int_equal(prt_transfer_paint_albedo(t, "backWall", blue, painted), PRT_OK);
+    assert_int_equal(prt_transfer_paint_albedo(t, "frontWall", blue, painted), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "backWall"));   /* the error lists the names */
+    assert_int_equal(prt_scene_paint_albedo(s, "backWall", blue), PRT_OK);
+    prt_transfer *rebaked = bake(ctx, s, NULL, NULL, "1024");
+    prt_lighting *l = NULL;
+    prt_light bulb;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    assert_int_equal(prt_light_parse("point:0.2,1.2,0.3:1.5", &bulb), PRT_OK);
+    assert_int_equal(prt_lighting_add(l, &bulb, NULL), PRT_OK);
+    prt_relit live, again;
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .albedo = painted}, &live), PRT_OK);
+    assert_int_equal(prt_relight(ctx, rebaked, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1}, &again), PRT_OK);
+    for (size_t i = 0; i < nv * 3; ++i) assert_float_equal(live.radiance[i], again.radiance[i], 1e-5f + 1e-4f * again.radiance[i]);
+    prt_relit_free(&live);
+    prt_relit_free(&again);
+    prt_lighting_release(l);
+    prt_transfer_release(rebaked);
+    free(painted);
     prt_scene_release(traced);
     prt_transfer_release(t);
     prt_scene_release(s);
