@@ -70,7 +70,7 @@ static const prt_option_desc options[] = {
     {"partition", "V", PRT_OPTION_INT, 16, PRT__SPECTRAL_MAX_PARTITION / 2, NULL, "vertices per METIS partition, 16..2048 (default 1000)"},
     {"samples", "N", PRT_OPTION_INT, 16, 1 << 20, NULL, "gathering rays per vertex (default 4096; the paper uses 128x128)"},
     {"drop-below", "E", PRT_OPTION_FLOAT, 0, 0.1, NULL,
-     "also drop transfer entries below E x the largest (default 0: only what rounds to zero\nat 16 bits, as the paper); 1e-3 keeps about a fifth of the entries of a closed room\nfor 2% error"},
+     "also drop transfer entries below E x the largest (default 0: only what rounds\nto zero at 16 bits, as the paper); in the demo room 5e-4 keeps a third of the\nentries for a 2% change, 1e-3 a fifth for 5%"},
     {"env-order", "N", PRT_OPTION_INT, 1, PRT_SH_MAX_ORDER, NULL, "SH order of the environment's shadowed direct light, 1..10 (default 4)"},
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "ray origin offset (default 1e-4 x scene diagonal)"},
 };
