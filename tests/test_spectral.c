@@ -486,6 +486,75 @@ static void test_glossy_final_bounce(void **state)
     prt_context_release(ctx);
 }
 
+/* Sunlight through a window into a closed room, drawn per pixel: no pixel is lit where the
+ * per-vertex drawing (shadow rays from the vertices) has no light anywhere near it - the shadow
+ * maps leak nothing along the room's seams. Returns the number of leaking pixels. */
+static int seam_leaks(prt_context *ctx, prt_renderer *ren, const prt_transfer *t, const prt_lighting *l, bool gate)
+{
+    const int zero = 0, W = 320, H = 240;
+    prt_relit drawn, flat;
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .controls = &zero}, &drawn), PRT_OK);
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .controls = &zero, .per_vertex = 1}, &flat), PRT_OK);
+    const prt_camera cam = {{2.5f, 1.5f, -1.8f}, {-1, 1.2f, 2}, {0, 1, 0}, 70};
+    prt_render_mesh rm;
+    prt_image a, b;
+    prt_relit_render_mesh(t, &drawn, &rm);
+    if (!gate) rm.light_visibility = NULL;
+    assert_int_equal(prt_render(ren, &rm, &cam, NULL, &a), PRT_OK);
+    prt_relit_render_mesh(t, &flat, &rm);
+    assert_int_equal(prt_render(ren, &rm, &cam, NULL, &b), PRT_OK);
+    int leaks = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            if (a.rgb[((size_t)y * W + x) * 3] < 0.05f) continue;
+            bool near = false;
+            for (int dy = -6; dy <= 6 && !near; ++dy)
+                for (int dx = -6; dx <= 6 && !near; ++dx) {
+                    const int xx = x + dx, yy = y + dy;
+                    near = xx >= 0 && yy >= 0 && xx < W && yy < H && b.rgb[((size_t)yy * W + xx) * 3] > 0.01f;
+                }
+            leaks += !near;
+        }
+    prt_image_free(&a);
+    prt_image_free(&b);
+    prt_relit_free(&drawn);
+    prt_relit_free(&flat);
+    return leaks;
+}
+
+static void test_no_seam_leaks(void **state)
+{
+    (void)state;
+    char path[] = "/tmp/prt_test_room_XXXXXX";
+    const int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    close(fd);
+    prt_context *ctx = test_context(0);
+    assert_int_equal(prt_demo_room_write(path, 0.125f), PRT_OK);
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    prt_transfer *t = bake(ctx, s, "256", NULL, "64");
+    prt_lighting *l = NULL;
+    prt_light sun;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    assert_int_equal(prt_light_parse("directional:0.3,0.6,1:30", &sun), PRT_OK);
+    assert_int_equal(prt_lighting_add(l, &sun, NULL), PRT_OK);
+    prt_renderer *ren = NULL;
+    assert_int_equal(prt_renderer_create(ctx, &(prt_renderer_desc){320, 240, 4}, &ren), PRT_OK);
+    const int leaks = seam_leaks(ctx, ren, t, l, true), ungated = seam_leaks(ctx, ren, t, l, false);
+    print_message("sunlit room: %d leaking pixels (%d with the shadow maps alone)\n", leaks, ungated);
+    assert_int_equal(leaks, 0);
+    prt_renderer_release(ren);
+    prt_lighting_release(l);
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    remove(path);
+    char mtl[sizeof path + 8];
+    snprintf(mtl, sizeof mtl, "%s.mtl", path);
+    remove(mtl);
+    prt_context_release(ctx);
+}
+
 static double rel_l2(const float *a, const float *b, size_t n, const float *mask_src)
 {
     double se = 0, sb = 0;
@@ -591,7 +660,7 @@ int main(int argc, char **argv)
     /* The renderer's test runs on its own (ctest: spectral-render), without leak checking:
      * Mesa's driver leaks where LeakSanitizer cannot name it (see tests/cli_test.sh). */
     if (argc > 1 && !strcmp(argv[1], "render")) {
-        const struct CMUnitTest render[] = {cmocka_unit_test(test_pixel_lights)};
+        const struct CMUnitTest render[] = {cmocka_unit_test(test_pixel_lights), cmocka_unit_test(test_no_seam_leaks)};
         return cmocka_run_group_tests(render, NULL, NULL);
     }
     const struct CMUnitTest tests[] = {

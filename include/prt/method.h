@@ -193,6 +193,11 @@ typedef struct prt_relit {
     prt_light *pixel_lights;
     int pixel_light_count;
     float *pixel_albedo;
+    /* Per pixel light and vertex ([light][vertex]): whether the vertex sees the light (shadow
+     * rays from the vertex; a fraction for sphere lights). The renderer keeps the light off
+     * triangles none of whose vertices see it, so that a shadow map's texels cannot leak light
+     * along a room's seams. */
+    float *pixel_visibility;
 } prt_relit;
 
 /* The PRT_LIGHTS_* bits relighting t under lighting needs: what the lighting holds, with

@@ -64,6 +64,10 @@ typedef struct prt_render_mesh {
     const struct prt_light *lights;
     int light_count;
     const float *albedo;
+    /* Optional, per light and vertex ([light][vertex]): 0 where the vertex cannot see the light
+     * (shadow rays); a triangle none of whose vertices sees a light gets none of it, whatever its
+     * shadow map says. NULL = the shadow maps alone. */
+    const float *light_visibility;
 } prt_render_mesh;
 
 prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, prt_renderer **out);

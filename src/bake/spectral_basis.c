@@ -226,6 +226,9 @@ prt_status prt__spectral_basis_build(prt_context *ctx, const prt__mesh *m, int p
             st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%llu basis functions: at most %d (fewer --functions or larger --partition)", (unsigned long long)total,
                            PRT__SPECTRAL_MAX_FUNCTIONS);
         b->functions = (uint32_t)total;
+        if (!st && total != (uint64_t)functions)
+            prt__log(ctx, PRT_LOG_INFO, "spectral basis: %llu functions over %u partitions (asked for %d: each partition gets its share by vertex count, at least one)",
+                     (unsigned long long)total, b->partitions, functions);
     }
     if (!st && !prt__spectral_basis_index(b, nv)) st = prt__fail(ctx, PRT_ERR_BACKEND, "spectral basis: inconsistent partitions");
     if (!st && !(b->values = prt__calloc(b->offset[nv] ? b->offset[nv] : 1, sizeof(float)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");

@@ -99,6 +99,9 @@ static prt_status write_obj(const char *obj_path, const shape *shapes, int count
     if (st) return st;
     char line[256];
     for (int i = 0; i < count && !st; ++i) {
+        bool seen = false;   /* several shapes may share a material: one entry each */
+        for (int j = 0; j < i && !seen; ++j) seen = !strcmp(shapes[j].material, shapes[i].material);
+        if (seen) continue;
         int n = snprintf(line, sizeof line, "newmtl %s\nKd %.4f %.4f %.4f\n\n", shapes[i].material,
                          shapes[i].rgb[0], shapes[i].rgb[1], shapes[i].rgb[2]);
         st = prt__atomic_write(&f, line, (size_t)n);

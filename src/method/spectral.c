@@ -331,9 +331,9 @@ static void spectral_describe(const prt_transfer *t, prt__describe *d)
         cJSON_AddNumberToObject(j, "glossy_coefficients", s->glossy_count ? (double)s->grow_start[(size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N] : 0.0);
         return;
     }
-    prt__describe_line(d, "basis:", "%u functions over %u partitions (%u..%u vertices, %u..%u functions each), %.2f MB", b->functions, b->partitions,
+    prt__describe_line(d, "basis:", "%u functions over %u partitions (%u..%u vertices, %u..%u functions each), %.2f MiB", b->functions, b->partitions,
                        vmin, vmax, kmin, kmax, basis_bytes(t) / 1048576.0);
-    prt__describe_line(d, "transfer:", "%llu coefficients, %.1f per vertex (at most %llu), 16-bit, %.2f MB", (unsigned long long)nnz, per_vertex,
+    prt__describe_line(d, "transfer:", "%llu coefficients, %.1f per vertex (at most %llu), 16-bit, %.2f MiB", (unsigned long long)nnz, per_vertex,
                        (unsigned long long)rmax, spectral_bytes(t) / 1048576.0);
     prt__describe_line(d, "bake:", "%d rays per vertex; environment through SH order %d (%d coefficients per vertex)", s->samples, s->env_order,
                        s->env_order * s->env_order);
@@ -381,10 +381,12 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
     if (!st && pixel) {
         r->pixel_lights = malloc((size_t)pixel * sizeof(prt_light));
         r->pixel_albedo = malloc(nv * 3 * sizeof(float));
-        if (!r->pixel_lights || !r->pixel_albedo) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        r->pixel_visibility = malloc((size_t)pixel * nv * sizeof(float));
+        if (!r->pixel_lights || !r->pixel_albedo || !r->pixel_visibility) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         else {
             for (int i = 0; i < pixel; ++i) r->pixel_lights[i] = *prt_lighting_light(l, i);
             r->pixel_light_count = pixel;
+            st = prt__spectral_visibility(ctx, t, r->pixel_lights, pixel, r->pixel_visibility);
             memcpy(r->pixel_albedo, albedo, nv * 3 * sizeof(float));
             for (size_t i = 0; i < nv * 3; ++i) direct[i] -= albedo[i] / (float)PRT_PI * Ep[i];
         }

@@ -121,6 +121,8 @@ prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const f
 /* Run time (relight/spectral.c). Per-vertex irradiance from the lighting's direct light; when
  * pixel is not NULL it also gets the part from the lighting's first pixel_count local lights. */
 prt_status prt__spectral_direct(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, float *irradiance, float *pixel, int pixel_count);
+/* Per light and vertex ([light][vertex]): whether the vertex sees the light, 0..1. */
+prt_status prt__spectral_visibility(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *vis);
 /* Per-vertex irradiance from count local lights, shadowed (adds to irradiance). */
 prt_status prt__spectral_lights(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *irradiance);
 /* N bounces from outgoing radiance `direct_out` (3 per vertex) with per-vertex albedo: fills

@@ -202,6 +202,7 @@ void prt_relit_free(prt_relit *r)
     free(r->kvec);
     free(r->pixel_lights);
     free(r->pixel_albedo);
+    free(r->pixel_visibility);
     memset(r, 0, sizeof *r);
 }
 
@@ -269,6 +270,7 @@ void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render
     m->lights = r->pixel_lights;
     m->light_count = r->pixel_lights ? r->pixel_light_count : 0;
     m->albedo = r->pixel_albedo;
+    m->light_visibility = r->pixel_lights ? r->pixel_visibility : NULL;
 }
 
 prt_status prt_relit_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb)

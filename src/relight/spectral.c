@@ -88,6 +88,40 @@ static void light_at(const prt__spectral_cache *c, const prt_transfer *t, size_t
     for (int k = 0; k < 3; ++k) e[k] = exact[k] * f;
 }
 
+/* Whether vertex v sees light l at all (its cone and the vertex's facing aside): 1 or 0, the
+ * visible fraction of a sphere light's samples. */
+static float light_visibility(const prt__spectral_cache *c, const prt_transfer *t, size_t v, const prt_light *l)
+{
+    const float *p = t->mesh.positions + v * 3, *o = c->origins + v * 3;
+    if (l->type == PRT_LIGHT_DIRECTIONAL) return occluded(c, o, l->direction, INFINITY) ? 0.0f : 1.0f;
+    prt_light bare = *l;
+    if (l->type == PRT_LIGHT_SPOT) bare.type = PRT_LIGHT_POINT;
+    const int samples = l->type == PRT_LIGHT_SPHERE ? SPHERE_RAYS : 1;
+    int seen = 0, tried = 0;
+    for (int i = 0; i < samples; ++i) {
+        double u1 = 0.5, u2 = 0.5;
+        if (samples > 1) prt__sobol2((uint32_t)i, (uint32_t)v * 2654435761u, &u1, &u2);
+        prt__light_sample s;
+        if (!prt__light_sample_from(&bare, p, u1, u2, &s)) continue;
+        tried++;
+        seen += !shadowed(c, p, o, s.wi, s.dist);
+    }
+    return tried ? (float)seen / (float)tried : 0.0f;
+}
+
+prt_status prt__spectral_visibility(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *vis)
+{
+    const prt__spectral_set *s = t->state;
+    prt_status st = cache_ready(ctx, t, s->cache);
+    if (st) return st;
+    const prt__spectral_cache *c = s->cache;
+    const size_t nv = t->mesh.vertex_count;
+#pragma omp parallel for schedule(dynamic, 256) num_threads(prt__threads(ctx))
+    for (size_t v = 0; v < nv; ++v)
+        for (int i = 0; i < count; ++i) vis[(size_t)i * nv + v] = light_visibility(c, t, v, &lights[i]);
+    return PRT_OK;
+}
+
 prt_status prt__spectral_lights(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *E)
 {
     const prt__spectral_set *s = t->state;

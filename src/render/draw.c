@@ -279,7 +279,7 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     }
     glBindVertexArray(0);
     d->index_count = m->triangle_count * 3;
-    prt__draw_set_lights(d, m->positions, m->albedo, m->vertex_count, lights ? m->lights : NULL, lights ? m->light_count : 0);
+    prt__draw_set_lights(d, m->positions, m->albedo, m->vertex_count, lights ? m->lights : NULL, lights ? m->light_count : 0, m->light_visibility);
     d->lights.dirty = true;   /* new geometry casts new shadows */
     if (d->exit_order) prt__draw_upload_exit(d, m->exit_sh, m->vertex_count);
     if (d->kvec_terms) {
@@ -312,9 +312,10 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     if (m->texel_radiance && m->texel_width > 0 && m->texel_height > 0) prt__draw_upload_texels(d, m->texel_radiance, m->texel_width, m->texel_height);
 }
 
-void prt__draw_set_lights(prt__draw *d, const float *positions, const float *albedo, size_t nv, const prt_light *lights, int count)
+void prt__draw_set_lights(prt__draw *d, const float *positions, const float *albedo, size_t nv, const prt_light *lights, int count,
+                          const float *visibility)
 {
-    prt__pixel_lights_set(&d->lights, d->vao, positions, albedo, nv, lights, count);
+    prt__pixel_lights_set(&d->lights, d->vao, positions, albedo, nv, lights, count, visibility);
 }
 
 void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int height)

@@ -40,7 +40,8 @@ void prt__draw_free(prt__draw *d);
 /* Uploads geometry and radiance (re-uploads everything; the radiance changes per relight). */
 void prt__draw_upload(prt__draw *d, const prt_render_mesh *mesh);
 /* Replaces the lights drawn per pixel and the albedo they shade (count 0: none). */
-void prt__draw_set_lights(prt__draw *d, const float *positions, const float *albedo, size_t vertex_count, const prt_light *lights, int count);
+void prt__draw_set_lights(prt__draw *d, const float *positions, const float *albedo, size_t vertex_count, const prt_light *lights, int count,
+                          const float *visibility);
 /* Replaces the per-texel radiance map; NULL turns the per-texel path off (vertex radiance). */
 void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int height);
 /* Replaces the glossy exit coefficients (mesh layout: vertex, channel, coefficient). */

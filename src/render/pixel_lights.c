@@ -44,14 +44,16 @@ static const char *VS_ADD =
     "layout(location = 0) in vec3 pos;\n"
     "layout(location = 2) in vec3 normal;\n"
     "layout(location = 4) in vec3 albedo;\n"
+    "layout(location = 5) in float visibility;\n"
     "uniform mat4 mvp;\n"
     "// centroid: with multisampling an edge pixel's centre may lie off the triangle, and a point\n"
     "// extrapolated past a room's seam would be lit from outside.\n"
-    "centroid out vec3 f_pos; centroid out vec3 f_nrm; centroid out vec3 f_alb;\n"
-    "void main() { f_pos = pos; f_nrm = normal; f_alb = albedo; gl_Position = mvp * vec4(pos, 1.0); }\n";
+    "centroid out vec3 f_pos; centroid out vec3 f_nrm; centroid out vec3 f_alb; centroid out float f_vis;\n"
+    "void main() { f_pos = pos; f_nrm = normal; f_alb = albedo; f_vis = visibility; gl_Position = mvp * vec4(pos, 1.0); }\n";
 static const char *FS_ADD =
     "#version 330 core\n"
-    "centroid in vec3 f_pos; centroid in vec3 f_nrm; centroid in vec3 f_alb;\n"
+    "centroid in vec3 f_pos; centroid in vec3 f_nrm; centroid in vec3 f_alb; centroid in float f_vis;\n"
+    "uniform int gate;          // 1: f_vis (the vertices' shadow rays) is meaningful\n"
     "uniform int type;          // 1 point, 2 spot, 3 directional, 4 sphere (prt_light_type)\n"
     "uniform vec3 lpos, ldir, colour; uniform vec2 cosang; uniform float radius;\n"
     "uniform samplerCube cube; uniform sampler2D plane; uniform mat4 light_vp;\n"
@@ -82,6 +84,9 @@ static const char *FS_ADD =
     "  return lit / float(n * n);\n"
     "}\n"
     "void main() {\n"
+    "  // A triangle none of whose vertices sees the light stays dark: shadow-map texels cannot\n"
+    "  // leak light in along the seams of closed rooms.\n"
+    "  if (gate != 0 && f_vis <= 0.0) discard;\n"
     "  vec3 n = normalize(f_nrm), E = vec3(0.0);\n"
     "  float lit = 1.0;\n"
     "  if (type == 3) {\n"
@@ -204,6 +209,7 @@ prt_status prt__pixel_lights_init(prt__pixel_lights *p)
     p->ua_light_vp = glGetUniformLocation(a, "light_vp");
     p->ua_texel = glGetUniformLocation(a, "texel");
     p->ua_bias = glGetUniformLocation(a, "bias");
+    p->ua_gate = glGetUniformLocation(a, "gate");
     glGenFramebuffers(1, &p->fbo);
     glGenRenderbuffers(1, &p->depth_rb);
     glBindRenderbuffer(GL_RENDERBUFFER, p->depth_rb);
@@ -213,6 +219,7 @@ prt_status prt__pixel_lights_init(prt__pixel_lights *p)
     glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, PLANE_RES, PLANE_RES);
     glBindRenderbuffer(GL_RENDERBUFFER, 0);
     glGenBuffers(1, &p->vbo_albedo);
+    glGenBuffers(1, &p->vbo_visibility);
     return PRT_OK;
 }
 
@@ -225,6 +232,7 @@ void prt__pixel_lights_free(prt__pixel_lights *p)
     if (p->depth_rb) glDeleteRenderbuffers(1, &p->depth_rb);
     if (p->plane_depth_rb) glDeleteRenderbuffers(1, &p->plane_depth_rb);
     if (p->vbo_albedo) glDeleteBuffers(1, &p->vbo_albedo);
+    if (p->vbo_visibility) glDeleteBuffers(1, &p->vbo_visibility);
     for (int i = 0; i < PRT__PIXEL_LIGHTS; ++i) {
         if (p->cube[i]) glDeleteTextures(1, &p->cube[i]);
         if (p->plane[i]) glDeleteTextures(1, &p->plane[i]);
@@ -233,7 +241,7 @@ void prt__pixel_lights_free(prt__pixel_lights *p)
 }
 
 void prt__pixel_lights_set(prt__pixel_lights *p, GLuint vao, const float *positions, const float *albedo, size_t nv, const prt_light *lights,
-                           int count)
+                           int count, const float *visibility)
 {
     const int n = lights && albedo && count > 0 ? (count < PRT__PIXEL_LIGHTS ? count : PRT__PIXEL_LIGHTS) : 0;
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -255,6 +263,16 @@ void prt__pixel_lights_set(prt__pixel_lights *p, GLuint vao, const float *positi
     glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(nv * 3 * sizeof(float)), albedo, GL_DYNAMIC_DRAW);
     glEnableVertexAttribArray(4);
     glVertexAttribPointer(4, 3, GL_FLOAT, GL_FALSE, 0, NULL);
+    p->has_visibility = visibility != NULL;
+    p->vertex_count = nv;
+    if (visibility) {
+        glBindBuffer(GL_ARRAY_BUFFER, p->vbo_visibility);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)((size_t)n * nv * sizeof(float)), visibility, GL_DYNAMIC_DRAW);
+        glEnableVertexAttribArray(5);
+    } else {
+        glDisableVertexAttribArray(5);
+        glVertexAttrib1f(5, 1.0f);
+    }
     glBindVertexArray(0);
     if (!same) p->dirty = true;
 }
@@ -391,6 +409,12 @@ void prt__pixel_lights_draw(const prt__pixel_lights *p, GLuint vao, size_t index
         const prt_light *l = &p->lights[i];
         const float *colour = l->type == PRT_LIGHT_DIRECTIONAL ? l->irradiance : l->type == PRT_LIGHT_SPHERE ? l->radiance : l->intensity;
         glUniform1i(p->ua_type, (int)l->type);
+        glUniform1i(p->ua_gate, p->has_visibility);
+        if (p->has_visibility) {   /* this light's row of the visibility */
+            glBindBuffer(GL_ARRAY_BUFFER, p->vbo_visibility);
+            glVertexAttribPointer(5, 1, GL_FLOAT, GL_FALSE, 0, (const void *)((size_t)i * p->vertex_count * sizeof(float)));
+            glBindBuffer(GL_ARRAY_BUFFER, 0);
+        }
         glUniform3fv(p->ua_pos, 1, l->position);
         glUniform3fv(p->ua_dir, 1, l->direction);
         glUniform3fv(p->ua_colour, 1, colour);

@@ -17,7 +17,10 @@ typedef struct prt__pixel_lights {
     GLuint program_cube, program_plane, program_add;
     GLint uc_vp, uc_light, uc_texel, up_vp, up_dir, up_texel;
     GLint ua_mvp, ua_type, ua_pos, ua_dir, ua_colour, ua_cos, ua_radius, ua_cube, ua_plane, ua_light_vp, ua_texel, ua_bias;
-    GLuint fbo, depth_rb, plane_depth_rb, vbo_albedo;
+    GLuint fbo, depth_rb, plane_depth_rb, vbo_albedo, vbo_visibility;
+    bool has_visibility;
+    size_t vertex_count;
+    GLint ua_gate;
     GLuint cube[PRT__PIXEL_LIGHTS], plane[PRT__PIXEL_LIGHTS];
     int count;
     prt_light lights[PRT__PIXEL_LIGHTS];
@@ -31,7 +34,7 @@ void prt__pixel_lights_free(prt__pixel_lights *p);
 /* Takes the lights (the first PRT__PIXEL_LIGHTS) and the per-vertex albedo into vao's attribute 4;
  * count 0 turns the pass off. positions give the bounds. */
 void prt__pixel_lights_set(prt__pixel_lights *p, GLuint vao, const float *positions, const float *albedo, size_t vertex_count,
-                           const prt_light *lights, int count);
+                           const prt_light *lights, int count, const float *visibility);
 /* Draws the shadow maps if the lights or geometry changed (binds its own framebuffer and restores
  * the caller's framebuffer and viewport). */
 void prt__pixel_lights_shadows(prt__pixel_lights *p, GLuint vao, size_t index_count);

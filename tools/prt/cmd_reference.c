@@ -99,7 +99,10 @@ int cmd_reference(int argc, char **argv)
         st = prt_scene_load(c.ctx, input, &sd, &scene);
     }
     for (int i = 0; !st && i < light.paint_count; ++i)
-        st = prt_scene_paint_albedo(scene, light.paint[i].name, light.paint[i].rgb);
+        if ((st = prt_scene_paint_albedo(scene, light.paint[i].name, light.paint[i].rgb))) {
+            cli_error(&c, "--albedo-of: %s", prt_last_error());
+            c.reported = true;
+        }
     if (!st) st = cli_lighting(&c, &light, t, scene, &lighting);
     rd.lighting = lighting;
     rd.progress = cli_progress;
