@@ -362,6 +362,7 @@ expect 0 "spectral bake" -- "$PRT" bake -q "$T/lamp.json" -o "$T/spec.prt" --met
 expect 0 "spectral info" -- "$PRT" info "$T/spec.prt"
 grep -q "partitions" "$T/out" && grep -q "red_wall" "$T/out" && grep -q "bounces 0..16" "$T/out" && ok || bad "info lacks partitions, surfaces or controls"
 expect 0 "spectral relight with the scene's lights" -- "$PRT" relight -q "$T/spec.prt" -o "$T/spec.json"
+grep -q '"direct"' "$T/spec.json" && grep -q '"indirect"' "$T/spec.json" && ok || bad "spectral relight JSON lacks direct and indirect"
 expect 0 "spectral relight, recoloured" -- "$PRT" relight -q "$T/spec.prt" -o "$T/spec_red.json" --albedo-of floor=0.9,0.1,0.1 --control bounces=1
 cmp -s "$T/spec.json" "$T/spec_red.json" && bad "--albedo-of changed nothing" || ok
 expect 0 "spectral render, lights per pixel" -- $NOLEAK "$PRT" render -q "$T/spec.prt" -o "$T/spec.png" --width 64 --height 48 --light sphere:0,2,0:0.2:30

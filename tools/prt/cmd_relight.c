@@ -12,7 +12,8 @@ static const char *HELP =
     "Evaluates per-vertex exit radiance (linear RGB) of a baked .prt under a lighting.\n"
     "PLY output is binary with float red/green/blue vertex properties (opens in MeshLab,\n"
     "Blender, Open3D); JSON holds {\"kind\", \"vertex_count\", \"radiance\": [[r,g,b], ...]} and,\n"
-    "where the method separates it, \"indirect\" (the light that bounced at least once).\n\n"
+    "where the method separates them, \"indirect\" (the light that bounced at least once) and\n"
+    "\"direct\" (relit with direct light only).\n\n"
     "  -o, --output FILE      .ply or .json (required; written atomically)\n"
     "  -k, --kind K           what to relight the file as (prt info lists what it holds: for SH\n"
     "                         files unshadowed | shadowed | interreflected | glossy-shadowed |\n"
@@ -112,8 +113,26 @@ int cmd_relight(int argc, char **argv)
         if (!rc && !st) st = cli_check_interrupt(&c);
         if (!rc && !st) {
             if (json) {
-                cli_vertex_field f[2] = {{"radiance", rgb}, {"indirect", r.indirect}};
-                st = cli_write_vertex_json(output, prt_transfer_variant_name(t, variant), nv, f, r.indirect ? 2 : 1);
+                /* Where the method separates bounced light, the direct part too: what relighting
+                 * with direct light only gives (seen from the same eye). */
+                float *direct = NULL;
+                if (r.indirect) {
+                    prt_relight_desc dd = {.variant = variant, .component = PRT_COMPONENT_DIRECT, .per_vertex = 1};
+                    int controls[PRT_MAX_CONTROLS];
+                    const int nc = cli_controls(&c, &light, t, controls);
+                    dd.controls = nc > 0 ? controls : NULL;
+                    dd.brdf = light.have_brdf ? &light.brdf : NULL;
+                    float *albedo = NULL;
+                    prt_relit rd;
+                    if (nc >= 0 && !cli_painted_albedo(&c, &light, t, &albedo) && (dd.albedo = albedo, !prt_relight(c.ctx, t, lighting, &dd, &rd))) {
+                        if ((direct = malloc(nv * 3 * sizeof(float))) && prt_relit_shade(c.ctx, t, &rd, eye, direct)) { free(direct); direct = NULL; }
+                        prt_relit_free(&rd);
+                    }
+                    free(albedo);
+                }
+                cli_vertex_field f[3] = {{"radiance", rgb}, {"indirect", r.indirect}, {"direct", direct}};
+                st = cli_write_vertex_json(output, prt_transfer_variant_name(t, variant), nv, f, r.indirect ? (direct ? 3 : 2) : 1);
+                free(direct);
             } else {
                 st = cli_write_vertex_ply(output, prt_transfer_positions(t), prt_transfer_normals(t), nv, prt_transfer_indices(t),
                                           prt_transfer_triangle_count(t), rgb);
