@@ -11,6 +11,7 @@
  * the same for any thread count. Rows are kept as floats until the end, then quantized to 16 bits
  * against the largest entry of the whole matrix (as the paper: one scale, zeros dropped). */
 #include "method/spectral.h"
+#include "bake/bake_internal.h"
 #include "core/progress.h"
 
 #include <omp.h>
@@ -360,6 +361,21 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
     s->gvalue = malloc(total[1] ? total[1] * sizeof(int16_t) : 1);
     if (!s->row_start || !s->index || !s->value || !s->grow_start || !s->gindex || !s->gvalue)
         return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    /* The glossy materials' SH matrices, once per bake (a numerical double integral). */
+    if (s->glossy_count) {
+        bool used[PRT__MAX_BRDFS] = {false};
+        for (size_t v = 0; v < nv; ++v)
+            if (s->glossy_of[v] != UINT32_MAX) used[t->mesh.material[v] - 1] = true;
+        prt_brdf only[PRT__MAX_BRDFS];
+        for (int k = 0; k < t->brdf_count; ++k) {
+            if (!used[k]) continue;
+            only[0] = t->brdfs[k];
+            float *B[1] = {NULL};
+            prt_status st = prt__brdf_matrices(base->ctx, only, 1, PRT__SPECTRAL_GLOSSY_ORDER, B);
+            if (st) { free(B[0]); return st; }
+            s->brdf_matrix[k] = B[0];
+        }
+    }
     const float inv[2] = {1.0f / s->scale, 1.0f / s->gscale};
     const long keep = sb->d.drop_below > 0 ? lroundf(sb->d.drop_below * 32767.0f) : 1;
     size_t at[2] = {0, 0};

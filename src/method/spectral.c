@@ -12,6 +12,7 @@
 #define CHUNK_SPCM PRT__FOURCC('S', 'P', 'C', 'M')
 #define CHUNK_SPCG PRT__FOURCC('S', 'P', 'C', 'G')
 #define SPCP_HEADER 48
+#define MATRIX_BYTES (3 * PRT__SPECTRAL_GLOSSY_N * PRT__SPECTRAL_GLOSSY_N * sizeof(float))
 
 static prt__spectral_cache *cache_new(void)
 {
@@ -34,10 +35,10 @@ void prt__spectral_set_free(void *state)
     free(s->grow_start);
     free(s->gindex);
     free(s->gvalue);
+    for (int k = 0; k < PRT__MAX_BRDFS; ++k) free(s->brdf_matrix[k]);
     if (s->cache) {
         prt__raycaster_release(&s->cache->rc);
         free(s->cache->origins);
-        for (int k = 0; k < 255; ++k) free(s->cache->brdf_matrix[k]);
         prt__frame_rot *fr = s->cache->frames;
         for (uint32_t g = 0; fr && g < s->glossy_count; ++g) prt__frame_rot_release(&fr[g]);
         free(fr);
@@ -124,14 +125,25 @@ static prt_status spectral_save(const prt_transfer *t, prt__chunk_list *l)
         /* glossy vertex count, SH order, scale, 0, entries per row, indices, values */
         const size_t rows = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N, gnnz = s->grow_start[rows], gb = gnnz * 2,
                      gpad = ((gb + 3) & ~(size_t)3) - gb;
-        unsigned char *gh = prt__chunks_alloc(l, 16);
+        int nmat = 0;
+        for (int k = 0; k < PRT__MAX_BRDFS; ++k) nmat += s->brdf_matrix[k] != NULL;
+        const size_t mbytes = (size_t)nmat * (4 + MATRIX_BYTES);
+        unsigned char *gh = prt__chunks_alloc(l, 16 + mbytes);
         uint32_t *gcounts = prt__chunks_alloc(l, rows * sizeof(uint32_t));
         if (!gh || !gcounts) return PRT_OK;
         prt__put32(gh, s->glossy_count);
         prt__put32(gh + 4, PRT__SPECTRAL_GLOSSY_ORDER);
         memcpy(gh + 8, &s->gscale, 4);
+        prt__put32(gh + 12, (uint32_t)nmat);
+        unsigned char *at = gh + 16;
+        for (int k = 0; k < PRT__MAX_BRDFS; ++k)
+            if (s->brdf_matrix[k]) {
+                prt__put32(at, (uint32_t)(k + 1));
+                memcpy(at + 4, s->brdf_matrix[k], MATRIX_BYTES);
+                at += 4 + MATRIX_BYTES;
+            }
         for (size_t r = 0; r < rows; ++r) gcounts[r] = (uint32_t)(s->grow_start[r + 1] - s->grow_start[r]);
-        prt__chunks_add(l, CHUNK_SPCG, gh, (size_t)16, gcounts, rows * sizeof(uint32_t), s->gindex, gb, zero4, gpad, s->gvalue, gb, zero4, gpad, NULL);
+        prt__chunks_add(l, CHUNK_SPCG, gh, 16 + mbytes, gcounts, rows * sizeof(uint32_t), s->gindex, gb, zero4, gpad, s->gvalue, gb, zero4, gpad, NULL);
     }
     return PRT_OK;
 }
@@ -202,14 +214,32 @@ static prt_status load_transfer(prt_context *ctx, size_t nv, prt__spectral_set *
     return PRT_OK;
 }
 
-static prt_status load_glossy(prt_context *ctx, prt__spectral_set *s, const prt__chunk_in *c)
+static prt_status load_glossy(prt_context *ctx, const prt_transfer *t, prt__spectral_set *s, const prt__chunk_in *c)
 {
-    const unsigned char *p = c->data;
-    const uint64_t len = c->size, rows = (uint64_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N;
-    if (len < 16 || prt__get32(p) != s->glossy_count || prt__get32(p + 4) != PRT__SPECTRAL_GLOSSY_ORDER || len < 16 + rows * 4)
+    const unsigned char *head = c->data;
+    const uint64_t rows = (uint64_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N;
+    uint64_t len = c->size;
+    if (len < 16 || prt__get32(head) != s->glossy_count || prt__get32(head + 4) != PRT__SPECTRAL_GLOSSY_ORDER)
         return bad(ctx, "invalid spectral glossy chunk");
-    memcpy(&s->gscale, p + 8, 4);
+    memcpy(&s->gscale, head + 8, 4);
     if (!(s->gscale > 0) || !isfinite(s->gscale)) return bad(ctx, "spectral glossy scale out of range");
+    /* The glossy materials' SH matrices: one for each material a glossy vertex uses, no other. */
+    const uint32_t nmat = prt__get32(head + 12);
+    if (nmat > (uint32_t)t->brdf_count || len < 16 + (uint64_t)nmat * (4 + MATRIX_BYTES)) return bad(ctx, "invalid spectral glossy chunk");
+    for (uint32_t i = 0; i < nmat; ++i) {
+        const unsigned char *e = head + 16 + (size_t)i * (4 + MATRIX_BYTES);
+        const uint32_t k = prt__get32(e);
+        if (k < 1 || k > (uint32_t)t->brdf_count || !prt_brdf_is_glossy(&t->brdfs[k - 1]) || s->brdf_matrix[k - 1])
+            return bad(ctx, "a spectral glossy material is out of range or repeated");
+        if (!(s->brdf_matrix[k - 1] = malloc(MATRIX_BYTES))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        memcpy(s->brdf_matrix[k - 1], e + 4, MATRIX_BYTES);
+        if (!prt__all_finite(s->brdf_matrix[k - 1], MATRIX_BYTES / sizeof(float))) return bad(ctx, "non-finite spectral glossy BRDF matrix");
+    }
+    for (size_t v = 0; v < t->mesh.vertex_count; ++v)
+        if (s->glossy_of[v] != UINT32_MAX && !s->brdf_matrix[t->mesh.material[v] - 1]) return bad(ctx, "a glossy material's BRDF matrix is missing");
+    const unsigned char *p = head + (size_t)nmat * (4 + MATRIX_BYTES);   /* the rest as if the matrices were not there */
+    len -= (uint64_t)nmat * (4 + MATRIX_BYTES);
+    if (len < 16 + rows * 4) return bad(ctx, "invalid spectral glossy chunk");
     if (!(s->grow_start = malloc((rows + 1) * sizeof(uint64_t)))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     s->grow_start[0] = 0;
     for (uint64_t r = 0; r < rows; ++r) {
@@ -272,7 +302,7 @@ static prt_status spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *
     if (!st && !prt__spectral_glossy_index(t, s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     c = st ? NULL : prt__chunk_take(chunks, count, CHUNK_SPCG);
     if (!st && !c != !s->glossy_count) st = bad(ctx, "the spectral glossy chunk does not match the glossy materials");
-    if (!st && c) st = load_glossy(ctx, s, c);
+    if (!st && c) st = load_glossy(ctx, t, s, c);
     static const uint32_t ids[6] = {CHUNK_SPCP, CHUNK_SPCB, CHUNK_SPCT, CHUNK_SPCE, CHUNK_SPCM, CHUNK_SPCG};
     for (int i = 0; i < 6 && !st; ++i)
         if (prt__chunk_take(chunks, count, ids[i])) st = bad(ctx, "a spectral chunk appears twice");

@@ -41,10 +41,7 @@ typedef struct prt__spectral_cache {
     prt_status failed;
     prt__raycaster rc;
     float *origins;          /* [vertex][3] shadow-ray origins */
-    /* The glossy final bounce: each glossy material's local SH matrix and each glossy vertex's
-     * frame rotations (built with the rest on first use). */
-    float *brdf_matrix[255];
-    void *frames;            /* prt__frame_rot[glossy_count] */
+    void *frames;            /* prt__frame_rot[glossy_count]: the glossy vertices' frame rotations */
 } prt__spectral_cache;
 
 typedef struct prt__spectral_set {
@@ -76,6 +73,9 @@ typedef struct prt__spectral_set {
     uint16_t *gindex;
     int16_t *gvalue;
     float gscale;
+    /* Per material (k - 1) with a glossy part: its local-frame SH matrix (3 x 16 x 16, the
+     * glossy part only; prt_brdf_sh_matrix), computed at bake time and kept in the file. */
+    float *brdf_matrix[PRT__MAX_BRDFS];
     prt__spectral_cache *cache;
 } prt__spectral_set;
 

@@ -225,26 +225,22 @@ prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const 
     return prt__cancelled(ctx) ? prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled") : PRT_OK;
 }
 
-/* The glossy materials' SH matrices and the glossy vertices' frame rotations, built once. */
+/* The glossy vertices' frame rotations, built once. */
 static prt_status glossy_ready(prt_context *ctx, const prt_transfer *t, prt__spectral_cache *c)
 {
     const prt__spectral_set *s = t->state;
     pthread_mutex_lock(&c->lock);
     prt_status st = PRT_OK;
     if (!c->frames) {
-        float *B[PRT__MAX_BRDFS] = {0};
         prt__frame_rot *fr = prt__calloc(s->glossy_count, sizeof *fr);
         if (!fr) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        if (!st) st = prt__brdf_matrices(ctx, t->brdfs, t->brdf_count, PRT__SPECTRAL_GLOSSY_ORDER, B);
         for (size_t v = 0; v < t->mesh.vertex_count && !st; ++v)
             if (s->glossy_of[v] != UINT32_MAX && prt__frame_rot_create(PRT__SPECTRAL_GLOSSY_ORDER, t->mesh.normals + v * 3, &fr[s->glossy_of[v]]))
                 st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         if (st) {
             for (uint32_t g = 0; fr && g < s->glossy_count; ++g) prt__frame_rot_release(&fr[g]);
             free(fr);
-            for (int k = 0; k < PRT__MAX_BRDFS; ++k) free(B[k]);
         } else {
-            memcpy(c->brdf_matrix, B, sizeof B);
             c->frames = fr;
         }
     }
@@ -281,7 +277,7 @@ prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const f
             in[1][k] = b * s->gscale;
             in[2][k] = d * s->gscale;
         }
-        const float *B = s->cache->brdf_matrix[t->mesh.material[v] - 1];
+        const float *B = s->brdf_matrix[t->mesh.material[v] - 1];
         for (int c = 0; c < 3; ++c) prt__apply_brdf(&frames[g], B, c, PRT__SPECTRAL_GLOSSY_ORDER, in[c], exit_sh + (v * 3 + (size_t)c) * n, 1);
     }
     free(coeffs);
