@@ -33,9 +33,25 @@ typedef struct thread_scratch {
     float *gweight;          /* [vertex][16] hit weight times y_k / cos for glossy receivers */
     uint32_t *touched;       /* vertices with a weight */
     float *row;              /* [ROWS][function] */
-    uint16_t *index;         /* a unit's rows before they are copied out */
+    uint16_t *index;         /* a unit's rows before they are copied out, grown as needed */
     float *value;
+    size_t cap;
 } thread_scratch;
+
+/* Room for `more` entries after `used` in the thread's unit buffers. */
+static bool scratch_room(thread_scratch *sc, size_t used, size_t more)
+{
+    if (used + more <= sc->cap) return true;
+    size_t cap = sc->cap ? sc->cap : 1024;
+    while (cap < used + more) cap *= 2;
+    uint16_t *index = realloc(sc->index, cap * sizeof(uint16_t));
+    if (index) sc->index = index;
+    float *value = index ? realloc(sc->value, cap * sizeof(float)) : NULL;
+    if (value) sc->value = value;
+    if (!index || !value) return false;
+    sc->cap = cap;
+    return true;
+}
 
 typedef struct sbake {
     prt__bake_job base;
@@ -195,8 +211,6 @@ static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
     const int nc = sb->d.env_order * sb->d.env_order;
     thread_scratch *sc = &sb->scratch[thread];
     unit_rows *u = &sb->units[unit];
-    uint16_t *index = sc->index;
-    float *value = sc->value;
     size_t at = 0;
     memset(u->count, 0, sizeof u->count);
     for (size_t v = v0; v < v1; ++v) {
@@ -204,6 +218,9 @@ static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
         const int rows = sb->s->glossy_of && sb->s->glossy_of[v] != UINT32_MAX ? ROWS : 1;
         for (int r = 0; r < rows; ++r) {
             const float *row = sc->row + (size_t)r * F;
+            if (!scratch_room(sc, at, F)) return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+            uint16_t *index = sc->index;
+            float *value = sc->value;
             uint32_t n = 0;
             for (uint32_t l = 0; l < F; ++l)
                 if (row[l] != 0.0f) { index[at] = (uint16_t)l; value[at++] = row[l]; ++n; }
@@ -215,8 +232,8 @@ static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
     u->index = malloc(at ? at * sizeof(uint16_t) : 1);
     u->value = malloc(at ? at * sizeof(float) : 1);
     if (!u->index || !u->value) return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    memcpy(u->index, index, at * sizeof(uint16_t));
-    memcpy(u->value, value, at * sizeof(float));
+    memcpy(u->index, sc->index, at * sizeof(uint16_t));
+    memcpy(u->value, sc->value, at * sizeof(float));
     return PRT_OK;
 }
 
@@ -303,11 +320,9 @@ static prt_status scratch_init(sbake *sb)
         sc->touched = prt__calloc(nv, sizeof(uint32_t));
         const size_t rows = sb->s->glossy_count ? ROWS : 1;
         sc->row = prt__calloc(rows * sb->s->basis.functions, sizeof(float));
-        sc->index = prt__calloc((size_t)BLOCK * rows * sb->s->basis.functions, sizeof(uint16_t));
-        sc->value = prt__calloc((size_t)BLOCK * rows * sb->s->basis.functions, sizeof(float));
         if (sb->s->glossy_count && !(sc->gweight = prt__calloc(nv * PRT__SPECTRAL_GLOSSY_N, sizeof(float))))
             return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        if (!sc->weight || !sc->touched || !sc->row || !sc->index || !sc->value) return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        if (!sc->weight || !sc->touched || !sc->row) return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
     return PRT_OK;
 }

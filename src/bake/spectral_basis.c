@@ -293,9 +293,9 @@ prt_status prt__spectral_basis_full(prt_context *ctx, size_t nv, prt__spectral_b
     return PRT_OK;
 }
 
-void prt__spectral_project(const prt__spectral_basis *b, const float *signal, float *coeffs)
+void prt__spectral_project(const prt__spectral_basis *b, const float *signal, float *coeffs, int threads)
 {
-#pragma omp parallel for schedule(dynamic, 4)
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
     for (uint32_t q = 0; q < b->partitions; ++q) {
         const uint32_t k = b->count[q];
         float *c = coeffs + (size_t)b->first[q] * 3;
@@ -312,9 +312,9 @@ void prt__spectral_project(const prt__spectral_basis *b, const float *signal, fl
     }
 }
 
-void prt__spectral_reconstruct(const prt__spectral_basis *b, size_t nv, const float *coeffs, float *signal)
+void prt__spectral_reconstruct(const prt__spectral_basis *b, size_t nv, const float *coeffs, float *signal, int threads)
 {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads)
     for (size_t v = 0; v < nv; ++v) {
         const uint32_t q = b->part_of[v], k = b->count[q];
         const float *s = b->values + b->offset[v], *c = coeffs + (size_t)b->first[q] * 3;

@@ -155,6 +155,7 @@ int prt__mesh_surface_id(prt__mesh *m, const char *name)
     char (*names)[PRT__SURFACE_NAME] = realloc(m->surface_names, (size_t)(m->surface_count + 1) * PRT__SURFACE_NAME);
     if (!names) return -1;
     m->surface_names = names;
+    memset(names[m->surface_count], 0, PRT__SURFACE_NAME);   /* files hold all 64 bytes: no heap garbage */
     memcpy(names[m->surface_count], clean, n + 1);
     return ++m->surface_count;
 }

@@ -93,7 +93,11 @@ static prt_status spectral_bake_begin(prt_context *ctx, const prt_scene *scene, 
     d.drop_below = prt__opt_float(o, "drop-below", 0.0f);
     d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
     prt_status st = prt__spectral_bake_begin(ctx, &d, t, job);
-    if (!st && !(((prt__spectral_set *)t->state)->cache = cache_new())) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!st && !(((prt__spectral_set *)t->state)->cache = cache_new())) {
+        (*job)->release(*job);   /* the driver releases only jobs that began */
+        *job = NULL;
+        st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    }
     return st;
 }
 
@@ -437,15 +441,19 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
      * other surfaces send out - emission, reflected direct light, the bounces - seen through the
      * basis; the renderer evaluates it per pixel. */
     const prt__spectral_set *s = t->state;
-    if (!st && s->glossy_count && d->component != PRT_COMPONENT_DIRECT) {
+    if (!st && s->glossy_count) {
         float *out = malloc(nv * 3 * sizeof(float));
         r->exit_sh = malloc(nv * 3 * PRT__SPECTRAL_GLOSSY_N * sizeof(float));
         if (!out || !r->exit_sh) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         else {
             /* direct[] lacks the pixel lights' part: the surfaces' outgoing light needs all of it. */
-            for (size_t i = 0; i < nv * 3; ++i)
-                out[i] = (le && d->component != PRT_COMPONENT_INDIRECT ? emission * le[i] : 0.0f) + direct[i] +
-                         (Ep ? albedo[i] / (float)PRT_PI * Ep[i] : 0.0f) + indirect[i];
+            /* The emitters' glossy reflection is direct light, the rest of it indirect: the
+             * components add up to the whole. */
+            for (size_t i = 0; i < nv * 3; ++i) {
+                const float own = le && d->component != PRT_COMPONENT_INDIRECT ? emission * le[i] : 0.0f;
+                const float bounced = direct[i] + (Ep ? albedo[i] / (float)PRT_PI * Ep[i] : 0.0f) + indirect[i];
+                out[i] = own + (d->component == PRT_COMPONENT_DIRECT ? 0.0f : bounced);
+            }
             st = prt__spectral_glossy(ctx, t, out, r->exit_sh);
             r->exit_order = PRT__SPECTRAL_GLOSSY_ORDER;
             r->exit_mirror = 0;
@@ -533,7 +541,7 @@ prt_status prt_spectral_project(const prt_transfer *t, const float *signal, floa
 {
     const prt__spectral_set *s = prt__spectral(t);
     if (!s || !signal || !coefficients) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_spectral_project: a spectral transfer and arrays are required");
-    prt__spectral_project(&s->basis, signal, coefficients);
+    prt__spectral_project(&s->basis, signal, coefficients, prt__threads(NULL));
     return PRT_OK;
 }
 
@@ -541,6 +549,6 @@ prt_status prt_spectral_reconstruct(const prt_transfer *t, const float *coeffici
 {
     const prt__spectral_set *s = prt__spectral(t);
     if (!s || !signal || !coefficients) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_spectral_reconstruct: a spectral transfer and arrays are required");
-    prt__spectral_reconstruct(&s->basis, t->mesh.vertex_count, coefficients, signal);
+    prt__spectral_reconstruct(&s->basis, t->mesh.vertex_count, coefficients, signal, prt__threads(NULL));
     return PRT_OK;
 }

@@ -38,7 +38,6 @@ typedef struct prt__spectral_basis {
 typedef struct prt__spectral_cache {
     pthread_mutex_t lock;
     bool ready;
-    prt_status failed;
     prt__raycaster rc;
     float *origins;          /* [vertex][3] shadow-ray origins */
     void *frames;            /* prt__frame_rot[glossy_count]: the glossy vertices' frame rotations */
@@ -98,9 +97,9 @@ prt_status prt__spectral_basis_build(prt_context *ctx, const prt__mesh *m, int p
  * eigenvectors span); at most PRT__SPECTRAL_MAX_FUNCTIONS vertices. */
 prt_status prt__spectral_basis_full(prt_context *ctx, size_t vertex_count, prt__spectral_basis *out);
 /* Coefficients of a per-vertex RGB signal (3 floats per vertex) on the basis: 3 per function. */
-void prt__spectral_project(const prt__spectral_basis *b, const float *signal, float *coeffs);
+void prt__spectral_project(const prt__spectral_basis *b, const float *signal, float *coeffs, int threads);
 /* The signal back from its coefficients (3 floats per vertex). */
-void prt__spectral_reconstruct(const prt__spectral_basis *b, size_t vertex_count, const float *coeffs, float *signal);
+void prt__spectral_reconstruct(const prt__spectral_basis *b, size_t vertex_count, const float *coeffs, float *signal, int threads);
 
 /* The bake (bake/spectral.c) as stages of work units. */
 typedef struct prt__spectral_bake_desc {

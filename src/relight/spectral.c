@@ -18,16 +18,22 @@
 static prt_status cache_ready(prt_context *ctx, const prt_transfer *t, prt__spectral_cache *c)
 {
     pthread_mutex_lock(&c->lock);
-    if (!c->ready && !c->failed) {
+    prt_status st = PRT_OK;
+    if (!c->ready) {
+        /* A failure (cancelled, out of memory) is not kept: the next relight tries again. */
         const prt__spectral_set *s = t->state;
-        prt_status st = prt__raycaster_create(ctx, &t->mesh, &c->rc);
+        st = prt__raycaster_create(ctx, &t->mesh, &c->rc);
         if (!st) st = prt__vertex_origins(&t->mesh, s->ray_offset, &c->origins);
-        if (st) c->failed = st;
-        else c->ready = true;
+        if (st) {
+            prt__raycaster_release(&c->rc);
+            free(c->origins);
+            c->origins = NULL;
+        } else {
+            c->ready = true;
+        }
     }
-    prt_status st = c->failed;
     pthread_mutex_unlock(&c->lock);
-    return st ? prt__fail(ctx, st, "spectral relighting: %s", prt_last_error()) : PRT_OK;
+    return st;
 }
 
 static bool occluded(const prt__spectral_cache *c, const float o[3], const float d[3], float tfar)
@@ -199,7 +205,7 @@ prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const 
     const float *from = direct_out;
     const float k = s->scale / (float)PRT_PI;
     for (int bounce = 0; bounce < bounces; ++bounce) {
-        prt__spectral_project(b, from, coeffs);
+        prt__spectral_project(b, from, coeffs, prt__threads(ctx));
         /* Each vertex gathers its row of T^s; the next bounce starts from what it reflects. */
 #pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
         for (size_t v = 0; v < nv; ++v) {
@@ -258,7 +264,7 @@ prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const f
     if (st) return st;
     float *coeffs = prt__calloc((size_t)s->basis.functions * 3, sizeof(float));
     if (!coeffs) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    prt__spectral_project(&s->basis, out, coeffs);
+    prt__spectral_project(&s->basis, out, coeffs, prt__threads(ctx));
     const prt__frame_rot *frames = s->cache->frames;
 #pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ctx))
     for (size_t v = 0; v < nv; ++v) {

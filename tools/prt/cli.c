@@ -1,6 +1,7 @@
 #include "cli.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -286,7 +287,7 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
         return 1;
     case OPT_ALBEDO_OF: {
         const char *eq = strrchr(arg, '=');
-        if (!eq || eq == arg || l->paint_count == CLI_MAX_LIGHTS ||
+        if (!eq || eq == arg || eq - arg >= 64 || l->paint_count == CLI_MAX_LIGHTS ||
             !cli_parse_vec3(eq + 1, true, l->paint[l->paint_count].rgb)) {
             cli_usage(c, "--albedo-of takes NAME=R,G,B (or NAME=V for grey), at most %d times", CLI_MAX_LIGHTS);
             return -1;
@@ -294,21 +295,22 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
         const float *rgb = l->paint[l->paint_count].rgb;
         for (int k = 0; k < 3; ++k)
             if (!(rgb[k] >= 0.0f && rgb[k] <= 1.0f)) { cli_usage(c, "--albedo-of %s: albedo must lie in [0, 1]", arg); return -1; }
-        char *name = strndup(arg, (size_t)(eq - arg));   /* lives as long as the command */
-        if (!name) { cli_error(c, "out of memory"); return -1; }
-        l->paint[l->paint_count++].name = name;
+        memcpy(l->paint[l->paint_count].name, arg, (size_t)(eq - arg));
+        l->paint[l->paint_count++].name[eq - arg] = 0;
         return 1;
     }
     case OPT_CONTROL: {
         const char *eq = strchr(arg, '=');
-        float v;
-        if (!eq || eq == arg || l->control_count == PRT_MAX_CONTROLS || !cli_parse_float(eq + 1, &v) || v != (float)(int)v) {
+        char *end = NULL;
+        errno = 0;
+        const long v = eq ? strtol(eq + 1, &end, 10) : 0;
+        if (!eq || eq == arg || eq - arg >= 64 || l->control_count == PRT_MAX_CONTROLS || end == eq + 1 || *end || errno || v < INT_MIN ||
+            v > INT_MAX) {
             cli_usage(c, "--control takes NAME=INTEGER (for example bounces=8)");
             return -1;
         }
-        char *name = strndup(arg, (size_t)(eq - arg));
-        if (!name) { cli_error(c, "out of memory"); return -1; }
-        l->control[l->control_count].name = name;
+        memcpy(l->control[l->control_count].name, arg, (size_t)(eq - arg));
+        l->control[l->control_count].name[eq - arg] = 0;
         l->control[l->control_count++].value = (int)v;
         return 1;
     }

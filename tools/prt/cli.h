@@ -75,10 +75,10 @@ typedef struct cli_light {
     bool have_brdf;           /* --brdf: the reflection lobe for glossy sets */
     prt_brdf brdf;
     /* --albedo-of NAME=R,G,B: surface colours at run time (methods that allow it). */
-    struct { const char *name; float rgb[3]; } paint[CLI_MAX_LIGHTS];
+    struct { char name[64]; float rgb[3]; } paint[CLI_MAX_LIGHTS];
     int paint_count;
     /* --control NAME=V: the method's run-time settings (prt_transfer_controls). */
-    struct { const char *name; int value; } control[PRT_MAX_CONTROLS];
+    struct { char name[64]; int value; } control[PRT_MAX_CONTROLS];
     int control_count;
     char path_buf[1024];
 } cli_light;
