@@ -151,7 +151,7 @@ static prt_status scan(prt__checkpoint *c, const prt__fingerprint *fp, uint64_t 
         at += RECORD_BYTES + size;
     }
     prt__bytes_free(&payload);
-    qsort(c->records, c->count, sizeof *c->records, cmp_record_offset);
+    if (c->count) qsort(c->records, c->count, sizeof *c->records, cmp_record_offset);   /* records is NULL when there are none */
     /* A unit recorded twice (cannot happen from prt; a hand-made file) keeps its first record. */
     size_t out = 0;
     for (size_t i = 0; i < c->count; ++i)
