@@ -2,6 +2,7 @@
 #include "common.h"
 
 #include <sys/stat.h>
+#include <zlib.h>
 #include <unistd.h>
 
 
@@ -119,14 +120,21 @@ static void test_damaged_files(void **state)
     expect_rejected(ctx, buf, n, "checksum");
 
     /* Truncated at several points. */
-    expect_rejected(ctx, orig, 10, "not a .prt");
+    expect_rejected(ctx, orig, 10, "truncated");   /* the magic is there: a cut file, not another format */
     expect_rejected(ctx, orig, 40, "truncated");
     expect_rejected(ctx, orig, n - 1, "truncated");
     expect_rejected(ctx, orig, n / 2, "truncated");
 
-    /* A newer version is refused by name. */
+    /* A newer version is refused by name; a damaged version byte is damage. */
     memcpy(buf, orig, n);
     buf[8] = 99;
+    expect_rejected(ctx, buf, n, "checksum");
+    uint32_t count;
+    memcpy(&count, buf + 12, 4);
+    const size_t table_end = 24 + 24 * (size_t)count;
+    memset(buf + 20, 0, 4);
+    const uint32_t crc = (uint32_t)crc32(0L, buf, (uInt)table_end);
+    memcpy(buf + 20, &crc, 4);
     expect_rejected(ctx, buf, n, "newer");
 
     /* Not a .prt at all. */
@@ -148,7 +156,6 @@ static void test_damaged_files(void **state)
     prt_context_release(ctx);
 }
 
-#include <zlib.h>
 
 /* Overwrites bytes of chunk `id` at `offset` and fixes every checksum, so that only the loader's
  * own checks can catch the change. */

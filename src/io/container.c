@@ -152,22 +152,27 @@ prt_status prt__container_read(prt_context *ctx, const void *data, size_t size, 
     *chunks = NULL;
     *count = 0;
     const unsigned char *b = data;
+    if (b && size > 0 && size < HEADER_SIZE && !memcmp(b, MAGIC, size < 8 ? size : 8)) return bad(ctx, "truncated .prt file (header cut off)");
     if (!b || size < HEADER_SIZE || memcmp(b, MAGIC, 8) != 0) return bad(ctx, "not a .prt file (bad magic number)");
     uint32_t version = prt__get32(b + 8), n = prt__get32(b + 12);
+    /* The checksum covers the version: a damaged version byte is damage, not a newer file. */
+    const bool table_ok = n > 0 && n <= MAX_CHUNKS;
+    const size_t table_end = HEADER_SIZE + (size_t)ENTRY_SIZE * (table_ok ? n : 0);
+    if (table_ok && table_end <= size) {
+        unsigned char *head = malloc(table_end);
+        if (!head) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        memcpy(head, b, table_end);
+        uint32_t stored = prt__get32(head + 20);
+        prt__put32(head + 20, 0);
+        uint32_t actual = prt__crc32(head, table_end);
+        free(head);
+        if (stored != actual) return bad(ctx, "corrupt .prt file: header checksum mismatch");
+    }
     if (version > FILE_VERSION)
         return prt__fail(ctx, PRT_ERR_FORMAT, "file format version %u is newer than this prt supports (%d): upgrade prt", version, FILE_VERSION);
     if (version < 1) return prt__fail(ctx, PRT_ERR_FORMAT, "file format version %u is not a valid .prt version", version);
-    if (n == 0 || n > MAX_CHUNKS) return prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: %u chunks", n);
-    const size_t table_end = HEADER_SIZE + (size_t)ENTRY_SIZE * n;
+    if (!table_ok) return prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: %u chunks", n);
     if (table_end > size) return bad(ctx, "truncated .prt file (chunk table cut off)");
-    unsigned char *head = malloc(table_end);
-    if (!head) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    memcpy(head, b, table_end);
-    uint32_t stored = prt__get32(head + 20);
-    prt__put32(head + 20, 0);
-    uint32_t actual = prt__crc32(head, table_end);
-    free(head);
-    if (stored != actual) return bad(ctx, "corrupt .prt file: header checksum mismatch");
     prt__chunk_in *c = prt__calloc(n, sizeof *c);
     if (!c) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     for (uint32_t i = 0; i < n; ++i) {
