@@ -137,7 +137,7 @@ static GLuint compile(GLenum type, const char *src, char *log, size_t logsize)
 }
 
 /* Compiles and links vs (+ gs) + fs; 0 and a message on failure. */
-static GLuint link_program(const char *vs_src, const char *gs_src, const char *fs_src)
+GLuint prt__gl_program(const char *vs_src, const char *gs_src, const char *fs_src)
 {
     char log[1024] = "";
     GLuint vs = compile(GL_VERTEX_SHADER, vs_src, log, sizeof log);
@@ -171,9 +171,9 @@ static GLuint link_program(const char *vs_src, const char *gs_src, const char *f
 prt_status prt__draw_init(prt__draw *d)
 {
     memset(d, 0, sizeof *d);
-    if (!(d->program = link_program(VS, NULL, FS))) return PRT_ERR_BACKEND;
-    if (!(d->program_g = link_program(VS_G, GS_G, FS_G)) || !(d->program_t = link_program(VS_T, NULL, FS_T)) ||
-        !(d->program_s = link_program(VS_G, GS_G, FS_S))) {
+    if (!(d->program = prt__gl_program(VS, NULL, FS))) return PRT_ERR_BACKEND;
+    if (!(d->program_g = prt__gl_program(VS_G, GS_G, FS_G)) || !(d->program_t = prt__gl_program(VS_T, NULL, FS_T)) ||
+        !(d->program_s = prt__gl_program(VS_G, GS_G, FS_S))) {
         glDeleteProgram(d->program);
         if (d->program_g) glDeleteProgram(d->program_g);
         if (d->program_t) glDeleteProgram(d->program_t);

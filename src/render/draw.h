@@ -35,6 +35,8 @@ typedef struct prt__draw {
     prt__pixel_lights lights;
 } prt__draw;
 
+/* Compiles and links vs (+ gs, may be NULL) + fs; 0 after recording the compiler's message. */
+GLuint prt__gl_program(const char *vs_src, const char *gs_src, const char *fs_src);
 prt_status prt__draw_init(prt__draw *d);
 void prt__draw_free(prt__draw *d);
 /* Uploads geometry and radiance (re-uploads everything; the radiance changes per relight). */

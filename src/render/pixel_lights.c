@@ -146,49 +146,12 @@ static const char *FS_ADD =
     "  color = vec4(f_alb / PI * E * lit, 1.0);\n"
     "}\n";
 
-static GLuint compile(GLenum type, const char *src, char *log, size_t size)
-{
-    GLuint s = glCreateShader(type);
-    glShaderSource(s, 1, &src, NULL);
-    glCompileShader(s);
-    GLint ok;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) { glGetShaderInfoLog(s, (GLsizei)size, NULL, log); glDeleteShader(s); return 0; }
-    return s;
-}
-
-static GLuint program(const char *vs_src, const char *fs_src)
-{
-    char log[1024] = "";
-    GLuint vs = compile(GL_VERTEX_SHADER, vs_src, log, sizeof log), fs = vs ? compile(GL_FRAGMENT_SHADER, fs_src, log, sizeof log) : 0;
-    if (!vs || !fs) {
-        if (vs) glDeleteShader(vs);
-        prt__fail(NULL, PRT_ERR_BACKEND, "shadow shader compilation failed: %s", log);
-        return 0;
-    }
-    GLuint p = glCreateProgram();
-    glAttachShader(p, vs);
-    glAttachShader(p, fs);
-    glLinkProgram(p);
-    glDeleteShader(vs);
-    glDeleteShader(fs);
-    GLint ok;
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        glGetProgramInfoLog(p, sizeof log, NULL, log);
-        glDeleteProgram(p);
-        prt__fail(NULL, PRT_ERR_BACKEND, "shadow shader link failed: %s", log);
-        return 0;
-    }
-    return p;
-}
-
 prt_status prt__pixel_lights_init(prt__pixel_lights *p)
 {
     memset(p, 0, sizeof *p);
-    p->program_cube = program(VS_DEPTH, FS_CUBE);
-    p->program_plane = p->program_cube ? program(VS_DEPTH, FS_PLANE) : 0;
-    p->program_add = p->program_plane ? program(VS_ADD, FS_ADD) : 0;
+    p->program_cube = prt__gl_program(VS_DEPTH, NULL, FS_CUBE);
+    p->program_plane = p->program_cube ? prt__gl_program(VS_DEPTH, NULL, FS_PLANE) : 0;
+    p->program_add = p->program_plane ? prt__gl_program(VS_ADD, NULL, FS_ADD) : 0;
     if (!p->program_add) { prt__pixel_lights_free(p); return PRT_ERR_BACKEND; }
     p->uc_vp = glGetUniformLocation(p->program_cube, "vp");
     p->uc_light = glGetUniformLocation(p->program_cube, "light");
