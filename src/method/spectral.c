@@ -17,7 +17,10 @@
 static prt__spectral_cache *cache_new(void)
 {
     prt__spectral_cache *c = prt__calloc(1, sizeof *c);
-    if (c) pthread_mutex_init(&c->lock, NULL);
+    if (c) {
+        pthread_mutex_init(&c->lock, NULL);
+        prt__vertex_lights_init(&c->lights);
+    }
     return c;
 }
 
@@ -37,8 +40,7 @@ void prt__spectral_set_free(void *state)
     free(s->gvalue);
     for (int k = 0; k < PRT__MAX_BRDFS; ++k) free(s->brdf_matrix[k]);
     if (s->cache) {
-        prt__raycaster_release(&s->cache->rc);
-        free(s->cache->origins);
+        prt__vertex_lights_free(&s->cache->lights);
         prt__frame_rot *fr = s->cache->frames;
         for (uint32_t g = 0; fr && g < s->glossy_count; ++g) prt__frame_rot_release(&fr[g]);
         free(fr);

@@ -13,6 +13,7 @@
 #include "geom/raycast.h"
 #include "light/light_sample.h"
 #include "method/method.h"
+#include "relight/vertex_lights.h"
 
 #include <pthread.h>
 
@@ -36,10 +37,8 @@ typedef struct prt__spectral_basis {
 /* Run-time helpers built on first use (ray casting for shadow rays, the emitters' direct light),
  * guarded by `lock` so that relighting from several threads stays safe. */
 typedef struct prt__spectral_cache {
-    pthread_mutex_t lock;
-    bool ready;
-    prt__raycaster rc;
-    float *origins;          /* [vertex][3] shadow-ray origins */
+    prt__vertex_lights lights;   /* shadow rays */
+    pthread_mutex_t lock;        /* guards frames */
     void *frames;            /* prt__frame_rot[glossy_count]: the glossy vertices' frame rotations */
 } prt__spectral_cache;
 

@@ -13,145 +13,29 @@
 
 #include <omp.h>
 
-#define SPHERE_RAYS 16
-
-static prt_status cache_ready(prt_context *ctx, const prt_transfer *t, prt__spectral_cache *c)
-{
-    pthread_mutex_lock(&c->lock);
-    prt_status st = PRT_OK;
-    if (!c->ready) {
-        /* A failure (cancelled, out of memory) is not kept: the next relight tries again. */
-        const prt__spectral_set *s = t->state;
-        st = prt__raycaster_create(ctx, &t->mesh, &c->rc);
-        if (!st) st = prt__vertex_origins(&t->mesh, s->ray_offset, &c->origins);
-        if (st) {
-            prt__raycaster_release(&c->rc);
-            free(c->origins);
-            c->origins = NULL;
-        } else {
-            c->ready = true;
-        }
-    }
-    pthread_mutex_unlock(&c->lock);
-    return st;
-}
-
-static bool occluded(const prt__spectral_cache *c, const float o[3], const float d[3], float tfar)
-{
-    struct RTCIntersectContext ictx;
-    rtcInitIntersectContext(&ictx);
-    struct RTCRay r;
-    memset(&r, 0, sizeof r);
-    r.org_x = o[0]; r.org_y = o[1]; r.org_z = o[2];
-    r.dir_x = d[0]; r.dir_y = d[1]; r.dir_z = d[2];
-    r.tnear = 0.0f;
-    r.tfar = tfar;
-    r.mask = 0xFFFFFFFFu;
-    rtcOccluded1(c->rc.scene, &ictx, &r);
-    return r.tfar < 0.0f;
-}
-
-/* Whether the light point p + wi dist is hidden from the ray origin o (the vertex moved off its
- * surface); dist INFINITY for distant light. */
-static bool shadowed(const prt__spectral_cache *c, const float p[3], const float o[3], const float wi[3], float dist)
-{
-    if (!isfinite(dist)) return occluded(c, o, wi, INFINITY);
-    float d[3];
-    for (int k = 0; k < 3; ++k) d[k] = p[k] + wi[k] * dist - o[k];
-    const float len = prt__v3_len(d);
-    return len > 0.0f && prt__v3_normalize(d) && occluded(c, o, d, len * (1.0f - 1e-4f));
-}
-
-/* Irradiance at vertex v from local light l, shadowed: evaluated at the vertex itself, shadow
- * rays from its origin. */
-static void light_at(const prt__spectral_cache *c, const prt_transfer *t, size_t v, const prt_light *l, float e[3])
-{
-    const float *p = t->mesh.positions + v * 3, *o = c->origins + v * 3, *n = t->mesh.normals + v * 3;
-    e[0] = e[1] = e[2] = 0.0f;
-    if (l->type != PRT_LIGHT_SPHERE) {
-        prt__light_sample s;
-        if (!prt__light_sample_from(l, p, 0.5, 0.5, &s)) return;
-        const float cosine = prt__v3_dot(s.wi, n);
-        if (cosine <= 0.0f || shadowed(c, p, o, s.wi, s.dist)) return;
-        for (int k = 0; k < 3; ++k) e[k] = cosine * s.value[k];
-        return;
-    }
-    float exact[3];
-    prt_light_irradiance(l, p, n, exact);
-    if (exact[0] <= 0 && exact[1] <= 0 && exact[2] <= 0) return;
-    double seen = 0.0, all = 0.0;
-    for (int i = 0; i < SPHERE_RAYS; ++i) {
-        double u1, u2;
-        prt__sobol2((uint32_t)i, (uint32_t)v * 2654435761u, &u1, &u2);
-        prt__light_sample s;
-        if (!prt__light_sample_from(l, p, u1, u2, &s)) continue;
-        const float cosine = prt__v3_dot(s.wi, n);
-        if (cosine <= 0.0f) continue;
-        all += cosine;
-        if (!shadowed(c, p, o, s.wi, s.dist)) seen += cosine;
-    }
-    const float f = all > 0 ? (float)(seen / all) : 0.0f;
-    for (int k = 0; k < 3; ++k) e[k] = exact[k] * f;
-}
-
-/* Whether vertex v sees light l at all (its cone and the vertex's facing aside): 1 or 0, the
- * visible fraction of a sphere light's samples. */
-static float light_visibility(const prt__spectral_cache *c, const prt_transfer *t, size_t v, const prt_light *l)
-{
-    const float *p = t->mesh.positions + v * 3, *o = c->origins + v * 3;
-    if (l->type == PRT_LIGHT_DIRECTIONAL) return occluded(c, o, l->direction, INFINITY) ? 0.0f : 1.0f;
-    prt_light bare = *l;
-    if (l->type == PRT_LIGHT_SPOT) bare.type = PRT_LIGHT_POINT;
-    const int samples = l->type == PRT_LIGHT_SPHERE ? SPHERE_RAYS : 1;
-    int seen = 0, tried = 0;
-    for (int i = 0; i < samples; ++i) {
-        double u1 = 0.5, u2 = 0.5;
-        if (samples > 1) prt__sobol2((uint32_t)i, (uint32_t)v * 2654435761u, &u1, &u2);
-        prt__light_sample s;
-        if (!prt__light_sample_from(&bare, p, u1, u2, &s)) continue;
-        tried++;
-        seen += !shadowed(c, p, o, s.wi, s.dist);
-    }
-    return tried ? (float)seen / (float)tried : 0.0f;
-}
-
 prt_status prt__spectral_visibility(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *vis)
 {
     const prt__spectral_set *s = t->state;
-    prt_status st = cache_ready(ctx, t, s->cache);
-    if (st) return st;
-    const prt__spectral_cache *c = s->cache;
-    const size_t nv = t->mesh.vertex_count;
-#pragma omp parallel for schedule(dynamic, 256) num_threads(prt__threads(ctx))
-    for (size_t v = 0; v < nv; ++v)
-        for (int i = 0; i < count; ++i) vis[(size_t)i * nv + v] = light_visibility(c, t, v, &lights[i]);
-    return PRT_OK;
+    prt_status st = prt__vertex_lights_ready(ctx, &t->mesh, s->ray_offset, &s->cache->lights);
+    if (!st) prt__vertex_lights_visibility(ctx, &s->cache->lights, &t->mesh, lights, count, vis);
+    return st;
 }
 
 prt_status prt__spectral_lights(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *E)
 {
     const prt__spectral_set *s = t->state;
-    prt_status st = cache_ready(ctx, t, s->cache);
-    if (st) return st;
-    const prt__spectral_cache *c = s->cache;
-    const size_t nv = t->mesh.vertex_count;
-#pragma omp parallel for schedule(dynamic, 256) num_threads(prt__threads(ctx))
-    for (size_t v = 0; v < nv; ++v)
-        for (int i = 0; i < count; ++i) {
-            float e[3];
-            light_at(c, t, v, &lights[i], e);
-            for (int k = 0; k < 3; ++k) E[v * 3 + k] += e[k];
-        }
-    return PRT_OK;
+    prt_status st = prt__vertex_lights_ready(ctx, &t->mesh, s->ray_offset, &s->cache->lights);
+    if (!st) prt__vertex_lights_add(ctx, &s->cache->lights, &t->mesh, lights, count, E);
+    return st;
 }
 
 prt_status prt__spectral_direct(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, float *E, float *pixel, int pixel_count)
 {
     const prt__spectral_set *s = t->state;
     const size_t nv = t->mesh.vertex_count;
-    prt_status st = cache_ready(ctx, t, s->cache);
+    prt_status st = prt__vertex_lights_ready(ctx, &t->mesh, s->ray_offset, &s->cache->lights);
     if (st) return st;
-    const prt__spectral_cache *c = s->cache;
+    const prt__vertex_lights *c = &s->cache->lights;
     memset(E, 0, nv * 3 * sizeof(float));
     /* The environment through the baked visibility. */
     const prt_envmap *env = prt_lighting_envmap(l);
@@ -179,7 +63,7 @@ prt_status prt__spectral_direct(prt_context *ctx, const prt_transfer *t, const p
         for (size_t v = 0; v < nv; ++v)
             for (int i = 0; i < count; ++i) {
                 float e[3];
-                light_at(c, t, v, prt_lighting_light(l, i), e);
+                prt__vertex_light_at(c, &t->mesh, v, prt_lighting_light(l, i), e);
                 for (int k = 0; k < 3; ++k) E[v * 3 + k] += e[k];
                 if (pixel && i < pixel_count)
                     for (int k = 0; k < 3; ++k) pixel[v * 3 + k] += e[k];
