@@ -388,7 +388,7 @@ static void spectral_control_range(const prt_transfer *t, int i, int *lo, int *h
     (void)t;
     (void)i;
     *lo = 0;
-    *hi = 16;
+    *hi = 64;
     *def = 3;
 }
 
@@ -398,7 +398,7 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
     if (d->brdf) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf does not apply to spectral transfer (it reflects diffusely; see --albedo-of)");
     const size_t nv = t->mesh.vertex_count;
     const int bounces = d->controls ? d->controls[0] : 3;
-    if (bounces < 0 || bounces > 16) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range 0..16", bounces);
+    if (bounces < 0 || bounces > 64) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range 0..64", bounces);
     prt_status st = prt__relit_alloc(ctx, t, r, d->with_indirect || d->component == PRT_COMPONENT_INDIRECT);
     if (st) return st;
     const float *albedo = d->albedo ? d->albedo : t->mesh.albedo;

@@ -2,12 +2,14 @@
  * plus one line here (docs/ARCHITECTURE.md). */
 #include "method/sh.h"
 #include "method/spectral.h"
+#include "method/lightcloud.h"
 #include "method/wavelet.h"
 
 static const prt__method *const table[] = {
     &prt__method_sh,
     &prt__method_wavelet,
     &prt__method_spectral,
+    &prt__method_lightcloud,
 };
 
 #define COUNT ((int)(sizeof table / sizeof table[0]))

@@ -382,6 +382,12 @@ prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t,
      * by the procedural sky: --light added to a plain scene adds to the sky. */
     const bool own = (l->set_lights ? kept > 0 && l->light_count > 0 : kept > 0) || emits;
     prt_environment_desc e = environment(l, has_env, &file_env, own);
+    /* A method without distant light (lightcloud) is not given the fallback sky; an environment
+     * the scene names is left out with the warning below. */
+    if (!(can & PRT_LIGHTS_ENVIRONMENT) && !l->set_source && !e.none) {
+        if (has_env) dropped |= PRT_LIGHTS_ENVIRONMENT;
+        e.none = 1;
+    }
     prt_lighting *lighting = NULL;
     prt_status st = prt_lighting_create(&lighting);
     if (!st) st = prt_lighting_set_environment(lighting, &e);
