@@ -13,6 +13,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 static prt_context *ctx;
 static prt_lighting *l;   /* made once: its map keeps the projections and cubes it builds */
 static prt_lighting *local;   /* the sky plus one light of every local kind, for methods that relight them */
+static prt_lighting *points;  /* point and sphere lights alone, for methods without distant light (lightcloud) */
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -22,12 +23,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         prt_envmap *env = NULL;
         if (prt_context_create(&(prt_context_desc){.threads = 1}, &ctx) != PRT_OK || prt_lighting_create(&l) != PRT_OK ||
             prt_sky_create(&sky, &env) != PRT_OK || prt_lighting_set_envmap(l, env, NULL, 1.0f) != PRT_OK ||
-            prt_lighting_copy(l, &local) != PRT_OK)
+            prt_lighting_copy(l, &local) != PRT_OK || prt_lighting_create(&points) != PRT_OK)
             abort();
         const char *specs[4] = {"point:0,2,0:5", "spot:0,2,0:0,-1,0:40,20:5", "directional:0.2,1,0.3:2", "sphere:1,2,0:0.3:10"};
         for (int i = 0; i < 4; ++i) {
             prt_light li;
             if (prt_light_parse(specs[i], &li) != PRT_OK || prt_lighting_add(local, &li, NULL) != PRT_OK) abort();
+            if ((i == 0 || i == 3) && prt_lighting_add(points, &li, NULL) != PRT_OK) abort();
         }
     }
     prt_transfer *t = NULL;
@@ -35,7 +37,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     char *text = NULL;
     if (prt_transfer_describe(t, "fuzz", 1, &text) == PRT_OK) free(text);
     {
-        const prt_lighting *lighting = prt_method_lighting(prt_transfer_method(t)) & PRT_LIGHTS_POINT ? local : l;
+        const unsigned can = prt_method_lighting(prt_transfer_method(t));
+        const prt_lighting *lighting = !(can & PRT_LIGHTS_ENVIRONMENT) ? points : can & PRT_LIGHTS_POINT ? local : l;
         /* Drawn (local lights left for the renderer, then shaded on the CPU) and per vertex. */
         for (int k = 0; k < 2 * prt_transfer_variant_count(t) && k < 6; ++k) {
             const int v = k / 2;

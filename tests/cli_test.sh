@@ -184,7 +184,7 @@ says "option of method sh"
 expect 2 "wavelet option without wavelet" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --terms 3
 says "method wavelet"
 expect 2 "bad method" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method fourier
-says "sh, wavelet or spectral"
+says "sh, wavelet, spectral or lightcloud"
 expect 2 "bad bits" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --bits 12
 says "8 or 16"
 expect 2 "too many wavelet bounces" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --bounces 9
@@ -360,7 +360,7 @@ expect 0 "reference under the scene's lights" -- "$PRT" reference "$T/lamp.prt" 
 # The spectral method: local lights with bounces, colours changed without a rebake, controls.
 expect 0 "spectral bake" -- "$PRT" bake -q "$T/lamp.json" -o "$T/spec.prt" --method spectral --basis 64 --samples 64
 expect 0 "spectral info" -- "$PRT" info "$T/spec.prt"
-grep -q "partitions" "$T/out" && grep -q "red_wall" "$T/out" && grep -q "bounces 0..16" "$T/out" && ok || bad "info lacks partitions, surfaces or controls"
+grep -q "partitions" "$T/out" && grep -q "red_wall" "$T/out" && grep -q "bounces 0..64" "$T/out" && ok || bad "info lacks partitions, surfaces or controls"
 expect 0 "spectral relight with the scene's lights" -- "$PRT" relight -q "$T/spec.prt" -o "$T/spec.json"
 grep -q '"direct"' "$T/spec.json" && grep -q '"indirect"' "$T/spec.json" && ok || bad "spectral relight JSON lacks direct and indirect"
 expect 0 "spectral relight, recoloured" -- "$PRT" relight -q "$T/spec.prt" -o "$T/spec_red.json" --albedo-of floor=0.9,0.1,0.1 --control bounces=1
@@ -371,11 +371,30 @@ says "no surface is called 'carpet'"
 expect 2 "albedo above 1" -- "$PRT" relight "$T/spec.prt" -o "$T/x.json" --albedo-of floor=2
 says "\[0, 1\]"
 expect 2 "a control out of range" -- "$PRT" relight "$T/spec.prt" -o "$T/x.json" --control bounces=99
-says "out of range 0..16"
+says "out of range 0..64"
 expect 2 "a control the method lacks" -- "$PRT" relight "$T/spec.prt" -o "$T/x.json" --control order=3
 says "no setting 'order'"
 expect 2 "colours of a method that bakes them" -- "$PRT" relight "$T/lamp.prt" -o "$T/x.json" --albedo-of floor=0.5
 says "needs a rebake"
+
+# The light cloud: point lights anywhere in a region with full global illumination.
+expect 0 "lightcloud bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/lc.prt" --method lightcloud --cloud-grid 3,2,3 --samples 64 --basis 64 --zone-vertices 3000
+expect 0 "lightcloud info" -- "$PRT" info "$T/lc.prt"
+grep -q "cloud:" "$T/out" && grep -q "zones:" "$T/out" && grep -q "neighbours" "$T/out" && ok || bad "info lacks the cloud, zones or control"
+expect 0 "lightcloud relight" -- "$PRT" relight -q "$T/lc.prt" -o "$T/lc.json" --light point:0.2,0.8,0.1:2 --control neighbours=4
+grep -q '"indirect"' "$T/lc.json" && ok || bad "lightcloud relight JSON lacks indirect"
+expect 0 "lightcloud render" -- $NOLEAK "$PRT" render -q "$T/lc.prt" -o "$T/lc.png" --width 64 --height 48 --light point:0.2,0.8,0.1:2
+expect 2 "a spot light on a light cloud" -- "$PRT" relight "$T/lc.prt" -o "$T/x.json" --light spot:0,1,0:0,-1,0:30:1
+says "cannot relight spot lights"
+expect 2 "a bad cloud grid" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method lightcloud --cloud-grid 3,0,3
+says "--cloud-grid"
+printf '{"lights": [[0, 1, 0], [0.5, "high", 0]]}' >"$T/cloud.json"
+expect 1 "a bad cloud list" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method lightcloud --cloud "$T/cloud.json" --samples 16
+says "light 1"
+expect 1 "a missing cloud list" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method lightcloud --cloud "$T/nothere.json" --samples 16
+says "nothere.json"
+expect 2 "an environment on a light cloud" -- "$PRT" relight "$T/lc.prt" -o "$T/x.json" --sun 0,1,0 --light point:0,1,0:1
+says "cannot relight environment.*--env none leaves"
 
 # A writer killed mid-write leaves "NAME.tmp.PID"; the next write of NAME removes it (that
 # process is gone) and leaves other files alone.

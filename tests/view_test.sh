@@ -154,6 +154,20 @@ within "$T/s2.exr" "$T/rs2.exr" 0.002
 r=$(field relative_l2 "$T/cmp")
 awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.005) }' && ok || bad "recolouring the floor changed nothing (relative L2 $r)"
 
+# Light cloud: a light dragged about in the viewer and back to where it started gives the picture
+# prt render draws there (relighting keeps no history: nothing lags or sticks).
+"$PRT" bake -q "$T/demo.obj" -o "$T/lc.prt" --method lightcloud --cloud-grid 3,2,3 --samples 64 --basis 64 || bad "lightcloud bake"
+printf '%s\n' "0 light-select 1" "0 light-move 0.1 0 0" "0.05 light-move 0.1 0 0" "0.05 light-move 0 0.1 -0.2" "0.05 screenshot $T/lc0.exr" \
+    "0.05 light-move 0 -0.1 0.2" "0.05 light-move -0.2 0 0" "0.1 screenshot $T/lc1.exr" "0.1 quit" >"$T/lcscript.txt"
+xrun -a -s "-screen 0 1024x768x24" "$PRT" view "$T/lc.prt" --light point:0,0.8,0.3:2 --width 320 --height 240 --script "$T/lcscript.txt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 0 ] && ok || { bad "lightcloud script exited $rc"; cat "$T/err"; }
+"$PRT" render -q "$T/lc.prt" -o "$T/rlc1.exr" --width 320 --height 240 --light point:0,0.8,0.3:2
+within "$T/lc1.exr" "$T/rlc1.exr" 0.002
+"$PRT" compare --json - -q "$T/lc0.exr" "$T/lc1.exr" >"$T/cmp"
+r=$(field relative_l2 "$T/cmp")
+awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.01) }' && ok || bad "moving the light changed nothing (relative L2 $r)"
+
 printf '0 frobnicate 1 2\n' >"$T/bad.txt"
 xrun -a "$PRT" view "$T/demo.prt" --script "$T/bad.txt" >/dev/null 2>"$T/err"
 rc=$?

@@ -465,7 +465,7 @@ static prt_status compress_block(prt_context *ctx, const lcbake *b, uint32_t zon
     if (cd.vectors > (int)dim) cd.vectors = (int)dim;
     prt__progress quiet = {0};
     quiet.ctx = ctx;
-    prt_status st = prt__cpca_build(ctx, X, rows, (int)dim, &cd, &quiet, &out->cpca);
+    prt_status st = prt__cpca_build_ex(ctx, X, rows, (int)dim, &cd, 64, &quiet, &out->cpca);
     free(X);
     return st;
 }

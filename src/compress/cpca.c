@@ -136,6 +136,12 @@ static bool subspace(const float *X, const size_t *members, size_t n, const doub
 
 prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim, const prt_compress_desc *d, prt__progress *prog, prt__cpca **out)
 {
+    return prt__cpca_build_ex(ctx, X, nv, dim, d, FULL_EIGEN_MAX_DIM, prog, out);
+}
+
+prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int dim, const prt_compress_desc *d, int full_max_dim, prt__progress *prog,
+                              prt__cpca **out)
+{
     *out = NULL;
     int K = d->clusters;
     if ((size_t)K > nv) K = (int)nv;
@@ -149,7 +155,7 @@ prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim,
     double *best = prt__calloc(nv, sizeof(double));
     /* Large vectors keep only the leading eigenvectors a cluster can be given (vector budgets
      * stay well below these), found in a subspace a few vectors wider. */
-    const bool large = dim > FULL_EIGEN_MAX_DIM;
+    const bool large = dim > full_max_dim || dim > FULL_EIGEN_MAX_DIM;
     int keep = dim;
     if (large) {
         keep = 2 * d->vectors + 8;

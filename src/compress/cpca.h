@@ -26,6 +26,11 @@ bool prt__cpca_index(prt__cpca *c, size_t vertex_count);
 /* Compresses nv vectors of dim floats (X row-major) with desc's settings filled in. */
 prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim, const prt_compress_desc *desc,
                            prt__progress *prog, prt__cpca **out);
+/* The same with vectors longer than full_max_dim (at most 512) decomposed only as far as the
+ * vectors a cluster can be given (subspace iteration) instead of completely: much faster for
+ * long vectors and small budgets. */
+prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int dim, const prt_compress_desc *desc, int full_max_dim,
+                              prt__progress *prog, prt__cpca **out);
 /* Quantization grid of nv vectors of dim floats: per coefficient index, value = bias + q * scale. */
 void prt__quant_grid(const float *x, size_t nv, int dim, int bits, float *scale, float *bias);
 

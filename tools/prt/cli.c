@@ -530,9 +530,12 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
         /* Lighting the method refuses: say how to leave it out. */
         const unsigned refused = prt_relight_needs(t, lighting) & ~prt_method_lighting(prt_transfer_method(t));
         if (refused) {
-            const bool lights = refused & (PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_SPHERE | PRT_LIGHTS_DIRECTIONAL), emit = refused & PRT_LIGHTS_EMISSIVE;
-            cli_error(c, "%s (%s%s%s leave%s them out)", prt_last_error(), lights ? "--light none" : "", lights && emit ? " and " : "",
-                      emit ? "--emission 0" : "", lights && emit ? "" : "s");
+            const bool lights = refused & (PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_SPHERE | PRT_LIGHTS_DIRECTIONAL), emit = refused & PRT_LIGHTS_EMISSIVE,
+                       env = refused & PRT_LIGHTS_ENVIRONMENT;
+            char how[96] = "";
+            snprintf(how, sizeof how, "%s%s%s%s%s", lights ? "--light none" : "", lights && (emit || env) ? ", " : "", emit ? "--emission 0" : "",
+                     emit && env ? ", " : "", env ? "--env none" : "");
+            cli_error(c, "%s (%s leave%s them out)", prt_last_error(), how, lights + emit + env > 1 ? "" : "s");
             ((cli *)c)->reported = true;
         }
     }
