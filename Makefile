@@ -68,6 +68,9 @@ bench: build
 	$(BUILD)/prt_bench_lights
 	$(BUILD)/prt_bench_spectral --room
 	$(BUILD)/prt_bench_spectral
+	$(BUILD)/prt_bench_lightcloud
+	@if [ -f ../shared/data/meshes/sponza/sponza_dabrovic.obj ]; then $(BUILD)/prt_bench_lightcloud ../shared/data/meshes/sponza/sponza_dabrovic.obj --grid 12,4,8 --zone-vertices 500; \
+	else echo "bench: ../shared/data/meshes/sponza is absent: skipping the Sponza light cloud"; fi
 
 # README's accuracy tables: PRT against the path-traced reference (several minutes).
 accuracy: build

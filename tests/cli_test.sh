@@ -394,7 +394,7 @@ says "light 1"
 expect 1 "a missing cloud list" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method lightcloud --cloud "$T/nothere.json" --samples 16
 says "nothere.json"
 expect 2 "an environment on a light cloud" -- "$PRT" relight "$T/lc.prt" -o "$T/x.json" --sun 0,1,0 --light point:0,1,0:1
-says "cannot relight environment.*--env none leaves"
+says "cannot relight environment.*to leave it out: --env none"
 
 # A writer killed mid-write leaves "NAME.tmp.PID"; the next write of NAME removes it (that
 # process is gone) and leaves other files alone.

@@ -33,6 +33,7 @@ typedef struct lcbake {
     size_t stride;                   /* floats per light */
     uint32_t *pos_of;                /* [vertex] position in member order */
     uint8_t *visible;                /* [light * n + light] mutual visibility (1 = visible) */
+    uint8_t *dark;                   /* [light] 1 when the light reaches no vertex at all */
     float merge_distance, merge_error;
 } lcbake;
 
@@ -84,6 +85,7 @@ static prt_status read_list(prt_context *ctx, const char *path, float **pts, uin
     const cJSON *list = cJSON_IsArray(root) ? root : cJSON_GetObjectItemCaseSensitive(root, "lights");
     const int n = cJSON_IsArray(list) ? cJSON_GetArraySize(list) : -1;
     if (n < 0) st = prt__fail(ctx, PRT_ERR_FORMAT, "%s: expected a list of [x, y, z] positions (or {\"lights\": [...]})", path);
+    else if (n == 0) st = prt__fail(ctx, PRT_ERR_FORMAT, "%s: the list holds no lights", path);
     else if (n > PRT__LIGHTCLOUD_MAX_LIGHTS) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s: %d lights, at most %d", path, n, PRT__LIGHTCLOUD_MAX_LIGHTS);
     float *p = st ? NULL : malloc((size_t)(n > 0 ? n : 1) * 3 * sizeof(float));
     if (!st && !p) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
@@ -105,13 +107,16 @@ static prt_status read_list(prt_context *ctx, const char *path, float **pts, uin
     return PRT_OK;
 }
 
-/* Inside geometry when most of 14 rays in fixed directions hit the back of a surface first. */
-static bool inside(const prt__raycaster *rc, const float p[3])
+/* 1 inside geometry (most of 14 rays in fixed directions reach the back of a surface first), 2 on
+ * a surface (one of them hits within `near`: such a light would see both sides of a thin shelf or
+ * wall), else 0. */
+static int inside(const prt__raycaster *rc, const float p[3], float near)
 {
     static const float dirs[14][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1},
                                       {.577f, .577f, .577f}, {-.577f, .577f, .577f}, {.577f, -.577f, .577f}, {.577f, .577f, -.577f},
                                       {-.577f, -.577f, .577f}, {-.577f, .577f, -.577f}, {.577f, -.577f, -.577f}, {-.577f, -.577f, -.577f}};
     int back = 0;
+    bool touching = false;
     for (int i = 0; i < 14; ++i) {
         struct RTCIntersectContext ictx;
         rtcInitIntersectContext(&ictx);
@@ -124,9 +129,10 @@ static bool inside(const prt__raycaster *rc, const float p[3])
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(rc->scene, &ictx, &rh);
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+        if (rh.ray.tfar < near) touching = true;
         if (rh.hit.Ng_x * dirs[i][0] + rh.hit.Ng_y * dirs[i][1] + rh.hit.Ng_z * dirs[i][2] > 0) back++;
     }
-    return back > 7;
+    return back > 7 ? 1 : touching ? 2 : 0;
 }
 
 static bool segment_clear(const prt__raycaster *rc, const float a[3], const float b[3])
@@ -217,19 +223,44 @@ static prt_status place_cloud(lcbake *b, const prt__raycaster *rc)
         }
         free(cdf);
     }
-    /* Drop lights inside geometry. */
-    uint64_t kept = 0;
+    /* The region the cloud covers: the grid's box, and the other lights' bounds grown below. */
+    float region[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+    if (ngrid) memcpy(region, box, sizeof region);
+    /* Drop lights inside geometry or on a surface (closer than a tenth of a grid cell, or than 1%
+     * of the box's diagonal). */
+    float near = 0.01f * diag;
+    if (ngrid)
+        for (int k = 0; k < 3; ++k) near = fminf(near, 0.1f * (box[3 + k] - box[k]) / g[k]);
+    uint64_t kept = 0, in = 0, on = 0;
     for (uint64_t i = 0; i < n; ++i) {
-        if (inside(rc, p + i * 3)) continue;
+        const int where = inside(rc, p + i * 3, near);
+        in += where == 1;
+        on += where == 2;
+        if (where) continue;
         memmove(p + kept * 3, p + i * 3, 3 * sizeof(float));
         kept++;
     }
-    if (kept < n) prt__log(ctx, PRT_LOG_INFO, "light cloud: %llu of %llu lights lie inside geometry and were dropped", (unsigned long long)(n - kept),
-                           (unsigned long long)n);
-    if (!kept) { free(p); return prt__fail(ctx, PRT_ERR_INVALID_ARG, "no cloud light lies outside the geometry: give a box (--cloud-box) or a list inside the open space"); }
+    if (in || on)
+        prt__log(ctx, PRT_LOG_INFO, "light cloud: of %llu lights, %llu lie inside geometry and %llu on a surface: dropped", (unsigned long long)n,
+                 (unsigned long long)in, (unsigned long long)on);
+    if (!kept) { free(p); return prt__fail(ctx, PRT_ERR_INVALID_ARG, "no cloud light lies in open space: give a box (--cloud-box) or a list inside the open space"); }
     b->s->cloud = p;
     b->s->cloud_count = (uint32_t)kept;
-    b->s->spacing = prt__lightcloud_spacing(p, (uint32_t)kept);
+    float spacing = prt__lightcloud_spacing(p, (uint32_t)kept);
+    if (kept == 1) {   /* no neighbour to measure: half the region's largest side (the scene's when the cloud is one listed light) */
+        float mesh_box[6];
+        mesh_bounds(m, mesh_box);
+        const float *r = ngrid ? box : mesh_box;
+        spacing = 0.5f * fmaxf(r[3] - r[0], fmaxf(r[4] - r[1], r[5] - r[2]));
+    }
+    if (nlist || b->d.surface_lights)   /* lights not on the grid: the bounds of all of them, grown by half a spacing */
+        for (uint64_t i = 0; i < kept; ++i)
+            for (int k = 0; k < 3; ++k) {
+                region[k] = fminf(region[k], p[i * 3 + k] - 0.5f * spacing);
+                region[3 + k] = fmaxf(region[3 + k], p[i * 3 + k] + 0.5f * spacing);
+            }
+    b->s->spacing = spacing;
+    memcpy(b->s->region, region, sizeof region);
     return st;
 }
 
@@ -315,7 +346,7 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
     s->merge_distance = b->merge_distance;
     s->merge_error = b->merge_error;
     /* Mutual visibility of the pairs that could merge (V_jk of eq. 9). */
-    if (!st && !(b->visible = prt__calloc((size_t)n * n, 1))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!st && (!(b->visible = prt__calloc((size_t)n * n, 1)) || !(b->dark = prt__calloc(n, 1)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) {
 #pragma omp parallel for schedule(dynamic, 4) num_threads(job->threads)
         for (uint32_t j = 0; j < n; ++j)
@@ -337,6 +368,10 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
         st = split_zones(b, idx, (uint32_t)nv, &s->zone_count);
     }
     free(idx);
+    /* One chunk per zone, and a file holds at most 4096 chunks. */
+    if (!st && s->zone_count > 4000)
+        st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%u zones of at most %d vertices: at most 4000 fit a file (raise --zone-vertices)", s->zone_count,
+                       b->d.zone_vertices);
     if (!st && !prt__lightcloud_index(b->t, s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st && !(s->zones = prt__calloc(s->zone_count, sizeof *s->zones))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st && !(b->pos_of = malloc(nv * sizeof(uint32_t)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
@@ -354,7 +389,7 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
         else st = solve(b, ctx, NULL, s->emit, s->emit + nv * 3, s->emit_sh);
     }
     if (!st)
-        prt__log(ctx, PRT_LOG_INFO, "light cloud: %u lights (spacing %.3g), %u zones, responses %.1f MiB on disk", n, s->spacing, s->zone_count,
+        prt__log(ctx, PRT_LOG_INFO, "light cloud: %u light%s (spacing %.3g), %u zones, responses %.1f MiB on disk", n, n == 1 ? "" : "s", s->spacing, s->zone_count,
                  (double)b->stride * n * 4 / 1048576.0);
     return st;
 }
@@ -378,6 +413,11 @@ static prt_status light_run(prt__bake_job *job, uint64_t unit, int thread)
     float *glossy = malloc(((size_t)s->glossy_count * 48 + 1) * sizeof(float)), *resp = malloc(b->stride * sizeof(float) + 4);
     prt_status st = diffuse && direct && glossy && resp ? PRT_OK : prt__fail(job->ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) st = solve(b, job->ctx, s->cloud + unit * 3, direct, diffuse, glossy);
+    if (!st) {
+        bool lit = false;
+        for (size_t i = 0; i < nv * 3 && !lit; ++i) lit = direct[i] != 0 || diffuse[i] != 0;
+        b->dark[unit] = !lit;
+    }
     if (!st && s->store_direct)
         for (size_t i = 0; i < nv * 3; ++i) diffuse[i] += direct[i];
     if (!st) {
@@ -396,24 +436,30 @@ static prt_status light_run(prt__bake_job *job, uint64_t unit, int thread)
     return st;
 }
 
+/* A unit's record: its response, then whether it reaches no vertex (1.0f) or does (0.0f). */
 static void light_save(prt__bake_job *job, uint64_t unit, prt__bytes *out)
 {
     lcbake *b = (lcbake *)job;
     const size_t bytes = b->stride * sizeof(float);
-    float *resp = malloc(bytes);
+    float *resp = malloc(bytes + sizeof(float));
     if (!resp || pread(fileno(b->spill), resp, bytes, (off_t)(unit * bytes)) != (ssize_t)bytes) out->failed = true;
-    else prt__bytes_put(out, resp, bytes);
+    else {
+        resp[b->stride] = b->dark[unit] ? 1.0f : 0.0f;
+        prt__bytes_put(out, resp, bytes + sizeof(float));
+    }
     free(resp);
 }
 
 static bool light_load(prt__bake_job *job, uint64_t unit, const unsigned char *data, size_t size)
 {
     lcbake *b = (lcbake *)job;
-    if (size != b->stride * sizeof(float) || !prt__all_finite((const float *)(const void *)data, b->stride)) return false;
+    if (size != (b->stride + 1) * sizeof(float)) return false;
     float *resp = malloc(size);
     if (!resp) return false;
     memcpy(resp, data, size);
-    const bool ok = !write_response(b, unit, resp);
+    const float dark = resp[b->stride];
+    const bool ok = prt__all_finite(resp, b->stride) && (dark == 0.0f || dark == 1.0f) && !write_response(b, unit, resp);
+    b->dark[unit] = dark == 1.0f;
     free(resp);
     return ok;
 }
@@ -532,6 +578,14 @@ static prt_status zone_run(lcbake *b, prt_context *ctx, uint32_t z)
 static prt_status zones_step(prt__bake_job *job, prt_context *ctx, prt__progress *p)
 {
     lcbake *b = (lcbake *)job;
+    uint32_t dark = 0;
+    for (uint32_t j = 0; j < b->s->cloud_count; ++j) dark += b->dark[j];
+    if (dark == b->s->cloud_count)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "none of the %u cloud lights reaches a surface (is the cloud outside a closed scene?): give a "
+                         "--cloud-box or --cloud list where the lights will be", dark);
+    if (dark)
+        prt__log(ctx, PRT_LOG_WARN, "%u of %u cloud lights reach no surface (outside a closed scene, or shut in): they add nothing", dark,
+                 b->s->cloud_count);
     prt__progress_begin(p, "zones", b->s->zone_count);
     prt_status st = PRT_OK;
     for (uint32_t z = 0; z < b->s->zone_count && !st; ++z) {
@@ -597,6 +651,7 @@ static void lc_release(prt__bake_job *job)
     if (b->spill) fclose(b->spill);
     free(b->pos_of);
     free(b->visible);
+    free(b->dark);
     free(b);
 }
 

@@ -8,7 +8,7 @@
 #define CHUNK_LCPR PRT__FOURCC('L', 'C', 'P', 'R')
 #define CHUNK_LCZN PRT__FOURCC('L', 'C', 'Z', 'N')
 #define CHUNK_LCEM PRT__FOURCC('L', 'C', 'E', 'M')
-#define LCPR_HEADER 64
+#define LCPR_HEADER 80
 #define ZONE_HEADER 24
 #define CPCA_HEADER 32
 
@@ -233,6 +233,7 @@ static prt_status lightcloud_save(const prt_transfer *t, prt__chunk_list *l)
     memcpy(h + 32, &s->merge_distance, 4);
     memcpy(h + 36, &s->merge_error, 4);
     prt__put64(h + 40, nv);
+    memcpy(h + 48, s->region, sizeof s->region);
     prt__chunks_add(l, CHUNK_LCPR, h, (size_t)LCPR_HEADER, s->cloud, (size_t)s->cloud_count * 12, s->zone_of, nv * 4, NULL);
     for (uint32_t z = 0; z < s->zone_count; ++z) {
         const prt__lightcloud_zone *zone = &s->zones[z];
@@ -370,6 +371,11 @@ static prt_status lightcloud_load(prt_context *ctx, prt_transfer *t, const cJSON
     memcpy(&s->ray_offset, h + 28, 4);
     memcpy(&s->merge_distance, h + 32, 4);
     memcpy(&s->merge_error, h + 36, 4);
+    memcpy(s->region, h + 48, sizeof s->region);
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(s->region[k]) || !isfinite(s->region[3 + k]) || !(s->region[k] <= s->region[3 + k]) || fabsf(s->region[k]) > 1e30f ||
+            fabsf(s->region[3 + k]) > 1e30f)
+            return bad(ctx, "light-cloud region out of range");
     if (s->cloud_count == 0 || s->cloud_count > PRT__LIGHTCLOUD_MAX_LIGHTS || s->zone_count == 0 || s->zone_count > nv || store > 1 || bounces < 1 ||
         bounces > 64 || samples > (1u << 20) || !(s->spacing >= 0) || !isfinite(s->spacing) || !(s->ray_offset > 0) || !isfinite(s->ray_offset) ||
         !isfinite(s->merge_distance) || !isfinite(s->merge_error))
@@ -459,6 +465,9 @@ static void lightcloud_describe(const prt_transfer *t, prt__describe *d)
     if (j) {
         cJSON_AddNumberToObject(j, "cloud_lights", s->cloud_count);
         cJSON_AddNumberToObject(j, "cloud_spacing", s->spacing);
+        cJSON *region = cJSON_AddArrayToObject(j, "cloud_region");
+        for (int k = 0; k < 6; ++k) cJSON_AddItemToArray(region, cJSON_CreateNumber(s->region[k]));
+        cJSON_AddNumberToObject(j, "samples", s->samples);
         cJSON_AddNumberToObject(j, "zones", s->zone_count);
         cJSON *per = cJSON_AddArrayToObject(j, "merged_lights_per_zone");
         for (uint32_t z = 0; z < s->zone_count; ++z) cJSON_AddItemToArray(per, cJSON_CreateNumber(s->zones[z].lights));
@@ -472,8 +481,10 @@ static void lightcloud_describe(const prt_transfer *t, prt__describe *d)
         cJSON_AddNumberToObject(j, "glossy_vertices", s->glossy_count);
         return;
     }
-    prt__describe_line(d, "cloud:", "%u point lights, spacing %.4g; %s baked (%d bounces)", s->cloud_count, s->spacing,
-                       s->store_direct ? "direct and indirect light" : "indirect light", s->bounces);
+    prt__describe_line(d, "cloud:", "%u point light%s, spacing %.4g, over (%.4g, %.4g, %.4g) .. (%.4g, %.4g, %.4g); %s baked (%d bounces)",
+                       s->cloud_count, s->cloud_count == 1 ? "" : "s", s->spacing, s->region[0], s->region[1], s->region[2], s->region[3], s->region[4],
+                       s->region[5], s->store_direct ? "direct and indirect light" : "indirect light", s->bounces);
+    prt__describe_line(d, "bake:", "%d gathering rays per vertex for the bounces", s->samples);
     prt__describe_line(d, "zones:", "%u (%u..%u vertices), merged lights per zone %u..%u (mean %.1f; merge distance %.4g, error %.3g)", s->zone_count,
                        vmin, vmax, lmin, lmax, lsum / s->zone_count, s->merge_distance, s->merge_error);
     if (compressed)
@@ -505,7 +516,8 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
     if (neighbours < 1 || neighbours >= PRT__KDTREE_MAX_K) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "neighbours %d out of range 1..%d", neighbours, PRT__KDTREE_MAX_K - 1);
     if (s->store_direct && d->component != PRT_COMPONENT_ALL)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this file stores direct and indirect light together (baked with --store all): it cannot show one of them");
-    prt_status st = prt__relit_alloc(ctx, t, r, d->with_indirect || d->component == PRT_COMPONENT_INDIRECT);
+    /* With --store all the indirect part is not separable: no `indirect` array. */
+    prt_status st = prt__relit_alloc(ctx, t, r, !s->store_direct && (d->with_indirect || d->component == PRT_COMPONENT_INDIRECT));
     if (st) return st;
     const int count = prt_lighting_count(l);
     const int pixel = s->store_direct || d->per_vertex || d->component == PRT_COMPONENT_INDIRECT ? 0 : count < PRT_MAX_PIXEL_LIGHTS ? count : PRT_MAX_PIXEL_LIGHTS;

@@ -40,12 +40,14 @@ typedef struct prt__lightcloud_cache {
     prt__kdtree tree;
     bool tree_ready;
     pthread_mutex_t lock;
+    int warned;                  /* a light outside the cloud or seeing none of it was reported (atomic) */
 } prt__lightcloud_cache;
 
 typedef struct prt__lightcloud_set {
     uint32_t cloud_count;
     float *cloud;                /* [light][3] */
-    float spacing;               /* median distance from a cloud light to its nearest neighbour */
+    float spacing;               /* median distance from a cloud light to its nearest neighbour (one light: half the region's largest side) */
+    float region[6];             /* min xyz, max xyz: where the cloud covers (the grid's box, the lights' bounds grown by half a spacing) */
     bool store_direct;           /* responses hold direct light too; else the run time adds it */
     int bounces, samples;
     float ray_offset;

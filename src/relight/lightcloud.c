@@ -73,6 +73,7 @@ prt_status prt__lightcloud_weights(prt_context *ctx, const prt_transfer *t, cons
     if (neighbours < 1) neighbours = 1;
     if (neighbours > PRT__KDTREE_MAX_K - 1) neighbours = PRT__KDTREE_MAX_K - 1;
     const float radius = 0.25f * s->spacing;
+    bool outside = false;
     for (int li = 0; li < count; ++li) {
         const prt_light *L = prt_lighting_light(l, li);
         float power[3];
@@ -106,17 +107,29 @@ prt_status prt__lightcloud_weights(prt_context *ctx, const prt_transfer *t, cons
             }
             found = use;
         }
+        /* Said once while it lasts, not on every frame of a drag. */
         if (sum <= 0) {
-            prt__log(ctx, PRT_LOG_WARN, "light at (%g, %g, %g) sees none of the light cloud near it: it adds no indirect light", L->position[0],
-                     L->position[1], L->position[2]);
+            if (!__atomic_exchange_n(&s->cache->warned, 1, __ATOMIC_RELAXED))
+                prt__log(ctx, PRT_LOG_WARN, "light at (%g, %g, %g) sees none of the light cloud near it: it adds no indirect light", L->position[0],
+                         L->position[1], L->position[2]);
+            outside = true;
             continue;
         }
-        if (found && dist[0] > 2.0f * s->spacing)
-            prt__log(ctx, PRT_LOG_WARN, "light at (%g, %g, %g) lies %.3g outside the light cloud (spacing %.3g): its indirect light is extrapolated",
-                     L->position[0], L->position[1], L->position[2], dist[0], s->spacing);
+        /* Beyond the region the cloud covers the nearest cloud lights stand in for the light, which
+         * is wrong (light through a window does not fall off, for one): say so. */
+        float beyond = 0;
+        for (int k = 0; k < 3; ++k) beyond = fmaxf(beyond, fmaxf(s->region[k] - L->position[k], L->position[k] - s->region[3 + k]));
+        if (beyond > 0) {
+            if (!__atomic_exchange_n(&s->cache->warned, 1, __ATOMIC_RELAXED))
+                prt__log(ctx, PRT_LOG_WARN, "light at (%g, %g, %g) lies %.3g outside the region the light cloud covers: its indirect light is the "
+                         "nearest cloud lights' and will be wrong (bake with a --cloud-box that covers it)", L->position[0], L->position[1],
+                         L->position[2], beyond);
+            outside = true;
+        }
         for (int i = 0; i < found; ++i)
             for (int k = 0; k < 3; ++k) w[(size_t)idx[i] * 3 + k] += (float)(weight[i] / sum) * power[k];
     }
+    if (!outside) __atomic_store_n(&s->cache->warned, 0, __ATOMIC_RELAXED);
     return PRT_OK;
 }
 

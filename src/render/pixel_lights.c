@@ -28,7 +28,7 @@ static const char *FS_CUBE =
     "  float d = length(w - light);\n"
     "  vec3 ng = normalize(cross(dFdx(w), dFdy(w)));\n"
     "  float c = abs(dot(ng, (w - light) / d)), t = sqrt(max(0.0, 1.0 - c * c)) / max(c, 0.1);\n"
-    "  dist = vec4(d + (gl_FrontFacing ? (2.0 + 2.0 * t) * d * texel : 0.0));\n"
+    "  dist = vec4(d + (gl_FrontFacing ? (2.0 + 8.0 * t) * d * texel : 0.0));\n"
     "}\n";
 static const char *FS_PLANE =
     "#version 330 core\n"
@@ -36,7 +36,7 @@ static const char *FS_PLANE =
     "void main() {\n"
     "  vec3 ng = normalize(cross(dFdx(w), dFdy(w)));\n"
     "  float c = abs(dot(ng, dir)), t = sqrt(max(0.0, 1.0 - c * c)) / max(c, 0.1);\n"
-    "  dist = vec4(dot(w, -dir) + (gl_FrontFacing ? (2.0 + 2.0 * t) * texel : 0.0));\n"
+    "  dist = vec4(dot(w, -dir) + (gl_FrontFacing ? (2.0 + 8.0 * t) * texel : 0.0));\n"
     "}\n";
 
 static const char *VS_ADD =

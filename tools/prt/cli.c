@@ -535,7 +535,7 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
             char how[96] = "";
             snprintf(how, sizeof how, "%s%s%s%s%s", lights ? "--light none" : "", lights && (emit || env) ? ", " : "", emit ? "--emission 0" : "",
                      emit && env ? ", " : "", env ? "--env none" : "");
-            cli_error(c, "%s (%s leave%s them out)", prt_last_error(), how, lights + emit + env > 1 ? "" : "s");
+            cli_error(c, "%s (to leave %s out: %s)", prt_last_error(), lights + emit + env > 1 ? "them" : "it", how);
             ((cli *)c)->reported = true;
         }
     }

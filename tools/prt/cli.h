@@ -84,7 +84,7 @@ typedef struct cli_light {
 } cli_light;
 
 #define CLI_LIGHT_OPTIONS_HELP \
-    "Lighting (defaults: what the baked scene named; else the procedural sky):\n" \
+    "Lighting (defaults: what the baked scene named; else the procedural sky, for methods that relight it):\n" \
     "  --env FILE|none       environment probe (.hdr .pfm .exr .png), or no environment light\n" \
     "  --layout L            latlong | angular | cross | auto (default auto, from aspect ratio)\n" \
     "  --rotate Y[,P[,R]]    rotate the environment: yaw about +y, pitch, roll in degrees\n" \
