@@ -5,7 +5,8 @@
 # (inside the box; for the window box half of them outside, near the window); per light the
 # relative L2 of per-vertex radiance and of its indirect part against the reference (512 paths per
 # vertex), with the reference's own noise taken out; the mean over the lights, for cloud
-# densities 4^3..8^3 and CPCA vectors 2..16 per cluster, and raw (no merging, no compression).
+# densities 4^3..8^3 and CPCA vectors 2..16 per cluster, raw (no merging, no compression) and merged
+# but not compressed (m6).
 # Usage: bench/lightcloud_accuracy.sh PATH/TO/prt OUTDIR [SHARED_DATA]   (some 25 minutes on 2 cores)
 set -eu
 PRT=$1
@@ -48,6 +49,7 @@ for scene in box window; do
     bake g6 --cloud-grid 6,6,6
     bake g8 --cloud-grid 8,8,8
     bake raw6 --cloud-grid 6,6,6 --compress none --merge-distance 0
+    bake m6 --cloud-grid 6,6,6 --compress none
     bake v2 --cloud-grid 6,6,6 --vectors 2
     bake v4 --cloud-grid 6,6,6 --vectors 4
     bake v16 --cloud-grid 6,6,6 --vectors 16
@@ -74,7 +76,7 @@ for scene in box window; do
     echo "$scene: mean over 20 lights | total | total above noise | indirect | indirect above noise | merged lights per zone | coefficients per vertex | MiB"
     echo "| $scene | total | above noise | indirect | above noise | lights per zone | coefficients | MiB |"
     echo "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
-    for name in g4 g5 g6 g8 raw6 v2 v4 v16; do
+    for name in g4 g5 g6 g8 raw6 m6 v2 v4 v16; do
         f="$OUT/$scene-$name.prt"
         sums=$(i=0; while read -r L; do i=$((i + 1)); echo "$(metric "$f" "$OUT/$scene-ref$i.json" "$L" "") $(metric "$f" "$OUT/$scene-ref$i.json" "$L" --indirect)"; done <"$OUT/$scene-lights.txt" |
                awk '{ a += $1; b += $2; c += $3; d += $4; n++ } END { printf "%.4f %.4f %.4f %.4f", a / n, b / n, c / n, d / n }')

@@ -249,6 +249,29 @@ static inline const char *shared_data_dir(void)
     return d && d[0] ? d : NULL;
 }
 
+/* Per-vertex results against the path tracer, emitters (emit > 0) left out: out[0] the relative L2
+ * of radiance, out[1] the reference's own relative noise, out[2] and out[3] the same for the
+ * indirect part (zero when indirect is NULL). */
+static inline void vs_reference(const float *radiance, const float *indirect, const prt_reference_vertices *ref, size_t nv, const float *emit,
+                                double out[4])
+{
+    double se = 0, sb = 0, sn = 0, sei = 0, sbi = 0, sni = 0;
+    for (size_t k = 0; k < nv * 3; ++k) {
+        if (emit && emit[k - k % 3] > 0) continue;
+        se += ((double)radiance[k] - ref->radiance[k]) * ((double)radiance[k] - ref->radiance[k]);
+        sb += (double)ref->radiance[k] * ref->radiance[k];
+        sn += (double)ref->std_error[k] * ref->std_error[k];
+        if (!indirect) continue;
+        sei += ((double)indirect[k] - ref->indirect[k]) * ((double)indirect[k] - ref->indirect[k]);
+        sbi += (double)ref->indirect[k] * ref->indirect[k];
+        sni += (double)ref->std_error_indirect[k] * ref->std_error_indirect[k];
+    }
+    out[0] = sqrt(se / sb);
+    out[1] = sqrt(sn / sb);
+    out[2] = sbi > 0 ? sqrt(sei / sbi) : 0;
+    out[3] = sbi > 0 ? sqrt(sni / sbi) : 0;
+}
+
 /* SH order-3 coefficients of a smooth, positive test environment (index l(l+1)+m). */
 static const float test_known_sh[9] = {4.0f, 0.4f, 0.8f, -0.5f, 0.2f, -0.15f, 0.3f, 0.1f, -0.25f};
 

@@ -405,17 +405,9 @@ static void test_cornell_vs_reference(void **state)
         rd.lighting = l;
         prt_reference_vertices ref;
         assert_int_equal(prt_reference_trace_vertices(ctx, traced, NULL, &rd, &ref), PRT_OK);
-        double se = 0, sb = 0, sei = 0, sbi = 0, sn = 0, sni = 0;
-        for (size_t k = 0; k < nv * 3; ++k) {
-            if (emit && emit[k - k % 3] > 0) continue;
-            se += (r.radiance[k] - ref.radiance[k]) * (double)(r.radiance[k] - ref.radiance[k]);
-            sb += (double)ref.radiance[k] * ref.radiance[k];
-            sei += (r.indirect[k] - ref.indirect[k]) * (double)(r.indirect[k] - ref.indirect[k]);
-            sbi += (double)ref.indirect[k] * ref.indirect[k];
-            sn += (double)ref.std_error[k] * ref.std_error[k];
-            sni += (double)ref.std_error_indirect[k] * ref.std_error_indirect[k];
-        }
-        const double total = sqrt(se / sb), indirect = sqrt(sei / sbi), rn = sqrt(sn / sb), rni = sqrt(sni / sbi);
+        double e[4];
+        vs_reference(r.radiance, r.indirect, &ref, nv, emit, e);
+        const double total = e[0], rn = e[1], indirect = e[2], rni = e[3];
         /* Errors add in quadrature: what the reference's own noise does not explain. */
         const double total_own = sqrt(fmax(0, total * total - rn * rn)), indirect_own = sqrt(fmax(0, indirect * indirect - rni * rni));
         print_message("Cornell box, %s: total %.4f (reference noise %.4f: %.4f beyond it), indirect %.4f (noise %.4f: %.4f beyond)\n", spec, total,

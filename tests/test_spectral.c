@@ -557,17 +557,6 @@ static void test_no_seam_leaks(void **state)
     prt_context_release(ctx);
 }
 
-static double rel_l2(const float *a, const float *b, size_t n, const float *mask_src)
-{
-    double se = 0, sb = 0;
-    for (size_t i = 0; i < n; ++i) {
-        if (mask_src && mask_src[i - i % 3] > 0) continue;   /* skip emitters */
-        se += ((double)a[i] - b[i]) * ((double)a[i] - b[i]);
-        sb += (double)b[i] * b[i];
-    }
-    return sqrt(se / sb);
-}
-
 /* The Cornell box lit by its ceiling light and by a point light, against the path tracer: all
  * bounces (16), total and indirect light, emitters left out. Measured (1024 rays, 1024 functions,
  * max edge 0.1, 512 paths): total 3.2% / 2.8% against reference noise 2.9% / 2.4%, indirect
@@ -610,16 +599,9 @@ static void test_cornell_vs_reference(void **state)
         prt_reference_vertices ref;
         assert_int_equal(prt_reference_trace_vertices(ctx, traced, NULL, &rd, &ref), PRT_OK);
         const float *emit = prt_transfer_emission(t);
-        const double total = rel_l2(r.radiance, ref.radiance, nv * 3, emit), indirect = rel_l2(r.indirect, ref.indirect, nv * 3, emit);
-        double sn = 0, sb = 0, sni = 0, sbi = 0;
-        for (size_t k = 0; k < nv * 3; ++k) {
-            if (emit && emit[k - k % 3] > 0) continue;
-            sn += (double)ref.std_error[k] * ref.std_error[k];
-            sb += (double)ref.radiance[k] * ref.radiance[k];
-            sni += (double)ref.std_error_indirect[k] * ref.std_error_indirect[k];
-            sbi += (double)ref.indirect[k] * ref.indirect[k];
-        }
-        const double rn = sqrt(sn / sb), rni = sqrt(sni / sbi);
+        double e[4];
+        vs_reference(r.radiance, r.indirect, &ref, nv, emit, e);
+        const double total = e[0], rn = e[1], indirect = e[2], rni = e[3];
         print_message("Cornell box, %s: total %.4f (reference noise %.4f), indirect %.4f (noise %.4f)\n", lights[i] ? lights[i] : "ceiling light",
                       total, rn, indirect, rni);
         assert_true(total < rn + 0.015);

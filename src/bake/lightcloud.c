@@ -135,25 +135,6 @@ static int inside(const prt__raycaster *rc, const float p[3], float near)
     return back > 7 ? 1 : touching ? 2 : 0;
 }
 
-static bool segment_clear(const prt__raycaster *rc, const float a[3], const float b[3])
-{
-    float d[3];
-    prt__v3_sub(b, a, d);
-    const float len = prt__v3_len(d);
-    if (!(len > 0)) return true;
-    for (int k = 0; k < 3; ++k) d[k] /= len;
-    struct RTCIntersectContext ictx;
-    rtcInitIntersectContext(&ictx);
-    struct RTCRay r;
-    memset(&r, 0, sizeof r);
-    r.org_x = a[0]; r.org_y = a[1]; r.org_z = a[2];
-    r.dir_x = d[0]; r.dir_y = d[1]; r.dir_z = d[2];
-    r.tfar = len;
-    r.mask = 0xFFFFFFFFu;
-    rtcOccluded1(rc->scene, &ictx, &r);
-    return r.tfar >= 0.0f;
-}
-
 static prt_status place_cloud(lcbake *b, const prt__raycaster *rc)
 {
     prt_context *ctx = b->base.ctx;
@@ -354,7 +335,7 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
                 float d[3];
                 prt__v3_sub(s->cloud + (size_t)j * 3, s->cloud + (size_t)k * 3, d);
                 if (prt__v3_len(d) >= b->merge_distance) continue;
-                const uint8_t vis = segment_clear(&rc, s->cloud + (size_t)j * 3, s->cloud + (size_t)k * 3);
+                const uint8_t vis = prt__raycaster_segment_clear(&rc, s->cloud + (size_t)j * 3, s->cloud + (size_t)k * 3);
                 b->visible[(size_t)j * n + k] = b->visible[(size_t)k * n + j] = vis;
             }
     }

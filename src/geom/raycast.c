@@ -57,6 +57,31 @@ void prt__raycaster_release(prt__raycaster *rc)
     rc->scene = NULL;
 }
 
+bool prt__raycaster_occluded(const prt__raycaster *rc, const float o[3], const float d[3], float tfar)
+{
+    struct RTCIntersectContext ictx;
+    rtcInitIntersectContext(&ictx);
+    struct RTCRay r;
+    memset(&r, 0, sizeof r);
+    r.org_x = o[0]; r.org_y = o[1]; r.org_z = o[2];
+    r.dir_x = d[0]; r.dir_y = d[1]; r.dir_z = d[2];
+    r.tnear = 0.0f;
+    r.tfar = tfar;
+    r.mask = 0xFFFFFFFFu;
+    rtcOccluded1(rc->scene, &ictx, &r);
+    return r.tfar < 0.0f;
+}
+
+bool prt__raycaster_segment_clear(const prt__raycaster *rc, const float a[3], const float b[3])
+{
+    float d[3];
+    prt__v3_sub(b, a, d);
+    const float len = prt__v3_len(d);
+    if (!(len > 0)) return true;
+    for (int k = 0; k < 3; ++k) d[k] /= len;
+    return !prt__raycaster_occluded(rc, a, d, len);
+}
+
 prt_status prt__vertex_origins(const prt__mesh *m, float offset, float **out)
 {
     float *o = prt__calloc(m->vertex_count * 3, sizeof(float));

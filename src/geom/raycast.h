@@ -10,6 +10,10 @@ typedef struct prt__raycaster {
 
 prt_status prt__raycaster_create(const prt_context *ctx, const prt__mesh *m, prt__raycaster *out);
 void prt__raycaster_release(prt__raycaster *rc);
+/* Whether anything lies on the ray o + d t, t in (0, tfar) (d unit). */
+bool prt__raycaster_occluded(const prt__raycaster *rc, const float o[3], const float d[3], float tfar);
+/* Whether the segment from a to b is free of geometry. */
+bool prt__raycaster_segment_clear(const prt__raycaster *rc, const float a[3], const float b[3]);
 /* Fills a 16-wide packet of rays from one origin along dirs[idx[k]] for the first `lanes`
  * lanes; the rest are masked off in `valid` (which Embree reads with aligned loads). */
 static inline void prt__packet_rays(struct RTCRay16 *r, int *valid, const float org[3], const float *dirs, const int *idx, int lanes)

@@ -494,9 +494,6 @@ static void lightcloud_describe(const prt_transfer *t, prt__describe *d)
     if (s->glossy_count) prt__describe_line(d, "glossy:", "%u vertices with SH order 4 exit radiance", s->glossy_count);
 }
 
-static int lc_variant_count(const prt_transfer *t) { (void)t; return 1; }
-static const char *lc_variant_name(const prt_transfer *t, int i) { (void)t; (void)i; return "lightcloud"; }
-static int lc_default_variant(const prt_transfer *t, int drawing) { (void)t; (void)drawing; return 0; }
 static void lc_control_range(const prt_transfer *t, int i, int *lo, int *hi, int *def)
 {
     (void)t;
@@ -614,9 +611,6 @@ const prt__method prt__method_lightcloud = {
     .load = lightcloud_load,
     .describe = lightcloud_describe,
     .transfer_bytes = lightcloud_bytes,
-    .variant_count = lc_variant_count,
-    .variant_name = lc_variant_name,
-    .default_variant = lc_default_variant,
     .control_range = lc_control_range,
     .relight = lightcloud_relight,
     .shade = lightcloud_shade,

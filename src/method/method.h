@@ -113,7 +113,8 @@ struct prt_method {
     void (*report)(const prt_transfer *t, prt__describe *d);
     size_t (*transfer_bytes)(const prt_transfer *t);
 
-    /* Variants and controls. find_variant may be NULL (exact names only). */
+    /* Variants and controls. find_variant may be NULL (exact names only); without variant_count,
+     * variant_name and default_variant the file has one variant, named after the method. */
     int (*variant_count)(const prt_transfer *t);
     const char *(*variant_name)(const prt_transfer *t, int index);
     int (*default_variant)(const prt_transfer *t, int drawing);

@@ -379,9 +379,6 @@ static void spectral_describe(const prt_transfer *t, prt__describe *d)
 }
 
 /* ---- variants and controls ---- */
-static int spectral_variant_count(const prt_transfer *t) { (void)t; return 1; }
-static const char *spectral_variant_name(const prt_transfer *t, int i) { (void)t; (void)i; return "spectral"; }
-static int spectral_default_variant(const prt_transfer *t, int drawing) { (void)t; (void)drawing; return 0; }
 
 static void spectral_control_range(const prt_transfer *t, int i, int *lo, int *hi, int *def)
 {
@@ -499,9 +496,6 @@ const prt__method prt__method_spectral = {
     .load = spectral_load,
     .describe = spectral_describe,
     .transfer_bytes = spectral_bytes,
-    .variant_count = spectral_variant_count,
-    .variant_name = spectral_variant_name,
-    .default_variant = spectral_default_variant,
     .control_range = spectral_control_range,
     .relight = spectral_relight,
     .shade = spectral_shade,

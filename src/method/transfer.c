@@ -143,25 +143,29 @@ prt_status prt_transfer_scene(prt_context *ctx, const prt_transfer *t, prt_scene
 }
 
 /* ---- variants and controls ---- */
-int prt_transfer_variant_count(const prt_transfer *t) { return t->method->variant_count(t); }
+/* A method without variant hooks has one variant, named after it. */
+static int variants(const prt_transfer *t) { return t->method->variant_count ? t->method->variant_count(t) : 1; }
+static const char *variant(const prt_transfer *t, int i) { return t->method->variant_name ? t->method->variant_name(t, i) : t->method->name; }
+
+int prt_transfer_variant_count(const prt_transfer *t) { return variants(t); }
 
 const char *prt_transfer_variant_name(const prt_transfer *t, int i)
 {
-    return i >= 0 && i < t->method->variant_count(t) ? t->method->variant_name(t, i) : "";
+    return i >= 0 && i < variants(t) ? variant(t, i) : "";
 }
 
-int prt_transfer_default_variant(const prt_transfer *t, int drawing) { return t->method->default_variant(t, drawing); }
+int prt_transfer_default_variant(const prt_transfer *t, int drawing) { return t->method->default_variant ? t->method->default_variant(t, drawing) : 0; }
 
 int prt_transfer_find_variant(const prt_transfer *t, const char *name)
 {
-    const int n = t->method->variant_count(t);
+    const int n = variants(t);
     int found = t->method->find_variant ? t->method->find_variant(t, name) : -1;
     for (int i = 0; i < n && found < 0; ++i)
-        if (!strcmp(t->method->variant_name(t, i), name)) found = i;
+        if (!strcmp(variant(t, i), name)) found = i;
     if (found >= 0) return found;
     char list[512] = "";
     size_t at = 0;
-    for (int i = 0; i < n && at < sizeof list; ++i) at += (size_t)snprintf(list + at, sizeof list - at, "%s%s", i ? ", " : "", t->method->variant_name(t, i));
+    for (int i = 0; i < n && at < sizeof list; ++i) at += (size_t)snprintf(list + at, sizeof list - at, "%s%s", i ? ", " : "", variant(t, i));
     prt__fail(NULL, PRT_ERR_INVALID_ARG, "this %s file holds no '%s' (it holds %s)", t->method->name, name, list);
     return -1;
 }
@@ -212,9 +216,8 @@ prt_status prt_relight(prt_context *ctx, const prt_transfer *t, const prt_lighti
     memset(out, 0, sizeof *out);
     prt_relight_desc d = desc ? *desc : (prt_relight_desc){.variant = -1};
     if (!desc) d.variant = -1;
-    if (d.variant < 0) d.variant = t->method->default_variant(t, 1);
-    if (d.variant >= t->method->variant_count(t))
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "variant %d out of range (the file has %d)", d.variant, t->method->variant_count(t));
+    if (d.variant < 0) d.variant = prt_transfer_default_variant(t, 1);
+    if (d.variant >= variants(t)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "variant %d out of range (the file has %d)", d.variant, variants(t));
     if (d.component < PRT_COMPONENT_ALL || d.component > PRT_COMPONENT_INDIRECT) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown light component %d", d.component);
     if (d.albedo && !t->method->runtime_albedo)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the %s method bakes surface colours in: changing them needs a rebake", t->method->name);

@@ -37,16 +37,6 @@ static prt_status tree_ready(prt_context *ctx, const prt__lightcloud_set *s)
     return st;
 }
 
-static bool clear(const prt__vertex_lights *vl, const float a[3], const float b[3])
-{
-    float d[3];
-    prt__v3_sub(b, a, d);
-    const float len = prt__v3_len(d);
-    if (!(len > 0)) return true;
-    for (int k = 0; k < 3; ++k) d[k] /= len;
-    return !prt__vertex_lights_occluded(vl, a, d, len);
-}
-
 /* Fraction of the short paths from p to cloud light q that are unblocked. */
 static float seen(const prt__vertex_lights *vl, const float p[3], const float q[3], float radius)
 {
@@ -55,7 +45,7 @@ static float seen(const prt__vertex_lights *vl, const float p[3], const float q[
     int open = 0;
     for (int i = 0; i < FADE_PATHS; ++i) {
         const float a[3] = {p[0] + radius * dirs[i][0], p[1] + radius * dirs[i][1], p[2] + radius * dirs[i][2]};
-        if ((i == 0 || clear(vl, p, a)) && clear(vl, a, q)) open++;
+        if ((i == 0 || prt__raycaster_segment_clear(&vl->rc, p, a)) && prt__raycaster_segment_clear(&vl->rc, a, q)) open++;
     }
     return (float)open / FADE_PATHS;
 }

@@ -45,17 +45,7 @@ prt_status prt__vertex_lights_ready(prt_context *ctx, const prt__mesh *m, float 
 
 bool prt__vertex_lights_occluded(const prt__vertex_lights *c, const float o[3], const float d[3], float tfar)
 {
-    struct RTCIntersectContext ictx;
-    rtcInitIntersectContext(&ictx);
-    struct RTCRay r;
-    memset(&r, 0, sizeof r);
-    r.org_x = o[0]; r.org_y = o[1]; r.org_z = o[2];
-    r.dir_x = d[0]; r.dir_y = d[1]; r.dir_z = d[2];
-    r.tnear = 0.0f;
-    r.tfar = tfar;
-    r.mask = 0xFFFFFFFFu;
-    rtcOccluded1(c->rc.scene, &ictx, &r);
-    return r.tfar < 0.0f;
+    return prt__raycaster_occluded(&c->rc, o, d, tfar);
 }
 
 /* Whether the light point p + wi dist is hidden from the ray origin o (the vertex moved off its
