@@ -404,6 +404,7 @@ static void test_files_independent_of_threads(void **state)
         if (prt_method_option(method, "clusters")) assert_int_equal(prt_options_set(o, "clusters", "4"), PRT_OK);
         if (prt_method_option(method, "supersample")) assert_int_equal(prt_options_set(o, "supersample", "1"), PRT_OK);
         if (prt_method_option(method, "brdf-res")) assert_int_equal(prt_options_set(o, "brdf-res", "8"), PRT_OK);
+        if (prt_method_option(method, "cloud-grid")) assert_int_equal(prt_options_set(o, "cloud-grid", "3,2,3"), PRT_OK);
         if (prt_method_option(method, "bounces") && prt_method_option(method, "gather-res")) {
             assert_int_equal(prt_options_set(o, "bounces", "1"), PRT_OK);
             assert_int_equal(prt_options_set(o, "gather-res", "8"), PRT_OK);

@@ -29,6 +29,10 @@ static prt_options *make_options(const prt_method *method, const char *samples)
         if (prt_method_option(method, "bounces")) assert_int_equal(prt_options_set(o, "bounces", "1"), PRT_OK);
         if (prt_method_option(method, "gather-res")) assert_int_equal(prt_options_set(o, "gather-res", "8"), PRT_OK);
         if (prt_method_option(method, "brdf-res")) assert_int_equal(prt_options_set(o, "brdf-res", "8"), PRT_OK);
+        if (prt_method_option(method, "cloud-grid")) {   /* light clouds: 18 lights, each a unit of its own */
+            assert_int_equal(prt_options_set(o, "cloud-grid", "3,2,3"), PRT_OK);
+            assert_int_equal(prt_options_set(o, "samples", samples), PRT_OK);
+        }
     }
     return o;
 }

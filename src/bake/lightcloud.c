@@ -167,7 +167,7 @@ static prt_status place_cloud(lcbake *b, const prt__raycaster *rc)
                 p[n * 3 + 1] = box[1] + (box[4] - box[1]) * (y + 0.5f) / g[1];
                 p[n * 3 + 2] = box[2] + (box[5] - box[2]) * (z + 0.5f) / g[2];
             }
-    memcpy(p + n * 3, list, (size_t)nlist * 3 * sizeof(float));
+    if (nlist) memcpy(p + n * 3, list, (size_t)nlist * 3 * sizeof(float));
     n += nlist;
     free(list);
     if (b->d.surface_lights) {
