@@ -178,7 +178,8 @@ prt_status prt__lightcloud_eval(prt_context *ctx, const prt_transfer *t, const f
 {
     const prt__lightcloud_set *s = prt__lightcloud(t);
     int failed = 0;
-#pragma omp parallel num_threads(prt__threads(ctx)) reduction(| : failed)
+/* Small scenes evaluate in well under a millisecond: threads would only add their start-up. */
+#pragma omp parallel num_threads(prt__threads(ctx)) reduction(| : failed) if (s->zone_count > 1 && t->mesh.vertex_count > 20000)
     {
         float *W = malloc(((size_t)s->cloud_count * 3 + 3) * sizeof(float));
         uint32_t *rows = malloc(((size_t)s->glossy_count + 1) * sizeof(uint32_t));
