@@ -367,7 +367,8 @@ prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t,
     const int nfile = t ? prt_transfer_light_count(t) : s ? prt_scene_light_count(s) : 0;
     /* What the scene names that the file's method cannot relight is left out, with a warning;
      * what the command line asks for explicitly is refused later by the method, by name. */
-    const unsigned can = t ? prt_method_lighting(prt_transfer_method(t)) : ~0u;
+    const prt_method *method = t ? prt_transfer_method(t) : l->method;
+    const unsigned can = method ? prt_method_lighting(method) : ~0u;
     bool emits = (t ? prt_transfer_emission(t) != NULL : s ? prt_scene_emission(s) != NULL : false) && !(l->set_emission && l->emission == 0);
     unsigned dropped = 0;
     if (emits && !l->set_emission && !(can & PRT_LIGHTS_EMISSIVE)) { emits = false; dropped |= PRT_LIGHTS_EMISSIVE; }
@@ -409,7 +410,7 @@ prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t,
             if ((dropped & bit) && at < sizeof names) at += (size_t)snprintf(names + at, sizeof names - at, "%s%s", at ? " and " : "", prt_lights_bit_name(bit));
         prt_methods_relighting(dropped, others, sizeof others);
         fprintf(stderr, "prt %s: warning: method %s cannot relight the scene's %s: left out (%s%sprt reference path-traces them)\n", c->cmd,
-                prt_method_name(prt_transfer_method(t)), names, others[0] ? others : "", others[0] ? " can; " : "");
+                prt_method_name(method), names, others[0] ? others : "", others[0] ? " can; " : "");
     }
     if (!prt_lighting_content(lighting) || (prt_lighting_content(lighting) == PRT_LIGHTS_EMISSIVE && !emits))
         if (!c->quiet) fprintf(stderr, "prt %s: warning: nothing lights the scene (no environment, no lights, no emitters): the result is black\n", c->cmd);

@@ -60,6 +60,7 @@ prt_status cli_check_interrupt(cli *c);
  * its rotation and intensity unless --rotate/--intensity are given), --light replaces its lights. */
 #define CLI_MAX_LIGHTS 64
 typedef struct cli_light {
+    const prt_method *method; /* the method the lighting is for when no .prt says (sweep); NULL: any */
     const char *env_path;     /* NULL: the procedural sky */
     bool env_none;            /* --env none: no environment light */
     prt_env_layout layout;

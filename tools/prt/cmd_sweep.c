@@ -189,6 +189,7 @@ int cmd_sweep(int argc, char **argv)
         cli_error(&c, "the scene has %zu vertices, the reference %zu: compute it from the same scene with the same options", prt_scene_vertex_count(scene), ref.nv);
         rc = EXIT_FAILURE_INPUT;
     }
+    light.method = method;
     if (!st && !rc) st = cli_lighting(&c, &light, NULL, scene, &lighting);
     char tmp[1100];
     snprintf(tmp, sizeof tmp, "%s.tmp.%ld", output, (long)getpid());
