@@ -249,6 +249,19 @@ static inline const char *shared_data_dir(void)
     return d && d[0] ? d : NULL;
 }
 
+/* The Cornell box of ../shared/data, or NULL after saying why (the caller skips). */
+static inline const char *cornell_box_path(void)
+{
+    static char path[1024];
+    const char *data = shared_data_dir();
+    if (data) snprintf(path, sizeof path, "%s/meshes/cornell_box/CornellBox-Original.obj", data);
+    if (!data || access(path, R_OK) != 0) {
+        print_message("skipping: ../shared/data is absent (the Cornell box test needs it)\n");
+        return NULL;
+    }
+    return path;
+}
+
 /* Per-vertex results against the path tracer, emitters (emit > 0) left out: out[0] the relative L2
  * of radiance, out[1] the reference's own relative noise, out[2] and out[3] the same for the
  * indirect part (zero when indirect is NULL). */

@@ -564,13 +564,8 @@ static void test_no_seam_leaks(void **state)
 static void test_cornell_vs_reference(void **state)
 {
     (void)state;
-    const char *data = shared_data_dir();
-    char path[1024];
-    if (data) snprintf(path, sizeof path, "%s/meshes/cornell_box/CornellBox-Original.obj", data);
-    if (!data || access(path, R_OK) != 0) {
-        print_message("skipping: ../shared/data is absent (the Cornell box test needs it)\n");
-        skip();
-    }
+    const char *path = cornell_box_path();
+    if (!path) skip();
     prt_context *ctx = test_context(0);
     prt_scene_desc sd = {0};
     sd.max_edge = 0.1f;
