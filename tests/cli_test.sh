@@ -388,6 +388,8 @@ expect 0 "lightcloud reference" -- "$PRT" reference -q "$T/lc.prt" -o "$T/lcref.
 expect 0 "lightcloud sweep (no sky for a method without one)" -- "$PRT" sweep -q "$T/demo.obj" --method lightcloud --param vectors --values 2,4 \
     --reference "$T/lcref.json" --light point:0.2,0.8,0.1:2 --cloud-grid 3,2,3 --samples 64 --basis 64 --zone-vertices 3000 -o "$T/lcsweep.csv"
 [ "$(wc -l <"$T/lcsweep.csv")" -eq 3 ] && ok || bad "lightcloud sweep wrote $(wc -l <"$T/lcsweep.csv") lines"
+expect 2 "a ray offset beyond the scene" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --ray-offset 1e30 --samples 16
+says "scene's size"
 expect 2 "a spot light on a light cloud" -- "$PRT" relight "$T/lc.prt" -o "$T/x.json" --light spot:0,1,0:0,-1,0:30:1
 says "cannot relight spot lights"
 expect 2 "a bad cloud grid" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method lightcloud --cloud-grid 3,0,3

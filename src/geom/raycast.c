@@ -84,6 +84,11 @@ bool prt__raycaster_segment_clear(const prt__raycaster *rc, const float a[3], co
 
 prt_status prt__vertex_origins(const prt__mesh *m, float offset, float **out)
 {
+    /* An offset beyond the scene's size (a corrupt file, a typo) would move origins out of the
+     * range Embree accepts (it asserts on such rays). */
+    const float diagonal = 1e4f * prt__ray_offset(m);
+    if (!(offset >= 0.0f) || !(offset <= fmaxf(diagonal, 1e-6f)))
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "ray offset %g is not between 0 and the scene's size (diagonal %g)", offset, diagonal);
     float *o = prt__calloc(m->vertex_count * 3, sizeof(float));
     float *cen = prt__calloc(m->vertex_count * 3, sizeof(float));
     if (!o || !cen) { free(o); free(cen); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for ray origins"); }

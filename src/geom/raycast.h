@@ -37,7 +37,8 @@ static inline void prt__packet_rayhits(struct RTCRayHit16 *rh, int *valid, const
 /* Ray origins for rays leaving each vertex: the vertex moved along its normal by `offset`, and
  * towards the centroid of its triangle fan by as much (at most a quarter of the way). The second
  * move keeps a vertex on a concave edge (a floor meeting a wall) from starting its rays inside the
- * other surface's plane, where they would be blocked or leak depending on rounding. */
+ * other surface's plane, where they would be blocked or leak depending on rounding. Offsets
+ * beyond the mesh's bounding-box diagonal are refused. */
 prt_status prt__vertex_origins(const prt__mesh *m, float offset, float **out);
 
 /* Default origin offset for a mesh: small against its size, large against float precision. */

@@ -381,6 +381,7 @@ static prt_status lightcloud_load(prt_context *ctx, prt_transfer *t, const cJSON
         !isfinite(s->merge_distance) || !isfinite(s->merge_error))
         return bad(ctx, "light-cloud parameters out of range");
     if (c->size != LCPR_HEADER + (uint64_t)s->cloud_count * 12 + nv * 4) return bad(ctx, "light-cloud parameter chunk size mismatch");
+    if (!(s->ray_offset <= fmaxf(1e4f * prt__ray_offset(&t->mesh), 1e-6f))) return bad(ctx, "light-cloud ray offset larger than the scene");
     s->store_direct = store;
     s->bounces = (int)bounces;
     s->samples = (int)samples;

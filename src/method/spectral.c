@@ -175,6 +175,7 @@ static prt_status load_params(prt_context *ctx, prt_transfer *t, prt__spectral_s
         *nnz > nv * (uint64_t)b->functions)
         return bad(ctx, "spectral parameters out of range");
     if (len != SPCP_HEADER + nv * 4 + (uint64_t)b->partitions * 4) return bad(ctx, "spectral parameter chunk size mismatch");
+    if (!(s->ray_offset <= fmaxf(1e4f * prt__ray_offset(&t->mesh), 1e-6f))) return bad(ctx, "spectral ray offset larger than the scene");
     b->part_of = malloc(nv * sizeof(uint32_t));
     b->count = malloc((size_t)b->partitions * sizeof(uint32_t));
     if (!b->part_of || !b->count) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
