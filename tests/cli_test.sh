@@ -207,8 +207,15 @@ expect 1 "unreadable normal map" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --te
 says "normal map"
 expect 2 "normal map without texels" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --normal-map "$T/nm.ppm"
 printf 'v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n' >"$T/nouv.obj"
-expect 2 "texels without UVs" -- "$PRT" bake "$T/nouv.obj" -o "$T/x.prt" --texels 16
+expect 2 "texels with --uv mesh, without UVs" -- "$PRT" bake "$T/nouv.obj" -o "$T/x.prt" --texels 16 --uv mesh
 says "texture coordinates"
+expect 0 "texels without UVs: a generated atlas" -- "$PRT" bake "$T/nouv.obj" -o "$T/x.prt" --texels 16 --samples 64
+says "UV atlas"
+printf 'PF\n1 1\n-1.0\n\000\000\000\077\000\000\000\077\000\000\200\077' >"$T/nm.pfm"
+expect 2 "normal map with a generated atlas" -- "$PRT" bake "$T/nouv.obj" -o "$T/x.prt" --texels 16 --normal-map "$T/nm.pfm"
+says "normal map"
+expect 2 "--uv without --texels" -- "$PRT" bake "$T/nouv.obj" -o "$T/x.prt" --uv atlas
+says "--texels"
 
 # An interrupted bake exits 130 and leaves neither the file nor a temporary.
 # The signal goes once the bake reports progress (its handler is in place by then); the bake is

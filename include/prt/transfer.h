@@ -38,6 +38,13 @@ typedef enum prt_transfer_kind {
 
 #define PRT_TRANSFER_ALL_KINDS 31u
 
+/* Where per-texel transfer's UV layout comes from. */
+typedef enum prt_uv_layout {
+    PRT_UV_AUTO = 0,       /* the mesh's own when unique and inside [0, 1], else a generated atlas */
+    PRT_UV_MESH = 1,       /* the mesh's own, or fail saying why it cannot be used */
+    PRT_UV_GENERATE = 2    /* always a generated atlas (charts, least-squares conformal maps, gutters) */
+} prt_uv_layout;
+
 typedef struct prt_bake_desc {
     int order;            /* SH order (bands); 0 = 5 (25 coefficients); 1..10 */
     int samples;          /* directions per vertex over the sphere; 0 = 1024 */
@@ -51,11 +58,14 @@ typedef struct prt_bake_desc {
      * isotropic model, through its SH matrix), so the sets hold exit radiance. */
     int glossy_exit;
     const prt_brdf *glossy_brdf;   /* with glossy_exit: this BRDF for every vertex instead */
-    /* Per-texel transfer (the diffuse kinds asked for) over the mesh's UV layout, which must be
-     * unique and inside [0, 1]: texels x texels texels; 0 = none. */
+    /* Per-texel transfer (the diffuse kinds asked for) into a texels x texels map; 0 = none. Over
+     * the layout uv_layout picks: a generated atlas copies the vertices on its seams, so the
+     * transfer then has more vertices than the scene. */
     int texels;
+    prt_uv_layout uv_layout;
     /* Tangent-space normal map for the per-texel transfer: RGB in [0, 1] as stored in the file
-     * (0.5, 0.5, 1 = unperturbed; +y of the map along +v), or NULL. */
+     * (0.5, 0.5, 1 = unperturbed; +y of the map along +v), or NULL. It follows the mesh's own
+     * texture coordinates, so it cannot go with a generated atlas. */
     const prt_image *normal_map;
     prt_progress_fn progress;
     void *progress_user;

@@ -8,6 +8,7 @@
  * Every vertex's result depends only on its own inputs and the fixed direction set, so the
  * result is bit-identical for any thread count and schedule. */
 #include "bake/bake_internal.h"
+#include "geom/uv_atlas.h"
 #include "geom/raycast.h"
 
 #include <string.h>
@@ -455,6 +456,25 @@ static void sh_release(prt__bake_job *b)
     free(sb);
 }
 
+/* Per-texel transfer needs a unique layout inside [0, 1]: the mesh's own, or one generated here
+ * (which copies the vertices on chart seams, before anything is sized by the vertex count). */
+static prt_status texel_layout(prt_context *ctx, const prt_bake_desc *d, prt_transfer *t)
+{
+    char why[160] = "asked for";
+    if (d->uv_layout == PRT_UV_MESH) return PRT_OK;   /* the texel bake says what is wrong with them */
+    if (d->uv_layout == PRT_UV_AUTO && !prt__uv_layout_unusable(&t->mesh, d->texels, why, sizeof why)) return PRT_OK;
+    if (d->normal_map)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a normal map follows the mesh's own texture coordinates, and '%s' cannot use them for texels (%s)",
+                         t->source, why);
+    prt__atlas_report r;
+    const size_t nv = t->mesh.vertex_count;
+    prt_status st = prt__uv_atlas(ctx, &t->mesh, &(prt__atlas_desc){.resolution = d->texels}, &r);
+    if (st) return st;
+    prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts cover %.0f%% of the %dx%d map; %zu of %zu vertices copied along seams",
+             t->source, why, r.charts, 100 * r.coverage, d->texels, d->texels, r.added_vertices, nv);
+    return PRT_OK;
+}
+
 prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *desc_in, prt__sh_extra *extra, prt_transfer *t, prt__bake_job **out)
 {
     prt_bake_desc d = desc_in ? *desc_in : (prt_bake_desc){0};
@@ -482,6 +502,12 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *desc_in, pr
     if (d.glossy_exit && !(d.kinds & (PRT_TRANSFER_GLOSSY_SHADOWED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "baking a BRDF in needs a glossy kind (glossy-shadowed or glossy-interreflected)");
     if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
+
+    if ((unsigned)d.uv_layout > PRT_UV_GENERATE) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown UV layout %d", (int)d.uv_layout);
+    if (d.texels) {
+        prt_status lst = texel_layout(ctx, &d, t);
+        if (lst) return lst;
+    }
 
     sh_bake *sb = prt__calloc(1, sizeof *sb);
     prt__sh_state *s = prt__sh_state_new();

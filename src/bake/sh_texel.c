@@ -148,39 +148,87 @@ static void texel_bake(const texel_job *job, size_t texel, float *unsh, float *s
             for (int i = 0; i < nc; ++i) ir[c * nc + i] = rho[c] * direct[i] + rho[c] / (float)PRT_PI * gather[c * nc + i];
 }
 
-/* Fills uncovered texels from covered neighbours, ring by ring, so bilinear filtering at chart
- * borders does not pull in black. */
-static void dilate(int width, int height, uint8_t *covered, float **planes, const int *floats, int nplanes, int rings)
+/* Fills every uncovered texel, ring by ring outwards from the baked ones, with the mean of its
+ * neighbours in earlier rings: bilinear filtering and mip-maps then never pull in black across a
+ * chart's border. covered: 0 outside every chart -> 2 filled. */
+static bool fill_gutters(int width, int height, uint8_t *covered, float **planes, const int *floats, int nplanes)
 {
-    uint8_t *next = malloc((size_t)width * height);
-    if (!next) return;
-    for (int r = 0; r < rings; ++r) {
-        memcpy(next, covered, (size_t)width * height);
-        for (int y = 0; y < height; ++y)
-            for (int x = 0; x < width; ++x) {
-                size_t i = (size_t)y * width + x;
-                if (covered[i]) continue;
-                int count = 0;
-                size_t nb[4];
-                if (x > 0 && covered[i - 1]) nb[count++] = i - 1;
-                if (x + 1 < width && covered[i + 1]) nb[count++] = i + 1;
-                if (y > 0 && covered[i - width]) nb[count++] = i - width;
-                if (y + 1 < height && covered[i + width]) nb[count++] = i + width;
-                if (!count) continue;
-                for (int pl = 0; pl < nplanes; ++pl) {
-                    if (!planes[pl]) continue;
-                    float *dst = planes[pl] + i * floats[pl];
-                    for (int f = 0; f < floats[pl]; ++f) {
-                        float s = 0;
-                        for (int k = 0; k < count; ++k) s += planes[pl][nb[k] * floats[pl] + f];
-                        dst[f] = s / count;
-                    }
-                }
-                next[i] = 2;   /* filled, not baked */
+    const size_t n = (size_t)width * height;
+    uint32_t *ring = malloc(n * sizeof *ring), *next = malloc(n * sizeof *next);
+    if (!ring || !next) { free(ring); free(next); return false; }
+    size_t count = 0;
+    const int dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            size_t i = (size_t)y * width + x;
+            if (covered[i]) continue;
+            for (int k = 0; k < 4; ++k) {
+                int u = x + dx[k], v = y + dy[k];
+                if (u >= 0 && u < width && v >= 0 && v < height && covered[(size_t)v * width + u] == 1) { covered[i] = 3; ring[count++] = (uint32_t)i; break; }
             }
-        memcpy(covered, next, (size_t)width * height);
+        }
+    while (count) {
+        for (size_t r = 0; r < count; ++r) {
+            const size_t i = ring[r];
+            const int x = (int)(i % width), y = (int)(i / width);
+            size_t nb[4];
+            int m = 0;
+            for (int k = 0; k < 4; ++k) {
+                int u = x + dx[k], v = y + dy[k];
+                if (u < 0 || u >= width || v < 0 || v >= height) continue;
+                size_t j = (size_t)v * width + u;
+                if (covered[j] == 1 || covered[j] == 2) nb[m++] = j;
+            }
+            for (int pl = 0; pl < nplanes; ++pl) {
+                if (!planes[pl]) continue;
+                float *dst = planes[pl] + i * floats[pl];
+                for (int f = 0; f < floats[pl]; ++f) {
+                    float sum = 0;
+                    for (int k = 0; k < m; ++k) sum += planes[pl][nb[k] * floats[pl] + f];
+                    dst[f] = sum / m;
+                }
+            }
+        }
+        size_t next_count = 0;
+        for (size_t r = 0; r < count; ++r) covered[ring[r]] = 2;
+        for (size_t r = 0; r < count; ++r) {
+            const size_t i = ring[r];
+            const int x = (int)(i % width), y = (int)(i / width);
+            for (int k = 0; k < 4; ++k) {
+                int u = x + dx[k], v = y + dy[k];
+                if (u < 0 || u >= width || v < 0 || v >= height) continue;
+                size_t j = (size_t)v * width + u;
+                if (!covered[j]) { covered[j] = 3; next[next_count++] = (uint32_t)j; }
+            }
+        }
+        uint32_t *tmp = ring; ring = next; next = tmp;
+        count = next_count;
     }
+    free(ring);
     free(next);
+    return true;
+}
+
+/* The point of triangle (u, v) nearest to (px, py), as barycentrics b1, b2; its squared distance. */
+static float nearest_on_triangle(const float u[3], const float v[3], float px, float py, float *b1, float *b2)
+{
+    float best = INFINITY;
+    for (int e = 0; e < 3; ++e) {
+        const int a = e, b = (e + 1) % 3;
+        float ex = u[b] - u[a], ey = v[b] - v[a], len2 = ex * ex + ey * ey;
+        float t = len2 > 0 ? ((px - u[a]) * ex + (py - v[a]) * ey) / len2 : 0.0f;
+        t = fminf(fmaxf(t, 0.0f), 1.0f);
+        float qx = u[a] + t * ex - px, qy = v[a] + t * ey - py, d2 = qx * qx + qy * qy;
+        if (d2 < best) {
+            best = d2;
+            float w[3] = {0, 0, 0};
+            w[a] = 1 - t;
+            w[b] = t;
+            *b1 = w[1];
+            *b2 = w[2];
+        }
+    }
+    return best;
 }
 
 prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__texel_sets *out)
@@ -230,7 +278,10 @@ prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__t
                 float b2 = ((u[1] - u[0]) * (py - v[0]) - (px - u[0]) * (v[1] - v[0])) / area;
                 if (b1 < -1e-6f || b2 < -1e-6f || b1 + b2 > 1.0f + 1e-6f) continue;
                 size_t i = (size_t)y * W + x;
-                if (job.owner[i]) { overlap++; continue; }
+                if (job.owner[i]) {   /* centres on a shared edge are not overlap */
+                    overlap += b1 > 1e-4f && b2 > 1e-4f && b1 + b2 < 1.0f - 1e-4f;
+                    continue;
+                }
                 job.owner[i] = (uint32_t)t + 1;
                 job.bary[i * 2] = b1;
                 job.bary[i * 2 + 1] = b2;
@@ -240,6 +291,43 @@ prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__t
         st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "per-texel transfer needs texture coordinates inside [0, 1] (a unique layout); "
                                                  "%zu vertex uses lie outside", outside);
         goto fail;
+    }
+    /* Triangles no texel centre falls in (slivers, charts smaller than a texel) take the texels
+     * they touch, at their nearest point: otherwise the gutter fill would give them another
+     * chart's light. Borders of larger triangles are left to the fill, which copies their own
+     * chart's texels: a border sample sits where surfaces touch (a sphere resting on the floor)
+     * and would see through the floor. */
+    {
+        float *near = malloc(ntex * sizeof *near);
+        uint8_t *owns = prt__calloc(m->triangle_count, 1);
+        if (!near || !owns) { free(near); free(owns); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %dx%d texels", W, H); goto fail; }
+        for (size_t i = 0; i < ntex; ++i) {
+            near[i] = INFINITY;
+            if (job.owner[i]) owns[job.owner[i] - 1] = 1;
+        }
+        for (size_t t = 0; t < m->triangle_count; ++t) {
+            if (owns[t]) continue;
+            const uint32_t *ix = m->indices + t * 3;
+            float u[3], v[3];
+            for (int k = 0; k < 3; ++k) { u[k] = m->uv[ix[k] * 2] * W; v[k] = m->uv[ix[k] * 2 + 1] * H; }
+            if ((u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]) == 0.0f) continue;
+            int x0 = (int)floorf(fminf(u[0], fminf(u[1], u[2])) - 0.5f), x1 = (int)ceilf(fmaxf(u[0], fmaxf(u[1], u[2])) + 0.5f);
+            int y0 = (int)floorf(fminf(v[0], fminf(v[1], v[2])) - 0.5f), y1 = (int)ceilf(fmaxf(v[0], fmaxf(v[1], v[2])) + 0.5f);
+            for (int y = y0 < 0 ? 0 : y0; y < y1 && y < H; ++y)
+                for (int x = x0 < 0 ? 0 : x0; x < x1 && x < W; ++x) {
+                    size_t i = (size_t)y * W + x;
+                    if (job.owner[i] && near[i] == INFINITY) continue;   /* its centre is inside a triangle */
+                    float b1 = 0, b2 = 0, d2 = nearest_on_triangle(u, v, x + 0.5f, y + 0.5f, &b1, &b2);
+                    if (d2 > 0.5f || d2 >= near[i]) continue;   /* 0.5: the texel's corner is the farthest it reaches */
+                    near[i] = d2;
+                    job.owner[i] = (uint32_t)t + 1;
+                    /* A fifth of the way to the centroid, away from where surfaces touch. */
+                    job.bary[i * 2] = 0.8f * b1 + 0.2f / 3;
+                    job.bary[i * 2 + 1] = 0.8f * b2 + 0.2f / 3;
+                }
+        }
+        free(near);
+        free(owns);
     }
     size_t covered = 0;
     for (size_t i = 0; i < ntex; ++i) covered += job.owner[i] != 0;
@@ -262,7 +350,7 @@ prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__t
     {
         float *planes[4] = {out->coeffs[0], out->coeffs[1], out->coeffs[2], out->albedo};
         const int floats[4] = {nc, nc, 3 * nc, 3};
-        dilate(W, H, out->covered, planes, floats, 4, 4);
+        if (!fill_gutters(W, H, out->covered, planes, floats, 4)) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %dx%d texels", W, H); goto fail; }
     }
     free(job.owner);
     free(job.bary);

@@ -198,8 +198,11 @@ static const prt_option_desc options[] = {
      "bake each vertex's scene material BRDF into the glossy sets (without this or --brdf,\n"
      "glossy sets hold incident radiance and the lobe is chosen when rendering)"},
     {"texels", "N", PRT_OPTION_INT, 1, 8192, NULL,
-     "also bake per-texel transfer (the diffuse kinds) over the mesh's UV layout into an\n"
-     "N x N map; needs unique UVs inside [0, 1]"},
+     "also bake per-texel transfer (the diffuse kinds) into an N x N map, over the\n"
+     "mesh's UVs or a generated atlas (see --uv)"},
+    {"uv", "FROM", PRT_OPTION_CHOICE, 0, 0, "auto|mesh|atlas",
+     "UV layout of --texels: the mesh's own when unique and inside [0, 1], else a generated\n"
+     "atlas (auto, the default); only the mesh's (mesh); always an atlas (atlas)"},
     {"normal-map", "FILE", PRT_OPTION_TEXT, 0, 0, NULL,
      "tangent-space normal map perturbing the per-texel normals (.png/.jpg values as\n"
      "stored; .exr/.hdr/.pfm values in [0, 1])"},
@@ -242,6 +245,7 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
     d.bounces = prt__opt_int(o, "bounces", 0);
     d.seed = (uint32_t)prt__opt_int(o, "seed", 0);
     d.texels = prt__opt_int(o, "texels", 0);
+    d.uv_layout = (prt_uv_layout)prt__opt_choice(o, "uv", PRT_UV_AUTO);
     d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
     prt_status st = PRT_OK;
     if (prt__opt(o, "kinds")) {
@@ -259,6 +263,7 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
         d.glossy_exit = 1;
     }
     if (prt__opt_flag(o, "bake-materials")) d.glossy_exit = 1;
+    if (!st && prt__opt(o, "uv") && !d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--uv needs --texels N");
     if (!st && prt__opt(o, "normal-map")) {
         if (!d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--normal-map needs --texels N");
         else st = load_normal_map(ctx, prt__opt(o, "normal-map"), &extra.normal_map);

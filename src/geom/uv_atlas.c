@@ -1,0 +1,916 @@
+/* UV atlas generation. Charts grow from seed triangles across shared edges, best-aligned first,
+ * while a triangle's normal stays within max_angle of the chart's mean normal. Each chart is
+ * flattened by least-squares conformal maps (Levy, Petitjean, Ray & Maillot 2002) started from its
+ * projection onto its mean plane, and checked: a map that folds a triangle, stretches one beyond
+ * MAX_STRETCH or overlaps itself falls back to the projection, and a chart neither can flatten is
+ * cut in two and tried again. Charts are scaled to one texel density, turned to their smallest
+ * bounding box and packed into shelves; the largest density that fits is found by bisection. */
+#include "geom/uv_atlas.h"
+
+#include <string.h>
+
+#define MAX_STRETCH 4.0       /* singular-value ratio a chart's worst triangle may reach */
+#define SPLIT_DEPTH 48
+#define PACK_ANGLES 32
+
+typedef struct chart {
+    uint32_t *tris;
+    size_t nt;
+    uint32_t *verts;    /* welded vertex ids */
+    size_t nv;
+    double *uv;         /* [nv][2], in scene units after flattening, texels after packing */
+    double w, h;        /* bounding box after turning */
+} chart;
+
+typedef struct atlas {
+    const prt__mesh *m;
+    size_t nt, nw;
+    uint32_t *weld;      /* [vertex] welded id: vertices at one position share it */
+    uint32_t *rep;       /* [welded] one vertex at that position */
+    int64_t *across;     /* [tri * 3 + edge] the triangle across that edge, -1 on a seam */
+    double *normal;      /* [tri][3] unit, zero when degenerate */
+    double *smooth;      /* [tri][3] mean of its vertex normals: what charts grow by */
+    double *area;        /* [tri] */
+    int32_t *local;      /* [welded] index in the chart being worked on, -1 elsewhere */
+    uint32_t *stamp;     /* [tri] last pass that touched it */
+    uint32_t pass;
+    chart *charts;
+    size_t count, cap;
+    size_t flattened, grown;
+} atlas;
+
+/* ---- welding and adjacency ---- */
+
+static const float *sort_pos;
+static int by_position(const void *a, const void *b)
+{
+    const uint32_t i = *(const uint32_t *)a, j = *(const uint32_t *)b;
+    for (int c = 0; c < 3; ++c) {
+        float x = sort_pos[i * 3 + c], y = sort_pos[j * 3 + c];
+        if (x != y) return x < y ? -1 : 1;
+    }
+    return i < j ? -1 : i > j;
+}
+
+typedef struct edge_key { uint32_t a, b, id; } edge_key;
+static int by_edge(const void *x, const void *y)
+{
+    const edge_key *p = x, *q = y;
+    if (p->a != q->a) return p->a < q->a ? -1 : 1;
+    if (p->b != q->b) return p->b < q->b ? -1 : 1;
+    return p->id < q->id ? -1 : p->id > q->id;
+}
+
+static bool build_adjacency(atlas *a)
+{
+    const prt__mesh *m = a->m;
+    const size_t nv = m->vertex_count, nt = m->triangle_count;
+    uint32_t *order = malloc(nv * sizeof *order);
+    edge_key *e = malloc(nt * 3 * sizeof *e);
+    bool ok = order && e;
+    if (ok) {
+        for (size_t v = 0; v < nv; ++v) order[v] = (uint32_t)v;
+        sort_pos = m->positions;   /* qsort has no user pointer; only this thread sorts positions here */
+        qsort(order, nv, sizeof *order, by_position);
+        uint32_t id = 0;
+        for (size_t k = 0; k < nv; ++k) {
+            if (k && memcmp(m->positions + order[k] * 3, m->positions + order[k - 1] * 3, 3 * sizeof(float))) id++;
+            a->weld[order[k]] = id;
+            a->rep[id] = order[k];
+        }
+        a->nw = nv ? (size_t)id + 1 : 0;
+        for (size_t t = 0; t < nt; ++t)
+            for (int k = 0; k < 3; ++k) {
+                uint32_t p = a->weld[m->indices[t * 3 + k]], q = a->weld[m->indices[t * 3 + (k + 1) % 3]];
+                e[t * 3 + k] = (edge_key){p < q ? p : q, p < q ? q : p, (uint32_t)(t * 3 + k)};
+                a->across[t * 3 + k] = -1;
+            }
+        qsort(e, nt * 3, sizeof *e, by_edge);
+        /* Exactly two triangles on an edge, running along it in opposite directions: one surface. */
+        for (size_t i = 0; i < nt * 3;) {
+            size_t j = i + 1;
+            while (j < nt * 3 && e[j].a == e[i].a && e[j].b == e[i].b) j++;
+            if (j - i == 2) {
+                uint32_t s = e[i].id, u = e[i + 1].id;
+                uint32_t s0 = a->weld[m->indices[s]], u0 = a->weld[m->indices[u]];
+                bool opposite = s0 != u0 && s / 3 != u / 3;
+                if (opposite) { a->across[s] = u / 3; a->across[u] = s / 3; }
+            }
+            i = j;
+        }
+    }
+    free(order);
+    free(e);
+    return ok;
+}
+
+/* ---- flattening ---- */
+
+static void plane_frame(const double n[3], double t1[3], double t2[3])
+{
+    const double ax = fabs(n[0]), ay = fabs(n[1]), az = fabs(n[2]);
+    double h[3] = {0, 0, 0};
+    h[ax <= ay && ax <= az ? 0 : ay <= az ? 1 : 2] = 1;
+    t1[0] = n[1] * h[2] - n[2] * h[1]; t1[1] = n[2] * h[0] - n[0] * h[2]; t1[2] = n[0] * h[1] - n[1] * h[0];
+    double l = sqrt(t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]);
+    for (int c = 0; c < 3; ++c) t1[c] /= l;
+    t2[0] = n[1] * t1[2] - n[2] * t1[1]; t2[1] = n[2] * t1[0] - n[0] * t1[2]; t2[2] = n[0] * t1[1] - n[1] * t1[0];
+}
+
+/* A triangle's corners in its own plane: (0, 0), (x1, 0), (x2, y2) with y2 > 0. */
+static bool tri_frame(const prt__mesh *m, const uint32_t *ix, double x[3], double y[3])
+{
+    const float *p0 = m->positions + ix[0] * 3, *p1 = m->positions + ix[1] * 3, *p2 = m->positions + ix[2] * 3;
+    double e1[3], e2[3];
+    for (int c = 0; c < 3; ++c) { e1[c] = (double)p1[c] - p0[c]; e2[c] = (double)p2[c] - p0[c]; }
+    double l1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+    if (!(l1 > 0)) return false;
+    double d = (e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]) / l1;
+    double q = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2] - d * d;
+    if (!(q > 0)) return false;
+    x[0] = 0; y[0] = 0; x[1] = l1; y[1] = 0; x[2] = d; y[2] = sqrt(q);
+    return y[2] > 1e-12 * l1;
+}
+
+double prt__uv_stretch(const prt__mesh *m, size_t t)
+{
+    const uint32_t *ix = m->indices + t * 3;
+    double x[3], y[3];
+    if (!tri_frame(m, ix, x, y)) return 1.0;
+    const float *a = m->uv + ix[0] * 2, *b = m->uv + ix[1] * 2, *c = m->uv + ix[2] * 2;
+    /* J maps (x, y) to (u, v): columns from the edges (x1, 0) and (x2, y2). */
+    double ju0 = (b[0] - a[0]) / x[1], jv0 = (b[1] - a[1]) / x[1];
+    double ju1 = ((c[0] - a[0]) - ju0 * x[2]) / y[2], jv1 = ((c[1] - a[1]) - jv0 * x[2]) / y[2];
+    double f = ju0 * ju0 + ju1 * ju1 + jv0 * jv0 + jv1 * jv1, det = fabs(ju0 * jv1 - ju1 * jv0);
+    double disc = sqrt(fmax(0.0, f * f / 4 - det * det));
+    double s1 = sqrt(f / 2 + disc), s2 = sqrt(fmax(0.0, f / 2 - disc));
+    return s2 > 0 ? s1 / s2 : INFINITY;
+}
+
+typedef struct lscm_tri { uint32_t v[3]; double a[3], b[3]; } lscm_tri;
+
+/* Ax for the LSCM system: per triangle, the real and imaginary parts of sum W_j U_j / sqrt(2 area). */
+static void lscm_apply(const lscm_tri *T, size_t nt, const double *uv, double *r)
+{
+    for (size_t t = 0; t < nt; ++t) {
+        double re = 0, im = 0;
+        for (int j = 0; j < 3; ++j) {
+            const double u = uv[T[t].v[j] * 2], v = uv[T[t].v[j] * 2 + 1];
+            re += T[t].a[j] * u - T[t].b[j] * v;
+            im += T[t].b[j] * u + T[t].a[j] * v;
+        }
+        r[t * 2] = re;
+        r[t * 2 + 1] = im;
+    }
+}
+
+static void lscm_transpose(const lscm_tri *T, size_t nt, const double *r, double *g, size_t nv)
+{
+    memset(g, 0, nv * 2 * sizeof *g);
+    for (size_t t = 0; t < nt; ++t)
+        for (int j = 0; j < 3; ++j) {
+            g[T[t].v[j] * 2] += T[t].a[j] * r[t * 2] + T[t].b[j] * r[t * 2 + 1];
+            g[T[t].v[j] * 2 + 1] += -T[t].b[j] * r[t * 2] + T[t].a[j] * r[t * 2 + 1];
+        }
+}
+
+/* Minimises the conformal energy with two vertices pinned, by conjugate gradients on the normal
+ * equations (Jacobi-preconditioned), starting from uv. False when it fails to converge. */
+static bool lscm_solve(const lscm_tri *T, size_t nt, size_t nv, const uint32_t pin[2], double *uv)
+{
+    const size_t n = nv * 2;
+    double *r = malloc(nt * 2 * sizeof *r), *g = malloc(n * sizeof *g), *p = malloc(n * sizeof *p), *q = malloc(nt * 2 * sizeof *q),
+           *z = malloc(n * sizeof *z), *dinv = calloc(n, sizeof *dinv);
+    bool ok = r && g && p && q && z && dinv;
+    if (ok) {
+        for (size_t t = 0; t < nt; ++t)
+            for (int j = 0; j < 3; ++j) {
+                double s = T[t].a[j] * T[t].a[j] + T[t].b[j] * T[t].b[j];
+                dinv[T[t].v[j] * 2] += s;
+                dinv[T[t].v[j] * 2 + 1] += s;
+            }
+        for (size_t i = 0; i < n; ++i) dinv[i] = dinv[i] > 0 ? 1.0 / dinv[i] : 0.0;
+        for (int k = 0; k < 2; ++k) dinv[pin[k] * 2] = dinv[pin[k] * 2 + 1] = 0;   /* pinned: never moves */
+        /* Residual r = -A uv; the gradient of the energy is A^T r. */
+        lscm_apply(T, nt, uv, r);
+        for (size_t i = 0; i < nt * 2; ++i) r[i] = -r[i];
+        lscm_transpose(T, nt, r, g, nv);
+        double rz = 0, g0 = 0;
+        for (size_t i = 0; i < n; ++i) { z[i] = dinv[i] * g[i]; p[i] = z[i]; rz += g[i] * z[i]; g0 += dinv[i] ? g[i] * g[i] : 0; }
+        const int max_iter = 200 + (int)fmin(2000.0, 10.0 * sqrt((double)nv));
+        double gn = g0;
+        /* Normal equations converge slowly; from the projection, 1e-7 of the first gradient's
+         * squared norm leaves no visible difference in the map. */
+        for (int it = 0; it < max_iter && gn > 1e-7 * g0 && rz > 0; ++it) {
+            lscm_apply(T, nt, p, q);
+            double qq = 0;
+            for (size_t i = 0; i < nt * 2; ++i) qq += q[i] * q[i];
+            if (!(qq > 0)) break;
+            const double alpha = rz / qq;
+            for (size_t i = 0; i < n; ++i) uv[i] += alpha * p[i];
+            for (size_t i = 0; i < nt * 2; ++i) r[i] -= alpha * q[i];
+            lscm_transpose(T, nt, r, g, nv);
+            double rz2 = 0;
+            gn = 0;
+            for (size_t i = 0; i < n; ++i) { z[i] = dinv[i] * g[i]; rz2 += g[i] * z[i]; gn += dinv[i] ? g[i] * g[i] : 0; }
+            const double beta = rz2 / rz;
+            rz = rz2;
+            for (size_t i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
+        }
+        for (size_t i = 0; i < n && ok; ++i) ok = isfinite(uv[i]);
+    }
+    free(r); free(g); free(p); free(q); free(z); free(dinv);
+    return ok;
+}
+
+/* Do two triangles (corners p, q) cover a common area? Separating axes over their six edge
+ * normals; projections that only touch (neighbours along an edge, at a corner) do not count. */
+static bool triangles_overlap(const double p[3][2], const double q[3][2])
+{
+    for (int s = 0; s < 2; ++s) {
+        const double (*t)[2] = s ? q : p;
+        for (int e = 0; e < 3; ++e) {
+            const double nx = t[(e + 1) % 3][1] - t[e][1], ny = t[e][0] - t[(e + 1) % 3][0];
+            const double len = sqrt(nx * nx + ny * ny);
+            if (!(len > 0)) continue;
+            double plo = INFINITY, phi = -INFINITY, qlo = INFINITY, qhi = -INFINITY;
+            for (int k = 0; k < 3; ++k) {
+                double a = (p[k][0] * nx + p[k][1] * ny) / len, b = (q[k][0] * nx + q[k][1] * ny) / len;
+                plo = fmin(plo, a); phi = fmax(phi, a); qlo = fmin(qlo, b); qhi = fmax(qhi, b);
+            }
+            const double eps = 1e-7 * (fmax(phi - plo, qhi - qlo) + 1e-300);
+            if (phi <= qlo + eps || qhi <= plo + eps) return false;
+        }
+    }
+    return true;
+}
+
+/* Any two of the chart's triangles overlapping in UV: candidates from a grid of buckets about
+ * one mean triangle wide, then the exact test. */
+static bool chart_overlaps(const atlas *a, const chart *c, double umin, double vmin, double umax, double vmax, double area)
+{
+    const prt__mesh *m = a->m;
+    double cell = sqrt(2 * area / (double)c->nt);
+    double gw = (umax - umin) / cell + 1, gh = (vmax - vmin) / cell + 1;
+    if (gw * gh > 4.0 * c->nt + 16) { double k = sqrt(gw * gh / (4.0 * c->nt + 16)); cell *= k; gw = (umax - umin) / cell + 1; gh = (vmax - vmin) / cell + 1; }
+    const size_t W = (size_t)gw, H = (size_t)gh, cells = W * H;
+    uint32_t *count = calloc(cells + 1, sizeof *count), *fill = NULL, *items = NULL;
+    bool overlap = false;
+    if (!count) return false;   /* cannot look: take it */
+    int32_t (*box)[4] = malloc(c->nt * sizeof *box);
+    if (!box) { free(count); return false; }
+    for (int pass = 0; pass < 2 && !overlap; ++pass) {
+        if (pass == 1) {
+            for (size_t i = 1; i <= cells; ++i) count[i] += count[i - 1];
+            fill = calloc(cells, sizeof *fill);
+            items = malloc((size_t)count[cells] * sizeof *items);
+            if (!fill || !items) break;
+        }
+        for (size_t t = 0; t < c->nt; ++t) {
+            const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
+            if (pass == 0) {
+                double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+                for (int k = 0; k < 3; ++k) {
+                    const double *q = c->uv + a->local[a->weld[ix[k]]] * 2;
+                    lo[0] = fmin(lo[0], q[0]); hi[0] = fmax(hi[0], q[0]); lo[1] = fmin(lo[1], q[1]); hi[1] = fmax(hi[1], q[1]);
+                }
+                box[t][0] = (int32_t)fmin((double)W - 1, (lo[0] - umin) / cell);
+                box[t][1] = (int32_t)fmin((double)H - 1, (lo[1] - vmin) / cell);
+                box[t][2] = (int32_t)fmin((double)W - 1, (hi[0] - umin) / cell);
+                box[t][3] = (int32_t)fmin((double)H - 1, (hi[1] - vmin) / cell);
+            }
+            for (int32_t y = box[t][1]; y <= box[t][3]; ++y)
+                for (int32_t x = box[t][0]; x <= box[t][2]; ++x) {
+                    const size_t b = (size_t)y * W + x;
+                    if (pass == 0) count[b + 1]++;
+                    else items[count[b] + fill[b]++] = (uint32_t)t;
+                }
+        }
+    }
+    if (fill && items) {
+        for (size_t b = 0; b < cells && !overlap; ++b)
+            for (uint32_t i = count[b]; i < count[b] + fill[b] && !overlap; ++i)
+                for (uint32_t j = i + 1; j < count[b] + fill[b] && !overlap; ++j) {
+                    double p[3][2], q[3][2];
+                    const uint32_t *ia = m->indices + (size_t)c->tris[items[i]] * 3, *ib = m->indices + (size_t)c->tris[items[j]] * 3;
+                    for (int k = 0; k < 3; ++k) {
+                        memcpy(p[k], c->uv + a->local[a->weld[ia[k]]] * 2, sizeof p[k]);
+                        memcpy(q[k], c->uv + a->local[a->weld[ib[k]]] * 2, sizeof q[k]);
+                    }
+                    overlap = triangles_overlap((const double (*)[2])p, (const double (*)[2])q);
+                }
+    }
+    free(count);
+    free(fill);
+    free(items);
+    free(box);
+    return overlap;
+}
+
+/* Does the chart's map keep every triangle the right way round and within MAX_STRETCH, and
+ * cover no point of the plane twice? */
+static bool chart_valid(const atlas *a, const chart *c)
+{
+    const prt__mesh *m = a->m;
+    double umin = INFINITY, vmin = INFINITY, umax = -INFINITY, vmax = -INFINITY, area = 0;
+    for (size_t t = 0; t < c->nt; ++t) {
+        const uint32_t tri = c->tris[t], *ix = m->indices + (size_t)tri * 3;
+        double x[3], y[3];
+        if (!tri_frame(m, ix, x, y)) continue;   /* degenerate in space: anything goes */
+        const double *p[3];
+        for (int k = 0; k < 3; ++k) p[k] = c->uv + a->local[a->weld[ix[k]]] * 2;
+        double du1 = p[1][0] - p[0][0], dv1 = p[1][1] - p[0][1], du2 = p[2][0] - p[0][0], dv2 = p[2][1] - p[0][1];
+        double sa = 0.5 * (du1 * dv2 - du2 * dv1);
+        if (!(sa > 1e-9 * a->area[tri])) return false;
+        double ju0 = du1 / x[1], jv0 = dv1 / x[1], ju1 = (du2 - ju0 * x[2]) / y[2], jv1 = (dv2 - jv0 * x[2]) / y[2];
+        double f = ju0 * ju0 + ju1 * ju1 + jv0 * jv0 + jv1 * jv1, det = ju0 * jv1 - ju1 * jv0;
+        double disc = sqrt(fmax(0.0, f * f / 4 - det * det));
+        double s1 = sqrt(f / 2 + disc), s2 = sqrt(fmax(0.0, f / 2 - disc));
+        if (!(s2 > 0) || s1 > MAX_STRETCH * s2) return false;
+        area += sa;
+    }
+    for (size_t v = 0; v < c->nv; ++v) {
+        umin = fmin(umin, c->uv[v * 2]); umax = fmax(umax, c->uv[v * 2]);
+        vmin = fmin(vmin, c->uv[v * 2 + 1]); vmax = fmax(vmax, c->uv[v * 2 + 1]);
+    }
+    if (c->nt < 2 || !(area > 0)) return true;
+    return !chart_overlaps(a, c, umin, vmin, umax, vmax, area);
+}
+
+/* Flattens chart c (its tris set, its verts found here): LSCM, else projection; false when neither
+ * gives a valid map. */
+static bool flatten(atlas *a, chart *c, bool *ok_memory)
+{
+    const prt__mesh *m = a->m;
+    double n[3] = {0, 0, 0};
+    for (size_t t = 0; t < c->nt; ++t)
+        for (int k = 0; k < 3; ++k) n[k] += a->normal[c->tris[t] * 3 + k] * a->area[c->tris[t]];
+    double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(l > 0)) { n[0] = 0; n[1] = 0; n[2] = 1; l = 1; }
+    for (int k = 0; k < 3; ++k) n[k] /= l;
+    double t1[3], t2[3];
+    plane_frame(n, t1, t2);
+    double *proj = malloc(c->nv * 2 * sizeof *proj);
+    lscm_tri *T = malloc(c->nt * sizeof *T);
+    if (!proj || !T) { free(proj); free(T); *ok_memory = false; return false; }
+    /* The projection, and the two vertices furthest apart along its wider axis as pins. */
+    uint32_t pin[2] = {0, 0};
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    uint32_t at_lo[2] = {0, 0}, at_hi[2] = {0, 0};
+    for (size_t v = 0; v < c->nv; ++v) {
+        const float *p = m->positions + (size_t)a->rep[c->verts[v]] * 3;
+        double pv[2] = {0, 0};
+        for (int k = 0; k < 3; ++k) { pv[0] += t1[k] * p[k]; pv[1] += t2[k] * p[k]; }
+        proj[v * 2] = pv[0];
+        proj[v * 2 + 1] = pv[1];
+        for (int k = 0; k < 2; ++k) {
+            if (pv[k] < lo[k]) { lo[k] = pv[k]; at_lo[k] = (uint32_t)v; }
+            if (pv[k] > hi[k]) { hi[k] = pv[k]; at_hi[k] = (uint32_t)v; }
+        }
+    }
+    const int axis = hi[0] - lo[0] >= hi[1] - lo[1] ? 0 : 1;
+    pin[0] = at_lo[axis];
+    pin[1] = at_hi[axis];
+    bool lscm = c->nt > 1 && pin[0] != pin[1];
+    for (size_t t = 0; t < c->nt && lscm; ++t) {
+        const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
+        double x[3], y[3];
+        if (!tri_frame(m, ix, x, y)) {   /* degenerate: no conformal constraint */
+            for (int j = 0; j < 3; ++j) { T[t].v[j] = (uint32_t)a->local[a->weld[ix[j]]]; T[t].a[j] = T[t].b[j] = 0; }
+            continue;
+        }
+        const double s = 1.0 / sqrt(x[1] * y[2]);   /* 1 / sqrt(2 area) */
+        for (int j = 0; j < 3; ++j) {
+            const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+            T[t].v[j] = (uint32_t)a->local[a->weld[ix[j]]];
+            T[t].a[j] = (x[j2] - x[j1]) * s;
+            T[t].b[j] = (y[j2] - y[j1]) * s;
+        }
+    }
+    bool done = false;
+    if (lscm) {
+        memcpy(c->uv, proj, c->nv * 2 * sizeof *proj);
+        if (lscm_solve(T, c->nt, c->nv, pin, c->uv) && chart_valid(a, c)) { done = true; a->flattened++; }
+    }
+    if (!done) {
+        memcpy(c->uv, proj, c->nv * 2 * sizeof *proj);
+        done = chart_valid(a, c);
+    }
+    free(proj);
+    free(T);
+    return done;
+}
+
+/* ---- charts ---- */
+
+typedef struct heap_item { double key; uint32_t tri; } heap_item;
+
+static void heap_push(heap_item *h, size_t *n, heap_item it)
+{
+    size_t i = (*n)++;
+    while (i) {
+        size_t p = (i - 1) / 2;
+        if (h[p].key > it.key || (h[p].key == it.key && h[p].tri < it.tri)) break;
+        h[i] = h[p];
+        i = p;
+    }
+    h[i] = it;
+}
+
+static heap_item heap_pop(heap_item *h, size_t *n)
+{
+    heap_item top = h[0], last = h[--(*n)];
+    size_t i = 0;
+    for (;;) {
+        size_t c = 2 * i + 1;
+        if (c >= *n) break;
+        if (c + 1 < *n && (h[c + 1].key > h[c].key || (h[c + 1].key == h[c].key && h[c + 1].tri < h[c].tri))) c++;
+        if (last.key > h[c].key || (last.key == h[c].key && last.tri < h[c].tri)) break;
+        h[i] = h[c];
+        i = c;
+    }
+    h[i] = last;
+    return top;
+}
+
+/* Fills c->verts (the welded ids its triangles use, numbered in a->local) and sizes c->uv. */
+static bool chart_vertices(atlas *a, chart *c)
+{
+    const prt__mesh *m = a->m;
+    c->verts = malloc(c->nt * 3 * sizeof *c->verts);
+    if (!c->verts) return false;
+    c->nv = 0;
+    for (size_t t = 0; t < c->nt; ++t)
+        for (int k = 0; k < 3; ++k) {
+            uint32_t w = a->weld[m->indices[(size_t)c->tris[t] * 3 + k]];
+            if (a->local[w] < 0) { a->local[w] = (int32_t)c->nv; c->verts[c->nv++] = w; }
+        }
+    c->uv = malloc(c->nv * 2 * sizeof *c->uv);
+    return c->uv != NULL;
+}
+
+static void chart_release_locals(atlas *a, const chart *c)
+{
+    for (size_t v = 0; v < c->nv; ++v) a->local[c->verts[v]] = -1;
+}
+
+static bool keep_chart(atlas *a, chart *c)
+{
+    if (a->count == a->cap) {
+        size_t cap = a->cap ? a->cap * 2 : 64;
+        chart *nc = realloc(a->charts, cap * sizeof *nc);
+        if (!nc) return false;
+        a->charts = nc;
+        a->cap = cap;
+    }
+    a->charts[a->count++] = *c;
+    return true;
+}
+
+static int by_double(const void *x, const void *y)
+{
+    const double a = *(const double *)x, b = *(const double *)y;
+    return a < b ? -1 : a > b;
+}
+
+/* Splits the triangle set into connected pieces, flattens each, and cuts a piece that cannot be
+ * flattened in two at its median along its longest extent. */
+static prt_status place_piece(const prt_context *ctx, atlas *a, uint32_t *tris, size_t nt, int depth)
+{
+    const prt__mesh *m = a->m;
+    if (prt__cancelled(ctx)) return prt__fail(ctx, PRT_ERR_CANCELLED, "UV atlas cancelled");
+    /* Connected pieces within this set (stamp marks membership, then visits). */
+    a->pass += 2;
+    const uint32_t member = a->pass - 1, seen = a->pass;
+    for (size_t i = 0; i < nt; ++i) a->stamp[tris[i]] = member;
+    uint32_t *order = malloc(nt * sizeof *order);
+    if (!order) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    size_t pieces = 0, filled = 0;
+    size_t *start = NULL;
+    for (size_t i = 0; i < nt; ++i) {
+        if (a->stamp[tris[i]] != member) continue;
+        size_t *ns = realloc(start, (pieces + 2) * sizeof *ns);
+        if (!ns) { free(order); free(start); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); }
+        start = ns;
+        start[pieces++] = filled;
+        size_t head = filled;
+        order[filled++] = tris[i];
+        a->stamp[tris[i]] = seen;
+        while (head < filled) {
+            uint32_t t = order[head++];
+            for (int k = 0; k < 3; ++k) {
+                int64_t o = a->across[(size_t)t * 3 + k];
+                if (o >= 0 && a->stamp[o] == member) { a->stamp[o] = seen; order[filled++] = (uint32_t)o; }
+            }
+        }
+    }
+    start = start ? start : malloc(sizeof *start);
+    if (!start) { free(order); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); }
+    start[pieces] = filled;
+    prt_status st = PRT_OK;
+    for (size_t p = 0; p < pieces && !st; ++p) {
+        chart c = {0};
+        c.nt = start[p + 1] - start[p];
+        c.tris = malloc(c.nt * sizeof *c.tris);
+        if (!c.tris) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); break; }
+        memcpy(c.tris, order + start[p], c.nt * sizeof *c.tris);
+        bool mem = true;
+        if (!chart_vertices(a, &c)) mem = false;
+        bool flat = mem && flatten(a, &c, &mem);
+        chart_release_locals(a, &c);
+        if (!mem) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+        else if (flat || c.nt == 1 || depth >= SPLIT_DEPTH) {
+            /* Not flat only past SPLIT_DEPTH (one triangle always is): it keeps its projection. */
+            if (!keep_chart(a, &c)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+            else continue;
+        } else {
+            /* Cut at the median centroid along the longest axis of the piece's box. */
+            double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+            double *key = malloc(c.nt * sizeof *key);
+            uint32_t *sorted = malloc(c.nt * sizeof *sorted);
+            if (!key || !sorted) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+            for (size_t t = 0; t < c.nt && !st; ++t)
+                for (int k = 0; k < 3; ++k) {
+                    const float *q = m->positions + m->indices[(size_t)c.tris[t] * 3 + k] * 3;
+                    for (int x = 0; x < 3; ++x) { lo[x] = fmin(lo[x], q[x]); hi[x] = fmax(hi[x], q[x]); }
+                }
+            const int ax = hi[0] - lo[0] >= hi[1] - lo[1] && hi[0] - lo[0] >= hi[2] - lo[2] ? 0 : hi[1] - lo[1] >= hi[2] - lo[2] ? 1 : 2;
+            if (!st) {
+                for (size_t t = 0; t < c.nt; ++t) {
+                    const uint32_t *ix = m->indices + (size_t)c.tris[t] * 3;
+                    key[t] = (double)m->positions[ix[0] * 3 + ax] + m->positions[ix[1] * 3 + ax] + m->positions[ix[2] * 3 + ax];
+                }
+                double *ks = malloc(c.nt * sizeof *ks);
+                if (!ks) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+                else {
+                    memcpy(ks, key, c.nt * sizeof *ks);
+                    qsort(ks, c.nt, sizeof *ks, by_double);
+                    const size_t kth = c.nt / 2;
+                    const double median = ks[kth];
+                    free(ks);
+                    size_t below = 0, above = c.nt;
+                    for (size_t t = 0; t < c.nt; ++t) {
+                        if (key[t] < median) sorted[below++] = c.tris[t];
+                        else sorted[--above] = c.tris[t];
+                    }
+                    if (below == 0 || below == c.nt) {   /* all on one key: split the list in half */
+                        memcpy(sorted, c.tris, c.nt * sizeof *sorted);
+                        below = c.nt / 2;
+                    }
+                    st = place_piece(ctx, a, sorted, below, depth + 1);
+                    if (!st) st = place_piece(ctx, a, sorted + below, c.nt - below, depth + 1);
+                }
+            }
+            free(key);
+            free(sorted);
+        }
+        free(c.tris);
+        free(c.verts);
+        free(c.uv);
+    }
+    free(order);
+    free(start);
+    return st;
+}
+
+/* Grows charts from seeds in triangle order: a neighbour joins while its normal stays within
+ * max_angle of the chart's area-weighted mean. */
+static prt_status grow_charts(const prt_context *ctx, atlas *a, double cos_max)
+{
+    const size_t nt = a->nt;
+    uint8_t *taken = calloc(nt, 1);
+    uint32_t *members = malloc(nt * sizeof *members);
+    heap_item *heap = malloc(nt * 3 * sizeof *heap + sizeof *heap);
+    prt_status st = taken && members && heap ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    for (size_t seed = 0; seed < nt && !st; ++seed) {
+        if (taken[seed]) continue;
+        size_t count = 0, hn = 0;
+        double n[3];
+        for (int k = 0; k < 3; ++k) n[k] = a->smooth[seed * 3 + k] * a->area[seed];
+        taken[seed] = 1;
+        members[count++] = (uint32_t)seed;
+        a->pass++;
+        a->stamp[seed] = a->pass;
+        heap_push(heap, &hn, (heap_item){1.0, (uint32_t)seed});
+        while (hn) {
+            heap_item it = heap_pop(heap, &hn);
+            if (it.tri != seed) {
+                if (taken[it.tri]) continue;
+                double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                const double *tn = a->smooth + (size_t)it.tri * 3;
+                double d = l > 0 ? (tn[0] * n[0] + tn[1] * n[1] + tn[2] * n[2]) / l : 1.0;
+                if (tn[0] == 0 && tn[1] == 0 && tn[2] == 0) d = 1.0;   /* degenerate: goes anywhere */
+                if (d < cos_max) continue;
+                taken[it.tri] = 1;
+                members[count++] = it.tri;
+                for (int k = 0; k < 3; ++k) n[k] += tn[k] * a->area[it.tri];
+            }
+            double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            for (int k = 0; k < 3; ++k) {
+                int64_t o = a->across[(size_t)it.tri * 3 + k];
+                if (o < 0 || taken[o] || hn >= nt * 3) continue;
+                const double *tn = a->smooth + (size_t)o * 3;
+                double d = l > 0 ? (tn[0] * n[0] + tn[1] * n[1] + tn[2] * n[2]) / l : 1.0;
+                if (d < cos_max) continue;
+                heap_push(heap, &hn, (heap_item){d, (uint32_t)o});
+            }
+        }
+        a->grown++;
+        st = place_piece(ctx, a, members, count, 0);
+    }
+    free(taken);
+    free(members);
+    free(heap);
+    return st;
+}
+
+/* ---- packing ---- */
+
+/* Turns a chart to the smallest-area bounding box of PACK_ANGLES tried, lying wide, corner at 0. */
+static void chart_orient(chart *c)
+{
+    double best = INFINITY, best_angle = 0;
+    for (int i = 0; i < PACK_ANGLES; ++i) {
+        const double th = (PRT_PI / 2) * i / PACK_ANGLES, cs = cos(th), sn = sin(th);
+        double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+        for (size_t v = 0; v < c->nv; ++v) {
+            double u = cs * c->uv[v * 2] - sn * c->uv[v * 2 + 1], w = sn * c->uv[v * 2] + cs * c->uv[v * 2 + 1];
+            lo[0] = fmin(lo[0], u); hi[0] = fmax(hi[0], u); lo[1] = fmin(lo[1], w); hi[1] = fmax(hi[1], w);
+        }
+        double area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
+        if (area < best * (1 - 1e-9)) { best = area; best_angle = th; }
+    }
+    const double cs = cos(best_angle), sn = sin(best_angle);
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (size_t v = 0; v < c->nv; ++v) {
+        double u = cs * c->uv[v * 2] - sn * c->uv[v * 2 + 1], w = sn * c->uv[v * 2] + cs * c->uv[v * 2 + 1];
+        c->uv[v * 2] = u;
+        c->uv[v * 2 + 1] = w;
+        lo[0] = fmin(lo[0], u); hi[0] = fmax(hi[0], u); lo[1] = fmin(lo[1], w); hi[1] = fmax(hi[1], w);
+    }
+    const bool turn = hi[1] - lo[1] > hi[0] - lo[0];
+    for (size_t v = 0; v < c->nv; ++v) {
+        double u = c->uv[v * 2] - lo[0], w = c->uv[v * 2 + 1] - lo[1];
+        c->uv[v * 2] = turn ? w : u;
+        c->uv[v * 2 + 1] = turn ? (hi[0] - lo[0]) - u : w;
+    }
+    c->w = turn ? hi[1] - lo[1] : hi[0] - lo[0];
+    c->h = turn ? hi[0] - lo[0] : hi[1] - lo[1];
+}
+
+static const chart *sort_charts;
+static int by_height(const void *x, const void *y)
+{
+    const uint32_t i = *(const uint32_t *)x, j = *(const uint32_t *)y;
+    const double a = sort_charts[i].h, b = sort_charts[j].h;
+    if (a != b) return a > b ? -1 : 1;
+    if (sort_charts[i].w != sort_charts[j].w) return sort_charts[i].w > sort_charts[j].w ? -1 : 1;
+    return i < j ? -1 : i > j;
+}
+
+/* Shelf packing at scale s (texels per scene unit); corners in texels, or false when it does not fit. */
+static bool pack(const atlas *a, const uint32_t *order, double s, int res, int pad, int32_t *at)
+{
+    long x = 0, y = 0, shelf = 0;
+    for (size_t i = 0; i < a->count; ++i) {
+        const chart *c = &a->charts[order[i]];
+        long w = (long)ceil(c->w * s) + 2 * pad, h = (long)ceil(c->h * s) + 2 * pad;
+        if (w < 1 + 2 * pad) w = 1 + 2 * pad;
+        if (h < 1 + 2 * pad) h = 1 + 2 * pad;
+        if (w > res) return false;
+        if (x + w > res) { y += shelf; x = 0; shelf = 0; }
+        if (y + h > res) return false;
+        if (at) { at[order[i] * 2] = (int32_t)x; at[order[i] * 2 + 1] = (int32_t)y; }
+        x += w;
+        if (h > shelf) shelf = h;
+    }
+    return true;
+}
+
+/* ---- the mesh with its new vertices ---- */
+
+static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, const int32_t *at, double s, int res, int pad, size_t *added)
+{
+    const size_t nv = m->vertex_count;
+    int64_t *owner = malloc(nv * sizeof *owner);         /* chart that keeps the vertex's own id */
+    uint32_t *dup = malloc(nv * sizeof *dup), *dup_stamp = malloc(nv * sizeof *dup_stamp);
+    if (!owner || !dup || !dup_stamp) { free(owner); free(dup); free(dup_stamp); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); }
+    for (size_t v = 0; v < nv; ++v) { owner[v] = -1; dup_stamp[v] = UINT32_MAX; }
+    /* First pass: count copies. */
+    size_t extra = 0;
+    for (size_t ci = 0; ci < a->count; ++ci) {
+        const chart *c = &a->charts[ci];
+        for (size_t t = 0; t < c->nt; ++t)
+            for (int k = 0; k < 3; ++k) {
+                uint32_t o = m->indices[(size_t)c->tris[t] * 3 + k];
+                if (owner[o] < 0) owner[o] = (int64_t)ci;
+                else if (owner[o] != (int64_t)ci && dup_stamp[o] != ci) { dup_stamp[o] = (uint32_t)ci; extra++; }
+            }
+    }
+    if (nv + extra > UINT32_MAX) { free(owner); free(dup); free(dup_stamp); return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the UV atlas would need more than 2^32 vertices"); }
+    const size_t nv2 = nv + extra;
+    bool ok = true;
+#define GROW(p, n) do { void *q_ = realloc((p), (n)); if (q_) (p) = q_; else ok = false; } while (0)
+    GROW(m->positions, nv2 * 3 * sizeof(float));
+    GROW(m->normals, nv2 * 3 * sizeof(float));
+    GROW(m->albedo, nv2 * 3 * sizeof(float));
+    GROW(m->material, nv2);
+    GROW(m->uv, nv2 * 2 * sizeof(float));
+    if (m->surface) GROW(m->surface, nv2 * sizeof(uint16_t));
+    if (m->emission) GROW(m->emission, nv2 * 3 * sizeof(float));
+#undef GROW
+    if (!ok) { free(owner); free(dup); free(dup_stamp); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); }
+    for (size_t v = 0; v < nv; ++v) dup_stamp[v] = UINT32_MAX;
+    size_t next = nv;
+    for (size_t ci = 0; ci < a->count; ++ci) {
+        const chart *c = &a->charts[ci];
+        for (size_t v = 0; v < c->nv; ++v) a->local[c->verts[v]] = (int32_t)v;
+        const double ox = at[ci * 2] + pad, oy = at[ci * 2 + 1] + pad;
+        for (size_t t = 0; t < c->nt; ++t)
+            for (int k = 0; k < 3; ++k) {
+                uint32_t *slot = m->indices + (size_t)c->tris[t] * 3 + k, o = *slot, id = o;
+                if (owner[o] != (int64_t)ci) {
+                    if (dup_stamp[o] != ci) {
+                        dup_stamp[o] = (uint32_t)ci;
+                        dup[o] = (uint32_t)next;
+                        memcpy(m->positions + next * 3, m->positions + (size_t)o * 3, 3 * sizeof(float));
+                        memcpy(m->normals + next * 3, m->normals + (size_t)o * 3, 3 * sizeof(float));
+                        memcpy(m->albedo + next * 3, m->albedo + (size_t)o * 3, 3 * sizeof(float));
+                        m->material[next] = m->material[o];
+                        if (m->surface) m->surface[next] = m->surface[o];
+                        if (m->emission) memcpy(m->emission + next * 3, m->emission + (size_t)o * 3, 3 * sizeof(float));
+                        next++;
+                    }
+                    id = dup[o];
+                    *slot = id;
+                }
+                const double *p = c->uv + a->local[a->weld[o]] * 2;
+                m->uv[(size_t)id * 2] = (float)((ox + p[0] * s) / res);
+                m->uv[(size_t)id * 2 + 1] = (float)((oy + p[1] * s) / res);
+            }
+        chart_release_locals(a, c);
+    }
+    m->vertex_count = nv2;
+    *added = extra;
+    free(owner);
+    free(dup);
+    free(dup_stamp);
+    return PRT_OK;
+}
+
+prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_desc *d, prt__atlas_report *report)
+{
+    prt__atlas_report rep = {0};
+    const int res = d->resolution, pad = d->padding > 0 ? d->padding : 2;
+    const double max_angle = d->max_angle > 0 ? d->max_angle : 60.0;
+    if (res < 1) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "UV atlas resolution %d must be positive", res);
+    if (!(max_angle < 90.0)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "UV atlas chart angle must be below 90 degrees");
+    if (!m->triangle_count) return prt__fail(ctx, PRT_ERR_EMPTY, "no triangles to lay out in UV space");
+    atlas a = {0};
+    a.m = m;
+    a.nt = m->triangle_count;
+    a.weld = malloc(m->vertex_count * sizeof *a.weld);
+    a.rep = malloc(m->vertex_count * sizeof *a.rep);
+    a.across = malloc(a.nt * 3 * sizeof *a.across);
+    a.normal = malloc(a.nt * 3 * sizeof *a.normal);
+    a.area = malloc(a.nt * sizeof *a.area);
+    a.smooth = malloc(a.nt * 3 * sizeof *a.smooth);
+    a.stamp = calloc(a.nt, sizeof *a.stamp);
+    prt_status st = PRT_OK;
+    double total = 0;
+    if (!a.weld || !a.rep || !a.across || !a.normal || !a.smooth || !a.area || !a.stamp || !build_adjacency(&a)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    if (!st) {
+        a.local = malloc(a.nw * sizeof *a.local);
+        if (!a.local) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+        else for (size_t w = 0; w < a.nw; ++w) a.local[w] = -1;
+    }
+    for (size_t t = 0; t < a.nt && !st; ++t) {
+        const uint32_t *ix = m->indices + t * 3;
+        const float *p0 = m->positions + ix[0] * 3, *p1 = m->positions + ix[1] * 3, *p2 = m->positions + ix[2] * 3;
+        double e1[3], e2[3], n[3];
+        for (int c = 0; c < 3; ++c) { e1[c] = (double)p1[c] - p0[c]; e2[c] = (double)p2[c] - p0[c]; }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1]; n[1] = e1[2] * e2[0] - e1[0] * e2[2]; n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        a.area[t] = 0.5 * l;
+        total += a.area[t];
+        for (int c = 0; c < 3; ++c) a.normal[t * 3 + c] = l > 0 ? n[c] / l : 0.0;
+        /* Scans are noisy: face normals swing from triangle to triangle and would cut charts
+         * into crumbs; the vertex normals' mean follows the surface's shape. */
+        double sn[3] = {0, 0, 0};
+        for (int k = 0; k < 3; ++k)
+            for (int c = 0; c < 3; ++c) sn[c] += m->normals[ix[k] * 3 + c];
+        double sl = sqrt(sn[0] * sn[0] + sn[1] * sn[1] + sn[2] * sn[2]);
+        for (int c = 0; c < 3; ++c) a.smooth[t * 3 + c] = sl > 0 ? sn[c] / sl : a.normal[t * 3 + c];
+    }
+    if (!st && !(total > 0)) st = prt__fail(ctx, PRT_ERR_EMPTY, "the mesh has no area to lay out in UV space");
+    if (!st) st = grow_charts(ctx, &a, cos(max_angle * PRT_PI / 180.0));
+    int32_t *at = NULL;
+    uint32_t *order = NULL;
+    double s = 0;
+    if (!st) {
+        /* One density for every chart: scale each so its UV area equals its area in space. */
+        for (size_t ci = 0; ci < a.count; ++ci) {
+            chart *c = &a.charts[ci];
+            double uv_area = 0, area = 0;
+            for (size_t v = 0; v < c->nv; ++v) a.local[c->verts[v]] = (int32_t)v;
+            for (size_t t = 0; t < c->nt; ++t) {
+                const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
+                const double *p[3];
+                for (int k = 0; k < 3; ++k) p[k] = c->uv + a.local[a.weld[ix[k]]] * 2;
+                uv_area += 0.5 * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]));
+                area += a.area[c->tris[t]];
+            }
+            chart_release_locals(&a, c);
+            const double k = uv_area > 0 && area > 0 ? sqrt(area / uv_area) : 1.0;
+            for (size_t v = 0; v < c->nv * 2; ++v) c->uv[v] *= k;
+            chart_orient(c);
+        }
+        order = malloc(a.count * sizeof *order);
+        at = malloc(a.count * 2 * sizeof *at);
+        if (!order || !at) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    }
+    if (!st) {
+        for (size_t i = 0; i < a.count; ++i) order[i] = (uint32_t)i;
+        sort_charts = a.charts;
+        qsort(order, a.count, sizeof *order, by_height);
+        double lo = 0, hi = res / sqrt(total);
+        if (!pack(&a, order, 0, res, pad, NULL))
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels: raise --texels",
+                           a.count, 2 * pad, res, res);
+        for (int it = 0; it < 40 && !st; ++it) {
+            double mid = 0.5 * (lo + hi);
+            if (pack(&a, order, mid, res, pad, NULL)) lo = mid;
+            else hi = mid;
+        }
+        s = lo;
+        if (!st && !(s > 0))
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts leave no room for a texel each in %d x %d texels: raise --texels", a.count, res, res);
+        if (!st) {
+            pack(&a, order, s, res, pad, at);
+            st = write_layout(ctx, &a, m, at, s, res, pad, &rep.added_vertices);
+        }
+    }
+    if (!st) {
+        rep.charts = a.count;
+        rep.flattened = a.flattened;
+        rep.grown = a.grown;
+        rep.coverage = total * s * s / ((double)res * res);
+        for (size_t t = 0; t < m->triangle_count; ++t) {
+            double r = prt__uv_stretch(m, t);
+            if (r > rep.worst_stretch) rep.worst_stretch = r;
+        }
+        if (report) *report = rep;
+    }
+    for (size_t i = 0; i < a.count; ++i) { free(a.charts[i].tris); free(a.charts[i].verts); free(a.charts[i].uv); }
+    free(a.charts);
+    free(a.weld); free(a.rep); free(a.across); free(a.normal); free(a.smooth); free(a.area); free(a.stamp); free(a.local);
+    free(order);
+    free(at);
+    return st;
+}
+
+bool prt__uv_layout_unusable(const prt__mesh *m, int resolution, char *why, size_t why_size)
+{
+    if (!prt__mesh_has_uv(m)) {
+        snprintf(why, why_size, "%s", m->uv && m->vertex_count && isfinite(m->uv[0]) ? "some vertices have no texture coordinates" : "it has no texture coordinates");
+        return true;
+    }
+    size_t outside = 0;
+    for (size_t v = 0; v < m->vertex_count; ++v)
+        outside += !(m->uv[v * 2] >= -1e-3f && m->uv[v * 2] <= 1.001f && m->uv[v * 2 + 1] >= -1e-3f && m->uv[v * 2 + 1] <= 1.001f);
+    if (outside) { snprintf(why, why_size, "%zu of its texture coordinates lie outside [0, 1]", outside); return true; }
+    const int W = resolution, H = resolution;
+    uint8_t *hit = calloc((size_t)W * H, 1);
+    if (!hit) return false;   /* cannot look; the bake itself will say */
+    size_t overlap = 0, covered = 0;
+    for (size_t t = 0; t < m->triangle_count; ++t) {
+        const uint32_t *ix = m->indices + t * 3;
+        float u[3], v[3];
+        for (int k = 0; k < 3; ++k) { u[k] = m->uv[ix[k] * 2] * W; v[k] = m->uv[ix[k] * 2 + 1] * H; }
+        float area = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
+        if (area == 0.0f) continue;
+        int x0 = (int)floorf(fminf(u[0], fminf(u[1], u[2]))), x1 = (int)ceilf(fmaxf(u[0], fmaxf(u[1], u[2])));
+        int y0 = (int)floorf(fminf(v[0], fminf(v[1], v[2]))), y1 = (int)ceilf(fmaxf(v[0], fmaxf(v[1], v[2])));
+        for (int y = y0 < 0 ? 0 : y0; y < y1 && y < H; ++y)
+            for (int x = x0 < 0 ? 0 : x0; x < x1 && x < W; ++x) {
+                float px = x + 0.5f, py = y + 0.5f;
+                float b1 = ((px - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (py - v[0])) / area;
+                float b2 = ((u[1] - u[0]) * (py - v[0]) - (px - u[0]) * (v[1] - v[0])) / area;
+                if (b1 < -1e-6f || b2 < -1e-6f || b1 + b2 > 1.0f + 1e-6f) continue;
+                /* Centres on a shared edge belong to both triangles: only one strictly inside
+                 * two is an overlap. */
+                const bool strict = b1 > 1e-4f && b2 > 1e-4f && b1 + b2 < 1.0f - 1e-4f;
+                uint8_t *h = hit + (size_t)y * W + x;
+                if (!*h) covered++;
+                if (strict && (*h & 2)) overlap++;
+                *h |= strict ? 3 : 1;
+            }
+    }
+    free(hit);
+    if (!covered) { snprintf(why, why_size, "its texture coordinates cover no texel centre of a %dx%d map", W, H); return true; }
+    if (overlap * 100 > covered) {
+        snprintf(why, why_size, "its UV layout overlaps itself on %.1f%% of the texels it covers", 100.0 * overlap / covered);
+        return true;
+    }
+    return false;
+}

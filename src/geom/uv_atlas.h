@@ -1,0 +1,37 @@
+/* UV atlases for meshes without a usable texture layout: charts grown by normal deviation, each
+ * flattened by least-squares conformal maps (Levy et al. 2002), packed into a square with a gutter
+ * of empty texels around every chart. What per-texel transfer bakes over. */
+#ifndef PRT_GEOM_UV_ATLAS_H
+#define PRT_GEOM_UV_ATLAS_H
+
+#include "geom/mesh.h"
+
+typedef struct prt__atlas_desc {
+    int resolution;    /* texels per side of the map the atlas is laid out for */
+    int padding;       /* empty texels on every side of a chart; 0 = 2 */
+    float max_angle;   /* degrees a triangle's normal may turn from its chart's mean; 0 = 60 */
+} prt__atlas_desc;
+
+typedef struct prt__atlas_report {
+    size_t grown;            /* charts grown by normal deviation */
+    size_t charts;           /* after splitting charts that would fold or overlap */
+    size_t added_vertices;   /* copies made where a vertex lies on a seam between charts */
+    size_t flattened;        /* charts flattened by LSCM (the rest by projection onto their plane) */
+    double coverage;         /* share of the square's area inside charts */
+    double worst_stretch;    /* largest ratio of a triangle map's singular values */
+} prt__atlas_report;
+
+/* Replaces m's texture coordinates by a generated atlas inside [0, 1], copying vertices that lie
+ * on seams between charts (their other attributes are copied as they are). Deterministic. */
+prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_desc *d, prt__atlas_report *report);
+
+/* Why m's own texture coordinates cannot carry a resolution x resolution map (missing, outside
+ * [0, 1], or overlapping on more than 1% of the texels they cover), written to why; false when
+ * they can. */
+bool prt__uv_layout_unusable(const prt__mesh *m, int resolution, char *why, size_t why_size);
+
+/* The ratio of the singular values of the map from triangle t's surface to its UVs (1 = no
+ * shear or anisotropic stretch); 1 for a triangle degenerate in space. */
+double prt__uv_stretch(const prt__mesh *m, size_t t);
+
+#endif

@@ -1,0 +1,288 @@
+/* Generated UV atlases: charts never overlap and keep a gutter between them, every triangle maps
+ * with bounded stretch, the surface is unchanged, the layout is deterministic, and per-texel
+ * transfer over it matches the closed form on a convex object with every gutter texel filled. */
+#include "common.h"
+
+#include "geom/uv_atlas.h"
+
+/* A sphere with radial noise, like a scan: normals swing from triangle to triangle. */
+static void bumpy_sphere(test_mesh *m, int rings, int segs, float noise)
+{
+    tm_sphere(m, (float[3]){0, 0, 0}, 1.0f, rings, segs);
+    uint32_t h = 12345;
+    for (size_t v = 0; v < m->nv; ++v) {
+        h = h * 1664525u + 1013904223u;
+        float k = 1.0f + noise * ((float)(h >> 8) / 16777216.0f - 0.5f);
+        for (int c = 0; c < 3; ++c) m->pos[v * 3 + c] *= k;
+    }
+}
+
+/* Union-find over triangles sharing a corner: the same position with the same UV (inside a
+ * chart, vertices the input split by normals still share both; seams give copies other UVs). */
+static size_t find(size_t *p, size_t i)
+{
+    while (p[i] != i) i = p[i] = p[p[i]];
+    return i;
+}
+
+static const prt__mesh *corner_mesh;
+static int by_corner(const void *x, const void *y)
+{
+    const uint32_t a = *(const uint32_t *)x, b = *(const uint32_t *)y;
+    int c = memcmp(corner_mesh->positions + a * 3, corner_mesh->positions + b * 3, 3 * sizeof(float));
+    if (!c) c = memcmp(corner_mesh->uv + a * 2, corner_mesh->uv + b * 2, 2 * sizeof(float));
+    return c ? c : (a > b) - (a < b);
+}
+
+static size_t *chart_of_triangles(const prt__mesh *m)
+{
+    size_t *parent = malloc(m->triangle_count * sizeof *parent), *by_vertex = malloc(m->vertex_count * sizeof *by_vertex);
+    uint32_t *order = malloc(m->vertex_count * sizeof *order), *canon = malloc(m->vertex_count * sizeof *canon);
+    for (size_t v = 0; v < m->vertex_count; ++v) order[v] = (uint32_t)v;
+    corner_mesh = m;
+    qsort(order, m->vertex_count, sizeof *order, by_corner);
+    for (size_t k = 0; k < m->vertex_count; ++k) {
+        const uint32_t v = order[k], u = k ? order[k - 1] : v;
+        const bool same = k && !memcmp(m->positions + v * 3, m->positions + u * 3, 12) && !memcmp(m->uv + v * 2, m->uv + u * 2, 8);
+        canon[v] = same ? canon[u] : v;
+    }
+    for (size_t t = 0; t < m->triangle_count; ++t) parent[t] = t;
+    for (size_t v = 0; v < m->vertex_count; ++v) by_vertex[v] = SIZE_MAX;
+    for (size_t t = 0; t < m->triangle_count; ++t)
+        for (int k = 0; k < 3; ++k) {
+            uint32_t v = canon[m->indices[t * 3 + k]];
+            if (by_vertex[v] == SIZE_MAX) by_vertex[v] = t;
+            else parent[find(parent, t)] = find(parent, by_vertex[v]);
+        }
+    for (size_t t = 0; t < m->triangle_count; ++t) parent[t] = find(parent, t);
+    free(by_vertex);
+    free(order);
+    free(canon);
+    return parent;
+}
+
+/* Squared distance from (px, py) to the triangle (u, v); 0 inside. */
+static float distance2(const float u[3], const float v[3], float px, float py)
+{
+    float d = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
+    float b1 = ((px - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (py - v[0])) / d;
+    float b2 = ((u[1] - u[0]) * (py - v[0]) - (px - u[0]) * (v[1] - v[0])) / d;
+    if (b1 >= 0 && b2 >= 0 && b1 + b2 <= 1) return 0;
+    float best = INFINITY;
+    for (int e = 0; e < 3; ++e) {
+        int a = e, b = (e + 1) % 3;
+        float ex = u[b] - u[a], ey = v[b] - v[a], l2 = ex * ex + ey * ey;
+        float t = l2 > 0 ? fminf(fmaxf(((px - u[a]) * ex + (py - v[a]) * ey) / l2, 0), 1) : 0;
+        float qx = u[a] + t * ex - px, qy = v[a] + t * ey - py;
+        best = fminf(best, qx * qx + qy * qy);
+    }
+    return best;
+}
+
+/* Lays out m at res and checks everything an atlas promises. */
+static void check_atlas(prt__mesh *m, int res, const char *what)
+{
+    prt_context *ctx = test_context(1);
+    const size_t nv0 = m->vertex_count, nt = m->triangle_count;
+    float *tri_pos = malloc(nt * 9 * sizeof(float));
+    for (size_t t = 0; t < nt; ++t)
+        for (int k = 0; k < 3; ++k) memcpy(tri_pos + t * 9 + k * 3, m->positions + m->indices[t * 3 + k] * 3, 3 * sizeof(float));
+    prt__atlas_report r;
+    assert_int_equal(prt__uv_atlas(ctx, m, &(prt__atlas_desc){.resolution = res}, &r), PRT_OK);
+    assert_int_equal(m->triangle_count, nt);
+    assert_int_equal(m->vertex_count, nv0 + r.added_vertices);
+    assert_true(prt__mesh_has_uv(m));
+    /* The same surface: every triangle's corners where they were. */
+    for (size_t t = 0; t < nt; ++t)
+        for (int k = 0; k < 3; ++k) assert_memory_equal(tri_pos + t * 9 + k * 3, m->positions + m->indices[t * 3 + k] * 3, 3 * sizeof(float));
+    free(tri_pos);
+    for (size_t v = 0; v < m->vertex_count * 2; ++v) assert_true(m->uv[v] >= 0.0f && m->uv[v] <= 1.0f);
+    /* Bounded stretch, and no triangle turned over. */
+    double worst = 0, mean = 0;
+    for (size_t t = 0; t < nt; ++t) {
+        double s = prt__uv_stretch(m, t);
+        worst = fmax(worst, s);
+        mean += s / nt;
+        const float *a = m->uv + m->indices[t * 3] * 2, *b = m->uv + m->indices[t * 3 + 1] * 2, *c = m->uv + m->indices[t * 3 + 2] * 2;
+        assert_true((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]) > 0);
+    }
+    /* Charts at least 2 texels apart: texels a chart's triangles touch (within half a texel's
+     * diagonal of a centre) are never within one texel of another chart's, so bilinear taps at
+     * one chart's border never read another chart. */
+    size_t *chart = chart_of_triangles(m);
+    size_t *owner = malloc((size_t)res * res * sizeof *owner);
+    for (size_t i = 0; i < (size_t)res * res; ++i) owner[i] = SIZE_MAX;
+    size_t clashes = 0, inside_twice = 0;
+    const int fine = 4 * res;
+    uint8_t *hit = calloc((size_t)fine * fine, 1);
+    for (size_t t = 0; t < nt; ++t) {
+        float u[3], v[3], uf[3], vf[3];
+        for (int k = 0; k < 3; ++k) {
+            u[k] = m->uv[m->indices[t * 3 + k] * 2] * res;
+            v[k] = m->uv[m->indices[t * 3 + k] * 2 + 1] * res;
+            uf[k] = u[k] * 4;
+            vf[k] = v[k] * 4;
+        }
+        int x0 = (int)floorf(fminf(u[0], fminf(u[1], u[2]))) - 1, x1 = (int)ceilf(fmaxf(u[0], fmaxf(u[1], u[2]))) + 1;
+        int y0 = (int)floorf(fminf(v[0], fminf(v[1], v[2]))) - 1, y1 = (int)ceilf(fmaxf(v[0], fmaxf(v[1], v[2]))) + 1;
+        for (int y = y0 < 0 ? 0 : y0; y < y1 && y < res; ++y)
+            for (int x = x0 < 0 ? 0 : x0; x < x1 && x < res; ++x) {
+                if (distance2(u, v, x + 0.5f, y + 0.5f) > 0.5f) continue;
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        int xx = x + dx, yy = y + dy;
+                        if (xx < 0 || yy < 0 || xx >= res || yy >= res) continue;
+                        size_t *o = owner + (size_t)yy * res + xx;
+                        if (*o == SIZE_MAX) *o = chart[t];
+                        else if (*o != chart[t]) clashes++;
+                    }
+            }
+        /* Overlap at 4x the resolution: a sample strictly inside two triangles. */
+        float d = (uf[1] - uf[0]) * (vf[2] - vf[0]) - (uf[2] - uf[0]) * (vf[1] - vf[0]);
+        int fx0 = (int)floorf(fminf(uf[0], fminf(uf[1], uf[2]))), fx1 = (int)ceilf(fmaxf(uf[0], fmaxf(uf[1], uf[2])));
+        int fy0 = (int)floorf(fminf(vf[0], fminf(vf[1], vf[2]))), fy1 = (int)ceilf(fmaxf(vf[0], fmaxf(vf[1], vf[2])));
+        for (int y = fy0 < 0 ? 0 : fy0; y < fy1 && y < fine; ++y)
+            for (int x = fx0 < 0 ? 0 : fx0; x < fx1 && x < fine; ++x) {
+                float px = x + 0.5f, py = y + 0.5f;
+                float b1 = ((px - uf[0]) * (vf[2] - vf[0]) - (uf[2] - uf[0]) * (py - vf[0])) / d;
+                float b2 = ((uf[1] - uf[0]) * (py - vf[0]) - (px - uf[0]) * (vf[1] - vf[0])) / d;
+                if (b1 <= 1e-4f || b2 <= 1e-4f || b1 + b2 >= 1 - 1e-4f) continue;
+                inside_twice += hit[(size_t)y * fine + x]++ != 0;
+            }
+    }
+    print_message("%s: %zu charts (%zu by LSCM), %zu vertices copied, %.0f%% coverage, stretch worst %.2f mean %.3f\n", what, r.charts,
+                  r.flattened, r.added_vertices, 100 * r.coverage, worst, mean);
+    assert_int_equal(inside_twice, 0);
+    assert_int_equal(clashes, 0);
+    assert_true(worst <= 4.0 + 1e-3);
+    assert_true(mean < 1.2);
+    assert_true(fabs(worst - r.worst_stretch) < 1e-9);
+    assert_true(r.coverage > 0.2);
+    free(hit);
+    free(owner);
+    free(chart);
+    prt_context_release(ctx);
+}
+
+static prt__mesh to_mesh(const test_mesh *t)
+{
+    prt__mesh m = {0};
+    assert_int_equal(prt__mesh_append(&m, t->pos, t->nrm, NULL, (float[3]){0.5f, 0.5f, 0.5f}, t->nv, t->idx, t->nt), PRT_OK);
+    for (size_t v = 0; v < m.vertex_count * 2; ++v) m.uv[v] = NAN;
+    return m;
+}
+
+static void test_layouts(void **state)
+{
+    (void)state;
+    test_mesh t = {0};
+    tm_sphere(&t, (float[3]){0, 0, 0}, 1.0f, 24, 48);
+    prt__mesh m = to_mesh(&t);
+    check_atlas(&m, 256, "sphere");
+    prt__mesh_free(&m);
+    tm_free(&t);
+
+    bumpy_sphere(&t, 60, 120, 0.03f);
+    m = to_mesh(&t);
+    check_atlas(&m, 512, "bumpy sphere");
+    /* Deterministic: the same mesh gives the same layout. */
+    prt__mesh m2 = to_mesh(&t);
+    prt_context *ctx = test_context(1);
+    assert_int_equal(prt__uv_atlas(ctx, &m2, &(prt__atlas_desc){.resolution = 512}, NULL), PRT_OK);
+    assert_int_equal(m2.vertex_count, m.vertex_count);
+    assert_memory_equal(m2.uv, m.uv, m.vertex_count * 2 * sizeof(float));
+    assert_memory_equal(m2.indices, m.indices, m.triangle_count * 3 * sizeof(uint32_t));
+    prt__mesh_free(&m2);
+    prt__mesh_free(&m);
+    tm_free(&t);
+
+    tm_pit(&t, 8);   /* a room without a ceiling: five planar charts meeting at right angles */
+    m = to_mesh(&t);
+    check_atlas(&m, 128, "open box");
+    prt__mesh_free(&m);
+    tm_free(&t);
+
+    /* Too many charts for the map: refused, saying what to do. */
+    tm_sphere(&t, (float[3]){0, 0, 0}, 1.0f, 24, 48);
+    m = to_mesh(&t);
+    assert_int_equal(prt__uv_atlas(ctx, &m, &(prt__atlas_desc){.resolution = 8}, NULL), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "raise --texels"));
+    prt__mesh_free(&m);
+    tm_free(&t);
+    prt_context_release(ctx);
+}
+
+static void test_real_meshes(void **state)
+{
+    (void)state;
+    const char *dir = shared_data_dir();
+    const char *names[] = {"meshes/bunny/bun_zipper.ply", "meshes/teapot/teapot.obj"};
+    for (int i = 0; i < 2; ++i) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s", dir ? dir : "", names[i]);
+        if (!dir || access(path, R_OK)) { print_message("skipped %s: %s not found (../shared/data)\n", names[i], path); continue; }
+        prt_context *ctx = test_context(1);
+        prt_scene *s = NULL;
+        assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+        check_atlas(&s->mesh, 512, names[i]);
+        prt_scene_release(s);
+        prt_context_release(ctx);
+    }
+}
+
+/* Per-texel transfer of a convex object without UVs: every texel of the generated atlas, baked or
+ * filled in a gutter, holds the unoccluded clamped cosine's DC term. */
+static void test_texels_on_atlas(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    test_mesh t = {0};
+    tm_sphere(&t, (float[3]){0, 0, 0}, 1.0f, 16, 32);
+    prt_scene *s = tm_scene(ctx, &t, 0.5f);
+    prt_bake_desc d = {0};
+    d.order = 1;
+    d.samples = 4096;
+    d.kinds = PRT_TRANSFER_UNSHADOWED | PRT_TRANSFER_SHADOWED;
+    d.texels = 64;
+    prt_transfer *x = NULL;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &x), PRT_OK);
+    assert_non_null(prt_transfer_uvs(x));
+    assert_true(prt_transfer_vertex_count(x) > t.nv);   /* seams copy vertices */
+    int w, h;
+    assert_true(prt_transfer_texel_size(x, &w, &h) && w == 64 && h == 64);
+    const float *U = prt_transfer_texel_coeffs(x, PRT_TRANSFER_UNSHADOWED, NULL), *S = prt_transfer_texel_coeffs(x, PRT_TRANSFER_SHADOWED, NULL);
+    double worst = 0;
+    for (int i = 0; i < w * h; ++i) {
+        worst = fmax(worst, fabs(U[i] - 0.28209479));
+        worst = fmax(worst, fabs(S[i] - 0.28209479));
+    }
+    print_message("sphere without UVs, 64x64 texels: worst |T_00 - 0.2821| %.4f over every texel\n", worst);
+    assert_true(worst < 0.01);
+    prt_transfer_release(x);
+    /* Only the mesh's own UVs: refused, saying why. */
+    d.uv_layout = PRT_UV_MESH;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &x), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "texture coordinates"));
+    /* A normal map follows the mesh's own UVs, which the atlas replaces. */
+    d.uv_layout = PRT_UV_AUTO;
+    prt_image nm = {1, 1, (float[3]){0.5f, 0.5f, 1.0f}};
+    d.normal_map = &nm;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &x), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "normal map"));
+    d.normal_map = NULL;
+    d.uv_layout = (prt_uv_layout)7;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &x), PRT_ERR_INVALID_ARG);
+    prt_scene_release(s);
+    tm_free(&t);
+    prt_context_release(ctx);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_layouts),
+        cmocka_unit_test(test_real_meshes),
+        cmocka_unit_test(test_texels_on_atlas),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
