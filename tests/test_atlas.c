@@ -196,6 +196,22 @@ static void test_layouts(void **state)
     prt__mesh_free(&m);
     tm_free(&t);
 
+    /* A disk as a fan of 3000 slivers: one flat chart whose triangles all meet at the centre
+     * (every overlap bucket would hold most of them). */
+    {
+        test_mesh f = {0};
+        tm_vertex(&f, 0, 0, 0, 0, 1, 0);
+        for (int i = 0; i < 3000; ++i) {
+            const float a = (float)(2 * M_PI * i / 3000);
+            tm_vertex(&f, cosf(a), 0, -sinf(a), 0, 1, 0);
+            tm_tri(&f, 0, 1 + i, 1 + (i + 1) % 3000);
+        }
+        m = to_mesh(&f);
+        check_atlas(&m, 256, "fan");
+        prt__mesh_free(&m);
+        tm_free(&f);
+    }
+
     tm_pit(&t, 8);   /* a room without a ceiling: five planar charts meeting at right angles */
     m = to_mesh(&t);
     check_atlas(&m, 128, "open box");

@@ -23,6 +23,7 @@ typedef struct chart {
 } chart;
 
 typedef struct atlas {
+    const prt_context *ctx;
     const prt__mesh *m;
     size_t nt, nw;
     uint32_t *weld;      /* [vertex] welded id: vertices at one position share it */
@@ -36,20 +37,19 @@ typedef struct atlas {
     uint32_t pass;
     chart *charts;
     size_t count, cap;
-    size_t flattened, grown;
+    size_t flattened, grown, unchecked;
 } atlas;
 
 /* ---- welding and adjacency ---- */
 
-static const float *sort_pos;
+/* Sorted as keys, not through a global pointer: contexts may bake on several threads at once. */
+typedef struct pos_key { float p[3]; uint32_t i; } pos_key;
 static int by_position(const void *a, const void *b)
 {
-    const uint32_t i = *(const uint32_t *)a, j = *(const uint32_t *)b;
-    for (int c = 0; c < 3; ++c) {
-        float x = sort_pos[i * 3 + c], y = sort_pos[j * 3 + c];
-        if (x != y) return x < y ? -1 : 1;
-    }
-    return i < j ? -1 : i > j;
+    const pos_key *x = a, *y = b;
+    for (int c = 0; c < 3; ++c)
+        if (x->p[c] != y->p[c]) return x->p[c] < y->p[c] ? -1 : 1;
+    return x->i < y->i ? -1 : x->i > y->i;
 }
 
 typedef struct edge_key { uint32_t a, b, id; } edge_key;
@@ -65,18 +65,18 @@ static bool build_adjacency(atlas *a)
 {
     const prt__mesh *m = a->m;
     const size_t nv = m->vertex_count, nt = m->triangle_count;
-    uint32_t *order = malloc(nv * sizeof *order);
+    pos_key *order = malloc(nv * sizeof *order);
     edge_key *e = malloc(nt * 3 * sizeof *e);
     bool ok = order && e;
     if (ok) {
-        for (size_t v = 0; v < nv; ++v) order[v] = (uint32_t)v;
-        sort_pos = m->positions;   /* qsort has no user pointer; only this thread sorts positions here */
+        for (size_t v = 0; v < nv; ++v) { memcpy(order[v].p, m->positions + v * 3, sizeof order[v].p); order[v].i = (uint32_t)v; }
         qsort(order, nv, sizeof *order, by_position);
         uint32_t id = 0;
         for (size_t k = 0; k < nv; ++k) {
-            if (k && memcmp(m->positions + order[k] * 3, m->positions + order[k - 1] * 3, 3 * sizeof(float))) id++;
-            a->weld[order[k]] = id;
-            a->rep[id] = order[k];
+            /* Compared as numbers, as sorted: -0 and +0 are one position. */
+            if (k && (order[k].p[0] != order[k - 1].p[0] || order[k].p[1] != order[k - 1].p[1] || order[k].p[2] != order[k - 1].p[2])) id++;
+            a->weld[order[k].i] = id;
+            a->rep[id] = order[k].i;
         }
         a->nw = nv ? (size_t)id + 1 : 0;
         for (size_t t = 0; t < nt; ++t)
@@ -176,7 +176,7 @@ static void lscm_transpose(const lscm_tri *T, size_t nt, const double *r, double
 
 /* Minimises the conformal energy with two vertices pinned, by conjugate gradients on the normal
  * equations (Jacobi-preconditioned), starting from uv. False when it fails to converge. */
-static bool lscm_solve(const lscm_tri *T, size_t nt, size_t nv, const uint32_t pin[2], double *uv)
+static bool lscm_solve(const prt_context *ctx, const lscm_tri *T, size_t nt, size_t nv, const uint32_t pin[2], double *uv)
 {
     const size_t n = nv * 2;
     double *r = malloc(nt * 2 * sizeof *r), *g = malloc(n * sizeof *g), *p = malloc(n * sizeof *p), *q = malloc(nt * 2 * sizeof *q),
@@ -202,6 +202,7 @@ static bool lscm_solve(const lscm_tri *T, size_t nt, size_t nv, const uint32_t p
         /* Normal equations converge slowly; from the projection, 1e-7 of the first gradient's
          * squared norm leaves no visible difference in the map. */
         for (int it = 0; it < max_iter && gn > 1e-7 * g0 && rz > 0; ++it) {
+            if ((it & 31) == 31 && prt__cancelled(ctx)) { ok = false; break; }   /* large charts take seconds */
             lscm_apply(T, nt, p, q);
             double qq = 0;
             for (size_t i = 0; i < nt * 2; ++i) qq += q[i] * q[i];
@@ -245,61 +246,107 @@ static bool triangles_overlap(const double p[3][2], const double q[3][2])
     return true;
 }
 
+/* Overlap by rasterizing interiors on a grid of about 64 cells per triangle (at most 4M): a cell
+ * centre strictly inside two triangles. For charts whose buckets would hold too many pairs (fans
+ * of long slivers); 1 overlap, 0 none, -1 out of memory. */
+static int raster_overlaps(const atlas *a, const chart *c, double umin, double vmin, double umax, double vmax, double area)
+{
+    const prt__mesh *m = a->m;
+    double cell = sqrt(area / ((double)c->nt * 64));
+    double gw = (umax - umin) / cell, gh = (vmax - vmin) / cell;
+    if (gw * gh > 4e6) { double k = sqrt(gw * gh / 4e6); cell *= k; gw /= k; gh /= k; }
+    if (gw > 4e6) gw = 4e6;
+    if (gh > 4e6) gh = 4e6;
+    const int W = (int)ceil(gw) + 1, H = (int)ceil(gh) + 1;
+    uint8_t *grid = calloc((size_t)W * H, 1);
+    if (!grid) return -1;
+    int overlap = 0;
+    for (size_t t = 0; t < c->nt && !overlap; ++t) {
+        const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
+        double u[3], v[3];
+        for (int k = 0; k < 3; ++k) {
+            const double *p = c->uv + (size_t)a->local[a->weld[ix[k]]] * 2;
+            u[k] = (p[0] - umin) / cell; v[k] = (p[1] - vmin) / cell;
+        }
+        double d = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
+        if (!(d > 0)) continue;
+        int x0 = (int)fmax(0, floor(fmin(u[0], fmin(u[1], u[2])))), x1 = (int)fmin(W, ceil(fmax(u[0], fmax(u[1], u[2]))));
+        int y0 = (int)fmax(0, floor(fmin(v[0], fmin(v[1], v[2])))), y1 = (int)fmin(H, ceil(fmax(v[0], fmax(v[1], v[2]))));
+        for (int y = y0; y < y1 && !overlap; ++y)
+            for (int x = x0; x < x1; ++x) {
+                double px = x + 0.5, py = y + 0.5;
+                double b1 = ((px - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (py - v[0])) / d;
+                double b2 = ((u[1] - u[0]) * (py - v[0]) - (px - u[0]) * (v[1] - v[0])) / d;
+                if (b1 <= 1e-6 || b2 <= 1e-6 || b1 + b2 >= 1 - 1e-6) continue;
+                if (grid[(size_t)y * W + x]++) { overlap = 1; break; }
+            }
+    }
+    free(grid);
+    return overlap;
+}
+
 /* Any two of the chart's triangles overlapping in UV: candidates from a grid of buckets about
- * one mean triangle wide, then the exact test. */
-static bool chart_overlaps(const atlas *a, const chart *c, double umin, double vmin, double umax, double vmax, double area)
+ * one mean triangle wide, then the exact test; 1 overlap, 0 none, -1 out of memory. */
+static int chart_overlaps(const atlas *a, const chart *c, double umin, double vmin, double umax, double vmax, double area)
 {
     const prt__mesh *m = a->m;
     double cell = sqrt(2 * area / (double)c->nt);
     double gw = (umax - umin) / cell + 1, gh = (vmax - vmin) / cell + 1;
     if (gw * gh > 4.0 * c->nt + 16) { double k = sqrt(gw * gh / (4.0 * c->nt + 16)); cell *= k; gw = (umax - umin) / cell + 1; gh = (vmax - vmin) / cell + 1; }
+    if (gw > 4.0 * c->nt + 16 || gh > 4.0 * c->nt + 16) return raster_overlaps(a, c, umin, vmin, umax, vmax, area);
     const size_t W = (size_t)gw, H = (size_t)gh, cells = W * H;
-    uint32_t *count = calloc(cells + 1, sizeof *count), *fill = NULL, *items = NULL;
-    bool overlap = false;
-    if (!count) return false;   /* cannot look: take it */
     int32_t (*box)[4] = malloc(c->nt * sizeof *box);
-    if (!box) { free(count); return false; }
-    for (int pass = 0; pass < 2 && !overlap; ++pass) {
-        if (pass == 1) {
-            for (size_t i = 1; i <= cells; ++i) count[i] += count[i - 1];
-            fill = calloc(cells, sizeof *fill);
-            items = malloc((size_t)count[cells] * sizeof *items);
-            if (!fill || !items) break;
+    size_t *count = calloc(cells + 1, sizeof *count), *fill = NULL;
+    uint32_t *items = NULL;
+    if (!count || !box) { free(count); free(box); return -1; }
+    /* Pass 0 counts bucket entries; long slivers in a fan would put most triangles in most
+     * buckets, so past a budget of entries or pairs the raster test takes over. */
+    const double budget = 64.0 * c->nt + 4096;
+    double entries = 0;
+    for (size_t t = 0; t < c->nt; ++t) {
+        const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
+        double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+        for (int k = 0; k < 3; ++k) {
+            const double *q = c->uv + (size_t)a->local[a->weld[ix[k]]] * 2;
+            lo[0] = fmin(lo[0], q[0]); hi[0] = fmax(hi[0], q[0]); lo[1] = fmin(lo[1], q[1]); hi[1] = fmax(hi[1], q[1]);
         }
-        for (size_t t = 0; t < c->nt; ++t) {
-            const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
-            if (pass == 0) {
-                double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
-                for (int k = 0; k < 3; ++k) {
-                    const double *q = c->uv + a->local[a->weld[ix[k]]] * 2;
-                    lo[0] = fmin(lo[0], q[0]); hi[0] = fmax(hi[0], q[0]); lo[1] = fmin(lo[1], q[1]); hi[1] = fmax(hi[1], q[1]);
-                }
-                box[t][0] = (int32_t)fmin((double)W - 1, (lo[0] - umin) / cell);
-                box[t][1] = (int32_t)fmin((double)H - 1, (lo[1] - vmin) / cell);
-                box[t][2] = (int32_t)fmin((double)W - 1, (hi[0] - umin) / cell);
-                box[t][3] = (int32_t)fmin((double)H - 1, (hi[1] - vmin) / cell);
-            }
+        box[t][0] = (int32_t)fmax(0, fmin((double)W - 1, (lo[0] - umin) / cell));
+        box[t][1] = (int32_t)fmax(0, fmin((double)H - 1, (lo[1] - vmin) / cell));
+        box[t][2] = (int32_t)fmax(0, fmin((double)W - 1, (hi[0] - umin) / cell));
+        box[t][3] = (int32_t)fmax(0, fmin((double)H - 1, (hi[1] - vmin) / cell));
+        entries += (double)(box[t][2] - box[t][0] + 1) * (box[t][3] - box[t][1] + 1);
+        if (entries > budget) break;
+    }
+    double pairs = 0;
+    if (entries <= budget) {
+        for (size_t t = 0; t < c->nt; ++t)
             for (int32_t y = box[t][1]; y <= box[t][3]; ++y)
-                for (int32_t x = box[t][0]; x <= box[t][2]; ++x) {
-                    const size_t b = (size_t)y * W + x;
-                    if (pass == 0) count[b + 1]++;
-                    else items[count[b] + fill[b]++] = (uint32_t)t;
-                }
-        }
+                for (int32_t x = box[t][0]; x <= box[t][2]; ++x) count[(size_t)y * W + x + 1]++;
+        for (size_t b = 1; b <= cells; ++b) pairs += 0.5 * (double)count[b] * (double)count[b];
     }
-    if (fill && items) {
-        for (size_t b = 0; b < cells && !overlap; ++b)
-            for (uint32_t i = count[b]; i < count[b] + fill[b] && !overlap; ++i)
-                for (uint32_t j = i + 1; j < count[b] + fill[b] && !overlap; ++j) {
-                    double p[3][2], q[3][2];
-                    const uint32_t *ia = m->indices + (size_t)c->tris[items[i]] * 3, *ib = m->indices + (size_t)c->tris[items[j]] * 3;
-                    for (int k = 0; k < 3; ++k) {
-                        memcpy(p[k], c->uv + a->local[a->weld[ia[k]]] * 2, sizeof p[k]);
-                        memcpy(q[k], c->uv + a->local[a->weld[ib[k]]] * 2, sizeof q[k]);
-                    }
-                    overlap = triangles_overlap((const double (*)[2])p, (const double (*)[2])q);
+    if (entries > budget || pairs > 4 * budget) { free(count); free(box); return raster_overlaps(a, c, umin, vmin, umax, vmax, area); }
+    for (size_t i = 1; i <= cells; ++i) count[i] += count[i - 1];
+    fill = calloc(cells, sizeof *fill);
+    items = malloc(count[cells] * sizeof *items + 1);
+    if (!fill || !items) { free(count); free(box); free(fill); free(items); return -1; }
+    for (size_t t = 0; t < c->nt; ++t)
+        for (int32_t y = box[t][1]; y <= box[t][3]; ++y)
+            for (int32_t x = box[t][0]; x <= box[t][2]; ++x) {
+                const size_t b = (size_t)y * W + x;
+                items[count[b] + fill[b]++] = (uint32_t)t;
+            }
+    int overlap = 0;
+    for (size_t b = 0; b < cells && !overlap; ++b)
+        for (size_t i = count[b]; i < count[b] + fill[b] && !overlap; ++i)
+            for (size_t j = i + 1; j < count[b] + fill[b] && !overlap; ++j) {
+                double p[3][2], q[3][2];
+                const uint32_t *ia = m->indices + (size_t)c->tris[items[i]] * 3, *ib = m->indices + (size_t)c->tris[items[j]] * 3;
+                for (int k = 0; k < 3; ++k) {
+                    memcpy(p[k], c->uv + (size_t)a->local[a->weld[ia[k]]] * 2, sizeof p[k]);
+                    memcpy(q[k], c->uv + (size_t)a->local[a->weld[ib[k]]] * 2, sizeof q[k]);
                 }
-    }
+                overlap = triangles_overlap((const double (*)[2])p, (const double (*)[2])q);
+            }
     free(count);
     free(fill);
     free(items);
@@ -308,8 +355,8 @@ static bool chart_overlaps(const atlas *a, const chart *c, double umin, double v
 }
 
 /* Does the chart's map keep every triangle the right way round and within MAX_STRETCH, and
- * cover no point of the plane twice? */
-static bool chart_valid(const atlas *a, const chart *c)
+ * cover no point of the plane twice? 1 yes, 0 no, -1 out of memory. */
+static int chart_valid(const atlas *a, const chart *c)
 {
     const prt__mesh *m = a->m;
     double umin = INFINITY, vmin = INFINITY, umax = -INFINITY, vmax = -INFINITY, area = 0;
@@ -321,20 +368,21 @@ static bool chart_valid(const atlas *a, const chart *c)
         for (int k = 0; k < 3; ++k) p[k] = c->uv + a->local[a->weld[ix[k]]] * 2;
         double du1 = p[1][0] - p[0][0], dv1 = p[1][1] - p[0][1], du2 = p[2][0] - p[0][0], dv2 = p[2][1] - p[0][1];
         double sa = 0.5 * (du1 * dv2 - du2 * dv1);
-        if (!(sa > 1e-9 * a->area[tri])) return false;
+        if (!(sa > 1e-9 * a->area[tri])) return 0;
         double ju0 = du1 / x[1], jv0 = dv1 / x[1], ju1 = (du2 - ju0 * x[2]) / y[2], jv1 = (dv2 - jv0 * x[2]) / y[2];
         double f = ju0 * ju0 + ju1 * ju1 + jv0 * jv0 + jv1 * jv1, det = ju0 * jv1 - ju1 * jv0;
         double disc = sqrt(fmax(0.0, f * f / 4 - det * det));
         double s1 = sqrt(f / 2 + disc), s2 = sqrt(fmax(0.0, f / 2 - disc));
-        if (!(s2 > 0) || s1 > MAX_STRETCH * s2) return false;
+        if (!(s2 > 0) || s1 > MAX_STRETCH * s2) return 0;
         area += sa;
     }
     for (size_t v = 0; v < c->nv; ++v) {
         umin = fmin(umin, c->uv[v * 2]); umax = fmax(umax, c->uv[v * 2]);
         vmin = fmin(vmin, c->uv[v * 2 + 1]); vmax = fmax(vmax, c->uv[v * 2 + 1]);
     }
-    if (c->nt < 2 || !(area > 0)) return true;
-    return !chart_overlaps(a, c, umin, vmin, umax, vmax, area);
+    if (c->nt < 2 || !(area > 0)) return 1;
+    const int overlap = chart_overlaps(a, c, umin, vmin, umax, vmax, area);
+    return overlap < 0 ? -1 : !overlap;
 }
 
 /* Flattens chart c (its tris set, its verts found here): LSCM, else projection; false when neither
@@ -387,18 +435,19 @@ static bool flatten(atlas *a, chart *c, bool *ok_memory)
             T[t].b[j] = (y[j2] - y[j1]) * s;
         }
     }
-    bool done = false;
+    int done = 0;
     if (lscm) {
         memcpy(c->uv, proj, c->nv * 2 * sizeof *proj);
-        if (lscm_solve(T, c->nt, c->nv, pin, c->uv) && chart_valid(a, c)) { done = true; a->flattened++; }
+        if (lscm_solve(a->ctx, T, c->nt, c->nv, pin, c->uv) && (done = chart_valid(a, c)) > 0) a->flattened++;
     }
-    if (!done) {
+    if (done == 0) {
         memcpy(c->uv, proj, c->nv * 2 * sizeof *proj);
         done = chart_valid(a, c);
     }
+    if (done < 0) *ok_memory = false;
     free(proj);
     free(T);
-    return done;
+    return done > 0;
 }
 
 /* ---- charts ---- */
@@ -518,9 +567,11 @@ static prt_status place_piece(const prt_context *ctx, atlas *a, uint32_t *tris, 
         if (!chart_vertices(a, &c)) mem = false;
         bool flat = mem && flatten(a, &c, &mem);
         chart_release_locals(a, &c);
+        if (mem && prt__cancelled(ctx)) { free(c.tris); free(c.verts); free(c.uv); st = prt__fail(ctx, PRT_ERR_CANCELLED, "UV atlas cancelled"); break; }
         if (!mem) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
         else if (flat || c.nt == 1 || depth >= SPLIT_DEPTH) {
             /* Not flat only past SPLIT_DEPTH (one triangle always is): it keeps its projection. */
+            a->unchecked += !flat;
             if (!keep_chart(a, &c)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
             else continue;
         } else {
@@ -658,14 +709,13 @@ static void chart_orient(chart *c)
     c->h = turn ? hi[0] - lo[0] : hi[1] - lo[1];
 }
 
-static const chart *sort_charts;
+typedef struct chart_key { double h, w; uint32_t i; } chart_key;
 static int by_height(const void *x, const void *y)
 {
-    const uint32_t i = *(const uint32_t *)x, j = *(const uint32_t *)y;
-    const double a = sort_charts[i].h, b = sort_charts[j].h;
-    if (a != b) return a > b ? -1 : 1;
-    if (sort_charts[i].w != sort_charts[j].w) return sort_charts[i].w > sort_charts[j].w ? -1 : 1;
-    return i < j ? -1 : i > j;
+    const chart_key *a = x, *b = y;
+    if (a->h != b->h) return a->h > b->h ? -1 : 1;
+    if (a->w != b->w) return a->w > b->w ? -1 : 1;
+    return a->i < b->i ? -1 : a->i > b->i;
 }
 
 /* Shelf packing at scale s (texels per scene unit); corners in texels, or false when it does not fit. */
@@ -674,6 +724,7 @@ static bool pack(const atlas *a, const uint32_t *order, double s, int res, int p
     long x = 0, y = 0, shelf = 0;
     for (size_t i = 0; i < a->count; ++i) {
         const chart *c = &a->charts[order[i]];
+        if (!(c->w * s <= res) || !(c->h * s <= res)) return false;
         long w = (long)ceil(c->w * s) + 2 * pad, h = (long)ceil(c->h * s) + 2 * pad;
         if (w < 1 + 2 * pad) w = 1 + 2 * pad;
         if (h < 1 + 2 * pad) h = 1 + 2 * pad;
@@ -767,6 +818,7 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
     if (!(max_angle < 90.0)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "UV atlas chart angle must be below 90 degrees");
     if (!m->triangle_count) return prt__fail(ctx, PRT_ERR_EMPTY, "no triangles to lay out in UV space");
     atlas a = {0};
+    a.ctx = ctx;
     a.m = m;
     a.nt = m->triangle_count;
     a.weld = malloc(m->vertex_count * sizeof *a.weld);
@@ -830,11 +882,16 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
         if (!order || !at) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
     }
     if (!st) {
-        for (size_t i = 0; i < a.count; ++i) order[i] = (uint32_t)i;
-        sort_charts = a.charts;
-        qsort(order, a.count, sizeof *order, by_height);
+        chart_key *keys = malloc(a.count * sizeof *keys);
+        if (!keys) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+        else {
+            for (size_t i = 0; i < a.count; ++i) keys[i] = (chart_key){a.charts[i].h, a.charts[i].w, (uint32_t)i};
+            qsort(keys, a.count, sizeof *keys, by_height);
+            for (size_t i = 0; i < a.count; ++i) order[i] = keys[i].i;
+            free(keys);
+        }
         double lo = 0, hi = res / sqrt(total);
-        if (!pack(&a, order, 0, res, pad, NULL))
+        if (!st && !pack(&a, order, 0, res, pad, NULL))
             st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels: raise --texels",
                            a.count, 2 * pad, res, res);
         for (int it = 0; it < 40 && !st; ++it) {
@@ -854,6 +911,9 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
         rep.charts = a.count;
         rep.flattened = a.flattened;
         rep.grown = a.grown;
+        if (a.unchecked)
+            prt__log(ctx, PRT_LOG_WARN, "UV atlas: %zu charts could not be flattened without folds or overlap after %d cuts; their texels may be shared",
+                     a.unchecked, SPLIT_DEPTH);
         rep.coverage = total * s * s / ((double)res * res);
         for (size_t t = 0; t < m->triangle_count; ++t) {
             double r = prt__uv_stretch(m, t);
@@ -881,7 +941,7 @@ bool prt__uv_layout_unusable(const prt__mesh *m, int resolution, char *why, size
     if (outside) { snprintf(why, why_size, "%zu of its texture coordinates lie outside [0, 1]", outside); return true; }
     const int W = resolution, H = resolution;
     uint8_t *hit = calloc((size_t)W * H, 1);
-    if (!hit) return false;   /* cannot look; the bake itself will say */
+    if (!hit) { snprintf(why, why_size, "its UV layout could not be checked (out of memory)"); return true; }
     size_t overlap = 0, covered = 0;
     for (size_t t = 0; t < m->triangle_count; ++t) {
         const uint32_t *ix = m->indices + t * 3;

@@ -135,7 +135,7 @@ int cmd_sweep(int argc, char **argv)
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) rc = cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); prt_options_release(fixed_opts); return EXIT_OK;
-        default: rc = cli_bad_option(&c, opt, argv); break;
+        default: rc = cli_bad_option(&c, opt, argv, opts); break;
         }
     }
     const prt_option_desc *pd = NULL;
@@ -198,6 +198,7 @@ int cmd_sweep(int argc, char **argv)
     if (csv) fprintf(csv, "param,value,kind,rmse,relative_l2,max_abs,bytes_per_vertex,bake_seconds,relative_l2_above_noise\n");
     const float *ref_err = indirect ? ref.std_error_indirect : ref.std_error;
     float *rgb = !st && !rc ? malloc(ref.nv * 3 * sizeof(float)) : NULL;
+    size_t rgb_vertices = ref.nv;
     if (!st && !rc && !rgb) st = PRT_ERR_NO_MEMORY;
     char names[MAX_VARIANTS][64];
     int nnames = 0;
@@ -213,6 +214,21 @@ int cmd_sweep(int argc, char **argv)
         if (!st) st = prt_bake(c.ctx, scene, method, o, &run, &t);
         prt_options_release(o);
         if (st) break;
+        /* A generated UV atlas appends copies of seam vertices after the scene's own, which
+         * keep their order: compare those, from a buffer sized for all. */
+        const size_t tnv = prt_transfer_vertex_count(t);
+        if (tnv < ref.nv) {
+            cli_error(&c, "the bake has %zu vertices, the reference %zu", tnv, ref.nv);
+            rc = EXIT_FAILURE_INPUT;
+            prt_transfer_release(t);
+            break;
+        }
+        if (tnv > rgb_vertices) {
+            float *grown = realloc(rgb, tnv * 3 * sizeof(float));
+            if (!grown) { st = PRT_ERR_NO_MEMORY; prt_transfer_release(t); break; }
+            rgb = grown;
+            rgb_vertices = tnv;
+        }
         prt_transfer_info info;
         prt_transfer_get_info(t, &info);
         const double bytes = (double)info.transfer_bytes / (double)ref.nv;
