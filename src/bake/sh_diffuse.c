@@ -22,6 +22,8 @@ typedef struct bake_job {
     int order, ncoeff, samples;
     float offset;
     float *origins;       /* [vertex][3], see prt__vertex_origins */
+    uint8_t *buried;      /* [vertex] prt__unbury_origins' status: 2 = filled from neighbours */
+    size_t buried_count;
     float *dirs;          /* [samples][3] */
     float *basis;         /* [samples][ncoeff] */
     prt__raycaster rc;
@@ -327,6 +329,11 @@ static prt_status run_glossy_bounces(prt__bake_job *b, prt_context *ctx, prt__pr
     float *dtot = NULL, *gtot = NULL;
     prt_status st = prt__bake_glossy_bounces(ctx, &bi, &dtot, sb->want_gir ? &gtot : NULL);
     if (st) return st;
+    if (sb->job.buried_count) {
+        const size_t nc = (size_t)sb->d.order * sb->d.order;
+        prt__fill_buried(&t->mesh, sb->job.buried, dtot, 3 * nc);
+        if (gtot) prt__fill_buried(&t->mesh, sb->job.buried, gtot, 3 * nc * nc);
+    }
     if (sb->d.kinds & PRT_TRANSFER_INTERREFLECTED) { sb->s->sets[2].channels = 3; sb->s->sets[2].coeffs = dtot; }
     else free(dtot);
     if (sb->want_gir) { sb->s->sets[4].channels = 3; sb->s->sets[4].coeffs = gtot; }
@@ -369,8 +376,15 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
     const size_t nv = sb->t->mesh.vertex_count;
     const int nc = sb->job.ncoeff, nc3 = 3 * nc;
     if (index > 0 && sb->plan[index - 1] == ST_VISIBILITY) {
-        /* Visibility is done: hand its sets over, and start the diffuse bounces from it. */
+        /* Visibility is done: vertices whose whole fan is buried take their neighbours' transfer
+         * (their own rays all start inside geometry); hand the sets over, and start the diffuse
+         * bounces from them. */
         prt__sh_state *s = sb->s;
+        if (sb->job.buried_count) {
+            if (sb->unsh) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->unsh, (size_t)nc);
+            if (sb->shad) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->shad, (size_t)nc);
+            if (sb->gshad) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->gshad, (size_t)nc * nc);
+        }
         if (sb->d.kinds & PRT_TRANSFER_UNSHADOWED) { s->sets[0].channels = 1; s->sets[0].coeffs = sb->unsh; sb->unsh = NULL; }
         if (!sb->coupled && (sb->d.kinds & PRT_TRANSFER_INTERREFLECTED)) {
             sb->total = prt__calloc(nv * nc3, sizeof(float));
@@ -388,6 +402,7 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
         float *tmp = sb->prev; sb->prev = sb->next; sb->next = tmp;
     }
     if (index > 0 && (index == sb->stages || sb->plan[index] != ST_BOUNCE) && sb->plan[index - 1] == ST_BOUNCE) {
+        if (sb->job.buried_count) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->total, (size_t)nc3);
         sb->s->sets[2].channels = 3;
         sb->s->sets[2].coeffs = sb->total;
         sb->total = NULL;
@@ -450,7 +465,7 @@ static void sh_release(prt__bake_job *b)
         for (size_t v = 0; v < sb->t->mesh.vertex_count; ++v) free(job->hits[v]);
     for (int i = 0; i < sb->nscratch; ++i) free(sb->scratch[i]);
     free(sb->scratch);
-    free(job->hits); free(job->hit_count); free(job->origins); free(job->dirs); free(job->basis);
+    free(job->hits); free(job->hit_count); free(job->origins); free(job->buried); free(job->dirs); free(job->basis);
     free(sb->unsh); free(sb->shad); free(sb->gshad); free(sb->total); free(sb->prev); free(sb->next);
     prt_image_free(&sb->extra.normal_map);
     free(sb);
@@ -576,6 +591,9 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *desc_in, pr
     }
     if (!st) st = prt__raycaster_create(ctx, &t->mesh, &job->rc);
     if (!st) st = prt__vertex_origins(&t->mesh, job->offset, &job->origins);
+    if (!st && !(job->buried = malloc(nv ? nv : 1))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!st) st = prt__unbury_origins(ctx, &job->rc, &t->mesh, job->offset, job->origins, job->buried, PRT_LOG_INFO);
+    for (size_t v = 0; !st && v < nv; ++v) job->buried_count += job->buried[v] == 2;
     if (st) { sh_release(&sb->base); return st; }
     sb->plan[sb->stages++] = ST_VISIBILITY;
     if (sb->coupled) sb->plan[sb->stages++] = ST_GLOSSY_BOUNCES;

@@ -474,6 +474,7 @@ prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_d
     if (!st && sb->emitters.count && !(s->emit = prt__calloc(nv * 3, sizeof(float)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) st = prt__raycaster_create(ctx, &t->mesh, &sb->rc);
     if (!st) st = prt__vertex_origins(&t->mesh, s->ray_offset, &sb->origins);
+    if (!st) st = prt__unbury_origins(ctx, &sb->rc, &t->mesh, s->ray_offset, sb->origins, NULL, PRT_LOG_INFO);
     if (st) { spectral_release(&sb->base); return st; }
     *out = &sb->base;
     return PRT_OK;

@@ -509,7 +509,9 @@ prt_status prt__wavelet_bake_begin(prt_context *ctx, const prt_wavelet_bake_desc
             st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
     if (!st) st = prt__raycaster_create(ctx, &t->mesh, &j->rc);
-    if (!st) st = prt__vertex_origins(&t->mesh, d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh), &j->origins);
+    const float offset = d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh);
+    if (!st) st = prt__vertex_origins(&t->mesh, offset, &j->origins);
+    if (!st) st = prt__unbury_origins(ctx, &j->rc, &t->mesh, offset, j->origins, NULL, PRT_LOG_INFO);
     if (st) { wavelet_release(&wb->base); return st; }
     *out = &wb->base;
     return PRT_OK;

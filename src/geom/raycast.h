@@ -41,6 +41,16 @@ static inline void prt__packet_rayhits(struct RTCRayHit16 *rh, int *valid, const
  * beyond the mesh's bounding-box diagonal are refused. */
 prt_status prt__vertex_origins(const prt__mesh *m, float offset, float **out);
 
+/* Finds origins that start inside geometry (more than half of a hemisphere of probe rays meets
+ * back faces first) and moves each to the freest point of its triangle fan. status (optional,
+ * per vertex): 0 fine, 1 moved, 2 buried with no free point found. Says how many at `level`. */
+prt_status prt__unbury_origins(const prt_context *ctx, const prt__raycaster *rc, const prt__mesh *m, float offset, float *origins,
+                               uint8_t *status, prt_log_level level);
+
+/* Gives every vertex of status 2 (see above) the mean of its neighbours that have values, ring by
+ * ring outwards; data holds stride floats per vertex. Returns how many found no such neighbour. */
+size_t prt__fill_buried(const prt__mesh *m, const uint8_t *status, float *data, size_t stride);
+
 /* Default origin offset for a mesh: small against its size, large against float precision. */
 float prt__ray_offset(const prt__mesh *m);
 

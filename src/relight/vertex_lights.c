@@ -31,6 +31,7 @@ prt_status prt__vertex_lights_ready(prt_context *ctx, const prt__mesh *m, float 
     if (!c->ready) {
         st = prt__raycaster_create(ctx, m, &c->rc);
         if (!st) st = prt__vertex_origins(m, ray_offset, &c->origins);
+        if (!st) st = prt__unbury_origins(ctx, &c->rc, m, ray_offset, c->origins, NULL, PRT_LOG_DEBUG);   /* the bake said */
         if (st) {
             prt__raycaster_release(&c->rc);
             free(c->origins);

@@ -466,6 +466,8 @@ static prt_status job_init(prt_context *ctx, const prt_scene *scene, const prt_e
     if (!st) st = prt__emitters_init(&j->emit, j->mesh, emission);
     if (!st) st = prt__raycaster_create(ctx, j->mesh, &j->rc);
     if (!st) st = prt__vertex_origins(j->mesh, j->offset, &j->origins);
+    /* The same origins as the bakes, so that comparisons are of the same points. */
+    if (!st) st = prt__unbury_origins(ctx, &j->rc, j->mesh, j->offset, j->origins, NULL, PRT_LOG_DEBUG);
     if (st) job_free(j);
     return st;
 }
