@@ -83,54 +83,139 @@ static int cmp_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* True when the file's triangles, taken together, form a nearly closed surface (under 5% of
- * edges, matched by position, are open) whose counter-clockwise normals point inwards. */
-static bool looks_inside_out(const struct aiScene *sc)
+typedef struct corner_key { uint64_t hash; uint32_t face; } corner_key;
+static int by_corner_hash(const void *a, const void *b)
 {
-    double c[3] = {0, 0, 0};
-    size_t nv = 0, ne = 0;
-    for (unsigned i = 0; i < sc->mNumMeshes; ++i) {
+    const corner_key *x = a, *y = b;
+    if (x->hash != y->hash) return x->hash < y->hash ? -1 : 1;
+    return x->face < y->face ? -1 : x->face > y->face;
+}
+
+static uint32_t find_root(uint32_t *parent, uint32_t i)
+{
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+}
+
+/* Which triangles to flip. Per connected piece (triangles joined through shared positions): one
+ * that is nearly closed (under 5% of its edges open) and wound inwards (negative signed volume
+ * about its own centre) is an object whose winding is reversed - unless another piece has a
+ * vertex inside its bounding box: then it is an enclosure (a room, whose walls face inwards on
+ * purpose), and it is kept. Returns a flag per triangle (in file order over the meshes), or NULL
+ * when nothing is to be flipped; counts what was decided. */
+static uint8_t *inside_out_triangles(const struct aiScene *sc, size_t *flipped, size_t *kept)
+{
+    *flipped = *kept = 0;
+    size_t nf = 0;
+    for (unsigned i = 0; i < sc->mNumMeshes; ++i) nf += sc->mMeshes[i]->mNumFaces;
+    if (!nf || nf > UINT32_MAX / 3) return NULL;
+    const struct aiVector3D **corner = malloc(nf * 3 * sizeof *corner);
+    corner_key *keys = malloc(nf * 3 * sizeof *keys);
+    uint32_t *parent = malloc(nf * sizeof *parent);
+    uint64_t *edges = malloc(nf * 3 * 2 * sizeof *edges);
+    uint8_t *tri = calloc(nf, 1), *flip = NULL;
+    double (*piece)[12] = NULL;   /* signed volume, |volume|, edges, open edges, box lo[3], hi[3], centre sum... */
+    double (*centre)[4] = NULL;
+    bool ok = corner && keys && parent && edges && tri;
+    size_t f = 0;
+    for (unsigned i = 0; ok && i < sc->mNumMeshes; ++i) {
         const struct aiMesh *am = sc->mMeshes[i];
-        for (unsigned v = 0; v < am->mNumVertices; ++v, ++nv) { c[0] += am->mVertices[v].x; c[1] += am->mVertices[v].y; c[2] += am->mVertices[v].z; }
-        ne += (size_t)am->mNumFaces * 3;
-    }
-    if (!nv || !ne) return false;
-    for (int k = 0; k < 3; ++k) c[k] /= (double)nv;
-    uint64_t *edges = malloc(ne * sizeof *edges);
-    if (!edges) return false;
-    double vol = 0, absvol = 0;
-    size_t e = 0;
-    for (unsigned i = 0; i < sc->mNumMeshes; ++i) {
-        const struct aiMesh *am = sc->mMeshes[i];
-        for (unsigned f = 0; f < am->mNumFaces; ++f) {
-            const struct aiFace *face = &am->mFaces[f];
-            if (face->mNumIndices != 3) continue;
-            const struct aiVector3D *p[3];
-            double q[3][3];
-            for (int k = 0; k < 3; ++k) {
-                p[k] = &am->mVertices[face->mIndices[k]];
-                q[k][0] = p[k]->x - c[0]; q[k][1] = p[k]->y - c[1]; q[k][2] = p[k]->z - c[2];
-            }
-            double t = (q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) - q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
-                        q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0])) / 6.0;
-            vol += t;
-            absvol += fabs(t);
-            for (int k = 0; k < 3; ++k) {
-                uint64_t a = hash_pos(p[k]), b = hash_pos(p[(k + 1) % 3]);
-                edges[e++] = a < b ? a * 31 + b : b * 31 + a;   /* the same for both directions */
+        for (unsigned k = 0; k < am->mNumFaces; ++k, ++f) {
+            parent[f] = (uint32_t)f;
+            const struct aiFace *face = &am->mFaces[k];
+            tri[f] = face->mNumIndices == 3;
+            for (int c = 0; c < 3; ++c) {
+                corner[f * 3 + c] = tri[f] ? &am->mVertices[face->mIndices[c]] : NULL;
+                keys[f * 3 + c] = (corner_key){tri[f] ? hash_pos(corner[f * 3 + c]) : 0, (uint32_t)f};
             }
         }
     }
-    qsort(edges, e, sizeof *edges, cmp_u64);
-    size_t open = 0;
-    for (size_t i = 0; i < e;) {
-        size_t j = i;
-        while (j < e && edges[j] == edges[i]) ++j;
-        open += j - i == 1;
-        i = j;
+    if (ok) {
+        /* Triangles sharing a position are one piece. */
+        qsort(keys, nf * 3, sizeof *keys, by_corner_hash);
+        for (size_t k = 1; k < nf * 3; ++k)
+            if (keys[k].hash == keys[k - 1].hash && tri[keys[k].face] && tri[keys[k - 1].face]) {
+                uint32_t a = find_root(parent, keys[k].face), b = find_root(parent, keys[k - 1].face);
+                if (a != b) parent[a < b ? b : a] = a < b ? a : b;
+            }
+        for (size_t t = 0; t < nf; ++t) parent[t] = find_root(parent, (uint32_t)t);
+        piece = calloc(nf, sizeof *piece);
+        centre = calloc(nf, sizeof *centre);
+        ok = piece && centre;
     }
-    free(edges);
-    return e > 0 && open * 20 < e && vol < -0.5 * absvol;
+    if (ok) {
+        for (size_t t = 0; t < nf; ++t) {
+            if (!tri[t]) continue;
+            double *c = centre[parent[t]], *q = piece[parent[t]];
+            if (c[3] == 0) for (int a = 0; a < 3; ++a) { q[4 + a] = INFINITY; q[7 + a] = -INFINITY; }
+            for (int k = 0; k < 3; ++k) {
+                const struct aiVector3D *p = corner[t * 3 + k];
+                const double v[3] = {p->x, p->y, p->z};
+                for (int a = 0; a < 3; ++a) { c[a] += v[a]; q[4 + a] = fmin(q[4 + a], v[a]); q[7 + a] = fmax(q[7 + a], v[a]); }
+                c[3] += 1;
+            }
+        }
+        size_t e = 0;
+        for (size_t t = 0; t < nf; ++t) {
+            if (!tri[t]) continue;
+            double *q = piece[parent[t]];
+            const double *c = centre[parent[t]];
+            double r[3][3];
+            for (int k = 0; k < 3; ++k) {
+                const struct aiVector3D *p = corner[t * 3 + k];
+                r[k][0] = p->x - c[0] / c[3]; r[k][1] = p->y - c[1] / c[3]; r[k][2] = p->z - c[2] / c[3];
+            }
+            const double v = (r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1]) - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0]) +
+                              r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0])) / 6.0;
+            q[0] += v;
+            q[1] += fabs(v);
+            for (int k = 0; k < 3; ++k) {
+                uint64_t a = hash_pos(corner[t * 3 + k]), b = hash_pos(corner[t * 3 + (k + 1) % 3]);
+                edges[e++] = a < b ? a * 31 + b : b * 31 + a;   /* the same for both directions */
+                edges[e++] = parent[t];
+            }
+            q[2] += 3;
+        }
+        /* Open edges: those that occur once (pairs sorted by key; the piece rides along). */
+        qsort(edges, e / 2, 2 * sizeof *edges, cmp_u64);
+        for (size_t i = 0; i < e;) {
+            size_t j = i;
+            while (j < e && edges[j] == edges[i]) j += 2;
+            if (j - i == 2) piece[edges[i + 1]][3] += 1;
+            i = j;
+        }
+        /* Candidates: nearly closed, wound inwards. */
+        for (size_t r = 0; r < nf; ++r) {
+            double *q = piece[r];
+            q[10] = centre[r][3] > 0 && q[2] > 0 && q[3] * 20 < q[2] && q[0] < -0.5 * q[1];
+        }
+        /* An enclosure holds another piece's vertex inside its box (candidates are few: a scene
+         * of many closed props has them wound the same way, and a few enclosures at most). */
+        uint32_t *cand = malloc(nf * sizeof *cand);
+        size_t ncand = 0;
+        for (size_t r = 0; cand && r < nf; ++r)
+            if (piece[r][10] == 1) cand[ncand++] = (uint32_t)r;
+        for (size_t t = 0; cand && t < nf && ncand; ++t) {
+            if (!tri[t]) continue;
+            for (int k = 0; k < 3; ++k) {
+                const struct aiVector3D *p = corner[t * 3 + k];
+                for (size_t i = 0; i < ncand; ++i) {
+                    double *q = piece[cand[i]];
+                    if (cand[i] == parent[t] || q[10] != 1) continue;
+                    if (p->x > q[4] && p->x < q[7] && p->y > q[5] && p->y < q[8] && p->z > q[6] && p->z < q[9]) q[10] = 2;
+                }
+            }
+        }
+        free(cand);
+        for (size_t r = 0; r < nf; ++r) {
+            *flipped += piece[r][10] == 1;
+            *kept += piece[r][10] == 2;
+        }
+        if (*flipped && (flip = calloc(nf, 1)))
+            for (size_t t = 0; t < nf; ++t) flip[t] = tri[t] && piece[parent[t]][10] == 1;
+    }
+    free(corner); free(keys); free(parent); free(edges); free(tri); free(piece); free(centre);
+    return flip;
 }
 
 /* Everything prt__import_mesh needs, as the child process sees it. */
@@ -173,20 +258,26 @@ static void import_with_assimp(void *arg, prt__bytes *out)
     /* Orientation is settled before normals are generated from the winding. */
     bool file_normals = false;
     for (unsigned i = 0; i < sc->mNumMeshes; ++i) file_normals |= sc->mMeshes[i]->mNormals != NULL;
-    bool flip = desc->winding == PRT_WINDING_FLIP, flipped_auto = false;
-    if (desc->winding == PRT_WINDING_AUTO && !file_normals && looks_inside_out(sc)) flip = flipped_auto = true;
+    bool flip = desc->winding == PRT_WINDING_FLIP;
+    size_t pieces_flipped = 0, pieces_kept = 0;
+    uint8_t *flip_tri = NULL;
+    if (desc->winding == PRT_WINDING_AUTO && !file_normals) {
+        flip_tri = inside_out_triangles(sc, &pieces_flipped, &pieces_kept);
+        flip = flip_tri != NULL;
+    }
     if (flip) {
         /* The scene belongs to us until aiReleaseImport; assimp's C API only hands it out const. */
         struct aiScene *msc = (struct aiScene *)sc;
+        size_t face = 0;
         for (unsigned i = 0; i < msc->mNumMeshes; ++i) {
             struct aiMesh *am = msc->mMeshes[i];
-            for (unsigned f = 0; f < am->mNumFaces; ++f)
-                if (am->mFaces[f].mNumIndices == 3) {
+            for (unsigned f = 0; f < am->mNumFaces; ++f, ++face)
+                if (am->mFaces[f].mNumIndices == 3 && (!flip_tri || flip_tri[face])) {
                     unsigned t = am->mFaces[f].mIndices[1];
                     am->mFaces[f].mIndices[1] = am->mFaces[f].mIndices[2];
                     am->mFaces[f].mIndices[2] = t;
                 }
-            if (am->mNormals)
+            if (am->mNormals && !flip_tri)   /* an automatic flip only happens without file normals */
                 for (unsigned v = 0; v < am->mNumVertices; ++v) {
                     am->mNormals[v].x = -am->mNormals[v].x; am->mNormals[v].y = -am->mNormals[v].y; am->mNormals[v].z = -am->mNormals[v].z;
                 }
@@ -206,7 +297,10 @@ static void import_with_assimp(void *arg, prt__bytes *out)
         memcpy(nmat, cof, sizeof cof);
     }
 
-    prt__mesh_message_begin(out, PRT_OK, flipped_auto ? PRT__IMPORT_FLIPPED : 0, NULL);
+    free(flip_tri);
+    /* What the winding check decided travels in the flags: counts of pieces flipped and kept. */
+    const uint32_t nflip = pieces_flipped < 0xFFF ? (uint32_t)pieces_flipped : 0xFFF, nkept = pieces_kept < 0xFFF ? (uint32_t)pieces_kept : 0xFFF;
+    prt__mesh_message_begin(out, PRT_OK, (nflip ? PRT__IMPORT_FLIPPED : 0) | (nkept ? PRT__IMPORT_KEPT_ENCLOSURE : 0) | nflip << 8 | nkept << 20, NULL);
     for (unsigned i = 0; i < sc->mNumMeshes; ++i) {
         const struct aiMesh *am = sc->mMeshes[i];
         if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) || am->mNumFaces == 0) continue;
@@ -305,7 +399,12 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
     uint32_t flags = 0;
     if (!st) st = prt__mesh_message_read(ctx, msg.data, msg.size, path, &flags, m);
     prt__bytes_free(&msg);
+    const unsigned nflip = (flags >> 8) & 0xFFF, nkept = (flags >> 20) & 0xFFF;
     if (!st && (flags & PRT__IMPORT_FLIPPED))
-        prt__log(ctx, PRT_LOG_WARN, "%s: closed mesh wound clockwise (normals would point inwards); flipped it (--winding keep to prevent)", path);
+        prt__log(ctx, PRT_LOG_WARN, "%s: %u closed piece%s wound clockwise with nothing inside (an object seen from outside, normals pointing in): "
+                 "flipped (--winding keep to prevent)", path, nflip, nflip == 1 ? "" : "s");
+    if (!st && (flags & PRT__IMPORT_KEPT_ENCLOSURE))
+        prt__log(ctx, PRT_LOG_INFO, "%s: %u closed piece%s wound clockwise around other geometry (a room seen from inside): kept as %s "
+                 "(--winding flip to flip)", path, nkept, nkept == 1 ? "" : "s", nkept == 1 ? "it is" : "they are");
     return st;
 }

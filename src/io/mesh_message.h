@@ -7,7 +7,9 @@
 
 #include "geom/mesh.h"
 
-#define PRT__IMPORT_FLIPPED 1u   /* the importer reversed the winding of a closed inside-out mesh */
+#define PRT__IMPORT_FLIPPED 1u          /* the importer reversed the winding of closed inside-out pieces */
+#define PRT__IMPORT_KEPT_ENCLOSURE 2u   /* ... and left closed pieces wound inwards around other geometry */
+/* Bits 8..19: pieces flipped, 20..31: pieces kept (each at most 4095). */
 
 /* Starts a message: the importer's status and, on failure, its one-line reason. */
 void prt__mesh_message_begin(prt__bytes *b, prt_status status, uint32_t flags, const char *message);
