@@ -35,6 +35,11 @@ says() {
     if grep -qi -- "$1" "$T/err"; then ok; else bad "stderr does not mention '$1':"; sed 's/^/    /' "$T/err"; fi
 }
 
+# A misspelt option: one line naming the closest one.
+expect 2 "misspelt option" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --oder 3
+says "did you mean --order"
+[ "$(wc -l <"$T/err")" -eq 1 ] && ok || bad "a usage error takes one line, not $(wc -l <"$T/err")"
+
 for cmd in bake relight render env info demo-scene reference compare sweep; do
     expect 0 "$cmd --help" -- "$PRT" "$cmd" --help
     grep -q "Exit codes" "$T/out" && ok || bad "$cmd --help lacks exit codes"
@@ -91,6 +96,9 @@ says "vertex counts differ"
 expect 0 "sweep with plot" -- "$PRT" sweep -q "$T/demo.obj" --reference "$T/ref.json" -o "$T/sweep.csv" --plot "$T/sweep.png" --values 2,3 --samples 32 --kinds shadowed,interreflected
 [ "$(wc -l <"$T/sweep.csv")" -eq 5 ] && ok || bad "sweep CSV should have a header and 4 rows"
 [ -s "$T/sweep.png" ] && ok || bad "sweep wrote no plot"
+expect 0 "sweep over a generated atlas (seam copies: more vertices than the reference)" -- "$PRT" sweep -q "$T/demo.obj" --reference "$T/ref.json" \
+    -o "$T/sweep2.csv" --values 2 --samples 32 --kinds shadowed --texels 32 --uv atlas
+[ "$(wc -l <"$T/sweep2.csv")" -eq 2 ] && ok || bad "atlas sweep CSV should have a header and 1 row"
 expect 2 "sweep without reference" -- "$PRT" sweep "$T/demo.obj" -o "$T/s.csv"
 expect 2 "sweep bad param" -- "$PRT" sweep "$T/demo.obj" --reference "$T/ref.json" -o "$T/s.csv" --param colour
 
@@ -197,6 +205,7 @@ says "wavelet"
 # Per-texel transfer over the demo scene's UV atlas, a normal map, the radiance map, and the errors.
 expect 0 "texel bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/texels.prt" --order 3 --samples 64 --bounces 1 --texels 64 --kinds shadowed,interreflected
 expect 0 "texel info" -- "$PRT" info "$T/texels.prt"
+grep -q "^bounds: .* to .*(size" "$T/out" && ok || bad "info does not show the bounding box"
 grep -q "64 x 64" "$T/out" && ok || bad "info does not show the texel sets"
 expect 0 "texel map" -- "$PRT" relight -q "$T/texels.prt" --texels -o "$T/map.pfm" -k interreflected
 expect 0 "texel render" -- $NOLEAK "$PRT" render -q "$T/texels.prt" -o "$T/texels.png" --width 64 --height 48

@@ -76,6 +76,34 @@ static void test_winding(void **state)
     const float *n = prt_scene_normals(s);
     for (size_t v = 0; v < prt_scene_vertex_count(s); ++v) assert_true(n[v * 3 + 1] > 0.5f || n[v * 3 + 2] > 0.5f);
     prt_scene_release(s);
+    /* A closed room wound inwards around a closed box wound inside out, both without normals: the
+     * box is an object seen from outside and is flipped; the room holds other geometry and is kept
+     * facing in, so that its inside can receive light. */
+    char text[2048];
+    size_t len = 0;
+    for (int c = 0; c < 8; ++c)
+        len += (size_t)snprintf(text + len, sizeof text - len, "v %d %d %d\n", 4 * (c == 1 || c == 2 || c == 5 || c == 6) - 2,
+                                4 * (c == 2 || c == 3 || c == 6 || c == 7) - 2, 4 * (c >= 4) - 2);
+    for (int c = 0; c < 8; ++c)
+        len += (size_t)snprintf(text + len, sizeof text - len, "v %d %d %d\n", c == 1 || c == 2 || c == 5 || c == 6, c == 2 || c == 3 || c == 6 || c == 7, c >= 4);
+    const int faces[12][3] = {{1, 2, 3}, {1, 3, 4}, {5, 7, 6}, {5, 8, 7}, {1, 6, 2}, {1, 5, 6}, {4, 3, 7}, {4, 7, 8}, {1, 8, 5}, {1, 4, 8}, {2, 7, 3}, {2, 6, 7}};
+    for (int k = 0; k < 2; ++k)   /* the same clockwise winding for both */
+        for (int f = 0; f < 12; ++f)
+            len += (size_t)snprintf(text + len, sizeof text - len, "f %d %d %d\n", faces[f][0] + 8 * k, faces[f][1] + 8 * k, faces[f][2] + 8 * k);
+    write_text("room_and_box.obj", text, path, sizeof path);
+    assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
+    const float *pos = prt_scene_positions(s);
+    n = prt_scene_normals(s);
+    size_t room = 0, box = 0;
+    for (size_t v = 0; v < prt_scene_vertex_count(s); ++v) {
+        const float *p = pos + v * 3, *q = n + v * 3;
+        const bool in_room = fabsf(p[0]) > 1.5f;
+        const float out = in_room ? p[0] * q[0] + p[1] * q[1] + p[2] * q[2] : (p[0] - 0.5f) * q[0] + (p[1] - 0.5f) * q[1] + (p[2] - 0.5f) * q[2];
+        if (in_room) { assert_true(out < 0); room++; }   /* the room's walls face in */
+        else { assert_true(out > 0); box++; }            /* the box faces out */
+    }
+    assert_true(room >= 8 && box >= 8);
+    prt_scene_release(s);
     prt_context_release(ctx);
 }
 
@@ -159,6 +187,22 @@ static void test_json_scene(void **state)
     prt_transfer_release(t);
     prt_transfer_release(u);
     prt_scene_release(s);
+    /* A JSON material named like a material of the mesh file replaces it there, and only there. */
+    write_text("two.mtl", "newmtl red\nKd 0.8 0.1 0.05\nnewmtl blue\nKd 0.1 0.2 0.7\n", path, sizeof path);
+    write_text("two.obj", "mtllib two.mtl\nv 0 0 0\nv 1 0 0\nv 1 0 -1\nv 3 0 0\nv 4 0 0\nv 4 1 0\nusemtl red\nf 1 2 3\nusemtl blue\nf 4 5 6\n",
+               path, sizeof path);
+    write_text("by_name.json", "{\"materials\": {\"blue\": {\"brdf\": \"phong:40:0.5:0.3\"}}, \"meshes\": [{\"file\": \"two.obj\"}]}", path, sizeof path);
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    assert_int_equal(prt_scene_brdf_count(s), 1);
+    alb = prt_scene_albedo(s);
+    pos = prt_scene_positions(s);
+    for (size_t v = 0; v < prt_scene_vertex_count(s); ++v)
+        if (pos[v * 3] < 2) assert_true(fabsf(alb[v * 3] - 0.8f) < 1e-6f);   /* red: the file's */
+        else assert_true(fabsf(alb[v * 3] - 0.3f) < 1e-6f && fabsf(alb[v * 3 + 2] - 0.3f) < 1e-6f);   /* blue: the BRDF's kd */
+    prt_scene_release(s);
+    write_text("by_name.json", "{\"materials\": {\"blue\": {\"brdf\": \"phong:nope\"}}, \"meshes\": [{\"file\": \"two.obj\"}]}", path, sizeof path);
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_ERR_FORMAT);
+    assert_non_null(strstr(prt_last_error(), "blue"));
     /* Bad scene files: a clear error. */
     const char *bad[] = {"{\"meshes\": []}", "{\"meshes\": [{\"file\": 3}]}", "{nope",
                          "{\"meshes\": [{\"file\": \"tri.obj\", \"material\": \"none\"}]}",

@@ -244,6 +244,37 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
             if (!id) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDF materials", path, PRT__MAX_BRDFS); break; }
             memset(m->material + first_vertex, id, m->vertex_count - first_vertex);
         }
+        /* Without a material of its own, the file's materials are looked up by name: a JSON
+         * material called like one of them replaces it on that surface. */
+        if (!a && !b && !e && materials && m->surface)
+            for (int sid = 1; sid <= m->surface_count && !st; ++sid) {
+                const cJSON *mat = cJSON_GetObjectItemCaseSensitive(materials, m->surface_names[sid - 1]);
+                if (!mat) continue;
+                const cJSON *ma = cJSON_GetObjectItemCaseSensitive(mat, "albedo"), *mb = cJSON_GetObjectItemCaseSensitive(mat, "brdf"),
+                            *me = cJSON_GetObjectItemCaseSensitive(mat, "emission");
+                float mrgb[3] = {0, 0, 0}, mle[3] = {0, 0, 0};
+                int brdf_id = 0;
+                if (ma && mb) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': give an albedo or a brdf, not both", path, m->surface_names[sid - 1]);
+                else if (ma && read_vec3(ctx, ma, "albedo", mrgb)) st = PRT_ERR_FORMAT;
+                else if (me && read_colour(ctx, me, "emission", mle))
+                    st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"emission\" must be a number or [r, g, b], finite and >= 0", path, m->surface_names[sid - 1]);
+                else if (mb) {
+                    prt_brdf mbrdf;
+                    if (!cJSON_IsString(mb) || prt_brdf_parse(mb->valuestring, &mbrdf))
+                        st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"brdf\" must be a BRDF such as \"phong:32:0.5:0.3\"", path, m->surface_names[sid - 1]);
+                    else if (!(brdf_id = prt__scene_brdf_id(scene, &mbrdf))) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDF materials", path, PRT__MAX_BRDFS);
+                    else prt_brdf_lambert_albedo(&mbrdf, mrgb);
+                }
+                float *em = !st && me && (m->emission || mle[0] > 0 || mle[1] > 0 || mle[2] > 0) ? prt__mesh_emission(m) : NULL;
+                if (!st && me && !em && (m->emission || mle[0] > 0 || mle[1] > 0 || mle[2] > 0)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+                for (size_t k = first_vertex; k < m->vertex_count && !st; ++k) {
+                    if (m->surface[k] != sid) continue;
+                    if (ma || mb) memcpy(m->albedo + k * 3, mrgb, sizeof mrgb);
+                    if (mb) m->material[k] = (uint8_t)brdf_id;
+                    if (em) memcpy(em + k * 3, mle, sizeof mle);
+                }
+            }
+        if (st) break;
         /* The JSON material names the surface (what --albedo-of recolours), else the file's own. */
         if (material_name) {
             const int id = prt__mesh_surface_id(m, material_name);

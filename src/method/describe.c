@@ -58,9 +58,20 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
     prt__describe_line(&d, "method:", "%s (%s)", t->method->title, t->method->name);
     t->method->describe(t, &d);
     char spec[128];
+    /* The box, so that cameras (--eye, --target) and lights can be placed without opening the mesh. */
+    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (size_t v = 0; v < nv; ++v)
+        for (int c = 0; c < 3; ++c) {
+            const float x = t->mesh.positions[v * 3 + c];
+            if (!v || x < lo[c]) lo[c] = x;
+            if (!v || x > hi[c]) hi[c] = x;
+        }
     if (j) {
         cJSON_AddNumberToObject(j, "vertices", (double)nv);
         cJSON_AddNumberToObject(j, "triangles", (double)t->mesh.triangle_count);
+        cJSON *box = cJSON_AddObjectToObject(j, "bounds");
+        cJSON_AddItemToObject(box, "min", cJSON_CreateFloatArray(lo, 3));
+        cJSON_AddItemToObject(box, "max", cJSON_CreateFloatArray(hi, 3));
         cJSON_AddNumberToObject(j, "transfer_bytes", (double)bytes);
         cJSON_AddNumberToObject(j, "mesh_bytes", (double)mesh_bytes(t));
         cJSON_AddNumberToObject(j, "bytes_per_vertex", (double)bytes / (double)nv);
@@ -117,6 +128,8 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
     for (size_t v = 0; t->mesh.emission && v < nv; ++v)
         emissive += t->mesh.emission[v * 3] > 0 || t->mesh.emission[v * 3 + 1] > 0 || t->mesh.emission[v * 3 + 2] > 0;
     prt__describe_line(&d, "mesh:", "%zu vertices, %zu triangles%s", nv, t->mesh.triangle_count, prt__mesh_has_uv(&t->mesh) ? ", with UVs" : "");
+    prt__describe_line(&d, "bounds:", "%.4g, %.4g, %.4g to %.4g, %.4g, %.4g (size %.4g x %.4g x %.4g)", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2],
+                       hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
     if (emissive) prt__describe_line(&d, "emissive:", "%zu vertices emit light", emissive);
     for (int i = 0; i < t->light_count; ++i) {
         char l[512];

@@ -40,11 +40,42 @@ int cli_exit_code(prt_status st)
     }
 }
 
-int cli_bad_option(const cli *c, int opt, char **argv)
+/* Edit distance between a and the first n bytes of b, capped at 9. */
+static int edit_distance(const char *a, const char *b, size_t n)
+{
+    const size_t la = strlen(a);
+    if (la > 63 || n > 63) return 9;
+    int row[64];
+    for (size_t j = 0; j <= n; ++j) row[j] = (int)j;
+    for (size_t i = 1; i <= la; ++i) {
+        int diag = row[0];
+        row[0] = (int)i;
+        for (size_t j = 1; j <= n; ++j) {
+            const int sub = diag + (a[i - 1] != b[j - 1]), del = row[j] + 1, ins = row[j - 1] + 1;
+            diag = row[j];
+            row[j] = sub < del ? (sub < ins ? sub : ins) : (del < ins ? del : ins);
+        }
+    }
+    return row[n] < 9 ? row[n] : 9;
+}
+
+int cli_bad_option(const cli *c, int opt, char **argv, const struct option *opts)
 {
     extern int optind;
     const char *arg = optind > 0 ? argv[optind - 1] : "";
     if (opt == ':') return cli_usage(c, "option '%s' needs a value", arg);
+    /* A misspelt long option: name the closest one (within a third of its length). */
+    if (!strncmp(arg, "--", 2) && opts) {
+        const char *name = arg + 2, *eq = strchr(name, '=');
+        const size_t n = eq ? (size_t)(eq - name) : strlen(name);
+        const char *best = NULL;
+        int best_d = 9;
+        for (const struct option *o = opts; o->name; ++o) {
+            const int d = edit_distance(o->name, name, n);
+            if (d < best_d) { best_d = d; best = o->name; }
+        }
+        if (best && best_d <= 1 + (int)strlen(best) / 3) return cli_usage(c, "unknown option '%.*s': did you mean --%s?", (int)n + 2, arg, best);
+    }
     return cli_usage(c, "unknown option '%s'", arg);
 }
 
@@ -54,10 +85,11 @@ int cli_usage(const cli *c, const char *fmt, ...)
     va_start(ap, fmt);
     fprintf(stderr, "prt %s: ", c->cmd);
     vfprintf(stderr, fmt, ap);
-    fprintf(stderr, "\nTry 'prt %s --help'.\n", c->cmd);
+    fprintf(stderr, " (prt %s --help lists the options)\n", c->cmd);   /* one line, for logs and scripts */
     va_end(ap);
     return EXIT_USAGE;
 }
+
 
 static void log_to_stderr(void *user, prt_log_level level, const char *msg)
 {

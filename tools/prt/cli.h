@@ -2,6 +2,7 @@
 #ifndef PRT_CLI_H
 #define PRT_CLI_H
 
+#include <getopt.h>
 #include <prt/prt.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -36,7 +37,7 @@ int cli_usage(const cli *c, const char *fmt, ...) __attribute__((format(printf, 
 int cli_make_context(cli *c);
 /* The usage error for what getopt_long returned as opt ('?' unknown, ':' missing value; opterr 0
  * and an optstring starting with ':'), naming the argument. */
-int cli_bad_option(const cli *c, int opt, char **argv);
+int cli_bad_option(const cli *c, int opt, char **argv, const struct option *opts);
 /* The exit code for a status, when the message was already printed. */
 int cli_exit_code(prt_status st);
 
@@ -144,7 +145,8 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     "      --default-albedo R,G,B  albedo where the file has no material (default 0.7)\n" \
     "      --crease-angle D   split computed normals above D degrees (default 45)\n" \
     "      --winding W        auto | keep | flip: which side of imported triangles faces out\n" \
-    "                         (auto flips closed meshes without normals that are wound inside out)\n" \
+    "                         (auto flips closed pieces without normals wound inside out, but\n" \
+    "                         keeps those enclosing other geometry: rooms face in)\n" \
     "      --import-timeout S  give up on a mesh file that the importer has not read in S seconds\n" \
     "                         (default 60 + 10 per MB; a malformed file can make it loop)\n"
 enum { OPT_MAX_EDGE = 1100, OPT_ALBEDO, OPT_DEFAULT_ALBEDO, OPT_CREASE, OPT_WINDING, OPT_IMPORT_TIMEOUT };

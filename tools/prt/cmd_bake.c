@@ -70,6 +70,54 @@ static int collect_options(const prt_method *chosen, struct option *opts, int ma
     return n;
 }
 
+/* Transfer lives at vertices: where big triangles cover much of the surface (a teapot of a few
+ * hundred triangles, the floor and walls of an interior), shading is blocky there. Suggests an
+ * edge length that splits them, with the triangle count it would give. */
+static void coarse_mesh_warning(const prt_scene *scene)
+{
+    float lo[3], hi[3];
+    prt_scene_bounds(scene, lo, hi);
+    const double diag = sqrt((double)(hi[0] - lo[0]) * (hi[0] - lo[0]) + (double)(hi[1] - lo[1]) * (hi[1] - lo[1]) + (double)(hi[2] - lo[2]) * (hi[2] - lo[2]));
+    const float *p = prt_scene_positions(scene);
+    const uint32_t *ix = prt_scene_indices(scene);
+    const size_t nt = prt_scene_triangle_count(scene);
+    const double big = diag / 25;
+    double area = 0, big_area = 0;
+    size_t big_count = 0;
+    for (size_t t = 0; t < nt; ++t) {
+        const float *a = p + ix[t * 3] * 3, *b = p + ix[t * 3 + 1] * 3, *c = p + ix[t * 3 + 2] * 3;
+        double e[3][3], longest = 0;
+        for (int k = 0; k < 3; ++k) {
+            e[0][k] = b[k] - a[k]; e[1][k] = c[k] - b[k]; e[2][k] = a[k] - c[k];
+        }
+        for (int j = 0; j < 3; ++j) longest = fmax(longest, sqrt(e[j][0] * e[j][0] + e[j][1] * e[j][1] + e[j][2] * e[j][2]));
+        const double cx = e[0][1] * e[2][2] - e[0][2] * e[2][1], cy = e[0][2] * e[2][0] - e[0][0] * e[2][2], cz = e[0][0] * e[2][1] - e[0][1] * e[2][0];
+        const double ta = 0.5 * sqrt(cx * cx + cy * cy + cz * cz);
+        area += ta;
+        if (longest > big) { big_area += ta; big_count++; }
+    }
+    if (!(area > 0) || big_area < 0.2 * area) return;
+    /* diag / 100, coarser while that would give more than 4x the triangles (or 250k): a global
+     * edge length multiplies an interior's triangles many times over. */
+    double edge = diag / 100, after = 0;
+    for (int tries = 0; tries < 8; ++tries, edge *= 1.5) {
+        after = 0;
+        for (size_t t = 0; t < nt; ++t) {
+            const float *a = p + ix[t * 3] * 3, *b = p + ix[t * 3 + 1] * 3, *c = p + ix[t * 3 + 2] * 3;
+            double longest = 0;
+            for (int j = 0; j < 3; ++j) {
+                const float *u = j == 0 ? a : j == 1 ? b : c, *v = j == 0 ? b : j == 1 ? c : a;
+                longest = fmax(longest, sqrt((double)(v[0] - u[0]) * (v[0] - u[0]) + (double)(v[1] - u[1]) * (v[1] - u[1]) + (double)(v[2] - u[2]) * (v[2] - u[2])));
+            }
+            const double split = ceil(longest / edge);
+            after += split * split;   /* splitting edges below `edge` makes about split^2 triangles of one */
+        }
+        if (after <= fmax(4.0 * nt, 250000.0)) break;
+    }
+    fprintf(stderr, "prt bake: warning: %zu large triangles (edges over %.3g) cover %.0f%% of the surface; per-vertex transfer will look "
+            "blocky there (try --max-edge %.3g: about %.0f triangles, or --texels N for a light map)\n", big_count, big, 100 * big_area / area, edge, after);
+}
+
 int cmd_bake(int argc, char **argv)
 {
     cli c = {.cmd = "bake"};
@@ -108,7 +156,7 @@ int cmd_bake(int argc, char **argv)
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) rc = cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
         case 'h': help(method_named ? method : NULL); prt_options_release(o); return EXIT_OK;
-        default: rc = cli_bad_option(&c, opt, argv); break;
+        default: rc = cli_bad_option(&c, opt, argv, opts); break;
         }
     }
     if (!rc && optind != argc - 1) rc = cli_usage(&c, "expected exactly one SCENE argument");
@@ -131,14 +179,7 @@ int cmd_bake(int argc, char **argv)
     prt_status st = prt_scene_load(c.ctx, argv[optind], &sd, &scene);
     if (!st && !c.quiet) {
         fprintf(stderr, "prt bake: %s: %zu vertices, %zu triangles\n", argv[optind], prt_scene_vertex_count(scene), prt_scene_triangle_count(scene));
-        /* Transfer lives at vertices: a handful of big triangles gives blocky shading. */
-        if (sd.max_edge == 0 && prt_scene_triangle_count(scene) < 1000) {
-            float lo[3], hi[3];
-            prt_scene_bounds(scene, lo, hi);
-            float diag = sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-            fprintf(stderr, "prt bake: warning: only %zu triangles; per-vertex transfer will look blocky (try --max-edge %.3g)\n",
-                    prt_scene_triangle_count(scene), diag / 100.0f);
-        }
+        if (sd.max_edge == 0) coarse_mesh_warning(scene);
     }
     if (!st) {
         uint64_t recovered = 0, total = 0;

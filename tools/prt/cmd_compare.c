@@ -90,7 +90,7 @@ int cmd_compare(int argc, char **argv)
         case OPT_ERROR_SCALE: if (!cli_parse_float(optarg, &scale) || scale <= 0) return cli_usage(&c, "--error-scale must be > 0"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); return EXIT_OK;
-        default: return cli_bad_option(&c, opt, argv);
+        default: return cli_bad_option(&c, opt, argv, opts);
         }
     }
     if (optind != argc - 2) return cli_usage(&c, "expected two results, A and B (the reference)");

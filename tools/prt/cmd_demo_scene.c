@@ -33,7 +33,7 @@ int cmd_demo_scene(int argc, char **argv)
             if (!cli_parse_float(optarg, &cell) || !(cell >= 0.005f && cell <= 1.0f)) return cli_usage(&c, "--cell takes a spacing in 0.005..1 metres");
         }
         else if (opt == 'h') { fputs(HELP, stdout); return EXIT_OK; }
-        else return cli_bad_option(&c, opt, argv);
+        else return cli_bad_option(&c, opt, argv, opts);
     }
     if (optind != argc || !output) return cli_usage(&c, "expected -o OUT.obj and no other arguments");
     prt_status st = room ? prt_demo_room_write(output, cell) : prt_demo_scene_write(output);

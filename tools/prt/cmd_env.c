@@ -58,7 +58,7 @@ int cmd_env(int argc, char **argv)
         case OPT_IMAGE_WIDTH: if (!cli_parse_int(optarg, 2, 16384, &width) || width % 2) return cli_usage(&c, "--width must be even, 2..16384"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); return EXIT_OK;
-        default: return cli_bad_option(&c, opt, argv);
+        default: return cli_bad_option(&c, opt, argv, opts);
         }
     }
     if (optind < argc - 1) return cli_usage(&c, "expected at most one PROBE argument");

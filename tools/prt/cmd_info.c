@@ -22,7 +22,7 @@ int cmd_info(int argc, char **argv)
     while ((opt = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
         if (opt == 'J') json = 1;
         else if (opt == 'h') { fputs(HELP, stdout); return EXIT_OK; }
-        else return cli_bad_option(&c, opt, argv);
+        else return cli_bad_option(&c, opt, argv, opts);
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one FILE.prt argument");
     c.threads = 1;

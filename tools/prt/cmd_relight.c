@@ -65,7 +65,7 @@ int cmd_relight(int argc, char **argv)
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); return EXIT_OK;
-        default: return cli_bad_option(&c, opt, argv);
+        default: return cli_bad_option(&c, opt, argv, opts);
         }
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one FILE.prt argument");
