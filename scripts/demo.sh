@@ -13,13 +13,13 @@ mkdir -p "$OUT"
 "$PRT" render "$OUT/scene.prt" --kind all -o "$OUT/sky_rotated.png" --width 480 --height 360 --rotate 150
 "$PRT" render "$OUT/scene.prt" --kind interreflected -o "$OUT/interreflected.exr" --width 480 --height 360
 "$PRT" env --order 6 --image "$OUT/sky_irradiance.png" --irradiance -o "$OUT/sky_sh.json" -q
-"$PRT" bake "$OUT/scene.obj" -o "$OUT/glossy.prt" --order 5 --samples 512 --bounces 2 -q \
+"$PRT" bake "$OUT/scene.obj" -o "$OUT/glossy.prt" --order 5 --samples 512 --bounces 2 \
     --kinds shadowed,interreflected,glossy-shadowed,glossy-interreflected
 "$PRT" render "$OUT/glossy.prt" --kind interreflected,glossy-interreflected -o "$OUT/glossy.png" --width 480 --height 360 --brdf phong:40:0.4
-"$PRT" bake "$OUT/scene.obj" -o "$OUT/texels.prt" --order 5 --samples 512 --bounces 2 --texels 512 --kinds shadowed,interreflected -q
+"$PRT" bake "$OUT/scene.obj" -o "$OUT/texels.prt" --order 5 --samples 512 --bounces 2 --texels 512 --kinds shadowed,interreflected
 "$PRT" render "$OUT/texels.prt" --kind shadowed,interreflected -o "$OUT/texels.png" --width 480 --height 360
 "$PRT" relight "$OUT/texels.prt" --texels --kind interreflected -o "$OUT/lightmap.png" -q
-"$PRT" bake "$OUT/scene.obj" -o "$OUT/wavelet.prt" --method wavelet --brdf phong:30:0.4:0.5 --bounces 1 -q
+"$PRT" bake "$OUT/scene.obj" -o "$OUT/wavelet.prt" --method wavelet --brdf phong:30:0.4:0.5 --bounces 1
 "$PRT" render "$OUT/wavelet.prt" -o "$OUT/wavelet.png" --width 480 --height 360
 "$PRT" render "$OUT/wavelet.prt" -o "$OUT/wavelet_rotated.png" --width 480 --height 360 --rotate 150
 PROBE=../shared/data/envmaps/probulator_ict/grace.hdr

@@ -58,6 +58,12 @@ says "glossy"
 expect 0 "demo-scene" -- "$PRT" demo-scene -o "$T/demo.obj"
 [ -s "$T/demo.mtl" ] && ok || bad "demo.mtl missing"
 expect 0 "bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/demo.prt" --order 4 --samples 128 --bounces 2
+# Progress for scripts: one JSON object per line; a summary with each stage's time.
+expect 0 "bake with JSON progress and a summary" -- "$PRT" bake "$T/demo.obj" -o "$T/p.prt" --order 2 --samples 32 --bounces 1 --progress json --summary "$T/sum.json" --compress pca
+grep '^{"stage"' "$T/err" | tail -n 1 | grep -q '"percent": 100.0' && ok || bad "JSON progress did not reach 100%"
+[ "$(grep -c '^{"stage"' "$T/err")" -ge 4 ] && ok || bad "JSON progress: too few lines"
+grep -q '"name":[[:space:]]*"compress interreflected"' "$T/sum.json" && grep -q '"bake_seconds"' "$T/sum.json" && ok || bad "the summary lacks stage times"
+expect 2 "bad --progress" -- "$PRT" bake "$T/demo.obj" -o "$T/p.prt" --progress loud
 expect 0 "info" -- "$PRT" info "$T/demo.prt"
 grep -q "interreflected" "$T/out" && ok || bad "info does not list interreflected"
 expect 0 "info --json" -- "$PRT" info --json "$T/demo.prt"
@@ -159,6 +165,10 @@ says "unknown BRDF"
 expect 2 "a BRDF to bake in without a glossy kind" -- "$PRT" bake -q "$T/demo.obj" -o "$T/x.prt" --brdf phong:10 --kinds shadowed
 says "glossy kind"
 expect 0 "bake a BRDF in" -- "$PRT" bake -q "$T/demo.obj" -o "$T/baked.prt" --order 3 --samples 64 --kinds shadowed,glossy-shadowed --brdf lafortune:clay
+expect 2 "run-time lobe on a file without glossy sets" -- "$PRT" render "$T/demo.prt" -o "$T/x.png" --brdf phong:10
+says "glossy"
+expect 2 "--view 0,0,0" -- "$PRT" render "$T/demo.prt" -o "$T/x.png" --view 0,0,0
+says "not 0,0,0"
 expect 2 "run-time lobe on a baked-in BRDF" -- $NOLEAK "$PRT" render "$T/baked.prt" -o "$T/x.png" --brdf phong:10
 says "baked in"
 expect 2 "glossy kind the file lacks" -- $NOLEAK "$PRT" render "$T/demo.prt" -o "$T/x.png" -k glossy-shadowed

@@ -397,11 +397,48 @@ static void test_shared_meshes(void **state)
     prt_context_release(ctx);
 }
 
+/* Auto framing: from outside for an object, from inside for a closed room (also one with a box in
+ * its middle, and one with its front open, as the Cornell box). */
+static void test_camera_framing(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(1);
+    for (int scene = 0; scene < 4; ++scene) {
+        test_mesh m = {0};
+        if (scene == 0) tm_sphere(&m, (float[3]){0, 0, 0}, 1.0f, 12, 24);
+        else {
+            /* A 4 x 3 x 5 room, walls facing in; scene 2 adds a box at the centre, scene 3 has no front wall. */
+            tm_quad(&m, (float[3]){-2, 0, 2.5f}, (float[3]){4, 0, 0}, (float[3]){0, 0, -5}, 4);     /* floor, up */
+            tm_quad(&m, (float[3]){-2, 3, -2.5f}, (float[3]){4, 0, 0}, (float[3]){0, 0, 5}, 4);     /* ceiling, down */
+            tm_quad(&m, (float[3]){-2, 0, 2.5f}, (float[3]){0, 0, -5}, (float[3]){0, 3, 0}, 4);     /* x = -2, +x */
+            tm_quad(&m, (float[3]){2, 0, -2.5f}, (float[3]){0, 0, 5}, (float[3]){0, 3, 0}, 4);      /* x = 2, -x */
+            tm_quad(&m, (float[3]){-2, 0, -2.5f}, (float[3]){4, 0, 0}, (float[3]){0, 3, 0}, 4);     /* back, +z */
+            if (scene != 3) tm_quad(&m, (float[3]){2, 0, 2.5f}, (float[3]){-4, 0, 0}, (float[3]){0, 3, 0}, 4);   /* front, -z */
+            if (scene == 2) tm_sphere(&m, (float[3]){0, 1.5f, 0}, 0.6f, 8, 16);
+        }
+        prt_camera cam;
+        const int inside = prt_camera_frame_mesh(ctx, m.pos, m.nv, m.idx, m.nt, NULL, 0, 4.0f / 3.0f, &cam);
+        print_message("scene %d: framed from %s, eye %.2f %.2f %.2f, fov %.0f\n", scene, inside ? "inside" : "outside", cam.eye[0], cam.eye[1], cam.eye[2],
+                      cam.fov_y_deg);
+        if (scene == 0) {
+            assert_int_equal(inside, 0);
+            assert_true(sqrtf(cam.eye[0] * cam.eye[0] + cam.eye[1] * cam.eye[1] + cam.eye[2] * cam.eye[2]) > 1.5f);
+        } else {
+            assert_int_equal(inside, 1);
+            assert_true(fabsf(cam.eye[0]) < 2 && cam.eye[1] > 0 && cam.eye[1] < 3 && fabsf(cam.eye[2]) < 2.5f);
+            assert_true(cam.fov_y_deg == 70.0f);
+        }
+        tm_free(&m);
+    }
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_obj_with_materials),
         cmocka_unit_test(test_winding),
+        cmocka_unit_test(test_camera_framing),
         cmocka_unit_test(test_gltf_and_ply),
         cmocka_unit_test(test_json_scene),
         cmocka_unit_test(test_bad_mesh_inputs),

@@ -29,7 +29,7 @@ export ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0"
 
 cat >"$T/script.txt" <<'S'
 # time  verb  arguments
-0    screenshot  SHOTS/first.exr
+0    screenshot  first.exr
 0    env-rotate  90 0
 0    screenshot  SHOTS/rotated.exr
 0    key k
@@ -62,6 +62,20 @@ within "$T/rotated.exr" "$T/render_rotated.exr" 0.002
 "$PRT" compare --json - -q "$T/first.exr" "$T/render_rotated.exr" >"$T/cmp"
 r=$(field relative_l2 "$T/cmp")
 awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "rotating the environment changed nothing (relative L2 $r)"
+
+# Fly mode: w moves the eye forward and a drag turns the view (each changes the image); the
+# camera options set the starting view as prt render's do; screenshot paths follow the script.
+printf '%s\n' "0 screenshot f0.exr" "0 key f" "0 key w" "0 key w" "0.1 screenshot f1.exr" "0.1 drag left 20 0" "0.2 screenshot f2.exr" "0.2 quit" >"$T/fscript.txt"
+xrun -a -s "-screen 0 1024x768x24" "$PRT" view "$T/demo.prt" --width 160 --height 120 --eye 0,1,3 --target 0,0.5,0 --fov 50 --script "$T/fscript.txt" >/dev/null 2>"$T/err" \
+    && ok || { bad "fly script"; sed 's/^/    /' "$T/err"; }
+"$PRT" render -q "$T/demo.prt" -o "$T/f_ref.exr" --width 160 --height 120 --eye 0,1,3 --target 0,0.5,0 --fov 50
+within "$T/f0.exr" "$T/f_ref.exr" 0.002   # --eye --target --fov: the same first frame as prt render
+for pair in "f0 f1" "f1 f2"; do
+    set -- $pair
+    "$PRT" compare "$T/$1.exr" "$T/$2.exr" --json - -q >"$T/cmp" 2>&1
+    m=$(sed -n 's/.*"max_abs":[[:space:]]*\([0-9.eE+-]*\).*/\1/p' "$T/cmp")
+    awk -v m="$m" 'BEGIN { exit !(m + 0 > 0.01) }' && ok || bad "fly mode: $1 and $2 are the same image"
+done
 
 # Bad scripts: a clear error, exit 2, before any window opens.
 # Glossy: the viewer draws the view-dependent part per pixel exactly as prt render does, the
@@ -172,7 +186,7 @@ printf '0 frobnicate 1 2\n' >"$T/bad.txt"
 xrun -a "$PRT" view "$T/demo.prt" --script "$T/bad.txt" >/dev/null 2>"$T/err"
 rc=$?
 [ "$rc" -eq 2 ] && grep -q "bad.txt:1" "$T/err" && ok || { bad "bad script: exit $rc"; cat "$T/err"; }
-printf '0 key z\n' >"$T/badkey.txt"
+printf '0 key j\n' >"$T/badkey.txt"
 xrun -a "$PRT" view "$T/demo.prt" --script "$T/badkey.txt" >/dev/null 2>"$T/err"
 rc=$?
 [ "$rc" -eq 2 ] && grep -q "no control is bound" "$T/err" && ok || { bad "unbound key: exit $rc"; cat "$T/err"; }

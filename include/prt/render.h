@@ -79,6 +79,13 @@ prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_ca
  * default three-quarter view). */
 void prt_camera_frame(const float lo[3], const float hi[3], const float *from, float fov_y_deg,
                       float aspect, prt_camera *out);
+/* Auto framing for a mesh (positions, triangles): prt_camera_frame's view of its box, unless the
+ * mesh closes around a point near its centre (a room, the Cornell box, a courtyard: from there
+ * most directions meet surfaces facing it). Then the camera is inside, backed towards the wall in
+ * direction `from`, looking across, with a 70 degree field of view unless fov_y_deg > 0 asks
+ * otherwise. Returns 1 for a view from inside, 0 otherwise. ctx may be NULL (outside only). */
+int prt_camera_frame_mesh(prt_context *ctx, const float *positions, size_t vertex_count, const uint32_t *indices, size_t triangle_count,
+                          const float *from, float fov_y_deg, float aspect, prt_camera *out);
 /* The GL renderer string, for reports ("llvmpipe ..."). */
 const char *prt_renderer_name(const prt_renderer *r);
 

@@ -231,17 +231,27 @@ static void draw_text(prt_window *w, const char *text, int fw, int fh)
     float *v = (float *)quads;
     /* Scale, offset, and a dark shadow quad set under the text for legibility. */
     size_t nv = (size_t)nq * 4;
-    float *buf = malloc(nv * 2 * 7 * sizeof(float));
-    uint32_t *idx = malloc((size_t)nq * 2 * 6 * sizeof(uint32_t));
+    const size_t quads_all = 1 + (size_t)nq * 2;   /* a backing panel, then shadow and text */
+    float *buf = malloc(quads_all * 4 * 7 * sizeof(float));
+    uint32_t *idx = malloc(quads_all * 6 * sizeof(uint32_t));
     if (!buf || !idx) { free(buf); free(idx); return; }
+    /* The panel: the text's box and a margin, dark and translucent, so text reads over any scene. */
+    float x1 = 0, y1 = 0;
+    for (size_t i = 0; i < nv; ++i) { x1 = fmaxf(x1, v[i * 4]); y1 = fmaxf(y1, v[i * 4 + 1]); }
+    const float px[4] = {2, 14 + x1 * scale, 14 + x1 * scale, 2}, py[4] = {2, 2, 14 + y1 * scale, 14 + y1 * scale};
+    for (int k = 0; k < 4; ++k) {
+        float *o = buf + (size_t)k * 7;
+        o[0] = px[k]; o[1] = py[k]; o[2] = 0;
+        o[3] = o[4] = o[5] = 0.02f; o[6] = 0.6f;
+    }
     for (int pass = 0; pass < 2; ++pass)
         for (size_t i = 0; i < nv; ++i) {
-            float *o = buf + ((size_t)pass * nv + i) * 7;
+            float *o = buf + (4 + (size_t)pass * nv + i) * 7;
             float off = pass == 0 ? 1.0f : 0.0f;
             o[0] = 8 + v[i * 4] * scale + off; o[1] = 8 + v[i * 4 + 1] * scale + off; o[2] = 0;
             o[3] = o[4] = o[5] = pass == 0 ? 0.0f : 1.0f; o[6] = 1.0f;
         }
-    for (size_t q = 0; q < (size_t)nq * 2; ++q) {
+    for (size_t q = 0; q < quads_all; ++q) {
         uint32_t b = (uint32_t)(q * 4), t[6] = {b, b + 1, b + 2, b, b + 2, b + 3};
         memcpy(idx + q * 6, t, sizeof t);
     }
@@ -249,15 +259,18 @@ static void draw_text(prt_window *w, const char *text, int fw, int fh)
     glUniform2f(w->text_screen, (float)fw, (float)fh);
     glBindVertexArray(w->text_vao);
     glBindBuffer(GL_ARRAY_BUFFER, w->text_vbo);
-    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(nv * 2 * 7 * sizeof(float)), buf, GL_STREAM_DRAW);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(quads_all * 4 * 7 * sizeof(float)), buf, GL_STREAM_DRAW);
     glEnableVertexAttribArray(0);
     glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 7 * sizeof(float), NULL);
     glEnableVertexAttribArray(1);
     glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, 7 * sizeof(float), (void *)(3 * sizeof(float)));
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, w->text_ibo);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)((size_t)nq * 2 * 6 * sizeof(uint32_t)), idx, GL_STREAM_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(quads_all * 6 * sizeof(uint32_t)), idx, GL_STREAM_DRAW);
     glDisable(GL_DEPTH_TEST);
-    glDrawElements(GL_TRIANGLES, nq * 2 * 6, GL_UNSIGNED_INT, NULL);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    glDrawElements(GL_TRIANGLES, (GLsizei)(quads_all * 6), GL_UNSIGNED_INT, NULL);
+    glDisable(GL_BLEND);
     glBindVertexArray(0);
     free(buf);
     free(idx);

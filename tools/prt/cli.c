@@ -176,25 +176,69 @@ static double now_seconds(void)
     return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
+/* Stage times for the bake's report: one entry per stage name, in the order first seen. */
+#define MAX_STAGES 256
+static char stage_names[MAX_STAGES][64];
+static const char *stage_name_ptrs[MAX_STAGES];
+static double stage_seconds[MAX_STAGES];
+static int stage_count;
+
+int cli_stage_times(const char *const **names, const double **seconds)
+{
+    for (int i = 0; i < stage_count; ++i) stage_name_ptrs[i] = stage_names[i];
+    *names = stage_name_ptrs;
+    *seconds = stage_seconds;
+    return stage_count;
+}
+
 int cli_progress(void *user, const char *stage, uint64_t done, uint64_t total)
 {
     const cli *c = user;
     static char current[64];
     static double start;
-    static int logged;   /* plain lines: the last tenth reported */
-    if (c->quiet) return interrupted;
+    static int logged;   /* plain lines: the last tenth reported; json: the last percent */
+    static int slot = -1;
     double t = now_seconds();
     const bool fresh = strcmp(current, stage) != 0;
     if (fresh) {
         snprintf(current, sizeof current, "%s", stage);
         start = t;
         logged = -1;
+        slot = -1;
+        for (int i = 0; i < stage_count && slot < 0; ++i)
+            if (!strcmp(stage_names[i], current)) slot = i;
+        if (slot < 0 && stage_count < MAX_STAGES) {
+            slot = stage_count++;
+            snprintf(stage_names[slot], sizeof stage_names[slot], "%s", current);
+            stage_seconds[slot] = 0;
+        }
     }
     double frac = total ? (double)done / (double)total : 1.0, elapsed = t - start;
+    if (slot >= 0) stage_seconds[slot] = elapsed;   /* a stage's time: its first report to its last */
+    if (c->quiet) return interrupted;
     char eta[32] = "--";
     if (frac > 0.01 && frac < 1.0) snprintf(eta, sizeof eta, "%.0f s", elapsed * (1.0 - frac) / frac);
     else if (frac >= 1.0) snprintf(eta, sizeof eta, "done");
-    if (!isatty(STDERR_FILENO)) {
+    if (c->progress == CLI_PROGRESS_JSON) {
+        /* Scripts: an object per whole percent, and at each stage's start and end. */
+        const int percent = (int)(frac * 100.0);
+        if (percent > logged) {
+            logged = percent;
+            const double eta_s = frac > 0.01 && frac < 1.0 ? elapsed * (1.0 - frac) / frac : frac >= 1.0 ? 0.0 : -1.0;
+            char name[130];
+            size_t k = 0;
+            for (const char *p = stage; *p && k + 2 < sizeof name; ++p) {   /* stage names are plain text; keep JSON valid anyway */
+                if (*p == '"' || *p == '\\') name[k++] = '\\';
+                name[k++] = (unsigned char)*p < 0x20 ? ' ' : *p;
+            }
+            name[k] = 0;
+            fprintf(stderr, "{\"stage\": \"%s\", \"done\": %llu, \"total\": %llu, \"percent\": %.1f, \"elapsed_s\": %.3f, \"eta_s\": %.3f}\n", name,
+                    (unsigned long long)done, (unsigned long long)total, 100.0 * frac, elapsed, eta_s);
+            fflush(stderr);
+        }
+        return interrupted;
+    }
+    if (c->progress == CLI_PROGRESS_LINES || !isatty(STDERR_FILENO)) {
         /* Logs, CI, nohup: a line when a stage starts and at every tenth, no control characters. */
         const int tenth = (int)(frac * 10.0);
         if (tenth > logged) {
@@ -220,10 +264,17 @@ int cli_view_option(const cli *c, cli_view *v, int opt, const char *arg)
     switch (opt) {
     case OPT_WIDTH: if (!cli_parse_int(arg, 1, 8192, &v->width)) { cli_usage(c, "--width must be 1..8192"); return -1; } return 1;
     case OPT_HEIGHT: if (!cli_parse_int(arg, 1, 8192, &v->height)) { cli_usage(c, "--height must be 1..8192"); return -1; } return 1;
-    case OPT_VIEW: if (!cli_parse_vec3(arg, false, v->view)) { cli_usage(c, "--view takes X,Y,Z"); return -1; } v->have_view = true; return 1;
+    case OPT_VIEW:
+        if (!cli_parse_vec3(arg, false, v->view)) { cli_usage(c, "--view takes X,Y,Z"); return -1; }
+        if (v->view[0] == 0 && v->view[1] == 0 && v->view[2] == 0) { cli_usage(c, "--view is a direction towards the camera: not 0,0,0"); return -1; }
+        v->have_view = true;
+        return 1;
     case OPT_EYE: if (!cli_parse_vec3(arg, false, v->eye)) { cli_usage(c, "--eye takes X,Y,Z"); return -1; } v->have_eye = true; return 1;
     case OPT_TARGET: if (!cli_parse_vec3(arg, false, v->target)) { cli_usage(c, "--target takes X,Y,Z"); return -1; } v->have_target = true; return 1;
-    case OPT_FOV: if (!cli_parse_float(arg, &v->fov) || v->fov <= 1 || v->fov >= 179) { cli_usage(c, "--fov must be in (1, 179)"); return -1; } return 1;
+    case OPT_FOV:
+        if (!cli_parse_float(arg, &v->fov) || v->fov <= 1 || v->fov >= 179) { cli_usage(c, "--fov must be in (1, 179)"); return -1; }
+        v->have_fov = true;
+        return 1;
     case OPT_EXPOSURE: if (!cli_parse_float(arg, &v->save.exposure_stops)) { cli_usage(c, "--exposure takes a number of stops"); return -1; } return 1;
     case OPT_TONEMAP:
         if (!strcasecmp(arg, "reinhard")) v->save.tonemap = 1;
@@ -235,21 +286,30 @@ int cli_view_option(const cli *c, cli_view *v, int opt, const char *arg)
     return 0;
 }
 
-void cli_view_camera(const cli_view *v, const float *p, size_t nv, float aspect, prt_camera *cam)
+void cli_view_camera(const cli *c, const cli_view *v, const float *p, size_t nv, const uint32_t *indices, size_t nt, float aspect,
+                     prt_camera *cam)
 {
-    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
-    for (size_t i = 0; i < nv * 3; ++i) {
-        if (p[i] < lo[i % 3]) lo[i % 3] = p[i];
-        if (p[i] > hi[i % 3]) hi[i % 3] = p[i];
+    if (v->have_eye) {   /* no framing to find: the camera is given */
+        memset(cam, 0, sizeof *cam);
+        memcpy(cam->eye, v->eye, sizeof v->eye);
+        memcpy(cam->target, v->target, sizeof v->target);
+        cam->up[1] = 1;
+        cam->fov_y_deg = v->fov;
+        return;
     }
-    prt_camera_frame(lo, hi, v->have_view ? v->view : NULL, v->fov, aspect, cam);
-    if (v->have_eye) { memcpy(cam->eye, v->eye, sizeof v->eye); memcpy(cam->target, v->target, sizeof v->target); }
+    prt_camera_frame_mesh(c ? c->ctx : NULL, p, nv, indices, nt, v->have_view ? v->view : NULL, v->have_fov ? v->fov : 0, aspect, cam);
 }
 
 /* ---- scene ---- */
-int cli_scene_option(const cli *c, prt_scene_desc *sd, int opt, const char *arg)
+int cli_scene_option(cli *c, prt_scene_desc *sd, int opt, const char *arg)
 {
     switch (opt) {
+    case OPT_PROGRESS:
+        if (!strcmp(arg, "auto")) c->progress = CLI_PROGRESS_AUTO;
+        else if (!strcmp(arg, "lines")) c->progress = CLI_PROGRESS_LINES;
+        else if (!strcmp(arg, "json")) c->progress = CLI_PROGRESS_JSON;
+        else { cli_usage(c, "--progress must be auto, lines or json"); return -1; }
+        return 1;
     case OPT_MAX_EDGE:
         if (!cli_parse_float(arg, &sd->max_edge) || sd->max_edge <= 0) { cli_usage(c, "--max-edge must be > 0"); return -1; }
         return 1;
@@ -543,6 +603,16 @@ int cli_controls(const cli *c, const cli_light *l, const prt_transfer *t, int va
 prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,
                        bool with_indirect, prt_relit *out)
 {
+    /* A run-time lobe shapes SH glossy sets that hold incident light, and nothing else. */
+    const bool sh_sets = prt_transfer_channels(t, PRT_TRANSFER_UNSHADOWED) || prt_transfer_channels(t, PRT_TRANSFER_SHADOWED) ||
+                         prt_transfer_channels(t, PRT_TRANSFER_INTERREFLECTED);
+    if (l && l->have_brdf && sh_sets && !prt_transfer_channels(t, PRT_TRANSFER_GLOSSY_SHADOWED) && !prt_transfer_channels(t, PRT_TRANSFER_GLOSSY_INTERREFLECTED)) {
+        /* Other methods refuse a run-time lobe themselves, saying why. */
+        cli_error(c, "--brdf shapes glossy SH sets baked without a BRDF, and this %s file has none (prt info lists what it holds)",
+                  prt_method_name(prt_transfer_method(t)));
+        ((cli *)c)->reported = true;
+        return PRT_ERR_INVALID_ARG;
+    }
     prt_relight_desc d;
     memset(&d, 0, sizeof d);
     d.variant = variant;

@@ -21,8 +21,11 @@ enum {
     "Exit codes: 0 success, 1 bad or missing input, 2 usage error, 3 backend failure,\n" \
     "            4 out of memory, 130 interrupted (no output written).\n"
 
+typedef enum { CLI_PROGRESS_AUTO = 0, CLI_PROGRESS_LINES, CLI_PROGRESS_JSON } cli_progress_mode;
+
 typedef struct cli {
     bool quiet;
+    cli_progress_mode progress;   /* auto: a bar on a terminal, lines otherwise */
     int threads;
     prt_context *ctx;
     const char *cmd;
@@ -148,16 +151,25 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     "                         (auto flips closed pieces without normals wound inside out, but\n" \
     "                         keeps those enclosing other geometry: rooms face in)\n" \
     "      --import-timeout S  give up on a mesh file that the importer has not read in S seconds\n" \
-    "                         (default 60 + 10 per MB; a malformed file can make it loop)\n"
-enum { OPT_MAX_EDGE = 1100, OPT_ALBEDO, OPT_DEFAULT_ALBEDO, OPT_CREASE, OPT_WINDING, OPT_IMPORT_TIMEOUT };
+    "                         (default 60 + 10 per MB; a malformed file can make it loop)\n" \
+    "      --progress P       auto (a bar on a terminal, else a line per tenth with ETA), lines,\n" \
+    "                         or json (one object per line: stage, done, total, percent,\n" \
+    "                         elapsed_s, eta_s - for scripts)\n"
+enum { OPT_MAX_EDGE = 1100, OPT_ALBEDO, OPT_DEFAULT_ALBEDO, OPT_CREASE, OPT_WINDING, OPT_IMPORT_TIMEOUT, OPT_PROGRESS };
 #define CLI_SCENE_LONG_OPTIONS \
     {"max-edge", required_argument, 0, OPT_MAX_EDGE}, {"albedo", required_argument, 0, OPT_ALBEDO}, \
     {"default-albedo", required_argument, 0, OPT_DEFAULT_ALBEDO}, {"crease-angle", required_argument, 0, OPT_CREASE}, \
-    {"winding", required_argument, 0, OPT_WINDING}, {"import-timeout", required_argument, 0, OPT_IMPORT_TIMEOUT}
-/* Returns 1 if consumed, 0 if not a scene option, -1 after reporting a bad value. */
-int cli_scene_option(const cli *c, prt_scene_desc *sd, int opt, const char *arg);
+    {"winding", required_argument, 0, OPT_WINDING}, {"import-timeout", required_argument, 0, OPT_IMPORT_TIMEOUT}, \
+    {"progress", required_argument, 0, OPT_PROGRESS}
+/* Returns 1 if consumed, 0 if not a scene option, -1 after reporting a bad value. Also takes
+ * --progress (the commands that load scenes are the long ones). */
+int cli_scene_option(cli *c, prt_scene_desc *sd, int opt, const char *arg);
+/* The stages cli_progress has seen and how long each took, in order. */
+int cli_stage_times(const char *const **names, const double **seconds);
 
 /* ---- per-vertex and image results (results.c) ---- */
+/* Writes text and a newline to path atomically (a temporary beside it, then renamed). */
+prt_status cli_write_text(const char *path, const char *text);
 typedef struct cli_vertex_field { const char *name; const float *rgb; } cli_vertex_field;
 /* {"kind": kind, "vertex_count": n, NAME: [[r, g, b], ...], ...}, written atomically. */
 prt_status cli_write_vertex_json(const char *path, const char *kind, size_t nv, const cli_vertex_field *fields, int nfields);
@@ -192,15 +204,17 @@ typedef struct cli_view {
     bool have_view, have_eye, have_target;
     float view[3], eye[3], target[3], fov, background[3];
     prt_image_save_desc save;
+    bool have_fov;   /* else 40 degrees outside, 70 inside a room (auto framing) */
 } cli_view;
-#define CLI_VIEW_DEFAULTS {800, 600, false, false, false, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, 40.0f, {0.02f, 0.02f, 0.02f}, {0, 0}}
+#define CLI_VIEW_DEFAULTS {800, 600, false, false, false, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, 40.0f, {0.02f, 0.02f, 0.02f}, {0, 0}, false}
 #define CLI_VIEW_OPTIONS_HELP \
     "      --width N          image width in pixels (default 800; per panel for render)\n" \
     "      --height N         image height in pixels (default 600)\n" \
-    "      --view X,Y,Z       direction from the scene centre towards the camera (auto framing)\n" \
+    "      --view X,Y,Z       direction from the scene centre towards the camera (auto framing:\n" \
+    "                         from inside when the scene closes around its centre, as rooms do)\n" \
     "      --eye X,Y,Z        camera position (with --target: overrides auto framing)\n" \
     "      --target X,Y,Z     point the camera looks at\n" \
-    "      --fov DEG          vertical field of view (default 40)\n" \
+    "      --fov DEG          vertical field of view (default 40; 70 inside a closed scene)\n" \
     "      --exposure STOPS   PNG: scale radiance by 2^STOPS before tone mapping (default 0)\n" \
     "      --tonemap T        PNG: reinhard (default) or clamp\n" \
     "      --background R,G,B linear radiance where no surface is hit (default 0.02)\n"
@@ -211,8 +225,10 @@ enum { OPT_WIDTH = 1200, OPT_HEIGHT, OPT_VIEW, OPT_EYE, OPT_TARGET, OPT_FOV, OPT
     {"exposure", required_argument, 0, OPT_EXPOSURE}, {"tonemap", required_argument, 0, OPT_TONEMAP}, \
     {"background", required_argument, 0, OPT_BACKGROUND}
 int cli_view_option(const cli *c, cli_view *v, int opt, const char *arg);
-/* The camera for a mesh's positions: auto framing unless --eye/--target were given. */
-void cli_view_camera(const cli_view *v, const float *positions, size_t nv, float aspect, prt_camera *cam);
+/* The camera for a mesh: auto framing (from inside when the mesh closes around its centre)
+ * unless --eye/--target were given. */
+void cli_view_camera(const cli *c, const cli_view *v, const float *positions, size_t nv, const uint32_t *indices, size_t nt, float aspect,
+                     prt_camera *cam);
 
 /* The method a command line names with --method NAME (or --method=NAME) before parsing it,
  * the default method when it names none; NULL after reporting an unknown name. */

@@ -1,5 +1,6 @@
 #include "cli.h"
 
+#include <cjson/cJSON.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -20,14 +21,16 @@ static const char *HELP_HEAD =
     "                         work unit, can be as large as the bake's memory, and is deleted\n"
     "                         once FILE is written)\n"
     "      --method M         the PRT method (default sh); each has the options listed below\n"
-    "                         (prt bake --method M --help shows one method's)\n";
+    "                         (prt bake --method M --help shows one method's)\n"
+    "      --summary FILE     also write a JSON summary: input, output, method, mesh, storage,\n"
+    "                         each stage's seconds (compression among them) and the total\n";
 
 static const char *HELP_TAIL =
     "  -j, --threads N        worker threads (default: all cores; results do not change)\n"
     "  -q, --quiet            no progress or warnings\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
-enum { OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_METHOD_OPTION = 3000 };
+enum { OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_METHOD_OPTION = 3000 };
 
 static void help(const prt_method *only)
 {
@@ -47,7 +50,7 @@ static int collect_options(const prt_method *chosen, struct option *opts, int ma
 {
     static const struct option fixed[] = {
         {"output", required_argument, 0, 'o'}, {"method", required_argument, 0, OPT_METHOD}, {"resume", no_argument, 0, OPT_RESUME},
-        {"no-checkpoint", no_argument, 0, OPT_NO_CHECKPOINT}, CLI_SCENE_LONG_OPTIONS,
+        {"no-checkpoint", no_argument, 0, OPT_NO_CHECKPOINT}, {"summary", required_argument, 0, OPT_SUMMARY}, CLI_SCENE_LONG_OPTIONS,
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}};
     int n = 0;
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; ++i) opts[n++] = fixed[i];
@@ -118,11 +121,44 @@ static void coarse_mesh_warning(const prt_scene *scene)
             "blocky there (try --max-edge %.3g: about %.0f triangles, or --texels N for a light map)\n", big_count, big, 100 * big_area / area, edge, after);
 }
 
+/* The bake as JSON for scripts and CI: what went in, what came out, where the time went. */
+static prt_status write_summary(cli *c, const char *path, const char *input, const char *output, const prt_transfer *t)
+{
+    prt_transfer_info info;
+    prt_transfer_get_info(t, &info);
+    cJSON *j = cJSON_CreateObject(), *stages = j ? cJSON_AddArrayToObject(j, "stages") : NULL;
+    if (!j || !stages) { cJSON_Delete(j); return PRT_ERR_NO_MEMORY; }
+    cJSON_AddStringToObject(j, "input", input);
+    cJSON_AddStringToObject(j, "output", output);
+    cJSON_AddStringToObject(j, "method", prt_method_name(prt_transfer_method(t)));
+    cJSON_AddNumberToObject(j, "vertices", (double)info.vertex_count);
+    cJSON_AddNumberToObject(j, "triangles", (double)info.triangle_count);
+    cJSON_AddNumberToObject(j, "transfer_bytes", (double)info.transfer_bytes);
+    const char *const *names;
+    const double *secs;
+    const int ns = cli_stage_times(&names, &secs);
+    for (int i = 0; i < ns; ++i) {
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddStringToObject(o, "name", names[i]);
+        cJSON_AddNumberToObject(o, "seconds", secs[i]);
+        cJSON_AddItemToArray(stages, o);
+    }
+    cJSON_AddNumberToObject(j, "bake_seconds", info.bake_seconds);
+    char *text = cJSON_Print(j);
+    cJSON_Delete(j);
+    if (!text) return PRT_ERR_NO_MEMORY;
+    const prt_status st = cli_write_text(path, text);
+    cJSON_free(text);
+    if (st) { cli_error(c, "cannot write the summary '%s'", path); c->reported = true; }
+    return st;
+}
+
 int cmd_bake(int argc, char **argv)
 {
     cli c = {.cmd = "bake"};
     prt_scene_desc sd = {0};
     const char *output = NULL;
+    const char *summary = NULL;
     bool resume = false, checkpoint = true;
     const prt_method *method = cli_method_from_argv(&c, argc, argv);
     if (!method) return EXIT_USAGE;
@@ -148,6 +184,7 @@ int cmd_bake(int argc, char **argv)
         case 'o': output = optarg; break;
         case OPT_RESUME: resume = true; break;
         case OPT_NO_CHECKPOINT: checkpoint = false; break;
+        case OPT_SUMMARY: summary = optarg; break;
         case OPT_METHOD:
             /* Read before parsing; getopt also accepts abbreviations such as --meth, which that
              * scan does not see. */
@@ -194,10 +231,20 @@ int cmd_bake(int argc, char **argv)
         char *report = NULL;
         if (!prt_transfer_bake_report(t, &report)) cli_print_lines(stderr, "prt bake: ", report);
         free(report);
+        /* Where the time went, stage by stage (compression is its own stage). */
+        const char *const *names;
+        const double *secs;
+        const int ns = cli_stage_times(&names, &secs);
+        char line[2048];
+        size_t at = 0;
+        for (int i = 0; i < ns && at < sizeof line; ++i)
+            at += (size_t)snprintf(line + at, sizeof line - at, "%s%s %.2f s", i ? ", " : "", names[i], secs[i]);
+        if (ns) fprintf(stderr, "prt bake: stage times: %s\n", line);
     }
     if (!st) st = cli_check_interrupt(&c);
     if (!st) st = prt_transfer_save(t, output);
     if (!st && checkpoint) remove(checkpoint_path);   /* the result is safe: nothing to resume */
+    if (!st && summary) st = write_summary(&c, summary, argv[optind], output, t);
     if (!st && !c.quiet) {
         char *text = NULL;
         if (!prt_transfer_describe(t, output, 0, &text)) {

@@ -189,7 +189,8 @@ int cmd_compare(int argc, char **argv)
             } else {
                 prt_renderer *r = NULL;
                 prt_camera cam;
-                cli_view_camera(&view, prt_transfer_positions(t), prt_transfer_vertex_count(t), (float)view.width / view.height, &cam);
+                cli_view_camera(&c, &view, prt_transfer_positions(t), prt_transfer_vertex_count(t), prt_transfer_indices(t), prt_transfer_triangle_count(t),
+                                (float)view.width / view.height, &cam);
                 st = prt_renderer_create(c.ctx, &(prt_renderer_desc){view.width, view.height, 0}, &r);
                 prt_render_mesh mesh = {.positions = prt_transfer_positions(t), .radiance = err, .vertex_count = prt_transfer_vertex_count(t),
                                         .indices = prt_transfer_indices(t), .triangle_count = prt_transfer_triangle_count(t)};

@@ -86,7 +86,8 @@ int cmd_render(int argc, char **argv)
         if (!rgb || !sheet.rgb) st = PRT_ERR_NO_MEMORY;
     }
     prt_camera cam;
-    if (!st && !rc) cli_view_camera(&view, prt_transfer_positions(t), prt_transfer_vertex_count(t), (float)width / height, &cam);
+    if (!st && !rc) cli_view_camera(&c, &view, prt_transfer_positions(t), prt_transfer_vertex_count(t), prt_transfer_indices(t), prt_transfer_triangle_count(t),
+                                   (float)width / height, &cam);
     for (int k = 0; k < count && !st && !rc; ++k) {
         prt_relit relit;
         if ((st = cli_relight(&c, t, lighting, &light, variants[k], per_vertex, false, &relit))) break;

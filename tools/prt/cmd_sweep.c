@@ -238,7 +238,7 @@ int cmd_sweep(int argc, char **argv)
             if (indirect && !r.indirect) { prt_relit_free(&r); continue; }   /* this kind holds no bounced light of its own */
             cli_view view = CLI_VIEW_DEFAULTS;
             prt_camera cam;
-            cli_view_camera(&view, prt_scene_positions(scene), ref.nv, (float)view.width / view.height, &cam);
+            cli_view_camera(&c, &view, prt_scene_positions(scene), ref.nv, prt_scene_indices(scene), prt_scene_triangle_count(scene), (float)view.width / view.height, &cam);
             st = prt_relit_shade(c.ctx, t, &r, cam.eye, rgb);
             const float *a = indirect ? r.indirect : rgb, *b = indirect ? ref.indirect : ref.radiance;
             double se = 0, sb = 0, mx = 0;

@@ -17,18 +17,22 @@ static const char *HELP =
     "Opens a window and relights the baked file in real time (OpenGL 3.3 through GLFW; needs a\n"
     "display - run under xvfb-run without one). The first frame equals prt render with the same\n"
     "size, camera and lighting.\n\n"
-    "Mouse: left-drag orbits, right-drag (or shift+left) pans, wheel zooms,\n"
+    "Mouse: left-drag orbits (in fly mode: looks around), right-drag (or shift+left) pans,\n"
+    "       wheel zooms,\n"
     "       ctrl+left-drag rotates the environment lighting,\n"
     "       alt+left-drag moves the selected light in the view plane (turns a directional one),\n"
     "       alt+right-drag or alt+wheel moves it in depth.\n"
     "Keys:  h lists them all; k what the file is relit as, d full/direct/indirect, the method's\n"
     "       own controls (h lists them, e.g. [ ] for the SH order), n add a light,\n"
     "       tab select the next, x remove it, , . dim/brighten, c recolour,\n"
-    "       + - exposure, t tone mapping, l reload probe, p screenshot, 0 reset, q quit.\n"
+    "       + - exposure, t tone mapping, l reload probe, p screenshot, 0 reset, q quit;\n"
+    "       f fly mode: w a s d move, e z rise and sink (walk into a room or Sponza).\n"
     "       Lighting changes relight; camera moves only redraw (view-dependent parts are\n"
     "       evaluated per pixel).\n\n"
     "      --width N --height N   window size (default 1024 x 768)\n"
     "      --exposure STOPS       initial exposure (default 0)\n"
+    "      --view X,Y,Z --eye X,Y,Z --target X,Y,Z --fov DEG   the starting camera, as prt render\n"
+    "                             takes it (auto framing from inside rooms and the Cornell box)\n"
     "      --script FILE          replay timed input and exit when it ends: lines\n"
     "                             'SECONDS VERB ARGS' with verbs orbit DYAW DPITCH, pan DX DY,\n"
     "                             zoom F, env-rotate YAW PITCH, key NAME, drag left|right DX DY\n"
@@ -80,8 +84,37 @@ static void begin_move(viewer *v)
 void view_orbit(viewer *v, float dyaw, float dpitch)
 {
     begin_move(v);
+    prt_camera before;
+    view_camera(v, &before);
     v->yaw += dyaw * PI_F / 180.0f;
     v->pitch = fminf(fmaxf(v->pitch + dpitch * PI_F / 180.0f, -1.55f), 1.55f);
+    if (v->fly) {
+        /* Looking around: the eye stays, the target swings round it (the opposite way, so that
+         * dragging right looks right). */
+        v->yaw -= 2 * dyaw * PI_F / 180.0f;
+        v->pitch = fminf(fmaxf(v->pitch - 2 * dpitch * PI_F / 180.0f, -1.55f), 1.55f);
+        const float cp = cosf(v->pitch), sp = sinf(v->pitch), cy = cosf(v->yaw), sy = sinf(v->yaw);
+        v->target[0] = before.eye[0] - v->dist * cp * sy;
+        v->target[1] = before.eye[1] - v->dist * sp;
+        v->target[2] = before.eye[2] - v->dist * cp * cy;
+    }
+    v->dirty = true;
+}
+
+void view_fly(viewer *v, float forward, float right, float up)
+{
+    begin_move(v);
+    prt_camera cam;
+    view_camera(v, &cam);
+    float f[3] = {cam.target[0] - cam.eye[0], cam.target[1] - cam.eye[1], cam.target[2] - cam.eye[2]};
+    const float fl = sqrtf(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+    if (!(fl > 0)) return;
+    for (int k = 0; k < 3; ++k) f[k] /= fl;
+    float r[3] = {-f[2], 0, f[0]};
+    const float rl = sqrtf(r[0] * r[0] + r[2] * r[2]);
+    if (rl > 0) { r[0] /= rl; r[2] /= rl; }
+    const float step = 0.02f * (v->scene_size > 0 ? v->scene_size : 1.0f);
+    for (int k = 0; k < 3; ++k) v->target[k] += step * (forward * f[k] + right * r[k] + (k == 1 ? up : 0));
     v->dirty = true;
 }
 
@@ -264,6 +297,13 @@ static void status_line(const viewer *v, char *buf, size_t n)
     }
     if (v->surface && len > 0 && (size_t)len < n) len += snprintf(buf + len, n - (size_t)len, "\nsurface: %s", prt_transfer_surface_name(v->t, v->surface));
     if (v->message[0] && len > 0 && (size_t)len < n) len += snprintf(buf + len, n - (size_t)len, "\n%s", v->message);
+    static const char *const mouse[] = {
+        "  drag    orbit (fly mode: look around)", "  right-drag, shift+drag   pan", "  wheel   zoom",
+        "  ctrl+drag   rotate the environment lighting",
+        "  alt+drag    move the selected light across the view (alt+right-drag, alt+wheel: in depth)"};
+    if (v->help)
+        for (size_t i = 0; i < sizeof mouse / sizeof mouse[0] && len > 0 && (size_t)len < n; ++i)
+            len += snprintf(buf + len, n - (size_t)len, "\n%s", mouse[i]);
     if (v->help)
         for (int i = 0; i < v->ncontrols && len > 0 && (size_t)len < n; ++i)
             len += snprintf(buf + len, n - (size_t)len, "\n  %-7s %s", v->controls[i].name, v->controls[i].help);
@@ -349,9 +389,12 @@ int cmd_view(int argc, char **argv)
     int width = 1024, height = 768;
     const char *script_path = NULL;
     bool stats = false;
+    cli_view view = CLI_VIEW_DEFAULTS;
     static const struct option opts[] = {
         {"width", required_argument, 0, OPT_W}, {"height", required_argument, 0, OPT_H}, {"exposure", required_argument, 0, OPT_EXP},
         {"script", required_argument, 0, OPT_SCRIPT}, {"stats", no_argument, 0, OPT_STATS}, CLI_LIGHT_LONG_OPTIONS,
+        {"view", required_argument, 0, OPT_VIEW}, {"eye", required_argument, 0, OPT_EYE}, {"target", required_argument, 0, OPT_TARGET},
+        {"fov", required_argument, 0, OPT_FOV},
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int opt;
     optind = 1;
@@ -360,6 +403,10 @@ int cmd_view(int argc, char **argv)
         int r = cli_light_option(&c, &v.light, opt, optarg);
         if (r < 0) return EXIT_USAGE;
         if (r) continue;
+        if (opt == OPT_VIEW || opt == OPT_EYE || opt == OPT_TARGET || opt == OPT_FOV) {   /* the camera, as prt render takes it */
+            if (cli_view_option(&c, &view, opt, optarg) < 0) return EXIT_USAGE;
+            continue;
+        }
         switch (opt) {
         case OPT_W: if (!cli_parse_int(optarg, 16, 8192, &width)) return cli_usage(&c, "--width must be 16..8192"); break;
         case OPT_H: if (!cli_parse_int(optarg, 16, 8192, &height)) return cli_usage(&c, "--height must be 16..8192"); break;
@@ -373,6 +420,7 @@ int cmd_view(int argc, char **argv)
         }
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one FILE.prt argument");
+    if (view.have_eye != view.have_target) return cli_usage(&c, "--eye and --target go together");
     view_script *script = NULL;
     int rc = script_path ? view_script_load(&c, script_path, &script) : EXIT_OK;
     if (rc) return rc;
@@ -420,10 +468,15 @@ int cmd_view(int argc, char **argv)
     }
     int fw, fh;
     prt_window_size(v.win, &fw, &fh);
-    prt_camera_frame((float[3]){0, 0, 0}, (float[3]){0, 0, 0}, NULL, 40, 1, &v.start_cam);
     {
-        cli_view view = CLI_VIEW_DEFAULTS;   /* the same framing as prt render */
-        cli_view_camera(&view, prt_transfer_positions(v.t), nv, (float)fw / fh, &v.start_cam);
+        const float *p = prt_transfer_positions(v.t);
+        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (size_t i = 0; i < nv * 3; ++i) { lo[i % 3] = fminf(lo[i % 3], p[i]); hi[i % 3] = fmaxf(hi[i % 3], p[i]); }
+        v.scene_size = nv ? sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2])) : 1.0f;
+    }
+    prt_camera_frame((float[3]){0, 0, 0}, (float[3]){0, 0, 0}, NULL, 40, 1, &v.start_cam);
+    {   /* the same framing as prt render */
+        cli_view_camera(&c, &view, prt_transfer_positions(v.t), nv, prt_transfer_indices(v.t), prt_transfer_triangle_count(v.t), (float)fw / fh, &v.start_cam);
     }
     v.result_version = v.shown_version = v.want.version;
     pthread_mutex_init(&v.lock, NULL);

@@ -28,6 +28,16 @@ static prt_status close_temp(FILE *f, const char *tmp, const char *path)
     return PRT_OK;
 }
 
+prt_status cli_write_text(const char *path, const char *text)
+{
+    char tmp[1100];
+    FILE *f = open_temp(path, tmp, sizeof tmp);
+    if (!f) return PRT_ERR_IO;
+    fputs(text, f);
+    fputc('\n', f);
+    return close_temp(f, tmp, path);
+}
+
 prt_status cli_write_vertex_json(const char *path, const char *kind, size_t nv, const cli_vertex_field *fields, int nfields)
 {
     char tmp[1100];
@@ -129,7 +139,7 @@ static prt_status relight_file(cli *c, const char *path, const cli_light *light,
     /* View-dependent vertices are seen from the auto-framed camera that render uses. */
     cli_view view = CLI_VIEW_DEFAULTS;
     prt_camera cam;
-    cli_view_camera(&view, prt_transfer_positions(t), out->nv, (float)view.width / view.height, &cam);
+    cli_view_camera(c, &view, prt_transfer_positions(t), out->nv, prt_transfer_indices(t), prt_transfer_triangle_count(t), (float)view.width / view.height, &cam);
     st = prt_relit_shade(c->ctx, t, &r, cam.eye, out->radiance);
     out->indirect = r.indirect;   /* the result takes it over */
     r.indirect = NULL;

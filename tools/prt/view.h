@@ -74,6 +74,9 @@ struct viewer {
     double last_x, last_y;
     bool dirty, quit;
     int screenshots;
+    /* fly mode: W A S D move, E Z rise and sink, dragging turns the view about the eye */
+    bool fly;
+    float scene_size;           /* the bounding box's diagonal: a fly step is 2% of it */
     /* statistics */
     double frame_ms_sum, draw_ms_sum, relight_ms_sum;
     long frames, draws, relights;
@@ -91,7 +94,11 @@ int view_key_code(const viewer *v, const char *name);
 void view_press(viewer *v, int key);
 
 /* Camera and lighting changes, used by mouse handling and scripts. */
+/* Turns the camera about its target, or in fly mode about the eye (looking around). */
 void view_orbit(viewer *v, float dyaw_deg, float dpitch_deg);
+/* Fly mode: moves eye and target together along the view (forward > 0), sideways and up, in
+ * steps of 2% of the scene. */
+void view_fly(viewer *v, float forward, float right, float up);
 void view_pan(viewer *v, float dx, float dy);
 void view_zoom(viewer *v, float factor);
 void view_rotate_env(viewer *v, float dyaw_deg, float dpitch_deg);

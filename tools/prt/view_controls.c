@@ -23,6 +23,13 @@ int view_key_code(const viewer *v, const char *name)
 
 void view_press(viewer *v, int key)
 {
+    /* Fly mode takes W A S D E Z for moving, ahead of their usual bindings. */
+    if (v->fly && (key == 'W' || key == 'A' || key == 'S' || key == 'D' || key == 'E' || key == 'Z')) {
+        v->message[0] = 0;
+        view_fly(v, key == 'W' ? 1.0f : key == 'S' ? -1.0f : 0.0f, key == 'D' ? 1.0f : key == 'A' ? -1.0f : 0.0f,
+                 key == 'E' ? 1.0f : key == 'Z' ? -1.0f : 0.0f);
+        return;
+    }
     for (int i = 0; i < v->ncontrols; ++i)
         if (v->controls[i].key == key) {
             v->message[0] = 0;
@@ -36,6 +43,18 @@ void view_press(viewer *v, int key)
 static void quit(viewer *v, int arg) { (void)arg; v->quit = true; }
 static void toggle_help(viewer *v, int arg) { (void)arg; v->help = !v->help; }
 static void toggle_hud(viewer *v, int arg) { (void)arg; v->hud = !v->hud; }
+static void toggle_fly(viewer *v, int arg)
+{
+    (void)arg;
+    v->fly = !v->fly;
+    snprintf(v->message, sizeof v->message, "%s", v->fly ? "fly mode: w a s d move, e z rise and sink, drag looks around (f leaves)" : "orbit mode");
+}
+/* w s e z outside fly mode (in it, view_press moves before the tables are looked at). */
+static void fly_key(viewer *v, int arg)
+{
+    (void)arg;
+    snprintf(v->message, sizeof v->message, "w a s d e z move in fly mode: press f first");
+}
 static void exposure(viewer *v, int arg) { v->exposure += 0.5f * (float)arg; }
 static void cycle_tonemap(viewer *v, int arg) { (void)arg; v->tonemap = v->tonemap == 2 ? 1 : 2; }
 static void reset_view(viewer *v, int arg)
@@ -86,6 +105,11 @@ static const view_control core[] = {
     {'Q', "q", "quit", quit, 0},
     {'H', "h", "show or hide this help", toggle_help, 0},
     {'I', "i", "show or hide the status line", toggle_hud, 0},
+    {'F', "f", "fly mode: w a s d move, e z rise and sink, drag looks around", toggle_fly, 0},
+    {'W', "w", "fly mode: forward", fly_key, 0},
+    {'S', "s", "fly mode: back", fly_key, 0},
+    {'E', "e", "fly mode: rise", fly_key, 0},
+    {'Z', "z", "fly mode: sink", fly_key, 0},
     {'=', "+", "exposure +1/2 stop", exposure, 1},
     {'-', "-", "exposure -1/2 stop", exposure, -1},
     {'T', "t", "tone mapping: Reinhard / clamp", cycle_tonemap, 0},

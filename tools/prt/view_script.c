@@ -96,7 +96,15 @@ int view_script_load(const cli *c, const char *path, view_script **out)
         e->time = last = t;
         e->kind = verbs[k].kind;
         bool numbers = true;
-        if (e->kind == EV_KEY || e->kind == EV_SCREENSHOT) snprintf(e->text, sizeof e->text, "%s", arg[0]);
+        if (e->kind == EV_KEY) snprintf(e->text, sizeof e->text, "%s", arg[0]);
+        else if (e->kind == EV_SCREENSHOT) {
+            /* Relative to the script, as its other paths would be: the script can move with its shots. */
+            const char *slash = strrchr(path, '/');
+            const size_t dir = arg[0][0] == '/' || !slash ? 0 : (size_t)(slash - path) + 1;
+            ok = dir + strlen(arg[0]) < sizeof e->text;
+            if (ok) { memcpy(e->text, path, dir); memcpy(e->text + dir, arg[0], strlen(arg[0]) + 1); }
+            else { cli_error(c, "%s:%d: the screenshot path is too long", path, lineno); fclose(f); view_script_free(s); return EXIT_USAGE; }
+        }
         else if (e->kind == EV_LIGHT_ADD) {
             e->button = (int)type;
             e->has_position = n == 6;
