@@ -76,8 +76,11 @@ bench: build
 accuracy: build
 	@sh scripts/accuracy.sh $(BUILD)/prt out/accuracy
 
+# make install PREFIX=/usr/local (the default): prt, libprt.{a,so}, headers, prt.pc, the CMake
+# package (find_package(prt)), man pages. Then `ldconfig` (or an rpath) for programs using libprt.so.
+PREFIX ?= /usr/local
 install: build
-	cmake --install $(BUILD)
+	cmake --install $(BUILD) --prefix $(PREFIX)
 
 clean:
 	rm -rf $(BUILD) $(ASAN_BUILD) $(CLANG_BUILD) $(FUZZ_BUILD) out

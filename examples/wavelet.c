@@ -1,7 +1,7 @@
 /* The wavelet method through libprt's public API: a glossy sphere over a diffuse floor, baked
  * with a separable Phong BRDF and one interreflection pass, relit under the procedural sky at two
  * rotations (a lighting change recomputes the K-vectors) and seen from two eyes (a view change
- * re-evaluates only the view maps). Build: cc wavelet.c $(pkg-config --cflags --libs prt) */
+ * re-evaluates only the view maps). Build: cc wavelet.c $(pkg-config --cflags --libs prt) -lm */
 #include <math.h>
 #include <prt/prt.h>
 #include <stdio.h>
