@@ -70,9 +70,27 @@ expect 0 "info --json" -- "$PRT" info --json "$T/demo.prt"
 grep -q '"order":[[:space:]]*4' "$T/out" && ok || bad "info --json lacks order 4"
 expect 0 "relight ply" -- "$PRT" relight -q "$T/demo.prt" -o "$T/lit.ply" --kind shadowed
 head -c 3 "$T/lit.ply" | grep -q ply && ok || bad "relight did not write a PLY"
-grep -a -q "property float red" "$T/lit.ply" && ok || bad "PLY lacks float colours"
+grep -a -q "property uchar red" "$T/lit.ply" && ok || bad "PLY lacks 8-bit sRGB colours (the default, what viewers show)"
 expect 0 "relight json" -- "$PRT" relight -q "$T/demo.prt" -o "$T/lit.json" --rotate 90,10
 grep -q '"radiance"' "$T/lit.json" && ok || bad "relight JSON lacks radiance"
+# Meshes for other tools through assimp: glTF with COLOR_0, PLY with 8-bit colours, OBJ with sRGB
+# colours after each v equal to the JSON radiance encoded, float PLY on request.
+expect 0 "relight glb" -- "$PRT" relight -q "$T/demo.prt" -o "$T/lit.glb" --rotate 90,10
+head -c 4 "$T/lit.glb" | grep -q glTF && grep -a -q '"COLOR_0"' "$T/lit.glb" && ok || bad "the .glb lacks COLOR_0"
+expect 0 "relight gltf" -- "$PRT" relight -q "$T/demo.prt" -o "$T/litg.gltf"
+grep -q '"COLOR_0"' "$T/litg.gltf" && [ -s "$T/litg.bin" ] && ok || bad "the .gltf lacks COLOR_0 or its .bin"
+ls -a "$T" | grep -q '\.tmp\.' && bad "an export left a temporary behind" || ok
+expect 0 "relight ply, 8-bit sRGB" -- "$PRT" relight -q "$T/demo.prt" -o "$T/lit8.ply"
+head -c 600 "$T/lit8.ply" | grep -a -q "property uchar red" && ok || bad "the PLY does not hold 8-bit colours"
+expect 0 "relight ply, float linear" -- "$PRT" relight -q "$T/demo.prt" -o "$T/litf.ply" --colors linear
+head -c 600 "$T/litf.ply" | grep -a -q "property float red" && ok || bad "--colors linear did not write float colours"
+expect 0 "relight obj" -- "$PRT" relight -q "$T/demo.prt" -o "$T/lit.obj" --rotate 90,10 --exposure -3
+r=$(sed -n 's/.*"radiance": \[\[\([-0-9.eE+]*\),.*/\1/p' "$T/lit.json")
+o=$(awk '$1 == "v" { print $5; exit }' "$T/lit.obj")
+awk -v r="$r" -v o="$o" 'BEGIN { x = r / 8; if (x > 1) x = 1; e = x <= 0.0031308 ? 12.92 * x : 1.055 * exp(log(x) / 2.4) - 0.055; exit !(o != "" && (e - o < 1e-4 && o - e < 1e-4)) }' \
+    && ok || bad "OBJ colour $o is not the sRGB encoding of radiance $r at exposure -3"
+expect 2 "--colors on JSON output" -- "$PRT" relight -q "$T/demo.prt" -o "$T/x.json" --colors srgb
+expect 2 "unknown mesh format" -- "$PRT" relight -q "$T/demo.prt" -o "$T/x.stl"
 expect 0 "render png" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -k all -o "$T/img.png" --width 64 --height 48
 [ -s "$T/img.png" ] && ok || bad "render wrote no PNG"
 expect 0 "render exr" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -o "$T/img.exr" --width 32 --height 32 --view 0,1,1

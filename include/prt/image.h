@@ -29,6 +29,27 @@ typedef struct prt_image_save_desc {
 prt_status prt_image_save(const char *path, const prt_image *img, const prt_image_save_desc *desc);
 void prt_image_free(prt_image *img);
 
+/* A mesh with per-vertex colours for other tools: glTF 2.0 (.glb, .gltf + .bin), PLY (.ply,
+ * binary) or OBJ (.obj + .mtl, colours after each v). Written through assimp's exporter; every
+ * file lands under its final name only when complete. */
+typedef enum prt_colour_encoding {
+    PRT_COLOURS_DEFAULT = 0,   /* linear for glTF (its COLOR_0 is linear), sRGB for PLY and OBJ */
+    PRT_COLOURS_SRGB,          /* sRGB-encoded, clamped to [0, 1]: what mesh viewers show as is */
+    PRT_COLOURS_LINEAR         /* linear, clamped to [0, 1] (PLY keeps 8 bits: prefer glTF) */
+} prt_colour_encoding;
+
+typedef struct prt_mesh_export_desc {
+    const float *positions, *normals;   /* 3 per vertex; normals may be NULL */
+    size_t vertex_count;
+    const uint32_t *indices;            /* 3 per triangle */
+    size_t triangle_count;
+    const float *rgb;                   /* 3 per vertex, linear radiance */
+    prt_colour_encoding encoding;
+    float exposure_stops;               /* radiance is scaled by 2^exposure_stops first */
+} prt_mesh_export_desc;
+
+prt_status prt_mesh_export(const char *path, const prt_mesh_export_desc *desc);
+
 #ifdef __cplusplus
 }
 #endif

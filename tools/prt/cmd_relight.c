@@ -1,20 +1,25 @@
 #include "cli.h"
 
 #include <getopt.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
 static const char *HELP =
-    "usage: prt relight FILE.prt -o OUT.ply|OUT.json [options]\n"
+    "usage: prt relight FILE.prt -o OUT.glb|.gltf|.ply|.obj|.json [options]\n"
     "       prt relight FILE.prt --texels -o MAP.exr|.hdr|.pfm|.png [options]\n"
-    "Evaluates per-vertex exit radiance (linear RGB) of a baked .prt under a lighting.\n"
-    "PLY output is binary with float red/green/blue vertex properties (opens in MeshLab,\n"
-    "Blender, Open3D); JSON holds {\"kind\", \"vertex_count\", \"radiance\": [[r,g,b], ...]} and,\n"
-    "where the method separates them, \"indirect\" (the light that bounced at least once) and\n"
-    "\"direct\" (relit with direct light only).\n\n"
-    "  -o, --output FILE      .ply or .json (required; written atomically)\n"
+    "Evaluates per-vertex exit radiance of a baked .prt under a lighting and hands the mesh\n"
+    "with it to other tools: glTF 2.0 (.glb, .gltf) with the radiance as COLOR_0 (linear, as\n"
+    "the format says; three.js, Godot, Unity, Blender read it), PLY and OBJ with sRGB-encoded\n"
+    "vertex colours (what MeshLab and Blender show as is; --colors linear for PLY writes float\n"
+    "linear red/green/blue instead). Colours are clamped to [0, 1] after --exposure. JSON holds\n"
+    "{\"kind\", \"vertex_count\", \"radiance\": [[r,g,b], ...]} unclamped and, where the method\n"
+    "separates them, \"indirect\" (the light that bounced at least once) and \"direct\".\n\n"
+    "  -o, --output FILE      .glb, .gltf, .ply, .obj or .json (required; written atomically)\n"
+    "      --colors C         srgb or linear (default: linear for glTF, srgb for PLY and OBJ)\n"
+    "      --exposure STOPS   scale radiance by 2^STOPS before clamping colours (default 0)\n"
     "  -k, --kind K           what to relight the file as (prt info lists what it holds: for SH\n"
     "                         files unshadowed | shadowed | interreflected | glossy-shadowed |\n"
     "                         glossy-interreflected); default: the richest view-independent one\n"
@@ -46,11 +51,14 @@ int cmd_relight(int argc, char **argv)
     const char *output = NULL, *kind = NULL;
     static const struct option opts[] = {{"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'},
                                          {"eye", required_argument, 0, 'e'}, {"texels", no_argument, 0, 'T'}, CLI_LIGHT_LONG_OPTIONS,
+                                         {"colors", required_argument, 0, 'C'}, {"exposure", required_argument, 0, 'E'},
                                          {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'},
                                          {0, 0, 0, 0}};
     int opt;
     float eye[3] = {0, 0, 0};
     bool have_eye = false, texels = false;
+    prt_colour_encoding encoding = PRT_COLOURS_DEFAULT;
+    float exposure = 0;
     optind = 1;
     opterr = 0;   /* one line of our own instead of getopt's */
     while ((opt = getopt_long(argc, argv, ":o:k:j:qh", opts, NULL)) != -1) {
@@ -61,6 +69,12 @@ int cmd_relight(int argc, char **argv)
         case 'o': output = optarg; break;
         case 'k': kind = optarg; break;
         case 'T': texels = true; break;
+        case 'C':
+            if (!strcasecmp(optarg, "srgb")) encoding = PRT_COLOURS_SRGB;
+            else if (!strcasecmp(optarg, "linear")) encoding = PRT_COLOURS_LINEAR;
+            else return cli_usage(&c, "--colors must be srgb or linear");
+            break;
+        case 'E': if (!cli_parse_float(optarg, &exposure) || fabsf(exposure) > 64) return cli_usage(&c, "--exposure takes stops in [-64, 64]"); break;
         case 'e': if (!cli_parse_vec3(optarg, false, eye)) return cli_usage(&c, "--eye takes X,Y,Z"); have_eye = true; break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
@@ -69,11 +83,14 @@ int cmd_relight(int argc, char **argv)
         }
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one FILE.prt argument");
-    if (!output) return cli_usage(&c, "an output file is required (-o OUT.ply or OUT.json)");
+    if (!output) return cli_usage(&c, "an output file is required (-o OUT.glb, .gltf, .ply, .obj or .json)");
     const char *ext = strrchr(output, '.');
     bool json = ext && !strcasecmp(ext, ".json");
-    if (!texels && !json && !(ext && !strcasecmp(ext, ".ply"))) return cli_usage(&c, "output must end in .ply or .json");
-    if (texels && (json || (ext && !strcasecmp(ext, ".ply")))) return cli_usage(&c, "--texels writes an image: .exr, .hdr, .pfm or .png");
+    const bool ply = ext && !strcasecmp(ext, ".ply"),
+               mesh = ext && (ply || !strcasecmp(ext, ".glb") || !strcasecmp(ext, ".gltf") || !strcasecmp(ext, ".obj"));
+    if (!texels && !json && !mesh) return cli_usage(&c, "output must end in .glb, .gltf, .ply, .obj or .json");
+    if (texels && (json || mesh)) return cli_usage(&c, "--texels writes an image: .exr, .hdr, .pfm or .png");
+    if ((encoding || exposure != 0) && !mesh) return cli_usage(&c, "--colors and --exposure apply to mesh outputs (.glb .gltf .ply .obj)");
     int rc = cli_make_context(&c);
     if (rc) return rc;
     prt_transfer *t = NULL;
@@ -133,12 +150,20 @@ int cmd_relight(int argc, char **argv)
                 cli_vertex_field f[3] = {{"radiance", rgb}, {"indirect", r.indirect}, {"direct", direct}};
                 st = cli_write_vertex_json(output, prt_transfer_variant_name(t, variant), nv, f, r.indirect ? (direct ? 3 : 2) : 1);
                 free(direct);
-            } else {
+            } else if (ply && encoding == PRT_COLOURS_LINEAR) {
+                /* Float colours keep what 8 bits would lose; assimp's PLY writer has 8 bits only. */
+                const float k = exp2f(exposure);
+                for (size_t i = 0; i < nv * 3; ++i) rgb[i] = fminf(fmaxf(rgb[i] * k, 0.0f), 1.0f);
                 st = cli_write_vertex_ply(output, prt_transfer_positions(t), prt_transfer_normals(t), nv, prt_transfer_indices(t),
                                           prt_transfer_triangle_count(t), rgb);
+            } else {
+                const prt_mesh_export_desc ed = {prt_transfer_positions(t), prt_transfer_normals(t), nv, prt_transfer_indices(t),
+                                                 prt_transfer_triangle_count(t), rgb, encoding, exposure};
+                st = prt_mesh_export(output, &ed);
+                if (st) { cli_error(&c, "%s", prt_last_error()); rc = EXIT_FAILURE_INPUT; st = PRT_OK; }
             }
             if (st) { cli_error(&c, "cannot write '%s'", output); rc = EXIT_FAILURE_INPUT; st = PRT_OK; }
-            else if (!c.quiet) fprintf(stderr, "prt relight: wrote %s (%s, %zu vertices)\n", output, prt_transfer_variant_name(t, variant), nv);
+            else if (!rc && !c.quiet) fprintf(stderr, "prt relight: wrote %s (%s, %zu vertices)\n", output, prt_transfer_variant_name(t, variant), nv);
         }
     }
     if (st && !rc) rc = cli_fail(&c, st);
