@@ -323,10 +323,54 @@ static void test_bad_bake_args(void **state)
     prt_context_release(ctx);
 }
 
+/* Every vertex sees the direction set turned its own way: on a plane, where one shared set would
+ * give every vertex the same quadrature error (streaks and blotches along the mesh), neighbours'
+ * errors differ and are not correlated; the same seed still gives the same bake. */
+static void test_decorrelated_noise(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_quad(&m, (float[3]){-1, 0, 1}, (float[3]){2, 0, 0}, (float[3]){0, 0, -2}, 20);
+    prt_scene *s = tm_scene(ctx, &m, 0.5f);
+    prt_transfer *t = bake(ctx, s, 2, 64, PRT_TRANSFER_UNSHADOWED), *u = bake(ctx, s, 2, 64, PRT_TRANSFER_UNSHADOWED);
+    const size_t nv = prt_transfer_vertex_count(t);
+    const float *T = prt_transfer_coeffs(t, PRT_TRANSFER_UNSHADOWED);
+    assert_memory_equal(T, prt_transfer_coeffs(u, PRT_TRANSFER_UNSHADOWED), nv * 4 * sizeof(float));
+    /* Errors of T_1,0 (the normal's band-1 term; 0 for T_1,-1 and T_1,1 exactly) against the closed
+     * form, along each row of the grid: the mean product of neighbours against the mean square. */
+    double zh[2], y[4], up[3] = {0, 1, 0};
+    prt_sh_clamped_cosine_zh(2, zh);
+    prt_sh_eval(2, up, y);
+    const double expect = sqrt(4 * M_PI / 3) * zh[1] * y[2] / M_PI;
+    double sq = 0, prod = 0, lo = INFINITY, hi = -INFINITY;
+    size_t pairs = 0;
+    for (int r = 0; r <= 20; ++r)
+        for (int c = 0; c < 20; ++c) {
+            const size_t a = (size_t)r * 21 + c, b = a + 1;
+            const double ea = T[a * 4 + 2] - expect, eb = T[b * 4 + 2] - expect;
+            sq += ea * ea;
+            prod += ea * eb;
+            lo = fmin(lo, ea);
+            hi = fmax(hi, ea);
+            pairs++;
+        }
+    const double corr = prod / sq;
+    print_message("64 directions on a plane: T_1,0 error %.4f .. %.4f, neighbour correlation %.2f\n", lo, hi, corr);
+    assert_true(hi - lo > 1e-3);       /* one shared set: every vertex the same error */
+    assert_true(fabs(corr) < 0.3);     /* shared: 1 */
+    prt_transfer_release(t);
+    prt_transfer_release(u);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_unoccluded_plane),
+        cmocka_unit_test(test_decorrelated_noise),
         cmocka_unit_test(test_convex_white_furnace),
         cmocka_unit_test(test_pit_and_interreflection),
         cmocka_unit_test(test_concave_white_furnace),
