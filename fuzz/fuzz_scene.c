@@ -20,10 +20,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         char cmd[256], obj[128];
         snprintf(cmd, sizeof cmd, "mkdir -p %s", dir);
         if (system(cmd) != 0) abort();
-        snprintf(obj, sizeof obj, "%s/tri.obj", dir);
+        /* Two named materials, so that JSON materials called like them replace them. */
+        snprintf(obj, sizeof obj, "%s/tri.mtl", dir);
         FILE *f = fopen(obj, "w");
         if (!f) abort();
-        fputs("v 0 0 0\nv 1 0 0\nv 0 0 -1\nv 1 0 -1\nf 1 2 3\nf 2 4 3\n", f);
+        fputs("newmtl m\nKd 0.5 0.5 0.5\nnewmtl n\nKd 0.2 0.3 0.4\n", f);
+        fclose(f);
+        snprintf(obj, sizeof obj, "%s/tri.obj", dir);
+        f = fopen(obj, "w");
+        if (!f) abort();
+        fputs("mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 0 -1\nv 1 0 -1\nusemtl m\nf 1 2 3\nusemtl n\nf 2 4 3\n", f);
         fclose(f);
         snprintf(json, sizeof json, "%s/scene.json", dir);
     }
