@@ -68,6 +68,16 @@ static void test_floor_under_box(void **state)
     assert_true(ring_min > 0.05f);
     assert_true(worst >= ring_min - 0.02f);   /* 1024 samples: noise well below 0.02 */
     prt_transfer_release(x);
+    /* Per texel (over a generated atlas): samples inside the box are left to the gutter fill, so
+     * no texel of the map is black. */
+    d.texels = 64;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &x), PRT_OK);
+    const float *tx = prt_transfer_texel_coeffs(x, PRT_TRANSFER_SHADOWED, NULL);
+    size_t black = 0;
+    for (size_t i = 0; i < 64 * 64; ++i) black += !(tx[i] > 1e-4f);
+    print_message("per texel: %zu of 4096 texels black\n", black);
+    assert_int_equal(black, 0);
+    prt_transfer_release(x);
     prt_scene_release(s);
     prt__raycaster_release(&rc);
     free(origins);

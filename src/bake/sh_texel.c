@@ -81,15 +81,19 @@ static bool texel_surface(const texel_job *job, size_t texel, float p[3], float 
 }
 
 /* The transfer of one texel: unshadowed and shadowed sums, and the inter-reflected one (3 ch). */
-static void texel_bake(const texel_job *job, size_t texel, float *unsh, float *shad, float *ir)
+static bool texel_bake(const texel_job *job, size_t texel, float *unsh, float *shad, float *ir)
 {
     const prt__texel_input *in = job->in;
     const prt__mesh *m = job->m;
     const int nc = job->nc;
     float p[3], ng[3], ns[3], rho[3];
-    if (!texel_surface(job, texel, p, ng, ns, rho)) return;
+    if (!texel_surface(job, texel, p, ng, ns, rho)) return true;
     float org[3];
     for (int c = 0; c < 3; ++c) org[c] = p[c] + ng[c] * in->offset;
+    /* A sample inside geometry (a scan folded through itself, a prop sunk into the floor) is left
+     * unbaked: the gutter fill gives it its neighbours' transfer, as vertices get theirs. */
+    const prt__raycaster rc = {in->scene};
+    if (prt__origin_back_share(&rc, org, ng) > 0.5) return false;
     memcpy(job->out->albedo + texel * 3, rho, sizeof rho);
     const float w = (float)(4.0 * PRT_PI / in->samples) / (float)PRT_PI;
     float direct[PRT_SH_MAX_COEFFS] = {0}, gather[3 * PRT_SH_MAX_COEFFS] = {0};
@@ -146,6 +150,7 @@ static void texel_bake(const texel_job *job, size_t texel, float *unsh, float *s
     if (ir)
         for (int c = 0; c < 3; ++c)
             for (int i = 0; i < nc; ++i) ir[c * nc + i] = rho[c] * direct[i] + rho[c] / (float)PRT_PI * gather[c * nc + i];
+    return true;
 }
 
 /* Fills every uncovered texel, ring by ring outwards from the baked ones, with the mean of its
@@ -339,9 +344,8 @@ prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__t
 #pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ctx))
     for (size_t i = 0; i < ntex; ++i) {
         if (job.owner[i] && !prt__progress_cancelled(in->progress)) {
-            texel_bake(&job, i, out->coeffs[0] ? out->coeffs[0] + i * nc : NULL, out->coeffs[1] ? out->coeffs[1] + i * nc : NULL,
-                       out->coeffs[2] ? out->coeffs[2] + i * 3 * nc : NULL);
-            out->covered[i] = 1;
+            out->covered[i] = texel_bake(&job, i, out->coeffs[0] ? out->coeffs[0] + i * nc : NULL, out->coeffs[1] ? out->coeffs[1] + i * nc : NULL,
+                                         out->coeffs[2] ? out->coeffs[2] + i * 3 * nc : NULL);
         }
         if ((i & 255) == 0) prt__progress_add(in->progress, 256);
     }

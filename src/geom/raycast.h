@@ -47,6 +47,10 @@ prt_status prt__vertex_origins(const prt__mesh *m, float offset, float **out);
 prt_status prt__unbury_origins(const prt_context *ctx, const prt__raycaster *rc, const prt__mesh *m, float offset, float *origins,
                                uint8_t *status, prt_log_level level);
 
+/* The share of a hemisphere of probe rays about n from o that meet a back face first: above one
+ * half, o is inside geometry. */
+double prt__origin_back_share(const prt__raycaster *rc, const float o[3], const float n[3]);
+
 /* Gives every vertex of status 2 (see above) the mean of its neighbours that have values, ring by
  * ring outwards; data holds stride floats per vertex. Returns how many found no such neighbour. */
 size_t prt__fill_buried(const prt__mesh *m, const uint8_t *status, float *data, size_t stride);

@@ -12,7 +12,7 @@
 #define MAX_CANDIDATES 12   /* fan triangles tried */
 
 /* The share of PROBES rays over the hemisphere about n from o that meet a back face first. */
-static double back_share(const prt__raycaster *rc, const float o[3], const float n[3])
+double prt__origin_back_share(const prt__raycaster *rc, const float o[3], const float n[3])
 {
     float t1[3], t2[3], h[3] = {0, 0, 0};
     h[fabsf(n[0]) < 0.6f ? 0 : fabsf(n[1]) < 0.6f ? 1 : 2] = 1;
@@ -60,7 +60,7 @@ prt_status prt__unbury_origins(const prt_context *ctx, const prt__raycaster *rc,
         if ((v & 1023) == 0 && prt__cancelled(ctx)) continue;
         const float *n = m->normals + v * 3, *p = m->positions + v * 3;
         float *o = origins + v * 3;
-        if (back_share(rc, o, n) <= BACK_SHARE) continue;
+        if (prt__origin_back_share(rc, o, n) <= BACK_SHARE) continue;
         found++;
         /* Candidates: halfway and nine tenths of the way to each fan triangle's centroid, lifted
          * off that triangle; then further along the vertex normal. The one with the fewest back
@@ -86,7 +86,7 @@ prt_status prt__unbury_origins(const prt_context *ctx, const prt__raycaster *rc,
                 const float lift = offset * (k == 2 * count ? 8.0f : 64.0f);
                 for (int i = 0; i < 3; ++i) { q[i] = p[i] + n[i] * lift; qn[i] = n[i]; }
             }
-            const double s = back_share(rc, q, n);
+            const double s = prt__origin_back_share(rc, q, n);
             if (s < best_share) { best_share = s; memcpy(best, q, sizeof best); }
         }
         if (best_share <= BACK_SHARE) {
