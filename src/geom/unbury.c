@@ -12,7 +12,7 @@
 #define MAX_CANDIDATES 12   /* fan triangles tried */
 
 /* The share of PROBES rays over the hemisphere about n from o that meet a back face first. */
-double prt__origin_back_share(const prt__raycaster *rc, const float o[3], const float n[3])
+static double hemisphere_back_share(const prt__raycaster *rc, const float o[3], const float n[3])
 {
     float t1[3], t2[3], h[3] = {0, 0, 0};
     h[fabsf(n[0]) < 0.6f ? 0 : fabsf(n[1]) < 0.6f ? 1 : 2] = 1;
@@ -40,6 +40,16 @@ double prt__origin_back_share(const prt__raycaster *rc, const float o[3], const 
         if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && rh.hit.Ng_x * d[0] + rh.hit.Ng_y * d[1] + rh.hit.Ng_z * d[2] > 0.0f) back++;
     }
     return (double)back / PROBES;
+}
+
+/* Inside geometry: most rays over the hemisphere the sample sees meet back faces. Behind a
+ * surface it touches (a torus or sphere resting on a floor, its contact ring offset below the
+ * floor): most rays back into its own surface meet the other surface's back first, where a free
+ * sample meets its own surface's front. The larger of the two shares. */
+double prt__origin_back_share(const prt__raycaster *rc, const float o[3], const float n[3])
+{
+    const float back_n[3] = {-n[0], -n[1], -n[2]};
+    return fmax(hemisphere_back_share(rc, o, n), hemisphere_back_share(rc, o, back_n));
 }
 
 prt_status prt__unbury_origins(const prt_context *ctx, const prt__raycaster *rc, const prt__mesh *m, float offset, float *origins,
