@@ -72,6 +72,24 @@ bool prt__raycaster_occluded(const prt__raycaster *rc, const float o[3], const f
     return r.tfar < 0.0f;
 }
 
+bool prt__raycaster_hit(const prt__raycaster *rc, const float o[3], const float d[3], prt__ray_hit *out)
+{
+    struct RTCIntersectContext ictx;
+    rtcInitIntersectContext(&ictx);
+    struct RTCRayHit rh;
+    memset(&rh, 0, sizeof rh);
+    rh.ray.org_x = o[0]; rh.ray.org_y = o[1]; rh.ray.org_z = o[2];
+    rh.ray.dir_x = d[0]; rh.ray.dir_y = d[1]; rh.ray.dir_z = d[2];
+    rh.ray.tfar = INFINITY;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rc->scene, &ictx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    *out = (prt__ray_hit){rh.ray.tfar, rh.hit.u, rh.hit.v, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, rh.hit.primID};
+    return true;
+}
+
 bool prt__raycaster_segment_clear(const prt__raycaster *rc, const float a[3], const float b[3])
 {
     float d[3];

@@ -12,6 +12,14 @@ prt_status prt__raycaster_create(const prt_context *ctx, const prt__mesh *m, prt
 void prt__raycaster_release(prt__raycaster *rc);
 /* Whether anything lies on the ray o + d t, t in (0, tfar) (d unit). */
 bool prt__raycaster_occluded(const prt__raycaster *rc, const float o[3], const float d[3], float tfar);
+/* The first surface on the ray o + d t (d unit): distance t, triangle, barycentrics and Embree's
+ * unnormalized geometric normal (pointing to where the triangle winds counter-clockwise). */
+typedef struct prt__ray_hit {
+    float t, u, v, ng[3];
+    uint32_t prim;
+} prt__ray_hit;
+/* False on a miss. */
+bool prt__raycaster_hit(const prt__raycaster *rc, const float o[3], const float d[3], prt__ray_hit *out);
 /* Whether the segment from a to b is free of geometry. */
 bool prt__raycaster_segment_clear(const prt__raycaster *rc, const float a[3], const float b[3]);
 /* Fills a 16-wide packet of rays from one origin along dirs[idx[k]] for the first `lanes`

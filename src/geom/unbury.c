@@ -19,25 +19,14 @@ static double hemisphere_back_share(const prt__raycaster *rc, const float o[3], 
     prt__v3_cross(n, h, t1);
     if (!prt__v3_normalize(t1)) return 0;
     prt__v3_cross(n, t1, t2);
-    struct RTCIntersectContext ictx;
-    rtcInitIntersectContext(&ictx);
     int back = 0;
     for (int k = 0; k < PROBES; ++k) {
         /* A Fibonacci spiral over the hemisphere, cosine-spaced towards the normal. */
         const float z = 1.0f - (k + 0.5f) / PROBES, r = sqrtf(fmaxf(0.0f, 1.0f - z * z)), phi = 2.39996323f * k;
         float d[3];
         for (int c = 0; c < 3; ++c) d[c] = r * cosf(phi) * t1[c] + r * sinf(phi) * t2[c] + z * n[c];
-        struct RTCRayHit rh;
-        memset(&rh, 0, sizeof rh);
-        rh.ray.org_x = o[0]; rh.ray.org_y = o[1]; rh.ray.org_z = o[2];
-        rh.ray.dir_x = d[0]; rh.ray.dir_y = d[1]; rh.ray.dir_z = d[2];
-        rh.ray.tnear = 0.0f;
-        rh.ray.tfar = INFINITY;
-        rh.ray.mask = 0xFFFFFFFFu;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(rc->scene, &ictx, &rh);
-        if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && rh.hit.Ng_x * d[0] + rh.hit.Ng_y * d[1] + rh.hit.Ng_z * d[2] > 0.0f) back++;
+        prt__ray_hit h;
+        if (prt__raycaster_hit(rc, o, d, &h) && h.ng[0] * d[0] + h.ng[1] * d[1] + h.ng[2] * d[2] > 0.0f) back++;
     }
     return (double)back / PROBES;
 }

@@ -15,21 +15,11 @@
  * first surface hit faces o. */
 static float first_hit(const prt__raycaster *rc, const float o[3], const float d[3], bool *facing)
 {
-    struct RTCIntersectContext ictx;
-    rtcInitIntersectContext(&ictx);
-    struct RTCRayHit rh;
-    memset(&rh, 0, sizeof rh);
-    rh.ray.org_x = o[0]; rh.ray.org_y = o[1]; rh.ray.org_z = o[2];
-    rh.ray.dir_x = d[0]; rh.ray.dir_y = d[1]; rh.ray.dir_z = d[2];
-    rh.ray.tfar = INFINITY;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(rc->scene, &ictx, &rh);
+    prt__ray_hit h;
     *facing = false;
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return INFINITY;
-    *facing = rh.hit.Ng_x * d[0] + rh.hit.Ng_y * d[1] + rh.hit.Ng_z * d[2] < 0.0f;
-    return rh.ray.tfar;
+    if (!prt__raycaster_hit(rc, o, d, &h)) return INFINITY;
+    *facing = h.ng[0] * d[0] + h.ng[1] * d[1] + h.ng[2] * d[2] < 0.0f;
+    return h.t;
 }
 
 /* The share of directions from o whose first surface faces o. */

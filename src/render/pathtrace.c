@@ -116,26 +116,17 @@ static void to_world(const surface *s, const float l[3], float w[3])
 /* Traces o + t d; fills the surface hit. Returns 0 on a miss, 1 on a front face, -1 on a back face. */
 static int intersect(const pt_job *j, const float o[3], const float d[3], surface *s)
 {
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    struct RTCRayHit rh;
-    memset(&rh, 0, sizeof rh);
-    rh.ray.org_x = o[0]; rh.ray.org_y = o[1]; rh.ray.org_z = o[2];
-    rh.ray.dir_x = d[0]; rh.ray.dir_y = d[1]; rh.ray.dir_z = d[2];
-    rh.ray.tfar = INFINITY;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(j->rc.scene, &ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
-    s->dist = rh.ray.tfar;
-    float ng[3] = {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
+    prt__ray_hit h;
+    if (!prt__raycaster_hit(&j->rc, o, d, &h)) return 0;
+    s->dist = h.t;
+    float ng[3] = {h.ng[0], h.ng[1], h.ng[2]};
     if (prt__v3_dot(ng, d) >= 0.0f) return -1;   /* Ng faces where the triangle winds counter-clockwise */
     prt__v3_normalize(ng);
     const prt__mesh *m = j->mesh;
-    const uint32_t *t = m->indices + (size_t)rh.hit.primID * 3;
-    float w0 = 1.0f - rh.hit.u - rh.hit.v, w1 = rh.hit.u, w2 = rh.hit.v;
+    const uint32_t *t = m->indices + (size_t)h.prim * 3;
+    float w0 = 1.0f - h.u - h.v, w1 = h.u, w2 = h.v;
     for (int c = 0; c < 3; ++c) {
-        s->p[c] = o[c] + rh.ray.tfar * d[c];
+        s->p[c] = o[c] + h.t * d[c];
         s->n[c] = w0 * m->normals[t[0] * 3 + c] + w1 * m->normals[t[1] * 3 + c] + w2 * m->normals[t[2] * 3 + c];
         s->rho[c] = w0 * m->albedo[t[0] * 3 + c] + w1 * m->albedo[t[1] * 3 + c] + w2 * m->albedo[t[2] * 3 + c];
         s->ng[c] = ng[c];
@@ -145,8 +136,8 @@ static int intersect(const pt_job *j, const float o[3], const float d[3], surfac
     /* A shading normal turned away from the viewer would light the surface from behind. */
     if (!prt__v3_normalize(s->n) || prt__v3_dot(s->n, d) >= 0.0f) memcpy(s->n, ng, sizeof ng);
     set_frame(s);
-    s->tri = rh.hit.primID;
-    prt__emission_at(&j->emit, m, rh.hit.primID, w1, w2, s->le);
+    s->tri = h.prim;
+    prt__emission_at(&j->emit, m, h.prim, w1, w2, s->le);
     return 1;
 }
 
