@@ -64,6 +64,10 @@ grep '^{"stage"' "$T/err" | tail -n 1 | grep -q '"percent": 100.0' && ok || bad 
 [ "$(grep -c '^{"stage"' "$T/err")" -ge 4 ] && ok || bad "JSON progress: too few lines"
 grep -q '"name":[[:space:]]*"compress interreflected"' "$T/sum.json" && grep -q '"bake_seconds"' "$T/sum.json" && ok || bad "the summary lacks stage times"
 expect 2 "bad --progress" -- "$PRT" bake "$T/demo.obj" -o "$T/p.prt" --progress loud
+rm -f "$T/p2.prt"
+expect 1 "a summary that cannot be written" -- "$PRT" bake -q "$T/demo.obj" -o "$T/p2.prt" --order 2 --samples 16 --bounces 1 --no-checkpoint --summary "$T/none/sum.json"
+says "summary"
+[ ! -e "$T/p2.prt" ] && ok || bad "the bake wrote its file although its summary failed"
 expect 0 "info" -- "$PRT" info "$T/demo.prt"
 grep -q "interreflected" "$T/out" && ok || bad "info does not list interreflected"
 expect 0 "info --json" -- "$PRT" info --json "$T/demo.prt"

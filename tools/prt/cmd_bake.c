@@ -242,9 +242,13 @@ int cmd_bake(int argc, char **argv)
         if (ns) fprintf(stderr, "prt bake: stage times: %s\n", line);
     }
     if (!st) st = cli_check_interrupt(&c);
-    if (!st) st = prt_transfer_save(t, output);
-    if (!st && checkpoint) remove(checkpoint_path);   /* the result is safe: nothing to resume */
+    /* The summary first: if it cannot be written, the bake fails before its file appears. */
     if (!st && summary) st = write_summary(&c, summary, argv[optind], output, t);
+    if (!st) {
+        st = prt_transfer_save(t, output);
+        if (st && summary) remove(summary);
+    }
+    if (!st && checkpoint) remove(checkpoint_path);   /* the result is safe: nothing to resume */
     if (!st && !c.quiet) {
         char *text = NULL;
         if (!prt_transfer_describe(t, output, 0, &text)) {
