@@ -63,7 +63,16 @@ expect 0 "bake with JSON progress and a summary" -- "$PRT" bake "$T/demo.obj" -o
 grep '^{"stage"' "$T/err" | tail -n 1 | grep -q '"percent": 100.0' && ok || bad "JSON progress did not reach 100%"
 [ "$(grep -c '^{"stage"' "$T/err")" -ge 4 ] && ok || bad "JSON progress: too few lines"
 grep -q '"name":[[:space:]]*"compress interreflected"' "$T/sum.json" && grep -q '"bake_seconds"' "$T/sum.json" && ok || bad "the summary lacks stage times"
+says "--refine"   # the contact ring of the torus and sphere: the bake suggests refining there
 expect 2 "bad --progress" -- "$PRT" bake "$T/demo.obj" -o "$T/p.prt" --progress loud
+# Adaptive refinement: more vertices, within the budget, in the file the bake writes.
+expect 0 "bake --refine" -- "$PRT" bake "$T/demo.obj" -o "$T/refined.prt" --order 2 --samples 32 --bounces 1 --refine --refine-vertices 3000
+says "refine: .* levels added"
+expect 0 "info of a refined bake" -- "$PRT" info --json "$T/refined.prt"
+nv=$(sed -n 's/.*"vertices":[[:space:]]*\([0-9]*\).*/\1/p' "$T/out" | head -n 1)
+[ -n "$nv" ] && [ "$nv" -gt 10195 ] && [ "$nv" -le 13195 ] && ok || bad "a refined bake has $nv vertices, expected 10196..13195"
+expect 2 "bad --refine-threshold" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --refine-threshold 2
+says "refine-threshold"
 rm -f "$T/p2.prt"
 expect 1 "a summary that cannot be written" -- "$PRT" bake -q "$T/demo.obj" -o "$T/p2.prt" --order 2 --samples 16 --bounces 1 --no-checkpoint --summary "$T/none/sum.json"
 says "summary"

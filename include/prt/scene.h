@@ -89,6 +89,40 @@ const float *prt_scene_emission(const prt_scene *scene);
  * its emissive surfaces at scale 1. */
 prt_status prt_scene_lighting(prt_context *ctx, const prt_scene *scene, prt_lighting **out);
 
+/* Adaptive refinement: splits triangles only where transfer changes faster than the vertices
+ * sample it (contact shadows, shadow edges crossing big triangles), instead of everywhere as
+ * max_edge does. What shapes transfer is probed at vertices, edge midpoints and inside triangles:
+ * ambient occlusion within a tenth of the scene, and the share of each light of the scene (its
+ * "lights" and emitting surfaces) that arrives unshadowed. Where two probes differ, or a midpoint
+ * differs from what its corners interpolate, by more than `threshold`, edges are split at their
+ * midpoints (longest-edge bisection keeps triangles well shaped and the mesh conforming, creases
+ * included); levels repeat until nothing differs, edges reach min_edge or the budget is spent.
+ * Deterministic for any thread count. Run it before baking: the bake and its file see the
+ * refined mesh. A cancelled call keeps the levels it finished (a valid, less refined mesh). */
+typedef struct prt_refine_desc {
+    size_t max_new_vertices;  /* vertex budget; 0 = as many as the scene has, at least 100,000 */
+    float threshold;          /* probe difference that splits, in (0, 1); 0 = 0.1 */
+    float min_edge;           /* edges at most twice this are not split; 0 = 1/2000 of the diagonal */
+    int max_levels;           /* 0 = 10 (each halves the edges it splits) */
+    prt_progress_fn progress; /* a stage per level; return non-zero to cancel (PRT_ERR_CANCELLED) */
+    void *progress_user;
+} prt_refine_desc;
+
+typedef struct prt_refine_stats {
+    int levels;               /* levels that split something */
+    size_t marked_edges;      /* edges found differing at the first level */
+    size_t marked_triangles;  /* prt_scene_refine_estimate: triangles estimated to need it */
+    size_t new_vertices, triangles;   /* added; triangles after */
+    size_t probes;            /* points probed */
+    int budget_spent;         /* non-zero when the budget stopped it */
+} prt_refine_stats;
+
+prt_status prt_scene_refine(prt_context *ctx, prt_scene *scene, const prt_refine_desc *desc, prt_refine_stats *stats);
+/* Estimates, from 2,000 evenly spread triangles and in a fraction of a second, how many triangles
+ * span edges their corners cannot resolve (stats->marked_triangles); changes nothing. What a tool
+ * needs to suggest refinement. */
+prt_status prt_scene_refine_estimate(prt_context *ctx, const prt_scene *scene, const prt_refine_desc *desc, prt_refine_stats *stats);
+
 /* Writes the procedural demo scene (a ribbed bowl and a torus knot-like ring of spheres over a
  * ground plane between a red and a green wall) as OBJ+MTL. */
 prt_status prt_demo_scene_write(const char *obj_path);

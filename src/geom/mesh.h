@@ -4,6 +4,7 @@
 
 #include "core/internal.h"
 #include "prt/brdf.h"
+#include "prt/scene.h"
 
 /* Struct-of-arrays mesh; every array has 3 entries per vertex or per triangle. */
 typedef struct prt__mesh {
@@ -51,6 +52,17 @@ bool prt__mesh_has_uv(const prt__mesh *m);
 prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *what);
 /* Splits edges until none is longer than max_edge, keeping the mesh conforming. */
 prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_edge);
+#define PRT__MAX_REFINE_VERTICES 50000000u
+/* Adaptive refinement (see prt_scene_refine) with the scene's lights. */
+prt_status prt__mesh_refine(const prt_context *ctx, prt__mesh *m, const prt_light *lights, int light_count,
+                            const prt_refine_desc *desc, prt_refine_stats *stats);
+prt_status prt__mesh_refine_estimate(const prt_context *ctx, const prt__mesh *m, const prt_light *lights, int light_count,
+                                     const prt_refine_desc *desc, prt_refine_stats *stats);
+/* Grows every per-vertex array to hold max_v vertices; false when out of memory (or past 2^32). */
+bool prt__mesh_reserve(prt__mesh *m, size_t max_v);
+/* Appends the midpoint of edge (a, b), every attribute interpolated, and returns its id; the
+ * arrays must have room (prt__mesh_reserve). */
+uint32_t prt__mesh_midpoint(prt__mesh *m, uint32_t a, uint32_t b);
 
 struct prt_scene {
     prt__mesh mesh;

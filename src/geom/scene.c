@@ -187,3 +187,15 @@ void prt_scene_bounds(const prt_scene *s, float lo[3], float hi[3])
         hi[i % 3] = fmaxf(hi[i % 3], s->mesh.positions[i]);
     }
 }
+
+prt_status prt_scene_refine(prt_context *ctx, prt_scene *s, const prt_refine_desc *desc, prt_refine_stats *stats)
+{
+    if (!s) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_scene_refine: scene is required");
+    return prt__mesh_refine(ctx, &s->mesh, s->lights, s->light_count, desc, stats);
+}
+
+prt_status prt_scene_refine_estimate(prt_context *ctx, const prt_scene *s, const prt_refine_desc *desc, prt_refine_stats *stats)
+{
+    if (!s) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_scene_refine_estimate: scene is required");
+    return prt__mesh_refine_estimate(ctx, &s->mesh, s->lights, s->light_count, desc, stats);
+}

@@ -38,6 +38,42 @@ static float edge_len2(const prt__mesh *m, uint32_t a, uint32_t b)
     return prt__v3_dot(d, d);
 }
 
+bool prt__mesh_reserve(prt__mesh *m, size_t max_v)
+{
+    if (max_v > UINT32_MAX) return false;
+    float *pos = realloc(m->positions, max_v * 3 * sizeof(float));
+    if (pos) m->positions = pos;
+    float *nrm = pos ? realloc(m->normals, max_v * 3 * sizeof(float)) : NULL;
+    if (nrm) m->normals = nrm;
+    float *alb = nrm ? realloc(m->albedo, max_v * 3 * sizeof(float)) : NULL;
+    if (alb) m->albedo = alb;
+    uint8_t *mat = alb ? realloc(m->material, max_v) : NULL;
+    if (mat) m->material = mat;
+    uint16_t *surf = mat ? realloc(m->surface, max_v * sizeof(uint16_t)) : NULL;
+    if (surf) m->surface = surf;
+    float *uvs = surf ? realloc(m->uv, max_v * 2 * sizeof(float)) : NULL;
+    if (uvs) m->uv = uvs;
+    float *emi = uvs && m->emission ? realloc(m->emission, max_v * 3 * sizeof(float)) : NULL;
+    if (emi) m->emission = emi;
+    return uvs && (!m->emission || emi);
+}
+
+uint32_t prt__mesh_midpoint(prt__mesh *m, uint32_t a, uint32_t b)
+{
+    const uint32_t nv = (uint32_t)m->vertex_count++;
+    for (int c = 0; c < 3; ++c) {
+        m->positions[nv * 3 + c] = 0.5f * (m->positions[a * 3 + c] + m->positions[b * 3 + c]);
+        m->normals[nv * 3 + c] = m->normals[a * 3 + c] + m->normals[b * 3 + c];
+        m->albedo[nv * 3 + c] = 0.5f * (m->albedo[a * 3 + c] + m->albedo[b * 3 + c]);
+        if (m->emission) m->emission[nv * 3 + c] = 0.5f * (m->emission[a * 3 + c] + m->emission[b * 3 + c]);
+    }
+    m->material[nv] = m->material[a];   /* edges never join two objects */
+    m->surface[nv] = m->surface[a];
+    for (int c = 0; c < 2; ++c) m->uv[nv * 2 + c] = 0.5f * (m->uv[a * 2 + c] + m->uv[b * 2 + c]);
+    if (!prt__v3_normalize(m->normals + nv * 3)) memcpy(m->normals + nv * 3, m->normals + a * 3, 3 * sizeof(float));
+    return nv;
+}
+
 prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_edge)
 {
     if (!(max_edge > 0.0f) || !isfinite(max_edge))
@@ -74,22 +110,8 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
         em.keys = prt__calloc(em.cap, sizeof *em.keys);
         em.values = prt__calloc(em.cap, sizeof *em.values);
         size_t max_v = m->vertex_count + split_edges;   /* an upper bound: shared edges count twice */
-        float *pos = realloc(m->positions, max_v * 3 * sizeof(float));
-        if (pos) m->positions = pos;
-        float *nrm = pos ? realloc(m->normals, max_v * 3 * sizeof(float)) : NULL;
-        if (nrm) m->normals = nrm;
-        float *alb = nrm ? realloc(m->albedo, max_v * 3 * sizeof(float)) : NULL;
-        if (alb) m->albedo = alb;
-        uint8_t *mat = alb ? realloc(m->material, max_v) : NULL;
-        if (mat) m->material = mat;
-        uint16_t *surf = mat ? realloc(m->surface, max_v * sizeof(uint16_t)) : NULL;
-        if (surf) m->surface = surf;
-        float *uvs = surf ? realloc(m->uv, max_v * 2 * sizeof(float)) : NULL;
-        if (uvs) m->uv = uvs;
-        float *emi = uvs && m->emission ? realloc(m->emission, max_v * 3 * sizeof(float)) : NULL;
-        if (emi) m->emission = emi;
         uint32_t *out = prt__calloc(new_tris * 3, sizeof(uint32_t));
-        if (!em.keys || !em.values || !uvs || (m->emission && !emi) || !out || max_v > UINT32_MAX) {
+        if (!em.keys || !em.values || !out || !prt__mesh_reserve(m, max_v)) {
             free(em.keys); free(em.values); free(out);
             return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory subdividing the mesh");
         }
@@ -109,20 +131,7 @@ prt_status prt__mesh_subdivide(const prt_context *ctx, prt__mesh *m, float max_e
                 count++;
                 bool found;
                 uint32_t *slot = edge_slot(&em, a, b, &found);
-                if (!found) {
-                    uint32_t nv = (uint32_t)m->vertex_count++;
-                    for (int c = 0; c < 3; ++c) {
-                        m->positions[nv * 3 + c] = 0.5f * (m->positions[a * 3 + c] + m->positions[b * 3 + c]);
-                        m->normals[nv * 3 + c] = m->normals[a * 3 + c] + m->normals[b * 3 + c];
-                        m->albedo[nv * 3 + c] = 0.5f * (m->albedo[a * 3 + c] + m->albedo[b * 3 + c]);
-                        if (m->emission) m->emission[nv * 3 + c] = 0.5f * (m->emission[a * 3 + c] + m->emission[b * 3 + c]);
-                    }
-                    m->material[nv] = m->material[a];   /* edges never join two objects */
-                    m->surface[nv] = m->surface[a];
-                    for (int c = 0; c < 2; ++c) m->uv[nv * 2 + c] = 0.5f * (m->uv[a * 2 + c] + m->uv[b * 2 + c]);
-                    if (!prt__v3_normalize(m->normals + nv * 3)) memcpy(m->normals + nv * 3, m->normals + a * 3, 3 * sizeof(float));
-                    *slot = nv;
-                }
+                if (!found) *slot = prt__mesh_midpoint(m, a, b);
                 mid[k] = *slot;
             }
 #define EMIT(x, y, z) (out[nt * 3] = (x), out[nt * 3 + 1] = (y), out[nt * 3 + 2] = (z), nt++)

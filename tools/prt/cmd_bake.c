@@ -20,17 +20,25 @@ static const char *HELP_HEAD =
     "      --no-checkpoint    do not keep FILE.checkpoint while baking (it holds every finished\n"
     "                         work unit, can be as large as the bake's memory, and is deleted\n"
     "                         once FILE is written)\n"
-    "      --method M         the PRT method (default sh); each has the options listed below\n"
-    "                         (prt bake --method M --help shows one method's)\n"
     "      --summary FILE     also write a JSON summary: input, output, method, mesh, storage,\n"
-    "                         each stage's seconds (compression among them) and the total\n";
+    "                         each stage's seconds (compression among them) and the total\n"
+    "      --refine           split triangles where transfer changes faster than the vertices\n"
+    "                         sample it (contact shadows, shadow edges of the scene's lights),\n"
+    "                         level by level, before baking; the bake suggests it when it sees\n"
+    "                         such triangles\n"
+    "      --refine-vertices N  at most N new vertices (default: as many as the mesh\n                         has, at least 100,000)\n"
+    "      --refine-threshold T  probe difference (occlusion, shadowed share of a light) that\n"
+    "                         splits, in (0, 1) (default 0.1; lower refines more)\n"
+    "      --method M         the PRT method (default sh); each has the options listed below\n"
+    "                         (prt bake --method M --help shows one method's)\n";
 
 static const char *HELP_TAIL =
     "  -j, --threads N        worker threads (default: all cores; results do not change)\n"
     "  -q, --quiet            no progress or warnings\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
-enum { OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_METHOD_OPTION = 3000 };
+enum { OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE, OPT_REFINE_VERTICES, OPT_REFINE_THRESHOLD,
+       OPT_METHOD_OPTION = 3000 };
 
 static void help(const prt_method *only)
 {
@@ -50,7 +58,9 @@ static int collect_options(const prt_method *chosen, struct option *opts, int ma
 {
     static const struct option fixed[] = {
         {"output", required_argument, 0, 'o'}, {"method", required_argument, 0, OPT_METHOD}, {"resume", no_argument, 0, OPT_RESUME},
-        {"no-checkpoint", no_argument, 0, OPT_NO_CHECKPOINT}, {"summary", required_argument, 0, OPT_SUMMARY}, CLI_SCENE_LONG_OPTIONS,
+        {"no-checkpoint", no_argument, 0, OPT_NO_CHECKPOINT}, {"summary", required_argument, 0, OPT_SUMMARY},
+        {"refine", no_argument, 0, OPT_REFINE}, {"refine-vertices", required_argument, 0, OPT_REFINE_VERTICES},
+        {"refine-threshold", required_argument, 0, OPT_REFINE_THRESHOLD}, CLI_SCENE_LONG_OPTIONS,
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}};
     int n = 0;
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; ++i) opts[n++] = fixed[i];
@@ -121,6 +131,41 @@ static void coarse_mesh_warning(const prt_scene *scene)
             "blocky there (try --max-edge %.3g: about %.0f triangles, or --texels N for a light map)\n", big_count, big, 100 * big_area / area, edge, after);
 }
 
+static prt_status refine_scene(cli *c, prt_scene *scene, const prt_refine_desc *desc)
+{
+    const size_t before = prt_scene_vertex_count(scene);
+    prt_refine_stats rs;
+    prt_refine_desc rd = *desc;
+    rd.progress = cli_progress;
+    rd.progress_user = c;
+    prt_status st = prt_scene_refine(c->ctx, scene, &rd, &rs);
+    if (st || c->quiet) return st;
+    if (!rs.new_vertices) {
+        fprintf(stderr, "prt bake: refine: no edge differs by more than the threshold (%zu points probed): the mesh is kept\n", rs.probes);
+        return PRT_OK;
+    }
+    fprintf(stderr, "prt bake: refine: %d levels added %zu vertices (%.0f%%), now %zu vertices, %zu triangles (%zu points probed)%s\n",
+            rs.levels, rs.new_vertices, 100.0 * (double)rs.new_vertices / (double)before, prt_scene_vertex_count(scene), rs.triangles,
+            rs.probes, rs.budget_spent ? "; the vertex budget stopped it (raise --refine-vertices for more)" : "");
+    return PRT_OK;
+}
+
+/* Per-vertex transfer cannot show a shadow that falls between vertices: say so, with the option
+ * that fixes it, when a quick sample finds such triangles (per-texel bakes sample texels). */
+static void suggest_refinement(cli *c, const prt_scene *scene, const prt_options *o, bool coarse_check)
+{
+    const char *texels = prt_options_get(o, "texels");
+    if (texels && strcmp(texels, "0") != 0) return;
+    prt_refine_stats rs;
+    if (prt_scene_refine_estimate(c->ctx, scene, NULL, &rs)) return;   /* a hint only */
+    const size_t nt = prt_scene_triangle_count(scene);
+    if (rs.marked_triangles * 100 >= nt && rs.marked_triangles >= 20)
+        fprintf(stderr, "prt bake: note: about %zu triangles (%.0f%%) span contact or shadow edges that their vertices cannot resolve "
+                "(sawtooth or missing shadows); --refine splits just those\n", rs.marked_triangles, 100.0 * (double)rs.marked_triangles / (double)nt);
+    else if (coarse_check)
+        coarse_mesh_warning(scene);
+}
+
 /* The bake as JSON for scripts and CI: what went in, what came out, where the time went. */
 static prt_status write_summary(cli *c, const char *path, const char *input, const char *output, const prt_transfer *t)
 {
@@ -159,7 +204,8 @@ int cmd_bake(int argc, char **argv)
     prt_scene_desc sd = {0};
     const char *output = NULL;
     const char *summary = NULL;
-    bool resume = false, checkpoint = true;
+    bool resume = false, checkpoint = true, refine = false;
+    prt_refine_desc rd = {0};
     const prt_method *method = cli_method_from_argv(&c, argc, argv);
     if (!method) return EXIT_USAGE;
     bool method_named = false;
@@ -185,6 +231,18 @@ int cmd_bake(int argc, char **argv)
         case OPT_RESUME: resume = true; break;
         case OPT_NO_CHECKPOINT: checkpoint = false; break;
         case OPT_SUMMARY: summary = optarg; break;
+        case OPT_REFINE: refine = true; break;
+        case OPT_REFINE_VERTICES: {
+            int n;
+            if (!cli_parse_int(optarg, 1, 50000000, &n)) rc = cli_usage(&c, "--refine-vertices must be 1..50000000");
+            rd.max_new_vertices = (size_t)n;
+            refine = true;
+            break;
+        }
+        case OPT_REFINE_THRESHOLD:
+            if (!cli_parse_float(optarg, &rd.threshold) || !(rd.threshold > 0 && rd.threshold < 1)) rc = cli_usage(&c, "--refine-threshold must lie in (0, 1)");
+            refine = true;
+            break;
         case OPT_METHOD:
             /* Read before parsing; getopt also accepts abbreviations such as --meth, which that
              * scan does not see. */
@@ -214,10 +272,10 @@ int cmd_bake(int argc, char **argv)
     prt_scene *scene = NULL;
     prt_transfer *t = NULL;
     prt_status st = prt_scene_load(c.ctx, argv[optind], &sd, &scene);
-    if (!st && !c.quiet) {
+    if (!st && !c.quiet)
         fprintf(stderr, "prt bake: %s: %zu vertices, %zu triangles\n", argv[optind], prt_scene_vertex_count(scene), prt_scene_triangle_count(scene));
-        if (sd.max_edge == 0) coarse_mesh_warning(scene);
-    }
+    if (!st && refine) st = refine_scene(&c, scene, &rd);
+    else if (!st && !c.quiet) suggest_refinement(&c, scene, o, sd.max_edge == 0);
     if (!st) {
         uint64_t recovered = 0, total = 0;
         prt_bake_run_desc run = {.progress = cli_progress, .progress_user = &c, .checkpoint = checkpoint ? checkpoint_path : NULL,
