@@ -104,6 +104,37 @@ static void test_winding(void **state)
     }
     assert_true(room >= 8 && box >= 8);
     prt_scene_release(s);
+
+    /* The room alone looks like an object wound inside out and is flipped; around a light of a
+     * JSON scene (moved and scaled with the room, so the check runs in the file's frame) it is a
+     * room and keeps facing in; a light outside it changes nothing. */
+    text[0] = 0;
+    len = 0;
+    for (int c = 0; c < 8; ++c)
+        len += (size_t)snprintf(text + len, sizeof text - len, "v %d %d %d\n", 4 * (c == 1 || c == 2 || c == 5 || c == 6) - 2,
+                                4 * (c == 2 || c == 3 || c == 6 || c == 7) - 2, 4 * (c >= 4) - 2);
+    for (int f = 0; f < 12; ++f) len += (size_t)snprintf(text + len, sizeof text - len, "f %d %d %d\n", faces[f][0], faces[f][1], faces[f][2]);
+    write_text("lone_room.obj", text, path, sizeof path);
+    const char *scenes[3] = {
+        "{\"meshes\": [{\"file\": \"lone_room.obj\"}]}",
+        "{\"meshes\": [{\"file\": \"lone_room.obj\", \"translate\": [10, 0, 0], \"scale\": [2, 2, 2], \"rotate\": [30, 0, 0]}],"
+        " \"lights\": [{\"type\": \"point\", \"position\": [13, 1, -2], \"intensity\": 1}]}",
+        "{\"meshes\": [{\"file\": \"lone_room.obj\", \"translate\": [10, 0, 0], \"scale\": [2, 2, 2], \"rotate\": [30, 0, 0]}],"
+        " \"lights\": [{\"type\": \"point\", \"position\": [30, 0, 0], \"intensity\": 1}]}"};
+    const float centre[3][3] = {{0, 0, 0}, {10, 0, 0}, {10, 0, 0}};
+    for (int k = 0; k < 3; ++k) {
+        write_text("lit_room.json", scenes[k], path, sizeof path);
+        assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
+        pos = prt_scene_positions(s);
+        n = prt_scene_normals(s);
+        for (size_t v = 0; v < prt_scene_vertex_count(s); ++v) {
+            const float *p = pos + v * 3, *q = n + v * 3;
+            const float out = (p[0] - centre[k][0]) * q[0] + (p[1] - centre[k][1]) * q[1] + (p[2] - centre[k][2]) * q[2];
+            if (k == 1) assert_true(out < 0);   /* a room around its light faces in */
+            else assert_true(out > 0);          /* alone, or with the light outside: flipped to face out */
+        }
+        prt_scene_release(s);
+    }
     prt_context_release(ctx);
 }
 

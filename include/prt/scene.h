@@ -22,9 +22,9 @@ typedef struct prt_scene prt_scene;
 /* Which side of an imported triangle is its front. Files that carry normals are trusted in AUTO
  * mode; for files without normals, AUTO looks at each connected piece: one that is nearly closed
  * and whose counter-clockwise normals would point inwards (negative signed volume), as scanned
- * meshes such as Stanford's bun_zipper.ply are wound, is flipped - unless another piece lies
- * inside its bounds, which makes it an enclosure (a room, walls facing in on purpose) that is
- * kept. Both decisions are said through the log hook. */
+ * meshes such as Stanford's bun_zipper.ply are wound, is flipped - unless another piece or a
+ * light of the JSON scene lies inside its bounds, which makes it an enclosure (a room, walls
+ * facing in on purpose) that is kept. Both decisions are said through the log hook. */
 typedef enum prt_winding {
     PRT_WINDING_AUTO = 0,
     PRT_WINDING_KEEP,     /* counter-clockwise is the front, as the file says */

@@ -79,9 +79,11 @@ struct prt_scene {
 int prt__scene_brdf_id(prt_scene *scene, const prt_brdf *brdf);
 
 /* Adds the mesh file at path (anything assimp reads), with optional transform (row-major 4x4,
- * NULL = identity) and albedo override (NULL = from materials, else desc default). */
-prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform,
-                            const float *albedo_override, const prt_scene_desc *desc, prt__mesh *m);
+ * NULL = identity) and albedo override (NULL = from materials, else desc default). `inside`
+ * holds inside_count world points (the scene's lights) that a room around them must keep facing:
+ * a closed piece around one is never flipped. */
+prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform, const float *albedo_override,
+                            const float *inside, size_t inside_count, const prt_scene_desc *desc, prt__mesh *m);
 /* Adds every mesh a .json scene names. */
 prt_status prt__import_scene_json(const prt_context *ctx, const char *path, const prt_scene_desc *desc,
                                   prt_scene *scene);

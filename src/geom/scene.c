@@ -46,7 +46,7 @@ prt_status prt_scene_load(prt_context *ctx, const char *path, const prt_scene_de
     prt_scene *s = prt__calloc(1, sizeof *s);
     if (!s) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     prt_status st = ends_with(path, ".json") ? prt__import_scene_json(ctx, path, &d, s)
-                                             : prt__import_mesh(ctx, path, NULL, NULL, &d, &s->mesh);
+                                             : prt__import_mesh(ctx, path, NULL, NULL, NULL, 0, &d, &s->mesh);
     if (st != PRT_OK) { prt_scene_release(s); return st; }
     return finish(ctx, s, &d, path, out);
 }

@@ -103,7 +103,7 @@ static uint32_t find_root(uint32_t *parent, uint32_t i)
  * vertex inside its bounding box: then it is an enclosure (a room, whose walls face inwards on
  * purpose), and it is kept. Returns a flag per triangle (in file order over the meshes), or NULL
  * when nothing is to be flipped; counts what was decided. */
-static uint8_t *inside_out_triangles(const struct aiScene *sc, size_t *flipped, size_t *kept)
+static uint8_t *inside_out_triangles(const struct aiScene *sc, const float *inside, size_t inside_count, size_t *flipped, size_t *kept)
 {
     *flipped = *kept = 0;
     size_t nf = 0;
@@ -206,6 +206,13 @@ static uint8_t *inside_out_triangles(const struct aiScene *sc, size_t *flipped, 
                 }
             }
         }
+        /* So does one around a light (in the file's own frame, as `inside` is given). */
+        for (size_t i = 0; cand && i < ncand; ++i)
+            for (size_t k = 0; k < inside_count; ++k) {
+                double *q = piece[cand[i]];
+                const float *p = inside + k * 3;
+                if (p[0] > q[4] && p[0] < q[7] && p[1] > q[5] && p[1] < q[8] && p[2] > q[6] && p[2] < q[9]) q[10] = 2;
+            }
         free(cand);
         for (size_t r = 0; r < nf; ++r) {
             *flipped += piece[r][10] == 1;
@@ -223,6 +230,8 @@ typedef struct import_job {
     const char *path;
     const float *xform, *albedo_override;
     const prt_scene_desc *desc;
+    const float *inside;     /* points inside the scene's rooms (its lights), world space */
+    size_t inside_count;
 } import_job;
 
 static void fail_message(prt__bytes *out, prt_status st, const char *fmt, const char *path, const char *why)
@@ -262,7 +271,27 @@ static void import_with_assimp(void *arg, prt__bytes *out)
     size_t pieces_flipped = 0, pieces_kept = 0;
     uint8_t *flip_tri = NULL;
     if (desc->winding == PRT_WINDING_AUTO && !file_normals) {
-        flip_tri = inside_out_triangles(sc, &pieces_flipped, &pieces_kept);
+        /* The lights into the file's frame: p = A^-1 (w - t) for the row-major affine xform. */
+        float *local = job->inside_count ? malloc(job->inside_count * 3 * sizeof *local) : NULL;
+        size_t nlocal = 0;
+        for (size_t k = 0; local && k < job->inside_count; ++k) {
+            const float *w = job->inside + k * 3, *a = xform;
+            float d[3] = {w[0], w[1], w[2]};
+            if (!a) { memcpy(local + nlocal++ * 3, d, sizeof d); continue; }
+            for (int c = 0; c < 3; ++c) d[c] -= a[c * 4 + 3];
+            /* Cramer's rule: the columns of A are the images of the file's axes. */
+            const double det = (double)a[0] * (a[5] * a[10] - a[6] * a[9]) - (double)a[1] * (a[4] * a[10] - a[6] * a[8]) + (double)a[2] * (a[4] * a[9] - a[5] * a[8]);
+            if (!(fabs(det) > 1e-30)) continue;
+            for (int c = 0; c < 3; ++c) {
+                double m[9];
+                for (int r = 0; r < 3; ++r)
+                    for (int q = 0; q < 3; ++q) m[r * 3 + q] = q == c ? d[r] : a[r * 4 + q];
+                local[nlocal * 3 + c] = (float)((m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6])) / det);
+            }
+            nlocal++;
+        }
+        flip_tri = inside_out_triangles(sc, local, nlocal, &pieces_flipped, &pieces_kept);
+        free(local);
         flip = flip_tri != NULL;
     }
     if (flip) {
@@ -378,13 +407,13 @@ static size_t import_max_bytes(double bytes)
     return cap >= (double)SIZE_MAX ? SIZE_MAX : (size_t)cap;
 }
 
-prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform,
-                            const float *albedo_override, const prt_scene_desc *desc, prt__mesh *m)
+prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform, const float *albedo_override,
+                            const float *inside, size_t inside_count, const prt_scene_desc *desc, prt__mesh *m)
 {
     FILE *probe = fopen(path, "rb");
     if (!probe) return prt__fail(ctx, PRT_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
     fclose(probe);
-    import_job job = {path, xform, albedo_override, desc};
+    import_job job = {path, xform, albedo_override, desc, inside, inside_count};
     prt__bytes msg = {0};
     prt_status st = PRT_OK;
     if (desc->import_in_process) {
@@ -404,7 +433,7 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
         prt__log(ctx, PRT_LOG_WARN, "%s: %u closed piece%s wound clockwise with nothing inside (an object seen from outside, normals pointing in): "
                  "flipped (--winding keep to prevent)", path, nflip, nflip == 1 ? "" : "s");
     if (!st && (flags & PRT__IMPORT_KEPT_ENCLOSURE))
-        prt__log(ctx, PRT_LOG_INFO, "%s: %u closed piece%s wound clockwise around other geometry (a room seen from inside): kept as %s "
+        prt__log(ctx, PRT_LOG_INFO, "%s: %u closed piece%s wound clockwise around other geometry or a light (a room seen from inside): kept as %s "
                  "(--winding flip to flip)", path, nkept, nkept == 1 ? "" : "s", nkept == 1 ? "it is" : "they are");
     return st;
 }

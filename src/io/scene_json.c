@@ -183,6 +183,11 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
     }
     const cJSON *lights = cJSON_GetObjectItemCaseSensitive(root, "lights");
     if (lights && (st = read_lights(ctx, path, lights, scene))) { cJSON_Delete(root); return st; }
+    /* Lights with a position sit inside whatever room they light: its walls face them. */
+    float light_points[64 * 3];
+    size_t light_point_count = 0;
+    for (int i = 0; i < scene->light_count && light_point_count < 64; ++i)
+        if (scene->lights[i].type != PRT_LIGHT_DIRECTIONAL) memcpy(light_points + light_point_count++ * 3, scene->lights[i].position, 3 * sizeof(float));
     const cJSON *item;
     int index = 0;
     cJSON_ArrayForEach(item, meshes) {
@@ -238,7 +243,7 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         float xf[16];
         make_xform(s, r, t, xf);
         const size_t first_vertex = m->vertex_count;
-        if ((st = prt__import_mesh(ctx, full, xf, albedo, desc, m))) break;
+        if ((st = prt__import_mesh(ctx, full, xf, albedo, light_points, light_point_count, desc, m))) break;
         if (has_brdf) {
             int id = prt__scene_brdf_id(scene, &brdf);
             if (!id) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDF materials", path, PRT__MAX_BRDFS); break; }

@@ -149,7 +149,7 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     "      --crease-angle D   split computed normals above D degrees (default 45)\n" \
     "      --winding W        auto | keep | flip: which side of imported triangles faces out\n" \
     "                         (auto flips closed pieces without normals wound inside out, but\n" \
-    "                         keeps those enclosing other geometry: rooms face in)\n" \
+    "                         keeps those enclosing other geometry or a light: rooms face in)\n" \
     "      --import-timeout S  give up on a mesh file that the importer has not read in S seconds\n" \
     "                         (default 60 + 10 per MB; a malformed file can make it loop)\n" \
     "      --progress P       auto (a bar on a terminal, else a line per tenth with ETA), lines,\n" \
