@@ -40,7 +40,7 @@ expect 2 "misspelt option" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --oder 3
 says "did you mean --order"
 [ "$(wc -l <"$T/err")" -eq 1 ] && ok || bad "a usage error takes one line, not $(wc -l <"$T/err")"
 
-for cmd in bake relight render env info demo-scene reference compare sweep; do
+for cmd in bake relight export render env info demo-scene reference compare sweep; do
     expect 0 "$cmd --help" -- "$PRT" "$cmd" --help
     grep -q "Exit codes" "$T/out" && ok || bad "$cmd --help lacks exit codes"
 done
@@ -93,6 +93,17 @@ head -c 4 "$T/lit.glb" | grep -q glTF && grep -a -q '"COLOR_0"' "$T/lit.glb" && 
 expect 0 "relight gltf" -- "$PRT" relight -q "$T/demo.prt" -o "$T/litg.gltf"
 grep -q '"COLOR_0"' "$T/litg.gltf" && [ -s "$T/litg.bin" ] && ok || bad "the .gltf lacks COLOR_0 or its .bin"
 ls -a "$T" | grep -q '\.tmp\.' && bad "an export left a temporary behind" || ok
+# prt export: the same mesh, plus the SH transfer as custom glTF attributes and the GLSL that
+# relights them (the GLSL's arithmetic against COLOR_0 was checked by hand: equal to 1e-7).
+expect 0 "export with SH attributes" -- "$PRT" export -q "$T/demo.prt" -o "$T/sh.gltf" --sh --glsl "$T/sh.glsl"
+grep -q '"_SH6"' "$T/sh.gltf" && ! grep -q '"COLOR_1"' "$T/sh.gltf" && ok || bad "the .gltf lacks the _SH attributes"
+grep -q 'vec3 prtRadiance(vec3 light\[9\])' "$T/sh.glsl" && grep -q 'in vec4 _SH6;' "$T/sh.glsl" && ok || bad "the GLSL lacks prtRadiance or its inputs"
+expect 0 "export shadowed, albedo attribute" -- "$PRT" export -q "$T/demo.prt" -o "$T/shs.glb" --sh -k shadowed
+grep -a -q '"_ALBEDO"' "$T/shs.glb" && ok || bad "a one-channel export lacks _ALBEDO"
+expect 2 "export --sh to PLY" -- "$PRT" export "$T/demo.prt" -o "$T/sh.ply" --sh
+says "glTF"
+expect 2 "export to JSON" -- "$PRT" export "$T/demo.prt" -o "$T/sh.json"
+says "prt relight"
 expect 0 "relight ply, 8-bit sRGB" -- "$PRT" relight -q "$T/demo.prt" -o "$T/lit8.ply"
 head -c 600 "$T/lit8.ply" | grep -a -q "property uchar red" && ok || bad "the PLY does not hold 8-bit colours"
 expect 0 "relight ply, float linear" -- "$PRT" relight -q "$T/demo.prt" -o "$T/litf.ply" --colors linear

@@ -320,6 +320,86 @@ static void test_hdr_reader_and_signatures(void **state)
     prt_image_free(&img);
 }
 
+static char *slurp(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    *n = (size_t)ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *d = malloc(*n + 1);
+    assert_int_equal(fread(d, 1, *n, f), *n);
+    d[*n] = 0;
+    fclose(f);
+    return d;
+}
+
+static uint32_t le32(const char *p) { const unsigned char *u = (const unsigned char *)p; return u[0] | u[1] << 8 | (uint32_t)u[2] << 16 | (uint32_t)u[3] << 24; }
+
+/* Custom vertex attributes in glTF (how prt export hands SH transfer to other renderers): named as
+ * asked, a valid GLB container around them, refused where the format has none or a name is bad. */
+static void test_mesh_export_attributes(void **state)
+{
+    (void)state;
+    const float pos[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}, rgb[12] = {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f, 0.7f, 0.8f, 0.9f, 1, 1, 1};
+    const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    float attr[4 * 2 * 4];
+    for (int i = 0; i < 32; ++i) attr[i] = 1000.0f + i;   /* beyond [0, 1]: not colours, kept as they are */
+    const char *const names[2] = {"_SH0", "_ALBEDO"};
+    prt_mesh_export_desc d = {pos, NULL, 4, idx, 2, rgb, PRT_COLOURS_LINEAR, 0, 2, attr, names};
+    char gltf[600], glb[600], bin[600];
+    snprintf(gltf, sizeof gltf, "%s/attr.gltf", test_dir);
+    snprintf(glb, sizeof glb, "%s/attr.glb", test_dir);
+    snprintf(bin, sizeof bin, "%s/attr.bin", test_dir);
+    assert_int_equal(prt_mesh_export(gltf, &d), PRT_OK);
+    size_t n;
+    char *text = slurp(gltf, &n);
+    assert_non_null(strstr(text, "\"_SH0\""));
+    assert_non_null(strstr(text, "\"_ALBEDO\""));
+    assert_non_null(strstr(text, "\"COLOR_0\""));
+    assert_null(strstr(text, "COLOR_1"));
+    free(text);
+    /* The values travel unclamped: 1000 + i is in the buffer as a float. */
+    char *data = slurp(bin, &n);
+    int found = 0;
+    for (size_t at = 0; at + 4 <= n; at += 4) {
+        float f;
+        memcpy(&f, data + at, 4);
+        found += f == 1031.0f || f == 1000.0f;
+    }
+    assert_int_equal(found, 2);
+    free(data);
+
+    assert_int_equal(prt_mesh_export(glb, &d), PRT_OK);
+    data = slurp(glb, &n);
+    assert_memory_equal(data, "glTF", 4);
+    assert_int_equal(le32(data + 4), 2);
+    assert_int_equal(le32(data + 8), n);               /* the header's length after the rewrite */
+    const uint32_t json_len = le32(data + 12);
+    assert_int_equal(json_len % 4, 0);                 /* chunks stay 4-byte aligned */
+    assert_memory_equal(data + 16, "JSON", 4);
+    assert_true(20 + json_len + 8 <= n);
+    assert_memory_equal(data + 20 + json_len + 4, "BIN", 3);
+    assert_int_equal(20 + json_len + 8 + le32(data + 20 + json_len), n);
+    data[20 + json_len - 1] = 0;
+    assert_non_null(strstr(data + 20, "\"_ALBEDO\""));
+    free(data);
+
+    /* Refused: formats without custom attributes, names glTF does not allow, too many. */
+    char ply[600];
+    snprintf(ply, sizeof ply, "%s/attr.ply", test_dir);
+    assert_int_equal(prt_mesh_export(ply, &d), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "glTF"));
+    const char *const bad[4][2] = {{"SH0", "_A"}, {"_sh0", "_A"}, {"_A", "_A"}, {"_A", "_THIS_NAME_IS_LONGER_THAN_31_BYTES"}};
+    for (int k = 0; k < 4; ++k) {
+        d.attribute_names = bad[k];
+        assert_int_equal(prt_mesh_export(gltf, &d), PRT_ERR_INVALID_ARG);
+    }
+    d.attribute_names = names;
+    d.attribute_count = 8;
+    assert_int_equal(prt_mesh_export(gltf, &d), PRT_ERR_INVALID_ARG);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -330,6 +410,7 @@ int main(void)
         cmocka_unit_test(test_image_round_trips),
         cmocka_unit_test(test_sky),
         cmocka_unit_test(test_hdr_reader_and_signatures),
+        cmocka_unit_test(test_mesh_export_attributes),
     };
     return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

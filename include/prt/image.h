@@ -46,6 +46,11 @@ typedef struct prt_mesh_export_desc {
     const float *rgb;                   /* 3 per vertex, linear radiance */
     prt_colour_encoding encoding;
     float exposure_stops;               /* radiance is scaled by 2^exposure_stops first */
+    /* glTF only: more per-vertex data as custom attributes (VEC4 float each), written as colour
+     * sets by assimp's exporter and then renamed; glTF wants such names to start with '_'. */
+    int attribute_count;                /* 0..7 */
+    const float *attributes;            /* 4 * attribute_count floats per vertex */
+    const char *const *attribute_names; /* attribute_count names, each "_" then [A-Z0-9_], <= 31 bytes */
 } prt_mesh_export_desc;
 
 prt_status prt_mesh_export(const char *path, const prt_mesh_export_desc *desc);

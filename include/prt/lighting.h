@@ -167,6 +167,11 @@ float prt_lighting_intensity(const prt_lighting *l);
 /* The desc the environment came from (all zero when set by prt_lighting_set_envmap). */
 const prt_environment_desc *prt_lighting_environment_desc(const prt_lighting *l);
 
+/* The distant part of a lighting as SH of `order` (what SH transfer dots): the environment
+ * projected, rotated and scaled, plus each directional light as a delta (E y_i(d)). Local
+ * lights with a position are not distant and are left out. */
+prt_status prt_lighting_sh(const prt_lighting *l, int order, prt_sh_light *out);
+
 /* Validates and appends a copy; *index (may be NULL) gets its position. */
 prt_status prt_lighting_add(prt_lighting *l, const prt_light *light, int *index);
 prt_status prt_lighting_set(prt_lighting *l, int index, const prt_light *light);

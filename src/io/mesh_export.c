@@ -6,6 +6,7 @@
 #include "prt/image.h"
 
 #include <assimp/cexport.h>
+#include <cjson/cJSON.h>
 #include <assimp/cimport.h>
 #include <assimp/material.h>
 #include <assimp/scene.h>
@@ -54,6 +55,93 @@ static void remove_dir(const char *dir)
     rmdir(dir);
 }
 
+static bool valid_attribute_name(const char *n)
+{
+    if (!n || n[0] != '_' || !n[1] || strlen(n) > 31) return false;
+    for (const char *p = n + 1; *p; ++p)
+        if (!((*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9') || *p == '_')) return false;
+    return true;
+}
+
+/* assimp writes colour sets 1..n as COLOR_1..COLOR_n: give them their own names. */
+static bool rename_attributes(cJSON *gltf, int count, const char *const *names)
+{
+    cJSON *meshes = cJSON_GetObjectItemCaseSensitive(gltf, "meshes"), *mesh, *prim;
+    int renamed = 0;
+    cJSON_ArrayForEach(mesh, meshes) {
+        cJSON_ArrayForEach(prim, cJSON_GetObjectItemCaseSensitive(mesh, "primitives")) {
+            cJSON *attrs = cJSON_GetObjectItemCaseSensitive(prim, "attributes");
+            for (int k = 0; k < count; ++k) {
+                char from[24];
+                snprintf(from, sizeof from, "COLOR_%d", k + 1);
+                cJSON *a = cJSON_DetachItemFromObjectCaseSensitive(attrs, from);
+                if (!a) return false;
+                cJSON_AddItemToObject(attrs, names[k], a);
+                renamed++;
+            }
+        }
+    }
+    return renamed == count;
+}
+
+static unsigned char *read_all(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    unsigned char *data = NULL;
+    long n = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+    if (n > 0 && fseek(f, 0, SEEK_SET) == 0 && (data = malloc((size_t)n)) && fread(data, 1, (size_t)n, f) != (size_t)n) { free(data); data = NULL; }
+    fclose(f);
+    *size = data ? (size_t)n : 0;
+    return data;
+}
+
+static uint32_t get_u32(const unsigned char *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
+static void put_u32(unsigned char *p, uint32_t v) { p[0] = (unsigned char)v; p[1] = (unsigned char)(v >> 8); p[2] = (unsigned char)(v >> 16); p[3] = (unsigned char)(v >> 24); }
+
+/* Renames the custom attributes in the file assimp wrote: the JSON of a .gltf, or the JSON chunk
+ * of a .glb (its header and chunk lengths rewritten, the binary chunk kept as it is). */
+static bool name_attributes(const char *file, bool binary, int count, const char *const *names)
+{
+    size_t size;
+    unsigned char *data = read_all(file, &size);
+    if (!data) return false;
+    size_t json_at = 0, json_len = size, rest_at = size;
+    if (binary) {
+        /* Header: magic, version, length; then the JSON chunk (length, type), padded to 4. */
+        if (size < 20 || memcmp(data, "glTF", 4) || get_u32(data + 12) > size - 20 || memcmp(data + 16, "JSON", 4)) { free(data); return false; }
+        json_at = 20;
+        json_len = get_u32(data + 12);
+        rest_at = json_at + json_len;
+    }
+    cJSON *gltf = cJSON_ParseWithLength((const char *)data + json_at, json_len);
+    char *text = gltf && rename_attributes(gltf, count, names) ? cJSON_PrintUnformatted(gltf) : NULL;
+    cJSON_Delete(gltf);
+    bool ok = text != NULL;
+    FILE *f = ok ? fopen(file, "wb") : NULL;
+    if (f) {
+        const size_t n = strlen(text), padded = binary ? (n + 3) & ~(size_t)3 : n;
+        if (binary) {
+            unsigned char head[20];
+            memcpy(head, "glTF", 4);
+            put_u32(head + 4, 2);
+            put_u32(head + 8, (uint32_t)(20 + padded + (size - rest_at)));
+            put_u32(head + 12, (uint32_t)padded);
+            memcpy(head + 16, "JSON", 4);
+            ok = fwrite(head, 1, 20, f) == 20;
+        }
+        ok = ok && fwrite(text, 1, n, f) == n;
+        for (size_t i = n; ok && i < padded; ++i) ok = fputc(' ', f) != EOF;
+        if (binary) ok = ok && fwrite(data + rest_at, 1, size - rest_at, f) == size - rest_at;
+        ok = (fclose(f) == 0) && ok;
+    } else {
+        ok = false;
+    }
+    cJSON_free(text);
+    free(data);
+    return ok;
+}
+
 prt_status prt_mesh_export(const char *path, const prt_mesh_export_desc *d)
 {
     if (!path || !d || !d->positions || !d->indices || !d->rgb || !d->vertex_count || !d->triangle_count)
@@ -68,13 +156,23 @@ prt_status prt_mesh_export(const char *path, const prt_mesh_export_desc *d)
     else if (ext && !strcasecmp(ext, ".ply")) format = "plyb";
     else if (ext && !strcasecmp(ext, ".obj")) format = "obj";
     else return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: '%s' is not .glb, .gltf, .ply or .obj", path);
+    if (d->attribute_count < 0 || d->attribute_count > 7 || (d->attribute_count && (!d->attributes || !d->attribute_names)))
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: 0 to 7 custom attributes, with their data and names");
+    if (d->attribute_count && !gltf) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: custom attributes need glTF (.glb or .gltf)");
+    for (int k = 0; k < d->attribute_count; ++k) {
+        if (!valid_attribute_name(d->attribute_names[k]))
+            return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: attribute name '%s' is not '_' followed by A-Z, 0-9 or '_' (31 bytes at most)",
+                             d->attribute_names[k] ? d->attribute_names[k] : "(null)");
+        for (int j = 0; j < k; ++j)
+            if (!strcmp(d->attribute_names[j], d->attribute_names[k])) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: attribute '%s' named twice", d->attribute_names[k]);
+    }
     const bool srgb = d->encoding == PRT_COLOURS_SRGB || (d->encoding == PRT_COLOURS_DEFAULT && !gltf);
     const float scale = exp2f(d->exposure_stops);
     if (!isfinite(scale)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: exposure %g is out of range", d->exposure_stops);
 
     const size_t nv = d->vertex_count, nt = d->triangle_count;
     struct aiVector3D *pos = prt__calloc(nv, sizeof *pos), *nrm = d->normals ? prt__calloc(nv, sizeof *nrm) : NULL;
-    struct aiColor4D *col = prt__calloc(nv, sizeof *col);
+    struct aiColor4D *col = prt__calloc(nv * (size_t)(1 + d->attribute_count), sizeof *col);
     struct aiFace *faces = prt__calloc(nt, sizeof *faces);
     unsigned *idx = prt__calloc(nt * 3, sizeof *idx);
     if (!pos || (d->normals && !nrm) || !col || !faces || !idx) {
@@ -91,6 +189,10 @@ prt_status prt_mesh_export(const char *path, const prt_mesh_export_desc *d)
             c[k] = srgb ? srgb_encode(x) : x;
         }
         col[v] = (struct aiColor4D){c[0], c[1], c[2], 1.0f};
+        for (int k = 0; k < d->attribute_count; ++k) {
+            const float *a = d->attributes + (v * (size_t)d->attribute_count + (size_t)k) * 4;
+            col[(size_t)(k + 1) * nv + v] = (struct aiColor4D){a[0], a[1], a[2], a[3]};
+        }
     }
     for (size_t t = 0; t < nt; ++t) {
         for (int k = 0; k < 3; ++k) idx[t * 3 + k] = d->indices[t * 3 + k];
@@ -104,7 +206,7 @@ prt_status prt_mesh_export(const char *path, const prt_mesh_export_desc *d)
     mesh.mNumFaces = (unsigned)nt;
     mesh.mVertices = pos;
     mesh.mNormals = nrm;
-    mesh.mColors[0] = col;
+    for (int k = 0; k <= d->attribute_count; ++k) mesh.mColors[k] = col + (size_t)k * nv;
     mesh.mFaces = faces;
     memcpy(mesh.mName.data, "prt", 4);
     mesh.mName.length = 3;
@@ -142,6 +244,8 @@ prt_status prt_mesh_export(const char *path, const prt_mesh_export_desc *d)
         snprintf(tmp_path, sizeof tmp_path, "%s/%s", dir, base);
         if (aiExportScene(&scene, format, tmp_path, 0) != aiReturn_SUCCESS)
             st = prt__fail(NULL, PRT_ERR_IO, "assimp could not write '%s': %s", path, aiGetErrorString());
+        else if (d->attribute_count && !name_attributes(tmp_path, !strcmp(format, "glb2"), d->attribute_count, d->attribute_names))
+            st = prt__fail(NULL, PRT_ERR_IO, "cannot name the custom attributes of '%s' (assimp's glTF did not hold the colour sets)", path);
         else if (!move_out(dir, parent))
             st = prt__fail(NULL, PRT_ERR_IO, "cannot move '%s' into place: %s", path, strerror(errno));
         if (st) remove_dir(dir);

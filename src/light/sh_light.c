@@ -1,5 +1,6 @@
 /* Operations on SH lighting vectors: rotation, evaluation, band-limited images. */
 #include "core/internal.h"
+#include "light/envmap_internal.h"
 
 #include <string.h>
 
@@ -60,5 +61,32 @@ prt_status prt_sh_light_to_image(const prt_sh_light *light, int width, int irrad
             float dir[3] = {sinf(th) * sinf(phi), cosf(th), -sinf(th) * cosf(phi)};
             prt_sh_light_eval(&l, dir, out->rgb + ((size_t)y * width + x) * 3);
         }
+    return PRT_OK;
+}
+
+/* The environment's projection (cached with the map), rotated and scaled, plus each directional
+ * light as a delta, E y_i(d). */
+prt_status prt_lighting_sh(const prt_lighting *l, int order, prt_sh_light *out)
+{
+    if (!l || !out || order < 1 || order > PRT_SH_MAX_ORDER) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_lighting_sh: lighting, out and order 1..%d are required", PRT_SH_MAX_ORDER);
+    memset(out, 0, sizeof *out);
+    out->order = order;
+    const prt_envmap *env = prt_lighting_envmap(l);
+    prt_status st = PRT_OK;
+    if (env) {
+        if ((st = prt__envmap_project_sh_cached(env, order, out))) return st;
+        double rot[9];
+        prt_lighting_rotation(l, rot);
+        if (!(rot[0] == 1 && rot[4] == 1 && rot[8] == 1) && (st = prt_sh_light_rotate(out, rot))) return st;
+        prt_sh_light_scale(out, prt_lighting_intensity(l));
+    }
+    for (int i = 0; i < prt_lighting_count(l); ++i) {
+        const prt_light *li = prt_lighting_light(l, i);
+        if (li->type != PRT_LIGHT_DIRECTIONAL) continue;
+        float y[PRT_SH_MAX_COEFFS];
+        prt_sh_eval_f(order, li->direction, y);
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < order * order; ++k) out->coeffs[c][k] += li->irradiance[c] * y[k];
+    }
     return PRT_OK;
 }

@@ -677,30 +677,10 @@ static void sh_control_range(const prt_transfer *t, int i, int *lo, int *hi, int
 }
 
 /* ---- relighting ---- */
-/* The lighting as SH of the given order: the environment's projection (cached with the map),
- * rotated and scaled, plus each directional light as a delta, E y_i(d). */
 static prt_status project(prt_context *ctx, const prt_lighting *l, int order, prt_sh_light *out)
 {
-    memset(out, 0, sizeof *out);
-    out->order = order;
-    const prt_envmap *env = prt_lighting_envmap(l);
-    prt_status st = PRT_OK;
-    if (env) {
-        if ((st = prt__envmap_project_sh_cached(env, order, out))) return prt__fail(ctx, st, "%s", prt_last_error());
-        double rot[9];
-        prt_lighting_rotation(l, rot);
-        if (!(rot[0] == 1 && rot[4] == 1 && rot[8] == 1) && (st = prt_sh_light_rotate(out, rot))) return st;
-        prt_sh_light_scale(out, prt_lighting_intensity(l));
-    }
-    for (int i = 0; i < prt_lighting_count(l); ++i) {
-        const prt_light *li = prt_lighting_light(l, i);
-        if (li->type != PRT_LIGHT_DIRECTIONAL) continue;
-        float y[PRT_SH_MAX_COEFFS];
-        prt_sh_eval_f(order, li->direction, y);
-        for (int c = 0; c < 3; ++c)
-            for (int k = 0; k < order * order; ++k) out->coeffs[c][k] += li->irradiance[c] * y[k];
-    }
-    return PRT_OK;
+    const prt_status st = prt_lighting_sh(l, order, out);
+    return st ? prt__fail(ctx, st, "%s", prt_last_error()) : PRT_OK;
 }
 
 static prt_status relight_kind(prt_context *ctx, const prt_transfer *t, int k, const prt_sh_light *sh, const prt_relight_desc *d, float *rgb, float *exit)

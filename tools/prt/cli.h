@@ -240,6 +240,7 @@ void cli_print_lines(FILE *f, const char *prefix, const char *text);
 
 int cmd_bake(int argc, char **argv);
 int cmd_relight(int argc, char **argv);
+int cmd_export(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_env(int argc, char **argv);
 int cmd_info(int argc, char **argv);

@@ -31,6 +31,99 @@ static const char *HELP =
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
+static const char *HELP_EXPORT =
+    "usage: prt export FILE.prt -o OUT.glb|.gltf|.ply|.obj [options]\n"
+    "Hands a baked .prt to other tools as a mesh with its exit radiance under a lighting as\n"
+    "vertex colours: glTF 2.0 COLOR_0 (linear, as the format says; three.js, Godot, Unity,\n"
+    "Blender read it), or sRGB-encoded colours in PLY and OBJ. With --sh the glTF also carries\n"
+    "the SH transfer itself, so that a renderer relights it under any distant lighting: the first\n"
+    "9 coefficients (order 3) of each channel as custom attributes _SH0, _SH1, ... (VEC4 float,\n"
+    "zero-padded; channel-major: all of red's, then green's, then blue's), and for one-channel\n"
+    "kinds the albedo as _ALBEDO; --glsl writes the shader function that dots them with the\n"
+    "lighting's SH (the lighting exported under is its default). Same as prt relight to a mesh.\n\n"
+    "  -o, --output FILE      .glb, .gltf, .ply or .obj (required; written atomically)\n"
+    "      --colors C         srgb or linear (default: linear for glTF, srgb for PLY and OBJ)\n"
+    "      --exposure STOPS   scale radiance by 2^STOPS before clamping colours (default 0)\n"
+    "  -k, --kind K           what to relight the file as (prt info lists what it holds);\n"
+    "                         default: the richest view-independent one\n"
+    "      --eye X,Y,Z        the viewpoint each vertex's colour is seen from (glossy surfaces)\n"
+    "      --sh               glTF only, SH files: add the transfer as custom attributes\n"
+    "      --glsl FILE        write the GLSL that relights those attributes (implies --sh)\n"
+    CLI_LIGHT_OPTIONS_HELP
+    "  -j, --threads N        worker threads\n"
+    "  -q, --quiet            no messages\n"
+    "  -h, --help             this text\n\n" EXIT_CODES_HELP;
+
+#define SH_EXPORT_COEFFS 9   /* order 3: what a vertex attribute budget of 7 VEC4s holds for RGB */
+
+/* The SH transfer of `kind` as attributes for prt_mesh_export: channel-major coefficients
+ * (order 3 of whatever order the file has: the projection the lighting's order 3 dots) in
+ * VEC4 groups, then for one-channel kinds the albedo. */
+static prt_status sh_attributes(const prt_transfer *t, prt_transfer_kind kind, float **out, int *groups, int *channels, int *coeffs)
+{
+    prt_transfer_info info;
+    prt_transfer_get_info(t, &info);
+    const int ch = prt_transfer_channels(t, kind), n = info.order * info.order, m = n < SH_EXPORT_COEFFS ? n : SH_EXPORT_COEFFS;
+    const size_t nv = info.vertex_count;
+    if (ch != 1 && ch != 3) return PRT_ERR_INVALID_ARG;
+    const int sh_groups = (ch * m + 3) / 4, total = sh_groups + (ch == 1);
+    float *all = malloc(nv * (size_t)ch * n * sizeof *all), *attr = calloc(nv * (size_t)total * 4, sizeof *attr);
+    prt_status st = all && attr ? prt_transfer_reconstruct(t, kind, all) : PRT_ERR_NO_MEMORY;
+    if (st) { free(all); free(attr); return st; }
+    const float *albedo = prt_transfer_albedo(t);
+    for (size_t v = 0; v < nv; ++v) {
+        float *a = attr + v * (size_t)total * 4;
+        for (int c = 0; c < ch; ++c)
+            for (int i = 0; i < m; ++i) a[c * m + i] = all[(v * ch + c) * n + i];
+        if (ch == 1)
+            for (int c = 0; c < 3; ++c) a[sh_groups * 4 + c] = albedo[v * 3 + c];
+    }
+    free(all);
+    *out = attr;
+    *groups = total;
+    *channels = ch;
+    *coeffs = m;
+    return PRT_OK;
+}
+
+/* GLSL that evaluates the exported attributes under SH lighting; the lighting the file was
+ * exported under is the default. */
+static prt_status write_glsl(const char *path, const char *source, const char *kind, int channels, int coeffs, int groups,
+                             const prt_sh_light *sh)
+{
+    char *text = malloc(16384);
+    if (!text) return PRT_ERR_NO_MEMORY;
+    size_t at = 0;
+#define PUT(...) (at += (size_t)snprintf(text + at, at < 16384 ? 16384 - at : 0, __VA_ARGS__))
+    PUT("// prt transfer from %s, kind %s: %d SH coefficient%s (order %d) per %s.\n", source, kind, coeffs, coeffs == 1 ? "" : "s",
+        coeffs == 1 ? 1 : coeffs == 4 ? 2 : 3, channels == 1 ? "vertex (one channel, times _ALBEDO)" : "colour channel");
+    PUT("// Exit radiance = sum_i T[i] * L[i] per channel, L the distant lighting's SH coefficients in\n"
+        "// prt's real SH basis (index l*(l+1)+m; prt env PROBE --order 3 prints them), world frame.\n"
+        "// Attributes as the glTF names them (three.js's GLTFLoader lower-cases custom names: _sh0 ...).\n");
+    for (int g = 0; g < groups; ++g) {
+        if (channels == 1 && g == groups - 1) PUT("in vec4 _ALBEDO;\n");
+        else PUT("in vec4 _SH%d;\n", g);
+    }
+    PUT("\n// The lighting exported under (COLOR_0 holds its result, before exposure and clamping).\n");
+    PUT("const vec3 prtDefaultLight[%d] = vec3[%d](\n", coeffs, coeffs);
+    for (int i = 0; i < coeffs; ++i)
+        PUT("    vec3(%.9g, %.9g, %.9g)%s\n", sh->coeffs[0][i], sh->coeffs[1][i], sh->coeffs[2][i], i + 1 < coeffs ? "," : "");
+    PUT(");\n\nvec3 prtRadiance(vec3 light[%d])\n{\n", coeffs);
+    PUT("    float t[%d] = float[%d](", (groups - (channels == 1)) * 4, (groups - (channels == 1)) * 4);
+    for (int g = 0; g < groups - (channels == 1); ++g)
+        PUT("%s_SH%d.x, _SH%d.y, _SH%d.z, _SH%d.w", g ? ", " : "", g, g, g, g);
+    PUT(");\n    vec3 sum = vec3(0.0);\n");
+    if (channels == 1) {
+        PUT("    for (int i = 0; i < %d; ++i) sum += t[i] * light[i];\n    return sum * _ALBEDO.rgb;\n}\n", coeffs);
+    } else {
+        PUT("    for (int i = 0; i < %d; ++i) sum += vec3(t[i], t[%d + i], t[%d + i]) * light[i];\n    return sum;\n}\n", coeffs, coeffs, 2 * coeffs);
+    }
+#undef PUT
+    const prt_status st = at < 16384 ? cli_write_text(path, text) : PRT_ERR_NO_MEMORY;
+    free(text);
+    return st;
+}
+
 static prt_status write_texels(const cli *c, const prt_relit *r, const char *output)
 {
     const int w = r->texel_width, h = r->texel_height;
@@ -44,19 +137,21 @@ static prt_status write_texels(const cli *c, const prt_relit *r, const char *out
     return st;
 }
 
-int cmd_relight(int argc, char **argv)
+static int relight_main(int argc, char **argv, bool exporting)
 {
-    cli c = {.cmd = "relight"};
+    cli c = {.cmd = exporting ? "export" : "relight"};
     cli_light light = {.intensity = 1.0f};
     const char *output = NULL, *kind = NULL;
     static const struct option opts[] = {{"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'},
                                          {"eye", required_argument, 0, 'e'}, {"texels", no_argument, 0, 'T'}, CLI_LIGHT_LONG_OPTIONS,
                                          {"colors", required_argument, 0, 'C'}, {"exposure", required_argument, 0, 'E'},
+                                         {"sh", no_argument, 0, 'S'}, {"glsl", required_argument, 0, 'G'},
                                          {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'},
                                          {0, 0, 0, 0}};
     int opt;
     float eye[3] = {0, 0, 0};
-    bool have_eye = false, texels = false;
+    bool have_eye = false, texels = false, sh_attrs = false;
+    const char *glsl = NULL;
     prt_colour_encoding encoding = PRT_COLOURS_DEFAULT;
     float exposure = 0;
     optind = 1;
@@ -69,6 +164,8 @@ int cmd_relight(int argc, char **argv)
         case 'o': output = optarg; break;
         case 'k': kind = optarg; break;
         case 'T': texels = true; break;
+        case 'S': sh_attrs = true; break;
+        case 'G': glsl = optarg; sh_attrs = true; break;
         case 'C':
             if (!strcasecmp(optarg, "srgb")) encoding = PRT_COLOURS_SRGB;
             else if (!strcasecmp(optarg, "linear")) encoding = PRT_COLOURS_LINEAR;
@@ -78,7 +175,7 @@ int cmd_relight(int argc, char **argv)
         case 'e': if (!cli_parse_vec3(optarg, false, eye)) return cli_usage(&c, "--eye takes X,Y,Z"); have_eye = true; break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
-        case 'h': fputs(HELP, stdout); return EXIT_OK;
+        case 'h': fputs(exporting ? HELP_EXPORT : HELP, stdout); return EXIT_OK;
         default: return cli_bad_option(&c, opt, argv, opts);
         }
     }
@@ -88,6 +185,10 @@ int cmd_relight(int argc, char **argv)
     bool json = ext && !strcasecmp(ext, ".json");
     const bool ply = ext && !strcasecmp(ext, ".ply"),
                mesh = ext && (ply || !strcasecmp(ext, ".glb") || !strcasecmp(ext, ".gltf") || !strcasecmp(ext, ".obj"));
+    if (exporting && (texels || json)) return cli_usage(&c, "prt export writes meshes (.glb .gltf .ply .obj): prt relight writes %s", texels ? "texel maps" : "JSON");
+    if (!exporting && sh_attrs) return cli_usage(&c, "--sh and --glsl belong to prt export");
+    const bool gltf_out = ext && (!strcasecmp(ext, ".glb") || !strcasecmp(ext, ".gltf"));
+    if (sh_attrs && !gltf_out) return cli_usage(&c, "--sh needs glTF output (.glb or .gltf): PLY and OBJ have no custom attributes");
     if (!texels && !json && !mesh) return cli_usage(&c, "output must end in .glb, .gltf, .ply, .obj or .json");
     if (texels && (json || mesh)) return cli_usage(&c, "--texels writes an image: .exr, .hdr, .pfm or .png");
     if ((encoding || exposure != 0) && !mesh) return cli_usage(&c, "--colors and --exposure apply to mesh outputs (.glb .gltf .ply .obj)");
@@ -157,13 +258,49 @@ int cmd_relight(int argc, char **argv)
                 st = cli_write_vertex_ply(output, prt_transfer_positions(t), prt_transfer_normals(t), nv, prt_transfer_indices(t),
                                           prt_transfer_triangle_count(t), rgb);
             } else {
-                const prt_mesh_export_desc ed = {prt_transfer_positions(t), prt_transfer_normals(t), nv, prt_transfer_indices(t),
-                                                 prt_transfer_triangle_count(t), rgb, encoding, exposure};
-                st = prt_mesh_export(output, &ed);
-                if (st) { cli_error(&c, "%s", prt_last_error()); rc = EXIT_FAILURE_INPUT; st = PRT_OK; }
+                prt_mesh_export_desc ed = {prt_transfer_positions(t), prt_transfer_normals(t), nv, prt_transfer_indices(t),
+                                           prt_transfer_triangle_count(t), rgb, encoding, exposure, 0, NULL, NULL};
+                static const char *const names[8][7] = {{0}, {"_SH0", "_ALBEDO"}, {"_SH0", "_SH1", "_ALBEDO"}, {"_SH0", "_SH1", "_SH2", "_ALBEDO"},
+                                                        {0}, {0}, {0}, {"_SH0", "_SH1", "_SH2", "_SH3", "_SH4", "_SH5", "_SH6"}};
+                float *attr = NULL;
+                int groups = 0, channels = 0, coeffs = 0;
+                prt_transfer_kind tk = 0;
+                const char *vname = prt_transfer_variant_name(t, variant);
+                if (sh_attrs) {
+                    if (prt_transfer_method(t) != prt_method_find("sh") || prt_transfer_kind_parse(vname, &tk) || strstr(vname, "glossy") ||
+                        !prt_transfer_channels(t, tk)) {
+                        cli_error(&c, "--sh exports per-vertex diffuse SH transfer (unshadowed, shadowed, interreflected): '%s' relit as %s has none",
+                                  argv[optind], vname);
+                        rc = EXIT_USAGE;
+                    } else if ((st = sh_attributes(t, tk, &attr, &groups, &channels, &coeffs))) {
+                        st = PRT_OK;
+                        cli_error(&c, "cannot read the %s transfer of '%s'", vname, argv[optind]);
+                        rc = EXIT_FAILURE_INPUT;
+                    } else {
+                        ed.attribute_count = groups;
+                        ed.attributes = attr;
+                        ed.attribute_names = channels == 3 ? names[7] : names[groups - 1];
+                    }
+                }
+                if (!rc) {
+                    st = prt_mesh_export(output, &ed);
+                    if (st) { cli_error(&c, "%s", prt_last_error()); rc = EXIT_FAILURE_INPUT; st = PRT_OK; }
+                }
+                if (!rc && glsl) {
+                    prt_sh_light sh;
+                    if (prt_lighting_sh(lighting, 3, &sh) || write_glsl(glsl, argv[optind], vname, channels, coeffs, groups, &sh)) {
+                        cli_error(&c, "cannot write '%s'", glsl);
+                        rc = EXIT_FAILURE_INPUT;
+                    } else if (!c.quiet) {
+                        fprintf(stderr, "prt export: wrote %s (prtRadiance() from the %d attributes)\n", glsl, groups);
+                    }
+                }
+                free(attr);
             }
             if (st) { cli_error(&c, "cannot write '%s'", output); rc = EXIT_FAILURE_INPUT; st = PRT_OK; }
-            else if (!rc && !c.quiet) fprintf(stderr, "prt relight: wrote %s (%s, %zu vertices)\n", output, prt_transfer_variant_name(t, variant), nv);
+            else if (!rc && !c.quiet)
+                fprintf(stderr, "prt %s: wrote %s (%s, %zu vertices%s)\n", c.cmd, output, prt_transfer_variant_name(t, variant), nv,
+                        sh_attrs ? ", SH transfer as _SH attributes" : "");
         }
     }
     if (st && !rc) rc = cli_fail(&c, st);
@@ -174,3 +311,6 @@ int cmd_relight(int argc, char **argv)
     prt_context_release(c.ctx);
     return rc;
 }
+
+int cmd_relight(int argc, char **argv) { return relight_main(argc, argv, false); }
+int cmd_export(int argc, char **argv) { return relight_main(argc, argv, true); }
