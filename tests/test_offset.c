@@ -1,0 +1,228 @@
+/* Offset sampling for offset radiance transfer mapping: the Delaunay density integrates to 1 and
+ * its samples follow it (chi-square), Voronoi cells clipped to [-1, 1]^2 tile the square, offsets
+ * chosen by importance crowd where the importance is, and eq. 8's Voronoi-summed areas reduce to
+ * the texel areas themselves when every integer offset is chosen. */
+#include "common.h"
+
+#include "bake/offset_sampling.h"
+
+static uint64_t rng_state = 12345;
+static double rnd(void)
+{
+    rng_state ^= rng_state << 13; rng_state ^= rng_state >> 7; rng_state ^= rng_state << 17;
+    return (double)(rng_state >> 11) / 9007199254740992.0;
+}
+
+/* Data points on an 11 x 11 grid over [-1, 1]^2 (plus the corners of the square, so the hull is
+ * the square) with weight f. */
+static size_t grid_points(double *xy, double *w, double (*f)(double, double))
+{
+    size_t n = 0;
+    for (int j = 0; j <= 10; ++j)
+        for (int i = 0; i <= 10; ++i) {
+            xy[n * 2] = i / 5.0 - 1;
+            xy[n * 2 + 1] = j / 5.0 - 1;
+            w[n] = f(xy[n * 2], xy[n * 2 + 1]);
+            n++;
+        }
+    return n;
+}
+
+static double linear_f(double x, double y) { (void)y; return 1 + x; }
+static double bump_f(double x, double y) { return exp(-8 * (x * x + y * y)) + 0.05; }
+
+static void test_density_integrates_and_samples_follow(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(1);
+    double xy[121 * 2], w[121];
+    /* 1 + x is linear: the piecewise-linear interpolant is exact, density (1 + x) / 4. */
+    size_t n = grid_points(xy, w, linear_f);
+    prt__plpdf pdf;
+    assert_int_equal(prt__plpdf_build(ctx, xy, w, n, &pdf), PRT_OK);
+    assert_int_equal(pdf.ntri, 200);   /* a 10 x 10 grid of squares, two triangles each */
+    assert_float_equal(pdf.total, 4.0, 1e-9);
+    double integral = 0;
+    const int m = 400;
+    for (int j = 0; j < m; ++j)
+        for (int i = 0; i < m; ++i) {
+            const double x = -1 + (i + 0.5) * 2.0 / m, y = -1 + (j + 0.5) * 2.0 / m;
+            assert_float_equal(prt__plpdf_eval(&pdf, x, y), (1 + x) / 4, 1e-9);
+            integral += prt__plpdf_eval(&pdf, x, y) * (2.0 / m) * (2.0 / m);
+        }
+    assert_float_equal(integral, 1.0, 1e-6);
+    prt__plpdf_free(&pdf);
+
+    /* A bump: samples binned on an 8 x 8 grid against the density's own integral per bin. */
+    n = grid_points(xy, w, bump_f);
+    assert_int_equal(prt__plpdf_build(ctx, xy, w, n, &pdf), PRT_OK);
+    enum { B = 8, SAMPLES = 200000 };
+    double expect[B][B] = {{0}};
+    const int sub = 40;
+    integral = 0;
+    for (int j = 0; j < B * sub; ++j)
+        for (int i = 0; i < B * sub; ++i) {
+            const double x = -1 + (i + 0.5) * 2.0 / (B * sub), y = -1 + (j + 0.5) * 2.0 / (B * sub);
+            const double p = prt__plpdf_eval(&pdf, x, y) * (2.0 / (B * sub)) * (2.0 / (B * sub));
+            expect[j / sub][i / sub] += p;
+            integral += p;
+        }
+    assert_float_equal(integral, 1.0, 1e-4);
+    int count[B][B] = {{0}};
+    for (int s = 0; s < SAMPLES; ++s) {
+        const double u[4] = {rnd(), rnd(), rnd(), rnd()};
+        double p[2];
+        prt__plpdf_sample(&pdf, u, p);
+        assert_true(p[0] >= -1 - 1e-9 && p[0] <= 1 + 1e-9 && p[1] >= -1 - 1e-9 && p[1] <= 1 + 1e-9);
+        const int bx = (int)fmin(B - 1, floor((p[0] + 1) / 2 * B)), by = (int)fmin(B - 1, floor((p[1] + 1) / 2 * B));
+        count[by][bx]++;
+    }
+    double chi2 = 0;
+    for (int j = 0; j < B; ++j)
+        for (int i = 0; i < B; ++i) {
+            const double e = expect[j][i] * SAMPLES;
+            chi2 += (count[j][i] - e) * (count[j][i] - e) / e;
+        }
+    /* 63 degrees of freedom: the 99.9th percentile is 103.4. */
+    print_message("chi-square of 200,000 samples over 64 bins: %.1f (63 degrees of freedom)\n", chi2);
+    assert_true(chi2 < 103.4);
+    prt__plpdf_free(&pdf);
+    prt_context_release(ctx);
+}
+
+static void test_voronoi_areas_tile_the_square(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(1);
+    double xy[500 * 2], areas[500];
+    /* A regular grid (every quad cocircular): each cell is its square, clipped at the border. */
+    size_t n = 0;
+    for (int j = 0; j < 5; ++j)
+        for (int i = 0; i < 5; ++i) { xy[n * 2] = -0.8 + 0.4 * i; xy[n * 2 + 1] = -0.8 + 0.4 * j; n++; }
+    assert_int_equal(prt__voronoi_areas(ctx, xy, n, areas), PRT_OK);
+    double sum = 0;
+    for (size_t i = 0; i < n; ++i) { assert_float_equal(areas[i], 0.16, 1e-12); sum += areas[i]; }
+    assert_float_equal(sum, 4.0, 1e-12);
+    /* Random points: the cells tile the square. */
+    for (int trial = 0; trial < 5; ++trial) {
+        n = 20 + 120 * (size_t)trial;
+        for (size_t i = 0; i < n * 2; ++i) xy[i] = 2 * rnd() - 1;
+        assert_int_equal(prt__voronoi_areas(ctx, xy, n, areas), PRT_OK);
+        sum = 0;
+        for (size_t i = 0; i < n; ++i) { assert_true(areas[i] > 0); sum += areas[i]; }
+        assert_float_equal(sum, 4.0, 1e-9);
+    }
+    /* Two points: the bisector halves the square. */
+    const double two[4] = {-0.5, 0, 0.5, 0};
+    assert_int_equal(prt__voronoi_areas(ctx, two, 2, areas), PRT_OK);
+    assert_float_equal(areas[0], 2.0, 1e-12);
+    assert_float_equal(areas[1], 2.0, 1e-12);
+    /* Refused: points outside the square, collinear input. */
+    const double out[6] = {0, 0, 1.5, 0, 0, 1};
+    assert_int_equal(prt__voronoi_areas(ctx, out, 3, areas), PRT_ERR_INVALID_ARG);
+    const double line[6] = {0, 0, 0.5, 0.5, -0.5, -0.5};
+    assert_int_equal(prt__voronoi_areas(ctx, line, 3, areas), PRT_ERR_INVALID_ARG);
+    prt_context_release(ctx);
+}
+
+/* Transfer that falls off with distance, strongest along +x: offsets should crowd near 0 and
+ * lean to +x. */
+static int calls;
+static double falloff(void *user, int dx, int dy)
+{
+    (void)user;
+    calls++;
+    const double r2 = (double)dx * dx + (double)dy * dy;
+    return (dx >= 0 ? 1.0 : 0.25) / (1 + r2 / 16);
+}
+
+static void test_choose_offsets(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    prt__offset_desc d = {.width = 64, .height = 64, .count = 200, .seed = 7};
+    int *o1 = NULL, *o2 = NULL, n1 = 0, n2 = 0;
+    calls = 0;
+    assert_int_equal(prt__choose_offsets(ctx, &d, falloff, NULL, &o1, &n1), PRT_OK);
+    print_message("200 offsets on a 64^2 map after %d importance evaluations\n", calls);
+    assert_int_equal(n1, 200);
+    assert_true(calls > 900 && calls <= 121 + 1000);
+    assert_int_equal(o1[0], 0);
+    assert_int_equal(o1[1], 0);
+    int near = 0, right = 0, left = 0;
+    for (int k = 0; k < n1; ++k) {
+        assert_true(abs(o1[k * 2]) < 64 && abs(o1[k * 2 + 1]) < 64);
+        for (int j = 0; j < k; ++j) assert_false(o1[j * 2] == o1[k * 2] && o1[j * 2 + 1] == o1[k * 2 + 1]);   /* distinct */
+        near += abs(o1[k * 2]) <= 16 && abs(o1[k * 2 + 1]) <= 16;
+        right += o1[k * 2] > 0;
+        left += o1[k * 2] < 0;
+    }
+    /* The central 33^2 of the 127^2 offsets is 6.8% of the range (14 of 200 if uniform); the
+     * importance puts about half of its mass there. */
+    print_message("within 16 texels: %d of 200; right of centre %d, left %d\n", near, right, left);
+    assert_true(near > 70);
+    assert_true(right > 2 * left);
+    /* The same seed gives the same offsets. */
+    assert_int_equal(prt__choose_offsets(ctx, &d, falloff, NULL, &o2, &n2), PRT_OK);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(o1, o2, (size_t)n1 * 2 * sizeof(int));
+    free(o1); free(o2);
+    /* Every integer offset of a small map: all distinct, none missing. */
+    d = (prt__offset_desc){.width = 4, .height = 4, .count = 49, .iterations = 50};
+    assert_int_equal(prt__choose_offsets(ctx, &d, falloff, NULL, &o1, &n1), PRT_OK);
+    assert_int_equal(n1, 49);
+    free(o1);
+    d.count = 50;   /* more than the 7 x 7 offsets there are */
+    assert_int_equal(prt__choose_offsets(ctx, &d, falloff, NULL, &o1, &n1), PRT_ERR_INVALID_ARG);
+    prt_context_release(ctx);
+}
+
+static void test_tva(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    enum { W = 12, H = 9 };
+    float area[W * H];
+    for (int i = 0; i < W * H; ++i) area[i] = (i % 7 == 3) ? 0.0f : 0.5f + 0.1f * (float)(i % 5);   /* some texels off the charts */
+    /* Every integer offset chosen: TVA(t, k) is the area of texel t + offset k (0 off the map). */
+    int all[(2 * W - 1) * (2 * H - 1) * 2], n = 0;
+    for (int dy = -(H - 1); dy <= H - 1; ++dy)
+        for (int dx = -(W - 1); dx <= W - 1; ++dx) { all[n * 2] = dx; all[n * 2 + 1] = dy; n++; }
+    float *tva = malloc((size_t)W * H * n * sizeof *tva);
+    assert_int_equal(prt__offset_tva(ctx, area, W, H, all, n, tva), PRT_OK);
+    for (int t = 0; t < W * H; ++t) {
+        const int tx = t % W, ty = t / W;
+        for (int k = 0; k < n; ++k) {
+            const int x = tx + all[k * 2], y = ty + all[k * 2 + 1];
+            const float want = area[t] > 0 && x >= 0 && x < W && y >= 0 && y < H ? area[y * W + x] : 0.0f;
+            assert_float_equal(tva[(size_t)t * n + k], want, 1e-6);
+        }
+    }
+    free(tva);
+    /* A few offsets: for each texel the sums over their cells add up to every texel's area (each
+     * integer offset belongs to exactly one cell), and more offsets nearer 0 split that up. */
+    const int few[5 * 2] = {0, 0, 3, 0, -3, 2, 5, -4, -8, -6};
+    tva = malloc((size_t)W * H * 5 * sizeof *tva);
+    assert_int_equal(prt__offset_tva(ctx, area, W, H, few, 5, tva), PRT_OK);
+    double total = 0;
+    for (int i = 0; i < W * H; ++i) total += area[i];
+    for (int t = 0; t < W * H; ++t) {
+        double sum = 0;
+        for (int k = 0; k < 5; ++k) sum += tva[(size_t)t * 5 + k];
+        assert_float_equal(sum, area[t] > 0 ? total : 0.0, 1e-4);
+    }
+    free(tva);
+    assert_int_equal(prt__offset_tva(ctx, area, 0, H, few, 5, area), PRT_ERR_INVALID_ARG);
+    prt_context_release(ctx);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_density_integrates_and_samples_follow),
+        cmocka_unit_test(test_voronoi_areas_tile_the_square),
+        cmocka_unit_test(test_choose_offsets),
+        cmocka_unit_test(test_tva),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
