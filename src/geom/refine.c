@@ -58,7 +58,7 @@ static float probe_occlusion(const probe_set *ps, const float o[3], const float 
     struct RTCIntersectContext ictx;
     rtcInitIntersectContext(&ictx);
     double free_w = 0, all_w = 0;
-    int back = 0, hits = 0;
+    int back = 0;
     for (int at = 0; at < count; at += 16) {
         const int lanes = count - at < 16 ? count - at : 16;
         struct RTCRayHit16 rh __attribute__((aligned(64)));
@@ -70,12 +70,10 @@ static float probe_occlusion(const probe_set *ps, const float o[3], const float 
             const float *d = ps->dirs + idx[at + k] * 3;
             all_w += w[at + k];
             if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) { free_w += w[at + k]; continue; }
-            hits++;
             back += rh.hit.Ng_x[k] * d[0] + rh.hit.Ng_y[k] * d[1] + rh.hit.Ng_z[k] * d[2] > 0.0f;
         }
     }
     if (2 * back > count) return NAN;
-    (void)hits;
     return all_w > 0 ? (float)(free_w / all_w) : 1.0f;
 }
 

@@ -186,8 +186,8 @@ static const prt_option_desc options[] = {
     {"order", "N", PRT_OPTION_INT, 1, PRT_SH_MAX_ORDER, NULL, "SH order, bands 1..10 (default 5 = 25 coefficients)"},
     {"samples", "N", PRT_OPTION_INT, 16, 1 << 20, NULL, "directions per vertex over the sphere (default 1024)"},
     {"kinds", "LIST", PRT_OPTION_LIST, 0, 0, "all|unshadowed|shadowed|interreflected|glossy-shadowed|glossy-interreflected|u|s|i",
-     "comma list of unshadowed, shadowed, interreflected (or 'all': these three, the\n"
-     "default) and glossy-shadowed, glossy-interreflected: per-vertex transfer matrices\n"
+     "comma list of unshadowed, shadowed, interreflected (u, s, i for short; or 'all': these\n"
+     "three, the default) and glossy-shadowed, glossy-interreflected: per-vertex transfer matrices\n"
      "(order^4 floats each; use --order 4 or 5) for view-dependent surfaces"},
     {"bounces", "N", PRT_OPTION_INT, 1, 64, NULL, "interreflection bounces (default 3)"},
     {"seed", "N", PRT_OPTION_INT, 0, 2147483647, NULL, "rotates the low-discrepancy directions (default 0)"},
@@ -208,7 +208,8 @@ static const prt_option_desc options[] = {
      "stored; .exr/.hdr/.pfm values in [0, 1])"},
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
     {"compress", "M", PRT_OPTION_CHOICE, 0, 0, "cpca|pca|vq",
-     "store the sets compressed: clustered PCA, one cluster (pca), or clusters only (vq);\n"
+     "store the sets compressed: clustered PCA (cpca), one cluster (pca), or clusters only\n"
+     "(vq);"
      "relighting reads them directly"},
     {"clusters", "K", PRT_OPTION_INT, 1, 65536, NULL, "clusters for cpca (default 64) and vq (default 256); alone: cpca"},
     {"vectors", "N", PRT_OPTION_INT, 1, 300, NULL, "average PCA vectors per cluster for cpca and pca (default 8); alone: cpca"},

@@ -15,20 +15,23 @@ static const char *HELP_HEAD =
     "or a .json scene, see docs/SCENE.md) and writes it to OUT.prt.\n\n"
     "  -o, --output FILE      the .prt file to write (required; written atomically)\n"
     "      --resume           continue an interrupted bake (Ctrl-C, kill, power cut) from\n"
-    "                         FILE.checkpoint: finished work is taken, not redone, and the\n"
+    "                         OUT.prt.checkpoint: finished work is taken, not redone, and the\n"
     "                         result is the same file an uninterrupted bake writes\n"
-    "      --no-checkpoint    do not keep FILE.checkpoint while baking (it holds every finished\n"
-    "                         work unit, can be as large as the bake's memory, and is deleted\n"
-    "                         once FILE is written)\n"
+    "      --no-checkpoint    do not keep OUT.prt.checkpoint while baking (it holds every\n"
+    "                         finished work unit, can be as large as the bake's memory, and is\n"
+    "                         deleted once OUT.prt is written)\n"
     "      --summary FILE     also write a JSON summary: input, output, method, mesh, storage,\n"
     "                         each stage's seconds (compression among them) and the total\n"
     "      --refine           split triangles where transfer changes faster than the vertices\n"
     "                         sample it (contact shadows, shadow edges of the scene's lights),\n"
     "                         level by level, before baking; the bake suggests it when it sees\n"
     "                         such triangles\n"
-    "      --refine-vertices N  at most N new vertices (default: as many as the mesh\n                         has, at least 100,000)\n"
-    "      --refine-threshold T  probe difference (occlusion, shadowed share of a light) that\n"
-    "                         splits, in (0, 1) (default 0.1; lower refines more)\n"
+    "      --refine-vertices N\n"
+    "                         at most N new vertices (default: as many as the mesh has, at\n"
+    "                         least 100,000; implies --refine)\n"
+    "      --refine-threshold T\n"
+    "                         probe difference (occlusion, shadowed share of a light) that\n"
+    "                         splits, in (0, 1) (default 0.1; lower refines more; implies --refine)\n"
     "      --method M         the PRT method (default sh); each has the options listed below\n"
     "                         (prt bake --method M --help shows one method's)\n";
 
@@ -40,11 +43,31 @@ static const char *HELP_TAIL =
 enum { OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE, OPT_REFINE_VERTICES, OPT_REFINE_THRESHOLD,
        OPT_METHOD_OPTION = 3000 };
 
+/* "NAME  summary" at the description column, the summary wrapped at 100 columns. */
+static void print_method_line(const prt_method *m)
+{
+    const int indent = 25 + 12;
+    printf("%25s%-10s  ", "", prt_method_name(m));
+    int col = indent;
+    const char *p = prt_method_summary(m);
+    while (*p) {
+        const char *end = p;
+        while (*end && *end != ' ') end++;
+        const int len = (int)(end - p);
+        if (col > indent && col + 1 + len > 100) { printf("\n%*s", indent, ""); col = indent; }
+        else if (col > indent) { putchar(' '); col++; }
+        printf("%.*s", len, p);
+        col += len;
+        p = *end ? end + 1 : end;
+    }
+    putchar('\n');
+}
+
 static void help(const prt_method *only)
 {
     fputs(HELP_HEAD, stdout);
     for (int i = 0; i < prt_method_count(); ++i)
-        if (!only || prt_method_at(i) == only) fprintf(stdout, "                         %-8s %s\n", prt_method_name(prt_method_at(i)), prt_method_summary(prt_method_at(i)));
+        if (!only || prt_method_at(i) == only) print_method_line(prt_method_at(i));
     fputs("Scene:\n" CLI_SCENE_OPTIONS_HELP, stdout);
     for (int i = 0; i < prt_method_count(); ++i)
         if (!only || prt_method_at(i) == only) cli_print_method_options(stdout, prt_method_at(i));
@@ -156,14 +179,13 @@ static void suggest_refinement(cli *c, const prt_scene *scene, const prt_options
 {
     const char *texels = prt_options_get(o, "texels");
     if (texels && strcmp(texels, "0") != 0) return;
+    if (coarse_check) coarse_mesh_warning(scene);
     prt_refine_stats rs;
     if (prt_scene_refine_estimate(c->ctx, scene, NULL, &rs)) return;   /* a hint only */
     const size_t nt = prt_scene_triangle_count(scene);
     if (rs.marked_triangles * 100 >= nt && rs.marked_triangles >= 20)
         fprintf(stderr, "prt bake: note: about %zu triangles (%.0f%%) span contact or shadow edges that their vertices cannot resolve "
                 "(sawtooth or missing shadows); --refine splits just those\n", rs.marked_triangles, 100.0 * (double)rs.marked_triangles / (double)nt);
-    else if (coarse_check)
-        coarse_mesh_warning(scene);
 }
 
 /* The bake as JSON for scripts and CI: what went in, what came out, where the time went. */

@@ -17,7 +17,8 @@ static const char *HELP =
     "linear red/green/blue instead). Colours are clamped to [0, 1] after --exposure. JSON holds\n"
     "{\"kind\", \"vertex_count\", \"radiance\": [[r,g,b], ...]} unclamped and, where the method\n"
     "separates them, \"indirect\" (the light that bounced at least once) and \"direct\".\n\n"
-    "  -o, --output FILE      .glb, .gltf, .ply, .obj or .json (required; written atomically)\n"
+    "  -o, --output FILE      .glb, .gltf, .ply, .obj or .json; with --texels .exr, .hdr, .pfm or\n"
+    "                         .png (required; written atomically)\n"
     "      --colors C         srgb or linear (default: linear for glTF, srgb for PLY and OBJ)\n"
     "      --exposure STOPS   scale radiance by 2^STOPS before clamping colours (default 0)\n"
     "  -k, --kind K           what to relight the file as (prt info lists what it holds: for SH\n"
@@ -191,6 +192,7 @@ static int relight_main(int argc, char **argv, bool exporting)
     if (sh_attrs && !gltf_out) return cli_usage(&c, "--sh needs glTF output (.glb or .gltf): PLY and OBJ have no custom attributes");
     if (!texels && !json && !mesh) return cli_usage(&c, "output must end in .glb, .gltf, .ply, .obj or .json");
     if (texels && (json || mesh)) return cli_usage(&c, "--texels writes an image: .exr, .hdr, .pfm or .png");
+    if (texels && have_eye) return cli_usage(&c, "--eye applies to per-vertex results seen from a viewpoint, not to --texels maps");
     if ((encoding || exposure != 0) && !mesh) return cli_usage(&c, "--colors and --exposure apply to mesh outputs (.glb .gltf .ply .obj)");
     int rc = cli_make_context(&c);
     if (rc) return rc;

@@ -8,7 +8,7 @@ static const struct { const char *name; int (*fn)(int, char **); const char *sum
     {"bake", cmd_bake, "precompute radiance transfer for a scene into a .prt file"},
     {"relight", cmd_relight, "per-vertex exit radiance of a .prt under a lighting: glTF, PLY, OBJ, JSON or a texel map"},
     {"export", cmd_export, "a .prt as a mesh for other tools: radiance as vertex colours, SH transfer as glTF attributes"},
-    {"render", cmd_render, "draw a relit .prt to a PNG or EXR image (headless OpenGL)"},
+    {"render", cmd_render, "draw a relit .prt to an image: PNG, EXR, HDR or PFM (headless OpenGL)"},
     {"view", cmd_view, "interactive real-time relighting window (GLFW); --script replays input"},
     {"env", cmd_env, "project an environment probe to SH; optional band-limited / irradiance image"},
     {"info", cmd_info, "describe what a .prt file holds"},
@@ -20,7 +20,7 @@ static const struct { const char *name; int (*fn)(int, char **); const char *sum
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: prt COMMAND [OPTIONS]   (prt COMMAND --help for each)\n\nCommands:\n");
+    fprintf(f, "usage: prt COMMAND [OPTIONS]   (prt COMMAND --help for each)\n       prt --version\n\nCommands:\n");
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i) fprintf(f, "  %-11s %s\n", commands[i].name, commands[i].summary);
     fprintf(f, "\n" EXIT_CODES_HELP);
 }
