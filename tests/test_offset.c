@@ -5,6 +5,8 @@
 #include "common.h"
 
 #include "bake/offset_sampling.h"
+#include "bake/texel_raster.h"
+#include "geom/uv_atlas.h"
 
 static uint64_t rng_state = 12345;
 static double rnd(void)
@@ -216,6 +218,51 @@ static void test_tva(void **state)
     prt_context_release(ctx);
 }
 
+/* Patch areas TA(t): exact on a plane, and over a generated atlas of a curved mesh they add up
+ * to the mesh's surface (each triangle's footprint is clipped texel by texel). */
+static void test_texel_areas(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    test_mesh t = {0};
+    tm_quad(&t, (float[3]){0, 0, 0}, (float[3]){2, 0, 0}, (float[3]){0, 1, 0}, 5);   /* 2 x 1 m */
+    prt__mesh m = {0};
+    assert_int_equal(prt__mesh_append(&m, t.pos, t.nrm, NULL, (float[3]){0.5f, 0.5f, 0.5f}, t.nv, t.idx, t.nt), PRT_OK);
+    float *uv = malloc(t.nv * 2 * sizeof *uv);
+    for (size_t v = 0; v < t.nv; ++v) { uv[v * 2] = t.pos[v * 3] / 2; uv[v * 2 + 1] = t.pos[v * 3 + 1]; }
+    prt__mesh_set_uv(&m, 0, t.nv, uv);
+    free(uv);
+    enum { R = 16 };
+    float area[R * R];
+    assert_true(prt__texel_areas(&m, R, R, area));
+    for (int i = 0; i < R * R; ++i) assert_float_equal(area[i], 2.0 / (R * R), 1e-6);   /* every texel is 2/16 x 1/16 m */
+    prt__mesh_free(&m);
+    tm_free(&t);
+
+    tm_sphere(&t, (float[3]){0, 0, 0}, 1, 16, 32);
+    memset(&m, 0, sizeof m);
+    assert_int_equal(prt__mesh_append(&m, t.pos, t.nrm, NULL, (float[3]){0.5f, 0.5f, 0.5f}, t.nv, t.idx, t.nt), PRT_OK);
+    assert_int_equal(prt__uv_atlas(ctx, &m, &(prt__atlas_desc){.resolution = 128}, NULL), PRT_OK);
+    float *big = malloc(128 * 128 * sizeof *big);
+    assert_true(prt__texel_areas(&m, 128, 128, big));
+    double sum = 0, surface = 0;
+    size_t covered = 0;
+    for (int i = 0; i < 128 * 128; ++i) { sum += big[i]; covered += big[i] > 0; }
+    for (size_t f = 0; f < m.triangle_count; ++f) {
+        const uint32_t *ix = m.indices + f * 3;
+        float e1[3], e2[3], cr[3];
+        for (int c = 0; c < 3; ++c) { e1[c] = m.positions[ix[1] * 3 + c] - m.positions[ix[0] * 3 + c]; e2[c] = m.positions[ix[2] * 3 + c] - m.positions[ix[0] * 3 + c]; }
+        cr[0] = e1[1] * e2[2] - e1[2] * e2[1]; cr[1] = e1[2] * e2[0] - e1[0] * e2[2]; cr[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        surface += 0.5 * sqrt((double)cr[0] * cr[0] + (double)cr[1] * cr[1] + (double)cr[2] * cr[2]);
+    }
+    print_message("sphere over a generated 128^2 atlas: texel areas sum to %.6f, the mesh's area %.6f (%zu texels)\n", sum, surface, covered);
+    assert_float_equal(sum, surface, 1e-4 * surface);
+    free(big);
+    prt__mesh_free(&m);
+    tm_free(&t);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -223,6 +270,7 @@ int main(void)
         cmocka_unit_test(test_voronoi_areas_tile_the_square),
         cmocka_unit_test(test_choose_offsets),
         cmocka_unit_test(test_tva),
+        cmocka_unit_test(test_texel_areas),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

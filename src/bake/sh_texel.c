@@ -4,6 +4,7 @@
  * integrals the vertices get. Inter-reflected texels gather the per-vertex inter-reflected
  * transfer at their ray hits (one final gather), so texels inherit the vertices' bounces. */
 #include "bake/bake_internal.h"
+#include "bake/texel_raster.h"
 #include "geom/raycast.h"
 
 #include <string.h>
@@ -214,28 +215,6 @@ static bool fill_gutters(int width, int height, uint8_t *covered, float **planes
     return true;
 }
 
-/* The point of triangle (u, v) nearest to (px, py), as barycentrics b1, b2; its squared distance. */
-static float nearest_on_triangle(const float u[3], const float v[3], float px, float py, float *b1, float *b2)
-{
-    float best = INFINITY;
-    for (int e = 0; e < 3; ++e) {
-        const int a = e, b = (e + 1) % 3;
-        float ex = u[b] - u[a], ey = v[b] - v[a], len2 = ex * ex + ey * ey;
-        float t = len2 > 0 ? ((px - u[a]) * ex + (py - v[a]) * ey) / len2 : 0.0f;
-        t = fminf(fmaxf(t, 0.0f), 1.0f);
-        float qx = u[a] + t * ex - px, qy = v[a] + t * ey - py, d2 = qx * qx + qy * qy;
-        if (d2 < best) {
-            best = d2;
-            float w[3] = {0, 0, 0};
-            w[a] = 1 - t;
-            w[b] = t;
-            *b1 = w[1];
-            *b2 = w[2];
-        }
-    }
-    return best;
-}
-
 prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__texel_sets *out)
 {
     memset(out, 0, sizeof *out);
@@ -260,79 +239,15 @@ prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__t
     }
     if (st || !job.owner || !job.bary || !out->albedo || !out->covered) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %dx%d texels", W, H); goto fail; }
 
-    /* Rasterize the UV layout: texel (x, y) has its centre at ((x + .5) / W, (y + .5) / H); the
-     * first triangle to cover a texel owns it, later ones count as overlap. */
     size_t overlap = 0, outside = 0;
-    for (size_t t = 0; t < m->triangle_count; ++t) {
-        const uint32_t *ix = m->indices + t * 3;
-        float u[3], v[3];
-        for (int k = 0; k < 3; ++k) { u[k] = m->uv[ix[k] * 2] * W; v[k] = m->uv[ix[k] * 2 + 1] * H; }
-        for (int k = 0; k < 3; ++k) outside += u[k] < -1e-3f * W || u[k] > W * 1.001f || v[k] < -1e-3f * H || v[k] > H * 1.001f;
-        float area = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
-        if (area == 0.0f) continue;
-        int x0 = (int)floorf(fminf(u[0], fminf(u[1], u[2]))), x1 = (int)ceilf(fmaxf(u[0], fmaxf(u[1], u[2])));
-        int y0 = (int)floorf(fminf(v[0], fminf(v[1], v[2]))), y1 = (int)ceilf(fmaxf(v[0], fmaxf(v[1], v[2])));
-        if (x0 < 0) x0 = 0;
-        if (y0 < 0) y0 = 0;
-        if (x1 > W) x1 = W;
-        if (y1 > H) y1 = H;
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x) {
-                float px = x + 0.5f, py = y + 0.5f;
-                float b1 = ((px - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (py - v[0])) / area;
-                float b2 = ((u[1] - u[0]) * (py - v[0]) - (px - u[0]) * (v[1] - v[0])) / area;
-                if (b1 < -1e-6f || b2 < -1e-6f || b1 + b2 > 1.0f + 1e-6f) continue;
-                size_t i = (size_t)y * W + x;
-                if (job.owner[i]) {   /* centres on a shared edge are not overlap */
-                    overlap += b1 > 1e-4f && b2 > 1e-4f && b1 + b2 < 1.0f - 1e-4f;
-                    continue;
-                }
-                job.owner[i] = (uint32_t)t + 1;
-                job.bary[i * 2] = b1;
-                job.bary[i * 2 + 1] = b2;
-            }
+    if (!prt__texel_raster(m, W, H, job.owner, job.bary, &overlap, &outside)) {
+        st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %dx%d texels", W, H);
+        goto fail;
     }
     if (outside) {
         st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "per-texel transfer needs texture coordinates inside [0, 1] (a unique layout); "
                                                  "%zu vertex uses lie outside", outside);
         goto fail;
-    }
-    /* Triangles no texel centre falls in (slivers, charts smaller than a texel) take the texels
-     * they touch, at their nearest point: otherwise the gutter fill would give them another
-     * chart's light. Borders of larger triangles are left to the fill, which copies their own
-     * chart's texels: a border sample sits where surfaces touch (a sphere resting on the floor)
-     * and would see through the floor. */
-    {
-        float *near = malloc(ntex * sizeof *near);
-        uint8_t *owns = prt__calloc(m->triangle_count, 1);
-        if (!near || !owns) { free(near); free(owns); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %dx%d texels", W, H); goto fail; }
-        for (size_t i = 0; i < ntex; ++i) {
-            near[i] = INFINITY;
-            if (job.owner[i]) owns[job.owner[i] - 1] = 1;
-        }
-        for (size_t t = 0; t < m->triangle_count; ++t) {
-            if (owns[t]) continue;
-            const uint32_t *ix = m->indices + t * 3;
-            float u[3], v[3];
-            for (int k = 0; k < 3; ++k) { u[k] = m->uv[ix[k] * 2] * W; v[k] = m->uv[ix[k] * 2 + 1] * H; }
-            if ((u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]) == 0.0f) continue;
-            int x0 = (int)floorf(fminf(u[0], fminf(u[1], u[2])) - 0.5f), x1 = (int)ceilf(fmaxf(u[0], fmaxf(u[1], u[2])) + 0.5f);
-            int y0 = (int)floorf(fminf(v[0], fminf(v[1], v[2])) - 0.5f), y1 = (int)ceilf(fmaxf(v[0], fmaxf(v[1], v[2])) + 0.5f);
-            for (int y = y0 < 0 ? 0 : y0; y < y1 && y < H; ++y)
-                for (int x = x0 < 0 ? 0 : x0; x < x1 && x < W; ++x) {
-                    size_t i = (size_t)y * W + x;
-                    if (job.owner[i] && near[i] == INFINITY) continue;   /* its centre is inside a triangle */
-                    float b1 = 0, b2 = 0, d2 = nearest_on_triangle(u, v, x + 0.5f, y + 0.5f, &b1, &b2);
-                    if (d2 > 0.5f || d2 >= near[i]) continue;   /* 0.5: the texel's corner is the farthest it reaches */
-                    near[i] = d2;
-                    job.owner[i] = (uint32_t)t + 1;
-                    /* A fifth of the way to the centroid, away from where surfaces touch. */
-                    job.bary[i * 2] = 0.8f * b1 + 0.2f / 3;
-                    job.bary[i * 2 + 1] = 0.8f * b2 + 0.2f / 3;
-                }
-        }
-        free(near);
-        free(owns);
     }
     size_t covered = 0;
     for (size_t i = 0; i < ntex; ++i) covered += job.owner[i] != 0;

@@ -1,0 +1,19 @@
+/* Texel patches of a UV layout. */
+#ifndef PRT_BAKE_TEXEL_RASTER_H
+#define PRT_BAKE_TEXEL_RASTER_H
+
+#include "geom/mesh.h"
+
+/* Rasterizes the mesh's UVs (every vertex has them) into a W x H grid: texel (x, y) has its
+ * centre at ((x + .5) / W, (y + .5) / H) and belongs to the first triangle covering it (owner:
+ * triangle + 1, 0 = none; bary: 2 barycentrics per texel); triangles no centre falls in take the
+ * texels they touch. Counts centres claimed twice inside triangles (overlap) and vertex uses
+ * outside [0, 1] (outside). False when out of memory. */
+bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float *bary, size_t *overlap, size_t *outside);
+
+/* The world-space surface area inside each texel of the W x H grid (each triangle clipped to
+ * each texel square in UV space, scaled by its world-to-UV area ratio): the patch areas TA(t)
+ * of offset transfer maps; their sum is the mesh's area when the layout covers it once. */
+bool prt__texel_areas(const prt__mesh *m, int W, int H, float *area);
+
+#endif
