@@ -100,6 +100,11 @@ grep -q '"_SH6"' "$T/sh.gltf" && ! grep -q '"COLOR_1"' "$T/sh.gltf" && ok || bad
 grep -q 'vec3 prtRadiance(vec3 light\[9\])' "$T/sh.glsl" && grep -q 'in vec4 _SH6;' "$T/sh.glsl" && ok || bad "the GLSL lacks prtRadiance or its inputs"
 expect 0 "export shadowed, albedo attribute" -- "$PRT" export -q "$T/demo.prt" -o "$T/shs.glb" --sh -k shadowed
 grep -a -q '"_ALBEDO"' "$T/shs.glb" && ok || bad "a one-channel export lacks _ALBEDO"
+# Options a command cannot honour are refused, not ignored.
+expect 2 "reference --brdf" -- "$PRT" reference "$T/demo.prt" -o "$T/r.json" --brdf phong:10
+expect 2 "env --control" -- "$PRT" env --control order=2
+expect 2 "compare --exposure" -- "$PRT" compare "$T/lit.json" "$T/lit.json" --exposure 1
+expect 2 "demo-scene --cell without --room" -- "$PRT" demo-scene -o "$T/x.obj" --cell 0.1
 expect 2 "export --sh to PLY" -- "$PRT" export "$T/demo.prt" -o "$T/sh.ply" --sh
 says "glTF"
 expect 2 "export to JSON" -- "$PRT" export "$T/demo.prt" -o "$T/sh.json"

@@ -36,6 +36,33 @@ static void test_obj_with_materials(void **state)
     prt_context_release(ctx);
 }
 
+/* --albedo 0 is black, not "unset": default_albedo_given keeps an all-zero default as given. */
+static void test_black_default_albedo(void **state)
+{
+    (void)state;
+    static const float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    static const uint32_t tri[] = {0, 1, 2};
+    prt_context *ctx = test_context(1);
+    prt_scene *s = NULL;
+    prt_scene_desc d = {0};
+    assert_int_equal(prt_scene_create_copy(ctx, pos, NULL, NULL, 3, tri, 1, &d, &s), PRT_OK);
+    assert_true(prt_scene_albedo(s)[0] == 0.7f);   /* zero-initialised: the old default */
+    prt_scene_release(s);
+    d.default_albedo_given = 1;
+    assert_int_equal(prt_scene_create_copy(ctx, pos, NULL, NULL, 3, tri, 1, &d, &s), PRT_OK);
+    for (size_t v = 0; v < prt_scene_vertex_count(s) * 3; ++v)
+        assert_true(prt_scene_albedo(s)[v] == 0.0f);
+    prt_scene_release(s);
+    /* The same through a mesh file without materials (imported in a child process). */
+    char path[512];
+    write_text("black.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", path, sizeof path);
+    assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
+    for (size_t v = 0; v < prt_scene_vertex_count(s) * 3; ++v)
+        assert_true(prt_scene_albedo(s)[v] == 0.0f);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
 /* A unit cube without normals, wound clockwise seen from outside (inside out). */
 static const char *CW_CUBE =
     "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
@@ -468,6 +495,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_obj_with_materials),
+        cmocka_unit_test(test_black_default_albedo),
         cmocka_unit_test(test_winding),
         cmocka_unit_test(test_camera_framing),
         cmocka_unit_test(test_gltf_and_ply),

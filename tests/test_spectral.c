@@ -77,7 +77,7 @@ static void check_basis(const prt_transfer *t, bool full)
     float *signal = malloc(nv * 3 * sizeof(float)), *back = malloc(nv * 3 * sizeof(float));
     float *coeffs = malloc((size_t)info.functions * 3 * sizeof(float));
     srand(7);
-    for (size_t i = 0; i < nv * 3; ++i) signal[i] = (float)rand() / RAND_MAX;
+    for (size_t i = 0; i < nv * 3; ++i) signal[i] = (float)rand() / (float)RAND_MAX;
     assert_int_equal(prt_spectral_project(t, signal, coeffs), PRT_OK);
     assert_int_equal(prt_spectral_reconstruct(t, coeffs, back), PRT_OK);
     if (full)

@@ -33,7 +33,8 @@ typedef enum prt_winding {
 
 typedef struct prt_scene_desc {
     float max_edge;          /* subdivide until no edge is longer (scene units); 0 = no subdivision */
-    float default_albedo[3]; /* for meshes without a material colour; all zero = 0.7 grey */
+    float default_albedo[3]; /* for meshes without a material colour; all zero = 0.7 grey unless
+                              * default_albedo_given */
     int override_albedo;     /* non-zero: use default_albedo for every material */
     float crease_angle_deg;  /* when normals are computed: split at dihedral angles above this; 0 = 45 */
     prt_winding winding;     /* triangle orientation of imported files; 0 = PRT_WINDING_AUTO */
@@ -43,6 +44,8 @@ typedef struct prt_scene_desc {
      * per MB of the file. The context's cancel hook stops an import within 100 ms. */
     float import_seconds;
     int import_in_process;   /* non-zero: call assimp in this process (no time limit, no containment) */
+    /* Last, so that older zero-initialisers keep meaning "0.7 grey". */
+    int default_albedo_given; /* non-zero: default_albedo as given, black included */
 } prt_scene_desc;
 
 /* path: a mesh file, or a .json scene file (see docs/SCENE.md). */

@@ -10,7 +10,9 @@
 static prt_scene_desc fill_defaults(const prt_scene_desc *in)
 {
     prt_scene_desc d = in ? *in : (prt_scene_desc){0};
-    if (d.default_albedo[0] == 0 && d.default_albedo[1] == 0 && d.default_albedo[2] == 0)
+    /* All zero is "unset" for descs that predate default_albedo_given; with it, black is black. */
+    if (!d.default_albedo_given && d.default_albedo[0] == 0 && d.default_albedo[1] == 0 &&
+        d.default_albedo[2] == 0)
         d.default_albedo[0] = d.default_albedo[1] = d.default_albedo[2] = 0.7f;
     if (d.crease_angle_deg <= 0) d.crease_angle_deg = 45.0f;
     return d;

@@ -116,26 +116,40 @@ float prt__lightcloud_spacing(const float *cloud, uint32_t count)
 }
 
 /* ---- bake options ---- */
+/* Help texts are reflowed by the printer (prt bake --help): line breaks here are for the source. */
 static const prt_option_desc options[] = {
-    {"cloud-grid", "NX,NY,NZ", PRT_OPTION_TEXT, 0, 0, NULL, "cloud lights at the centres of an NX x NY x NZ grid over the box (default 6,6,6)"},
-    {"cloud-box", "X0,Y0,Z0,X1,Y1,Z1", PRT_OPTION_TEXT, 0, 0, NULL, "the region lights will move in (default the scene's bounds)"},
+    {"cloud-grid", "NX,NY,NZ", PRT_OPTION_TEXT, 0, 0, NULL,
+     "cloud lights at the centres of an NX x NY x NZ grid over the box (default 6,6,6)"},
+    {"cloud-box", "X0,Y0,Z0,X1,Y1,Z1", PRT_OPTION_TEXT, 0, 0, NULL,
+     "the region lights will move in (default the scene's bounds)"},
     {"cloud", "FILE", PRT_OPTION_TEXT, 0, 0, NULL,
-     "cloud light positions from JSON: [[x,y,z], ...] or {\"lights\": [...]}\n(replaces the grid unless --cloud-grid is given too)"},
-    {"cloud-surface", "N", PRT_OPTION_INT, 1, PRT__LIGHTCLOUD_MAX_LIGHTS, NULL, "N more lights just off the surfaces (denser where lamps go)"},
-    {"zone-vertices", "N", PRT_OPTION_INT, 16, 1e7, NULL, "split the scene box until a zone holds at most N vertices (default 2000)"},
-    {"merge-distance", "D", PRT_OPTION_FLOAT, 0, 1e30, NULL, "lights farther apart never merge: w1 = 1/D (default 3 x the cloud spacing;\n0: no merging)"},
+     "cloud light positions from JSON: [[x,y,z], ...] or {\"lights\": [...]} (replaces the grid "
+     "unless --cloud-grid is given too)"},
+    {"cloud-surface", "N", PRT_OPTION_INT, 1, PRT__LIGHTCLOUD_MAX_LIGHTS, NULL,
+     "N more lights just off the surfaces (denser where lamps go)"},
+    {"zone-vertices", "N", PRT_OPTION_INT, 16, 1e7, NULL,
+     "split the scene box until a zone holds at most N vertices (default 2000)"},
+    {"merge-distance", "D", PRT_OPTION_FLOAT, 0, 1e30, NULL,
+     "lights farther apart never merge: w1 = 1/D (default 3 x the cloud spacing; 0: no merging)"},
     {"merge-error", "E", PRT_OPTION_FLOAT, 0, 1e30, NULL,
-     "responses differing by E x the zone's largest never merge: w2 = 1/(E max)\n(default 0.1; 0: distance and visibility only)"},
+     "responses differing by E x the zone's largest never merge: w2 = 1/(E max) (default 0.1; "
+     "0: distance and visibility only)"},
     {"store", "WHAT", PRT_OPTION_CHOICE, 0, 0, "indirect|all",
-     "indirect (default): the run time adds direct light with shadows, per pixel\nwhen drawn; all: direct light baked too (soft, compresses worse)"},
-    {"bounces", "N", PRT_OPTION_INT, 1, 64, NULL, "light bounces of each cloud light's solution (default 16: closed rooms need\nmany)"},
-    {"compress", "M", PRT_OPTION_CHOICE, 0, 0, "cpca|none", "cpca (default): clustered PCA per zone; none: keep every response"},
+     "indirect (default): the run time adds direct light with shadows, per pixel when drawn; "
+     "all: direct light baked too (soft, compresses worse)"},
+    {"bounces", "N", PRT_OPTION_INT, 1, 64, NULL,
+     "light bounces of each cloud light's solution (default 16: closed rooms need many)"},
+    {"compress", "M", PRT_OPTION_CHOICE, 0, 0, "cpca|none",
+     "cpca (default): clustered PCA per zone; none: keep every response"},
     {"clusters", "K", PRT_OPTION_INT, 1, 4096, NULL, "CPCA clusters per zone (default 8)"},
     {"vectors", "N", PRT_OPTION_INT, 1, 256, NULL, "average PCA vectors per cluster (default 8)"},
-    {"samples", "N", PRT_OPTION_INT, 16, 1 << 20, NULL, "gathering rays per vertex for the bounces (default 4096)"},
+    {"samples", "N", PRT_OPTION_INT, 16, 1 << 20, NULL,
+     "gathering rays per vertex for the bounces (default 4096)"},
     {"basis", "N", PRT_OPTION_INT, 1, 65535, NULL, "spectral basis functions the bounces use (default 1024)"},
-    {"full-basis", NULL, PRT_OPTION_FLAG, 0, 0, NULL, "bounces without basis truncation (at most 65535 vertices)"},
-    {"partition", "V", PRT_OPTION_INT, 16, 2048, NULL, "vertices per METIS partition of the basis (default 1000)"},
+    {"full-basis", NULL, PRT_OPTION_FLAG, 0, 0, NULL,
+     "bounces without basis truncation (at most 65535 vertices)"},
+    {"partition", "V", PRT_OPTION_INT, 16, 2048, NULL,
+     "vertices per METIS partition of the basis (default 1000)"},
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "ray origin offset (default 1e-4 x scene diagonal)"},
 };
 

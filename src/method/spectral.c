@@ -65,16 +65,23 @@ bool prt__spectral_glossy_index(const prt_transfer *t, prt__spectral_set *s)
 }
 
 /* ---- bake options ---- */
+/* Help texts are reflowed by the printer (prt bake --help): line breaks here are for the source. */
 static const prt_option_desc options[] = {
     {"basis", "N", PRT_OPTION_INT, 1, PRT__SPECTRAL_MAX_FUNCTIONS, NULL,
-     "spectral basis functions in all, spread over the partitions by vertex count\n(default 1024)"},
+     "spectral basis functions in all, spread over the partitions by vertex count (default 1024)"},
     {"full-basis", NULL, PRT_OPTION_FLAG, 0, 0, NULL,
-     "no truncation: every vertex its own basis function (the same space as all\neigenvectors; at most 65535 vertices): the reference for the basis error"},
-    {"partition", "V", PRT_OPTION_INT, 16, PRT__SPECTRAL_MAX_PARTITION / 2, NULL, "vertices per METIS partition, 16..2048 (default 1000)"},
-    {"samples", "N", PRT_OPTION_INT, 16, 1 << 20, NULL, "gathering rays per vertex (default 4096; the paper uses 128x128)"},
+     "no truncation: every vertex its own basis function (the same space as all eigenvectors; "
+     "at most 65535 vertices): the reference for the basis error"},
+    {"partition", "V", PRT_OPTION_INT, 16, PRT__SPECTRAL_MAX_PARTITION / 2, NULL,
+     "vertices per METIS partition, 16..2048 (default 1000)"},
+    {"samples", "N", PRT_OPTION_INT, 16, 1 << 20, NULL,
+     "gathering rays per vertex (default 4096; the paper uses 128x128)"},
     {"drop-below", "E", PRT_OPTION_FLOAT, 0, 0.1, NULL,
-     "also drop transfer entries below E x the largest (default 0: only what rounds\nto zero at 16 bits, as the paper); in the demo room 5e-4 keeps a third of the\nentries for a 2% change, 1e-3 a fifth for 5%"},
-    {"env-order", "N", PRT_OPTION_INT, 1, PRT_SH_MAX_ORDER, NULL, "SH order of the environment's shadowed direct light, 1..10 (default 4)"},
+     "also drop transfer entries below E x the largest (default 0: only what rounds to zero at "
+     "16 bits, as the paper); in the demo room 5e-4 keeps a third of the entries for a 2% "
+     "change, 1e-3 a fifth for 5%"},
+    {"env-order", "N", PRT_OPTION_INT, 1, PRT_SH_MAX_ORDER, NULL,
+     "SH order of the environment's shadowed direct light, 1..10 (default 4)"},
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "ray origin offset (default 1e-4 x scene diagonal)"},
 };
 

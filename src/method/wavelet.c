@@ -130,18 +130,28 @@ int prt_wavelet_view_maps(const prt_transfer *t, const float **maps, int *sets, 
 }
 
 /* ---- bake options ---- */
+/* Help texts are reflowed by the printer (prt bake --help): line breaks here are for the source. */
 static const prt_option_desc options[] = {
     {"terms", "K", PRT_OPTION_INT, 1, PRT_BRDF_MAX_TERMS, NULL,
-     "separable BRDF terms per glossy material, 1..16 (default 4); the cosine-weighted RMS\nerror per K is reported"},
-    {"coefficients", "N", PRT_OPTION_INT, 1, PRT_WAVELET_DIM, NULL, "Haar coefficients kept per transport vector (default 128)"},
+     "separable BRDF terms per glossy material, 1..16 (default 4); the cosine-weighted RMS "
+     "error per K is reported"},
+    {"coefficients", "N", PRT_OPTION_INT, 1, PRT_WAVELET_DIM, NULL,
+     "Haar coefficients kept per transport vector (default 128)"},
     {"bits", "B", PRT_OPTION_CHOICE, 0, 0, "8|16", "quantization per colour channel: 8 (default) or 16"},
-    {"supersample", "S", PRT_OPTION_INT, 1, 4, NULL, "visibility rays per cube texel side, 1..4 (default 2: 6x128x128)"},
+    {"supersample", "S", PRT_OPTION_INT, 1, 4, NULL,
+     "visibility rays per cube texel side, 1..4 (default 2: 6x128x128)"},
     {"bounces", "N", PRT_OPTION_INT, 0, 8, NULL, "interreflection passes, 0..8 (default 0 = direct light only)"},
-    {"gather-res", "R", PRT_OPTION_INT, 4, 64, NULL, "hit-point cube map per side for bounces, 4..64 (default 32)"},
+    {"gather-res", "R", PRT_OPTION_INT, 4, 64, NULL,
+     "hit-point cube map per side for bounces, 4..64 (default 32)"},
     {"brdf-res", "R", PRT_OPTION_INT, 4, 96, NULL, "BRDF light/view map size, 4..96 (default 48)"},
-    {"param", "P", PRT_OPTION_CHOICE, 0, 0, "grid|polar", "BRDF parameterization: grid (default, eq. 10) or polar (eq. 11)"},
-    {"brdf", "SPEC", PRT_OPTION_TEXT, 0, 0, NULL, "this BRDF for every vertex instead of the scene's materials"},
-    {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
+    {"param", "P", PRT_OPTION_CHOICE, 0, 0, "grid|polar",
+     "BRDF parameterization: grid (default, eq. 10) or polar (eq. 11)"},
+    {"brdf", "SPEC", PRT_OPTION_TEXT, 0, 0, NULL,
+     "this BRDF for every vertex instead of the scene's materials: lambert[:RHO], "
+     "phong:N[:KS[:KD]], blinn:N[:KS[:KD]], ashikhmin:NU:NV[:RS[:RD]] (anisotropic) or "
+     "lafortune:clay|skin"},
+    {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL,
+     "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
 };
 
 static const prt_control_desc controls[] = {

@@ -321,6 +321,7 @@ int cli_scene_option(cli *c, prt_scene_desc *sd, int opt, const char *arg)
             return -1;
         }
         if (opt == OPT_ALBEDO) sd->override_albedo = 1;
+        sd->default_albedo_given = 1;   /* --albedo 0 means black, not the 0.7 default */
         return 1;
     case OPT_CREASE:
         if (!cli_parse_float(arg, &sd->crease_angle_deg) || sd->crease_angle_deg <= 0 || sd->crease_angle_deg > 180) {
@@ -666,25 +667,42 @@ const prt_method *cli_method_from_argv(const cli *c, int argc, char **argv)
     return m;
 }
 
+void cli_print_wrapped(FILE *f, int col, int indent, const char *text)
+{
+    if (col < indent) { fprintf(f, "%*s", indent - col, ""); col = indent; }
+    bool words = false;   /* a word of text is on the current line */
+    for (const char *p = text; p && *p;) {
+        while (*p == ' ' || *p == '\n' || *p == '\t') ++p;
+        const int len = (int)strcspn(p, " \n\t");
+        if (!len) break;
+        /* A word wider than the whole column still goes out, alone on its line. */
+        if (col > indent && col + (words ? 1 : 0) + len > CLI_HELP_COLUMNS) {
+            fprintf(f, "\n%*s", indent, "");
+            col = indent;
+            words = false;
+        }
+        if (words) { fputc(' ', f); ++col; }
+        fprintf(f, "%.*s", len, p);
+        col += len;
+        words = true;
+        p += len;
+    }
+    fputc('\n', f);
+}
+
 void cli_print_method_options(FILE *f, const prt_method *m)
 {
     const prt_option_desc *o;
     int n = prt_method_options(m, &o);
-    fprintf(f, "Method %s: %s\n", prt_method_name(m), prt_method_summary(m));
+    /* Option texts are reflowed: their authors' line breaks cannot know where they start. */
+    cli_print_wrapped(f, fprintf(f, "Method %s: ", prt_method_name(m)), 6, prt_method_summary(m));
     for (int i = 0; i < n; ++i) {
         char head[64];
         snprintf(head, sizeof head, "--%s%s%s", o[i].name, o[i].arg ? " " : "", o[i].arg ? o[i].arg : "");
-        const char *h = o[i].help;
-        bool first = true;
-        while (h && *h) {
-            const char *nl = strchr(h, '\n');
-            int len = nl ? (int)(nl - h) : (int)strlen(h);
-            if (first && strlen(head) <= 18) fprintf(f, "      %-18s %.*s\n", head, len, h);
-            else if (first) fprintf(f, "      %s\n      %-18s %.*s\n", head, "", len, h);
-            else fprintf(f, "      %-18s %.*s\n", "", len, h);
-            first = false;
-            h = nl ? nl + 1 : NULL;
-        }
+        int col = 0;
+        if (strlen(head) <= 18) col = fprintf(f, "      %-18s ", head);
+        else fprintf(f, "      %s\n", head);
+        cli_print_wrapped(f, col, 25, o[i].help);
     }
 }
 

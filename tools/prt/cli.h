@@ -88,24 +88,37 @@ typedef struct cli_light {
     char path_buf[1024];
 } cli_light;
 
-#define CLI_LIGHT_OPTIONS_HELP \
-    "Lighting (defaults: what the baked scene named; else the procedural sky, for methods that relight it):\n" \
+/* The lighting help comes in parts so that each command lists only what it takes: the header
+ * and light sources (every lighting command), and the relight settings (commands that relight a
+ * .prt: relight, render, view, compare, sweep). */
+#define CLI_LIGHT_HEADER_HELP \
+    "Lighting (default: what the scene named, else the procedural sky where the method " \
+    "relights it):\n"
+#define CLI_LIGHT_SOURCES_HELP \
     "  --env FILE|none       environment probe (.hdr .pfm .exr .png), or no environment light\n" \
-    "  --layout L            latlong | angular | cross | auto (default auto, from aspect ratio)\n" \
+    "  --layout L            latlong | angular | cross | auto (default: the scene's, else auto\n" \
+    "                        from the aspect ratio)\n" \
     "  --rotate Y[,P[,R]]    rotate the environment: yaw about +y, pitch, roll in degrees\n" \
-    "  --intensity S         scale the environment (default 1)\n" \
+    "  --intensity S         scale the environment (default: the scene's, else 1)\n" \
     "  --sun X,Y,Z           sun direction of the procedural sky\n" \
     "  --light SPEC          a light, repeatable; replaces the scene's lights ('none': no lights):\n" \
     "                        point:X,Y,Z:R,G,B (W/sr)  spot:X,Y,Z:DX,DY,DZ:ANGLE[,FALLOFF]:R,G,B\n" \
     "                        directional:DX,DY,DZ:R,G,B (towards the light, W/m^2)\n" \
     "                        sphere:X,Y,Z:RADIUS:R,G,B (radiance)\n" \
-    "  --emission S          scale the scene's emissive surfaces (0 turns them off; default 1)\n" \
+    "  --emission S          scale the scene's emissive surfaces (0 turns them off; default 1)\n"
+#define CLI_LIGHT_BRDF_HELP \
     "  --brdf SPEC           reflection lobe for SH glossy sets: phong:N[:KS] or blinn:N[:KS]\n" \
-    "                        (default: the scene's materials; not with a BRDF baked in)\n" \
+    "                        (default: the scene's materials; not with a BRDF baked in)\n"
+#define CLI_LIGHT_PAINT_HELP \
     "  --albedo-of NAME=R,G,B  recolour the surface NAME (prt info lists them), repeatable;\n" \
-    "                        for methods that change colours without a rebake (spectral)\n" \
-    "  --control NAME=V      a run-time setting of the file's method (prt info lists them:\n" \
-    "                        SH order, wavelet light-coefficients, spectral bounces)\n"
+    "                        for methods that change colours without a rebake (spectral)\n"
+#define CLI_LIGHT_CONTROL_HELP \
+    "  --control NAME=V      a run-time setting of the file's method (prt info lists them: SH\n" \
+    "                        order, wavelet light-coefficients, spectral bounces, lightcloud\n" \
+    "                        neighbours)\n"
+#define CLI_LIGHT_RELIGHT_HELP CLI_LIGHT_BRDF_HELP CLI_LIGHT_PAINT_HELP CLI_LIGHT_CONTROL_HELP
+/* Everything, for the commands that take every lighting option. */
+#define CLI_LIGHT_OPTIONS_HELP CLI_LIGHT_HEADER_HELP CLI_LIGHT_SOURCES_HELP CLI_LIGHT_RELIGHT_HELP
 
 /* Returns 1 if the option was a lighting option (consumed), 0 if not, -1 on a bad value. */
 int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg);
@@ -142,7 +155,7 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
                        bool with_indirect, prt_relit *out);
 
 /* Scene options shared by bake, reference and sweep. */
-#define CLI_SCENE_OPTIONS_HELP \
+#define CLI_SCENE_FILE_HELP \
     "      --max-edge L       subdivide until no edge is longer than L scene units\n" \
     "      --albedo R,G,B     albedo for every material (or one value for grey)\n" \
     "      --default-albedo R,G,B  albedo where the file has no material (default 0.7)\n" \
@@ -151,7 +164,9 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     "                         (auto flips closed pieces without normals wound inside out, but\n" \
     "                         keeps those enclosing other geometry or a light: rooms face in)\n" \
     "      --import-timeout S  give up on a mesh file that the importer has not read in S seconds\n" \
-    "                         (default 60 + 10 per MB; a malformed file can make it loop)\n" \
+    "                         (default 60 + 10 per MB; a malformed file can make it loop)\n"
+/* --progress is no scene option: the long commands (bake, reference, sweep) list it beside -q. */
+#define CLI_PROGRESS_HELP \
     "      --progress P       auto (a bar on a terminal, else a line per tenth with ETA), lines,\n" \
     "                         or json (one object per line: stage, done, total, percent,\n" \
     "                         elapsed_s, eta_s - for scripts)\n"
@@ -207,17 +222,23 @@ typedef struct cli_view {
     bool have_fov;   /* else 40 degrees outside, 70 inside a room (auto framing) */
 } cli_view;
 #define CLI_VIEW_DEFAULTS {800, 600, false, false, false, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, 40.0f, {0.02f, 0.02f, 0.02f}, {0, 0}, false}
-#define CLI_VIEW_OPTIONS_HELP \
-    "      --width N          image width in pixels (default 800; per panel for render)\n" \
+/* In parts: render's --width is per panel, and compare draws exact colours (no tone mapping). */
+#define CLI_VIEW_WIDTH_HELP \
+    "      --width N          image width in pixels (default 800)\n"
+#define CLI_VIEW_CAMERA_HELP \
     "      --height N         image height in pixels (default 600)\n" \
     "      --view X,Y,Z       direction from the scene centre towards the camera (auto framing:\n" \
     "                         from inside when the scene closes around its centre, as rooms do)\n" \
     "      --eye X,Y,Z        camera position (with --target: overrides auto framing)\n" \
     "      --target X,Y,Z     point the camera looks at\n" \
-    "      --fov DEG          vertical field of view (default 40; 70 inside a closed scene)\n" \
+    "      --fov DEG          vertical field of view (default 40; 70 inside a closed scene)\n"
+#define CLI_VIEW_TONE_HELP \
     "      --exposure STOPS   PNG: scale radiance by 2^STOPS before tone mapping (default 0)\n" \
-    "      --tonemap T        PNG: reinhard (default) or clamp\n" \
+    "      --tonemap T        PNG: reinhard (default) or clamp\n"
+#define CLI_VIEW_BACKGROUND_HELP \
     "      --background R,G,B linear radiance where no surface is hit (default 0.02)\n"
+#define CLI_VIEW_OPTIONS_HELP \
+    CLI_VIEW_WIDTH_HELP CLI_VIEW_CAMERA_HELP CLI_VIEW_TONE_HELP CLI_VIEW_BACKGROUND_HELP
 enum { OPT_WIDTH = 1200, OPT_HEIGHT, OPT_VIEW, OPT_EYE, OPT_TARGET, OPT_FOV, OPT_EXPOSURE, OPT_TONEMAP, OPT_BACKGROUND };
 #define CLI_VIEW_LONG_OPTIONS \
     {"width", required_argument, 0, OPT_WIDTH}, {"height", required_argument, 0, OPT_HEIGHT}, {"view", required_argument, 0, OPT_VIEW}, \
@@ -233,7 +254,12 @@ void cli_view_camera(const cli *c, const cli_view *v, const float *positions, si
 /* The method a command line names with --method NAME (or --method=NAME) before parsing it,
  * the default method when it names none; NULL after reporting an unknown name. */
 const prt_method *cli_method_from_argv(const cli *c, int argc, char **argv);
-/* Prints a method's bake options as help text. */
+/* Help texts are at most this wide. */
+#define CLI_HELP_COLUMNS 100
+/* Prints text (its line breaks taken as spaces) from column col, wrapped at CLI_HELP_COLUMNS
+ * with continuation lines indented by indent spaces, and ends the line. */
+void cli_print_wrapped(FILE *f, int col, int indent, const char *text);
+/* Prints a method's bake options as help text, wrapped at CLI_HELP_COLUMNS. */
 void cli_print_method_options(FILE *f, const prt_method *m);
 /* Prints a library-made text (describe, bake report) to f, each line prefixed. */
 void cli_print_lines(FILE *f, const char *prefix, const char *text);

@@ -36,8 +36,10 @@ static const char *HELP_HEAD =
     "                         (prt bake --method M --help shows one method's)\n";
 
 static const char *HELP_TAIL =
+    "Other:\n"
     "  -j, --threads N        worker threads (default: all cores; results do not change)\n"
-    "  -q, --quiet            no progress or warnings\n"
+    CLI_PROGRESS_HELP
+    "  -q, --quiet            no progress or messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
 enum { OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE, OPT_REFINE_VERTICES, OPT_REFINE_THRESHOLD,
@@ -46,21 +48,7 @@ enum { OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE
 /* "NAME  summary" at the description column, the summary wrapped at 100 columns. */
 static void print_method_line(const prt_method *m)
 {
-    const int indent = 25 + 12;
-    printf("%25s%-10s  ", "", prt_method_name(m));
-    int col = indent;
-    const char *p = prt_method_summary(m);
-    while (*p) {
-        const char *end = p;
-        while (*end && *end != ' ') end++;
-        const int len = (int)(end - p);
-        if (col > indent && col + 1 + len > 100) { printf("\n%*s", indent, ""); col = indent; }
-        else if (col > indent) { putchar(' '); col++; }
-        printf("%.*s", len, p);
-        col += len;
-        p = *end ? end + 1 : end;
-    }
-    putchar('\n');
+    cli_print_wrapped(stdout, printf("%25s%-10s  ", "", prt_method_name(m)), 37, prt_method_summary(m));
 }
 
 static void help(const prt_method *only)
@@ -68,7 +56,7 @@ static void help(const prt_method *only)
     fputs(HELP_HEAD, stdout);
     for (int i = 0; i < prt_method_count(); ++i)
         if (!only || prt_method_at(i) == only) print_method_line(prt_method_at(i));
-    fputs("Scene:\n" CLI_SCENE_OPTIONS_HELP, stdout);
+    fputs("Scene:\n" CLI_SCENE_FILE_HELP, stdout);
     for (int i = 0; i < prt_method_count(); ++i)
         if (!only || prt_method_at(i) == only) cli_print_method_options(stdout, prt_method_at(i));
     fputs(HELP_TAIL, stdout);

@@ -14,15 +14,18 @@ static const char *HELP =
     "images (.exr .hdr .pfm .png). Metrics over every channel of every vertex or pixel: RMSE,\n"
     "relative L2 (||A - B|| / ||B||), mean and max absolute error, PSNR for images (peak = max B),\n"
     "and for a reference with error bars the reference's own relative noise.\n\n"
-    "  -k, --kind K           what to relight .prt inputs as (default: the richest held)\n"
+    "  -k, --kind K           what to relight .prt inputs as (default: the richest\n"
+    "                         view-independent one, as prt relight)\n"
     "      --indirect         compare only light that bounced at least once (a .prt's\n"
-    "                         indirect part where its method separates it - SH: inter-reflected\n"
+    "                         indirect part where its method separates it - SH: interreflected\n"
     "                         minus shadowed; a reference's \"indirect\")\n"
     "      --json FILE        also write the metrics as JSON ('-' for standard output)\n"
     "      --error-image FILE false-colour |A - B| (blue = 0 ... red = scale); for per-vertex\n"
     "                         results drawn on the mesh of the .prt input (needs one)\n"
     "      --error-scale S    error shown as red (default: the largest error)\n"
-    CLI_VIEW_OPTIONS_HELP CLI_LIGHT_OPTIONS_HELP
+    "Error image camera (per-vertex results):\n"
+    CLI_VIEW_WIDTH_HELP CLI_VIEW_CAMERA_HELP CLI_VIEW_BACKGROUND_HELP CLI_LIGHT_OPTIONS_HELP
+    "Other:\n"
     "  -q, --quiet            print nothing but errors (and --json -)\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
@@ -78,6 +81,10 @@ int cmd_compare(int argc, char **argv)
     optind = 1;
     opterr = 0;   /* one line of our own instead of getopt's */
     while ((opt = getopt_long(argc, argv, ":k:qh", opts, NULL)) != -1) {
+        /* The error image's colours are exact: nothing to expose or tone map. */
+        if (opt == OPT_EXPOSURE || opt == OPT_TONEMAP)
+            return cli_usage(&c, "--%s does not apply: the error image's colours are exact",
+                             opt == OPT_EXPOSURE ? "exposure" : "tonemap");
         int r = cli_light_option(&c, &light, opt, optarg);
         if (!r) r = cli_view_option(&c, &view, opt, optarg);
         if (r < 0) return EXIT_USAGE;
@@ -94,6 +101,7 @@ int cmd_compare(int argc, char **argv)
         }
     }
     if (optind != argc - 2) return cli_usage(&c, "expected two results, A and B (the reference)");
+    if (view.have_eye != view.have_target) return cli_usage(&c, "--eye and --target go together");
     int rc = cli_make_context(&c);
     if (rc) return rc;
     cli_result a, b;

@@ -19,7 +19,7 @@ int cmd_demo_scene(int argc, char **argv)
 {
     cli c = {.cmd = "demo-scene"};
     const char *output = NULL;
-    bool room = false;
+    bool room = false, have_cell = false;
     float cell = 0.0625f;
     int opt;
     static const struct option opts[] = {{"output", required_argument, 0, 'o'}, {"room", no_argument, 0, 'r'}, {"cell", required_argument, 0, 'c'},
@@ -31,11 +31,14 @@ int cmd_demo_scene(int argc, char **argv)
         else if (opt == 'r') room = true;
         else if (opt == 'c') {
             if (!cli_parse_float(optarg, &cell) || !(cell >= 0.005f && cell <= 1.0f)) return cli_usage(&c, "--cell takes a spacing in 0.005..1 metres");
+            have_cell = true;
         }
         else if (opt == 'h') { fputs(HELP, stdout); return EXIT_OK; }
         else return cli_bad_option(&c, opt, argv, opts);
     }
     if (optind != argc || !output) return cli_usage(&c, "expected -o OUT.obj and no other arguments");
+    if (have_cell && !room)
+        return cli_usage(&c, "--cell is the room's grid spacing: give --room too");
     prt_status st = room ? prt_demo_room_write(output, cell) : prt_demo_scene_write(output);
     return st ? cli_fail(&c, st) : EXIT_OK;
 }

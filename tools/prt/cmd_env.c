@@ -21,7 +21,7 @@ static const char *HELP =
     "      --layout L         latlong | angular | cross | auto (default auto)\n"
     "      --rotate Y[,P[,R]] rotate before projecting, degrees\n"
     "      --intensity S      scale (default 1)\n"
-    "      --sun X,Y,Z        sun direction of the procedural sky\n"
+    "      --sun X,Y,Z        sun direction of the procedural sky (without PROBE)\n"
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
@@ -38,6 +38,7 @@ int cmd_env(int argc, char **argv)
     cli_light light = {.intensity = 1.0f};
     const char *output = NULL, *image = NULL;
     int order = 3, width = 512, irradiance = 0;
+    bool sun = false;
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"order", required_argument, 0, OPT_ORDER}, {"image", required_argument, 0, OPT_IMAGE},
         {"irradiance", no_argument, 0, OPT_IRRADIANCE}, {"width", required_argument, 0, OPT_IMAGE_WIDTH}, CLI_LIGHT_LONG_OPTIONS,
@@ -47,6 +48,7 @@ int cmd_env(int argc, char **argv)
     opterr = 0;   /* one line of our own instead of getopt's */
     while ((opt = getopt_long(argc, argv, ":o:qh", opts, NULL)) != -1) {
         if (opt == OPT_ENV) return cli_usage(&c, "give the probe as the argument: prt env PROBE");
+        if (opt == OPT_SUN) sun = true;
         int r = cli_light_option(&c, &light, opt, optarg);
         if (r < 0) return EXIT_USAGE;
         if (r) continue;
@@ -64,7 +66,12 @@ int cmd_env(int argc, char **argv)
     if (optind < argc - 1) return cli_usage(&c, "expected at most one PROBE argument");
     if (optind == argc - 1) { light.env_path = argv[optind]; light.set_source = true; }
     if (irradiance && !image) return cli_usage(&c, "--irradiance needs --image FILE");
-    if (light.set_lights || light.set_emission || light.have_brdf) return cli_usage(&c, "--light, --emission and --brdf do not apply: prt env projects an environment");
+    if (light.set_lights || light.set_emission || light.have_brdf || light.paint_count ||
+        light.control_count)
+        return cli_usage(&c, "--light, --emission, --brdf, --albedo-of and --control do not apply: "
+                             "prt env projects an environment");
+    if (sun && light.env_path)
+        return cli_usage(&c, "--sun places the procedural sky's sun: not with a PROBE");
     if (light.env_none) return cli_usage(&c, "--env none leaves nothing to project");
     int rc = cli_make_context(&c);
     if (rc) return rc;

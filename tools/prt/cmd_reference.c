@@ -11,8 +11,9 @@ static const char *HELP =
     "usage: prt reference INPUT [-o OUT.json|OUT.ply] [--image OUT.exr|OUT.png] [options]\n"
     "Ground truth by unbiased Monte Carlo path tracing (Embree): per-vertex exit radiance split\n"
     "into direct and indirect light with standard errors, and/or an image from a camera.\n"
-    "INPUT is a .prt (its baked mesh, so results match the file vertex for vertex, and the\n"
-    "lighting its scene named) or a scene, read with the same options as prt bake.\n"
+    "INPUT is a .prt (its baked mesh, so results match the file vertex for vertex, and all the\n"
+    "lighting its scene named, whatever the method relights) or a scene, read with the same\n"
+    "options as prt bake.\n"
     "Surfaces are one-sided and reflect with their material's BRDF (Lambert where none); light\n"
     "comes from the environment, local lights and emissive surfaces, each sampled explicitly and\n"
     "combined with BRDF sampling (MIS); paths end by Russian roulette. Glossy vertices are seen\n"
@@ -24,10 +25,16 @@ static const char *HELP =
     "      --target-error E   add paths until every vertex's standard error is below E times its\n"
     "                         radiance (doubling, up to --max-samples)\n"
     "      --max-samples N    cap for --target-error (default 65536)\n"
-    "      --seed N           random seed (results do not depend on the thread count)\n"
-    CLI_VIEW_OPTIONS_HELP CLI_LIGHT_OPTIONS_HELP
-    "Scene (when INPUT is not a .prt):\n" CLI_SCENE_OPTIONS_HELP
+    "      --seed N           random seed (default 0; results do not depend on the thread count)\n"
+    CLI_VIEW_OPTIONS_HELP
+    "Lighting (default: what the scene named, all of it, else the procedural sky):\n"
+    CLI_LIGHT_SOURCES_HELP
+    "  --albedo-of NAME=R,G,B  recolour the surface NAME (a material of the scene; prt info lists\n"
+    "                        a .prt's), repeatable\n"
+    "Scene (when INPUT is not a .prt):\n" CLI_SCENE_FILE_HELP
+    "Other:\n"
     "  -j, --threads N        worker threads\n"
+    CLI_PROGRESS_HELP
     "  -q, --quiet            no progress or messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
@@ -80,6 +87,11 @@ int cmd_reference(int argc, char **argv)
     if (output && !json && !(ext && !strcasecmp(ext, ".ply"))) return cli_usage(&c, "-o must end in .json or .ply");
     if (view.have_eye != view.have_target) return cli_usage(&c, "--eye and --target go together");
     if (light.set_intensity && light.intensity == 0) return cli_usage(&c, "--intensity 0 leaves nothing to trace");
+    /* Both set how a .prt is relit; the path tracer reflects with the materials' own BRDFs and
+     * follows every bounce. */
+    if (light.have_brdf || light.control_count)
+        return cli_usage(&c, "--%s does not apply: prt reference traces the scene's materials, "
+                             "it relights no .prt", light.have_brdf ? "brdf" : "control");
     int rc = cli_make_context(&c);
     if (rc) return rc;
 
@@ -103,7 +115,9 @@ int cmd_reference(int argc, char **argv)
             cli_error(&c, "--albedo-of: %s", prt_last_error());
             c.reported = true;
         }
-    if (!st) st = cli_lighting(&c, &light, t, scene, &lighting);
+    /* The scene's lighting, not the baked method's share of it: every light the scene named is
+     * traced, whatever the method could relight (cli_lighting with no transfer and no method). */
+    if (!st) st = cli_lighting(&c, &light, NULL, scene, &lighting);
     rd.lighting = lighting;
     rd.progress = cli_progress;
     rd.progress_user = &c;

@@ -28,6 +28,7 @@ static const char *HELP =
     "                         result depends on the view (glossy surfaces)\n"
     "      --texels           write the per-texel radiance map (top row = v 1) instead\n"
     CLI_LIGHT_OPTIONS_HELP
+    "Other:\n"
     "  -j, --threads N        worker threads\n"
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
@@ -51,6 +52,7 @@ static const char *HELP_EXPORT =
     "      --sh               glTF only, SH files: add the transfer as custom attributes\n"
     "      --glsl FILE        write the GLSL that relights those attributes (implies --sh)\n"
     CLI_LIGHT_OPTIONS_HELP
+    "Other:\n"
     "  -j, --threads N        worker threads\n"
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;

@@ -10,14 +10,17 @@ static const char *HELP =
     "usage: prt render FILE.prt -o OUT.png|OUT.exr [options]\n"
     "Relights a baked .prt and draws it with OpenGL 3.3 (headless EGL; Mesa llvmpipe without a\n"
     "GPU). Several kinds are drawn side by side, left to right, in the order given.\n\n"
-    "  -o, --output FILE      .png (tone-mapped sRGB), .exr (linear half), .hdr or .pfm\n"
+    "  -o, --output FILE      the image (required): .png (tone-mapped sRGB), .exr (linear half),\n"
+    "                         .hdr or .pfm\n"
     "  -k, --kind LIST        comma list of what to draw the file as (prt info lists what it\n"
     "                         holds: for SH files unshadowed, shadowed, interreflected,\n"
     "                         glossy-shadowed, glossy-interreflected), or 'all'; default: the\n"
     "                         richest. View-dependent parts (glossy SH, wavelet view factors)\n"
     "                         are evaluated per pixel\n"
-    CLI_VIEW_OPTIONS_HELP
+    "      --width N          image width in pixels, per panel (default 800)\n"
+    CLI_VIEW_CAMERA_HELP CLI_VIEW_TONE_HELP CLI_VIEW_BACKGROUND_HELP
     CLI_LIGHT_OPTIONS_HELP
+    "Other:\n"
     "      --per-vertex       shade from the vertex sets even where the file has per-texel ones,\n"
     "                         and evaluate view-dependent parts per vertex rather than per pixel\n"
     "  -j, --threads N        worker threads for relighting\n"

@@ -15,21 +15,30 @@ static const char *HELP =
     "on the same scene (prt reference SCENE -o REF.json with the same scene and lighting\n"
     "options). Writes one CSV row per value and kind, and with --plot a PNG of error and storage\n"
     "against the parameter (gnuplot).\n\n"
-    "  -o, --output FILE      the CSV (param,value,kind,rmse,relative_l2,max_abs,bytes_per_vertex,bake_seconds,\n"
-    "                         relative_l2_above_noise: the error with the reference's own noise\n"
-    "                         taken out, when it has error bars)\n"
+    "  -o, --output FILE      the CSV (required): param,value,kind,rmse,relative_l2,max_abs,\n"
+    "                         bytes_per_vertex,bake_seconds,relative_l2_above_noise (the error\n"
+    "                         with the reference's own noise taken out, when it has error bars)\n"
     "      --reference FILE   per-vertex reference JSON (required)\n"
     "      --plot FILE        PNG plot of relative L2 error and bytes per vertex\n"
     "      --method M         the method to bake with (default sh)\n"
-    "      --param P          a numeric bake option of the method to sweep (default: its first,\n"
-    "                         order for sh); e.g. order, samples, bounces, clusters, vectors\n"
+    "      --param P          an integer bake option of the method (or a choice one, with\n"
+    "                         --values) to sweep (default: its first integer one, order for sh);\n"
+    "                         e.g. order, samples, bounces, clusters, vectors\n"
     "      --values LIST      comma list (default: every value of small ranges, else powers of two)\n"
     "      --indirect         compare only the indirect light (where the method separates it)\n"
-    "      any bake option of the method (prt bake --method M --help) fixes what is not swept,\n"
-    "      for example --order 6 --samples 512 --kinds shadowed,interreflected\n"
-    CLI_LIGHT_OPTIONS_HELP "Scene:\n" CLI_SCENE_OPTIONS_HELP
+    "      any bake option of the method (prt bake --method M --help) fixes what is not swept\n"
+    "      (except --brdf, which is the run-time lobe here, as in prt relight), for example\n"
+    "      --order 6 --samples 512 --kinds shadowed,interreflected\n"
+    CLI_LIGHT_HEADER_HELP CLI_LIGHT_SOURCES_HELP
+    "  --brdf SPEC           run-time reflection lobe for SH glossy sets, as in prt relight:\n"
+    "                        phong:N[:KS] or blinn:N[:KS] (default: the scene's materials; not\n"
+    "                        with a BRDF baked in)\n"
+    CLI_LIGHT_PAINT_HELP CLI_LIGHT_CONTROL_HELP
+    "Scene:\n" CLI_SCENE_FILE_HELP
+    "Other:\n"
     "  -j, --threads N        worker threads\n"
-    "  -q, --quiet            no progress\n"
+    CLI_PROGRESS_HELP
+    "  -q, --quiet            no progress or messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
 enum { OPT_REFERENCE = 2400, OPT_PLOT, OPT_PARAM, OPT_VALUES, OPT_INDIRECT_ONLY, OPT_METHOD, OPT_METHOD_OPTION = 3000 };
@@ -142,8 +151,9 @@ int cmd_sweep(int argc, char **argv)
     if (!rc && param) {
         pd = prt_method_option(method, param);
         if (!pd || (pd->type != PRT_OPTION_INT && pd->type != PRT_OPTION_CHOICE))
-            rc = cli_usage(&c, "--param must name an integer bake option of method %s (prt bake --method %s --help)", prt_method_name(method),
-                           prt_method_name(method));
+            rc = cli_usage(&c, "--param must name an integer (or, with --values, a choice) bake "
+                               "option of method %s (prt bake --method %s --help)",
+                           prt_method_name(method), prt_method_name(method));
     } else if (!rc) {
         for (int i = 0; i < nmo && !pd; ++i)
             if (mo[i].type == PRT_OPTION_INT) pd = &mo[i];

@@ -16,7 +16,7 @@ static const char *HELP =
     "usage: prt view FILE.prt [options]\n"
     "Opens a window and relights the baked file in real time (OpenGL 3.3 through GLFW; needs a\n"
     "display - run under xvfb-run without one). The first frame equals prt render with the same\n"
-    "size, camera and lighting.\n\n"
+    "size, camera and lighting (with render's default kind, tone mapping and background).\n\n"
     "Mouse: left-drag orbits (in fly mode: looks around), right-drag (or shift+left) pans,\n"
     "       wheel zooms,\n"
     "       ctrl+left-drag rotates the environment lighting,\n"
@@ -41,6 +41,7 @@ static const char *HELP =
     "                             light-remove, screenshot FILE (.png .exr), quit\n"
     "      --stats                print frame and relight times as JSON on exit\n"
     CLI_LIGHT_OPTIONS_HELP
+    "Other:\n"
     "  -j, --threads N            relighting threads\n"
     "  -q, --quiet                no messages\n"
     "  -h, --help                 this text\n\n" EXIT_CODES_HELP
