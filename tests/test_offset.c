@@ -5,6 +5,7 @@
 #include "common.h"
 
 #include "bake/offset_sampling.h"
+#include "bake/offset_bins.h"
 #include "bake/offset_transfer.h"
 #include "bake/texel_raster.h"
 #include "geom/uv_atlas.h"
@@ -418,6 +419,82 @@ static void test_thin_beam(void **state)
     prt_context_release(ctx);
 }
 
+/* Binning: every texel of every map lands in exactly one atlas texel, none shares one, the
+ * pieces put back together give each map exactly, and the atlases are about as few as the maps'
+ * area allows. */
+static void test_binning(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(1);
+    enum { MAPS = 60, BIN = 256 };
+    int w[MAPS], h[MAPS];
+    float *maps[MAPS];
+    size_t total = 0;
+    for (int i = 0; i < MAPS; ++i) {
+        w[i] = i == 7 ? 0 : 1 + (int)(rnd() * 300);   /* one empty, some wider or taller than an atlas */
+        h[i] = i == 7 ? 0 : 1 + (int)(rnd() * (i % 5 ? 120 : 400));
+        maps[i] = malloc(((size_t)w[i] * h[i] + 1) * sizeof(float));
+        for (int k = 0; k < w[i] * h[i]; ++k) maps[i][k] = (float)(i * 100000 + k);
+        total += (size_t)w[i] * h[i];
+    }
+    prt__bin_piece *pieces = NULL;
+    int np = 0, nb = 0;
+    assert_int_equal(prt__bin_maps(ctx, w, h, MAPS, BIN, &pieces, &np, &nb), PRT_OK);
+    const int lower = (int)((total + BIN * BIN - 1) / (BIN * BIN));
+    print_message("%d maps (%zu texels) in %d atlases of %d^2 (at least %d), %d pieces\n", MAPS, total, nb, BIN, lower, np);
+    assert_true(nb >= lower && nb <= lower + 1);
+    float *atlas = malloc((size_t)nb * BIN * BIN * sizeof *atlas);
+    uint8_t *used = calloc((size_t)nb * BIN * BIN, 1);
+    for (int i = 0; i < np; ++i) {
+        const prt__bin_piece *p = &pieces[i];
+        assert_true(p->map >= 0 && p->map < MAPS && p->bin >= 0 && p->bin < nb);
+        assert_true(p->sx >= 0 && p->sy >= 0 && p->sx + p->w <= w[p->map] && p->sy + p->h <= h[p->map]);
+        assert_true(p->dx >= 0 && p->dy >= 0 && p->dx + p->w <= BIN && p->dy + p->h <= BIN);
+        assert_int_equal(p->w & (p->w - 1), 0);   /* power-of-two slices */
+        for (int y = 0; y < p->h; ++y)
+            for (int x = 0; x < p->w; ++x) {
+                const size_t at = ((size_t)p->bin * BIN + p->dy + y) * BIN + p->dx + x;
+                assert_int_equal(used[at], 0);   /* no overlap */
+                used[at] = 1;
+                atlas[at] = maps[p->map][(size_t)(p->sy + y) * w[p->map] + p->sx + x];
+            }
+    }
+    /* Reassemble from the atlases only. */
+    for (int i = 0; i < MAPS; ++i) {
+        float *back = malloc(((size_t)w[i] * h[i] + 1) * sizeof *back);
+        uint8_t *seen = calloc((size_t)w[i] * h[i] + 1, 1);
+        for (int k = 0; k < np; ++k) {
+            const prt__bin_piece *p = &pieces[k];
+            if (p->map != i) continue;
+            for (int y = 0; y < p->h; ++y)
+                for (int x = 0; x < p->w; ++x) {
+                    const size_t at = (size_t)(p->sy + y) * w[i] + p->sx + x;
+                    assert_int_equal(seen[at], 0);
+                    seen[at] = 1;
+                    back[at] = atlas[((size_t)p->bin * BIN + p->dy + y) * BIN + p->dx + x];
+                }
+        }
+        for (int k = 0; k < w[i] * h[i]; ++k) assert_int_equal(seen[k], 1);   /* nothing lost */
+        assert_memory_equal(back, maps[i], (size_t)w[i] * h[i] * sizeof(float));
+        free(back);
+        free(seen);
+        free(maps[i]);
+    }
+    free(atlas);
+    free(used);
+    free(pieces);
+    assert_int_equal(prt__bin_maps(ctx, w, h, MAPS, 100, &pieces, &np, &nb), PRT_ERR_INVALID_ARG);   /* not a power of two */
+    /* Cropping finds the non-zero box. */
+    float m[8 * 6 * 3] = {0};
+    int x0, y0, cw, ch;
+    assert_false(prt__map_crop(m, 8, 6, &x0, &y0, &cw, &ch));
+    m[(2 * 8 + 3) * 3 + 1] = 1;
+    m[(4 * 8 + 6) * 3 + 2] = 1;
+    assert_true(prt__map_crop(m, 8, 6, &x0, &y0, &cw, &ch));
+    assert_int_equal(x0, 3); assert_int_equal(y0, 2); assert_int_equal(cw, 4); assert_int_equal(ch, 3);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -429,6 +506,7 @@ int main(void)
         cmocka_unit_test(test_offset_form_equals_gather),
         cmocka_unit_test(test_dipole),
         cmocka_unit_test(test_thin_beam),
+        cmocka_unit_test(test_binning),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
