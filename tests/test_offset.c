@@ -346,6 +346,10 @@ static void test_dipole(void **state)
                 prev = v;
             }
             const double total = prt__dipole_total(&d);
+            /* The disc integral grows to the total. */
+            assert_float_equal(prt__dipole_disc(&d, 1e6), total, 1e-9);
+            assert_true(prt__dipole_disc(&d, 0.1) < prt__dipole_disc(&d, 1.0));
+            assert_float_equal(prt__dipole_disc(&d, 0), 0.0, 1e-12);
             if (c == 0) print_message("%s red: total diffuse reflectance %.4f, profile integral %.4f\n", m ? "skin" : "marble", total, integral);
             assert_float_equal(integral, total, 1e-4 * total);
             assert_true(total > 0 && total < 1);

@@ -77,6 +77,13 @@ double prt__dipole_rd(const prt__dipole *d, double r)
            (d->zr * (d->sigma_tr * dr + 1) * exp(-d->sigma_tr * dr) / (dr * dr * dr) + d->zv * (d->sigma_tr * dv + 1) * exp(-d->sigma_tr * dv) / (dv * dv * dv));
 }
 
+double prt__dipole_disc(const prt__dipole *d, double a)
+{
+    /* Each pole: alpha / 2 (exp(-sigma_tr z) - z exp(-sigma_tr d(a)) / d(a)), d(a) = sqrt(a^2 + z^2). */
+    const double dr = sqrt(a * a + d->zr * d->zr), dv = sqrt(a * a + d->zv * d->zv);
+    return 0.5 * d->alpha * (exp(-d->sigma_tr * d->zr) - d->zr * exp(-d->sigma_tr * dr) / dr + exp(-d->sigma_tr * d->zv) - d->zv * exp(-d->sigma_tr * dv) / dv);
+}
+
 double prt__dipole_total(const prt__dipole *d)
 {
     /* Each pole integrates to alpha / 2 exp(-sigma_tr z). */
@@ -89,7 +96,16 @@ void prt__offset_tr(const prt__offset_transfer *x, size_t t, size_t s, float out
 {
     const prt__texel_patches *p = x->patches;
     out[0] = out[1] = out[2] = 0;
-    if (t == s || !(p->area[t] > 0) || !(p->area[s] > 0)) return;
+    if (!(p->area[t] > 0) || !(p->area[s] > 0)) return;
+    if (t == s) {
+        /* Light scattered back out within the texel itself: the dipole over a disc of its area
+         * (per unit area, as every entry); a surface does not light itself by inter-reflection. */
+        if (x->kind == PRT__OFFSET_DIPOLE) {
+            const double a = sqrt(p->area[t] / PRT_PI);
+            for (int c = 0; c < 3; ++c) out[c] = (float)(prt__dipole_disc(&x->dipole[c], a) / p->area[t]);
+        }
+        return;
+    }
     const float *pt = p->pos + t * 3, *ps = p->pos + s * 3;
     float d[3];
     prt__v3_sub(ps, pt, d);

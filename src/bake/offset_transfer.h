@@ -30,6 +30,8 @@ prt_status prt__dipole_init(double sigma_a, double sigma_s_reduced, double eta, 
 double prt__dipole_rd(const prt__dipole *d, double r);
 /* Its integral over the plane, in closed form: the total diffuse reflectance. */
 double prt__dipole_total(const prt__dipole *d);
+/* Its integral over a disc of radius a about the entry point, in closed form. */
+double prt__dipole_disc(const prt__dipole *d, double a);
 
 /* Transfer from source texel s to receiver t per unit area of s, per colour channel. */
 typedef enum prt__offset_kind {

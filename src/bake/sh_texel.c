@@ -154,67 +154,6 @@ static bool texel_bake(const texel_job *job, size_t texel, float *unsh, float *s
     return true;
 }
 
-/* Fills every uncovered texel, ring by ring outwards from the baked ones, with the mean of its
- * neighbours in earlier rings: bilinear filtering and mip-maps then never pull in black across a
- * chart's border. covered: 0 outside every chart -> 2 filled. */
-static bool fill_gutters(int width, int height, uint8_t *covered, float **planes, const int *floats, int nplanes)
-{
-    const size_t n = (size_t)width * height;
-    uint32_t *ring = malloc(n * sizeof *ring), *next = malloc(n * sizeof *next);
-    if (!ring || !next) { free(ring); free(next); return false; }
-    size_t count = 0;
-    const int dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
-            size_t i = (size_t)y * width + x;
-            if (covered[i]) continue;
-            for (int k = 0; k < 4; ++k) {
-                int u = x + dx[k], v = y + dy[k];
-                if (u >= 0 && u < width && v >= 0 && v < height && covered[(size_t)v * width + u] == 1) { covered[i] = 3; ring[count++] = (uint32_t)i; break; }
-            }
-        }
-    while (count) {
-        for (size_t r = 0; r < count; ++r) {
-            const size_t i = ring[r];
-            const int x = (int)(i % width), y = (int)(i / width);
-            size_t nb[4];
-            int m = 0;
-            for (int k = 0; k < 4; ++k) {
-                int u = x + dx[k], v = y + dy[k];
-                if (u < 0 || u >= width || v < 0 || v >= height) continue;
-                size_t j = (size_t)v * width + u;
-                if (covered[j] == 1 || covered[j] == 2) nb[m++] = j;
-            }
-            for (int pl = 0; pl < nplanes; ++pl) {
-                if (!planes[pl]) continue;
-                float *dst = planes[pl] + i * floats[pl];
-                for (int f = 0; f < floats[pl]; ++f) {
-                    float sum = 0;
-                    for (int k = 0; k < m; ++k) sum += planes[pl][nb[k] * floats[pl] + f];
-                    dst[f] = sum / m;
-                }
-            }
-        }
-        size_t next_count = 0;
-        for (size_t r = 0; r < count; ++r) covered[ring[r]] = 2;
-        for (size_t r = 0; r < count; ++r) {
-            const size_t i = ring[r];
-            const int x = (int)(i % width), y = (int)(i / width);
-            for (int k = 0; k < 4; ++k) {
-                int u = x + dx[k], v = y + dy[k];
-                if (u < 0 || u >= width || v < 0 || v >= height) continue;
-                size_t j = (size_t)v * width + u;
-                if (!covered[j]) { covered[j] = 3; next[next_count++] = (uint32_t)j; }
-            }
-        }
-        uint32_t *tmp = ring; ring = next; next = tmp;
-        count = next_count;
-    }
-    free(ring);
-    free(next);
-    return true;
-}
-
 prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__texel_sets *out)
 {
     memset(out, 0, sizeof *out);
@@ -269,7 +208,7 @@ prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__t
     {
         float *planes[4] = {out->coeffs[0], out->coeffs[1], out->coeffs[2], out->albedo};
         const int floats[4] = {nc, nc, 3 * nc, 3};
-        if (!fill_gutters(W, H, out->covered, planes, floats, 4)) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %dx%d texels", W, H); goto fail; }
+        if (!prt__texel_fill_gutters(W, H, out->covered, planes, floats, 4)) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %dx%d texels", W, H); goto fail; }
     }
     free(job.owner);
     free(job.bary);

@@ -16,4 +16,10 @@ bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float 
  * of offset transfer maps; their sum is the mesh's area when the layout covers it once. */
 bool prt__texel_areas(const prt__mesh *m, int W, int H, float *area);
 
+/* Fills every uncovered texel, ring by ring outwards from the baked ones, with the mean of its
+ * neighbours in earlier rings, so that bilinear filtering and mip-maps never pull in black across
+ * a chart's border. covered: 1 = baked; 0 -> 2 filled. planes[k] holds floats[k] per texel (NULL
+ * planes are skipped). False when out of memory. */
+bool prt__texel_fill_gutters(int width, int height, uint8_t *covered, float **planes, const int *floats, int nplanes);
+
 #endif
