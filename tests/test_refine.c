@@ -271,8 +271,9 @@ static void test_bad_arguments(void **state)
 
 static int progress_stop(void *user, const char *stage, uint64_t done, uint64_t total)
 {
-    (void)user; (void)stage; (void)done; (void)total;
-    return 1;
+    (void)done; (void)total;
+    int *until = user;
+    return strstr(stage, "level 2") != NULL || --*until < 0;   /* in level 2, or after `until` reports */
 }
 
 static void test_cancel(void **state)
@@ -281,10 +282,17 @@ static void test_cancel(void **state)
     prt_context *ctx = test_context(2);
     test_mesh t = {0};
     floor_quad(&t, 1);
-    closed_box(&t, (float[3]){-0.5f, 0.02f, -0.5f}, (float[3]){0.5f, 1.02f, 0.5f}, 2);
+    closed_box(&t, (float[3]){-0.5f, 0.015625f, -0.5f}, (float[3]){0.5f, 1.015625f, 0.5f}, 2);   /* exact in binary: no crack to begin with */
     prt_scene *scene = tm_scene(ctx, &t, 0.5f);
     prt_refine_stats s;
-    assert_int_equal(prt_scene_refine(ctx, scene, &(prt_refine_desc){.progress = progress_stop}, &s), PRT_ERR_CANCELLED);
+    int until = 0;
+    assert_int_equal(prt_scene_refine(ctx, scene, &(prt_refine_desc){.progress = progress_stop, .progress_user = &until}, &s), PRT_ERR_CANCELLED);
+    assert_int_equal(prt_scene_vertex_count(scene), t.nv);   /* stopped at once: nothing split */
+    /* Stopped in its second level: the first level's split stays, and the mesh is whole. */
+    until = 1 << 30;
+    assert_int_equal(prt_scene_refine(ctx, scene, &(prt_refine_desc){.progress = progress_stop, .progress_user = &until}, &s), PRT_ERR_CANCELLED);
+    assert_true(prt_scene_vertex_count(scene) > t.nv);
+    assert_no_cracks(&scene->mesh);
     prt_scene_release(scene);
     tm_free(&t);
     prt_context_release(ctx);

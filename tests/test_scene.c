@@ -144,8 +144,10 @@ static void test_winding(void **state)
     write_text("lone_room.obj", text, path, sizeof path);
     const char *scenes[3] = {
         "{\"meshes\": [{\"file\": \"lone_room.obj\"}]}",
-        "{\"meshes\": [{\"file\": \"lone_room.obj\", \"translate\": [10, 0, 0], \"scale\": [2, 2, 2], \"rotate\": [30, 0, 0]}],"
-        " \"lights\": [{\"type\": \"point\", \"position\": [13, 1, -2], \"intensity\": 1}]}",
+        /* A long room turned a quarter about +y: the light 6 along z is inside only if the check
+         * undoes the turn (the room is 1 wide along z before it). */
+        "{\"meshes\": [{\"file\": \"lone_room.obj\", \"translate\": [10, 0, 0], \"scale\": [4, 0.5, 0.5], \"rotate\": [90, 0, 0]}],"
+        " \"lights\": [{\"type\": \"point\", \"position\": [10, 0, 6], \"intensity\": 1}]}",
         "{\"meshes\": [{\"file\": \"lone_room.obj\", \"translate\": [10, 0, 0], \"scale\": [2, 2, 2], \"rotate\": [30, 0, 0]}],"
         " \"lights\": [{\"type\": \"point\", \"position\": [30, 0, 0], \"intensity\": 1}]}"};
     const float centre[3][3] = {{0, 0, 0}, {10, 0, 0}, {10, 0, 0}};

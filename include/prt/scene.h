@@ -96,7 +96,7 @@ prt_status prt_scene_lighting(prt_context *ctx, const prt_scene *scene, prt_ligh
  * sample it (contact shadows, shadow edges crossing big triangles), instead of everywhere as
  * max_edge does. What shapes transfer is probed at vertices, edge midpoints and inside triangles:
  * ambient occlusion within a tenth of the scene, and the share of each light of the scene (its
- * "lights" and emitting surfaces) that arrives unshadowed. Where two probes differ, or a midpoint
+ * first 15 "lights", and its emitting surfaces together) that arrives unshadowed. Where two probes differ, or a midpoint
  * differs from what its corners interpolate, by more than `threshold`, edges are split at their
  * midpoints (longest-edge bisection keeps triangles well shaped and the mesh conforming, creases
  * included); levels repeat until nothing differs, edges reach min_edge or the budget is spent.
@@ -105,7 +105,8 @@ prt_status prt_scene_lighting(prt_context *ctx, const prt_scene *scene, prt_ligh
 typedef struct prt_refine_desc {
     size_t max_new_vertices;  /* vertex budget; 0 = as many as the scene has, at least 100,000 */
     float threshold;          /* probe difference that splits, in (0, 1); 0 = 0.1 */
-    float min_edge;           /* edges at most twice this are not split; 0 = 1/2000 of the diagonal */
+    float min_edge;           /* edges at most twice this are not split; 0 = the larger of 1/2000 of the
+                               * diagonal and an eighth of the spacing the budget's vertices would have */
     int max_levels;           /* 0 = 10 (each halves the edges it splits) */
     prt_progress_fn progress; /* a stage per level; return non-zero to cancel (PRT_ERR_CANCELLED) */
     void *progress_user;

@@ -25,6 +25,7 @@ prt_status prt__delaunay2d(const prt_context *ctx, const double *xy, size_t n, u
     char *errtext = NULL;
     size_t errsize = 0;
     FILE *err = open_memstream(&errtext, &errsize);
+    if (!err) { free(pts); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory triangulating"); }   /* qhull would print */
     qhT qh_qh;
     qhT *qh = &qh_qh;
     qh_zero(qh, err);
@@ -34,7 +35,7 @@ prt_status prt__delaunay2d(const prt_context *ctx, const double *xy, size_t n, u
     const int code = qh_new_qhull(qh, 2, (int)n, pts, False, flags, NULL, err);
     prt_status st = PRT_OK;
     if (code) {
-        if (err) fflush(err);
+        fflush(err);
         char first[200] = "";
         if (errtext) {
             snprintf(first, sizeof first, "%s", errtext);
@@ -72,7 +73,7 @@ prt_status prt__delaunay2d(const prt_context *ctx, const double *xy, size_t n, u
     qh_freeqhull(qh, !qh_ALL);
     int curlong, totlong;
     qh_memfreeshort(qh, &curlong, &totlong);
-    if (err) fclose(err);
+    fclose(err);
     free(errtext);
     free(pts);
     return st;
@@ -180,12 +181,12 @@ void prt__plpdf_sample(const prt__plpdf *p, const double u[4], double out[2])
 
 /* ---- Voronoi areas ------------------------------------------------------------------------------- */
 
-/* Clips the convex polygon (n points, at most cap) to the half-plane n . x <= d. */
-static int clip(double (*poly)[2], int n, int cap, const double nrm[2], double d)
+/* Clips the convex polygon poly (n points) to the half-plane nrm . x <= d into out (room for
+ * n + 1 points: a convex polygon gains at most one); returns its point count. */
+static int clip(const double (*poly)[2], int n, const double nrm[2], double d, double (*out)[2])
 {
-    double out[64][2];
     int m = 0;
-    for (int i = 0; i < n && m + 2 <= cap && m + 2 <= 64; ++i) {
+    for (int i = 0; i < n; ++i) {
         const double *p = poly[i], *q = poly[(i + 1) % n];
         const double dp = nrm[0] * p[0] + nrm[1] * p[1] - d, dq = nrm[0] * q[0] + nrm[1] * q[1] - d;
         if (dp <= 0) { out[m][0] = p[0]; out[m][1] = p[1]; m++; }
@@ -196,7 +197,6 @@ static int clip(double (*poly)[2], int n, int cap, const double nrm[2], double d
             m++;
         }
     }
-    memcpy(poly, out, (size_t)m * sizeof *out);
     return m;
 }
 
@@ -228,20 +228,34 @@ prt_status prt__voronoi_areas(const prt_context *ctx, const double *xy, size_t n
                 nb[start[v] + fill[v]++] = tris[t * 3 + (k + 2) % 3];
             }
     }
+    /* A point qhull left out (a repeated point) has no neighbours and would claim the square. */
+    for (size_t i = 0; n > 2 && i < n; ++i)
+        if (start[i + 1] == start[i]) {
+            free(tris); free(start); free(nb); free(fill);
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "point %zu (%g, %g) repeats another or was left out of the triangulation", i, xy[i * 2], xy[i * 2 + 1]);
+        }
+    uint32_t most = 0;
+    for (size_t i = 0; i < n; ++i) most = start[i + 1] - start[i] > most ? start[i + 1] - start[i] : most;
+    /* A cell has at most 4 + (its bisectors) corners. */
+    double (*a)[2] = malloc((most + 6) * sizeof *a), (*b)[2] = malloc((most + 6) * sizeof *b);
+    if (!a || !b) { free(a); free(b); free(tris); free(start); free(nb); free(fill); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for Voronoi cells"); }
     for (size_t i = 0; i < n; ++i) {
-        double poly[64][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+        static const double square[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+        memcpy(a, square, sizeof square);
         int m = 4;
         const double *p = xy + i * 2;
         for (uint32_t j = start[i]; j < start[i + 1] && m > 0; ++j) {
             const double *q = xy + nb[j] * 2;
             /* Nearer p than q: (q - p) . x <= (|q|^2 - |p|^2) / 2. */
             const double nrm[2] = {q[0] - p[0], q[1] - p[1]};
-            m = clip(poly, m, 64, nrm, 0.5 * (q[0] * q[0] + q[1] * q[1] - p[0] * p[0] - p[1] * p[1]));
+            m = clip((const double (*)[2])a, m, nrm, 0.5 * (q[0] * q[0] + q[1] * q[1] - p[0] * p[0] - p[1] * p[1]), b);
+            double (*tmp)[2] = a; a = b; b = tmp;
         }
-        double a = 0;
-        for (int k = 0; k < m; ++k) a += poly[k][0] * poly[(k + 1) % m][1] - poly[(k + 1) % m][0] * poly[k][1];
-        areas[i] = 0.5 * a;
+        double area = 0;
+        for (int k = 0; k < m; ++k) area += a[k][0] * a[(k + 1) % m][1] - a[(k + 1) % m][0] * a[k][1];
+        areas[i] = 0.5 * area;
     }
+    free(a); free(b);
     free(tris); free(start); free(nb); free(fill);
     return PRT_OK;
 }
@@ -356,27 +370,28 @@ prt_status prt__choose_offsets(const prt_context *ctx, const prt__offset_desc *d
         }
     }
     /* The final offsets from the converged density: (0, 0) first (a texel's own light), then
-     * distinct samples; a density too peaked to give enough distinct ones is flattened. */
+     * distinct samples. */
     if (!st) {
         prt__plpdf_free(&pdf);
         st = build_density(ctx, &data, &pdf);
     }
-    if (!st) offset_add(&chosen, 0, 0, 0);
-    for (int round = 0; !st && chosen.n < (size_t)d->count; ++round) {
-        for (int tries = 0; chosen.n < (size_t)d->count && tries < 64 * d->count; ++tries) {
-            const double u[4] = {uniform(&rng), uniform(&rng), uniform(&rng), uniform(&rng)};
-            double p[2];
-            int dx, dy;
-            prt__plpdf_sample(&pdf, u, p);
-            snap(&chosen, p, &dx, &dy);
-            offset_add(&chosen, dx, dy, 0);
-        }
-        if (chosen.n < (size_t)d->count) {
-            /* Fill from the whole range, in a fixed scan: few distinct offsets remain. */
-            for (size_t cell = 0; cell < all && chosen.n < (size_t)d->count; ++cell)
-                if (!chosen.taken[cell]) offset_add(&chosen, (int)(cell % (size_t)(2 * d->width - 1)) - (d->width - 1), (int)(cell / (size_t)(2 * d->width - 1)) - (d->height - 1), 0);
-        }
+    if (!st && !offset_add(&chosen, 0, 0, 0)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory choosing offsets");
+    for (size_t tries = 0; !st && chosen.n < (size_t)d->count && tries < 64 * (size_t)d->count; ++tries) {
+        const double u[4] = {uniform(&rng), uniform(&rng), uniform(&rng), uniform(&rng)};
+        double p[2];
+        int dx, dy;
+        prt__plpdf_sample(&pdf, u, p);
+        snap(&chosen, p, &dx, &dy);
+        const size_t before = chosen.n;
+        if (!offset_add(&chosen, dx, dy, 0) && chosen.n == before &&
+            !chosen.taken[(size_t)(dy + d->height - 1) * (size_t)(2 * d->width - 1) + (size_t)(dx + d->width - 1)])
+            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory choosing offsets");
     }
+    /* A density too peaked to give enough distinct offsets: the rest in a fixed scan. */
+    for (size_t cell = 0; !st && cell < all && chosen.n < (size_t)d->count; ++cell)
+        if (!chosen.taken[cell] &&
+            !offset_add(&chosen, (int)(cell % (size_t)(2 * d->width - 1)) - (d->width - 1), (int)(cell / (size_t)(2 * d->width - 1)) - (d->height - 1), 0))
+            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory choosing offsets");
     prt__plpdf_free(&pdf);
     if (!st && chosen.n == (size_t)d->count) {
         *offsets = chosen.xy;

@@ -122,7 +122,14 @@ static float probe_light(const probe_set *ps, const prt_light *l, const float o[
         }
         return probe_points(ps, o, n, q, NULL, SPHERE_SAMPLES);
     }
-    default:   /* point and spot: the shadow of one point */
+    case PRT_LIGHT_SPOT: {   /* outside its cone no light falls: nothing to resolve */
+        float d[3], axis[3] = {l->direction[0], l->direction[1], l->direction[2]};
+        prt__v3_sub(o, l->position, d);
+        const float angle = (l->angle_deg > 0 ? l->angle_deg : 30.0f) * (float)PRT_PI / 180.0f;
+        if (!prt__v3_normalize(d) || !prt__v3_normalize(axis) || prt__v3_dot(d, axis) < cosf(angle)) return 1.0f;
+        return probe_points(ps, o, n, l->position, NULL, 1);
+    }
+    default:   /* point: the shadow of one point */
         return probe_points(ps, o, n, l->position, NULL, 1);
     }
 }
@@ -401,7 +408,8 @@ static prt_status build_edges(refiner *r, level *l)
     u64_map em = {0}, wm = {0};
     l->edges = malloc(nt * 3 * sizeof *l->edges + 1);
     l->tri_edges = malloc(nt * 3 * sizeof *l->tri_edges + 1);
-    if (!l->edges || !l->tri_edges || !map_init(&em, nt * 3 / 2 + 16) || !map_init(&wm, nt * 3 / 2 + 16)) {
+    /* Sized for every edge distinct (a triangle soup): the load stays at most one half. */
+    if (!l->edges || !l->tri_edges || !map_init(&em, nt * 3 + 16) || !map_init(&wm, nt * 3 + 16)) {
         map_free(&em); map_free(&wm);
         return PRT_ERR_NO_MEMORY;
     }
@@ -449,7 +457,7 @@ static prt_status probe_midpoints(refiner *r, level *l)
     /* The map of rows must hold every edge that will ever be probed: grow it by rebuilding. */
     if ((r->mid_index.count + need) * 2 > r->mid_index.cap) {
         u64_map bigger;
-        if (!map_init(&bigger, (r->mid_index.count + need) * 2)) return PRT_ERR_NO_MEMORY;
+        if (!map_init(&bigger, (r->mid_index.count + need) * 2)) { map_free(&bigger); return PRT_ERR_NO_MEMORY; }
         for (size_t i = 0; i < r->mid_index.cap; ++i)
             if (r->mid_index.keys[i]) {
                 bool found;
@@ -663,7 +671,12 @@ prt_status prt__mesh_refine(const prt_context *ctx, prt__mesh *m, const prt_ligh
     if (!(d.threshold >= 0 && d.threshold < 1)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "refinement threshold must lie in [0, 1) (got %g)", d.threshold);
     if (!(d.min_edge >= 0) || !isfinite(d.min_edge)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "minimum edge length must be finite and >= 0 (got %g)", d.min_edge);
     if (d.max_levels < 0 || d.max_levels > 20) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "refinement levels must be 0..20 (got %d)", d.max_levels);
-    const size_t budget = d.max_new_vertices ? d.max_new_vertices : m->vertex_count > DEFAULT_BUDGET ? m->vertex_count : DEFAULT_BUDGET;
+    size_t budget = d.max_new_vertices;
+    if (!budget) {   /* as many as the mesh has, at least DEFAULT_BUDGET, within the limits */
+        budget = m->vertex_count > DEFAULT_BUDGET ? m->vertex_count : DEFAULT_BUDGET;
+        if (budget > PRT__MAX_REFINE_VERTICES) budget = PRT__MAX_REFINE_VERTICES;
+        if (m->vertex_count + budget > UINT32_MAX) budget = UINT32_MAX - m->vertex_count;
+    }
     if (budget > PRT__MAX_REFINE_VERTICES || m->vertex_count + budget > UINT32_MAX)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a refinement budget of %zu vertices is over the limit of %u", budget, PRT__MAX_REFINE_VERTICES);
     const float diag = 1e4f * prt__ray_offset(m);

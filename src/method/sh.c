@@ -209,7 +209,7 @@ static const prt_option_desc options[] = {
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
     {"compress", "M", PRT_OPTION_CHOICE, 0, 0, "cpca|pca|vq",
      "store the sets compressed: clustered PCA (cpca), one cluster (pca), or clusters only\n"
-     "(vq);"
+     "(vq); "
      "relighting reads them directly"},
     {"clusters", "K", PRT_OPTION_INT, 1, 65536, NULL, "clusters for cpca (default 64) and vq (default 256); alone: cpca"},
     {"vectors", "N", PRT_OPTION_INT, 1, 300, NULL, "average PCA vectors per cluster for cpca and pca (default 8); alone: cpca"},

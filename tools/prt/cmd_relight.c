@@ -39,10 +39,11 @@ static const char *HELP_EXPORT =
     "vertex colours: glTF 2.0 COLOR_0 (linear, as the format says; three.js, Godot, Unity,\n"
     "Blender read it), or sRGB-encoded colours in PLY and OBJ. With --sh the glTF also carries\n"
     "the SH transfer itself, so that a renderer relights it under any distant lighting: the first\n"
-    "9 coefficients (order 3) of each channel as custom attributes _SH0, _SH1, ... (VEC4 float,\n"
-    "zero-padded; channel-major: all of red's, then green's, then blue's), and for one-channel\n"
-    "kinds the albedo as _ALBEDO; --glsl writes the shader function that dots them with the\n"
-    "lighting's SH (the lighting exported under is its default). Same as prt relight to a mesh.\n\n"
+    "9 coefficients (order 3; fewer for lower orders) of each channel as custom attributes _SH0,\n"
+    "_SH1, ... (VEC4 float, zero-padded; channel-major: all of red's, then green's, then blue's),\n"
+    "and for one-channel kinds the albedo as _ALBEDO; --glsl writes the shader function that dots\n"
+    "them with the lighting's SH (the lighting exported under is its default; COLOR_0 is then\n"
+    "relit at order 3 too, so both agree). Otherwise the same as prt relight to a mesh.\n\n"
     "  -o, --output FILE      .glb, .gltf, .ply or .obj (required; written atomically)\n"
     "      --colors C         srgb or linear (default: linear for glTF, srgb for PLY and OBJ)\n"
     "      --exposure STOPS   scale radiance by 2^STOPS before clamping colours (default 0)\n"
@@ -107,7 +108,7 @@ static prt_status write_glsl(const char *path, const char *source, const char *k
         if (channels == 1 && g == groups - 1) PUT("in vec4 _ALBEDO;\n");
         else PUT("in vec4 _SH%d;\n", g);
     }
-    PUT("\n// The lighting exported under (COLOR_0 holds its result, before exposure and clamping).\n");
+    PUT("\n// The lighting exported under (COLOR_0 holds its result at this order, before exposure and clamping).\n");
     PUT("const vec3 prtDefaultLight[%d] = vec3[%d](\n", coeffs, coeffs);
     for (int i = 0; i < coeffs; ++i)
         PUT("    vec3(%.9g, %.9g, %.9g)%s\n", sh->coeffs[0][i], sh->coeffs[1][i], sh->coeffs[2][i], i + 1 < coeffs ? "," : "");
@@ -209,6 +210,21 @@ static int relight_main(int argc, char **argv, bool exporting)
         variant = kind ? prt_transfer_find_variant(t, kind) : prt_transfer_default_variant(t, 0);
         if (variant < 0) rc = cli_usage(&c, "%s", prt_last_error());
     }
+    /* The exported transfer is order 3 (what seven VEC4 attributes hold for RGB): COLOR_0 is relit
+     * at the same order, so that the GLSL gives exactly the colours in the file. */
+    if (!st && !rc && sh_attrs && prt_transfer_method(t) == prt_method_find("sh")) {
+        int k = 0;
+        while (k < light.control_count && strcmp(light.control[k].name, "order")) ++k;
+        if (k < light.control_count && light.control[k].value > 3) {
+            rc = cli_usage(&c, "--sh exports SH order 3: --control order must be 1..3 with it");
+        } else if (k == light.control_count && light.control_count < PRT_MAX_CONTROLS) {
+            prt_transfer_info info;
+            prt_transfer_get_info(t, &info);
+            snprintf(light.control[k].name, sizeof light.control[k].name, "order");
+            light.control[k].value = info.order < 3 ? info.order : 3;
+            light.control_count++;
+        }
+    }
     if (!st && !rc) st = cli_lighting(&c, &light, t, NULL, &lighting);
     if (!st && !rc) st = cli_relight(&c, t, lighting, &light, variant, !texels, json && !texels, &r);
     if (!st && !rc) st = cli_check_interrupt(&c);
@@ -286,16 +302,22 @@ static int relight_main(int argc, char **argv, bool exporting)
                         ed.attribute_names = channels == 3 ? names[7] : names[groups - 1];
                     }
                 }
-                if (!rc) {
-                    st = prt_mesh_export(output, &ed);
-                    if (st) { cli_error(&c, "%s", prt_last_error()); rc = EXIT_FAILURE_INPUT; st = PRT_OK; }
-                }
+                /* The shader first: a mesh whose shader could not be written is not left behind. */
                 if (!rc && glsl) {
                     prt_sh_light sh;
                     if (prt_lighting_sh(lighting, 3, &sh) || write_glsl(glsl, argv[optind], vname, channels, coeffs, groups, &sh)) {
                         cli_error(&c, "cannot write '%s'", glsl);
                         rc = EXIT_FAILURE_INPUT;
-                    } else if (!c.quiet) {
+                    }
+                }
+                if (!rc) {
+                    st = prt_mesh_export(output, &ed);
+                    if (st) {
+                        cli_error(&c, "%s", prt_last_error());
+                        rc = EXIT_FAILURE_INPUT;
+                        st = PRT_OK;
+                        if (glsl) remove(glsl);
+                    } else if (glsl && !c.quiet) {
                         fprintf(stderr, "prt export: wrote %s (prtRadiance() from the %d attributes)\n", glsl, groups);
                     }
                 }
