@@ -100,6 +100,14 @@ grep -q '"_SH6"' "$T/sh.gltf" && ! grep -q '"COLOR_1"' "$T/sh.gltf" && ok || bad
 grep -q 'vec3 prtRadiance(vec3 light\[9\])' "$T/sh.glsl" && grep -q 'in vec4 _SH6;' "$T/sh.glsl" && ok || bad "the GLSL lacks prtRadiance or its inputs"
 expect 0 "export shadowed, albedo attribute" -- "$PRT" export -q "$T/demo.prt" -o "$T/shs.glb" --sh -k shadowed
 grep -a -q '"_ALBEDO"' "$T/shs.glb" && ok || bad "a one-channel export lacks _ALBEDO"
+# Offset transfer maps: a light map, relit under a point light, drawn, exported as a mesh.
+expect 0 "bake --method offset" -- "$PRT" bake -q "$T/demo.obj" --method offset --texels 32 --offsets 40 --iterations 60 -o "$T/offset.prt"
+expect 0 "info of an offset bake" -- "$PRT" info "$T/offset.prt"
+grep -q "light map:   32 x 32 texels" "$T/out" && ok || bad "info does not describe the light map"
+expect 0 "relight offset" -- "$PRT" relight -q "$T/offset.prt" --env none --light point:0.3,1.2,0.4:2 -o "$T/offset.json"
+grep -q '"indirect"' "$T/offset.json" && ok || bad "an offset relight lacks its indirect light"
+expect 0 "render offset" -- $NOLEAK "$PRT" render -q "$T/offset.prt" --env none --light point:0.3,1.2,0.4:2 -o "$T/offset.png" --width 64 --height 48
+expect 2 "offset: bounces out of range" -- "$PRT" relight "$T/offset.prt" --control bounces=99 -o "$T/x.json"
 # Options a command cannot honour are refused, not ignored.
 expect 2 "reference --brdf" -- "$PRT" reference "$T/demo.prt" -o "$T/r.json" --brdf phong:10
 expect 2 "env --control" -- "$PRT" env --control order=2
@@ -249,7 +257,7 @@ says "option of method sh"
 expect 2 "wavelet option without wavelet" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --terms 3
 says "method wavelet"
 expect 2 "bad method" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method fourier
-says "sh, wavelet, spectral or lightcloud"
+says "sh, wavelet, spectral, lightcloud or offset"
 expect 2 "bad bits" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --bits 12
 says "8 or 16"
 expect 2 "too many wavelet bounces" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --bounces 9

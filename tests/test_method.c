@@ -212,7 +212,7 @@ static void test_directional_light(void **state)
     prt_relit r;
     assert_int_equal(prt_relight(ctx, t, l, NULL, &r), PRT_ERR_INVALID_ARG);
     assert_non_null(strstr(prt_last_error(), "cannot relight point lights"));
-    assert_non_null(strstr(prt_last_error(), "methods spectral, lightcloud can"));
+    assert_non_null(strstr(prt_last_error(), "methods spectral, lightcloud, offset can"));
     assert_null(r.radiance);
     assert_int_equal(prt_method_check_lighting(prt_method_find("wavelet"), PRT_LIGHTS_DIRECTIONAL), PRT_OK);
     assert_int_equal(prt_method_check_lighting(prt_method_find("wavelet"), PRT_LIGHTS_SPHERE), PRT_ERR_INVALID_ARG);

@@ -121,6 +121,19 @@ static void test_voronoi_areas_tile_the_square(void **state)
     assert_int_equal(prt__voronoi_areas(ctx, two, 2, areas), PRT_OK);
     assert_float_equal(areas[0], 2.0, 1e-12);
     assert_float_equal(areas[1], 2.0, 1e-12);
+    /* A cell with 100 neighbours: the centre of a ring of 100 points of radius 0.8 owns the
+     * regular 100-gon of inradius 0.4. */
+    n = 0;
+    xy[n * 2] = 0; xy[n * 2 + 1] = 0; n++;
+    for (int k = 0; k < 100; ++k) { xy[n * 2] = 0.8 * cos(2 * M_PI * k / 100); xy[n * 2 + 1] = 0.8 * sin(2 * M_PI * k / 100); n++; }
+    assert_int_equal(prt__voronoi_areas(ctx, xy, n, areas), PRT_OK);
+    assert_float_equal(areas[0], 100 * 0.4 * 0.4 * tan(M_PI / 100), 1e-9);
+    sum = 0;
+    for (size_t i = 0; i < n; ++i) sum += areas[i];
+    assert_float_equal(sum, 4.0, 1e-9);
+    /* A repeated point has no cell of its own: refused, not given the square. */
+    const double twice[8] = {-0.5, -0.5, 0.5, -0.5, 0.2, 0.6, 0.5, -0.5};
+    assert_int_equal(prt__voronoi_areas(ctx, twice, 4, areas), PRT_ERR_INVALID_ARG);
     /* Refused: points outside the square, collinear input. */
     const double out[6] = {0, 0, 1.5, 0, 0, 1};
     assert_int_equal(prt__voronoi_areas(ctx, out, 3, areas), PRT_ERR_INVALID_ARG);
@@ -214,6 +227,23 @@ static void test_tva(void **state)
         double sum = 0;
         for (int k = 0; k < 5; ++k) sum += tva[(size_t)t * 5 + k];
         assert_float_equal(sum, area[t] > 0 ? total : 0.0, 1e-4);
+    }
+    /* Against a brute-force labelling: each integer offset to its nearest chosen one. */
+    for (int t = 0; t < W * H; t += 7) {
+        const int tx = t % W, ty = t / W;
+        double want[5] = {0};
+        for (int vy = -(H - 1); vy <= H - 1; ++vy)
+            for (int vx = -(W - 1); vx <= W - 1; ++vx) {
+                int best = 0;
+                double bd = INFINITY;
+                for (int k = 0; k < 5; ++k) {
+                    const double ex = (vx - few[k * 2]) / (double)(W - 1), ey = (vy - few[k * 2 + 1]) / (double)(H - 1), d2 = ex * ex + ey * ey;
+                    if (d2 < bd) { bd = d2; best = k; }
+                }
+                const int x = tx + vx, y = ty + vy;
+                if (area[t] > 0 && x >= 0 && x < W && y >= 0 && y < H) want[best] += area[y * W + x];
+            }
+        for (int k = 0; k < 5; ++k) assert_float_equal(tva[(size_t)t * 5 + k], want[k], 1e-4);
     }
     free(tva);
     assert_int_equal(prt__offset_tva(ctx, area, 0, H, few, 5, area), PRT_ERR_INVALID_ARG);
@@ -499,6 +529,124 @@ static void test_binning(void **state)
     prt_context_release(ctx);
 }
 
+static prt_transfer *bake_offset(prt_context *ctx, const prt_scene *scene, const char *const *kv)
+{
+    const prt_method *m = prt_method_find("offset");
+    assert_non_null(m);
+    prt_options *o = NULL;
+    assert_int_equal(prt_options_create(m, &o), PRT_OK);
+    for (int i = 0; kv[i]; i += 2) assert_int_equal(prt_options_set(o, kv[i], kv[i + 1]), PRT_OK);
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake(ctx, scene, m, o, NULL, &t), PRT_OK);
+    prt_options_release(o);
+    return t;
+}
+
+/* The method end to end on the demo scene under a point light: first-order light matches the path
+ * tracer's direct light, the bounces bring the indirect light close to its, the file round-trips,
+ * and subsurface scattering much shorter than a texel reflects the medium's total diffuse
+ * reflectance. */
+static void test_offset_method(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    prt_scene *scene = load_demo_scene(ctx);
+    prt_transfer *t = bake_offset(ctx, scene, (const char *const[]){"texels", "64", "offsets", "200", "iterations", "300", NULL});
+    const size_t nv = prt_transfer_vertex_count(t);
+    prt_lighting *l = NULL;
+    prt_light bulb;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    assert_int_equal(prt_light_parse("point:0.3,1.2,0.4:2", &bulb), PRT_OK);
+    assert_int_equal(prt_lighting_add(l, &bulb, NULL), PRT_OK);
+    prt_relit r, first;
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .with_indirect = 1, .per_vertex = 1}, &r), PRT_OK);
+    assert_non_null(r.texels);
+    assert_int_equal(r.texel_width, 64);
+    const int no_bounce = 0;
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .with_indirect = 1, .per_vertex = 1, .controls = &no_bounce}, &first), PRT_OK);
+    for (size_t i = 0; i < nv * 3; ++i) {
+        assert_float_equal(first.indirect[i], 0.0f, 1e-7f);
+        assert_float_equal(first.radiance[i], r.radiance[i] - r.indirect[i], 1e-4f + 1e-4f * r.radiance[i]);
+    }
+    prt_scene *ts = NULL;
+    assert_int_equal(prt_transfer_scene(ctx, t, &ts), PRT_OK);
+    prt_reference_vertices ref;
+    assert_int_equal(prt_reference_trace_vertices(ctx, ts, NULL, &(prt_reference_desc){.lighting = l, .samples = 96}, &ref), PRT_OK);
+    double direct_e = 0, direct_b = 0, ind = 0, ind_ref = 0;
+    for (size_t i = 0; i < nv * 3; ++i) {
+        const double d = (double)first.radiance[i] - ref.direct[i];
+        direct_e += d * d;
+        direct_b += (double)ref.direct[i] * ref.direct[i];
+        ind += r.indirect[i];
+        ind_ref += ref.indirect[i];
+    }
+    double e[4];
+    vs_reference(r.radiance, r.indirect, &ref, nv, NULL, e);
+    print_message("demo scene, point light, 64^2 map, 200 offsets: relative L2 %.3f (reference noise %.3f), direct %.3f, "
+                  "indirect %.3f with %.2f of its energy\n", e[0], e[1], sqrt(direct_e / direct_b), e[2], ind / ind_ref);
+    assert_true(sqrt(direct_e / direct_b) < 0.1);
+    assert_true(e[0] < 0.25);
+    assert_true(ind / ind_ref > 0.7 && ind / ind_ref < 1.3);
+    prt_reference_vertices_free(&ref);
+    prt_scene_release(ts);
+
+    /* Saved and loaded, it relights the same. */
+    char path[600];
+    snprintf(path, sizeof path, "%s/offset.prt", test_dir);
+    assert_int_equal(prt_transfer_save(t, path), PRT_OK);
+    prt_transfer *back = NULL;
+    assert_int_equal(prt_transfer_load(ctx, path, &back), PRT_OK);
+    prt_relit again;
+    assert_int_equal(prt_relight(ctx, back, l, &(prt_relight_desc){.variant = -1, .with_indirect = 1, .per_vertex = 1}, &again), PRT_OK);
+    assert_memory_equal(again.radiance, r.radiance, nv * 3 * sizeof(float));
+    prt_relit_free(&again);
+    prt_transfer_release(back);
+    prt_relit_free(&r);
+    prt_relit_free(&first);
+    prt_transfer_release(t);
+
+    /* Skin in a scene of metres: light scatters a few millimetres (red, the farthest: 1 / sigma_tr
+     * = 3.7 mm), a texel is 47 mm wide, so each texel gives back what it takes in times the
+     * total diffuse reflectance. */
+    t = bake_offset(ctx, scene, (const char *const[]){"texels", "64", "offsets", "50", "iterations", "50", "transfer", "subsurface", "medium", "skin",
+                                                       "mm-per-unit", "1000", NULL});
+    prt_options *plain = NULL;
+    assert_int_equal(prt_options_create(prt_method_find("offset"), &plain), PRT_OK);
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1}, &r), PRT_OK);
+    prt_transfer *lambert = bake_offset(ctx, scene, (const char *const[]){"texels", "64", "offsets", "50", "iterations", "50", NULL});
+    assert_int_equal(prt_relight(ctx, lambert, l, &(prt_relight_desc){.variant = -1, .with_indirect = 1, .per_vertex = 1, .controls = &no_bounce}, &first), PRT_OK);
+    prt__dipole skin;   /* its red channel */
+    assert_int_equal(prt__dipole_init(0.032 * 1000, 0.74 * 1000, 1.3, &skin), PRT_OK);
+    const float *albedo = prt_transfer_albedo(lambert);
+    double ratio = 0;
+    size_t lit = 0;
+    for (size_t v = 0; v < nv; ++v) {
+        if (!(first.radiance[v * 3] > 0.05f)) continue;
+        ratio += r.radiance[v * 3] / (first.radiance[v * 3] / albedo[v * 3]);
+        lit++;
+    }
+    ratio /= (double)lit;
+    print_message("skin (red), scattering far below a texel: reflects %.3f of the light, the dipole's total %.3f\n", ratio, prt__dipole_total(&skin));
+    assert_float_equal(ratio, prt__dipole_total(&skin), 0.03);
+    prt_relit_free(&r);
+    prt_relit_free(&first);
+    prt_transfer_release(lambert);
+    prt_transfer_release(t);
+    prt_options_release(plain);
+
+    /* Refused: a light map too small, a medium that is not three numbers. */
+    prt_options *o = NULL;
+    assert_int_equal(prt_options_create(prt_method_find("offset"), &o), PRT_OK);
+    assert_int_equal(prt_options_set(o, "texels", "4"), PRT_ERR_INVALID_ARG);
+    assert_int_equal(prt_options_set(o, "sigma-a", "red"), PRT_OK);
+    assert_int_equal(prt_bake(ctx, scene, prt_method_find("offset"), o, NULL, &t), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "sigma-a"));
+    prt_options_release(o);
+    prt_lighting_release(l);
+    prt_scene_release(scene);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -511,6 +659,7 @@ int main(void)
         cmocka_unit_test(test_dipole),
         cmocka_unit_test(test_thin_beam),
         cmocka_unit_test(test_binning),
+        cmocka_unit_test(test_offset_method),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

@@ -112,7 +112,10 @@ void prt__offset_tr(const prt__offset_transfer *x, size_t t, size_t s, float out
     const float r2 = prt__v3_dot(d, d);
     if (!(r2 > 0)) return;
     if (x->kind == PRT__OFFSET_DIPOLE) {
-        const double r = sqrt((double)r2);
+        /* At the distance of the source patch's rim when its centre is nearer than that: a texel
+         * whose centre nearly touches another's (slivers, a sphere's pole) would otherwise take
+         * the dipole's peak for its whole area. */
+        const double r = sqrt((double)r2 + p->area[s] / PRT_PI);
         for (int c = 0; c < 3; ++c) out[c] = (float)prt__dipole_rd(&x->dipole[c], r);
         return;
     }
@@ -125,7 +128,9 @@ void prt__offset_tr(const prt__offset_transfer *x, size_t t, size_t s, float out
         b[c] = ps[c] + p->nrm[s * 3 + c] * x->ray_offset;
     }
     if (!prt__raycaster_segment_clear(x->rc, a, b)) return;
-    const float f = ct * cs / ((float)PRT_PI * r2);
+    /* Per unit area of a disc of the source's area seen from t (Wallace et al. 1989): bounded by
+     * 1 / area where the points' own form factor would blow up (texels meeting at a corner). */
+    const float f = ct * cs / ((float)PRT_PI * r2 + p->area[s]);
     for (int c = 0; c < 3; ++c) out[c] = p->albedo[t * 3 + c] * f;
 }
 

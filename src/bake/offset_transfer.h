@@ -35,9 +35,10 @@ double prt__dipole_disc(const prt__dipole *d, double a);
 
 /* Transfer from source texel s to receiver t per unit area of s, per colour channel. */
 typedef enum prt__offset_kind {
-    PRT__OFFSET_RADIOSITY = 1,   /* one diffuse bounce: albedo(t) cos cos' V / (pi r^2) */
-    PRT__OFFSET_DIPOLE           /* subsurface: R_d(|x_t - x_s|), no visibility (not yet limited to
-                                  * one object: R_d is negligible a few mean free paths away) */
+    PRT__OFFSET_RADIOSITY = 1,   /* one diffuse bounce: albedo(t) cos cos' V / (pi r^2 + TA(s)) */
+    PRT__OFFSET_DIPOLE           /* subsurface: R_d at |x_t - x_s| widened by the source's radius,
+                                  * no visibility (not yet limited to one object: R_d is negligible
+                                  * a few mean free paths away) */
 } prt__offset_kind;
 
 typedef struct prt__offset_transfer {

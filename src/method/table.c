@@ -3,6 +3,7 @@
 #include "method/sh.h"
 #include "method/spectral.h"
 #include "method/lightcloud.h"
+#include "method/offset.h"
 #include "method/wavelet.h"
 
 static const prt__method *const table[] = {
@@ -10,6 +11,7 @@ static const prt__method *const table[] = {
     &prt__method_wavelet,
     &prt__method_spectral,
     &prt__method_lightcloud,
+    &prt__method_offset,
 };
 
 #define COUNT ((int)(sizeof table / sizeof table[0]))

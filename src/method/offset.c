@@ -1,0 +1,299 @@
+/* The offset method's table entry (offset radiance transfer mapping, Sunshine-Hill & Faloutsos
+ * 2006): bake options, its chunks (OFSP parameters and offsets, OFST texel patches, OFSR and OFSS
+ * maps), description, the bounce control and relighting. The offsets and maps are made in
+ * bake/offset.c (with bake/offset_sampling.c and bake/offset_transfer.c), the run time is
+ * relight/offset.c. */
+#include "method/offset.h"
+
+#define CHUNK_OFSP PRT__FOURCC('O', 'F', 'S', 'P')
+#define CHUNK_OFST PRT__FOURCC('O', 'F', 'S', 'T')
+#define CHUNK_OFSR PRT__FOURCC('O', 'F', 'S', 'R')
+#define CHUNK_OFSS PRT__FOURCC('O', 'F', 'S', 'S')
+#define OFSP_HEADER 72
+#define TEXEL_FLOATS (3 + 3 + 3 + 1 + PRT__OFFSET_ENV_COEFFS)   /* pos, nrm, albedo, area, env */
+
+void prt__offset_set_free(void *state)
+{
+    prt__offset_set *s = state;
+    if (!s) return;
+    free(s->offsets); free(s->texel); free(s->pos); free(s->nrm); free(s->albedo); free(s->area); free(s->emit); free(s->emit_in); free(s->env);
+    free(s->radiosity); free(s->subsurface); free(s->index);
+    if (s->lights) { prt__vertex_lights_free(s->lights); free(s->lights); }
+    if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
+    free(s);
+}
+
+bool prt__offset_cache_new(prt__offset_set *s)
+{
+    s->lock = malloc(sizeof *s->lock);
+    s->lights = prt__calloc(1, sizeof *s->lights);
+    if (!s->lock || !s->lights) return false;
+    pthread_mutex_init(s->lock, NULL);
+    prt__vertex_lights_init(s->lights);
+    return true;
+}
+
+/* ---- bake options ---- */
+static const prt_option_desc options[] = {
+    {"texels", "N", PRT_OPTION_INT, 8, 4096, NULL,
+     "light map of N x N texels over the mesh's UVs, or a generated atlas (see --uv) (default 128)"},
+    {"offsets", "N", PRT_OPTION_INT, 1, 100000, NULL, "transfer maps, one per offset (default 200; the paper uses 50..400)"},
+    {"iterations", "N", PRT_OPTION_INT, 0, 1000000, NULL,
+     "refinements of the importance distribution the offsets are drawn from, rebuilt every 20 (default 1000)"},
+    {"importance", "H", PRT_OPTION_CHOICE, 0, 0, "max|mean",
+     "what weighs an offset: the largest transfer it carries to any texel (max, the default: distant objects keep their "
+     "offsets) or the mean (fewer artefacts on one smooth chart)"},
+    {"transfer", "K", PRT_OPTION_CHOICE, 0, 0, "radiosity|subsurface|both",
+     "radiosity: diffuse inter-reflection, bounced at run time (default); subsurface: Jensen's dipole in place of diffuse "
+     "reflection (skin, marble, wax); both"},
+    {"medium", "M", PRT_OPTION_CHOICE, 0, 0, "skin|marble|ketchup",
+     "measured coefficients of subsurface scattering (Jensen et al. 2001; default skin)"},
+    {"sigma-a", "R,G,B", PRT_OPTION_TEXT, 0, 0, NULL, "absorption per mm, instead of the medium's"},
+    {"sigma-s", "R,G,B", PRT_OPTION_TEXT, 0, 0, NULL, "reduced scattering per mm, instead of the medium's"},
+    {"eta", "N", PRT_OPTION_FLOAT, 1, 4, NULL, "relative index of refraction of the medium (default 1.3)"},
+    {"mm-per-unit", "S", PRT_OPTION_FLOAT, 1e-6, 1e9, NULL,
+     "millimetres per scene unit, the scale subsurface scattering needs (default 1000: the scene is in metres)"},
+    {"uv", "FROM", PRT_OPTION_CHOICE, 0, 0, "auto|mesh|atlas",
+     "UV layout: the mesh's own when unique and inside [0, 1], else a generated atlas (auto, the default); only the "
+     "mesh's (mesh); always an atlas (atlas)"},
+    {"seed", "N", PRT_OPTION_INT, 0, 2147483647, NULL, "seed of the offsets drawn (default 0)"},
+    {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
+};
+
+static const prt_control_desc controls[] = {
+    {"bounces", "inter-reflection passes over the light map (radiosity; 0 = first-order and subsurface only)", '[', ']', 0},
+};
+
+static bool parse_rgb(const char *text, float out[3])
+{
+    char *end;
+    for (int c = 0; c < 3; ++c) {
+        out[c] = strtof(text, &end);
+        if (end == text || !(out[c] >= 0) || !isfinite(out[c])) return false;
+        text = end;
+        if (c < 2) {
+            if (*text != ',') { out[1] = out[2] = out[0]; return *text == 0 && c == 0; }
+            text++;
+        }
+    }
+    return *text == 0;
+}
+
+static prt_status offset_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job)
+{
+    (void)scene;
+    /* Jensen et al. 2001, table 2 (per mm): reduced scattering, absorption. */
+    static const float media[3][2][3] = {{{0.74f, 0.88f, 1.01f}, {0.032f, 0.17f, 0.48f}},          /* skin 1 */
+                                         {{2.19f, 2.62f, 3.00f}, {0.0021f, 0.0041f, 0.0071f}},     /* marble */
+                                         {{0.18f, 0.07f, 0.03f}, {0.061f, 0.97f, 1.45f}}};         /* ketchup */
+    prt__offset_bake_desc d = {0};
+    d.texels = prt__opt_int(o, "texels", 128);
+    d.count = prt__opt_int(o, "offsets", 200);
+    d.iterations = prt__opt_int(o, "iterations", 1000);
+    d.importance = prt__opt_choice(o, "importance", 0);
+    const int kind = prt__opt_choice(o, "transfer", 0);
+    d.kinds = kind == 0 ? PRT__OFFSET_RADIOSITY_BIT : kind == 1 ? PRT__OFFSET_SUBSURFACE_BIT : PRT__OFFSET_RADIOSITY_BIT | PRT__OFFSET_SUBSURFACE_BIT;
+    const int medium = prt__opt_choice(o, "medium", 0);
+    for (int c = 0; c < 3; ++c) { d.sigma_s[c] = media[medium][0][c]; d.sigma_a[c] = media[medium][1][c]; }
+    if (prt__opt(o, "sigma-a") && (!parse_rgb(prt__opt(o, "sigma-a"), d.sigma_a) || !(d.sigma_a[0] > 0 && d.sigma_a[1] > 0 && d.sigma_a[2] > 0)))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--sigma-a takes R,G,B (or one value), each > 0 per mm");
+    if (prt__opt(o, "sigma-s") && !parse_rgb(prt__opt(o, "sigma-s"), d.sigma_s))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--sigma-s takes R,G,B (or one value), each >= 0 per mm");
+    d.eta = prt__opt_float(o, "eta", 1.3f);
+    d.mm_per_unit = prt__opt_float(o, "mm-per-unit", 1000.0f);
+    d.uv_layout = (prt_uv_layout)prt__opt_choice(o, "uv", 0);
+    d.seed = prt__opt_int(o, "seed", 0);
+    d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
+    return prt__offset_bake_begin(ctx, &d, t, job);
+}
+
+/* ---- files ---- */
+static prt_status offset_save(const prt_transfer *t, prt__chunk_list *l)
+{
+    const prt__offset_set *s = t->state;
+    const size_t nc = s->covered;
+    unsigned char *head = prt__chunks_alloc(l, OFSP_HEADER);
+    float *texels = prt__chunks_alloc(l, nc * TEXEL_FLOATS * sizeof(float));
+    if (!head || !texels) return PRT_OK;   /* the list records the failure */
+    const uint32_t p32[8] = {(uint32_t)s->width, (uint32_t)s->height, (uint32_t)s->count, s->kinds, (uint32_t)s->iterations,
+                             (uint32_t)s->importance, s->covered, s->emit != NULL};
+    for (int i = 0; i < 8; ++i) prt__put32(head + 4 * i, p32[i]);
+    const float f[10] = {s->ray_offset, s->eta, s->mm_per_unit, s->sigma_a[0], s->sigma_a[1], s->sigma_a[2], s->sigma_s[0], s->sigma_s[1], s->sigma_s[2], 0};
+    memcpy(head + 32, f, sizeof f);
+    prt__chunks_add(l, CHUNK_OFSP, head, (size_t)OFSP_HEADER, s->offsets, (size_t)s->count * 2 * sizeof(int32_t), NULL);
+    for (size_t i = 0; i < nc; ++i) {
+        float *e = texels + i * TEXEL_FLOATS;
+        memcpy(e, s->pos + i * 3, 12);
+        memcpy(e + 3, s->nrm + i * 3, 12);
+        memcpy(e + 6, s->albedo + i * 3, 12);
+        e[9] = s->area[i];
+        memcpy(e + 10, s->env + i * PRT__OFFSET_ENV_COEFFS, PRT__OFFSET_ENV_COEFFS * sizeof(float));
+    }
+    prt__chunks_add(l, CHUNK_OFST, s->texel, nc * sizeof(uint32_t), texels, nc * TEXEL_FLOATS * sizeof(float), s->emit, s->emit ? nc * 3 * sizeof(float) : 0,
+                    s->emit_in, s->emit ? nc * 3 * sizeof(float) : 0, NULL);
+    const size_t maps = (size_t)s->count * nc * 3 * sizeof(float);
+    if (s->radiosity) prt__chunks_add(l, CHUNK_OFSR, s->radiosity, maps, NULL);
+    if (s->subsurface) prt__chunks_add(l, CHUNK_OFSS, s->subsurface, maps, NULL);
+    return PRT_OK;
+}
+
+static prt_status bad(prt_context *ctx, const char *msg) { return prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: %s", msg); }
+
+static prt_status load_maps(prt_context *ctx, const prt__offset_set *s, const prt__chunk_in *c, float **out)
+{
+    const uint64_t n = (uint64_t)s->count * s->covered * 3;
+    if (c->size != n * sizeof(float)) return bad(ctx, "offset transfer map chunk size mismatch");
+    if (!(*out = malloc(n * sizeof(float) + 1))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(*out, c->data, n * sizeof(float));
+    for (uint64_t i = 0; i < n; ++i)
+        if (!((*out)[i] >= 0 && (*out)[i] <= 1e30f)) return bad(ctx, "offset transfer map values out of range");
+    return PRT_OK;
+}
+
+static prt_status offset_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count)
+{
+    (void)meta;
+    prt__offset_set *s = prt__calloc(1, sizeof *s);
+    if (!s) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    t->state = s;
+    if (!prt__offset_cache_new(s)) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    prt__chunk_in *c = prt__chunk_take(chunks, count, CHUNK_OFSP);
+    if (!c || c->size < OFSP_HEADER) return bad(ctx, "offset parameter chunk missing or short");
+    const unsigned char *p = c->data;
+    s->width = (int)prt__get32(p);
+    s->height = (int)prt__get32(p + 4);
+    s->count = (int)prt__get32(p + 8);
+    s->kinds = prt__get32(p + 12);
+    s->iterations = (int)prt__get32(p + 16);
+    s->importance = (int)prt__get32(p + 20);
+    s->covered = prt__get32(p + 24);
+    const uint32_t emits = prt__get32(p + 28);
+    float f[10];
+    memcpy(f, p + 32, sizeof f);
+    s->ray_offset = f[0]; s->eta = f[1]; s->mm_per_unit = f[2];
+    for (int k = 0; k < 3; ++k) { s->sigma_a[k] = f[3 + k]; s->sigma_s[k] = f[6 + k]; }
+    const uint64_t n = (uint64_t)(uint32_t)s->width * (uint32_t)s->height;
+    if (s->width < 8 || s->width > 4096 || s->height < 8 || s->height > 4096 || s->count < 1 || !s->kinds || s->kinds > 3 || s->iterations < 0 ||
+        (s->importance != 0 && s->importance != 1) || !s->covered || s->covered > n || emits > 1 ||
+        (uint64_t)s->count > (uint64_t)(2 * s->width - 1) * (uint64_t)(2 * s->height - 1) || n * (uint64_t)s->count > PRT__OFFSET_MAX_ENTRIES ||
+        !(s->ray_offset > 0) || !(s->ray_offset <= fmaxf(1e4f * prt__ray_offset(&t->mesh), 1e-6f)) || !(s->eta >= 1 && s->eta <= 4) ||
+        !(s->mm_per_unit > 0 && s->mm_per_unit <= 1e9f))
+        return bad(ctx, "offset parameters out of range");
+    if (c->size != OFSP_HEADER + (uint64_t)s->count * 8) return bad(ctx, "offset parameter chunk size mismatch");
+    if (!(s->offsets = malloc((size_t)s->count * 2 * sizeof(int)))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (int k = 0; k < s->count * 2; ++k) {
+        s->offsets[k] = (int32_t)prt__get32(p + OFSP_HEADER + 4 * k);
+        const int lim = k % 2 ? s->height : s->width;
+        if (s->offsets[k] <= -lim || s->offsets[k] >= lim) return bad(ctx, "an offset lies beyond the light map");
+    }
+    if (!(c = prt__chunk_take(chunks, count, CHUNK_OFST))) return bad(ctx, "offset texel chunk missing");
+    const size_t nc = s->covered;
+    if (c->size != (uint64_t)nc * (4 + TEXEL_FLOATS * 4 + (emits ? 24 : 0))) return bad(ctx, "offset texel chunk size mismatch");
+    s->texel = malloc(nc * sizeof *s->texel);
+    s->pos = malloc(nc * 12); s->nrm = malloc(nc * 12); s->albedo = malloc(nc * 12); s->area = malloc(nc * 4);
+    s->env = malloc(nc * PRT__OFFSET_ENV_COEFFS * sizeof(float));
+    if (emits) { s->emit = malloc(nc * 12); s->emit_in = malloc(nc * 12); }
+    if (!s->texel || !s->pos || !s->nrm || !s->albedo || !s->area || !s->env || (emits && (!s->emit || !s->emit_in)))
+        return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(s->texel, c->data, nc * 4);
+    const float *e = (const float *)(const void *)(c->data + nc * 4);
+    float row[TEXEL_FLOATS];
+    for (size_t i = 0; i < nc; ++i) {
+        memcpy(row, (const unsigned char *)e + i * sizeof row, sizeof row);
+        if (!prt__all_finite(row, TEXEL_FLOATS) || !(row[9] > 0)) return bad(ctx, "offset texel values out of range");
+        for (int k = 6; k < 9; ++k)
+            if (!(row[k] >= 0 && row[k] <= 1)) return bad(ctx, "offset texel albedo out of range");
+        memcpy(s->pos + i * 3, row, 12);
+        memcpy(s->nrm + i * 3, row + 3, 12);
+        memcpy(s->albedo + i * 3, row + 6, 12);
+        s->area[i] = row[9];
+        memcpy(s->env + i * PRT__OFFSET_ENV_COEFFS, row + 10, PRT__OFFSET_ENV_COEFFS * sizeof(float));
+    }
+    if (emits) {
+        memcpy(s->emit, c->data + nc * (4 + TEXEL_FLOATS * 4), nc * 12);
+        memcpy(s->emit_in, c->data + nc * (4 + TEXEL_FLOATS * 4 + 12), nc * 12);
+        for (size_t i = 0; i < nc * 3; ++i)
+            if (!(s->emit[i] >= 0 && s->emit[i] <= PRT__MAX_RADIANCE) || !(s->emit_in[i] >= 0 && s->emit_in[i] <= 1e30f))
+                return bad(ctx, "offset texel emission out of range");
+    }
+    if (!prt__offset_set_index(s)) return bad(ctx, "offset texels out of order or beyond the light map");
+    prt_status st = PRT_OK;
+    c = prt__chunk_take(chunks, count, CHUNK_OFSR);
+    if (!c != !(s->kinds & PRT__OFFSET_RADIOSITY_BIT)) return bad(ctx, "the radiosity map chunk does not match the transfer kinds");
+    if (c && (st = load_maps(ctx, s, c, &s->radiosity))) return st;
+    c = prt__chunk_take(chunks, count, CHUNK_OFSS);
+    if (!c != !(s->kinds & PRT__OFFSET_SUBSURFACE_BIT)) return bad(ctx, "the subsurface map chunk does not match the transfer kinds");
+    if (c && (st = load_maps(ctx, s, c, &s->subsurface))) return st;
+    static const uint32_t ids[4] = {CHUNK_OFSP, CHUNK_OFST, CHUNK_OFSR, CHUNK_OFSS};
+    for (int i = 0; i < 4; ++i)
+        if (prt__chunk_take(chunks, count, ids[i])) return bad(ctx, "an offset chunk appears twice");
+    return PRT_OK;
+}
+
+/* ---- description ---- */
+static size_t offset_bytes(const prt_transfer *t)
+{
+    const prt__offset_set *s = t->state;
+    const size_t maps = (size_t)s->count * s->covered * 3 * sizeof(float);
+    return (s->radiosity ? maps : 0) + (s->subsurface ? maps : 0) + (size_t)s->covered * (4 + TEXEL_FLOATS * 4);
+}
+
+static void offset_describe(const prt_transfer *t, prt__describe *d)
+{
+    const prt__offset_set *s = t->state;
+    const char *kinds = s->kinds == 3 ? "radiosity and subsurface" : s->kinds == 1 ? "radiosity" : "subsurface";
+    cJSON *j = prt__describe_json(d);
+    if (j) {
+        cJSON_AddNumberToObject(j, "texel_width", s->width);
+        cJSON_AddNumberToObject(j, "texel_height", s->height);
+        cJSON_AddNumberToObject(j, "covered_texels", s->covered);
+        cJSON_AddNumberToObject(j, "offsets", s->count);
+        cJSON_AddStringToObject(j, "transfer", kinds);
+        cJSON_AddNumberToObject(j, "iterations", s->iterations);
+        cJSON_AddStringToObject(j, "importance", s->importance ? "mean" : "max");
+        if (s->subsurface) {
+            cJSON *m = cJSON_AddObjectToObject(j, "medium");
+            cJSON *sa = cJSON_AddArrayToObject(m, "sigma_a"), *ss = cJSON_AddArrayToObject(m, "sigma_s");
+            for (int c = 0; c < 3; ++c) { cJSON_AddItemToArray(sa, cJSON_CreateNumber(s->sigma_a[c])); cJSON_AddItemToArray(ss, cJSON_CreateNumber(s->sigma_s[c])); }
+            cJSON_AddNumberToObject(m, "eta", s->eta);
+            cJSON_AddNumberToObject(m, "mm_per_unit", s->mm_per_unit);
+        }
+        return;
+    }
+    prt__describe_line(d, "light map:", "%d x %d texels, %u on the surface (%.0f%%)", s->width, s->height, s->covered,
+                       100.0 * s->covered / ((double)s->width * s->height));
+    prt__describe_line(d, "transfer:", "%s: %d offset maps (drawn by %s transference, %d refinements), %.2f MiB", kinds, s->count,
+                       s->importance ? "mean" : "largest", s->iterations, offset_bytes(t) / 1048576.0);
+    if (s->subsurface)
+        prt__describe_line(d, "medium:", "sigma_a %g %g %g, sigma_s' %g %g %g per mm, eta %g, %g mm per unit", s->sigma_a[0], s->sigma_a[1], s->sigma_a[2],
+                           s->sigma_s[0], s->sigma_s[1], s->sigma_s[2], s->eta, s->mm_per_unit);
+}
+
+static void offset_control_range(const prt_transfer *t, int i, int *lo, int *hi, int *def)
+{
+    (void)t;
+    (void)i;
+    *lo = 0;
+    *hi = 64;
+    *def = 3;
+}
+
+const prt__method prt__method_offset = {
+    .name = "offset",
+    .title = "offset radiance transfer maps",
+    .summary = "offset transfer maps (Sunshine-Hill & Faloutsos): radiosity and subsurface scattering in texture space, any first-order light",
+    .lighting = PRT_LIGHTS_ENVIRONMENT | PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_DIRECTIONAL | PRT_LIGHTS_SPHERE | PRT_LIGHTS_EMISSIVE,
+    .runtime_albedo = false,
+    .options = options,
+    .option_count = (int)(sizeof options / sizeof options[0]),
+    .controls = controls,
+    .control_count = (int)(sizeof controls / sizeof controls[0]),
+    .bake_begin = offset_bake_begin,
+    .free_state = prt__offset_set_free,
+    .save = offset_save,
+    .load = offset_load,
+    .describe = offset_describe,
+    .transfer_bytes = offset_bytes,
+    .control_range = offset_control_range,
+    .relight = prt__offset_relight,
+};
