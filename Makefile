@@ -69,6 +69,7 @@ bench: build
 	$(BUILD)/prt_bench_spectral --room
 	$(BUILD)/prt_bench_spectral
 	$(BUILD)/prt_bench_lightcloud
+	$(BUILD)/prt_bench_offset
 	@if [ -f ../shared/data/meshes/sponza/sponza_dabrovic.obj ]; then $(BUILD)/prt_bench_lightcloud ../shared/data/meshes/sponza/sponza_dabrovic.obj --grid 12,4,8 --zone-vertices 500; \
 	else echo "bench: ../shared/data/meshes/sponza is absent: skipping the Sponza light cloud"; fi
 

@@ -19,11 +19,23 @@ bool prt__offset_set_index(prt__offset_set *s)
     return true;
 }
 
-/* out[i] = sum_k in[texel i + offset k] maps[k][i], over covered texels. */
-static void apply(prt_context *ctx, const prt__offset_set *s, const float *maps, const float *in, float *out)
+/* out[i] = sum_k in(texel i + offset k) maps[k][i], over covered texels. `in` is read from the
+ * whole map with its gutters filled (full, W x H x 3 scratch): an offset landing just off a
+ * chart, in a cell that does hold surface, reads the light of the chart's edge rather than
+ * nothing - as the paper's lightmap, bilinearly filtered with dilated gutters, gives it. */
+static bool apply(prt_context *ctx, const prt__offset_set *s, const float *maps, const float *in, float *full, uint8_t *mask, float *out)
 {
     const int W = s->width, H = s->height;
-    const size_t nc = s->covered;
+    const size_t nc = s->covered, n = (size_t)W * H;
+    memset(full, 0, n * 3 * sizeof *full);
+    memset(mask, 0, n);
+    for (size_t i = 0; i < nc; ++i) {
+        memcpy(full + (size_t)s->texel[i] * 3, in + i * 3, 3 * sizeof *full);
+        mask[s->texel[i]] = 1;
+    }
+    float *planes[1] = {full};
+    const int floats[1] = {3};
+    if (!prt__texel_fill_gutters(W, H, mask, planes, floats, 1)) return false;
 #pragma omp parallel for schedule(static, 256) num_threads(prt__threads(ctx))
     for (size_t i = 0; i < nc; ++i) {
         const int tx = (int)(s->texel[i] % (uint32_t)W), ty = (int)(s->texel[i] / (uint32_t)W);
@@ -31,15 +43,14 @@ static void apply(prt_context *ctx, const prt__offset_set *s, const float *maps,
         for (int k = 0; k < s->count; ++k) {
             const int sx = tx + s->offsets[k * 2], sy = ty + s->offsets[k * 2 + 1];
             if (sx < 0 || sx >= W || sy < 0 || sy >= H) continue;
-            const int32_t j = s->index[(size_t)sy * W + sx];
-            if (j < 0) continue;
-            const float *m = maps + ((size_t)k * nc + i) * 3, *f = in + (size_t)j * 3;
+            const float *m = maps + ((size_t)k * nc + i) * 3, *f = full + ((size_t)sy * W + sx) * 3;
             sum[0] += f[0] * m[0];
             sum[1] += f[1] * m[1];
             sum[2] += f[2] * m[2];
         }
         memcpy(out + i * 3, sum, sizeof sum);
     }
+    return true;
 }
 
 /* Shadow rays from the texels: the mesh in Embree and the texels' ray origins, once. */
@@ -89,8 +100,9 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     float *E = prt__calloc(nc * 3, sizeof(float)), *first = malloc(nc * 3 * sizeof(float)), *indirect = prt__calloc(nc * 3, sizeof(float));
     float *a = malloc(nc * 3 * sizeof(float)), *b = malloc(nc * 3 * sizeof(float));
     float *map = prt__calloc(n * 3, sizeof(float)), *imap = r->indirect ? prt__calloc(n * 3, sizeof(float)) : NULL;
-    uint8_t *covered = prt__calloc(n, 1);
-    if (!E || !first || !indirect || !a || !b || !map || (r->indirect && !imap) || !covered) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    uint8_t *covered = prt__calloc(n, 1), *mask = malloc(n);
+    float *full = malloc(n * 3 * sizeof(float));
+    if (!E || !first || !indirect || !a || !b || !map || (r->indirect && !imap) || !covered || !mask || !full) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     /* Local lights (directional ones too: sharp shadows), by shadow rays from each texel. */
     prt_light *local = NULL;
     int nlocal = 0;
@@ -123,14 +135,15 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
             a[i * 3 + c] = e > 0 ? e : 0;
             first[i * 3 + c] = s->albedo[i * 3 + c] * a[i * 3 + c];
         }
-    if (s->subsurface) {   /* the dipole is the surface's diffuse reflection: it replaces albedo x irradiance */
-        apply(ctx, s, s->subsurface, a, first);
+    if (s->subsurface && !apply(ctx, s, s->subsurface, a, full, mask, first)) {   /* the dipole replaces albedo x irradiance */
+        st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        goto done;
     }
     /* Inter-reflection: each bounce gathers what the last one sent out. */
     if (s->radiosity && d->component != PRT_COMPONENT_DIRECT) {
         memcpy(a, first, nc * 3 * sizeof(float));
         for (int k = 0; k < bounces; ++k) {
-            apply(ctx, s, s->radiosity, a, b);
+            if (!apply(ctx, s, s->radiosity, a, full, mask, b)) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
             for (size_t i = 0; i < nc * 3; ++i) indirect[i] += b[i];
             float *tmp = a; a = b; b = tmp;
         }
@@ -172,6 +185,6 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     map = NULL;
 done:
     free(local);
-    free(E); free(first); free(indirect); free(a); free(b); free(map); free(imap); free(covered);
+    free(E); free(first); free(indirect); free(a); free(b); free(map); free(imap); free(covered); free(mask); free(full);
     return st;
 }
