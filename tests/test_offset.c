@@ -9,6 +9,7 @@
 #include "bake/offset_transfer.h"
 #include "bake/texel_raster.h"
 #include "geom/uv_atlas.h"
+#include "method/transfer.h"
 
 static uint64_t rng_state = 12345;
 static double rnd(void)
@@ -630,10 +631,51 @@ static void test_offset_method(void **state)
     assert_float_equal(ratio, prt__dipole_total(&skin), 0.03);
     prt_relit_free(&r);
     prt_relit_free(&first);
-    prt_transfer_release(lambert);
     prt_transfer_release(t);
     prt_options_release(plain);
 
+    /* A translucent material of a JSON scene: only the sphere scatters under its surface (it
+     * gives back skin's total reflectance), the floor reflects as before. */
+    char json[700];
+    snprintf(json, sizeof json, "%s/skin.json", test_dir);
+    write_text("skin.json", "{\"meshes\": [{\"file\": \"demo.obj\"}], \"materials\": {\"sphere\": {\"subsurface\": \"skin\"}}}", path, sizeof path);
+    prt_scene *translucent = NULL;
+    assert_int_equal(prt_scene_load(ctx, json, NULL, &translucent), PRT_OK);
+    prt_medium med;
+    assert_int_equal(prt_scene_medium(translucent, "sphere", &med), 1);
+    assert_int_equal(prt_scene_medium(translucent, "floor", NULL), 0);
+    t = bake_offset(ctx, translucent, (const char *const[]){"texels", "64", "offsets", "50", "iterations", "50", NULL});
+    const int first_order = 1;   /* the first-order variant */
+    assert_string_equal(prt_transfer_variant_name(t, first_order), "first-order");
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = first_order, .per_vertex = 1}, &r), PRT_OK);
+    assert_int_equal(prt_relight(ctx, lambert, l, &(prt_relight_desc){.variant = -1, .with_indirect = 1, .per_vertex = 1, .controls = &no_bounce}, &first), PRT_OK);
+    double sphere = 0, floor_diff = 0, floor_sum = 0;
+    size_t nsphere = 0;
+    const prt__mesh *tm = &((const struct prt_transfer *)t)->mesh;
+    for (size_t v = 0; v < nv; ++v) {
+        const char *name = tm->surface[v] ? tm->surface_names[tm->surface[v] - 1] : "";
+        if (!(first.radiance[v * 3] > 0.05f)) continue;
+        if (!strcmp(name, "sphere")) { sphere += r.radiance[v * 3] / (first.radiance[v * 3] / albedo[v * 3]); nsphere++; }
+        if (!strcmp(name, "floor")) { floor_diff += fabs(r.radiance[v * 3] - first.radiance[v * 3]); floor_sum += first.radiance[v * 3]; }
+    }
+    print_message("skin on the sphere only: it reflects %.3f (skin's total %.3f); the floor's first-order light moved by %.2g%%\n", sphere / nsphere,
+                  prt__dipole_total(&skin), 100 * floor_diff / floor_sum);
+    assert_true(nsphere > 50);
+    assert_float_equal(sphere / nsphere, prt__dipole_total(&skin), 0.03);
+    assert_true(floor_diff < 1e-4 * floor_sum);
+    prt_relit_free(&r);
+    prt_relit_free(&first);
+    prt_transfer_release(t);
+    prt_scene_release(translucent);
+    /* A medium that does not exist, coefficients missing: one-line errors naming the material. */
+    write_text("bad.json", "{\"meshes\": [{\"file\": \"demo.obj\"}], \"materials\": {\"sphere\": {\"subsurface\": \"jade\"}}}", path, sizeof path);
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &translucent), PRT_ERR_FORMAT);
+    assert_non_null(strstr(prt_last_error(), "skin, marble or ketchup"));
+    write_text("bad.json", "{\"meshes\": [{\"file\": \"demo.obj\"}], \"materials\": {\"sphere\": {\"subsurface\": {\"sigma_a\": 0.1}}}}", path, sizeof path);
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &translucent), PRT_ERR_FORMAT);
+    assert_non_null(strstr(prt_last_error(), "sigma_s"));
+
+    prt_transfer_release(lambert);
     /* Refused: a light map too small, a medium that is not three numbers. */
     prt_options *o = NULL;
     assert_int_equal(prt_options_create(prt_method_find("offset"), &o), PRT_OK);

@@ -20,6 +20,8 @@ typedef struct obake {
     prt__texel_patches patches;
     prt__raycaster rc;
     prt__offset_transfer x[2];   /* radiosity, subsurface */
+    uint8_t *texel_medium;       /* [width * height] */
+    prt__dipole (*dipoles)[3];   /* per medium */
     prt__progress *progress;
 } obake;
 
@@ -213,7 +215,7 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
             for (int c = 0; c < 3; ++c) {
                 double sum = 0;
                 for (int o = 0; o < K; ++o) sum += maps[((size_t)o * nc + i) * 3 + c];
-                const double limit = k == 0 ? s->albedo[i * 3 + c] : prt__dipole_total(&ob->x[1].dipole[c]);
+                const double limit = k == 0 ? s->albedo[i * 3 + c] : s->medium[i] ? prt__dipole_total(&ob->dipoles[s->medium[i] - 1][c]) : 0.0;
                 if (!(sum > limit) || !(sum > 0)) continue;
                 capped += c == 0;
                 for (int o = 0; o < K; ++o) maps[((size_t)o * nc + i) * 3 + c] *= (float)(limit / sum);
@@ -303,6 +305,8 @@ static void offset_release(prt__bake_job *base)
     obake *ob = (obake *)base;
     prt__raycaster_release(&ob->rc);
     prt__texel_patches_free(&ob->patches);
+    free(ob->texel_medium);
+    free(ob->dipoles);
     free(ob);
 }
 
@@ -353,6 +357,20 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
     s->eta = d.eta;
     s->mm_per_unit = d.mm_per_unit;
     for (int c = 0; c < 3; ++c) { s->sigma_a[c] = d.sigma_a[c]; s->sigma_s[c] = d.sigma_s[c]; }
+    /* The media: the scene's translucent materials, or one for every surface. */
+    if (d.kinds & PRT__OFFSET_SUBSURFACE_BIT) {
+        s->medium_count = d.surface_medium ? d.medium_count : 1;
+        s->media = malloc((size_t)(s->medium_count + 1) * sizeof *s->media);
+        ob->dipoles = malloc((size_t)(s->medium_count + 1) * sizeof *ob->dipoles);
+        if (!s->media || !ob->dipoles) { offset_release(&ob->base); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+        for (int k = 0; k < s->medium_count; ++k) {
+            s->media[k] = d.surface_medium ? d.media[k] : (prt_medium){{d.sigma_a[0], d.sigma_a[1], d.sigma_a[2]}, {d.sigma_s[0], d.sigma_s[1], d.sigma_s[2]}, d.eta};
+            /* Per mm in the medium; the scene's lengths become mm through mm_per_unit. */
+            for (int c = 0; c < 3 && !st; ++c)
+                st = prt__dipole_init(s->media[k].sigma_a[c] * d.mm_per_unit, s->media[k].sigma_s[c] * d.mm_per_unit, s->media[k].eta, &ob->dipoles[k][c]);
+        }
+        if (st) { offset_release(&ob->base); return st; }
+    }
     s->ray_offset = d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh);
     st = prt__texel_patches_build(ctx, &t->mesh, d.texels, d.texels, &ob->patches);
     if (!st) st = prt__raycaster_create(ctx, &t->mesh, &ob->rc);
@@ -370,6 +388,11 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
         bool emits = false;
         for (size_t v = 0; t->mesh.emission && v < t->mesh.vertex_count * 3 && !emits; ++v) emits = t->mesh.emission[v] > 0;
         if (emits) { s->emit = prt__calloc(nc * 3, sizeof(float)); s->emit_in = prt__calloc(nc * 3, sizeof(float)); }
+        if (s->medium_count) {
+            s->medium = prt__calloc(nc + 1, 1);
+            ob->texel_medium = prt__calloc(n + 1, 1);
+            if (!s->medium || !ob->texel_medium) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        }
         if (!s->texel || !s->pos || !s->nrm || !s->albedo || !s->area || !s->env || (emits && (!s->emit || !s->emit_in)))
             st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
@@ -380,6 +403,11 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
         memcpy(s->nrm + k * 3, ob->patches.nrm + i * 3, 3 * sizeof(float));
         memcpy(s->albedo + k * 3, ob->patches.albedo + i * 3, 3 * sizeof(float));
         s->area[k] = ob->patches.area[i];
+        if (s->medium) {   /* the owning triangle's surface */
+            const uint32_t v0 = t->mesh.indices[(size_t)(ob->patches.owner[i] - 1) * 3];
+            const uint16_t sid = t->mesh.surface ? t->mesh.surface[v0] : 0;
+            s->medium[k] = ob->texel_medium[i] = d.surface_medium ? d.surface_medium[sid] : 1;
+        }
         if (s->emit) {   /* the owning triangle's emission at the texel centre */
             const uint32_t *ix = t->mesh.indices + (size_t)(ob->patches.owner[i] - 1) * 3;
             for (int c = 0; c < 3; ++c)
@@ -390,10 +418,8 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
     if (!st && !prt__offset_set_index(s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) {
         ob->x[0] = (prt__offset_transfer){.kind = PRT__OFFSET_RADIOSITY, .patches = &ob->patches, .rc = &ob->rc, .ray_offset = s->ray_offset};
-        ob->x[1] = (prt__offset_transfer){.kind = PRT__OFFSET_DIPOLE, .patches = &ob->patches};
-        /* The medium is given per mm; the scene's lengths become mm through mm_per_unit. */
-        for (int c = 0; c < 3 && !st; ++c)
-            st = prt__dipole_init(d.sigma_a[c] * d.mm_per_unit, d.sigma_s[c] * d.mm_per_unit, d.eta, &ob->x[1].dipole[c]);
+        ob->x[1] = (prt__offset_transfer){.kind = PRT__OFFSET_DIPOLE, .patches = &ob->patches, .medium = ob->texel_medium,
+                                          .media = (const prt__dipole (*)[3])ob->dipoles};
     }
     if (st) { offset_release(&ob->base); return st; }
     *out = &ob->base;

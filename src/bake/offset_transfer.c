@@ -97,12 +97,17 @@ void prt__offset_tr(const prt__offset_transfer *x, size_t t, size_t s, float out
     const prt__texel_patches *p = x->patches;
     out[0] = out[1] = out[2] = 0;
     if (!(p->area[t] > 0) || !(p->area[s] > 0)) return;
+    const prt__dipole *dip = x->dipole;
+    if (x->kind == PRT__OFFSET_DIPOLE && x->medium) {   /* light scatters within one medium */
+        if (!x->medium[t] || x->medium[t] != x->medium[s]) return;
+        dip = x->media[x->medium[t] - 1];
+    }
     if (t == s) {
         /* Light scattered back out within the texel itself: the dipole over a disc of its area
          * (per unit area, as every entry); a surface does not light itself by inter-reflection. */
         if (x->kind == PRT__OFFSET_DIPOLE) {
             const double a = sqrt(p->area[t] / PRT_PI);
-            for (int c = 0; c < 3; ++c) out[c] = (float)(prt__dipole_disc(&x->dipole[c], a) / p->area[t]);
+            for (int c = 0; c < 3; ++c) out[c] = (float)(prt__dipole_disc(&dip[c], a) / p->area[t]);
         }
         return;
     }
@@ -116,7 +121,7 @@ void prt__offset_tr(const prt__offset_transfer *x, size_t t, size_t s, float out
          * whose centre nearly touches another's (slivers, a sphere's pole) would otherwise take
          * the dipole's peak for its whole area. */
         const double r = sqrt((double)r2 + p->area[s] / PRT_PI);
-        for (int c = 0; c < 3; ++c) out[c] = (float)prt__dipole_rd(&x->dipole[c], r);
+        for (int c = 0; c < 3; ++c) out[c] = (float)prt__dipole_rd(&dip[c], r);
         return;
     }
     const float r = sqrtf(r2);

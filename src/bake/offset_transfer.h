@@ -46,7 +46,11 @@ typedef struct prt__offset_transfer {
     const prt__texel_patches *patches;
     const prt__raycaster *rc;          /* radiosity: visibility */
     float ray_offset;
-    prt__dipole dipole[3];             /* dipole: per channel */
+    prt__dipole dipole[3];             /* dipole: per channel, when medium is NULL */
+    /* Dipole with translucent materials: per texel (width x height) 0 = opaque, else a medium of
+     * media[medium - 1]; light scatters only between texels of one medium. */
+    const uint8_t *medium;
+    const prt__dipole (*media)[3];
 } prt__offset_transfer;
 
 void prt__offset_tr(const prt__offset_transfer *x, size_t t, size_t s, float out[3]);

@@ -73,6 +73,8 @@ struct prt_scene {
     prt_environment_desc env;
     int light_count;
     prt_light *lights;
+    int medium_count;                 /* translucent surfaces, by name */
+    struct prt__named_medium { char name[PRT__SURFACE_NAME]; prt_medium m; } *media;
 };
 
 /* The material id (1-based) of brdf in the scene's table, adding it if new; 0 when the table is full. */

@@ -132,7 +132,38 @@ void prt_scene_release(prt_scene *s)
     if (!s) return;
     prt__mesh_free(&s->mesh);
     free(s->lights);
+    free(s->media);
     free(s);
+}
+
+prt_status prt_scene_set_medium(prt_scene *s, const char *surface, const prt_medium *m)
+{
+    if (!s || !surface || !m) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_medium: scene, surface and medium are required");
+    prt_status st = prt_medium_check(m);
+    if (st) return st;
+    int id = 0;
+    for (int k = 0; k < s->mesh.surface_count && !id; ++k)
+        if (!strcmp(s->mesh.surface_names[k], surface)) id = k + 1;
+    if (!id) {
+        const float keep[3] = {0, 0, 0};
+        return prt__mesh_paint(&s->mesh, surface, keep, NULL);   /* fails naming the surfaces there are */
+    }
+    for (int k = 0; k < s->medium_count; ++k)
+        if (!strcmp(s->media[k].name, surface)) { s->media[k].m = *m; return PRT_OK; }
+    struct prt__named_medium *grown = realloc(s->media, (size_t)(s->medium_count + 1) * sizeof *grown);
+    if (!grown) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    s->media = grown;
+    memset(&s->media[s->medium_count], 0, sizeof *s->media);
+    snprintf(s->media[s->medium_count].name, sizeof s->media[0].name, "%s", surface);
+    s->media[s->medium_count++].m = *m;
+    return PRT_OK;
+}
+
+int prt_scene_medium(const prt_scene *s, const char *surface, prt_medium *out)
+{
+    for (int k = 0; s && surface && k < s->medium_count; ++k)
+        if (!strcmp(s->media[k].name, surface)) { if (out) *out = s->media[k].m; return 1; }
+    return 0;
 }
 
 size_t prt_scene_vertex_count(const prt_scene *s) { return s->mesh.vertex_count; }

@@ -212,8 +212,9 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
             a = cJSON_GetObjectItemCaseSensitive(mat, "albedo");
             b = cJSON_GetObjectItemCaseSensitive(mat, "brdf");
             e = cJSON_GetObjectItemCaseSensitive(mat, "emission");
-            if (!a && !b && !e) {
-                st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s' needs an \"albedo\", a \"brdf\" or an \"emission\"", path, v->valuestring);
+            if (!a && !b && !e && !cJSON_GetObjectItemCaseSensitive(mat, "subsurface")) {
+                st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s' needs an \"albedo\", a \"brdf\", an \"emission\" or a \"subsurface\"", path,
+                               v->valuestring);
                 break;
             }
         }
@@ -294,7 +295,33 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         }
         index++;
     }
-    cJSON_Delete(root);
     if (!st) prt__mesh_compact_surfaces(m);   /* the files' names a JSON material replaced */
+    /* Translucent materials: "subsurface" is a measured medium's name or its coefficients. A
+     * material no surface wears has nothing to make translucent. */
+    const cJSON *mat, *translucent = st ? NULL : materials;
+    cJSON_ArrayForEach(mat, translucent) {
+        const cJSON *sub = cJSON_GetObjectItemCaseSensitive(mat, "subsurface");
+        if (!sub) continue;
+        prt_medium med = {.eta = 1.3f};
+        if (cJSON_IsString(sub)) {
+            if (prt_medium_preset(sub->valuestring, &med)) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': %s", path, mat->string, prt_last_error());
+        } else if (cJSON_IsObject(sub)) {
+            const cJSON *sa = cJSON_GetObjectItemCaseSensitive(sub, "sigma_a"), *ss = cJSON_GetObjectItemCaseSensitive(sub, "sigma_s"),
+                        *eta = cJSON_GetObjectItemCaseSensitive(sub, "eta");
+            if (!sa || !ss || read_colour(ctx, sa, "sigma_a", med.sigma_a) || read_colour(ctx, ss, "sigma_s", med.sigma_s) || (eta && !cJSON_IsNumber(eta)))
+                st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"subsurface\" needs \"sigma_a\" and \"sigma_s\" (per mm: a number or [r, g, b]) "
+                               "and an optional \"eta\"", path, mat->string);
+            if (!st && eta) med.eta = (float)eta->valuedouble;
+        } else {
+            st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"subsurface\" must be \"skin\", \"marble\", \"ketchup\" or an object", path,
+                           mat->string);
+        }
+        if (!st && prt_medium_check(&med)) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': %s", path, mat->string, prt_last_error());
+        bool worn = false;
+        for (int k = 0; !st && k < m->surface_count && !worn; ++k) worn = !strcmp(m->surface_names[k], mat->string);
+        if (!st && worn && prt_scene_set_medium(scene, mat->string, &med)) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': %s", path, prt_last_error());
+        if (st) break;
+    }
+    cJSON_Delete(root);
     return st;
 }

@@ -9,6 +9,7 @@
 #define CHUNK_OFST PRT__FOURCC('O', 'F', 'S', 'T')
 #define CHUNK_OFSR PRT__FOURCC('O', 'F', 'S', 'R')
 #define CHUNK_OFSS PRT__FOURCC('O', 'F', 'S', 'S')
+#define CHUNK_OFSD PRT__FOURCC('O', 'F', 'S', 'D')
 #define OFSP_HEADER 72
 #define TEXEL_FLOATS (3 + 3 + 3 + 1 + PRT__OFFSET_ENV_COEFFS)   /* pos, nrm, albedo, area, env */
 
@@ -17,7 +18,7 @@ void prt__offset_set_free(void *state)
     prt__offset_set *s = state;
     if (!s) return;
     free(s->offsets); free(s->texel); free(s->pos); free(s->nrm); free(s->albedo); free(s->area); free(s->emit); free(s->emit_in); free(s->env);
-    free(s->radiosity); free(s->subsurface); free(s->index);
+    free(s->radiosity); free(s->subsurface); free(s->index); free(s->media); free(s->medium);
     if (s->lights) { prt__vertex_lights_free(s->lights); free(s->lights); }
     if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
     free(s);
@@ -43,11 +44,12 @@ static const prt_option_desc options[] = {
     {"importance", "H", PRT_OPTION_CHOICE, 0, 0, "max|mean",
      "what weighs an offset: the largest transfer it carries to any texel (max, the default: distant objects keep their "
      "offsets) or the mean (fewer artefacts on one smooth chart)"},
-    {"transfer", "K", PRT_OPTION_CHOICE, 0, 0, "radiosity|subsurface|both",
-     "radiosity: diffuse inter-reflection, bounced at run time (default); subsurface: Jensen's dipole in place of diffuse "
-     "reflection (skin, marble, wax); both"},
+    {"transfer", "K", PRT_OPTION_CHOICE, 0, 0, "auto|radiosity|subsurface|both",
+     "radiosity: diffuse inter-reflection, bounced at run time; subsurface: Jensen's dipole in place of diffuse reflection "
+     "on the scene's translucent materials (a JSON material's \"subsurface\"), or on every surface of a scene that names "
+     "none; both; auto (the default): radiosity, and subsurface where the scene names a medium"},
     {"medium", "M", PRT_OPTION_CHOICE, 0, 0, "skin|marble|ketchup",
-     "measured coefficients of subsurface scattering (Jensen et al. 2001; default skin)"},
+     "measured coefficients of subsurface scattering for a scene that names no medium (Jensen et al. 2001; default skin)"},
     {"sigma-a", "R,G,B", PRT_OPTION_TEXT, 0, 0, NULL, "absorption per mm, instead of the medium's"},
     {"sigma-s", "R,G,B", PRT_OPTION_TEXT, 0, 0, NULL, "reduced scattering per mm, instead of the medium's"},
     {"eta", "N", PRT_OPTION_FLOAT, 1, 4, NULL, "relative index of refraction of the medium (default 1.3)"},
@@ -81,20 +83,32 @@ static bool parse_rgb(const char *text, float out[3])
 
 static prt_status offset_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job)
 {
-    (void)scene;
-    /* Jensen et al. 2001, table 2 (per mm): reduced scattering, absorption. */
-    static const float media[3][2][3] = {{{0.74f, 0.88f, 1.01f}, {0.032f, 0.17f, 0.48f}},          /* skin 1 */
-                                         {{2.19f, 2.62f, 3.00f}, {0.0021f, 0.0041f, 0.0071f}},     /* marble */
-                                         {{0.18f, 0.07f, 0.03f}, {0.061f, 0.97f, 1.45f}}};         /* ketchup */
     prt__offset_bake_desc d = {0};
     d.texels = prt__opt_int(o, "texels", 128);
     d.count = prt__opt_int(o, "offsets", 200);
     d.iterations = prt__opt_int(o, "iterations", 1000);
     d.importance = prt__opt_choice(o, "importance", 0);
     const int kind = prt__opt_choice(o, "transfer", 0);
-    d.kinds = kind == 0 ? PRT__OFFSET_RADIOSITY_BIT : kind == 1 ? PRT__OFFSET_SUBSURFACE_BIT : PRT__OFFSET_RADIOSITY_BIT | PRT__OFFSET_SUBSURFACE_BIT;
-    const int medium = prt__opt_choice(o, "medium", 0);
-    for (int c = 0; c < 3; ++c) { d.sigma_s[c] = media[medium][0][c]; d.sigma_a[c] = media[medium][1][c]; }
+    static const char *const medium_names[3] = {"skin", "marble", "ketchup"};
+    prt_medium preset;
+    if (prt_medium_preset(medium_names[prt__opt_choice(o, "medium", 0)], &preset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s", prt_last_error());
+    for (int c = 0; c < 3; ++c) { d.sigma_s[c] = preset.sigma_s[c]; d.sigma_a[c] = preset.sigma_a[c]; }
+    /* The scene's translucent materials, by the transfer mesh's surface ids. */
+    const prt__mesh *tm = &t->mesh;
+    uint8_t *surface_medium = prt__calloc((size_t)tm->surface_count + 1, 1);
+    prt_medium named[PRT__OFFSET_MAX_MEDIA];
+    int nnamed = 0;
+    if (!surface_medium) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (int k = 0; k < tm->surface_count; ++k) {
+        prt_medium m;
+        if (!prt_scene_medium(scene, tm->surface_names[k], &m)) continue;
+        if (nnamed == PRT__OFFSET_MAX_MEDIA) { free(surface_medium); return prt__fail(ctx, PRT_ERR_INVALID_ARG, "more than %d translucent materials", PRT__OFFSET_MAX_MEDIA); }
+        named[nnamed++] = m;
+        surface_medium[k + 1] = (uint8_t)nnamed;
+    }
+    d.kinds = kind == 1 ? PRT__OFFSET_RADIOSITY_BIT : kind == 2 ? PRT__OFFSET_SUBSURFACE_BIT : kind == 3 ? PRT__OFFSET_RADIOSITY_BIT | PRT__OFFSET_SUBSURFACE_BIT
+            : PRT__OFFSET_RADIOSITY_BIT | (nnamed ? PRT__OFFSET_SUBSURFACE_BIT : 0u);
+    if (nnamed) { d.surface_medium = surface_medium; d.medium_count = nnamed; d.media = named; }
     if (prt__opt(o, "sigma-a") && (!parse_rgb(prt__opt(o, "sigma-a"), d.sigma_a) || !(d.sigma_a[0] > 0 && d.sigma_a[1] > 0 && d.sigma_a[2] > 0)))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--sigma-a takes R,G,B (or one value), each > 0 per mm");
     if (prt__opt(o, "sigma-s") && !parse_rgb(prt__opt(o, "sigma-s"), d.sigma_s))
@@ -104,7 +118,9 @@ static prt_status offset_bake_begin(prt_context *ctx, const prt_scene *scene, co
     d.uv_layout = (prt_uv_layout)prt__opt_choice(o, "uv", 0);
     d.seed = prt__opt_int(o, "seed", 0);
     d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
-    return prt__offset_bake_begin(ctx, &d, t, job);
+    const prt_status st = prt__offset_bake_begin(ctx, &d, t, job);
+    free(surface_medium);
+    return st;
 }
 
 /* ---- files ---- */
@@ -133,7 +149,16 @@ static prt_status offset_save(const prt_transfer *t, prt__chunk_list *l)
                     s->emit_in, s->emit ? nc * 3 * sizeof(float) : 0, NULL);
     const size_t maps = (size_t)s->count * nc * 3 * sizeof(float);
     if (s->radiosity) prt__chunks_add(l, CHUNK_OFSR, s->radiosity, maps, NULL);
-    if (s->subsurface) prt__chunks_add(l, CHUNK_OFSS, s->subsurface, maps, NULL);
+    if (s->subsurface) {
+        /* The media: count, 7 floats each, then each texel's (padded to 4 bytes). */
+        static const unsigned char zero4[4] = {0};
+        unsigned char *head = prt__chunks_alloc(l, 4);
+        if (!head) return PRT_OK;
+        prt__put32(head, (uint32_t)s->medium_count);
+        prt__chunks_add(l, CHUNK_OFSS, s->subsurface, maps, NULL);
+        prt__chunks_add(l, CHUNK_OFSD, head, (size_t)4, s->media, (size_t)s->medium_count * sizeof(prt_medium), s->medium, nc, zero4,
+                        ((nc + 3) & ~(size_t)3) - nc, NULL);
+    }
     return PRT_OK;
 }
 
@@ -224,8 +249,26 @@ static prt_status offset_load(prt_context *ctx, prt_transfer *t, const cJSON *me
     c = prt__chunk_take(chunks, count, CHUNK_OFSS);
     if (!c != !(s->kinds & PRT__OFFSET_SUBSURFACE_BIT)) return bad(ctx, "the subsurface map chunk does not match the transfer kinds");
     if (c && (st = load_maps(ctx, s, c, &s->subsurface))) return st;
-    static const uint32_t ids[4] = {CHUNK_OFSP, CHUNK_OFST, CHUNK_OFSR, CHUNK_OFSS};
-    for (int i = 0; i < 4; ++i)
+    c = prt__chunk_take(chunks, count, CHUNK_OFSD);
+    if (!c != !s->subsurface) return bad(ctx, "the subsurface media chunk does not match the transfer kinds");
+    if (c) {
+        if (c->size < 4) return bad(ctx, "offset media chunk short");
+        s->medium_count = (int)prt__get32(c->data);
+        if (s->medium_count < 1 || s->medium_count > PRT__OFFSET_MAX_MEDIA ||
+            c->size != 4 + (uint64_t)s->medium_count * sizeof(prt_medium) + (((uint64_t)nc + 3) & ~3ull))
+            return bad(ctx, "offset media chunk size mismatch");
+        s->media = malloc((size_t)s->medium_count * sizeof(prt_medium));
+        s->medium = malloc(nc + 1);
+        if (!s->media || !s->medium) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        memcpy(s->media, c->data + 4, (size_t)s->medium_count * sizeof(prt_medium));
+        memcpy(s->medium, c->data + 4 + (size_t)s->medium_count * sizeof(prt_medium), nc);
+        for (int k = 0; k < s->medium_count; ++k)
+            if (prt_medium_check(&s->media[k])) return bad(ctx, "an offset medium is out of range");
+        for (size_t i = 0; i < nc; ++i)
+            if (s->medium[i] > s->medium_count) return bad(ctx, "a texel's medium is out of range");
+    }
+    static const uint32_t ids[5] = {CHUNK_OFSP, CHUNK_OFST, CHUNK_OFSR, CHUNK_OFSS, CHUNK_OFSD};
+    for (int i = 0; i < 5; ++i)
         if (prt__chunk_take(chunks, count, ids[i])) return bad(ctx, "an offset chunk appears twice");
     return PRT_OK;
 }
@@ -251,22 +294,28 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
         cJSON_AddStringToObject(j, "transfer", kinds);
         cJSON_AddNumberToObject(j, "iterations", s->iterations);
         cJSON_AddStringToObject(j, "importance", s->importance ? "mean" : "max");
-        if (s->subsurface) {
-            cJSON *m = cJSON_AddObjectToObject(j, "medium");
+        cJSON *media = s->medium_count ? cJSON_AddArrayToObject(j, "media") : NULL;
+        for (int k = 0; k < s->medium_count; ++k) {
+            cJSON *m = cJSON_CreateObject();
             cJSON *sa = cJSON_AddArrayToObject(m, "sigma_a"), *ss = cJSON_AddArrayToObject(m, "sigma_s");
-            for (int c = 0; c < 3; ++c) { cJSON_AddItemToArray(sa, cJSON_CreateNumber(s->sigma_a[c])); cJSON_AddItemToArray(ss, cJSON_CreateNumber(s->sigma_s[c])); }
-            cJSON_AddNumberToObject(m, "eta", s->eta);
-            cJSON_AddNumberToObject(m, "mm_per_unit", s->mm_per_unit);
+            for (int c = 0; c < 3; ++c) { cJSON_AddItemToArray(sa, cJSON_CreateNumber(s->media[k].sigma_a[c])); cJSON_AddItemToArray(ss, cJSON_CreateNumber(s->media[k].sigma_s[c])); }
+            cJSON_AddNumberToObject(m, "eta", s->media[k].eta);
+            cJSON_AddItemToArray(media, m);
         }
+        if (s->medium_count) cJSON_AddNumberToObject(j, "mm_per_unit", s->mm_per_unit);
         return;
     }
     prt__describe_line(d, "light map:", "%d x %d texels, %u on the surface (%.0f%%)", s->width, s->height, s->covered,
                        100.0 * s->covered / ((double)s->width * s->height));
     prt__describe_line(d, "transfer:", "%s: %d offset maps (drawn by %s transference, %d refinements), %.2f MiB", kinds, s->count,
                        s->importance ? "mean" : "largest", s->iterations, offset_bytes(t) / 1048576.0);
-    if (s->subsurface)
-        prt__describe_line(d, "medium:", "sigma_a %g %g %g, sigma_s' %g %g %g per mm, eta %g, %g mm per unit", s->sigma_a[0], s->sigma_a[1], s->sigma_a[2],
-                           s->sigma_s[0], s->sigma_s[1], s->sigma_s[2], s->eta, s->mm_per_unit);
+    for (int k = 0; k < s->medium_count; ++k) {
+        size_t texels = 0;
+        for (size_t i = 0; i < s->covered; ++i) texels += s->medium[i] == k + 1;
+        const prt_medium *m = &s->media[k];
+        prt__describe_line(d, k ? "" : "media:", "sigma_a %g %g %g, sigma_s' %g %g %g per mm, eta %g (%zu texels), %g mm per unit", m->sigma_a[0], m->sigma_a[1],
+                           m->sigma_a[2], m->sigma_s[0], m->sigma_s[1], m->sigma_s[2], m->eta, texels, s->mm_per_unit);
+    }
 }
 
 static void offset_control_range(const prt_transfer *t, int i, int *lo, int *hi, int *def)
@@ -276,6 +325,19 @@ static void offset_control_range(const prt_transfer *t, int i, int *lo, int *hi,
     *lo = 0;
     *hi = 64;
     *def = 3;   /* as spectral; a closed room keeps a fifth of its indirect light past the third */
+}
+
+/* The final light, and the first-order light map it starts from (the paper's viewer shows both
+ * side by side: prt render -k final,first-order). */
+static int offset_variant_count(const prt_transfer *t) { (void)t; return 2; }
+static const char *offset_variant_name(const prt_transfer *t, int i) { (void)t; return i == 1 ? "first-order" : "final"; }
+static int offset_default_variant(const prt_transfer *t, int drawing) { (void)t; (void)drawing; return 0; }
+
+static prt_status offset_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *r)
+{
+    prt_relight_desc dd = *d;
+    if (d->variant == 1 && dd.component == PRT_COMPONENT_ALL) dd.component = PRT_COMPONENT_DIRECT;
+    return prt__offset_relight(ctx, t, l, &dd, r);
 }
 
 const prt__method prt__method_offset = {
@@ -294,6 +356,9 @@ const prt__method prt__method_offset = {
     .load = offset_load,
     .describe = offset_describe,
     .transfer_bytes = offset_bytes,
+    .variant_count = offset_variant_count,
+    .variant_name = offset_variant_name,
+    .default_variant = offset_default_variant,
     .control_range = offset_control_range,
-    .relight = prt__offset_relight,
+    .relight = offset_relight,
 };

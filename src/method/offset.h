@@ -31,6 +31,10 @@ typedef struct prt__offset_set {
                                    * shadowed; with emit */
     float *env;                   /* [covered][9] shadowed SH transfer (cosine / pi folded in) */
     float *radiosity, *subsurface;   /* [count][covered][3] or NULL */
+    /* Subsurface: the media (up to 255) and each covered texel's (0 = opaque: diffuse). */
+    int medium_count;
+    prt_medium *media;
+    uint8_t *medium;
     int32_t *index;               /* [width * height] covered index, -1 off the surface (derived) */
     /* Run-time: shadow rays for local lights, built on first use. */
     pthread_mutex_t *lock;
@@ -46,11 +50,19 @@ bool prt__offset_cache_new(prt__offset_set *s);
  * list is not increasing and inside the map. */
 bool prt__offset_set_index(prt__offset_set *s);
 
+#define PRT__OFFSET_MAX_MEDIA 255
+
 typedef struct prt__offset_bake_desc {
     int texels, count, iterations, importance, seed;
     unsigned kinds;
     prt_uv_layout uv_layout;
     float sigma_a[3], sigma_s[3], eta, mm_per_unit, ray_offset;
+    /* Translucent surfaces by surface id of the transfer's mesh (surface_count + 1 entries, 0 =
+     * opaque, else media[k - 1]); NULL: with subsurface transfer, every surface is of the
+     * medium sigma_a, sigma_s, eta. */
+    const uint8_t *surface_medium;
+    int medium_count;
+    const prt_medium *media;
 } prt__offset_bake_desc;
 
 prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc *d, prt_transfer *t, prt__bake_job **out);

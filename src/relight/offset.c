@@ -135,9 +135,10 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
             a[i * 3 + c] = e > 0 ? e : 0;
             first[i * 3 + c] = s->albedo[i * 3 + c] * a[i * 3 + c];
         }
-    if (s->subsurface && !apply(ctx, s, s->subsurface, a, full, mask, first)) {   /* the dipole replaces albedo x irradiance */
-        st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        goto done;
+    if (s->subsurface) {   /* on translucent texels the dipole replaces albedo x irradiance */
+        if (!apply(ctx, s, s->subsurface, a, full, mask, b)) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+        for (size_t i = 0; i < nc; ++i)
+            if (s->medium[i]) memcpy(first + i * 3, b + i * 3, 3 * sizeof(float));
     }
     /* Inter-reflection: each bounce gathers what the last one sent out. */
     if (s->radiosity && d->component != PRT_COMPONENT_DIRECT) {
