@@ -385,6 +385,17 @@ static void test_dipole(void **state)
             assert_float_equal(integral, total, 1e-4 * total);
             assert_true(total > 0 && total < 1);
         }
+    /* The exponential falloff integrates to 1 in closed form too. */
+    const prt__dipole f = {.falloff = 0.7};
+    assert_float_equal(prt__dipole_total(&f), 1.0, 0);
+    assert_float_equal(prt__dipole_disc(&f, 1e3), 1.0, 1e-12);
+    double fint = 0;
+    for (int i = 0; i < 200000; ++i) {
+        const double r0 = 1e-6 * pow(1e8, (double)i / 200000), r1 = 1e-6 * pow(1e8, (double)(i + 1) / 200000);
+        fint += prt__dipole_rd(&f, 0.5 * (r0 + r1)) * 2 * M_PI * 0.5 * (r0 + r1) * (r1 - r0);
+    }
+    assert_float_equal(fint, 1.0, 1e-4);
+    assert_float_equal(prt__dipole_disc(&f, 0.7), 1 - 2 / M_E, 1e-12);   /* within one mean distance */
     prt__dipole d;
     assert_int_equal(prt__dipole_init(0, 1, 1.3, &d), PRT_ERR_INVALID_ARG);
     assert_int_equal(prt__dipole_init(0.1, 1, 0.5, &d), PRT_ERR_INVALID_ARG);
@@ -663,6 +674,29 @@ static void test_offset_method(void **state)
     assert_true(nsphere > 50);
     assert_float_equal(sphere / nsphere, prt__dipole_total(&skin), 0.03);
     assert_true(floor_diff < 1e-4 * floor_sum);
+    prt_relit_free(&r);
+    prt_relit_free(&first);
+    prt_transfer_release(t);
+    prt_scene_release(translucent);
+    /* The paper's simpler kernel, an exponential falloff over 2 mm: it scatters what the albedo
+     * reflects, so with scattering far below a texel the sphere looks as if diffuse. */
+    write_text("falloff.json", "{\"meshes\": [{\"file\": \"demo.obj\"}], \"materials\": {\"sphere\": {\"subsurface\": {\"falloff\": 2}}}}", path, sizeof path);
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &translucent), PRT_OK);
+    assert_int_equal(prt_scene_medium(translucent, "sphere", &med), 1);
+    assert_float_equal(med.falloff_mm, 2.0f, 0);
+    t = bake_offset(ctx, translucent, (const char *const[]){"texels", "64", "offsets", "50", "iterations", "50", NULL});
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = first_order, .per_vertex = 1}, &r), PRT_OK);
+    assert_int_equal(prt_relight(ctx, lambert, l, &(prt_relight_desc){.variant = -1, .with_indirect = 1, .per_vertex = 1, .controls = &no_bounce}, &first), PRT_OK);
+    sphere = 0;
+    nsphere = 0;
+    tm = &((const struct prt_transfer *)t)->mesh;
+    for (size_t v = 0; v < nv; ++v) {
+        if (!(first.radiance[v * 3] > 0.05f) || !tm->surface[v] || strcmp(tm->surface_names[tm->surface[v] - 1], "sphere")) continue;
+        sphere += r.radiance[v * 3] / first.radiance[v * 3];
+        nsphere++;
+    }
+    print_message("exponential falloff on the sphere: %.3f of its diffuse light\n", sphere / nsphere);
+    assert_float_equal(sphere / nsphere, 1.0, 0.03);
     prt_relit_free(&r);
     prt_relit_free(&first);
     prt_transfer_release(t);

@@ -132,12 +132,16 @@ prt_status prt_scene_refine_estimate(prt_context *ctx, const prt_scene *scene, c
 typedef struct prt_medium {
     float sigma_a[3], sigma_s[3];
     float eta;
+    /* > 0: instead of the dipole, the paper's simpler kernel - an exponential falloff with this
+     * mean distance (mm) that scatters what the surface's albedo reflects; sigma and eta unused. */
+    float falloff_mm;
 } prt_medium;
 
 /* Jensen et al. 2001's measured "skin", "marble" and "ketchup"; an unknown name is an error
  * that lists them. */
 prt_status prt_medium_preset(const char *name, prt_medium *out);
-/* Whether the coefficients are usable: sigma_a > 0, sigma_s >= 0 (at most 1e6), eta in [1, 4]. */
+/* Whether the coefficients are usable: sigma_a > 0, sigma_s >= 0 (at most 1e6), eta in [1, 4];
+ * or a falloff distance in (0, 1e6] mm. */
 prt_status prt_medium_check(const prt_medium *m);
 /* Makes the surface called name (a material of the mesh files or of the JSON scene) translucent;
  * an unknown name is an error listing the names. JSON scenes do this with a material's

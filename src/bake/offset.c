@@ -215,7 +215,8 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
             for (int c = 0; c < 3; ++c) {
                 double sum = 0;
                 for (int o = 0; o < K; ++o) sum += maps[((size_t)o * nc + i) * 3 + c];
-                const double limit = k == 0 ? s->albedo[i * 3 + c] : s->medium[i] ? prt__dipole_total(&ob->dipoles[s->medium[i] - 1][c]) : 0.0;
+                const prt__dipole *dm = k && s->medium[i] ? &ob->dipoles[s->medium[i] - 1][c] : NULL;
+                const double limit = k == 0 ? s->albedo[i * 3 + c] : dm ? prt__dipole_total(dm) * (dm->falloff > 0 ? s->albedo[i * 3 + c] : 1.0) : 0.0;
                 if (!(sum > limit) || !(sum > 0)) continue;
                 capped += c == 0;
                 for (int o = 0; o < K; ++o) maps[((size_t)o * nc + i) * 3 + c] *= (float)(limit / sum);
@@ -364,10 +365,15 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
         ob->dipoles = malloc((size_t)(s->medium_count + 1) * sizeof *ob->dipoles);
         if (!s->media || !ob->dipoles) { offset_release(&ob->base); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
         for (int k = 0; k < s->medium_count; ++k) {
-            s->media[k] = d.surface_medium ? d.media[k] : (prt_medium){{d.sigma_a[0], d.sigma_a[1], d.sigma_a[2]}, {d.sigma_s[0], d.sigma_s[1], d.sigma_s[2]}, d.eta};
+            s->media[k] = d.surface_medium ? d.media[k] : (prt_medium){{d.sigma_a[0], d.sigma_a[1], d.sigma_a[2]}, {d.sigma_s[0], d.sigma_s[1], d.sigma_s[2]}, d.eta, 0};
             /* Per mm in the medium; the scene's lengths become mm through mm_per_unit. */
-            for (int c = 0; c < 3 && !st; ++c)
+            for (int c = 0; c < 3 && !st; ++c) {
+                if (s->media[k].falloff_mm > 0) {   /* the mean distance in scene units */
+                    ob->dipoles[k][c] = (prt__dipole){.falloff = s->media[k].falloff_mm / d.mm_per_unit};
+                    continue;
+                }
                 st = prt__dipole_init(s->media[k].sigma_a[c] * d.mm_per_unit, s->media[k].sigma_s[c] * d.mm_per_unit, s->media[k].eta, &ob->dipoles[k][c]);
+            }
         }
         if (st) { offset_release(&ob->base); return st; }
     }

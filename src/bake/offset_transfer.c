@@ -63,6 +63,7 @@ prt_status prt__dipole_init(double sigma_a, double sigma_s_reduced, double eta, 
     const double sigma_t = sigma_a + sigma_s_reduced;
     /* Diffuse Fresnel reflectance (Egan and Hilgeman's fit) and the boundary term A. */
     const double fdr = -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta, a = (1 + fdr) / (1 - fdr);
+    out->falloff = 0;
     out->alpha = sigma_s_reduced / sigma_t;
     out->sigma_tr = sqrt(3 * sigma_a * sigma_t);
     out->zr = 1 / sigma_t;
@@ -72,6 +73,7 @@ prt_status prt__dipole_init(double sigma_a, double sigma_s_reduced, double eta, 
 
 double prt__dipole_rd(const prt__dipole *d, double r)
 {
+    if (d->falloff > 0) return exp(-r / d->falloff) / (2 * PRT_PI * d->falloff * d->falloff);
     const double dr = sqrt(r * r + d->zr * d->zr), dv = sqrt(r * r + d->zv * d->zv);
     return d->alpha / (4 * PRT_PI) *
            (d->zr * (d->sigma_tr * dr + 1) * exp(-d->sigma_tr * dr) / (dr * dr * dr) + d->zv * (d->sigma_tr * dv + 1) * exp(-d->sigma_tr * dv) / (dv * dv * dv));
@@ -79,6 +81,7 @@ double prt__dipole_rd(const prt__dipole *d, double r)
 
 double prt__dipole_disc(const prt__dipole *d, double a)
 {
+    if (d->falloff > 0) return 1 - exp(-a / d->falloff) * (1 + a / d->falloff);
     /* Each pole: alpha / 2 (exp(-sigma_tr z) - z exp(-sigma_tr d(a)) / d(a)), d(a) = sqrt(a^2 + z^2). */
     const double dr = sqrt(a * a + d->zr * d->zr), dv = sqrt(a * a + d->zv * d->zv);
     return 0.5 * d->alpha * (exp(-d->sigma_tr * d->zr) - d->zr * exp(-d->sigma_tr * dr) / dr + exp(-d->sigma_tr * d->zv) - d->zv * exp(-d->sigma_tr * dv) / dv);
@@ -86,6 +89,7 @@ double prt__dipole_disc(const prt__dipole *d, double a)
 
 double prt__dipole_total(const prt__dipole *d)
 {
+    if (d->falloff > 0) return 1;
     /* Each pole integrates to alpha / 2 exp(-sigma_tr z). */
     return 0.5 * d->alpha * (exp(-d->sigma_tr * d->zr) + exp(-d->sigma_tr * d->zv));
 }
@@ -107,7 +111,7 @@ void prt__offset_tr(const prt__offset_transfer *x, size_t t, size_t s, float out
          * (per unit area, as every entry); a surface does not light itself by inter-reflection. */
         if (x->kind == PRT__OFFSET_DIPOLE) {
             const double a = sqrt(p->area[t] / PRT_PI);
-            for (int c = 0; c < 3; ++c) out[c] = (float)(prt__dipole_disc(&dip[c], a) / p->area[t]);
+            for (int c = 0; c < 3; ++c) out[c] = (float)(prt__dipole_disc(&dip[c], a) / p->area[t] * (dip[c].falloff > 0 ? p->albedo[t * 3 + c] : 1.0f));
         }
         return;
     }
@@ -121,7 +125,7 @@ void prt__offset_tr(const prt__offset_transfer *x, size_t t, size_t s, float out
          * whose centre nearly touches another's (slivers, a sphere's pole) would otherwise take
          * the dipole's peak for its whole area. */
         const double r = sqrt((double)r2 + p->area[s] / PRT_PI);
-        for (int c = 0; c < 3; ++c) out[c] = (float)prt__dipole_rd(&dip[c], r);
+        for (int c = 0; c < 3; ++c) out[c] = (float)prt__dipole_rd(&dip[c], r) * (dip[c].falloff > 0 ? p->albedo[t * 3 + c] : 1.0f);
         return;
     }
     const float r = sqrtf(r2);

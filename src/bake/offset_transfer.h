@@ -23,6 +23,7 @@ void prt__texel_patches_free(prt__texel_patches *p);
  * per unit length, relative index of refraction eta. */
 typedef struct prt__dipole {
     double sigma_tr, alpha, zr, zv;
+    double falloff;   /* > 0: an exponential falloff of this mean distance instead, integrating to 1 */
 } prt__dipole;
 
 prt_status prt__dipole_init(double sigma_a, double sigma_s_reduced, double eta, prt__dipole *out);
@@ -30,7 +31,8 @@ prt_status prt__dipole_init(double sigma_a, double sigma_s_reduced, double eta, 
 double prt__dipole_rd(const prt__dipole *d, double r);
 /* Its integral over the plane, in closed form: the total diffuse reflectance. */
 double prt__dipole_total(const prt__dipole *d);
-/* Its integral over a disc of radius a about the entry point, in closed form. */
+/* Its integral over a disc of radius a about the entry point, in closed form. With `falloff`
+ * set, the three are those of exp(-r / d) / (2 pi d^2), whose total is 1. */
 double prt__dipole_disc(const prt__dipole *d, double a);
 
 /* Transfer from source texel s to receiver t per unit area of s, per colour channel. */

@@ -305,12 +305,16 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         prt_medium med = {.eta = 1.3f};
         if (cJSON_IsString(sub)) {
             if (prt_medium_preset(sub->valuestring, &med)) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': %s", path, mat->string, prt_last_error());
+        } else if (cJSON_IsObject(sub) && cJSON_GetObjectItemCaseSensitive(sub, "falloff")) {
+            const cJSON *f = cJSON_GetObjectItemCaseSensitive(sub, "falloff");
+            if (!cJSON_IsNumber(f)) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"falloff\" must be a distance in mm", path, mat->string);
+            else med.falloff_mm = (float)f->valuedouble;
         } else if (cJSON_IsObject(sub)) {
             const cJSON *sa = cJSON_GetObjectItemCaseSensitive(sub, "sigma_a"), *ss = cJSON_GetObjectItemCaseSensitive(sub, "sigma_s"),
                         *eta = cJSON_GetObjectItemCaseSensitive(sub, "eta");
             if (!sa || !ss || read_colour(ctx, sa, "sigma_a", med.sigma_a) || read_colour(ctx, ss, "sigma_s", med.sigma_s) || (eta && !cJSON_IsNumber(eta)))
                 st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"subsurface\" needs \"sigma_a\" and \"sigma_s\" (per mm: a number or [r, g, b]) "
-                               "and an optional \"eta\"", path, mat->string);
+                               "and an optional \"eta\", or a \"falloff\" distance", path, mat->string);
             if (!st && eta) med.eta = (float)eta->valuedouble;
         } else {
             st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"subsurface\" must be \"skin\", \"marble\", \"ketchup\" or an object", path,

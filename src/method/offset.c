@@ -300,6 +300,7 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
             cJSON *sa = cJSON_AddArrayToObject(m, "sigma_a"), *ss = cJSON_AddArrayToObject(m, "sigma_s");
             for (int c = 0; c < 3; ++c) { cJSON_AddItemToArray(sa, cJSON_CreateNumber(s->media[k].sigma_a[c])); cJSON_AddItemToArray(ss, cJSON_CreateNumber(s->media[k].sigma_s[c])); }
             cJSON_AddNumberToObject(m, "eta", s->media[k].eta);
+            cJSON_AddNumberToObject(m, "falloff_mm", s->media[k].falloff_mm);
             cJSON_AddItemToArray(media, m);
         }
         if (s->medium_count) cJSON_AddNumberToObject(j, "mm_per_unit", s->mm_per_unit);
@@ -313,8 +314,11 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
         size_t texels = 0;
         for (size_t i = 0; i < s->covered; ++i) texels += s->medium[i] == k + 1;
         const prt_medium *m = &s->media[k];
-        prt__describe_line(d, k ? "" : "media:", "sigma_a %g %g %g, sigma_s' %g %g %g per mm, eta %g (%zu texels), %g mm per unit", m->sigma_a[0], m->sigma_a[1],
-                           m->sigma_a[2], m->sigma_s[0], m->sigma_s[1], m->sigma_s[2], m->eta, texels, s->mm_per_unit);
+        if (m->falloff_mm > 0)
+            prt__describe_line(d, k ? "" : "media:", "exponential falloff over %g mm (%zu texels), %g mm per unit", m->falloff_mm, texels, s->mm_per_unit);
+        else
+            prt__describe_line(d, k ? "" : "media:", "dipole, sigma_a %g %g %g, sigma_s' %g %g %g per mm, eta %g (%zu texels), %g mm per unit", m->sigma_a[0],
+                               m->sigma_a[1], m->sigma_a[2], m->sigma_s[0], m->sigma_s[1], m->sigma_s[2], m->eta, texels, s->mm_per_unit);
     }
 }
 
