@@ -108,6 +108,11 @@ expect 0 "relight offset" -- "$PRT" relight -q "$T/offset.prt" --env none --ligh
 grep -q '"indirect"' "$T/offset.json" && ok || bad "an offset relight lacks its indirect light"
 expect 0 "render offset" -- $NOLEAK "$PRT" render -q "$T/offset.prt" --env none --light point:0.3,1.2,0.4:2 -o "$T/offset.png" --width 64 --height 48
 expect 2 "offset: bounces out of range" -- "$PRT" relight "$T/offset.prt" --control bounces=99 -o "$T/x.json"
+expect 0 "render offset: final and first-order side by side" -- $NOLEAK "$PRT" render -q "$T/offset.prt" -k final,first-order -o "$T/offset2.png" --width 64 --height 48
+expect 0 "export offset maps" -- "$PRT" export -q "$T/offset.prt" --maps "$T/maps"
+grep -q '"radiosity"' "$T/maps/index.json" && [ "$(ls "$T/maps" | grep -c '\.exr$')" -gt 10 ] && ok || bad "export --maps wrote no index or too few maps"
+expect 2 "export --maps of an SH file" -- "$PRT" export "$T/demo.prt" --maps "$T/nomaps"
+says "method offset"
 # Options a command cannot honour are refused, not ignored.
 expect 2 "reference --brdf" -- "$PRT" reference "$T/demo.prt" -o "$T/r.json" --brdf phong:10
 expect 2 "env --control" -- "$PRT" env --control order=2

@@ -18,5 +18,6 @@
 #include "prt/compress.h"
 #include "prt/wavelet.h"
 #include "prt/spectral.h"
+#include "prt/offset.h"
 
 #endif

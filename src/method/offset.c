@@ -366,3 +366,35 @@ const prt__method prt__method_offset = {
     .control_range = offset_control_range,
     .relight = offset_relight,
 };
+
+/* ---- the offset public accessors ---- */
+int prt_transfer_offset_info(const prt_transfer *t, prt_offset_info *info)
+{
+    if (info) memset(info, 0, sizeof *info);
+    const prt__offset_set *s = prt__state_of(t, &prt__method_offset);
+    if (!s) return 0;
+    if (info) {
+        info->width = s->width;
+        info->height = s->height;
+        info->count = s->count;
+        info->covered = (int)s->covered;
+        info->has[PRT_OFFSET_RADIOSITY] = s->radiosity != NULL;
+        info->has[PRT_OFFSET_SUBSURFACE] = s->subsurface != NULL;
+    }
+    return 1;
+}
+
+prt_status prt_transfer_offset_map(const prt_transfer *t, prt_offset_kind kind, int k, int offset[2], float *rgb)
+{
+    const prt__offset_set *s = prt__state_of(t, &prt__method_offset);
+    if (!s || !offset) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_transfer_offset_map: an offset transfer and offset[2] are required");
+    const float *maps = kind == PRT_OFFSET_RADIOSITY ? s->radiosity : kind == PRT_OFFSET_SUBSURFACE ? s->subsurface : NULL;
+    if (!maps) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "the file holds no %s maps", kind == PRT_OFFSET_SUBSURFACE ? "subsurface" : "such");
+    if (k < 0 || k >= s->count) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "offset %d out of range (the file has %d)", k, s->count);
+    offset[0] = s->offsets[k * 2];
+    offset[1] = s->offsets[k * 2 + 1];
+    if (!rgb) return PRT_OK;
+    memset(rgb, 0, (size_t)s->width * s->height * 3 * sizeof *rgb);
+    for (size_t i = 0; i < s->covered; ++i) memcpy(rgb + (size_t)s->texel[i] * 3, maps + ((size_t)k * s->covered + i) * 3, 3 * sizeof *rgb);
+    return PRT_OK;
+}

@@ -1,5 +1,9 @@
 #include "cli.h"
 
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <sys/stat.h>
+
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -35,6 +39,7 @@ static const char *HELP =
 
 static const char *HELP_EXPORT =
     "usage: prt export FILE.prt -o OUT.glb|.gltf|.ply|.obj [options]\n"
+    "       prt export FILE.prt --maps DIR\n"
     "Hands a baked .prt to other tools as a mesh with its exit radiance under a lighting as\n"
     "vertex colours: glTF 2.0 COLOR_0 (linear, as the format says; three.js, Godot, Unity,\n"
     "Blender read it), or sRGB-encoded colours in PLY and OBJ. With --sh the glTF also carries\n"
@@ -52,11 +57,86 @@ static const char *HELP_EXPORT =
     "      --eye X,Y,Z        the viewpoint each vertex's colour is seen from (glossy surfaces)\n"
     "      --sh               glTF only, SH files: add the transfer as custom attributes\n"
     "      --glsl FILE        write the GLSL that relights those attributes (implies --sh)\n"
+    "      --maps DIR         offset files: each transfer map as an OpenEXR file cropped to its\n"
+    "                         non-zero box, and DIR/index.json naming kind, offset and box (with\n"
+    "                         or without -o)\n"
     CLI_LIGHT_OPTIONS_HELP
     "Other:\n"
     "  -j, --threads N        worker threads\n"
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
+
+/* The offset transfer maps as OpenEXR files (each cropped to its non-zero box) and an index
+ * that names each file's kind, offset and box: the paper's pipeline hands these to its binning
+ * and rendering programs. */
+static prt_status write_offset_maps(cli *c, const prt_transfer *t, const char *dir)
+{
+    prt_offset_info info;
+    if (!prt_transfer_offset_info(t, &info)) { cli_error(c, "--maps writes the maps of offset transfer files (bake with --method offset)"); return PRT_ERR_INVALID_ARG; }
+    if (mkdir(dir, 0777) != 0 && errno != EEXIST) { cli_error(c, "cannot create '%s': %s", dir, strerror(errno)); return PRT_ERR_IO; }
+    const int W = info.width, H = info.height;
+    float *map = malloc((size_t)W * H * 3 * sizeof *map);
+    cJSON *index = cJSON_CreateObject(), *kinds = index ? cJSON_AddObjectToObject(index, "kinds") : NULL;
+    prt_status st = map && kinds ? PRT_OK : PRT_ERR_NO_MEMORY;
+    if (!st) {
+        cJSON_AddNumberToObject(index, "width", W);
+        cJSON_AddNumberToObject(index, "height", H);
+        cJSON_AddStringToObject(index, "layout", "each file holds the box crop = [x0, y0, w, h] of its map (texel rows from v = 0 at the image's bottom); "
+                                                 "final(t) = first(t) + sum over maps of first(t + offset) * map(t)");
+    }
+    static const char *const names[2] = {"radiosity", "subsurface"};
+    size_t files = 0;
+    for (int kind = 0; kind < 2 && !st; ++kind) {
+        if (!info.has[kind]) continue;
+        cJSON *list = cJSON_AddArrayToObject(kinds, names[kind]);
+        for (int k = 0; k < info.count && !st; ++k) {
+            int off[2];
+            if ((st = prt_transfer_offset_map(t, (prt_offset_kind)kind, k, off, map))) break;
+            int x0 = W, y0 = H, x1 = -1, y1 = -1;
+            for (int y = 0; y < H; ++y)
+                for (int x = 0; x < W; ++x) {
+                    const float *v = map + ((size_t)y * W + x) * 3;
+                    if (v[0] == 0 && v[1] == 0 && v[2] == 0) continue;
+                    x0 = x < x0 ? x : x0; x1 = x > x1 ? x : x1; y0 = y < y0 ? y : y0; y1 = y > y1 ? y : y1;
+                }
+            cJSON *e = cJSON_CreateObject();
+            cJSON *o = cJSON_AddArrayToObject(e, "offset");
+            cJSON_AddItemToArray(o, cJSON_CreateNumber(off[0]));
+            cJSON_AddItemToArray(o, cJSON_CreateNumber(off[1]));
+            cJSON_AddItemToArray(list, e);
+            if (x1 < 0) { cJSON_AddNullToObject(e, "file"); continue; }   /* carries nothing */
+            const int w = x1 - x0 + 1, h = y1 - y0 + 1;
+            prt_image img = {w, h, malloc((size_t)w * h * 3 * sizeof(float))};
+            if (!img.rgb) { st = PRT_ERR_NO_MEMORY; break; }
+            for (int y = 0; y < h; ++y)   /* texel row 0 is v near 0: the image's bottom */
+                memcpy(img.rgb + (size_t)(h - 1 - y) * w * 3, map + ((size_t)(y0 + y) * W + x0) * 3, (size_t)w * 3 * sizeof(float));
+            char name[64], path[4200];
+            snprintf(name, sizeof name, "%s_%04d.exr", names[kind], k);
+            snprintf(path, sizeof path, "%s/%s", dir, name);
+            st = prt_image_save(path, &img, NULL);
+            prt_image_free(&img);
+            if (st) { cli_error(c, "cannot write '%s': %s", path, prt_last_error()); break; }
+            files++;
+            cJSON_AddStringToObject(e, "file", name);
+            cJSON *crop = cJSON_AddArrayToObject(e, "crop");
+            const int box[4] = {x0, y0, w, h};
+            for (int i = 0; i < 4; ++i) cJSON_AddItemToArray(crop, cJSON_CreateNumber(box[i]));
+        }
+    }
+    char *text = !st ? cJSON_Print(index) : NULL;
+    if (!st && !text) st = PRT_ERR_NO_MEMORY;
+    if (!st) {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/index.json", dir);
+        if ((st = cli_write_text(path, text))) cli_error(c, "cannot write '%s'", path);
+        else if (!c->quiet) fprintf(stderr, "prt export: wrote %zu maps and %s\n", files, path);
+    }
+    cJSON_free(text);
+    cJSON_Delete(index);
+    free(map);
+    if (st == PRT_ERR_NO_MEMORY) cli_error(c, "out of memory writing the maps");
+    return st;
+}
 
 #define SH_EXPORT_COEFFS 9   /* order 3: what a vertex attribute budget of 7 VEC4s holds for RGB */
 
@@ -149,13 +229,13 @@ static int relight_main(int argc, char **argv, bool exporting)
     static const struct option opts[] = {{"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'},
                                          {"eye", required_argument, 0, 'e'}, {"texels", no_argument, 0, 'T'}, CLI_LIGHT_LONG_OPTIONS,
                                          {"colors", required_argument, 0, 'C'}, {"exposure", required_argument, 0, 'E'},
-                                         {"sh", no_argument, 0, 'S'}, {"glsl", required_argument, 0, 'G'},
+                                         {"sh", no_argument, 0, 'S'}, {"glsl", required_argument, 0, 'G'}, {"maps", required_argument, 0, 'M'},
                                          {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'},
                                          {0, 0, 0, 0}};
     int opt;
     float eye[3] = {0, 0, 0};
     bool have_eye = false, texels = false, sh_attrs = false;
-    const char *glsl = NULL;
+    const char *glsl = NULL, *maps_dir = NULL;
     prt_colour_encoding encoding = PRT_COLOURS_DEFAULT;
     float exposure = 0;
     optind = 1;
@@ -170,6 +250,7 @@ static int relight_main(int argc, char **argv, bool exporting)
         case 'T': texels = true; break;
         case 'S': sh_attrs = true; break;
         case 'G': glsl = optarg; sh_attrs = true; break;
+        case 'M': maps_dir = optarg; break;
         case 'C':
             if (!strcasecmp(optarg, "srgb")) encoding = PRT_COLOURS_SRGB;
             else if (!strcasecmp(optarg, "linear")) encoding = PRT_COLOURS_LINEAR;
@@ -184,6 +265,18 @@ static int relight_main(int argc, char **argv, bool exporting)
         }
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one FILE.prt argument");
+    if (maps_dir && !exporting) return cli_usage(&c, "--maps belongs to prt export");
+    if (maps_dir && !output) {   /* only the maps */
+        int rc = cli_make_context(&c);
+        if (rc) return rc;
+        prt_transfer *t = NULL;
+        prt_status st = prt_transfer_load(c.ctx, argv[optind], &t);
+        if (!st) st = write_offset_maps(&c, t, maps_dir);
+        rc = st == PRT_ERR_INVALID_ARG ? EXIT_USAGE : st ? (c.reported ? EXIT_FAILURE_INPUT : cli_fail(&c, st)) : EXIT_OK;
+        prt_transfer_release(t);
+        prt_context_release(c.ctx);
+        return rc;
+    }
     if (!output) return cli_usage(&c, "an output file is required (-o OUT.glb, .gltf, .ply, .obj or .json)");
     const char *ext = strrchr(output, '.');
     bool json = ext && !strcasecmp(ext, ".json");
@@ -329,6 +422,7 @@ static int relight_main(int argc, char **argv, bool exporting)
                         sh_attrs ? ", SH transfer as _SH attributes" : "");
         }
     }
+    if (!st && !rc && maps_dir && write_offset_maps(&c, t, maps_dir)) rc = EXIT_FAILURE_INPUT;
     if (st && !rc) rc = cli_fail(&c, st);
     free(rgb);
     prt_relit_free(&r);

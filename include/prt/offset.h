@@ -1,0 +1,36 @@
+/* prt/offset.h - offset radiance transfer maps (Sunshine-Hill & Faloutsos 2006): what a file of
+ * method "offset" holds. A light map of width x height texels over the mesh's UVs; for each of
+ * `count` offsets dt and each transfer kind, a map whose texel t holds TR(t, t + dt) TVA(t, dt):
+ * at run time the first-order light map, shifted by dt, is multiplied by it and summed over the
+ * offsets (eq. 9). The maps are what a GPU renderer would bin into atlases and blend, and what
+ * prt export --maps writes as OpenEXR files with an index. Everything else goes through
+ * prt/method.h. */
+#ifndef PRT_OFFSET_H
+#define PRT_OFFSET_H
+
+#include "prt/base.h"
+#include "prt/transfer.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum prt_offset_kind { PRT_OFFSET_RADIOSITY = 0, PRT_OFFSET_SUBSURFACE = 1 } prt_offset_kind;
+
+typedef struct prt_offset_info {
+    int width, height;        /* the light map, texels */
+    int count;                /* offsets, one map per offset and kind */
+    int covered;              /* texels on the surface */
+    int has[2];               /* which kinds the file holds (prt_offset_kind) */
+} prt_offset_info;
+
+/* 1 and info filled when t is an offset file, else 0. */
+int prt_transfer_offset_info(const prt_transfer *t, prt_offset_info *info);
+/* Offset k's map of a kind as width x height RGB (row 0 at v near 0, zero off the surface) and
+ * its offset in texels (dx, dy); rgb may be NULL to ask for the offset only. */
+prt_status prt_transfer_offset_map(const prt_transfer *t, prt_offset_kind kind, int k, int offset[2], float *rgb);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
