@@ -223,9 +223,29 @@ static prt_status offset_load(prt_context *ctx, prt_transfer *t, const cJSON *me
     memcpy(s->texel, c->data, nc * 4);
     const float *e = (const float *)(const void *)(c->data + nc * 4);
     float row[TEXEL_FLOATS];
+    /* Texel points lie on the mesh (rays start there): inside its bounds, with unit normals and
+     * no more area than the whole surface. */
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < t->mesh.vertex_count; ++v)
+        for (int k = 0; k < 3; ++k) { lo[k] = fminf(lo[k], t->mesh.positions[v * 3 + k]); hi[k] = fmaxf(hi[k], t->mesh.positions[v * 3 + k]); }
+    double surface = 0;
+    for (size_t f = 0; f < t->mesh.triangle_count; ++f) {
+        const uint32_t *ix = t->mesh.indices + f * 3;
+        float e1[3], e2[3], cr[3];
+        prt__v3_sub(t->mesh.positions + ix[1] * 3, t->mesh.positions + ix[0] * 3, e1);
+        prt__v3_sub(t->mesh.positions + ix[2] * 3, t->mesh.positions + ix[0] * 3, e2);
+        prt__v3_cross(e1, e2, cr);
+        surface += 0.5 * prt__v3_len(cr);
+    }
+    const float margin = 1e-3f * (hi[0] - lo[0] + hi[1] - lo[1] + hi[2] - lo[2]) + 1e-6f;
     for (size_t i = 0; i < nc; ++i) {
         memcpy(row, (const unsigned char *)e + i * sizeof row, sizeof row);
-        if (!prt__all_finite(row, TEXEL_FLOATS) || !(row[9] > 0)) return bad(ctx, "offset texel values out of range");
+        if (!prt__all_finite(row, TEXEL_FLOATS) || !(row[9] > 0) || !(row[9] <= surface * 1.01 + 1e-12)) return bad(ctx, "offset texel values out of range");
+        for (int k = 0; k < 3; ++k)
+            if (!(row[k] >= lo[k] - margin && row[k] <= hi[k] + margin)) return bad(ctx, "an offset texel lies outside the mesh");
+        if (!(fabsf(prt__v3_len(row + 3) - 1.0f) < 1e-3f)) return bad(ctx, "an offset texel normal is not of unit length");
+        for (int k = 10; k < TEXEL_FLOATS; ++k)
+            if (!(fabsf(row[k]) <= 10.0f)) return bad(ctx, "offset texel environment transfer out of range");
         for (int k = 6; k < 9; ++k)
             if (!(row[k] >= 0 && row[k] <= 1)) return bad(ctx, "offset texel albedo out of range");
         memcpy(s->pos + i * 3, row, 12);
