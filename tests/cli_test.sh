@@ -113,6 +113,11 @@ expect 0 "export offset maps" -- "$PRT" export -q "$T/offset.prt" --maps "$T/map
 grep -q '"radiosity"' "$T/maps/index.json" && [ "$(ls "$T/maps" | grep -c '\.exr$')" -gt 10 ] && ok || bad "export --maps wrote no index or too few maps"
 expect 2 "export --maps of an SH file" -- "$PRT" export "$T/demo.prt" --maps "$T/nomaps"
 says "method offset"
+rm -f "$T/nomesh.glb"
+expect 2 "export a mesh and --maps of an SH file" -- "$PRT" export "$T/demo.prt" -o "$T/nomesh.glb" --maps "$T/nomaps"
+[ ! -e "$T/nomesh.glb" ] && ok || bad "a refused --maps left the mesh behind"
+expect 2 "offset: --medium without subsurface transfer" -- "$PRT" bake "$T/demo.obj" --method offset --medium marble -o "$T/x.prt"
+says "does not apply"
 # Options a command cannot honour are refused, not ignored.
 expect 2 "reference --brdf" -- "$PRT" reference "$T/demo.prt" -o "$T/r.json" --brdf phong:10
 expect 2 "env --control" -- "$PRT" env --control order=2

@@ -30,6 +30,10 @@ int prt_transfer_offset_info(const prt_transfer *t, prt_offset_info *info);
  * its offset in texels (dx, dy); rgb may be NULL to ask for the offset only. */
 prt_status prt_transfer_offset_map(const prt_transfer *t, prt_offset_kind kind, int k, int offset[2], float *rgb);
 
+/* Which texels scatter under their surface: width x height values, 0 opaque, k the k-th medium
+ * (as prt info lists them); fails when the file has no subsurface maps. */
+prt_status prt_transfer_offset_medium(const prt_transfer *t, float *medium);
+
 #ifdef __cplusplus
 }
 #endif

@@ -11,6 +11,7 @@
 #define IMPORTANCE_TEXELS 4096   /* texels an offset's importance looks at (evenly spread) */
 #define ENV_DIRECTIONS 256       /* rays per texel for its environment visibility */
 #define EMITTER_SAMPLES 256      /* light samples per texel on the emissive surfaces */
+#define CENTRE_RING 8            /* how far the centre offset's exact sum reaches, texels */
 
 typedef struct obake {
     prt__bake_job base;
@@ -102,7 +103,11 @@ static bool representative(const prt__offset_set *s, const float *area, int tx, 
 {
     const int W = s->width, H = s->height, ox = s->offsets[o * 2], oy = s->offsets[o * 2 + 1];
     const double sxn = 1.0 / (W - 1), syn = 1.0 / (H - 1);
-    for (int ring = 0; ring <= 4; ++ring)
+    if (tx + ox >= 0 && tx + ox < W && ty + oy >= 0 && ty + oy < H && area[(size_t)(ty + oy) * W + tx + ox] > 0) {
+        *out = (size_t)(ty + oy) * W + tx + ox;   /* the offset itself: always in its own cell */
+        return true;
+    }
+    for (int ring = 1; ring <= 4; ++ring)
         for (int dy = -ring; dy <= ring; ++dy)
             for (int dx = -ring; dx <= ring; ++dx) {
                 if (abs(dx) != ring && abs(dy) != ring) continue;
@@ -130,7 +135,9 @@ static int *centre_cell(const int *offsets, int count, int W, int H, int *n_out)
 {
     const double sx = 1.0 / (W - 1), sy = 1.0 / (H - 1);
     int *list = NULL, n = 0, cap = 0;
-    for (int ring = 0; ring < W || ring < H; ++ring) {
+    /* At most CENTRE_RING texels out: with few offsets the cell would be the whole map, and its
+     * exact sum a gather over every texel pair. */
+    for (int ring = 0; ring <= CENTRE_RING && (ring < W || ring < H); ++ring) {
         int added = 0;
         for (int dy = -ring; dy <= ring; ++dy)
             for (int dx = -ring; dx <= ring; ++dx) {
@@ -172,7 +179,8 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
      * changes fastest (subsurface scattering falls off within a texel or two): there the map is
      * the exact sum over the cell, not the transfer at (0, 0) times the cell's area. */
     int ncell = 0, *cell = st ? NULL : centre_cell(s->offsets, K, W, H, &ncell);
-    if (!st && (!cell || s->offsets[0] != 0 || s->offsets[1] != 0)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the transfer maps");
+    if (!st && !cell) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the transfer maps");
+    if (!st && (s->offsets[0] != 0 || s->offsets[1] != 0)) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "the first offset must be (0, 0)");
     prt__progress_begin(p, p->stage, (uint64_t)nc * (uint64_t)((ob->d.kinds & 1) + ((ob->d.kinds >> 1) & 1)));
     for (int k = 0; k < 2 && !st; ++k) {
         if (!(ob->d.kinds & (1u << k))) continue;

@@ -26,11 +26,13 @@ void prt__offset_set_free(void *state)
 
 bool prt__offset_cache_new(prt__offset_set *s)
 {
-    s->lock = malloc(sizeof *s->lock);
-    s->lights = prt__calloc(1, sizeof *s->lights);
-    if (!s->lock || !s->lights) return false;
-    pthread_mutex_init(s->lock, NULL);
-    prt__vertex_lights_init(s->lights);
+    pthread_mutex_t *lock = malloc(sizeof *lock);
+    prt__vertex_lights *lights = prt__calloc(1, sizeof *lights);
+    if (!lock || !lights) { free(lock); free(lights); return false; }   /* free_state then finds neither */
+    pthread_mutex_init(lock, NULL);
+    prt__vertex_lights_init(lights);
+    s->lock = lock;
+    s->lights = lights;
     return true;
 }
 
@@ -89,6 +91,11 @@ static prt_status offset_bake_begin(prt_context *ctx, const prt_scene *scene, co
     d.iterations = prt__opt_int(o, "iterations", 1000);
     d.importance = prt__opt_choice(o, "importance", 0);
     const int kind = prt__opt_choice(o, "transfer", 0);
+    if (prt__opt(o, "sigma-a") && (!parse_rgb(prt__opt(o, "sigma-a"), d.sigma_a) || !(d.sigma_a[0] > 0 && d.sigma_a[1] > 0 && d.sigma_a[2] > 0)))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--sigma-a takes R,G,B (or one value), each > 0 per mm");
+    if (prt__opt(o, "sigma-s") && !parse_rgb(prt__opt(o, "sigma-s"), d.sigma_s))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--sigma-s takes R,G,B (or one value), each >= 0 per mm");
+
     static const char *const medium_names[3] = {"skin", "marble", "ketchup"};
     prt_medium preset;
     if (prt_medium_preset(medium_names[prt__opt_choice(o, "medium", 0)], &preset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s", prt_last_error());
@@ -109,10 +116,15 @@ static prt_status offset_bake_begin(prt_context *ctx, const prt_scene *scene, co
     d.kinds = kind == 1 ? PRT__OFFSET_RADIOSITY_BIT : kind == 2 ? PRT__OFFSET_SUBSURFACE_BIT : kind == 3 ? PRT__OFFSET_RADIOSITY_BIT | PRT__OFFSET_SUBSURFACE_BIT
             : PRT__OFFSET_RADIOSITY_BIT | (nnamed ? PRT__OFFSET_SUBSURFACE_BIT : 0u);
     if (nnamed) { d.surface_medium = surface_medium; d.medium_count = nnamed; d.media = named; }
-    if (prt__opt(o, "sigma-a") && (!parse_rgb(prt__opt(o, "sigma-a"), d.sigma_a) || !(d.sigma_a[0] > 0 && d.sigma_a[1] > 0 && d.sigma_a[2] > 0)))
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--sigma-a takes R,G,B (or one value), each > 0 per mm");
-    if (prt__opt(o, "sigma-s") && !parse_rgb(prt__opt(o, "sigma-s"), d.sigma_s))
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--sigma-s takes R,G,B (or one value), each >= 0 per mm");
+    /* The medium options describe the one medium of a scene that names none: refused, not
+     * ignored, where they would not apply. */
+    const char *medium_opts[4] = {"medium", "sigma-a", "sigma-s", "eta"};
+    for (int i = 0; i < 4; ++i) {
+        if (!prt__opt(o, medium_opts[i])) continue;
+        const char *why = !(d.kinds & PRT__OFFSET_SUBSURFACE_BIT) ? "without subsurface transfer (--transfer subsurface or both)"
+                          : nnamed ? "when the scene names its translucent materials (their \"subsurface\" sets the medium)" : NULL;
+        if (why) { free(surface_medium); return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--%s does not apply %s", medium_opts[i], why); }
+    }
     d.eta = prt__opt_float(o, "eta", 1.3f);
     d.mm_per_unit = prt__opt_float(o, "mm-per-unit", 1000.0f);
     d.uv_layout = (prt_uv_layout)prt__opt_choice(o, "uv", 0);
@@ -164,7 +176,9 @@ static prt_status offset_save(const prt_transfer *t, prt__chunk_list *l)
 
 static prt_status bad(prt_context *ctx, const char *msg) { return prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: %s", msg); }
 
-static prt_status load_maps(prt_context *ctx, const prt__offset_set *s, const prt__chunk_in *c, float **out)
+/* A texel gathers at most all it sees (radiosity: its albedo) or all it scatters (subsurface:
+ * under 1), as the bake caps them; a file with more would make light grow bounce by bounce. */
+static prt_status load_maps(prt_context *ctx, const prt__offset_set *s, const prt__chunk_in *c, bool radiosity, float **out)
 {
     const uint64_t n = (uint64_t)s->count * s->covered * 3;
     if (c->size != n * sizeof(float)) return bad(ctx, "offset transfer map chunk size mismatch");
@@ -172,6 +186,13 @@ static prt_status load_maps(prt_context *ctx, const prt__offset_set *s, const pr
     memcpy(*out, c->data, n * sizeof(float));
     for (uint64_t i = 0; i < n; ++i)
         if (!((*out)[i] >= 0 && (*out)[i] <= 1e30f)) return bad(ctx, "offset transfer map values out of range");
+    for (size_t i = 0; i < s->covered; ++i)
+        for (int ch = 0; ch < 3; ++ch) {
+            double sum = 0;
+            for (int k = 0; k < s->count; ++k) sum += (*out)[((size_t)k * s->covered + i) * 3 + ch];
+            const double bound = radiosity ? s->albedo[i * 3 + ch] : 1.0;
+            if (!(sum <= bound * 1.001 + 1e-6)) return bad(ctx, "an offset texel gathers more light than it can");
+        }
     return PRT_OK;
 }
 
@@ -182,6 +203,7 @@ static prt_status offset_load(prt_context *ctx, prt_transfer *t, const cJSON *me
     if (!s) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     t->state = s;
     if (!prt__offset_cache_new(s)) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!prt__mesh_has_uv(&t->mesh)) return bad(ctx, "an offset file's mesh has no texture coordinates for its light map");
     prt__chunk_in *c = prt__chunk_take(chunks, count, CHUNK_OFSP);
     if (!c || c->size < OFSP_HEADER) return bad(ctx, "offset parameter chunk missing or short");
     const unsigned char *p = c->data;
@@ -265,10 +287,10 @@ static prt_status offset_load(prt_context *ctx, prt_transfer *t, const cJSON *me
     prt_status st = PRT_OK;
     c = prt__chunk_take(chunks, count, CHUNK_OFSR);
     if (!c != !(s->kinds & PRT__OFFSET_RADIOSITY_BIT)) return bad(ctx, "the radiosity map chunk does not match the transfer kinds");
-    if (c && (st = load_maps(ctx, s, c, &s->radiosity))) return st;
+    if (c && (st = load_maps(ctx, s, c, true, &s->radiosity))) return st;
     c = prt__chunk_take(chunks, count, CHUNK_OFSS);
     if (!c != !(s->kinds & PRT__OFFSET_SUBSURFACE_BIT)) return bad(ctx, "the subsurface map chunk does not match the transfer kinds");
-    if (c && (st = load_maps(ctx, s, c, &s->subsurface))) return st;
+    if (c && (st = load_maps(ctx, s, c, false, &s->subsurface))) return st;
     c = prt__chunk_take(chunks, count, CHUNK_OFSD);
     if (!c != !s->subsurface) return bad(ctx, "the subsurface media chunk does not match the transfer kinds");
     if (c) {
@@ -329,7 +351,7 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
     prt__describe_line(d, "light map:", "%d x %d texels, %u on the surface (%.0f%%)", s->width, s->height, s->covered,
                        100.0 * s->covered / ((double)s->width * s->height));
     prt__describe_line(d, "transfer:", "%s: %d offset maps (drawn by %s transference, %d refinements), %.2f MiB", kinds, s->count,
-                       s->importance ? "mean" : "largest", s->iterations, offset_bytes(t) / 1048576.0);
+                       s->importance ? "mean" : "max", s->iterations, offset_bytes(t) / 1048576.0);
     for (int k = 0; k < s->medium_count; ++k) {
         size_t texels = 0;
         for (size_t i = 0; i < s->covered; ++i) texels += s->medium[i] == k + 1;
@@ -416,5 +438,15 @@ prt_status prt_transfer_offset_map(const prt_transfer *t, prt_offset_kind kind, 
     if (!rgb) return PRT_OK;
     memset(rgb, 0, (size_t)s->width * s->height * 3 * sizeof *rgb);
     for (size_t i = 0; i < s->covered; ++i) memcpy(rgb + (size_t)s->texel[i] * 3, maps + ((size_t)k * s->covered + i) * 3, 3 * sizeof *rgb);
+    return PRT_OK;
+}
+
+prt_status prt_transfer_offset_medium(const prt_transfer *t, float *medium)
+{
+    const prt__offset_set *s = prt__state_of(t, &prt__method_offset);
+    if (!s || !medium) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_transfer_offset_medium: an offset transfer and an array are required");
+    if (!s->medium) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "the file holds no subsurface maps");
+    memset(medium, 0, (size_t)s->width * s->height * sizeof *medium);
+    for (size_t i = 0; i < s->covered; ++i) medium[s->texel[i]] = s->medium[i];
     return PRT_OK;
 }

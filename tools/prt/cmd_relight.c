@@ -81,8 +81,10 @@ static prt_status write_offset_maps(cli *c, const prt_transfer *t, const char *d
     if (!st) {
         cJSON_AddNumberToObject(index, "width", W);
         cJSON_AddNumberToObject(index, "height", H);
-        cJSON_AddStringToObject(index, "layout", "each file holds the box crop = [x0, y0, w, h] of its map (texel rows from v = 0 at the image's bottom); "
-                                                 "final(t) = first(t) + sum over maps of first(t + offset) * map(t)");
+        cJSON_AddStringToObject(index, "layout", "each file holds the box crop = [x0, y0, w, h] of its map (texel rows from v = 0 at the image's bottom). "
+                                                 "A pass over a kind's maps: out(t) = sum over its maps of in(t + offset) * map(t). subsurface: in = "
+                                                 "irradiance / pi, and out replaces albedo * in on the texels of medium.exr above 0; radiosity: in = the "
+                                                 "first-order light map, each bounce is a pass over what the last one gave, final = first + the bounces");
     }
     static const char *const names[2] = {"radiosity", "subsurface"};
     size_t files = 0;
@@ -122,6 +124,20 @@ static prt_status write_offset_maps(cli *c, const prt_transfer *t, const char *d
             const int box[4] = {x0, y0, w, h};
             for (int i = 0; i < 4; ++i) cJSON_AddItemToArray(crop, cJSON_CreateNumber(box[i]));
         }
+    }
+    if (!st && info.has[PRT_OFFSET_SUBSURFACE]) {   /* which texels the subsurface pass replaces */
+        float *med = malloc((size_t)W * H * sizeof *med);
+        prt_image img = {W, H, malloc((size_t)W * H * 3 * sizeof(float))};
+        st = med && img.rgb ? prt_transfer_offset_medium(t, med) : PRT_ERR_NO_MEMORY;
+        for (int y = 0; !st && y < H; ++y)
+            for (int x = 0; x < W; ++x)
+                for (int ch = 0; ch < 3; ++ch) img.rgb[((size_t)(H - 1 - y) * W + x) * 3 + ch] = med[(size_t)y * W + x];
+        char path[4200];
+        snprintf(path, sizeof path, "%s/medium.exr", dir);
+        if (!st && (st = prt_image_save(path, &img, NULL))) cli_error(c, "cannot write '%s': %s", path, prt_last_error());
+        if (!st) cJSON_AddStringToObject(index, "medium", "medium.exr");
+        free(med);
+        prt_image_free(&img);
     }
     char *text = !st ? cJSON_Print(index) : NULL;
     if (!st && !text) st = PRT_ERR_NO_MEMORY;
@@ -299,7 +315,9 @@ static int relight_main(int argc, char **argv, bool exporting)
     float *rgb = NULL;
     int variant = -1;
     prt_status st = prt_transfer_load(c.ctx, argv[optind], &t);
-    if (!st) {
+    if (!st && maps_dir && !prt_transfer_offset_info(t, NULL))   /* before the mesh is written */
+        rc = cli_usage(&c, "--maps writes the maps of offset transfer files (bake with --method offset)");
+    if (!st && !rc) {
         variant = kind ? prt_transfer_find_variant(t, kind) : prt_transfer_default_variant(t, 0);
         if (variant < 0) rc = cli_usage(&c, "%s", prt_last_error());
     }
