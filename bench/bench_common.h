@@ -81,6 +81,23 @@ static inline double bench_read_bandwidth(size_t bytes, int threads)
 /* The mesh a benchmark runs on: the one given, else ../shared/data's bunny when present, else the
  * procedural demo scene; loaded with a context of `threads` threads (0 = all). Returns false
  * after saying why. */
+/* Best wall time of a relight of t under l with `bounces` (the method's first control) over five
+ * runs. */
+static inline double bench_relight_time(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, int bounces)
+{
+    double best = 1e30;
+    for (int run = 0; run < 5; ++run) {
+        prt_relight_desc d = {.variant = -1, .controls = &bounces};
+        prt_relit r;
+        const double t0 = prt__now();
+        if (prt_relight(ctx, t, l, &d, &r)) { fprintf(stderr, "bench: %s\n", prt_last_error()); exit(1); }
+        const double dt = prt__now() - t0;
+        prt_relit_free(&r);
+        if (dt < best) best = dt;
+    }
+    return best;
+}
+
 static inline bool bench_load(const char *mesh, int threads, prt_context **ctx, prt_scene **scene, const char **used)
 {
     static const char *bunny = "../shared/data/meshes/bunny/bun_zipper.ply";

@@ -13,21 +13,6 @@
 
 #include <string.h>
 
-static double pass_time(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, int bounces)
-{
-    double best = 1e30;
-    for (int run = 0; run < 5; ++run) {
-        prt_relight_desc d = {.variant = -1, .controls = &bounces};
-        prt_relit r;
-        const double t0 = prt__now();
-        if (prt_relight(ctx, t, l, &d, &r)) { fprintf(stderr, "bench: %s\n", prt_last_error()); exit(1); }
-        const double dt = prt__now() - t0;
-        prt_relit_free(&r);
-        if (dt < best) best = dt;
-    }
-    return best;
-}
-
 static int parse_list(const char *text, int *out, int max)
 {
     int n = 0;
@@ -80,8 +65,8 @@ int main(int argc, char **argv)
             if (prt_bake(ctx, s, m, o, NULL, &t)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return 1; }
             const double bake = prt__now() - t0;
             const prt__offset_set *set = t->state;
-            pass_time(ctx, t, l, 0);   /* builds the shadow-ray cache */
-            const double p0 = pass_time(ctx, t, l, 0), p3 = pass_time(ctx, t, l, 3), pass = (p3 - p0) / 3;
+            bench_relight_time(ctx, t, l, 0);   /* builds the shadow-ray cache */
+            const double p0 = bench_relight_time(ctx, t, l, 0), p3 = bench_relight_time(ctx, t, l, 3), pass = (p3 - p0) / 3;
             const double bytes = (double)set->count * set->covered * 3 * sizeof(float);
             const double limit = bench_read_bandwidth((size_t)bytes, threads);
             fprintf(stderr, "  %-6d %-8d %-8u %-10.2f %-10.1f %-12.1f %.0f%% (%.3g of %.3g B/s)\n", sizes[a], counts[b], set->covered, bake, bytes / 1048576.0,

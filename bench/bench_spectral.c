@@ -57,22 +57,6 @@ static int progress(void *user, const char *stage, uint64_t done, uint64_t total
     return 0;
 }
 
-/* Best wall time of a relight with `bounces` bounces over several runs. */
-static double relight_time(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, int bounces)
-{
-    double best = 1e30;
-    for (int run = 0; run < 5; ++run) {
-        prt_relight_desc d = {.variant = -1, .controls = &bounces};
-        prt_relit r;
-        const double t0 = prt__now();
-        if (prt_relight(ctx, t, l, &d, &r)) { fprintf(stderr, "bench: %s\n", prt_last_error()); exit(1); }
-        const double dt = prt__now() - t0;
-        prt_relit_free(&r);
-        if (dt < best) best = dt;
-    }
-    return best;
-}
-
 int main(int argc, char **argv)
 {
     const char *mesh = NULL, *samples = "4096", *basis = "1024";
@@ -134,8 +118,8 @@ int main(int argc, char **argv)
     prt_light bulb = {.type = PRT_LIGHT_POINT, .position = {0.5f * (lo[0] + hi[0]), lo[1] + 0.8f * (hi[1] - lo[1]), 0.5f * (lo[2] + hi[2])},
                       .intensity = {5, 5, 5}};
     prt_lighting_add(l, &bulb, NULL);
-    relight_time(ctx, t, l, 0);   /* builds the shadow-ray cache */
-    const double r0 = relight_time(ctx, t, l, 0), r1 = relight_time(ctx, t, l, 1), r3 = relight_time(ctx, t, l, 3);
+    bench_relight_time(ctx, t, l, 0);   /* builds the shadow-ray cache */
+    const double r0 = bench_relight_time(ctx, t, l, 0), r1 = bench_relight_time(ctx, t, l, 1), r3 = bench_relight_time(ctx, t, l, 3);
     const double per_bounce = (r3 - r0) / 3.0, nnz = (double)set->row_start[nv];
     const double bounce_rate = per_bounce > 0 ? nnz / per_bounce : 0, limit = bare_gather(set, nv, threads);
     prt_spectral_info info;

@@ -97,6 +97,19 @@ static inline void tm_sphere(test_mesh *m, const float c[3], float r, int rings,
         }
 }
 
+/* A closed box from lo to hi, a separate n x n grid per face (normals split at every edge, as
+ * files bring them), faces outwards. */
+static inline void tm_closed_box(test_mesh *m, const float lo[3], const float hi[3], int n)
+{
+    const float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+    tm_quad(m, (float[3]){lo[0], hi[1], hi[2]}, (float[3]){dx, 0, 0}, (float[3]){0, 0, -dz}, n);   /* top, up */
+    tm_quad(m, (float[3]){lo[0], lo[1], lo[2]}, (float[3]){dx, 0, 0}, (float[3]){0, 0, dz}, n);    /* bottom, down */
+    tm_quad(m, (float[3]){hi[0], lo[1], hi[2]}, (float[3]){0, 0, -dz}, (float[3]){0, dy, 0}, n);   /* +x */
+    tm_quad(m, (float[3]){lo[0], lo[1], lo[2]}, (float[3]){0, 0, dz}, (float[3]){0, dy, 0}, n);    /* -x */
+    tm_quad(m, (float[3]){lo[0], lo[1], hi[2]}, (float[3]){dx, 0, 0}, (float[3]){0, dy, 0}, n);    /* +z */
+    tm_quad(m, (float[3]){hi[0], lo[1], lo[2]}, (float[3]){-dx, 0, 0}, (float[3]){0, dy, 0}, n);   /* -z */
+}
+
 /* An open box (a pit) of side 1 with inward normals, n x n cells per face: its floor centre
  * sees the sky only through the top. */
 static inline void tm_pit(test_mesh *m, int n)

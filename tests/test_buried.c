@@ -6,17 +6,6 @@
 
 #include "geom/raycast.h"
 
-static void closed_box(test_mesh *m, const float lo[3], const float hi[3], int n)
-{
-    const float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
-    tm_quad(m, (float[3]){lo[0], hi[1], hi[2]}, (float[3]){dx, 0, 0}, (float[3]){0, 0, -dz}, n);   /* top, up */
-    tm_quad(m, (float[3]){lo[0], lo[1], lo[2]}, (float[3]){dx, 0, 0}, (float[3]){0, 0, dz}, n);    /* bottom, down */
-    tm_quad(m, (float[3]){hi[0], lo[1], hi[2]}, (float[3]){0, 0, -dz}, (float[3]){0, dy, 0}, n);   /* +x */
-    tm_quad(m, (float[3]){lo[0], lo[1], lo[2]}, (float[3]){0, 0, dz}, (float[3]){0, dy, 0}, n);    /* -x */
-    tm_quad(m, (float[3]){lo[0], lo[1], hi[2]}, (float[3]){dx, 0, 0}, (float[3]){0, dy, 0}, n);    /* +z */
-    tm_quad(m, (float[3]){hi[0], lo[1], lo[2]}, (float[3]){-dx, 0, 0}, (float[3]){0, dy, 0}, n);   /* -z */
-}
-
 static void test_floor_under_box(void **state)
 {
     (void)state;
@@ -24,7 +13,7 @@ static void test_floor_under_box(void **state)
     test_mesh t = {0};
     tm_quad(&t, (float[3]){-1, 0, 1}, (float[3]){2, 0, 0}, (float[3]){0, 0, -2}, 40);   /* floor, 0.05 cells, up */
     const size_t floor_vertices = t.nv;
-    closed_box(&t, (float[3]){-0.31f, -0.1f, -0.31f}, (float[3]){0.31f, 0.4f, 0.31f}, 4);   /* sunk 0.1 into the floor */
+    tm_closed_box(&t, (float[3]){-0.31f, -0.1f, -0.31f}, (float[3]){0.31f, 0.4f, 0.31f}, 4);   /* sunk 0.1 into the floor */
 
     /* Which vertices the check finds, on the mesh as the bake sees it. */
     prt__mesh m = {0};

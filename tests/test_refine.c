@@ -6,18 +6,6 @@
 
 #include "geom/mesh.h"
 
-/* A closed box with a separate grid per face (normals split at every edge, as files bring them). */
-static void closed_box(test_mesh *m, const float lo[3], const float hi[3], int n)
-{
-    const float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
-    tm_quad(m, (float[3]){lo[0], hi[1], hi[2]}, (float[3]){dx, 0, 0}, (float[3]){0, 0, -dz}, n);   /* top, up */
-    tm_quad(m, (float[3]){lo[0], lo[1], lo[2]}, (float[3]){dx, 0, 0}, (float[3]){0, 0, dz}, n);    /* bottom, down */
-    tm_quad(m, (float[3]){hi[0], lo[1], hi[2]}, (float[3]){0, 0, -dz}, (float[3]){0, dy, 0}, n);   /* +x */
-    tm_quad(m, (float[3]){lo[0], lo[1], lo[2]}, (float[3]){0, 0, dz}, (float[3]){0, dy, 0}, n);    /* -x */
-    tm_quad(m, (float[3]){lo[0], lo[1], hi[2]}, (float[3]){dx, 0, 0}, (float[3]){0, dy, 0}, n);    /* +z */
-    tm_quad(m, (float[3]){hi[0], lo[1], lo[2]}, (float[3]){-dx, 0, 0}, (float[3]){0, dy, 0}, n);   /* -z */
-}
-
 static prt__mesh mesh_of(const test_mesh *t)
 {
     prt__mesh m = {0};
@@ -36,7 +24,7 @@ static void test_contact_zone(void **state)
     prt_context *ctx = test_context(2);
     test_mesh t = {0};
     floor_quad(&t, 1);   /* two triangles: no vertex anywhere near the box */
-    closed_box(&t, (float[3]){-0.5f, 0.02f, -0.5f}, (float[3]){0.5f, 1.02f, 0.5f}, 2);
+    tm_closed_box(&t, (float[3]){-0.5f, 0.02f, -0.5f}, (float[3]){0.5f, 1.02f, 0.5f}, 2);
     prt__mesh m = mesh_of(&t);
     const size_t before = m.vertex_count;
     prt_refine_stats s;
@@ -194,7 +182,7 @@ static void test_conforming_and_deterministic(void **state)
     test_mesh t = {0};
     floor_quad(&t, 2);
     /* Corners exact in binary, so that every face computes them to the same bits. */
-    closed_box(&t, (float[3]){-1.25f, 0.0078125f, -0.75f}, (float[3]){0.75f, 1.25f, 0.875f}, 1);
+    tm_closed_box(&t, (float[3]){-1.25f, 0.0078125f, -0.75f}, (float[3]){0.75f, 1.25f, 0.875f}, 1);
     prt__mesh one = mesh_of(&t), two = mesh_of(&t);
     assert_no_cracks(&one);
     const double area = total_area(&one), oriented[3] = {signed_area(&one, 0), signed_area(&one, 1), signed_area(&one, 2)};
@@ -282,7 +270,7 @@ static void test_cancel(void **state)
     prt_context *ctx = test_context(2);
     test_mesh t = {0};
     floor_quad(&t, 1);
-    closed_box(&t, (float[3]){-0.5f, 0.015625f, -0.5f}, (float[3]){0.5f, 1.015625f, 0.5f}, 2);   /* exact in binary: no crack to begin with */
+    tm_closed_box(&t, (float[3]){-0.5f, 0.015625f, -0.5f}, (float[3]){0.5f, 1.015625f, 0.5f}, 2);   /* exact in binary: no crack to begin with */
     prt_scene *scene = tm_scene(ctx, &t, 0.5f);
     prt_refine_stats s;
     int until = 0;

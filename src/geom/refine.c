@@ -173,6 +173,21 @@ static float difference(const float *a, const float *b, int channels)
     return d;
 }
 
+/* An emitting triangle's share of the emitter samples: twice its area times its summed
+ * emission (0 when it does not emit); cross gets its unnormalised normal when not NULL. */
+static double emitter_weight(const prt__mesh *m, size_t t, float cross[3])
+{
+    const uint32_t *ix = m->indices + t * 3;
+    float e1[3], e2[3], cr[3], e = 0;
+    for (int k = 0; k < 3; ++k) e += m->emission[ix[k] * 3] + m->emission[ix[k] * 3 + 1] + m->emission[ix[k] * 3 + 2];
+    if (!(e > 0)) return 0;
+    prt__v3_sub(m->positions + ix[1] * 3, m->positions + ix[0] * 3, e1);
+    prt__v3_sub(m->positions + ix[2] * 3, m->positions + ix[0] * 3, e2);
+    prt__v3_cross(e1, e2, cr);
+    if (cross) memcpy(cross, cr, sizeof cr);
+    return (double)e * prt__v3_len(cr);
+}
+
 static void setup_probe(probe_set *ps, const prt__raycaster *rc, const prt__mesh *m, const prt_light *lights, int light_count)
 {
     memset(ps, 0, sizeof *ps);
@@ -187,30 +202,18 @@ static void setup_probe(probe_set *ps, const prt__raycaster *rc, const prt__mesh
     ps->light_count = light_count < MAX_CHANNELS - 2 ? light_count : MAX_CHANNELS - 2;
     /* Emitting triangles, sampled by area times brightness at fixed stratified points. */
     double total = 0;
-    if (m->emission) {
-        for (size_t t = 0; t < m->triangle_count; ++t) {
-            const uint32_t *ix = m->indices + t * 3;
-            float e1[3], e2[3], cr[3], e = 0;
-            for (int k = 0; k < 3; ++k) e += m->emission[ix[k] * 3] + m->emission[ix[k] * 3 + 1] + m->emission[ix[k] * 3 + 2];
-            if (!(e > 0)) continue;
-            prt__v3_sub(m->positions + ix[1] * 3, m->positions + ix[0] * 3, e1);
-            prt__v3_sub(m->positions + ix[2] * 3, m->positions + ix[0] * 3, e2);
-            prt__v3_cross(e1, e2, cr);
-            total += (double)e * prt__v3_len(cr);
-        }
-    }
+    for (size_t t = 0; m->emission && t < m->triangle_count; ++t) total += emitter_weight(m, t, NULL);
     if (total > 0) {
         double acc = 0;
         int next = 0;
         for (size_t t = 0; t < m->triangle_count && next < EMITTER_SAMPLES; ++t) {
             const uint32_t *ix = m->indices + t * 3;
-            float e1[3], e2[3], cr[3], e = 0;
-            for (int k = 0; k < 3; ++k) e += m->emission[ix[k] * 3] + m->emission[ix[k] * 3 + 1] + m->emission[ix[k] * 3 + 2];
-            if (!(e > 0)) continue;
+            float e1[3], e2[3], cr[3];
+            const double w = emitter_weight(m, t, cr);
+            if (!(w > 0)) continue;
             prt__v3_sub(m->positions + ix[1] * 3, m->positions + ix[0] * 3, e1);
             prt__v3_sub(m->positions + ix[2] * 3, m->positions + ix[0] * 3, e2);
-            prt__v3_cross(e1, e2, cr);
-            acc += (double)e * prt__v3_len(cr);
+            acc += w;
             while (next < EMITTER_SAMPLES && (next + 0.5) / EMITTER_SAMPLES * total <= acc) {
                 /* A point of the triangle from the R2 sequence, folded into it. */
                 float u = fmodf(0.5f + 0.7548777f * next, 1.0f), v = fmodf(0.5f + 0.5698403f * next, 1.0f);
@@ -466,8 +469,8 @@ static prt_status probe_midpoints(refiner *r, level *l)
         map_free(&r->mid_index);
         r->mid_index = bigger;
     }
-    uint32_t *todo = malloc(need * sizeof *todo + 1);
-    if (!todo) return PRT_ERR_NO_MEMORY;
+    uint32_t *pending = malloc(need * sizeof *pending + 1);
+    if (!pending) return PRT_ERR_NO_MEMORY;
     size_t n = 0;
     for (size_t e = 0; e < l->ne; ++e) {
         edge *ed = &l->edges[e];
@@ -475,12 +478,12 @@ static prt_status probe_midpoints(refiner *r, level *l)
         ed->mid = (uint32_t)(r->mid_count + n);
         bool found;
         map_get(&r->mid_index, edge_key(ed->a, ed->b), ed->mid, &found);
-        todo[n++] = (uint32_t)e;
+        pending[n++] = (uint32_t)e;
     }
 #pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(r->ctx))
     for (size_t i = 0; i < n; ++i) {
         if (prt__progress_add(&r->progress, 1)) continue;
-        const edge *ed = &l->edges[todo[i]];
+        const edge *ed = &l->edges[pending[i]];
         float p[3], nrm[3], cen[3], o[3];
         for (int c = 0; c < 3; ++c) {
             p[c] = 0.5f * (m->positions[ed->a * 3 + c] + m->positions[ed->b * 3 + c]);
@@ -491,7 +494,7 @@ static prt_status probe_midpoints(refiner *r, level *l)
         probe_origin(&r->ps, p, nrm, cen, o);
         probe(&r->ps, o, nrm, r->mid_values + (size_t)ed->mid * ch);
     }
-    free(todo);
+    free(pending);
     r->mid_count += n;
     r->probes += n;
     return PRT_OK;

@@ -321,9 +321,14 @@ static int relight_main(int argc, char **argv, bool exporting)
         variant = kind ? prt_transfer_find_variant(t, kind) : prt_transfer_default_variant(t, 0);
         if (variant < 0) rc = cli_usage(&c, "%s", prt_last_error());
     }
+    /* What --sh exports: per-vertex diffuse SH transfer of the chosen kind (files of other methods
+     * hold none: prt_transfer_channels is 0 for them). */
+    prt_transfer_kind sh_kind = 0;
+    const bool sh_sets = !st && !rc && !prt_transfer_kind_parse(prt_transfer_variant_name(t, variant), &sh_kind) &&
+                         !strstr(prt_transfer_variant_name(t, variant), "glossy") && prt_transfer_channels(t, sh_kind) > 0;
     /* The exported transfer is order 3 (what seven VEC4 attributes hold for RGB): COLOR_0 is relit
      * at the same order, so that the GLSL gives exactly the colours in the file. */
-    if (!st && !rc && sh_attrs && prt_transfer_method(t) == prt_method_find("sh")) {
+    if (!st && !rc && sh_attrs && sh_sets) {
         int k = 0;
         while (k < light.control_count && strcmp(light.control[k].name, "order")) ++k;
         if (k < light.control_count && light.control[k].value > 3) {
@@ -395,11 +400,10 @@ static int relight_main(int argc, char **argv, bool exporting)
                                                         {0}, {0}, {0}, {"_SH0", "_SH1", "_SH2", "_SH3", "_SH4", "_SH5", "_SH6"}};
                 float *attr = NULL;
                 int groups = 0, channels = 0, coeffs = 0;
-                prt_transfer_kind tk = 0;
+                const prt_transfer_kind tk = sh_kind;
                 const char *vname = prt_transfer_variant_name(t, variant);
                 if (sh_attrs) {
-                    if (prt_transfer_method(t) != prt_method_find("sh") || prt_transfer_kind_parse(vname, &tk) || strstr(vname, "glossy") ||
-                        !prt_transfer_channels(t, tk)) {
+                    if (!sh_sets) {
                         cli_error(&c, "--sh exports per-vertex diffuse SH transfer (unshadowed, shadowed, interreflected): '%s' relit as %s has none",
                                   argv[optind], vname);
                         rc = EXIT_USAGE;
