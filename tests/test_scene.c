@@ -336,6 +336,25 @@ static void test_cleaning_in_memory(void **state)
     prt_context_release(ctx);
 }
 
+/* A face pasted over another with its own vertices and corners in another order (as the Cornell
+ * box's OBJ does) is dropped; a face back to back with it (a two-sided sheet) stays. */
+static void test_duplicate_faces(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(1);
+    float pos[] = {0, 0, 0, 1, 0, 0, 0, 0, -1,        /* the face */
+                   1, 0, 0, 0, 0, -1, 0, 0, 0,        /* the same corners, turned: a duplicate */
+                   0, 0, 0, 0, 0, -1, 1, 0, 0,        /* the same corners, the other winding */
+                   -0.0f, 0, 0, 1, 0, 0, 0, 0, -1};   /* -0 is 0: a duplicate */
+    uint32_t idx[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_create_copy(ctx, pos, NULL, NULL, 12, idx, 4, NULL, &s), PRT_OK);
+    assert_int_equal(prt_scene_triangle_count(s), 2);
+    assert_int_equal(prt_scene_vertex_count(s), 6);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
 static double tri_area(const float *p, const uint32_t *t)
 {
     float e1[3], e2[3];
@@ -504,6 +523,7 @@ int main(void)
         cmocka_unit_test(test_json_scene),
         cmocka_unit_test(test_bad_mesh_inputs),
         cmocka_unit_test(test_cleaning_in_memory),
+        cmocka_unit_test(test_duplicate_faces),
         cmocka_unit_test(test_subdivision),
         cmocka_unit_test(test_demo_scene),
         cmocka_unit_test(test_shared_meshes),

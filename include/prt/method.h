@@ -162,6 +162,10 @@ typedef struct prt_relight_desc {
      * methods that let surface colours change without a rebake (prt_method_runtime_albedo); NULL
      * = as baked. Other methods refuse it. */
     const float *albedo;
+    /* Leave the last step to the GPU where the method has one (offset maps: the modulate-shift-
+     * accumulate passes): prt_relit.gpu_input is filled instead of texels, and a renderer given
+     * the result (prt_relit_render_mesh) finishes it. Other methods ignore it. */
+    int gpu_finish;
 } prt_relight_desc;
 
 /* What relighting produced: everything the renderer draws. Arrays are owned by the result
@@ -198,6 +202,14 @@ typedef struct prt_relit {
      * triangles none of whose vertices see it, so that a shadow map's texels cannot leak light
      * along a room's seams. */
     float *pixel_visibility;
+    /* With desc.gpu_finish, for offset maps: the first-order input the GPU passes start from,
+     * per texel over the texel map (texel_width x texel_height RGB: irradiance / pi, zero off
+     * the surface), the emission scale, and the bounces and component asked for; texels is NULL
+     * and radiance holds albedo x irradiance / pi plus emission (the light before subsurface
+     * scattering and bounces). NULL otherwise. */
+    float *gpu_input;
+    float gpu_emission;
+    int gpu_bounces, gpu_component;
 } prt_relit;
 
 /* The PRT_LIGHTS_* bits relighting t under lighting needs: what the lighting holds, with

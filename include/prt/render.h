@@ -68,6 +68,20 @@ typedef struct prt_render_mesh {
      * (shadow rays); a triangle none of whose vertices sees a light gets none of it, whatever its
      * shadow map says. NULL = the shadow maps alone. */
     const float *light_visibility;
+    /* Optional: offset transfer maps (prt/offset.h) finished by the GPU, as the paper's run time.
+     * The renderer packs the file's maps into atlases (power-of-two vertical slices, texture
+     * arrays) once per transfer, then on each upload accumulates the light map from gpu_input with
+     * additive blending - for every offset, the map times the input shifted by the offset (eq. 9),
+     * subsurface first, then gpu_bounces inter-reflection passes - and draws it per texel (needs
+     * uv; texel_width x texel_height as the file's map). The fields are prt_relit's (see
+     * prt_relight_desc.gpu_finish); prt_relit_render_mesh fills them. */
+    const struct prt_transfer *gpu_transfer;
+    const float *gpu_input;
+    float gpu_emission;
+    int gpu_bounces, gpu_component;
+    /* With gpu_transfer: the first-order light map on the left half of the image, the final one
+     * on the right (the paper's side-by-side viewer). */
+    int side_by_side;
 } prt_render_mesh;
 
 prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, prt_renderer **out);
@@ -75,6 +89,11 @@ void prt_renderer_release(prt_renderer *r);
 /* background: linear RGB behind the mesh (NULL = black). */
 prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_camera *cam,
                       const float background[3], prt_image *out);
+/* The per-texel light map the renderer draws for mesh (texel_width x texel_height RGB, row 0 at v
+ * near 0) read back: for offset maps finished on the GPU (gpu_transfer) the accumulation's
+ * result, and in first_rgb (may be NULL) the first-order map; else texel_radiance as uploaded.
+ * Fails when the mesh draws no per-texel map, or first_rgb is asked of one not GPU-finished. */
+prt_status prt_render_light_map(prt_renderer *r, const prt_render_mesh *mesh, float *rgb, float *first_rgb);
 /* A camera that frames the box [lo, hi] from direction `from` (towards the eye; NULL = a
  * default three-quarter view). */
 void prt_camera_frame(const float lo[3], const float hi[3], const float *from, float fov_y_deg,
@@ -135,6 +154,9 @@ void prt_window_set_radiance(prt_window *w, const float *rgb, size_t vertex_coun
 void prt_window_set_lights(prt_window *w, const prt_render_mesh *mesh);
 /* Replaces the per-texel radiance map (needs the mesh's uv); NULL switches back to vertex radiance. */
 void prt_window_set_texels(prt_window *w, const float *rgb, int width, int height);
+/* Replaces the GPU-finished input (mesh's gpu_* fields, the transfer given to set_mesh) and runs
+ * the accumulation passes again; side_by_side as in prt_render_mesh. */
+void prt_window_set_gpu_input(prt_window *w, const prt_render_mesh *mesh);
 /* Replaces the glossy exit coefficients (same layout and order as given to set_mesh). */
 void prt_window_set_exit(prt_window *w, const float *exit_sh, size_t vertex_count);
 /* Replaces the wavelet K-vectors (same layout as prt_render_mesh.kvec). */

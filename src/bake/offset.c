@@ -95,38 +95,18 @@ static prt_status offsets_step(prt__bake_job *base, prt_context *ctx, prt__progr
 
 /* ---- maps ---- */
 
-/* Which texel stands for offset o's cell seen from (tx, ty): the one at the offset, or where
- * that is off the surface (a gutter, another chart's margin) while the cell still holds surface,
- * the nearest surface texel of the cell within a few texels - else the cell's area would be
- * weighed with no transfer at all, and light lost (a box's walls, each its own chart). */
-static bool representative(const prt__offset_set *s, const float *area, int tx, int ty, int o, size_t *out)
+/* The texel whose transfer stands for offset o's cell from texel (tx, ty): the one whose light the
+ * run time multiplies by it - the offset itself on the surface, else its gutter's source
+ * (s->source), so that map and light always describe the same patch. False off the map or when
+ * the map holds no surface. */
+static bool representative(const prt__offset_set *s, int tx, int ty, int o, size_t *out)
 {
-    const int W = s->width, H = s->height, ox = s->offsets[o * 2], oy = s->offsets[o * 2 + 1];
-    const double sxn = 1.0 / (W - 1), syn = 1.0 / (H - 1);
-    if (tx + ox >= 0 && tx + ox < W && ty + oy >= 0 && ty + oy < H && area[(size_t)(ty + oy) * W + tx + ox] > 0) {
-        *out = (size_t)(ty + oy) * W + tx + ox;   /* the offset itself: always in its own cell */
-        return true;
-    }
-    for (int ring = 1; ring <= 4; ++ring)
-        for (int dy = -ring; dy <= ring; ++dy)
-            for (int dx = -ring; dx <= ring; ++dx) {
-                if (abs(dx) != ring && abs(dy) != ring) continue;
-                const int x = tx + ox + dx, y = ty + oy + dy;
-                if (x < 0 || x >= W || y < 0 || y >= H || !(area[(size_t)y * W + x] > 0)) continue;
-                /* Still in the cell: no other offset nearer (ties to the lower index, as eq. 8's labels). */
-                const double px = (ox + dx) * sxn, py = (oy + dy) * syn;
-                const double own = (px - ox * sxn) * (px - ox * sxn) + (py - oy * syn) * (py - oy * syn);
-                bool mine = true;
-                for (int k = 0; k < s->count && mine; ++k) {
-                    if (k == o) continue;
-                    const double ex = px - s->offsets[k * 2] * sxn, ey = py - s->offsets[k * 2 + 1] * syn, d2 = ex * ex + ey * ey;
-                    mine = d2 > own || (d2 == own && k > o);
-                }
-                if (!mine) continue;
-                *out = (size_t)y * W + x;
-                return true;
-            }
-    return false;
+    const int W = s->width, H = s->height, x = tx + s->offsets[o * 2], y = ty + s->offsets[o * 2 + 1];
+    if (x < 0 || x >= W || y < 0 || y >= H) return false;
+    const int32_t src = s->source[(size_t)y * W + x];
+    if (src < 0) return false;
+    *out = s->texel[src];
+    return true;
 }
 
 /* The integer offsets whose nearest chosen offset is offsets[0] = (0, 0) (the labelling of eq. 8:
@@ -207,7 +187,7 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
                 }
                 if (!(tva[t * (size_t)K + o] > 0)) continue;   /* no surface in this cell from t */
                 size_t src;
-                if (!representative(s, ob->patches.area, tx, ty, o, &src)) continue;
+                if (!representative(s, tx, ty, o, &src)) continue;
                 float tr[3];
                 prt__offset_tr(&ob->x[k], t, src, tr);
                 for (int c = 0; c < 3; ++c) m[c] = tr[c] * tva[t * (size_t)K + o];

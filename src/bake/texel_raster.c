@@ -219,3 +219,58 @@ bool prt__texel_fill_gutters(int width, int height, uint8_t *covered, float **pl
     free(next);
     return true;
 }
+
+bool prt__texel_gutter_sources(int width, int height, const int32_t *index, int32_t *source)
+{
+    const size_t n = (size_t)width * height;
+    uint32_t *ring = malloc(n * sizeof *ring + 1), *next = malloc(n * sizeof *next + 1);
+    uint8_t *done = malloc(n + 1);
+    if (!ring || !next || !done) { free(ring); free(next); free(done); return false; }
+    const int dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
+    size_t count = 0;
+    for (size_t i = 0; i < n; ++i) {
+        source[i] = index[i] >= 0 ? index[i] : -1;
+        done[i] = index[i] >= 0;
+    }
+    /* The first ring: uncovered texels beside the surface. */
+    for (size_t i = 0; i < n; ++i) {
+        if (done[i]) continue;
+        const int x = (int)(i % (size_t)width), y = (int)(i / (size_t)width);
+        for (int k = 0; k < 4; ++k) {
+            const int u = x + dx[k], v = y + dy[k];
+            if (u >= 0 && u < width && v >= 0 && v < height && index[(size_t)v * width + u] >= 0) { ring[count++] = (uint32_t)i; break; }
+        }
+    }
+    while (count) {
+        /* Sources come only from earlier rings: read them all before marking this one done. */
+        for (size_t r = 0; r < count; ++r) {
+            const size_t i = ring[r];
+            const int x = (int)(i % (size_t)width), y = (int)(i / (size_t)width);
+            for (int k = 0; k < 4; ++k) {
+                const int u = x + dx[k], v = y + dy[k];
+                if (u < 0 || u >= width || v < 0 || v >= height) continue;
+                const size_t j = (size_t)v * width + u;
+                if (done[j]) { source[i] = source[j]; break; }
+            }
+        }
+        for (size_t r = 0; r < count; ++r) done[ring[r]] = 1;
+        size_t next_count = 0;
+        for (size_t r = 0; r < count; ++r) {
+            const size_t i = ring[r];
+            const int x = (int)(i % (size_t)width), y = (int)(i / (size_t)width);
+            for (int k = 0; k < 4; ++k) {
+                const int u = x + dx[k], v = y + dy[k];
+                if (u < 0 || u >= width || v < 0 || v >= height) continue;
+                const size_t j = (size_t)v * width + u;
+                if (!done[j] && done[j] != 2) { done[j] = 2; next[next_count++] = (uint32_t)j; }
+            }
+        }
+        for (size_t r = 0; r < next_count; ++r) done[next[r]] = 0;
+        uint32_t *tmp = ring; ring = next; next = tmp;
+        count = next_count;
+    }
+    free(ring);
+    free(next);
+    free(done);
+    return true;
+}

@@ -21,5 +21,10 @@ bool prt__texel_areas(const prt__mesh *m, int W, int H, float *area);
  * a chart's border. covered: 1 = baked; 0 -> 2 filled. planes[k] holds floats[k] per texel (NULL
  * planes are skipped). False when out of memory. */
 bool prt__texel_fill_gutters(int width, int height, uint8_t *covered, float **planes, const int *floats, int nplanes);
+/* For every texel, the surface texel whose value it takes when read: itself on the surface
+ * (index[t] >= 0, the covered index), else the source of its first neighbour (left, right, down,
+ * up) in the ring before its own, rings growing outwards from the charts; -1 when the map holds
+ * no surface. A fixed gather that a CPU loop and a GPU shader both apply exactly. */
+bool prt__texel_gutter_sources(int width, int height, const int32_t *index, int32_t *source);
 
 #endif

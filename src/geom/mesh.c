@@ -49,6 +49,64 @@ prt_status prt__mesh_append(prt__mesh *m, const float *pos, const float *nrm, co
     return PRT_OK;
 }
 
+/* A triangle by its corners' positions, turned so that the smallest corner comes first (the
+ * winding kept): two faces with equal keys lie on each other, facing the same way. */
+typedef struct tri_key { float p[9]; uint32_t t; } tri_key;
+static int by_tri_key(const void *x, const void *y)
+{
+    const tri_key *a = x, *b = y;
+    for (int k = 0; k < 9; ++k)
+        if (a->p[k] != b->p[k]) return a->p[k] < b->p[k] ? -1 : 1;
+    return a->t < b->t ? -1 : a->t > b->t;
+}
+
+static int corner_before(const float *a, const float *b)
+{
+    for (int c = 0; c < 3; ++c)
+        if (a[c] != b[c]) return a[c] < b[c];
+    return 0;
+}
+
+/* Drops triangles lying exactly on an earlier one with the same winding (models exported twice,
+ * a box's face pasted over another, as in the Cornell box's OBJ): they double the light a
+ * surface gathers and leave edges with four triangles, which no chart or welding can use. Faces
+ * back to back (opposite windings) are a two-sided sheet and stay. */
+static prt_status drop_duplicates(const prt_context *ctx, prt__mesh *m, float *face_n, const char *what)
+{
+    const size_t nt = m->triangle_count;
+    tri_key *keys = malloc(nt * sizeof *keys + 1);
+    uint8_t *drop = prt__calloc(nt + 1, 1);
+    if (!keys || !drop) { free(keys); free(drop); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    for (size_t t = 0; t < nt; ++t) {
+        const float *q[3];
+        for (int k = 0; k < 3; ++k) q[k] = m->positions + (size_t)m->indices[t * 3 + k] * 3;
+        const int first = corner_before(q[1], q[0]) ? (corner_before(q[2], q[1]) ? 2 : 1) : (corner_before(q[2], q[0]) ? 2 : 0);
+        for (int k = 0; k < 3; ++k) memcpy(keys[t].p + k * 3, q[(first + k) % 3], 3 * sizeof(float));
+        keys[t].t = (uint32_t)t;
+    }
+    qsort(keys, nt, sizeof *keys, by_tri_key);
+    size_t dropped = 0;
+    for (size_t i = 1; i < nt; ++i) {
+        bool same = true;   /* compared as numbers, as sorted: -0 and +0 are one position */
+        for (int k = 0; k < 9 && same; ++k) same = keys[i].p[k] == keys[i - 1].p[k];
+        if (same) { drop[keys[i].t] = 1; dropped++; }
+    }
+    if (dropped) {
+        size_t kept = 0;
+        for (size_t t = 0; t < nt; ++t) {
+            if (drop[t]) continue;
+            memmove(m->indices + kept * 3, m->indices + t * 3, 3 * sizeof(uint32_t));
+            memmove(face_n + kept * 3, face_n + t * 3, 3 * sizeof(float));
+            kept++;
+        }
+        m->triangle_count = kept;
+        prt__log(ctx, PRT_LOG_WARN, "%s: dropped %zu triangles lying on others with the same winding", what, dropped);
+    }
+    free(keys);
+    free(drop);
+    return PRT_OK;
+}
+
 prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *what)
 {
     if (m->vertex_count == 0 || m->triangle_count == 0)
@@ -95,6 +153,9 @@ prt_status prt__mesh_clean(const prt_context *ctx, prt__mesh *m, const char *wha
     if (kept < m->triangle_count)
         prt__log(ctx, PRT_LOG_WARN, "%s: dropped %zu zero-area triangles of %zu", what, m->triangle_count - kept, m->triangle_count);
     m->triangle_count = kept;
+    prt_status st = drop_duplicates(ctx, m, face_n, what);
+    if (st) { free(face_n); return st; }
+    kept = m->triangle_count;
 
     /* Repair normals that are missing (zero), non-finite or not unit: area-weighted average of
      * the faces around the vertex, or the first face's normal if those cancel out. */

@@ -302,6 +302,7 @@ prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t s
     if (st) return st;
     prt_transfer *t = prt__calloc(1, sizeof *t);
     if (!t) { free(chunks); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    t->serial = prt__transfer_serial();
     st = load(ctx, chunks, count, t);
     free(chunks);
     if (st) { prt_transfer_release(t); return st; }

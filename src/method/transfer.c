@@ -2,6 +2,8 @@
  * dispatch of variants, controls and relighting to the method's table entry. */
 #include "method/method.h"
 
+#include <stdatomic.h>
+
 prt_status prt__mesh_copy(prt__mesh *dst, const prt__mesh *src)
 {
     prt_status st = prt__mesh_append(dst, src->positions, src->normals, src->albedo, (float[3]){0, 0, 0}, src->vertex_count,
@@ -32,11 +34,18 @@ static prt_status copy_lights(prt_transfer *t, const prt_light *lights, int coun
     return PRT_OK;
 }
 
+uint64_t prt__transfer_serial(void)
+{
+    static _Atomic uint64_t next = 1;
+    return atomic_fetch_add(&next, 1);
+}
+
 prt_status prt__transfer_from_scene(prt_context *ctx, const prt__method *m, const prt_scene *scene, prt_transfer **out)
 {
     prt_transfer *t = prt__calloc(1, sizeof *t);
     if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     t->method = m;
+    t->serial = prt__transfer_serial();
     prt_status st = prt__mesh_copy(&t->mesh, &scene->mesh);
     if (!st) st = copy_lights(t, scene->lights, scene->light_count);
     if (st) { prt_transfer_release(t); return prt__fail(ctx, st, "%s", prt_last_error()); }
@@ -54,6 +63,7 @@ prt_status prt__transfer_copy_frame(prt_context *ctx, const prt_transfer *src, p
     prt_transfer *t = prt__calloc(1, sizeof *t);
     if (!t) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     *t = *src;
+    t->serial = prt__transfer_serial();
     memset(&t->mesh, 0, sizeof t->mesh);
     t->lights = NULL;
     t->light_count = 0;
@@ -207,6 +217,7 @@ void prt_relit_free(prt_relit *r)
     free(r->pixel_lights);
     free(r->pixel_albedo);
     free(r->pixel_visibility);
+    free(r->gpu_input);
     memset(r, 0, sizeof *r);
 }
 
@@ -274,6 +285,13 @@ void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render
     m->light_count = r->pixel_lights ? r->pixel_light_count : 0;
     m->albedo = r->pixel_albedo;
     m->light_visibility = r->pixel_lights ? r->pixel_visibility : NULL;
+    if (r->gpu_input) {
+        m->gpu_transfer = t;
+        m->gpu_input = r->gpu_input;
+        m->gpu_emission = r->gpu_emission;
+        m->gpu_bounces = r->gpu_bounces;
+        m->gpu_component = r->gpu_component;
+    }
 }
 
 prt_status prt_relit_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb)

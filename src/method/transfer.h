@@ -25,7 +25,10 @@ struct prt_transfer {
     int threads;
     const struct prt_method *method;
     void *state;                      /* the method's own, freed by method->free_state */
+    uint64_t serial;                  /* unique in the process: what GPU caches key on (never reused, unlike an address) */
 };
+/* The next transfer serial (thread-safe). */
+uint64_t prt__transfer_serial(void);
 
 /* A new transfer of method m with a copy of scene's mesh, materials and lighting. */
 prt_status prt__transfer_from_scene(prt_context *ctx, const struct prt_method *m, const prt_scene *scene, prt_transfer **out);

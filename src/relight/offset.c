@@ -10,32 +10,27 @@ bool prt__offset_set_index(prt__offset_set *s)
 {
     const size_t n = (size_t)s->width * s->height;
     free(s->index);
+    free(s->source);
+    s->source = NULL;
     if (!(s->index = malloc(n * sizeof *s->index))) return false;
     for (size_t i = 0; i < n; ++i) s->index[i] = -1;
     for (uint32_t k = 0; k < s->covered; ++k) {
         if (s->texel[k] >= n || (k && s->texel[k] <= s->texel[k - 1])) return false;
         s->index[s->texel[k]] = (int32_t)k;
     }
-    return true;
+    if (!(s->source = malloc(n * sizeof *s->source))) return false;
+    return prt__texel_gutter_sources(s->width, s->height, s->index, s->source);
 }
 
-/* out[i] = sum_k in(texel i + offset k) maps[k][i], over covered texels. `in` is read from the
- * whole map with its gutters filled (full, W x H x 3 scratch): an offset landing just off a
- * chart, in a cell that does hold surface, reads the light of the chart's edge rather than
- * nothing - as the paper's lightmap, bilinearly filtered with dilated gutters, gives it. */
-static bool apply(prt_context *ctx, const prt__offset_set *s, const float *maps, const float *in, float *full, uint8_t *mask, float *out)
+/* out[i] = sum_k in(texel i + offset k) maps[k][i], over covered texels. An offset landing off
+ * the surface reads its gutter's source (s->source): a cell that does hold surface takes the light
+ * of the chart's edge rather than nothing - as the paper's lightmap with dilated gutters gives it,
+ * and exactly what the GPU path (render/offset_gl.c) reads. */
+static void apply(prt_context *ctx, const prt__offset_set *s, const float *maps, const float *in, float *out)
 {
     const int W = s->width, H = s->height;
-    const size_t nc = s->covered, n = (size_t)W * H;
-    memset(full, 0, n * 3 * sizeof *full);
-    memset(mask, 0, n);
-    for (size_t i = 0; i < nc; ++i) {
-        memcpy(full + (size_t)s->texel[i] * 3, in + i * 3, 3 * sizeof *full);
-        mask[s->texel[i]] = 1;
-    }
-    float *planes[1] = {full};
-    const int floats[1] = {3};
-    if (!prt__texel_fill_gutters(W, H, mask, planes, floats, 1)) return false;
+    const size_t nc = s->covered;
+    const int32_t *src = s->source;
 #pragma omp parallel for schedule(static, 256) num_threads(prt__threads(ctx))
     for (size_t i = 0; i < nc; ++i) {
         const int tx = (int)(s->texel[i] % (uint32_t)W), ty = (int)(s->texel[i] / (uint32_t)W);
@@ -43,14 +38,24 @@ static bool apply(prt_context *ctx, const prt__offset_set *s, const float *maps,
         for (int k = 0; k < s->count; ++k) {
             const int sx = tx + s->offsets[k * 2], sy = ty + s->offsets[k * 2 + 1];
             if (sx < 0 || sx >= W || sy < 0 || sy >= H) continue;
-            const float *m = maps + ((size_t)k * nc + i) * 3, *f = full + ((size_t)sy * W + sx) * 3;
+            const float *m = maps + ((size_t)k * nc + i) * 3, *f = in + (size_t)src[(size_t)sy * W + sx] * 3;
             sum[0] += f[0] * m[0];
             sum[1] += f[1] * m[1];
             sum[2] += f[2] * m[2];
         }
         memcpy(out + i * 3, sum, sizeof sum);
     }
-    return true;
+}
+
+/* A full map from covered-texel values: every texel takes its source's (gutters included). */
+static void spread(const prt__offset_set *s, const float *values, float *map)
+{
+    const size_t n = (size_t)s->width * s->height;
+    for (size_t i = 0; i < n; ++i) {
+        const int32_t c = s->source[i];
+        if (c >= 0) memcpy(map + i * 3, values + (size_t)c * 3, 3 * sizeof *map);
+        else map[i * 3] = map[i * 3 + 1] = map[i * 3 + 2] = 0;
+    }
 }
 
 /* Shadow rays from the texels: the mesh in Embree and the texels' ray origins, once. */
@@ -95,14 +100,12 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     if (bounces < 0 || bounces > 64) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range 0..64", bounces);
     if (d->brdf) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf does not apply to offset transfer maps (they reflect diffusely)");
     const size_t nc = s->covered, n = (size_t)s->width * s->height, nv = t->mesh.vertex_count;
-    prt_status st = prt__relit_alloc(ctx, t, r, d->with_indirect || d->component == PRT_COMPONENT_INDIRECT);
+    prt_status st = prt__relit_alloc(ctx, t, r, !d->gpu_finish && (d->with_indirect || d->component == PRT_COMPONENT_INDIRECT));
     if (st) return st;
     float *E = prt__calloc(nc * 3, sizeof(float)), *first = malloc(nc * 3 * sizeof(float)), *indirect = prt__calloc(nc * 3, sizeof(float));
     float *a = malloc(nc * 3 * sizeof(float)), *b = malloc(nc * 3 * sizeof(float));
     float *map = prt__calloc(n * 3, sizeof(float)), *imap = r->indirect ? prt__calloc(n * 3, sizeof(float)) : NULL;
-    uint8_t *covered = prt__calloc(n, 1), *mask = malloc(n);
-    float *full = malloc(n * 3 * sizeof(float));
-    if (!E || !first || !indirect || !a || !b || !map || (r->indirect && !imap) || !covered || !mask || !full) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!E || !first || !indirect || !a || !b || !map || (r->indirect && !imap) ) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     /* Local lights (directional ones too: sharp shadows), by shadow rays from each texel. */
     prt_light *local = NULL;
     int nlocal = 0;
@@ -135,8 +138,24 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
             a[i * 3 + c] = e > 0 ? e : 0;
             first[i * 3 + c] = s->albedo[i * 3 + c] * a[i * 3 + c];
         }
+    if (d->gpu_finish) {   /* the renderer runs the passes below (render/offset_gl.c) */
+        r->gpu_input = prt__calloc(n * 3, sizeof(float));
+        if (!r->gpu_input) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+        for (size_t i = 0; i < nc; ++i) {
+            memcpy(r->gpu_input + (size_t)s->texel[i] * 3, a + i * 3, 3 * sizeof(float));
+            for (int c = 0; c < 3; ++c) b[i * 3 + c] = first[i * 3 + c] + (s->emit ? emission * s->emit[i * 3 + c] : 0.0f);
+        }
+        spread(s, b, map);
+        for (size_t v = 0; v < nv; ++v) sample_map(map, s->width, s->height, t->mesh.uv[v * 2], t->mesh.uv[v * 2 + 1], r->radiance + v * 3);
+        r->gpu_emission = emission;
+        r->gpu_bounces = bounces;
+        r->gpu_component = d->component;
+        r->texel_width = s->width;
+        r->texel_height = s->height;
+        goto done;
+    }
     if (s->subsurface) {   /* on translucent texels the dipole replaces albedo x irradiance */
-        if (!apply(ctx, s, s->subsurface, a, full, mask, b)) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+        apply(ctx, s, s->subsurface, a, b);
         for (size_t i = 0; i < nc; ++i)
             if (s->medium[i]) memcpy(first + i * 3, b + i * 3, 3 * sizeof(float));
     }
@@ -144,36 +163,21 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     if (s->radiosity && d->component != PRT_COMPONENT_DIRECT) {
         memcpy(a, first, nc * 3 * sizeof(float));
         for (int k = 0; k < bounces; ++k) {
-            if (!apply(ctx, s, s->radiosity, a, full, mask, b)) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+            apply(ctx, s, s->radiosity, a, b);
             for (size_t i = 0; i < nc * 3; ++i) indirect[i] += b[i];
             float *tmp = a; a = b; b = tmp;
         }
     }
     if (s->emit)
         for (size_t i = 0; i < nc * 3; ++i) first[i] += emission * s->emit[i];
-    for (size_t i = 0; i < nc; ++i) {
-        const size_t tx = s->texel[i];
-        covered[tx] = 1;
+    /* The shown map (b): gutters as the GPU path fills them, each texel its source's value. */
+    for (size_t i = 0; i < nc; ++i)
         for (int c = 0; c < 3; ++c) {
             const float f = first[i * 3 + c], g = indirect[i * 3 + c];
-            map[tx * 3 + c] = d->component == PRT_COMPONENT_DIRECT ? f : d->component == PRT_COMPONENT_INDIRECT ? g : f + g;
-            if (imap) imap[tx * 3 + c] = g;
+            b[i * 3 + c] = d->component == PRT_COMPONENT_DIRECT ? f : d->component == PRT_COMPONENT_INDIRECT ? g : f + g;
         }
-    }
-    {
-        uint8_t *covered2 = imap ? malloc(n) : NULL;
-        if (imap && !covered2) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
-        if (covered2) memcpy(covered2, covered, n);
-        float *planes[1] = {map};
-        const int floats[1] = {3};
-        bool ok = prt__texel_fill_gutters(s->width, s->height, covered, planes, floats, 1);
-        if (ok && imap) {
-            planes[0] = imap;
-            ok = prt__texel_fill_gutters(s->width, s->height, covered2, planes, floats, 1);
-        }
-        free(covered2);
-        if (!ok) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
-    }
+    spread(s, b, map);
+    if (imap) spread(s, indirect, imap);
     /* Per vertex: the light map at the vertex's texture coordinates. */
     for (size_t v = 0; v < nv; ++v) {
         const float u = t->mesh.uv[v * 2], w = t->mesh.uv[v * 2 + 1];
@@ -186,6 +190,6 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     map = NULL;
 done:
     free(local);
-    free(E); free(first); free(indirect); free(a); free(b); free(map); free(imap); free(covered); free(mask); free(full);
+    free(E); free(first); free(indirect); free(a); free(b); free(map); free(imap);
     return st;
 }

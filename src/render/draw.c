@@ -232,6 +232,8 @@ void prt__draw_free(prt__draw *d)
     free(d->view_set);
     if (d->vbo_uv) glDeleteBuffers(1, &d->vbo_uv);
     if (d->tex) glDeleteTextures(1, &d->tex);
+    if (d->tex_first) glDeleteTextures(1, &d->tex_first);
+    prt__offset_gl_free(&d->offset);
     if (d->vbo_nrm) { GLuint b[2] = {d->vbo_nrm, d->tbo}; glDeleteBuffers(2, b); }
     if (d->tbo_tex) glDeleteTextures(1, &d->tbo_tex);
     free(d->pack);
@@ -241,7 +243,7 @@ void prt__draw_free(prt__draw *d)
     memset(d, 0, sizeof *d);
 }
 
-void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
+prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
 {
     glBindVertexArray(d->vao);
     glBindBuffer(GL_ARRAY_BUFFER, d->vbo_pos);
@@ -285,14 +287,14 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     if (d->kvec_terms) {
         free(d->view_set);
         d->view_set = malloc(m->vertex_count);
-        if (!d->view_set) { d->kvec_terms = 0; return; }
+        if (!d->view_set) { d->kvec_terms = 0; return PRT_OK; }
         memcpy(d->view_set, m->view_set, m->vertex_count);
         d->kpack_vertices = 0;   /* the packing must be rebuilt with the new sets */
         d->view_polar = m->view_map_polar;
         const int res = m->view_map_resolution, layers = m->view_map_sets * m->kvec_terms;
         /* [set][term][channel][res][res] -> one RGB layer per (set, term). */
         float *rgb = malloc((size_t)layers * res * res * 3 * sizeof(float));
-        if (!rgb) { d->kvec_terms = 0; return; }
+        if (!rgb) { d->kvec_terms = 0; return PRT_OK; }
         for (int layer = 0; layer < layers; ++layer)
             for (int i = 0; i < res * res; ++i)
                 for (int c = 0; c < 3; ++c)
@@ -310,6 +312,39 @@ void prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
         prt__draw_upload_kvec(d, m->kvec, m->vertex_count);
     }
     if (m->texel_radiance && m->texel_width > 0 && m->texel_height > 0) prt__draw_upload_texels(d, m->texel_radiance, m->texel_width, m->texel_height);
+    return prt__draw_upload_gpu(d, m);
+}
+
+/* A display map: RGBA32F, filtered as the per-texel path samples it. */
+static void display_map(GLuint tex, int width, int height)
+{
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, width, height, 0, GL_RGBA, GL_FLOAT, NULL);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glBindTexture(GL_TEXTURE_2D, 0);
+}
+
+prt_status prt__draw_upload_gpu(prt__draw *d, const prt_render_mesh *m)
+{
+    d->side_by_side = false;
+    if (!m->gpu_transfer) return PRT_OK;
+    if (!m->gpu_input || !d->has_uv) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU accumulation needs the first-order input and texture coordinates");
+    prt_status st = prt__offset_gl_load(&d->offset, m->gpu_transfer);
+    if (st) return st;
+    if (m->texel_width != d->offset.width || m->texel_height != d->offset.height)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU accumulation: a %dx%d input for a %dx%d light map", m->texel_width, m->texel_height, d->offset.width,
+                         d->offset.height);
+    if (!d->tex_first) glGenTextures(1, &d->tex_first);
+    display_map(d->tex, d->offset.width, d->offset.height);
+    display_map(d->tex_first, d->offset.width, d->offset.height);
+    prt__offset_gl_run(&d->offset, m->gpu_input, m->gpu_emission, m->gpu_bounces, m->gpu_component, d->tex, d->tex_first);
+    d->texel_width = d->offset.width;
+    d->texel_height = d->offset.height;
+    d->side_by_side = m->side_by_side != 0;
+    return PRT_OK;
 }
 
 void prt__draw_set_lights(prt__draw *d, const float *positions, const float *albedo, size_t nv, const prt_light *lights, int count,
@@ -417,6 +452,25 @@ void prt__draw_mesh(prt__draw *d, const prt_camera *cam, int w, int h, const flo
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     glEnable(GL_DEPTH_TEST);
     glDisable(GL_CULL_FACE);   /* one-sided walls must show from both sides */
+    if (d->texel_width && d->side_by_side && d->tex_first) {
+        /* First-order light on the left, the final light on the right, each with half the width. */
+        const int half = w / 2;
+        float side[16];
+        prt__camera_matrix(cam, (float)half / (float)h, NULL, side);
+        glUseProgram(d->program_t);
+        glUniformMatrix4fv(d->ut_mvp, 1, GL_FALSE, side);
+        glActiveTexture(GL_TEXTURE0);
+        glUniform1i(d->ut_map, 0);
+        glBindVertexArray(d->vao);
+        for (int k = 0; k < 2; ++k) {
+            glViewport(k ? half : 0, 0, k ? w - half : half, h);
+            glBindTexture(GL_TEXTURE_2D, k ? d->tex : d->tex_first);
+            glDrawElements(GL_TRIANGLES, (GLsizei)d->index_count, GL_UNSIGNED_INT, NULL);
+        }
+        glBindVertexArray(0);
+        glViewport(0, 0, w, h);
+        return;
+    }
     if (d->texel_width) {
         glUseProgram(d->program_t);
         glUniformMatrix4fv(d->ut_mvp, 1, GL_FALSE, mvp);

@@ -4,6 +4,7 @@
 #define PRT_RENDER_DRAW_H
 
 #include "core/internal.h"
+#include "render/offset_gl.h"
 #include "render/pixel_lights.h"
 
 #include <epoxy/gl.h>
@@ -33,14 +34,23 @@ typedef struct prt__draw {
     size_t kpack_vertices;
     /* Local lights drawn per pixel with shadow maps, added after the main pass. */
     prt__pixel_lights lights;
+    /* Offset transfer maps finished on the GPU: the final light map goes into tex, the
+     * first-order one into tex_first, drawn beside it when side_by_side. */
+    prt__offset_gl offset;
+    GLuint tex_first;
+    bool side_by_side;
 } prt__draw;
 
 /* Compiles and links vs (+ gs, may be NULL) + fs; 0 after recording the compiler's message. */
 GLuint prt__gl_program(const char *vs_src, const char *gs_src, const char *fs_src);
 prt_status prt__draw_init(prt__draw *d);
 void prt__draw_free(prt__draw *d);
-/* Uploads geometry and radiance (re-uploads everything; the radiance changes per relight). */
-void prt__draw_upload(prt__draw *d, const prt_render_mesh *mesh);
+/* Uploads geometry and radiance (re-uploads everything; the radiance changes per relight). Fails
+ * only where the mesh asks for GPU accumulation the GPU cannot run. */
+prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *mesh);
+/* Runs the GPU accumulation of mesh's gpu_* fields into the per-texel map (the transfer's atlases
+ * uploaded when new); nothing when mesh has no gpu_transfer. */
+prt_status prt__draw_upload_gpu(prt__draw *d, const prt_render_mesh *mesh);
 /* Replaces the lights drawn per pixel and the albedo they shade (count 0: none). */
 void prt__draw_set_lights(prt__draw *d, const float *positions, const float *albedo, size_t vertex_count, const prt_light *lights, int count,
                           const float *visibility);

@@ -82,6 +82,26 @@ void prt_renderer_release(prt_renderer *r)
 
 const char *prt_renderer_name(const prt_renderer *r) { return r->name; }
 
+prt_status prt_render_light_map(prt_renderer *r, const prt_render_mesh *mesh, float *rgb, float *first_rgb)
+{
+    if (!r || !mesh || !rgb || !mesh->positions || !mesh->radiance || !mesh->indices)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_light_map: renderer, mesh arrays and output are required");
+    eglMakeCurrent(r->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, r->egl);
+    prt_status st = prt__draw_upload(&r->draw, mesh);
+    if (st) return st;
+    if (!r->draw.texel_width) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_light_map: the mesh draws no per-texel map");
+    if (first_rgb && !mesh->gpu_transfer) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_light_map: a first-order map comes only from GPU accumulation");
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glBindTexture(GL_TEXTURE_2D, r->draw.tex);
+    glGetTexImage(GL_TEXTURE_2D, 0, GL_RGB, GL_FLOAT, rgb);
+    if (first_rgb) {
+        glBindTexture(GL_TEXTURE_2D, r->draw.tex_first);
+        glGetTexImage(GL_TEXTURE_2D, 0, GL_RGB, GL_FLOAT, first_rgb);
+    }
+    glBindTexture(GL_TEXTURE_2D, 0);
+    return PRT_OK;
+}
+
 prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_camera *cam, const float background[3], prt_image *out)
 {
     memset(out, 0, sizeof *out);
@@ -89,7 +109,8 @@ prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_ca
         return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render: mesh arrays and camera are required");
     if (mesh->triangle_count * 3 > (size_t)INT32_MAX) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh too large to draw");
     eglMakeCurrent(r->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, r->egl);
-    prt__draw_upload(&r->draw, mesh);
+    prt_status st = prt__draw_upload(&r->draw, mesh);
+    if (st) return st;
     prt__target_draw(&r->target, &r->draw, cam, background);
     return prt__target_read(&r->target, out);
 }

@@ -18,7 +18,17 @@ struct prt_window {
     GLint tm_exposure, tm_mode, text_screen;
     prt_event queue[QUEUE];
     int head, count;
+    /* An upload that failed (GPU accumulation the GPU cannot run): reported by the next draw. */
+    prt_status upload_status;
+    char upload_error[256];
 };
+
+static void uploaded(prt_window *w, prt_status st)
+{
+    if (!st || w->upload_status) return;
+    w->upload_status = st;
+    snprintf(w->upload_error, sizeof w->upload_error, "%s", prt_last_error());
+}
 
 static _Thread_local char glfw_message[512];
 static void on_glfw_error(int code, const char *msg) { snprintf(glfw_message, sizeof glfw_message, "%s (GLFW error 0x%x)", msg, code); }
@@ -185,7 +195,13 @@ void prt_window_wait(prt_window *w, double timeout)
 void prt_window_set_mesh(prt_window *w, const prt_render_mesh *mesh)
 {
     glfwMakeContextCurrent(w->win);
-    prt__draw_upload(&w->draw, mesh);
+    uploaded(w, prt__draw_upload(&w->draw, mesh));
+}
+
+void prt_window_set_gpu_input(prt_window *w, const prt_render_mesh *mesh)
+{
+    glfwMakeContextCurrent(w->win);
+    uploaded(w, prt__draw_upload_gpu(&w->draw, mesh));
 }
 
 void prt_window_set_lights(prt_window *w, const prt_render_mesh *mesh)
@@ -280,6 +296,11 @@ prt_status prt_window_draw(prt_window *w, const prt_camera *cam, const float bac
                            const char *overlay)
 {
     glfwMakeContextCurrent(w->win);
+    if (w->upload_status) {
+        const prt_status st = w->upload_status;
+        w->upload_status = PRT_OK;
+        return prt__fail(NULL, st, "%s", w->upload_error);
+    }
     int fw = w->target.width, fh = w->target.height;
     prt__target_draw(&w->target, &w->draw, cam, background);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);

@@ -1,0 +1,345 @@
+/* Offset transfer maps accumulated by the GPU: the paper's run time. Light maps are RGBA32F
+ * render targets of the light map's size; a pass draws, for every slice of every map, a quad over
+ * the slice's texels whose fragments add map(t) x light(source(t + offset)) into the target with
+ * GL_ONE, GL_ONE blending. Reading the light through the gutter-source map (a dependent read the
+ * paper's 2006 GPU avoided with dilated gutters) gives exactly the CPU's sum (relight/offset.c). */
+#include "render/offset_gl.h"
+
+#include "bake/offset_bins.h"
+#include "render/draw.h"
+#include "method/offset.h"
+#include "method/transfer.h"
+
+#include <string.h>
+
+/* Quad corners in texel units; per slice: where its atlas texels are relative to the light map
+ * (shift), the offset whose light it multiplies, and its atlas layer. */
+static const char *VS_ACCUM =
+    "#version 330 core\n"
+    "layout(location = 0) in vec2 corner;\n"
+    "layout(location = 1) in ivec4 shift_offset;\n"
+    "layout(location = 2) in int layer;\n"
+    "uniform vec2 size;\n"
+    "flat out ivec4 f_so; flat out int f_layer;\n"
+    "void main() { f_so = shift_offset; f_layer = layer; gl_Position = vec4(corner / size * 2.0 - 1.0, 0.0, 1.0); }\n";
+static const char *FS_ACCUM =
+    "#version 330 core\n"
+    "flat in ivec4 f_so; flat in int f_layer;\n"
+    "uniform sampler2DArray atlas; uniform sampler2D light; uniform isampler2D source;\n"
+    "layout(location = 0) out vec4 bounce;\n"
+    "layout(location = 1) out vec4 total;\n"
+    "void main() {\n"
+    "  ivec2 t = ivec2(gl_FragCoord.xy), p = t + f_so.zw, size = textureSize(source, 0);\n"
+    "  if (any(lessThan(p, ivec2(0))) || any(greaterThanEqual(p, size))) discard;\n"
+    "  ivec2 s = texelFetch(source, p, 0).xy;\n"
+    "  if (s.x < 0) discard;\n"
+    "  vec3 c = texelFetch(atlas, ivec3(t + f_so.xy, f_layer), 0).rgb * texelFetch(light, s, 0).rgb;\n"
+    "  bounce = vec4(c, 0.0);\n"
+    "  total = vec4(c, 0.0);\n"
+    "}\n";
+/* Full-map passes: a triangle covering the map, each texel computed at its source. */
+static const char *VS_FULL =
+    "#version 330 core\n"
+    "void main() { vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0); gl_Position = vec4(p, 0.0, 1.0); }\n";
+/* First-order light: albedo x irradiance / pi, or on translucent texels what subsurface scattering
+ * gathered. */
+static const char *FS_FIRST =
+    "#version 330 core\n"
+    "uniform isampler2D source; uniform sampler2D input_map, albedo, medium, sub; uniform int has_sub;\n"
+    "out vec4 color;\n"
+    "void main() {\n"
+    "  ivec2 s = texelFetch(source, ivec2(gl_FragCoord.xy), 0).xy;\n"
+    "  if (s.x < 0) { color = vec4(0.0); return; }\n"
+    "  vec3 f = texelFetch(albedo, s, 0).rgb * texelFetch(input_map, s, 0).rgb;\n"
+    "  if (has_sub != 0 && texelFetch(medium, s, 0).r > 0.0) f = texelFetch(sub, s, 0).rgb;\n"
+    "  color = vec4(f, 1.0);\n"
+    "}\n";
+/* What is shown: first-order plus emission, bounced light, or both (component 0 all, 1 direct,
+ * 2 indirect); the first-order map alone as the second output. */
+static const char *FS_FINAL =
+    "#version 330 core\n"
+    "uniform isampler2D source; uniform sampler2D first, total, emit; uniform float emission; uniform int component;\n"
+    "layout(location = 0) out vec4 color;\n"
+    "layout(location = 1) out vec4 first_order;\n"
+    "void main() {\n"
+    "  ivec2 s = texelFetch(source, ivec2(gl_FragCoord.xy), 0).xy;\n"
+    "  if (s.x < 0) { color = first_order = vec4(0.0, 0.0, 0.0, 1.0); return; }\n"
+    "  vec3 f = texelFetch(first, s, 0).rgb + emission * texelFetch(emit, s, 0).rgb, g = texelFetch(total, s, 0).rgb;\n"
+    "  color = vec4(component == 1 ? f : component == 2 ? g : f + g, 1.0);\n"
+    "  first_order = vec4(f, 1.0);\n"
+    "}\n";
+
+typedef struct quad_vertex {
+    float x, y;
+    int32_t shift_x, shift_y, offset_x, offset_y, layer;
+} quad_vertex;
+
+static GLuint new_map(int w, int h, GLenum internal, GLenum format, GLenum type, const void *data)
+{
+    GLuint tex;
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTexImage2D(GL_TEXTURE_2D, 0, (GLint)internal, w, h, 0, format, type, data);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    return tex;
+}
+
+/* A per-texel map of a covered-texel array (floats per texel, 1 or 3), zero off the surface. */
+static GLuint texel_map(const prt__offset_set *s, const float *values, const uint8_t *bytes, int floats, float *scratch)
+{
+    const size_t n = (size_t)s->width * s->height;
+    memset(scratch, 0, n * 3 * sizeof *scratch);
+    for (size_t i = 0; i < s->covered; ++i)
+        for (int c = 0; c < floats; ++c)
+            scratch[(size_t)s->texel[i] * floats + c] = values ? values[i * floats + c] : (float)bytes[i];
+    return new_map(s->width, s->height, floats == 3 ? GL_RGB32F : GL_R32F, floats == 3 ? GL_RGB : GL_RED, GL_FLOAT, scratch);
+}
+
+void prt__offset_gl_free(prt__offset_gl *g)
+{
+    for (int k = 0; k < 2; ++k) {
+        if (g->atlas[k]) glDeleteTextures(1, &g->atlas[k]);
+        if (g->vbo[k]) glDeleteBuffers(1, &g->vbo[k]);
+        if (g->vao[k]) glDeleteVertexArrays(1, &g->vao[k]);
+    }
+    GLuint tex[] = {g->source, g->albedo, g->medium, g->emit, g->input, g->sub, g->first, g->bounce[0], g->bounce[1], g->total};
+    for (size_t i = 0; i < sizeof tex / sizeof *tex; ++i)
+        if (tex[i]) glDeleteTextures(1, &tex[i]);
+    if (g->fbo) glDeleteFramebuffers(1, &g->fbo);
+    if (g->p_accum) glDeleteProgram(g->p_accum);
+    if (g->p_first) glDeleteProgram(g->p_first);
+    if (g->p_final) glDeleteProgram(g->p_final);
+    memset(g, 0, sizeof *g);
+}
+
+/* Crops kind k's maps, bins their slices and uploads the atlases and the slices' quads. */
+static prt_status upload_kind(prt__offset_gl *g, const prt__offset_set *s, const float *maps, int k, int max_layers)
+{
+    const int W = s->width, H = s->height, K = s->count;
+    const size_t n = (size_t)W * H, nc = s->covered;
+    float *full = malloc(n * 3 * sizeof *full);
+    int *box = malloc((size_t)K * 4 * sizeof *box), *bw = malloc((size_t)K * sizeof *bw), *bh = malloc((size_t)K * sizeof *bh);
+    prt__bin_piece *pieces = NULL;
+    int npieces = 0, nbins = 0;
+    float *layer = NULL;
+    quad_vertex *quads = NULL;
+    prt_status st = full && box && bw && bh ? PRT_OK : prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for the offset atlases");
+    for (int o = 0; o < K && !st; ++o) {
+        memset(full, 0, n * 3 * sizeof *full);
+        for (size_t i = 0; i < nc; ++i) memcpy(full + (size_t)s->texel[i] * 3, maps + ((size_t)o * nc + i) * 3, 3 * sizeof *full);
+        if (!prt__map_crop(full, W, H, &box[o * 4], &box[o * 4 + 1], &box[o * 4 + 2], &box[o * 4 + 3])) box[o * 4 + 2] = box[o * 4 + 3] = 0;
+        bw[o] = box[o * 4 + 2];
+        bh[o] = box[o * 4 + 3];
+    }
+    if (!st) st = prt__bin_maps(NULL, bw, bh, K, g->bin_size, &pieces, &npieces, &nbins);
+    if (!st && nbins > max_layers)
+        st = prt__fail(NULL, PRT_ERR_BACKEND, "the offset maps need %d atlases of %d^2 texels; this GPU holds %d in one texture array", nbins, g->bin_size, max_layers);
+    if (!st && nbins > 0) {
+        const size_t bin_texels = (size_t)g->bin_size * g->bin_size;
+        layer = malloc(bin_texels * 3 * sizeof *layer);
+        quads = malloc((size_t)npieces * 6 * sizeof *quads + 1);
+        if (!layer || !quads) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for the offset atlases");
+        if (!st) {
+            glGenTextures(1, &g->atlas[k]);
+            glBindTexture(GL_TEXTURE_2D_ARRAY, g->atlas[k]);
+            glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGB32F, g->bin_size, g->bin_size, nbins, 0, GL_RGB, GL_FLOAT, NULL);
+            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+            glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+        }
+        /* One atlas at a time: its pieces' texels straight from the covered-texel maps. */
+        for (int b = 0; b < nbins && !st; ++b) {
+            memset(layer, 0, bin_texels * 3 * sizeof *layer);
+            for (int p = 0; p < npieces; ++p) {
+                const prt__bin_piece *pc = &pieces[p];
+                if (pc->bin != b) continue;
+                const int o = pc->map, x0 = box[o * 4] + pc->sx, y0 = box[o * 4 + 1] + pc->sy;
+                for (int y = 0; y < pc->h; ++y)
+                    for (int x = 0; x < pc->w; ++x) {
+                        const int32_t i = s->index[(size_t)(y0 + y) * W + x0 + x];
+                        if (i >= 0) memcpy(layer + ((size_t)(pc->dy + y) * g->bin_size + pc->dx + x) * 3, maps + ((size_t)o * nc + (size_t)i) * 3, 3 * sizeof *layer);
+                    }
+            }
+            glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, b, g->bin_size, g->bin_size, 1, GL_RGB, GL_FLOAT, layer);
+        }
+        for (int p = 0; p < npieces && !st; ++p) {
+            const prt__bin_piece *pc = &pieces[p];
+            const int o = pc->map, x0 = box[o * 4] + pc->sx, y0 = box[o * 4 + 1] + pc->sy;
+            const quad_vertex v = {0, 0, pc->dx - x0, pc->dy - y0, s->offsets[o * 2], s->offsets[o * 2 + 1], pc->bin};
+            const float xs[6] = {0, 1, 1, 0, 1, 0}, ys[6] = {0, 0, 1, 0, 1, 1};
+            for (int c = 0; c < 6; ++c) {
+                quads[p * 6 + c] = v;
+                quads[p * 6 + c].x = (float)(x0 + xs[c] * pc->w);
+                quads[p * 6 + c].y = (float)(y0 + ys[c] * pc->h);
+            }
+        }
+        if (!st) {
+            glGenVertexArrays(1, &g->vao[k]);
+            glGenBuffers(1, &g->vbo[k]);
+            glBindVertexArray(g->vao[k]);
+            glBindBuffer(GL_ARRAY_BUFFER, g->vbo[k]);
+            glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)((size_t)npieces * 6 * sizeof *quads), quads, GL_STATIC_DRAW);
+            glEnableVertexAttribArray(0);
+            glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, sizeof *quads, (void *)offsetof(quad_vertex, x));
+            glEnableVertexAttribArray(1);
+            glVertexAttribIPointer(1, 4, GL_INT, sizeof *quads, (void *)offsetof(quad_vertex, shift_x));
+            glEnableVertexAttribArray(2);
+            glVertexAttribIPointer(2, 1, GL_INT, sizeof *quads, (void *)offsetof(quad_vertex, layer));
+            glBindVertexArray(0);
+            g->vertices[k] = npieces * 6;
+            g->layers += nbins;
+        }
+    }
+    free(full); free(box); free(bw); free(bh); free(pieces); free(layer); free(quads);
+    return st;
+}
+
+prt_status prt__offset_gl_load(prt__offset_gl *g, const prt_transfer *t)
+{
+    const prt__offset_set *s = t ? prt__state_of(t, &prt__method_offset) : NULL;
+    if (!s) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU accumulation needs a transfer of method offset");
+    if (g->serial == t->serial) return PRT_OK;
+    prt__offset_gl_free(g);
+    const int W = s->width, H = s->height;
+    GLint max_size = 0, max_layers = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+    glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+    g->width = W;
+    g->height = H;
+    for (g->bin_size = 1; g->bin_size < W || g->bin_size < H; g->bin_size *= 2) {}
+    if (g->bin_size > max_size) return prt__fail(NULL, PRT_ERR_BACKEND, "a %dx%d light map is beyond this GPU's %d-texel textures", W, H, max_size);
+    g->p_accum = prt__gl_program(VS_ACCUM, NULL, FS_ACCUM);
+    g->p_first = g->p_accum ? prt__gl_program(VS_FULL, NULL, FS_FIRST) : 0;
+    g->p_final = g->p_first ? prt__gl_program(VS_FULL, NULL, FS_FINAL) : 0;
+    if (!g->p_final) { prt__offset_gl_free(g); return PRT_ERR_BACKEND; }   /* prt__gl_program said why */
+    while (glGetError() != GL_NO_ERROR) {}
+    prt_status st = PRT_OK;
+    if (s->radiosity) st = upload_kind(g, s, s->radiosity, 0, max_layers);
+    if (!st && s->subsurface) st = upload_kind(g, s, s->subsurface, 1, max_layers);
+    const size_t n = (size_t)W * H;
+    float *scratch = st ? NULL : malloc(n * 3 * sizeof *scratch);
+    int32_t *src = st ? NULL : malloc(n * 2 * sizeof *src);
+    if (!st && (!scratch || !src)) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for the offset maps");
+    if (!st) {
+        for (size_t i = 0; i < n; ++i) {
+            const int32_t c = s->source[i];
+            src[i * 2] = c < 0 ? -1 : (int32_t)(s->texel[c] % (uint32_t)W);
+            src[i * 2 + 1] = c < 0 ? -1 : (int32_t)(s->texel[c] / (uint32_t)W);
+        }
+        g->source = new_map(W, H, GL_RG32I, GL_RG_INTEGER, GL_INT, src);
+        g->albedo = texel_map(s, s->albedo, NULL, 3, scratch);
+        g->has_medium = s->medium != NULL;
+        g->medium = s->medium ? texel_map(s, NULL, s->medium, 1, scratch) : texel_map(s, NULL, NULL, 0, scratch);
+        g->has_emit = s->emit != NULL;
+        g->emit = texel_map(s, s->emit, NULL, s->emit ? 3 : 0, scratch);
+        GLuint *work[] = {&g->input, &g->sub, &g->first, &g->bounce[0], &g->bounce[1], &g->total};
+        for (size_t i = 0; i < sizeof work / sizeof *work; ++i) *work[i] = new_map(W, H, GL_RGBA32F, GL_RGBA, GL_FLOAT, NULL);
+        glGenFramebuffers(1, &g->fbo);
+    }
+    free(scratch);
+    free(src);
+    if (!st) {
+        const GLenum e = glGetError();
+        if (e == GL_OUT_OF_MEMORY) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "the GPU has no room for the offset atlases (%d of %d^2 texels)", g->layers, g->bin_size);
+        else if (e != GL_NO_ERROR) st = prt__fail(NULL, PRT_ERR_BACKEND, "uploading the offset atlases failed (GL error 0x%x)", e);
+    }
+    if (st) { prt__offset_gl_free(g); return st; }
+    g->serial = t->serial;
+    return PRT_OK;
+}
+
+static void bind(GLuint program, const char *name, int unit, GLenum target, GLuint tex)
+{
+    glActiveTexture(GL_TEXTURE0 + (GLenum)unit);
+    glBindTexture(target, tex);
+    glUniform1i(glGetUniformLocation(program, name), unit);
+}
+
+static void target(GLuint fbo, GLuint color0, GLuint color1)
+{
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, color0, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, color1, 0);
+    const GLenum both[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glDrawBuffers(color1 ? 2 : 1, both);
+}
+
+/* Adds every slice of kind k's maps times `light` into the bound targets. */
+static void accumulate(prt__offset_gl *g, int k, GLuint light)
+{
+    glUseProgram(g->p_accum);
+    glUniform2f(glGetUniformLocation(g->p_accum, "size"), (float)g->width, (float)g->height);
+    bind(g->p_accum, "atlas", 0, GL_TEXTURE_2D_ARRAY, g->atlas[k]);
+    bind(g->p_accum, "light", 1, GL_TEXTURE_2D, light);
+    bind(g->p_accum, "source", 2, GL_TEXTURE_2D, g->source);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_ONE, GL_ONE);
+    glBlendEquation(GL_FUNC_ADD);
+    glBindVertexArray(g->vao[k]);
+    glDrawArrays(GL_TRIANGLES, 0, g->vertices[k]);
+    glBindVertexArray(0);
+    glDisable(GL_BLEND);
+}
+
+void prt__offset_gl_run(prt__offset_gl *g, const float *input, float emission, int bounces, int component, GLuint final_tex, GLuint first_tex)
+{
+    const float zero[4] = {0, 0, 0, 0};
+    GLint viewport[4];
+    glGetIntegerv(GL_VIEWPORT, viewport);
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_MULTISAMPLE);
+    glViewport(0, 0, g->width, g->height);
+    glBindTexture(GL_TEXTURE_2D, g->input);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, g->width, g->height, GL_RGB, GL_FLOAT, input);
+    GLuint empty_vao;
+    glGenVertexArrays(1, &empty_vao);
+    /* Subsurface scattering of the irradiance, then the first-order light map. */
+    if (g->vertices[1]) {
+        target(g->fbo, g->sub, 0);
+        glClearBufferfv(GL_COLOR, 0, zero);
+        accumulate(g, 1, g->input);
+    }
+    target(g->fbo, g->first, 0);
+    glUseProgram(g->p_first);
+    bind(g->p_first, "source", 0, GL_TEXTURE_2D, g->source);
+    bind(g->p_first, "input_map", 1, GL_TEXTURE_2D, g->input);
+    bind(g->p_first, "albedo", 2, GL_TEXTURE_2D, g->albedo);
+    bind(g->p_first, "medium", 3, GL_TEXTURE_2D, g->medium);
+    bind(g->p_first, "sub", 4, GL_TEXTURE_2D, g->sub);
+    glUniform1i(glGetUniformLocation(g->p_first, "has_sub"), g->vertices[1] && g->has_medium);
+    glBindVertexArray(empty_vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    /* Inter-reflection: each bounce gathers the last one's light; all of them add into total. */
+    target(g->fbo, g->total, 0);
+    glClearBufferfv(GL_COLOR, 0, zero);
+    GLuint from = g->first;
+    for (int b = 0; b < bounces && g->vertices[0] && component != PRT_COMPONENT_DIRECT; ++b) {
+        const GLuint to = g->bounce[b & 1];
+        target(g->fbo, to, g->total);
+        glClearBufferfv(GL_COLOR, 0, zero);
+        accumulate(g, 0, from);
+        from = to;
+    }
+    target(g->fbo, final_tex, first_tex);
+    glUseProgram(g->p_final);
+    bind(g->p_final, "source", 0, GL_TEXTURE_2D, g->source);
+    bind(g->p_final, "first", 1, GL_TEXTURE_2D, g->first);
+    bind(g->p_final, "total", 2, GL_TEXTURE_2D, g->total);
+    bind(g->p_final, "emit", 3, GL_TEXTURE_2D, g->emit);
+    glUniform1f(glGetUniformLocation(g->p_final, "emission"), g->has_emit ? emission : 0.0f);
+    glUniform1i(glGetUniformLocation(g->p_final, "component"), component);
+    glBindVertexArray(empty_vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+    glDeleteVertexArrays(1, &empty_vao);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glActiveTexture(GL_TEXTURE0);
+    glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+}
