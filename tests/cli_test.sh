@@ -109,8 +109,18 @@ grep -q '"indirect"' "$T/offset.json" && ok || bad "an offset relight lacks its 
 expect 0 "render offset" -- $NOLEAK "$PRT" render -q "$T/offset.prt" --env none --light point:0.3,1.2,0.4:2 -o "$T/offset.png" --width 64 --height 48
 expect 2 "offset: bounces out of range" -- "$PRT" relight "$T/offset.prt" --control bounces=99 -o "$T/x.json"
 expect 0 "render offset: final and first-order side by side" -- $NOLEAK "$PRT" render -q "$T/offset.prt" -k final,first-order -o "$T/offset2.png" --width 64 --height 48
+expect 0 "render offset on the GPU" -- $NOLEAK "$PRT" render -q "$T/offset.prt" --env none --light point:0.3,1.2,0.4:2 -o "$T/offset_gpu.exr" --width 64 --height 48 --accumulate gpu
+expect 0 "render offset on the CPU" -- $NOLEAK "$PRT" render -q "$T/offset.prt" --env none --light point:0.3,1.2,0.4:2 -o "$T/offset_cpu.exr" --width 64 --height 48 --accumulate cpu
+expect 0 "GPU and CPU accumulation draw the same" -- "$PRT" compare --json "$T/cmp.json" "$T/offset_gpu.exr" "$T/offset_cpu.exr"
+awk '/"relative_l2"/ { gsub(/[^0-9.eE+-]/, "", $2); exit !($2 < 1e-3) }' "$T/cmp.json" && ok || bad "GPU and CPU offset renders differ"
+expect 2 "--accumulate of an SH file" -- "$PRT" render "$T/demo.prt" --accumulate gpu -o "$T/x.png"
+says "offset transfer maps"
+expect 2 "--accumulate gpu with --per-vertex" -- "$PRT" render "$T/offset.prt" --accumulate gpu --per-vertex -o "$T/x.png"
+expect 2 "--accumulate nonsense" -- "$PRT" render "$T/offset.prt" --accumulate fpga -o "$T/x.png"
+mkdir -p "$T/maps" && : >"$T/maps/radiosity_0999.exr" && : >"$T/maps/mine.txt"
 expect 0 "export offset maps" -- "$PRT" export -q "$T/offset.prt" --maps "$T/maps"
 grep -q '"radiosity"' "$T/maps/index.json" && [ "$(ls "$T/maps" | grep -c '\.exr$')" -gt 10 ] && ok || bad "export --maps wrote no index or too few maps"
+[ ! -e "$T/maps/radiosity_0999.exr" ] && [ -e "$T/maps/mine.txt" ] && [ -s "$T/maps/surface.exr" ] && ok || bad "export --maps left an earlier map, removed another file or wrote no surface.exr"
 expect 2 "export --maps of an SH file" -- "$PRT" export "$T/demo.prt" --maps "$T/nomaps"
 says "method offset"
 rm -f "$T/nomesh.glb"

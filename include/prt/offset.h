@@ -2,8 +2,8 @@
  * method "offset" holds. A light map of width x height texels over the mesh's UVs; for each of
  * `count` offsets dt and each transfer kind, a map whose texel t holds TR(t, t + dt) TVA(t, dt):
  * at run time the first-order light map, shifted by dt, is multiplied by it and summed over the
- * offsets (eq. 9). The maps are what a GPU renderer would bin into atlases and blend, and what
- * prt export --maps writes as OpenEXR files with an index. Everything else goes through
+ * offsets (eq. 9). The maps are what prt_render bins into atlases and blends (prt_render_mesh's
+ * gpu_* fields), and what prt export --maps writes as OpenEXR files with an index. Everything else goes through
  * prt/method.h. */
 #ifndef PRT_OFFSET_H
 #define PRT_OFFSET_H
@@ -29,6 +29,12 @@ int prt_transfer_offset_info(const prt_transfer *t, prt_offset_info *info);
 /* Offset k's map of a kind as width x height RGB (row 0 at v near 0, zero off the surface) and
  * its offset in texels (dx, dy); rgb may be NULL to ask for the offset only. */
 prt_status prt_transfer_offset_map(const prt_transfer *t, prt_offset_kind kind, int k, int offset[2], float *rgb);
+
+/* Where each texel's light is read (width x height values, y * width + x): itself on the
+ * surface, else the surface texel that fills its gutter (rings grown outwards from the charts,
+ * each texel taking the source of its first neighbour - left, right, down, up - in the ring
+ * before), -1 when the map holds no surface. The maps multiply the light at source(t + dt). */
+prt_status prt_transfer_offset_sources(const prt_transfer *t, int32_t *source);
 
 /* Which texels scatter under their surface: width x height values, 0 opaque, k the k-th medium
  * (as prt info lists them); fails when the file has no subsurface maps. */

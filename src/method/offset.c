@@ -441,6 +441,14 @@ prt_status prt_transfer_offset_map(const prt_transfer *t, prt_offset_kind kind, 
     return PRT_OK;
 }
 
+prt_status prt_transfer_offset_sources(const prt_transfer *t, int32_t *source)
+{
+    const prt__offset_set *s = prt__state_of(t, &prt__method_offset);
+    if (!s || !source) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_transfer_offset_sources: an offset transfer and an array are required");
+    for (size_t i = 0, n = (size_t)s->width * s->height; i < n; ++i) source[i] = s->source[i] < 0 ? -1 : (int32_t)s->texel[s->source[i]];
+    return PRT_OK;
+}
+
 prt_status prt_transfer_offset_medium(const prt_transfer *t, float *medium)
 {
     const prt__offset_set *s = prt__state_of(t, &prt__method_offset);

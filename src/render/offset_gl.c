@@ -291,6 +291,7 @@ void prt__offset_gl_run(prt__offset_gl *g, const float *input, float emission, i
     const float zero[4] = {0, 0, 0, 0};
     GLint viewport[4];
     glGetIntegerv(GL_VIEWPORT, viewport);
+    const GLboolean multisample = glIsEnabled(GL_MULTISAMPLE), depth = glIsEnabled(GL_DEPTH_TEST);
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_CULL_FACE);
     glDisable(GL_MULTISAMPLE);
@@ -342,4 +343,6 @@ void prt__offset_gl_run(prt__offset_gl *g, const float *input, float emission, i
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glActiveTexture(GL_TEXTURE0);
     glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+    if (multisample) glEnable(GL_MULTISAMPLE);   /* the mesh is drawn next, antialiased */
+    if (depth) glEnable(GL_DEPTH_TEST);
 }

@@ -601,6 +601,28 @@ int cli_controls(const cli *c, const cli_light *l, const prt_transfer *t, int va
     return n;
 }
 
+bool cli_parse_accumulate(const char *arg, bool *gpu)
+{
+    if (!strcasecmp(arg, "cpu")) *gpu = false;
+    else if (!strcasecmp(arg, "gpu")) *gpu = true;
+    else return false;
+    return true;
+}
+
+bool cli_check_accumulate(const cli *c, const prt_transfer *t, bool per_vertex)
+{
+    prt_offset_info info;
+    if (!prt_transfer_offset_info(t, &info)) {
+        cli_error(c, "--accumulate gpu applies to offset transfer maps, and this is a %s file (prt info says what it holds)", prt_method_name(prt_transfer_method(t)));
+        return false;
+    }
+    if (per_vertex) {
+        cli_error(c, "--accumulate gpu draws the light map per texel; --per-vertex asks for vertex colours");
+        return false;
+    }
+    return true;
+}
+
 prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,
                        bool with_indirect, prt_relit *out)
 {
@@ -620,6 +642,7 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     d.per_vertex = per_vertex;
     d.with_indirect = with_indirect;
     d.brdf = l && l->have_brdf ? &l->brdf : NULL;
+    d.gpu_finish = l && l->gpu_finish;
     int controls[PRT_MAX_CONTROLS];
     const int nc = cli_controls(c, l, t, controls);
     if (nc < 0) { ((cli *)c)->reported = true; return PRT_ERR_INVALID_ARG; }

@@ -85,6 +85,7 @@ typedef struct cli_light {
     /* --control NAME=V: the method's run-time settings (prt_transfer_controls). */
     struct { char name[64]; int value; } control[PRT_MAX_CONTROLS];
     int control_count;
+    bool gpu_finish;          /* --accumulate gpu: the method's last passes in the renderer */
     char path_buf[1024];
 } cli_light;
 
@@ -150,6 +151,10 @@ int cli_relight_resolve(const cli *c, const cli_kinds *r, const prt_transfer *t,
 prt_status cli_painted_albedo(const cli *c, const cli_light *l, const prt_transfer *t, float **out);
 /* The method's control values with --control applied (defaults elsewhere); count is returned. */
 int cli_controls(const cli *c, const cli_light *l, const prt_transfer *t, int values[PRT_MAX_CONTROLS]);
+/* --accumulate cpu|gpu; false when it is neither. */
+bool cli_parse_accumulate(const char *arg, bool *gpu);
+/* Whether --accumulate gpu applies to t (offset maps drawn per texel); reports when not. */
+bool cli_check_accumulate(const cli *c, const prt_transfer *t, bool per_vertex);
 /* Relights t into out with l (variant index, per-vertex only when asked). */
 prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,
                        bool with_indirect, prt_relit *out);

@@ -1,5 +1,7 @@
 #include "cli.h"
 
+#include <dirent.h>
+
 #include <cjson/cJSON.h>
 #include <errno.h>
 #include <sys/stat.h>
@@ -59,12 +61,33 @@ static const char *HELP_EXPORT =
     "      --glsl FILE        write the GLSL that relights those attributes (implies --sh)\n"
     "      --maps DIR         offset files: each transfer map as an OpenEXR file cropped to its\n"
     "                         non-zero box, and DIR/index.json naming kind, offset and box (with\n"
-    "                         or without -o)\n"
+    "                         or without -o); replaces what an earlier export left in DIR\n"
     CLI_LIGHT_OPTIONS_HELP
     "Other:\n"
     "  -j, --threads N        worker threads\n"
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
+
+/* Removes what an earlier export left in dir (its maps, medium.exr, index.json), so that a file
+ * with fewer maps or kinds never leaves stale maps beside its index; other files stay. */
+static prt_status clear_offset_maps(cli *c, const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d) { cli_error(c, "cannot read '%s': %s", dir, strerror(errno)); return PRT_ERR_IO; }
+    prt_status st = PRT_OK;
+    for (struct dirent *e; !st && (e = readdir(d));) {
+        const char *n = e->d_name;
+        int k = -1, used = 0;
+        const bool map = (sscanf(n, "radiosity_%4d.exr%n", &k, &used) == 1 || sscanf(n, "subsurface_%4d.exr%n", &k, &used) == 1) && used > 0 &&
+                         !n[used] && k >= 0;
+        if (!map && strcmp(n, "medium.exr") && strcmp(n, "surface.exr") && strcmp(n, "index.json")) continue;
+        char path[4200];
+        snprintf(path, sizeof path, "%s/%s", dir, n);
+        if (remove(path) != 0 && errno != ENOENT) { cli_error(c, "cannot remove the earlier export's '%s': %s", path, strerror(errno)); st = PRT_ERR_IO; }
+    }
+    closedir(d);
+    return st;
+}
 
 /* The offset transfer maps as OpenEXR files (each cropped to its non-zero box) and an index
  * that names each file's kind, offset and box: the paper's pipeline hands these to its binning
@@ -74,6 +97,7 @@ static prt_status write_offset_maps(cli *c, const prt_transfer *t, const char *d
     prt_offset_info info;
     if (!prt_transfer_offset_info(t, &info)) { cli_error(c, "--maps writes the maps of offset transfer files (bake with --method offset)"); return PRT_ERR_INVALID_ARG; }
     if (mkdir(dir, 0777) != 0 && errno != EEXIST) { cli_error(c, "cannot create '%s': %s", dir, strerror(errno)); return PRT_ERR_IO; }
+    if (clear_offset_maps(c, dir)) return PRT_ERR_IO;
     const int W = info.width, H = info.height;
     float *map = malloc((size_t)W * H * 3 * sizeof *map);
     cJSON *index = cJSON_CreateObject(), *kinds = index ? cJSON_AddObjectToObject(index, "kinds") : NULL;
@@ -82,7 +106,9 @@ static prt_status write_offset_maps(cli *c, const prt_transfer *t, const char *d
         cJSON_AddNumberToObject(index, "width", W);
         cJSON_AddNumberToObject(index, "height", H);
         cJSON_AddStringToObject(index, "layout", "each file holds the box crop = [x0, y0, w, h] of its map (texel rows from v = 0 at the image's bottom). "
-                                                 "A pass over a kind's maps: out(t) = sum over its maps of in(t + offset) * map(t). subsurface: in = "
+                                                 "A pass over a kind's maps: out(t) = sum over its maps of in(s(t + offset)) * map(t), where s(u) = u on the surface (surface.exr "
+                                                 "above 0) and otherwise the surface texel that fills u's gutter: rings grow outwards from the "
+                                                 "charts, each texel taking the source of its first neighbour (left, right, down, up) in the ring before. subsurface: in = "
                                                  "irradiance / pi, and out replaces albedo * in on the texels of medium.exr above 0; radiosity: in = the "
                                                  "first-order light map, each bounce is a pass over what the last one gave, final = first + the bounces");
     }
@@ -124,6 +150,20 @@ static prt_status write_offset_maps(cli *c, const prt_transfer *t, const char *d
             const int box[4] = {x0, y0, w, h};
             for (int i = 0; i < 4; ++i) cJSON_AddItemToArray(crop, cJSON_CreateNumber(box[i]));
         }
+    }
+    if (!st) {   /* which texels are on the surface */
+        int32_t *src = malloc((size_t)W * H * sizeof *src);
+        prt_image img = {W, H, malloc((size_t)W * H * 3 * sizeof(float))};
+        st = src && img.rgb ? prt_transfer_offset_sources(t, src) : PRT_ERR_NO_MEMORY;
+        for (int y = 0; !st && y < H; ++y)
+            for (int x = 0; x < W; ++x)
+                for (int ch = 0; ch < 3; ++ch) img.rgb[((size_t)(H - 1 - y) * W + x) * 3 + ch] = src[(size_t)y * W + x] == y * W + x ? 1.0f : 0.0f;
+        char path[4200];
+        snprintf(path, sizeof path, "%s/surface.exr", dir);
+        if (!st && (st = prt_image_save(path, &img, NULL))) cli_error(c, "cannot write '%s': %s", path, prt_last_error());
+        if (!st) cJSON_AddStringToObject(index, "surface", "surface.exr");
+        free(src);
+        prt_image_free(&img);
     }
     if (!st && info.has[PRT_OFFSET_SUBSURFACE]) {   /* which texels the subsurface pass replaces */
         float *med = malloc((size_t)W * H * sizeof *med);

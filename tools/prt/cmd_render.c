@@ -23,6 +23,9 @@ static const char *HELP =
     "Other:\n"
     "      --per-vertex       shade from the vertex sets even where the file has per-texel ones,\n"
     "                         and evaluate view-dependent parts per vertex rather than per pixel\n"
+    "      --accumulate W     offset transfer maps: where the transfer passes run - cpu (default:\n"
+    "                         threads) or gpu (the paper's run time: the maps binned into atlases,\n"
+    "                         accumulated by additive blending); the same light map either way\n"
     "  -j, --threads N        worker threads for relighting\n"
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
@@ -40,7 +43,7 @@ int cmd_render(int argc, char **argv)
     cli_view view = CLI_VIEW_DEFAULTS;
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'}, CLI_VIEW_LONG_OPTIONS, CLI_LIGHT_LONG_OPTIONS,
-        {"threads", required_argument, 0, 'j'}, {"per-vertex", no_argument, 0, 'P'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'},
+        {"threads", required_argument, 0, 'j'}, {"per-vertex", no_argument, 0, 'P'}, {"accumulate", required_argument, 0, 'A'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     int opt;
     optind = 1;
@@ -53,6 +56,9 @@ int cmd_render(int argc, char **argv)
         switch (opt) {
         case 'o': output = optarg; break;
         case 'P': per_vertex = true; break;
+        case 'A':
+            if (!cli_parse_accumulate(optarg, &light.gpu_finish)) return cli_usage(&c, "--accumulate takes cpu or gpu");
+            break;
         case 'k':
             snprintf(kind_buf, sizeof kind_buf, "%s", optarg);
             if (!cli_relight_kinds(&kinds, kind_buf)) return cli_usage(&c, "--kind takes a comma list of at most 16 names");
@@ -78,6 +84,7 @@ int cmd_render(int argc, char **argv)
     int variants[MAX_PANELS], count = 0;
     prt_status st = prt_transfer_load(c.ctx, argv[optind], &t);
     if (!st && (count = cli_relight_resolve(&c, &kinds, t, 1, variants, MAX_PANELS)) < 0) rc = EXIT_USAGE;
+    if (!st && !rc && light.gpu_finish && !cli_check_accumulate(&c, t, per_vertex)) rc = EXIT_USAGE;
     if (!st && !rc) st = cli_lighting(&c, &light, t, NULL, &lighting);
     if (!st && !rc) st = prt_renderer_create(c.ctx, &(prt_renderer_desc){width, height, 0}, &r);
     if (!st && !rc) {

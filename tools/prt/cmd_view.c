@@ -24,6 +24,7 @@ static const char *HELP =
     "       alt+right-drag or alt+wheel moves it in depth.\n"
     "Keys:  h lists them all; k what the file is relit as, d full/direct/indirect, the method's\n"
     "       own controls (h lists them, e.g. [ ] for the SH order), n add a light,\n"
+    "       g b offset maps' passes on the GPU or CPU, first-order and final side by side,\n"
     "       tab select the next, x remove it, , . dim/brighten, c recolour,\n"
     "       + - exposure, t tone mapping, l reload probe, p screenshot, 0 reset, q quit;\n"
     "       f fly mode: w a s d move, e z rise and sink (walk into a room or Sponza).\n"
@@ -40,6 +41,9 @@ static const char *HELP =
     "                             light-move DX DY DZ, light-scale F, light-colour R G B,\n"
     "                             light-remove, screenshot FILE (.png .exr), quit\n"
     "      --stats                print frame and relight times as JSON on exit\n"
+    "      --accumulate W         offset transfer maps: where the transfer passes run - gpu (the\n"
+    "                             default: binned atlases, additive blending; b shows first-order\n"
+    "                             and final side by side) or cpu (threads); g switches\n"
     CLI_LIGHT_OPTIONS_HELP
     "Other:\n"
     "  -j, --threads N            relighting threads\n"
@@ -178,6 +182,7 @@ static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
     d.controls = job->controls;
     d.brdf = v->light.have_brdf ? &v->light.brdf : NULL;
     d.albedo = v->albedo;
+    d.gpu_finish = job->gpu;
     if (!st) st = prt_relight(v->worker_ctx, v->t, v->lighting, &d, out);
     return st;
 }
@@ -226,9 +231,16 @@ static void show(viewer *v, prt_relit *r)
     const prt_relit *o = &v->shown;
     const bool same = o->radiance && (o->exit_sh != NULL) == (r->exit_sh != NULL) && o->exit_order == r->exit_order &&
                       (o->texels != NULL) == (r->texels != NULL) && o->texel_width == r->texel_width && o->texel_height == r->texel_height &&
-                      (o->kvec != NULL) == (r->kvec != NULL) && o->kvec_terms == r->kvec_terms && o->exit_mirror == r->exit_mirror;
+                      (o->kvec != NULL) == (r->kvec != NULL) && o->kvec_terms == r->kvec_terms && o->exit_mirror == r->exit_mirror &&
+                      (o->gpu_input != NULL) == (r->gpu_input != NULL);
     if (same) {
         prt_window_set_radiance(v->win, r->radiance, nv);
+        if (r->gpu_input) {
+            prt_render_mesh mesh;
+            prt_relit_render_mesh(v->t, r, &mesh);
+            mesh.side_by_side = v->side_by_side;
+            prt_window_set_gpu_input(v->win, &mesh);
+        }
         if (r->exit_sh) prt_window_set_exit(v->win, r->exit_sh, nv);
         if (r->texels) prt_window_set_texels(v->win, r->texels, r->texel_width, r->texel_height);
         if (r->kvec) prt_window_set_kvec(v->win, r->kvec, nv);
@@ -238,6 +250,7 @@ static void show(viewer *v, prt_relit *r)
     } else {
         prt_render_mesh mesh;
         prt_relit_render_mesh(v->t, r, &mesh);
+        mesh.side_by_side = v->side_by_side;
         prt_window_set_mesh(v->win, &mesh);
     }
     prt_relit_free(&v->shown);
@@ -287,6 +300,7 @@ static void status_line(const viewer *v, char *buf, size_t n)
     int nc = prt_transfer_controls(v->t, &cd);
     for (int i = 0, at = 0; i < nc && at < (int)sizeof settings; ++i)
         at += snprintf(settings + at, sizeof settings - (size_t)at, ", %s %d", cd[i].name, v->want.controls[i]);
+    if (v->shown.gpu_input) snprintf(settings + strlen(settings), sizeof settings - strlen(settings), ", GPU passes%s", v->side_by_side ? ", first-order | final" : "");
     int len = snprintf(buf, n, "%s %s%s%s, %zu vertices, exposure %+.1f, light at %.0f, %.0f deg\nframe %.2f ms  draw %.2f ms  relight %.2f ms  (h: help)",
                        prt_method_name(prt_transfer_method(v->t)), prt_transfer_variant_name(v->t, v->want.variant), component[v->want.component], settings,
                        prt_transfer_vertex_count(v->t), v->exposure, v->want.env_yaw, v->want.env_pitch, v->frame_ms_sum / frames, v->draw_ms_sum / draws,
@@ -375,7 +389,7 @@ static void handle(viewer *v, const prt_event *e)
     }
 }
 
-enum { OPT_W = 2500, OPT_H, OPT_EXP, OPT_SCRIPT, OPT_STATS };
+enum { OPT_W = 2500, OPT_H, OPT_EXP, OPT_SCRIPT, OPT_STATS, OPT_ACCUMULATE };
 
 int cmd_view(int argc, char **argv)
 {
@@ -389,11 +403,12 @@ int cmd_view(int argc, char **argv)
     v.background[0] = v.background[1] = v.background[2] = 0.02f;
     int width = 1024, height = 768;
     const char *script_path = NULL;
-    bool stats = false;
+    bool stats = false, accumulate_given = false;
     cli_view view = CLI_VIEW_DEFAULTS;
     static const struct option opts[] = {
         {"width", required_argument, 0, OPT_W}, {"height", required_argument, 0, OPT_H}, {"exposure", required_argument, 0, OPT_EXP},
         {"script", required_argument, 0, OPT_SCRIPT}, {"stats", no_argument, 0, OPT_STATS}, CLI_LIGHT_LONG_OPTIONS,
+        {"accumulate", required_argument, 0, OPT_ACCUMULATE},
         {"view", required_argument, 0, OPT_VIEW}, {"eye", required_argument, 0, OPT_EYE}, {"target", required_argument, 0, OPT_TARGET},
         {"fov", required_argument, 0, OPT_FOV},
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
@@ -414,6 +429,10 @@ int cmd_view(int argc, char **argv)
         case OPT_EXP: if (!cli_parse_float(optarg, &v.exposure)) return cli_usage(&c, "--exposure takes a number of stops"); break;
         case OPT_SCRIPT: script_path = optarg; break;
         case OPT_STATS: stats = true; break;
+        case OPT_ACCUMULATE:
+            if (!cli_parse_accumulate(optarg, &v.light.gpu_finish)) return cli_usage(&c, "--accumulate takes cpu or gpu");
+            accumulate_given = true;
+            break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
         case 'h': fputs(HELP, stdout); return EXIT_OK;
@@ -433,6 +452,10 @@ int cmd_view(int argc, char **argv)
         /* The file's lights become the viewer's to edit; the worker relights with a copy per job. */
         view_take_lights(&v);
         v.want.variant = prt_transfer_default_variant(v.t, 1);
+        /* Offset maps accumulate on the GPU unless asked otherwise: the paper's run time. */
+        if (!accumulate_given) v.light.gpu_finish = prt_transfer_offset_info(v.t, NULL);
+        else if (v.light.gpu_finish && !cli_check_accumulate(&c, v.t, false)) { c.reported = true; st = PRT_ERR_INVALID_ARG; }
+        v.want.gpu = v.light.gpu_finish;
         if (cli_controls(&c, &v.light, v.t, v.want.controls) < 0) { c.reported = true; st = PRT_ERR_INVALID_ARG; }
         if (!st) st = cli_painted_albedo(&c, &v.light, v.t, &v.albedo);
     }

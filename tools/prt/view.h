@@ -27,6 +27,7 @@ typedef struct relight_job {
     int component;             /* PRT_COMPONENT_*: all, direct only, indirect only */
     int controls[PRT_MAX_CONTROLS];   /* the method's run-time controls */
     float env_yaw, env_pitch;  /* degrees, on top of the file's rotation */
+    bool gpu;                  /* leave the method's last passes to the renderer (prt_relight_desc.gpu_finish) */
     prt_light lights[CLI_MAX_LIGHTS];
     int light_count;
     unsigned version;
@@ -48,6 +49,7 @@ struct viewer {
     int tonemap;
     float background[3];
     bool hud, help;
+    bool side_by_side;          /* GPU-finished results: first-order light left, final right */
     char message[256];          /* one line shown under the status (a refused action) */
     /* lighting and method state */
     relight_job want;

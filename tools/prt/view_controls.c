@@ -100,6 +100,28 @@ static void next_component(viewer *v, int arg)
     view_request_relight(v);
 }
 
+static void toggle_gpu(viewer *v, int arg)
+{
+    (void)arg;
+    if (!v->shown.gpu_input && !v->want.gpu) {
+        /* Asked of the method: a result comes back with GPU input only where it has GPU passes. */
+        prt_offset_info info;
+        if (!prt_transfer_offset_info(v->t, &info)) { snprintf(v->message, sizeof v->message, "GPU passes are for offset transfer maps"); return; }
+    }
+    v->want.gpu = !v->want.gpu;
+    if (!v->want.gpu) v->side_by_side = false;
+    snprintf(v->message, sizeof v->message, "transfer passes on the %s", v->want.gpu ? "GPU" : "CPU");
+    view_request_relight(v);
+}
+static void toggle_side_by_side(viewer *v, int arg)
+{
+    (void)arg;
+    if (!v->shown.gpu_input) { snprintf(v->message, sizeof v->message, "side by side shows offset maps finished on the GPU (g)"); return; }
+    v->side_by_side = !v->side_by_side;
+    v->message[0] = 0;
+    view_request_relight(v);
+}
+
 static const view_control core[] = {
     {PRT_KEY_ESCAPE, "escape", "quit", quit, 0},
     {'Q', "q", "quit", quit, 0},
@@ -118,6 +140,8 @@ static const view_control core[] = {
     {'P', "p", "screenshot (prt-screenshot-N.png)", screenshot, 0},
     {'K', "k", "relight the file as its next kind (prt info lists them)", next_variant, 0},
     {'D', "d", "full / direct only / indirect only", next_component, 0},
+    {'G', "g", "offset maps: transfer passes on the GPU / the CPU", toggle_gpu, 0},
+    {'B', "b", "offset maps on the GPU: first-order and final light side by side", toggle_side_by_side, 0},
 };
 
 void view_register_core(viewer *v) { view_register(v, core, (int)(sizeof core / sizeof core[0])); }
