@@ -13,6 +13,7 @@
 #define PRT__OFFSET_RADIOSITY_BIT 1
 #define PRT__OFFSET_SUBSURFACE_BIT 2
 #define PRT__OFFSET_ENV_COEFFS 9    /* first-order light from the environment: SH order 3 */
+#define PRT__OFFSET_SHADOW_SAMPLES 4 /* shadow-ray points per texel: a rotated grid */
 #define PRT__OFFSET_MAX_ENTRIES ((uint64_t)1 << 28)   /* texels x offsets, each 3 floats: 3 GiB */
 
 typedef struct prt__offset_set {
@@ -38,9 +39,11 @@ typedef struct prt__offset_set {
     int32_t *index;               /* [width * height] covered index, -1 off the surface (derived) */
     int32_t *source;              /* [width * height] the covered texel each texel reads: itself, or
                                    * its gutter's source (prt__texel_gutter_sources; derived) */
-    /* Run-time: shadow rays for local lights, built on first use. */
+    /* Run-time: shadow rays for local lights, built on first use, from PRT__OFFSET_SHADOW_SAMPLES
+     * points per texel on its own triangle (sample_pos, sample_nrm). */
     pthread_mutex_t *lock;
     prt__vertex_lights *lights;
+    float *sample_pos, *sample_nrm;
 } prt__offset_set;
 
 extern const prt__method prt__method_offset;

@@ -58,6 +58,57 @@ static void spread(const prt__offset_set *s, const float *values, float *map)
     }
 }
 
+/* Where a texel's shadow rays start: PRT__OFFSET_SHADOW_SAMPLES points of a rotated grid over the
+ * texel's square in UV space, each mapped onto the texel's own triangle (barycentrics clamped to
+ * it, so no point leaves the surface it lights), with the interpolated normal. A shadow edge then
+ * crosses a texel as a fraction of its area instead of a step from lit to dark, and a texel half
+ * under an object resting on it is half lit. Texels without a triangle keep their centre. */
+static bool shadow_samples(const prt_transfer *t, prt__offset_set *s)
+{
+    static const float grid[PRT__OFFSET_SHADOW_SAMPLES][2] = {{0.125f, 0.375f}, {0.375f, -0.125f}, {-0.125f, -0.375f}, {-0.375f, 0.125f}};
+    const int W = s->width, H = s->height, S = PRT__OFFSET_SHADOW_SAMPLES;
+    const size_t n = (size_t)W * H, nc = s->covered;
+    const prt__mesh *m = &t->mesh;
+    uint32_t *owner = prt__calloc(n, sizeof *owner);
+    float *bary = malloc(n * 2 * sizeof *bary);
+    s->sample_pos = malloc(nc * S * 3 * sizeof(float));
+    s->sample_nrm = malloc(nc * S * 3 * sizeof(float));
+    size_t overlap, outside;
+    bool ok = owner && bary && s->sample_pos && s->sample_nrm && prt__texel_raster(m, W, H, owner, bary, &overlap, &outside);
+    for (size_t i = 0; ok && i < nc; ++i) {
+        const uint32_t tri = owner[s->texel[i]];
+        const int tx = (int)(s->texel[i] % (uint32_t)W), ty = (int)(s->texel[i] / (uint32_t)W);
+        for (int k = 0; k < S; ++k) {
+            float *p = s->sample_pos + (i * S + k) * 3, *nr = s->sample_nrm + (i * S + k) * 3;
+            memcpy(p, s->pos + i * 3, 3 * sizeof *p);
+            memcpy(nr, s->nrm + i * 3, 3 * sizeof *nr);
+            if (!tri || tri > m->triangle_count) continue;
+            const uint32_t *ix = m->indices + (size_t)(tri - 1) * 3;
+            const float *a = m->uv + ix[0] * 2, *b = m->uv + ix[1] * 2, *c = m->uv + ix[2] * 2;
+            const double qu = (tx + 0.5 + grid[k][0]) / W, qv = (ty + 0.5 + grid[k][1]) / H;
+            const double e1u = b[0] - a[0], e1v = b[1] - a[1], e2u = c[0] - a[0], e2v = c[1] - a[1], det = e1u * e2v - e2u * e1v;
+            if (!(fabs(det) > 1e-20)) continue;
+            double w1 = ((qu - a[0]) * e2v - e2u * (qv - a[1])) / det, w2 = (e1u * (qv - a[1]) - (qu - a[0]) * e1v) / det, w0 = 1 - w1 - w2;
+            w0 = fmax(w0, 0.0); w1 = fmax(w1, 0.0); w2 = fmax(w2, 0.0);
+            const double sum = w0 + w1 + w2;
+            if (!(sum > 0)) continue;
+            w0 /= sum; w1 /= sum; w2 /= sum;
+            double len = 0;
+            for (int d = 0; d < 3; ++d) {
+                p[d] = (float)(w0 * m->positions[ix[0] * 3 + d] + w1 * m->positions[ix[1] * 3 + d] + w2 * m->positions[ix[2] * 3 + d]);
+                const double v = w0 * m->normals[ix[0] * 3 + d] + w1 * m->normals[ix[1] * 3 + d] + w2 * m->normals[ix[2] * 3 + d];
+                len += v * v;
+            }
+            len = sqrt(len);
+            if (len > 0)
+                for (int d = 0; d < 3; ++d) nr[d] = (float)((w0 * m->normals[ix[0] * 3 + d] + w1 * m->normals[ix[1] * 3 + d] + w2 * m->normals[ix[2] * 3 + d]) / len);
+        }
+    }
+    free(owner);
+    free(bary);
+    return ok;
+}
+
 /* Shadow rays from the texels: the mesh in Embree and the texels' ray origins, once. */
 static prt_status lights_ready(prt_context *ctx, const prt_transfer *t, prt__offset_set *s)
 {
@@ -65,11 +116,11 @@ static prt_status lights_ready(prt_context *ctx, const prt_transfer *t, prt__off
     prt__vertex_lights *c = s->lights;
     prt_status st = PRT_OK;
     if (!c->ready) {
-        const size_t nc = s->covered;
-        float *o = malloc(nc * 3 * sizeof *o + 1);
-        st = o ? prt__raycaster_create(ctx, &t->mesh, &c->rc) : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        const size_t np = (size_t)s->covered * PRT__OFFSET_SHADOW_SAMPLES;
+        float *o = malloc(np * 3 * sizeof *o + 1);
+        st = o && shadow_samples(t, s) ? prt__raycaster_create(ctx, &t->mesh, &c->rc) : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         if (!st) {
-            for (size_t i = 0; i < nc * 3; ++i) o[i] = s->pos[i] + s->nrm[i] * s->ray_offset;
+            for (size_t i = 0; i < np * 3; ++i) o[i] = s->sample_pos[i] + s->sample_nrm[i] * s->ray_offset;
             c->origins = o;
             c->ready = true;
         } else {
@@ -113,8 +164,15 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
         if ((st = lights_ready(ctx, t, s))) goto done;
         if (!(local = malloc((size_t)prt_lighting_count(l) * sizeof *local))) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
         for (int i = 0; i < prt_lighting_count(l); ++i) local[nlocal++] = *prt_lighting_light(l, i);
-        const prt__mesh texels = {.vertex_count = nc, .positions = s->pos, .normals = s->nrm};
-        prt__vertex_lights_add(ctx, s->lights, &texels, local, nlocal, E);
+        const size_t S = PRT__OFFSET_SHADOW_SAMPLES;
+        const prt__mesh points = {.vertex_count = nc * S, .positions = s->sample_pos, .normals = s->sample_nrm};
+        float *Es = prt__calloc(nc * S * 3, sizeof *Es);
+        if (!Es) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+        prt__vertex_lights_add(ctx, s->lights, &points, local, nlocal, Es);
+        for (size_t i = 0; i < nc; ++i)
+            for (size_t k = 0; k < S; ++k)
+                for (int c = 0; c < 3; ++c) E[i * 3 + c] += Es[(i * S + k) * 3 + c] / (float)S;
+        free(Es);
     }
     /* The environment alone (the directional lights are in E already) through the texels' SH. */
     prt_sh_light env;
