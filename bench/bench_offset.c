@@ -4,7 +4,11 @@
  * at 256^2 and 512^2:
  *   bake:    seconds to choose the offsets and make the maps;
  *   relight: one accumulation pass (eq. 9, every map once) per second, and its bytes of maps read
- *            per second  vs  plain read bandwidth over a buffer of the same size, measured here.
+ *            per second  vs  plain read bandwidth over a buffer of the same size, measured here;
+ *   GPU:     the same passes in the renderer (binned atlases, additive blending; prt_render_light_map
+ *            with its read-back): passes per second, and frames per second of a whole relight with
+ *            3 bounces (first-order light on the CPU, the passes on the GPU). On a machine without
+ *            a GPU this is Mesa's llvmpipe on the CPU; the renderer's name is printed.
  * Usage: prt_bench_offset [MESH] [--threads N] [--sizes 256,512] [--offsets 50,100,200,400]
  * Without MESH it uses ../shared/data's bunny_lowres.obj (3.7k vertices, as the paper's face) if
  * present, else the procedural demo scene. JSON on stdout, a table on stderr. */
@@ -12,6 +16,24 @@
 #include "method/offset.h"
 
 #include <string.h>
+
+/* Best of 5: the GPU passes for an input relit with gpu_finish (upload, passes, read-back). */
+static double gpu_time(prt_context *ctx, prt_renderer *ren, const prt_transfer *t, const prt_lighting *l, int bounces, float *map)
+{
+    prt_relit r;
+    if (prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .controls = &bounces, .gpu_finish = 1}, &r)) { fprintf(stderr, "bench: %s\n", prt_last_error()); exit(1); }
+    prt_render_mesh rm;
+    prt_relit_render_mesh(t, &r, &rm);
+    double best = 1e30;
+    for (int run = 0; run < 5; ++run) {
+        const double t0 = prt__now();
+        if (prt_render_light_map(ren, &rm, map, NULL)) { fprintf(stderr, "bench: %s\n", prt_last_error()); exit(1); }
+        const double dt = prt__now() - t0;
+        if (dt < best) best = dt;
+    }
+    prt_relit_free(&r);
+    return best;
+}
 
 static int parse_list(const char *text, int *out, int max)
 {
@@ -49,9 +71,16 @@ int main(int argc, char **argv)
                       .intensity = {5, 5, 5}};
     prt_lighting_add(l, &bulb, NULL);
     const prt_method *m = prt_method_find("offset");
-    fprintf(stderr, "bench: %s, %zu vertices, %d threads\n  %-6s %-8s %-8s %-10s %-10s %-12s %s\n", mesh, prt_scene_vertex_count(s), threads, "size",
-            "offsets", "texels", "bake s", "MiB", "passes/s", "maps read / plain read bandwidth");
-    printf("{\"mesh\": \"%s\", \"vertices\": %zu, \"threads\": %d, \"runs\": [", mesh, prt_scene_vertex_count(s), threads);
+    prt_renderer *ren = NULL;
+    if (prt_renderer_create(ctx, &(prt_renderer_desc){64, 64, 1}, &ren)) fprintf(stderr, "bench: no OpenGL context (%s): no GPU numbers\n", prt_last_error());
+    int largest = 0;
+    for (int a = 0; a < nsizes; ++a) largest = sizes[a] > largest ? sizes[a] : largest;
+    float *map = malloc((size_t)largest * largest * 3 * sizeof *map + 1);
+    fprintf(stderr, "bench: %s, %zu vertices, %d threads; GPU: %s\n  %-6s %-8s %-8s %-10s %-10s %-12s %-34s %-12s %s\n", mesh, prt_scene_vertex_count(s), threads,
+            ren ? prt_renderer_name(ren) : "none", "size", "offsets", "texels", "bake s", "MiB", "passes/s", "maps read / plain read bandwidth", "GPU passes/s",
+            "GPU fps (3 bounces)");
+    printf("{\"mesh\": \"%s\", \"vertices\": %zu, \"threads\": %d, \"gpu\": \"%s\", \"runs\": [", mesh, prt_scene_vertex_count(s), threads,
+           ren ? prt_renderer_name(ren) : "");
     for (int a = 0; a < nsizes; ++a)
         for (int b = 0; b < ncounts; ++b) {
             char tx[16], nc[16];
@@ -69,15 +98,25 @@ int main(int argc, char **argv)
             const double p0 = bench_relight_time(ctx, t, l, 0), p3 = bench_relight_time(ctx, t, l, 3), pass = (p3 - p0) / 3;
             const double bytes = (double)set->count * set->covered * 3 * sizeof(float);
             const double limit = bench_read_bandwidth((size_t)bytes, threads);
-            fprintf(stderr, "  %-6d %-8d %-8u %-10.2f %-10.1f %-12.1f %.0f%% (%.3g of %.3g B/s)\n", sizes[a], counts[b], set->covered, bake, bytes / 1048576.0,
-                    pass > 0 ? 1 / pass : 0, pass > 0 && limit > 0 ? 100 * bytes / pass / limit : 0, pass > 0 ? bytes / pass : 0, limit);
+            double gpass = 0, gframe = 0;
+            if (ren && map) {
+                const double g0 = gpu_time(ctx, ren, t, l, 0, map), g3 = gpu_time(ctx, ren, t, l, 3, map);
+                gpass = (g3 - g0) / 3;
+                gframe = p0 + g3;   /* the first-order light on the CPU, then every GPU pass and the read-back */
+            }
+            char bw[64];
+            snprintf(bw, sizeof bw, "%.0f%% (%.3g of %.3g B/s)", pass > 0 && limit > 0 ? 100 * bytes / pass / limit : 0, pass > 0 ? bytes / pass : 0, limit);
+            fprintf(stderr, "  %-6d %-8d %-8u %-10.2f %-10.1f %-12.1f %-34s %-12.1f %.1f\n", sizes[a], counts[b], set->covered, bake, bytes / 1048576.0,
+                    pass > 0 ? 1 / pass : 0, bw, gpass > 0 ? 1 / gpass : 0, gframe > 0 ? 1 / gframe : 0);
             printf("%s{\"size\": %d, \"offsets\": %d, \"texels\": %u, \"bake_seconds\": %.3f, \"map_bytes\": %.0f, \"pass_seconds\": %.6f, "
-                   "\"first_order_seconds\": %.6f, \"read_ratio\": %.3f}",
-                   a || b ? ", " : "", sizes[a], counts[b], set->covered, bake, bytes, pass, p0, pass > 0 && limit > 0 ? bytes / pass / limit : 0);
+                   "\"first_order_seconds\": %.6f, \"read_ratio\": %.3f, \"gpu_pass_seconds\": %.6f, \"gpu_frame_seconds\": %.6f}",
+                   a || b ? ", " : "", sizes[a], counts[b], set->covered, bake, bytes, pass, p0, pass > 0 && limit > 0 ? bytes / pass / limit : 0, gpass, gframe);
             prt_transfer_release(t);
             prt_options_release(o);
         }
     printf("]}\n");
+    free(map);
+    prt_renderer_release(ren);
     prt_lighting_release(l);
     prt_scene_release(s);
     prt_context_release(ctx);

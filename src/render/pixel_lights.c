@@ -214,7 +214,7 @@ void prt__pixel_lights_set(prt__pixel_lights *p, GLuint vao, const float *positi
             hi[k] = fmaxf(hi[k], positions[v * 3 + k]);
         }
     /* The same lights over the same bounds keep their shadow maps (a viewer relights often). */
-    const bool same = n == p->count && !memcmp(p->lights, lights, (size_t)n * sizeof *lights) && !memcmp(lo, p->lo, sizeof lo) &&
+    const bool same = n == p->count && (n == 0 || !memcmp(p->lights, lights, (size_t)n * sizeof *lights)) && !memcmp(lo, p->lo, sizeof lo) &&
                       !memcmp(hi, p->hi, sizeof hi);
     p->count = n;
     if (!n) return;
