@@ -723,6 +723,92 @@ static void test_offset_method(void **state)
     prt_context_release(ctx);
 }
 
+/* Multi-bounce maps in a closed room of albedo 0.5: every path from every texel stays inside, so
+ * the bounces past the first add exactly 0.5^2 + ... + 0.5^6 to what each texel's maps gather, on
+ * top of the first bounce's maps - the same as a single-bounce bake's, which gather most of the
+ * albedo and never more. The maps are the same bytes for any thread count, the run time makes one pass, and
+ * files say how many bounces their maps hold. */
+static void test_multi_bounce_maps(void **state)
+{
+    (void)state;
+    test_mesh room = {0};
+    tm_pit(&room, 6);
+    tm_quad(&room, (float[3]){-0.5f, 1, -0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 0, 1}, 6);   /* the ceiling, facing down */
+    prt_context *one = test_context(1), *two = test_context(2);
+    prt_scene *scene = tm_scene(two, &room, 0.5f);
+    const char *const common[] = {"texels", "32", "offsets", "60", "iterations", "60", NULL};
+    prt_transfer *multi[2], *single = NULL;
+    for (int k = 0; k < 2; ++k) {
+        prt_options *o = NULL;
+        assert_int_equal(prt_options_create(prt_method_find("offset"), &o), PRT_OK);
+        for (int i = 0; common[i]; i += 2) assert_int_equal(prt_options_set(o, common[i], common[i + 1]), PRT_OK);
+        assert_int_equal(prt_options_set(o, "map-bounces", "6"), PRT_OK);
+        assert_int_equal(prt_options_set(o, "walks", "64"), PRT_OK);
+        assert_int_equal(prt_bake(k ? two : one, scene, prt_method_find("offset"), o, NULL, &multi[k]), PRT_OK);
+        prt_options_release(o);
+    }
+    single = bake_offset(two, scene, (const char *const[]){"texels", "32", "offsets", "60", "iterations", "60", "map-bounces", "1", NULL});
+    prt_offset_info info;
+    assert_true(prt_transfer_offset_info(multi[0], &info));
+    const size_t n = (size_t)info.width * info.height;
+    float *a = malloc(n * 3 * sizeof(float)), *b = malloc(n * 3 * sizeof(float)), *c = malloc(n * 3 * sizeof(float));
+    double *more = prt__calloc(n, sizeof(double)), *first = prt__calloc(n, sizeof(double));
+    for (int k = 0; k < info.count; ++k) {
+        int off[2];
+        assert_int_equal(prt_transfer_offset_map(multi[0], PRT_OFFSET_RADIOSITY, k, off, a), PRT_OK);
+        assert_int_equal(prt_transfer_offset_map(multi[1], PRT_OFFSET_RADIOSITY, k, off, b), PRT_OK);
+        assert_int_equal(prt_transfer_offset_map(single, PRT_OFFSET_RADIOSITY, k, off, c), PRT_OK);
+        assert_memory_equal(a, b, n * 3 * sizeof(float));   /* 1 thread and 2 */
+        for (size_t i = 0; i < n; ++i) { more[i] += (double)a[i * 3] - c[i * 3]; first[i] += c[i * 3]; }
+    }
+    const double expect = 0.25 + 0.125 + 0.0625 + 0.03125 + 0.015625;
+    int32_t *src = malloc(n * sizeof *src);
+    assert_int_equal(prt_transfer_offset_sources(multi[0], src), PRT_OK);
+    double worst = 0, first_sum = 0;
+    size_t texels = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (src[i] != (int32_t)i) continue;
+        worst = fmax(worst, fabs(more[i] - expect));
+        first_sum += first[i];
+        texels++;
+    }
+    print_message("closed room, albedo 0.5: bounces 2..6 add %.6f (worst texel off by %.2g) to the first bounce's %.3f on average\n", expect, worst,
+                  first_sum / (double)texels);
+    assert_true(worst < 1e-4);
+    /* Sixty offsets catch most of the first bounce (a closed room sends all it reflects back). */
+    assert_true(first_sum / (double)texels > 0.8 * 0.5 && first_sum / (double)texels <= 0.5 * 1.001);
+    /* One pass or none at run time; more is refused, saying why. */
+    int lo, hi, def;
+    prt_transfer_control_range(multi[0], 0, &lo, &hi, &def);
+    assert_true(lo == 0 && hi == 1 && def == 1);
+    prt_lighting *l = NULL;
+    prt_light bulb;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    assert_int_equal(prt_light_parse("point:0,0.8,0:1", &bulb), PRT_OK);
+    assert_int_equal(prt_lighting_add(l, &bulb, NULL), PRT_OK);
+    const int three = 3;
+    prt_relit r;
+    assert_int_equal(prt_relight(two, multi[0], l, &(prt_relight_desc){.variant = 0, .controls = &three}, &r), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "hold 6 bounces"));
+    /* The file keeps the count. */
+    char path[600];
+    snprintf(path, sizeof path, "%s/multi.prt", test_dir);
+    assert_int_equal(prt_transfer_save(multi[0], path), PRT_OK);
+    prt_transfer *back = NULL;
+    assert_int_equal(prt_transfer_load(two, path, &back), PRT_OK);
+    prt_transfer_control_range(back, 0, &lo, &hi, &def);
+    assert_true(hi == 1 && def == 1);
+    prt_transfer_release(back);
+    free(a); free(b); free(c); free(more); free(first); free(src);
+    prt_lighting_release(l);
+    for (int k = 0; k < 2; ++k) prt_transfer_release(multi[k]);
+    prt_transfer_release(single);
+    prt_scene_release(scene);
+    tm_free(&room);
+    prt_context_release(one);
+    prt_context_release(two);
+}
+
 /* The GPU run time (render/offset_gl.c: binned atlases, one blended quad per slice) gives the
  * CPU's light map texel for texel - subsurface first, then three bounces, for each component -
  * and its side-by-side view shows the first-order map on the left, the final one on the right. */
@@ -731,9 +817,10 @@ static void test_gpu_accumulation(void **state)
     (void)state;
     prt_context *ctx = test_context(2);
     prt_scene *scene = load_demo_scene(ctx);
-    /* Marble at 20 mm per unit scatters over several texels of a 48^2 map. */
+    /* Marble at 20 mm per unit scatters over several texels of a 48^2 map; single-bounce maps, so
+     * that three bounces are three passes. */
     prt_transfer *t = bake_offset(ctx, scene, (const char *const[]){"texels", "48", "offsets", "60", "iterations", "60", "transfer", "both", "medium", "marble",
-                                                                     "mm-per-unit", "20", NULL});
+                                                                     "mm-per-unit", "20", "map-bounces", "1", NULL});
     prt_offset_info info;
     assert_true(prt_transfer_offset_info(t, &info));
     assert_true(info.has[PRT_OFFSET_RADIOSITY] && info.has[PRT_OFFSET_SUBSURFACE]);
@@ -871,6 +958,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_thin_beam),
         cmocka_unit_test(test_binning),
         cmocka_unit_test(test_offset_method),
+        cmocka_unit_test(test_multi_bounce_maps),
     };
     return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

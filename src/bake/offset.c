@@ -271,12 +271,119 @@ static prt_status env_step(prt__bake_job *base, prt_context *ctx, prt__progress 
     return prt__progress_cancelled(p) ? prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled") : PRT_OK;
 }
 
+/* ---- multi-bounce radiosity maps ---- */
+
+static uint64_t walk_random(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+static double walk_uniform(uint64_t *s) { return (double)(walk_random(s) >> 11) * (1.0 / 9007199254740992.0); }
+
+static void cosine_direction(const float n[3], double u1, double u2, float d[3])
+{
+    float t1[3], t2[3], h[3] = {0, 0, 0};
+    h[fabsf(n[0]) < 0.6f ? 0 : fabsf(n[1]) < 0.6f ? 1 : 2] = 1;
+    prt__v3_cross(n, h, t1);
+    prt__v3_normalize(t1);
+    prt__v3_cross(n, t1, t2);
+    const double r = sqrt(u1), phi = 2 * PRT_PI * u2, z = sqrt(fmax(0.0, 1 - u1));
+    for (int c = 0; c < 3; ++c) d[c] = (float)(r * cos(phi) * t1[c] + r * sin(phi) * t2[c] + z * n[c]);
+}
+
+/* Bounces past the first, added to the single-bounce radiosity maps (the paper's maps hold every
+ * bounce: TR(t, t') is the radiosity solution with unit emission at t'). From each texel, paths
+ * of cosine-distributed rays: where the k-th ray (k >= 2) lands, the path's weight - the albedos
+ * met so far, the texel's own first - goes to the offset cell that holds the landing texel, as a
+ * unit emitter there would send it back. Summed over a cell this is the integral eq. 8's TVA
+ * approximates, so no cell's surface goes missing; the first bounce stays the exact one of
+ * maps_step. Seeded per texel: the same maps for any thread count. */
+static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
+{
+    obake *ob = (obake *)base;
+    prt__offset_set *s = ob->s;
+    const int W = s->width, H = s->height, K = s->count, B = s->map_bounces, N = ob->d.walks > 0 ? ob->d.walks : 256;
+    const size_t nc = s->covered;
+    const prt__mesh *m = &ob->t->mesh;
+    int32_t *label = NULL;
+    prt_status st = prt__offset_labels(ctx, W, H, s->offsets, K, &label);
+    if (st) return st;
+    const int gw = 2 * W - 1;
+    prt__progress_begin(p, p->stage, nc);
+    const int strata = (int)sqrt((double)N);
+#pragma omp parallel num_threads(prt__threads(ctx))
+    {
+        double *acc = malloc((size_t)K * 3 * sizeof *acc);
+#pragma omp for schedule(dynamic, 16)
+        for (size_t i = 0; i < nc; ++i) {
+            if (!acc || prt__progress_cancelled(p)) continue;
+            memset(acc, 0, (size_t)K * 3 * sizeof *acc);
+            const int tx = (int)(s->texel[i] % (uint32_t)W), ty = (int)(s->texel[i] / (uint32_t)W);
+            uint64_t rng = ((uint64_t)ob->d.seed << 32) ^ (i * 0xD1B54A32D192ED03ull);
+            for (int w = 0; w < N; ++w) {
+                float o[3], n[3], d[3];
+                double weight[3];
+                for (int c = 0; c < 3; ++c) {
+                    n[c] = s->nrm[i * 3 + c];
+                    o[c] = s->pos[i * 3 + c] + n[c] * s->ray_offset;
+                    weight[c] = s->albedo[i * 3 + c];
+                }
+                /* The first direction stratified: the paths spread evenly over the hemisphere. */
+                double u1 = walk_uniform(&rng), u2 = walk_uniform(&rng);
+                if (w < strata * strata) { u1 = (w / strata + u1) / strata; u2 = (w % strata + u2) / strata; }
+                for (int k = 1; k <= B; ++k) {
+                    if (k > 1) { u1 = walk_uniform(&rng); u2 = walk_uniform(&rng); }
+                    cosine_direction(n, u1, u2, d);
+                    prt__ray_hit h;
+                    if (!prt__raycaster_hit(&ob->rc, o, d, &h) || h.prim >= m->triangle_count) break;
+                    if (prt__v3_dot(h.ng, d) > 0) break;   /* a back face: surfaces reflect on their front only */
+                    const uint32_t *ix = m->indices + (size_t)h.prim * 3;
+                    const float b0 = 1 - h.u - h.v;
+                    const float hu = b0 * m->uv[ix[0] * 2] + h.u * m->uv[ix[1] * 2] + h.v * m->uv[ix[2] * 2];
+                    const float hv = b0 * m->uv[ix[0] * 2 + 1] + h.u * m->uv[ix[1] * 2 + 1] + h.v * m->uv[ix[2] * 2 + 1];
+                    int hx = (int)floorf(hu * W), hy = (int)floorf(hv * H);
+                    hx = hx < 0 ? 0 : hx >= W ? W - 1 : hx;
+                    hy = hy < 0 ? 0 : hy >= H ? H - 1 : hy;
+                    const int32_t at = s->source[(size_t)hy * W + hx];
+                    if (at < 0) break;
+                    if (k > 1) {
+                        const int32_t cell = label[(size_t)(hy - ty + H - 1) * gw + (hx - tx + W - 1)];
+                        for (int c = 0; c < 3; ++c) acc[cell * 3 + c] += weight[c];
+                    }
+                    double most = 0;
+                    for (int c = 0; c < 3; ++c) { weight[c] *= s->albedo[(size_t)at * 3 + c]; most = fmax(most, weight[c]); }
+                    if (!(most > 1e-4)) break;
+                    /* On from the hit, off its surface along its (front-facing) shading normal. */
+                    float len = 0;
+                    for (int c = 0; c < 3; ++c) {
+                        n[c] = b0 * m->normals[ix[0] * 3 + c] + h.u * m->normals[ix[1] * 3 + c] + h.v * m->normals[ix[2] * 3 + c];
+                        len += n[c] * n[c];
+                    }
+                    if (!(len > 0) || prt__v3_dot(n, d) >= 0)
+                        for (int c = 0; c < 3; ++c) n[c] = -h.ng[c];
+                    prt__v3_normalize(n);
+                    for (int c = 0; c < 3; ++c) o[c] = o[c] + d[c] * h.t + n[c] * s->ray_offset;
+                }
+            }
+            for (int k = 0; k < K; ++k)
+                for (int c = 0; c < 3; ++c) s->radiosity[((size_t)k * nc + i) * 3 + c] += (float)(acc[k * 3 + c] / N);
+            prt__progress_add(p, 1);
+        }
+        free(acc);
+    }
+    free(label);
+    if (prt__progress_cancelled(p)) return prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    return PRT_OK;
+}
+
 static prt_status offset_stage(prt__bake_job *base, int index, prt__stage *out)
 {
-    static const char *const names[3] = {"offsets", "transfer maps", "first-order light"};
-    static prt_status (*const steps[3])(prt__bake_job *, prt_context *, prt__progress *) = {offsets_step, maps_step, env_step};
-    if (index < 0 || index > 2) return PRT_OK;
-    (void)base;
+    static const char *const names[4] = {"offsets", "transfer maps", "first-order light", "bounces"};
+    static prt_status (*const steps[4])(prt__bake_job *, prt_context *, prt__progress *) = {offsets_step, maps_step, env_step, bounces_step};
+    const obake *ob = (const obake *)base;
+    if (index < 0 || index > 3 || (index == 3 && (ob->s->map_bounces < 2 || !ob->s->radiosity))) return PRT_OK;
     snprintf(out->name, sizeof out->name, "%s", names[index]);
     out->whole = steps[index];
     return PRT_OK;
@@ -342,6 +449,7 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
     s->width = s->height = d.texels;
     s->kinds = d.kinds;
     s->iterations = d.iterations;
+    s->map_bounces = d.map_bounces > 1 ? d.map_bounces : 1;
     s->importance = d.importance;
     s->eta = d.eta;
     s->mm_per_unit = d.mm_per_unit;

@@ -409,15 +409,11 @@ prt_status prt__choose_offsets(const prt_context *ctx, const prt__offset_desc *d
 
 typedef struct run { int k, dy, dx0, dx1; } run;
 
-prt_status prt__offset_tva(const prt_context *ctx, const float *area, int width, int height, const int *offsets, int count, float *out)
+prt_status prt__offset_labels(const prt_context *ctx, int width, int height, const int *offsets, int count, int32_t **out)
 {
-    if (width < 1 || height < 1 || width > 16384 || height > 16384 || count < 1 || !area || !offsets || !out)
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "TVA needs a map, offsets and an output");
     const int gw = 2 * width - 1, gh = 2 * height - 1;
-    /* Label every integer offset with its nearest chosen offset (normalised coordinates, as the
-     * Voronoi cells; ties to the lower index), row by row into runs of one label. */
     int32_t *label = malloc((size_t)gw * gh * sizeof *label);
-    if (!label) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for TVA");
+    if (!label) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory labelling offsets");
     const double sx = width > 1 ? 1.0 / (width - 1) : 1, sy = height > 1 ? 1.0 / (height - 1) : 1;
 #pragma omp parallel for schedule(dynamic, 4) num_threads(prt__threads(ctx))
     for (int y = 0; y < gh; ++y)
@@ -431,6 +427,19 @@ prt_status prt__offset_tva(const prt_context *ctx, const float *area, int width,
             }
             label[(size_t)y * gw + x] = arg;
         }
+    *out = label;
+    return PRT_OK;
+}
+
+prt_status prt__offset_tva(const prt_context *ctx, const float *area, int width, int height, const int *offsets, int count, float *out)
+{
+    if (width < 1 || height < 1 || width > 16384 || height > 16384 || count < 1 || !area || !offsets || !out)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "TVA needs a map, offsets and an output");
+    const int gw = 2 * width - 1, gh = 2 * height - 1;
+    /* Every integer offset labelled with its nearest chosen offset, row by row into runs. */
+    int32_t *label = NULL;
+    prt_status lst = prt__offset_labels(ctx, width, height, offsets, count, &label);
+    if (lst) return lst;
     size_t nruns = 0, cap = (size_t)gh * 4 + 16;
     run *runs = malloc(cap * sizeof *runs);
     for (int y = 0; runs && y < gh; ++y)

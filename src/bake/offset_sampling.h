@@ -53,6 +53,11 @@ typedef struct prt__offset_desc {
 prt_status prt__choose_offsets(const prt_context *ctx, const prt__offset_desc *desc, prt__offset_importance_fn importance, void *user,
                                int **offsets, int *count);
 
+/* The nearest chosen offset (normalised coordinates, as the Voronoi cells; ties to the lower
+ * index) of every integer offset (dx, dy) with |dx| < width, |dy| < height:
+ * out[(dy + height - 1) * (2 width - 1) + dx + width - 1] (malloc'd). */
+prt_status prt__offset_labels(const prt_context *ctx, int width, int height, const int *offsets, int count, int32_t **out);
+
 /* TVA of eq. 8: for texel t and offset k, the sum of texel areas A(t + v) over the integer offsets
  * v whose nearest chosen offset is k (v within |vx| < width, |vy| < height; ties to the lower
  * index). area: width * height texel areas (0 outside the charts). out: width * height * count,

@@ -49,7 +49,7 @@ static const prt_option_desc options[] = {
      "what weighs an offset: the largest transfer it carries to any texel (max, the default: distant objects keep their "
      "offsets) or the mean (fewer artefacts on one smooth chart)"},
     {"transfer", "K", PRT_OPTION_CHOICE, 0, 0, "auto|radiosity|subsurface|both",
-     "radiosity: diffuse inter-reflection, bounced at run time; subsurface: Jensen's dipole in place of diffuse reflection "
+     "radiosity: diffuse inter-reflection (see --map-bounces); subsurface: Jensen's dipole in place of diffuse reflection "
      "on the scene's translucent materials (a JSON material's \"subsurface\"), or on every surface of a scene that names "
      "none; both; auto (the default): radiosity, and subsurface where the scene names a medium"},
     {"medium", "M", PRT_OPTION_CHOICE, 0, 0, "skin|marble|ketchup",
@@ -62,7 +62,12 @@ static const prt_option_desc options[] = {
     {"uv", "FROM", PRT_OPTION_CHOICE, 0, 0, "auto|mesh|atlas",
      "UV layout: the mesh's own when unique and inside [0, 1], else a generated atlas (auto, the default); only the "
      "mesh's (mesh); always an atlas (atlas)"},
-    {"seed", "N", PRT_OPTION_INT, 0, 2147483647, NULL, "seed of the offsets drawn (default 0)"},
+    {"map-bounces", "N", PRT_OPTION_INT, 1, 16, NULL,
+     "bounces the radiosity maps hold: 2..16 (default 8) bake them all into the maps, as the paper, and one pass at "
+     "run time gives them (the bounces past the first from paths traced from every texel: --walks); 1 bakes one "
+     "and the run time repeats the pass per bounce (--control bounces)"},
+    {"walks", "N", PRT_OPTION_INT, 16, 65536, NULL, "paths per texel for the bounces past the first of --map-bounces (default 256)"},
+    {"seed", "N", PRT_OPTION_INT, 0, 2147483647, NULL, "seed of the offsets drawn and the paths traced (default 0)"},
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
 };
 
@@ -131,6 +136,13 @@ static prt_status offset_bake_begin(prt_context *ctx, const prt_scene *scene, co
     d.mm_per_unit = prt__opt_float(o, "mm-per-unit", 1000.0f);
     d.uv_layout = (prt_uv_layout)prt__opt_choice(o, "uv", 0);
     d.seed = prt__opt_int(o, "seed", 0);
+    d.map_bounces = prt__opt_int(o, "map-bounces", (kind == 2) ? 1 : 8);
+    d.walks = prt__opt_int(o, "walks", 256);
+    if ((prt__opt(o, "map-bounces") || prt__opt(o, "walks")) && !(d.kinds & PRT__OFFSET_RADIOSITY_BIT)) {
+        free(surface_medium);
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--%s does not apply without radiosity transfer", prt__opt(o, "map-bounces") ? "map-bounces" : "walks");
+    }
+    if (prt__opt(o, "walks") && d.map_bounces < 2) { free(surface_medium); return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--walks applies to --map-bounces 2 and more"); }
     d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
     const prt_status st = prt__offset_bake_begin(ctx, &d, t, job);
     free(surface_medium);
@@ -148,7 +160,8 @@ static prt_status offset_save(const prt_transfer *t, prt__chunk_list *l)
     const uint32_t p32[8] = {(uint32_t)s->width, (uint32_t)s->height, (uint32_t)s->count, s->kinds, (uint32_t)s->iterations,
                              (uint32_t)s->importance, s->covered, s->emit != NULL};
     for (int i = 0; i < 8; ++i) prt__put32(head + 4 * i, p32[i]);
-    const float f[10] = {s->ray_offset, s->eta, s->mm_per_unit, s->sigma_a[0], s->sigma_a[1], s->sigma_a[2], s->sigma_s[0], s->sigma_s[1], s->sigma_s[2], 0};
+    const float f[10] = {s->ray_offset, s->eta, s->mm_per_unit, s->sigma_a[0], s->sigma_a[1], s->sigma_a[2], s->sigma_s[0], s->sigma_s[1], s->sigma_s[2],
+                         s->map_bounces > 1 ? (float)s->map_bounces : 0.0f};
     memcpy(head + 32, f, sizeof f);
     prt__chunks_add(l, CHUNK_OFSP, head, (size_t)OFSP_HEADER, s->offsets, (size_t)s->count * 2 * sizeof(int32_t), NULL);
     for (size_t i = 0; i < nc; ++i) {
@@ -192,7 +205,8 @@ static prt_status load_maps(prt_context *ctx, const prt__offset_set *s, const pr
         for (int ch = 0; ch < 3; ++ch) {
             double sum = 0;
             for (int k = 0; k < s->count; ++k) sum += (*out)[((size_t)k * s->covered + i) * 3 + ch];
-            const double bound = radiosity ? s->albedo[i * 3 + ch] : 1.0;
+            /* Multi-bounce maps: each bounce past the first adds at most the texel's albedo again. */
+            const double bound = radiosity ? s->albedo[i * 3 + ch] * s->map_bounces : 1.0;
             if (!(sum <= bound * 1.001 + 1e-6)) return bad(ctx, "an offset texel gathers more light than it can");
         }
     return PRT_OK;
@@ -221,6 +235,9 @@ static prt_status offset_load(prt_context *ctx, prt_transfer *t, const cJSON *me
     memcpy(f, p + 32, sizeof f);
     s->ray_offset = f[0]; s->eta = f[1]; s->mm_per_unit = f[2];
     for (int k = 0; k < 3; ++k) { s->sigma_a[k] = f[3 + k]; s->sigma_s[k] = f[6 + k]; }
+    /* Files of maps holding one bounce wrote 0 here. */
+    if (!(f[9] == 0 || (f[9] >= 2 && f[9] <= 16 && f[9] == floorf(f[9])))) return bad(ctx, "offset map bounces out of range");
+    s->map_bounces = f[9] >= 2 ? (int)f[9] : 1;
     const uint64_t n = (uint64_t)(uint32_t)s->width * (uint32_t)s->height;
     if (s->width < 8 || s->width > 4096 || s->height < 8 || s->height > 4096 || s->count < 1 || !s->kinds || s->kinds > 3 || s->iterations < 0 ||
         (s->importance != 0 && s->importance != 1) || !s->covered || s->covered > n || emits > 1 ||
@@ -338,6 +355,7 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
         cJSON_AddStringToObject(j, "transfer", kinds);
         cJSON_AddNumberToObject(j, "iterations", s->iterations);
         cJSON_AddStringToObject(j, "importance", s->importance ? "mean" : "max");
+        cJSON_AddNumberToObject(j, "map_bounces", s->map_bounces);
         cJSON *media = s->medium_count ? cJSON_AddArrayToObject(j, "media") : NULL;
         for (int k = 0; k < s->medium_count; ++k) {
             cJSON *m = cJSON_CreateObject();
@@ -354,6 +372,9 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
                        100.0 * s->covered / ((double)s->width * s->height));
     prt__describe_line(d, "transfer:", "%s: %d offset maps (drawn by %s transference, %d refinements), %.2f MiB", kinds, s->count,
                        s->importance ? "mean" : "max", s->iterations, offset_bytes(t) / 1048576.0);
+    if (s->kinds & PRT__OFFSET_RADIOSITY_BIT)
+        prt__describe_line(d, "bounces:", s->map_bounces > 1 ? "the radiosity maps hold %d (one pass at run time)" : "the radiosity maps hold one; the run time repeats the pass",
+                           s->map_bounces);
     for (int k = 0; k < s->medium_count; ++k) {
         size_t texels = 0;
         for (size_t i = 0; i < s->covered; ++i) texels += s->medium[i] == k + 1;
@@ -368,9 +389,10 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
 
 static void offset_control_range(const prt_transfer *t, int i, int *lo, int *hi, int *def)
 {
-    (void)t;
     (void)i;
+    const prt__offset_set *s = t ? t->state : NULL;
     *lo = 0;
+    if (s && s->map_bounces > 1) { *hi = 1; *def = 1; return; }   /* the maps hold the bounces: one pass or none */
     *hi = 64;
     *def = 3;   /* as spectral; a closed room keeps a fifth of its indirect light past the third */
 }

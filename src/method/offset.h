@@ -20,6 +20,8 @@ typedef struct prt__offset_set {
     int width, height, count;     /* the light map; offsets */
     unsigned kinds;               /* PRT__OFFSET_*_BIT */
     int iterations, importance;   /* how offsets were chosen: refinements, 0 = max, 1 = mean */
+    int map_bounces;              /* bounces the radiosity maps hold: 1 (the run time repeats the
+                                   * pass per bounce) or 2..16 (one pass gives them all) */
     float ray_offset;
     float sigma_a[3], sigma_s[3], eta, mm_per_unit;   /* the medium of subsurface transfer */
     int *offsets;                 /* count x (dx, dy) texels */
@@ -59,6 +61,8 @@ bool prt__offset_set_index(prt__offset_set *s);
 
 typedef struct prt__offset_bake_desc {
     int texels, count, iterations, importance, seed;
+    int map_bounces, walks;       /* radiosity maps holding map_bounces bounces (1: one, bounced at
+                                   * run time); paths per texel for those past the first */
     unsigned kinds;
     prt_uv_layout uv_layout;
     float sigma_a[3], sigma_s[3], eta, mm_per_unit, ray_offset;

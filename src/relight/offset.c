@@ -147,8 +147,13 @@ static void sample_map(const float *map, int W, int H, float u, float v, float o
 prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *r)
 {
     prt__offset_set *s = t->state;
-    const int bounces = d->controls ? d->controls[0] : 3;
-    if (bounces < 0 || bounces > 64) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range 0..64", bounces);
+    int lo, hi, def;
+    prt_transfer_control_range(t, 0, &lo, &hi, &def);
+    const int bounces = d->controls ? d->controls[0] : def;
+    if ((bounces < lo || bounces > hi) && s->map_bounces > 1)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range %d..%d: this file's maps hold %d bounces, given by one pass", bounces, lo, hi,
+                         s->map_bounces);
+    if (bounces < lo || bounces > hi) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range %d..%d", bounces, lo, hi);
     if (d->brdf) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf does not apply to offset transfer maps (they reflect diffusely)");
     const size_t nc = s->covered, n = (size_t)s->width * s->height, nv = t->mesh.vertex_count;
     prt_status st = prt__relit_alloc(ctx, t, r, !d->gpu_finish && (d->with_indirect || d->component == PRT_COMPONENT_INDIRECT));
