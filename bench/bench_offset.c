@@ -6,8 +6,8 @@
  *   relight: one accumulation pass (eq. 9, every map once) per second, and its bytes of maps read
  *            per second  vs  plain read bandwidth over a buffer of the same size, measured here;
  *   GPU:     the same passes in the renderer (binned atlases, additive blending; prt_render_light_map
- *            with its read-back): passes per second, and frames per second of a whole relight with
- *            3 bounces (first-order light on the CPU, the passes on the GPU). On a machine without
+ *            with its read-back): passes per second, and frames per second of a whole relight
+ *            (first-order light on the CPU, the passes on the GPU: one for maps of every bounce). On a machine without
  *            a GPU this is Mesa's llvmpipe on the CPU; the renderer's name is printed.
  * Usage: prt_bench_offset [MESH] [--threads N] [--sizes 256,512] [--offsets 50,100,200,400]
  * Without MESH it uses ../shared/data's bunny_lowres.obj (3.7k vertices, as the paper's face) if
@@ -78,7 +78,7 @@ int main(int argc, char **argv)
     float *map = malloc((size_t)largest * largest * 3 * sizeof *map + 1);
     fprintf(stderr, "bench: %s, %zu vertices, %d threads; GPU: %s\n  %-6s %-8s %-8s %-10s %-10s %-12s %-34s %-12s %s\n", mesh, prt_scene_vertex_count(s), threads,
             ren ? prt_renderer_name(ren) : "none", "size", "offsets", "texels", "bake s", "MiB", "passes/s", "maps read / plain read bandwidth", "GPU passes/s",
-            "GPU fps (3 bounces)");
+            "GPU fps");
     printf("{\"mesh\": \"%s\", \"vertices\": %zu, \"threads\": %d, \"gpu\": \"%s\", \"runs\": [", mesh, prt_scene_vertex_count(s), threads,
            ren ? prt_renderer_name(ren) : "");
     for (int a = 0; a < nsizes; ++a)
@@ -95,14 +95,19 @@ int main(int argc, char **argv)
             const double bake = prt__now() - t0;
             const prt__offset_set *set = t->state;
             bench_relight_time(ctx, t, l, 0);   /* builds the shadow-ray cache */
-            const double p0 = bench_relight_time(ctx, t, l, 0), p3 = bench_relight_time(ctx, t, l, 3), pass = (p3 - p0) / 3;
+            /* A frame: the maps' passes - one for maps holding every bounce (the default), the
+             * default count of them for single-bounce maps. */
+            int lo, passes, def;
+            prt_transfer_control_range(t, 0, &lo, &passes, &def);
+            passes = def;
+            const double p0 = bench_relight_time(ctx, t, l, 0), pn = bench_relight_time(ctx, t, l, passes), pass = (pn - p0) / passes;
             const double bytes = (double)set->count * set->covered * 3 * sizeof(float);
             const double limit = bench_read_bandwidth((size_t)bytes, threads);
             double gpass = 0, gframe = 0;
             if (ren && map) {
-                const double g0 = gpu_time(ctx, ren, t, l, 0, map), g3 = gpu_time(ctx, ren, t, l, 3, map);
-                gpass = (g3 - g0) / 3;
-                gframe = p0 + g3;   /* the first-order light on the CPU, then every GPU pass and the read-back */
+                const double g0 = gpu_time(ctx, ren, t, l, 0, map), gn = gpu_time(ctx, ren, t, l, passes, map);
+                gpass = (gn - g0) / passes;
+                gframe = p0 + gn;   /* the first-order light on the CPU, then every GPU pass and the read-back */
             }
             char bw[64];
             snprintf(bw, sizeof bw, "%.0f%% (%.3g of %.3g B/s)", pass > 0 && limit > 0 ? 100 * bytes / pass / limit : 0, pass > 0 ? bytes / pass : 0, limit);

@@ -373,7 +373,7 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
     prt__describe_line(d, "transfer:", "%s: %d offset maps (drawn by %s transference, %d refinements), %.2f MiB", kinds, s->count,
                        s->importance ? "mean" : "max", s->iterations, offset_bytes(t) / 1048576.0);
     if (s->kinds & PRT__OFFSET_RADIOSITY_BIT)
-        prt__describe_line(d, "bounces:", s->map_bounces > 1 ? "the radiosity maps hold %d (one pass at run time)" : "the radiosity maps hold one; the run time repeats the pass",
+        prt__describe_line(d, "bounces:", s->map_bounces > 1 ? "the radiosity maps hold %d bounces (one pass at run time)" : "the radiosity maps hold one; the run time repeats the pass",
                            s->map_bounces);
     for (int k = 0; k < s->medium_count; ++k) {
         size_t texels = 0;
@@ -446,6 +446,7 @@ int prt_transfer_offset_info(const prt_transfer *t, prt_offset_info *info)
         info->covered = (int)s->covered;
         info->has[PRT_OFFSET_RADIOSITY] = s->radiosity != NULL;
         info->has[PRT_OFFSET_SUBSURFACE] = s->subsurface != NULL;
+        info->map_bounces = s->map_bounces;
     }
     return 1;
 }

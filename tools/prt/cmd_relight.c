@@ -110,7 +110,9 @@ static prt_status write_offset_maps(cli *c, const prt_transfer *t, const char *d
                                                  "above 0) and otherwise the surface texel that fills u's gutter: rings grow outwards from the "
                                                  "charts, each texel taking the source of its first neighbour (left, right, down, up) in the ring before. subsurface: in = "
                                                  "irradiance / pi, and out replaces albedo * in on the texels of medium.exr above 0; radiosity: in = the "
-                                                 "first-order light map, each bounce is a pass over what the last one gave, final = first + the bounces");
+                                                 "first-order light map; maps holding map_bounces > 1 bounces give them all in one pass (final = first + "
+                                                 "out), maps of 1 are a pass per bounce over what the last one gave (final = first + every pass)");
+        cJSON_AddNumberToObject(index, "map_bounces", info.map_bounces);
     }
     static const char *const names[2] = {"radiosity", "subsurface"};
     size_t files = 0;
