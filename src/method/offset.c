@@ -18,7 +18,7 @@ void prt__offset_set_free(void *state)
     prt__offset_set *s = state;
     if (!s) return;
     free(s->offsets); free(s->texel); free(s->pos); free(s->nrm); free(s->albedo); free(s->area); free(s->emit); free(s->emit_in); free(s->env);
-    free(s->radiosity); free(s->subsurface); free(s->index); free(s->source); free(s->media); free(s->medium);
+    free(s->radiosity); free(s->subsurface); free(s->index); free(s->source); free(s->xy); free(s->media); free(s->medium);
     if (s->lights) { prt__vertex_lights_free(s->lights); free(s->lights); }
     free(s->sample_pos);
     free(s->sample_nrm);

@@ -19,31 +19,46 @@ bool prt__offset_set_index(prt__offset_set *s)
         s->index[s->texel[k]] = (int32_t)k;
     }
     if (!(s->source = malloc(n * sizeof *s->source))) return false;
+    free(s->xy);
+    if (!(s->xy = malloc((size_t)s->covered * 2 * sizeof *s->xy + 1))) return false;
+    for (uint32_t k = 0; k < s->covered; ++k) {
+        s->xy[k * 2] = (int32_t)(s->texel[k] % (uint32_t)s->width);
+        s->xy[k * 2 + 1] = (int32_t)(s->texel[k] / (uint32_t)s->width);
+    }
     return prt__texel_gutter_sources(s->width, s->height, s->index, s->source);
 }
 
 /* out[i] = sum_k in(texel i + offset k) maps[k][i], over covered texels. An offset landing off
  * the surface reads its gutter's source (s->source): a cell that does hold surface takes the light
  * of the chart's edge rather than nothing - as the paper's lightmap with dilated gutters gives it,
- * and exactly what the GPU path (render/offset_gl.c) reads. */
-static void apply(prt_context *ctx, const prt__offset_set *s, const float *maps, const float *in, float *out)
+ * and exactly what the GPU path (render/offset_gl.c) reads. Blocks of texels take the maps one
+ * after the other, so that each map streams through memory once and the block's sums stay in
+ * cache (texel by texel, every offset would touch a new cache line); each texel still sums its
+ * offsets in order, so the result does not depend on the block or thread count. */
+#define APPLY_BLOCK 2048
+static void apply(prt_context *ctx, const prt__offset_set *s, const float *maps, const float *restrict in, float *restrict out)
 {
     const int W = s->width, H = s->height;
-    const size_t nc = s->covered;
-    const int32_t *src = s->source;
-#pragma omp parallel for schedule(static, 256) num_threads(prt__threads(ctx))
-    for (size_t i = 0; i < nc; ++i) {
-        const int tx = (int)(s->texel[i] % (uint32_t)W), ty = (int)(s->texel[i] / (uint32_t)W);
-        float sum[3] = {0, 0, 0};
+    const size_t nc = s->covered, blocks = (nc + APPLY_BLOCK - 1) / APPLY_BLOCK;
+    const int32_t *restrict src = s->source, *restrict xy = s->xy;
+    const uint32_t *restrict texel = s->texel;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(prt__threads(ctx))
+    for (size_t b = 0; b < blocks; ++b) {
+        const int i0 = (int)(b * APPLY_BLOCK), n = (int)((size_t)i0 + APPLY_BLOCK < nc ? APPLY_BLOCK : nc - (size_t)i0);
+        float *restrict o = out + (size_t)i0 * 3;
+        memset(o, 0, (size_t)n * 3 * sizeof *o);
         for (int k = 0; k < s->count; ++k) {
-            const int sx = tx + s->offsets[k * 2], sy = ty + s->offsets[k * 2 + 1];
-            if (sx < 0 || sx >= W || sy < 0 || sy >= H) continue;
-            const float *m = maps + ((size_t)k * nc + i) * 3, *f = in + (size_t)src[(size_t)sy * W + sx] * 3;
-            sum[0] += f[0] * m[0];
-            sum[1] += f[1] * m[1];
-            sum[2] += f[2] * m[2];
+            const int ox = s->offsets[k * 2], oy = s->offsets[k * 2 + 1];
+            const int32_t shift = oy * W + ox;
+            const float *restrict m = maps + ((size_t)k * nc + (size_t)i0) * 3;
+            for (int i = 0; i < n; ++i) {
+                if ((unsigned)(xy[(i0 + i) * 2] + ox) >= (unsigned)W || (unsigned)(xy[(i0 + i) * 2 + 1] + oy) >= (unsigned)H) continue;
+                const float *restrict f = in + (size_t)src[(int32_t)texel[i0 + i] + shift] * 3;
+                o[i * 3] += f[0] * m[i * 3];
+                o[i * 3 + 1] += f[1] * m[i * 3 + 1];
+                o[i * 3 + 2] += f[2] * m[i * 3 + 2];
+            }
         }
-        memcpy(out + i * 3, sum, sizeof sum);
     }
 }
 
