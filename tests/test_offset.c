@@ -9,6 +9,7 @@
 #include "bake/offset_transfer.h"
 #include "bake/texel_raster.h"
 #include "geom/uv_atlas.h"
+#include "method/offset.h"
 #include "method/transfer.h"
 
 static uint64_t rng_state = 12345;
@@ -674,6 +675,18 @@ static void test_offset_method(void **state)
     assert_true(nsphere > 50);
     assert_float_equal(sphere / nsphere, prt__dipole_total(&skin), 0.03);
     assert_true(floor_diff < 1e-4 * floor_sum);
+    /* Light bounced onto the skin enters it too: its texels gather indirect light with skin's
+     * total diffuse reflectance (red 0.436), the floor's with the floor's colour. */
+    {
+        const prt__offset_set *os = ((const struct prt_transfer *)t)->state;
+        size_t skin_texels = 0;
+        for (size_t i = 0; i < os->covered; ++i) {
+            if (!os->medium[i]) continue;
+            assert_float_equal(os->albedo[i * 3], prt__dipole_total(&skin), 1e-5);
+            skin_texels++;
+        }
+        assert_true(skin_texels > 100);
+    }
     prt_relit_free(&r);
     prt_relit_free(&first);
     prt_transfer_release(t);

@@ -517,6 +517,17 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
         }
         k++;
     }
+    /* A translucent texel reflects light that bounced onto it through its medium, as it does first-
+     * order light: the dipole's total diffuse reflectance, not the mesh's colour, is the albedo its
+     * radiosity maps gather with (an exponential falloff keeps the albedo: it integrates to 1). */
+    for (size_t k = 0; !st && s->medium && k < s->covered; ++k) {
+        if (!s->medium[k]) continue;
+        for (int c = 0; c < 3; ++c) {
+            const prt__dipole *dm = &ob->dipoles[s->medium[k] - 1][c];
+            if (dm->falloff > 0) continue;
+            s->albedo[k * 3 + c] = ob->patches.albedo[(size_t)s->texel[k] * 3 + c] = (float)fmin(1.0, prt__dipole_total(dm));
+        }
+    }
     if (!st && !prt__offset_set_index(s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) {
         ob->x[0] = (prt__offset_transfer){.kind = PRT__OFFSET_RADIOSITY, .patches = &ob->patches, .rc = &ob->rc, .ray_offset = s->ray_offset};
