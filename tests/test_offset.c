@@ -598,7 +598,10 @@ static void test_offset_method(void **state)
     print_message("demo scene, point light, 64^2 map, 200 offsets: relative L2 %.3f (reference noise %.3f), direct %.3f, "
                   "indirect %.3f with %.2f of its energy\n", e[0], e[1], sqrt(direct_e / direct_b), e[2], ind / ind_ref);
     assert_true(sqrt(direct_e / direct_b) < 0.1);
-    assert_true(e[0] < 0.25);
+    /* Measured 0.162 and 0.389 (maps of 8 bounces); bounces binned into the wrong offset cells
+     * (dx and dy swapped) give 0.226 and 0.577. */
+    assert_true(e[0] < 0.2);
+    assert_true(e[2] < 0.5);
     assert_true(ind / ind_ref > 0.7 && ind / ind_ref < 1.3);
     prt_reference_vertices_free(&ref);
     prt_scene_release(ts);

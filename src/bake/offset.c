@@ -313,9 +313,11 @@ static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progr
     const int gw = 2 * W - 1;
     prt__progress_begin(p, p->stage, nc);
     const int strata = (int)sqrt((double)N);
+    int short_of_memory = 0;
 #pragma omp parallel num_threads(prt__threads(ctx))
     {
         double *acc = malloc((size_t)K * 3 * sizeof *acc);
+        if (!acc) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
 #pragma omp for schedule(dynamic, 16)
         for (size_t i = 0; i < nc; ++i) {
             if (!acc || prt__progress_cancelled(p)) continue;
@@ -343,9 +345,8 @@ static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progr
                     const float b0 = 1 - h.u - h.v;
                     const float hu = b0 * m->uv[ix[0] * 2] + h.u * m->uv[ix[1] * 2] + h.v * m->uv[ix[2] * 2];
                     const float hv = b0 * m->uv[ix[0] * 2 + 1] + h.u * m->uv[ix[1] * 2 + 1] + h.v * m->uv[ix[2] * 2 + 1];
-                    int hx = (int)floorf(hu * W), hy = (int)floorf(hv * H);
-                    hx = hx < 0 ? 0 : hx >= W ? W - 1 : hx;
-                    hy = hy < 0 ? 0 : hy >= H ? H - 1 : hy;
+                    const int hx = (int)fminf(fmaxf(floorf(hu * W), 0.0f), (float)(W - 1));   /* clamped before the cast: */
+                    const int hy = (int)fminf(fmaxf(floorf(hv * H), 0.0f), (float)(H - 1));   /* UVs may lie far out */
                     const int32_t at = s->source[(size_t)hy * W + hx];
                     if (at < 0) break;
                     if (k > 1) {
@@ -361,8 +362,8 @@ static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progr
                         n[c] = b0 * m->normals[ix[0] * 3 + c] + h.u * m->normals[ix[1] * 3 + c] + h.v * m->normals[ix[2] * 3 + c];
                         len += n[c] * n[c];
                     }
-                    if (!(len > 0) || prt__v3_dot(n, d) >= 0)
-                        for (int c = 0; c < 3; ++c) n[c] = -h.ng[c];
+                    if (!(len > 0) || prt__v3_dot(n, d) >= 0)   /* the front's geometric normal (it faces the ray) */
+                        for (int c = 0; c < 3; ++c) n[c] = h.ng[c];
                     prt__v3_normalize(n);
                     for (int c = 0; c < 3; ++c) o[c] = o[c] + d[c] * h.t + n[c] * s->ray_offset;
                 }
@@ -374,6 +375,7 @@ static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progr
         free(acc);
     }
     free(label);
+    if (short_of_memory) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory tracing the maps' bounces");
     if (prt__progress_cancelled(p)) return prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     return PRT_OK;
 }

@@ -201,12 +201,23 @@ static prt_status load_maps(prt_context *ctx, const prt__offset_set *s, const pr
     memcpy(*out, c->data, n * sizeof(float));
     for (uint64_t i = 0; i < n; ++i)
         if (!((*out)[i] >= 0 && (*out)[i] <= 1e30f)) return bad(ctx, "offset transfer map values out of range");
+    /* Multi-bounce maps: bounce k adds at most the texel's albedo times the brightest albedo to the
+     * power k - 1. */
+    double series[3] = {1, 1, 1};
+    if (radiosity && s->map_bounces > 1) {
+        double top[3] = {0, 0, 0};
+        for (size_t i = 0; i < s->covered; ++i)
+            for (int ch = 0; ch < 3; ++ch) top[ch] = fmax(top[ch], s->albedo[i * 3 + ch]);
+        for (int ch = 0; ch < 3; ++ch) {
+            double power = 1;
+            for (int k = 1; k < s->map_bounces; ++k) { power *= top[ch]; series[ch] += power; }
+        }
+    }
     for (size_t i = 0; i < s->covered; ++i)
         for (int ch = 0; ch < 3; ++ch) {
             double sum = 0;
             for (int k = 0; k < s->count; ++k) sum += (*out)[((size_t)k * s->covered + i) * 3 + ch];
-            /* Multi-bounce maps: each bounce past the first adds at most the texel's albedo again. */
-            const double bound = radiosity ? s->albedo[i * 3 + ch] * s->map_bounces : 1.0;
+            const double bound = radiosity ? s->albedo[i * 3 + ch] * series[ch] : 1.0;
             if (!(sum <= bound * 1.001 + 1e-6)) return bad(ctx, "an offset texel gathers more light than it can");
         }
     return PRT_OK;
@@ -238,6 +249,7 @@ static prt_status offset_load(prt_context *ctx, prt_transfer *t, const cJSON *me
     /* Files of maps holding one bounce wrote 0 here. */
     if (!(f[9] == 0 || (f[9] >= 2 && f[9] <= 16 && f[9] == floorf(f[9])))) return bad(ctx, "offset map bounces out of range");
     s->map_bounces = f[9] >= 2 ? (int)f[9] : 1;
+    if (s->map_bounces > 1 && !(s->kinds & PRT__OFFSET_RADIOSITY_BIT)) return bad(ctx, "offset map bounces without radiosity maps");
     const uint64_t n = (uint64_t)(uint32_t)s->width * (uint32_t)s->height;
     if (s->width < 8 || s->width > 4096 || s->height < 8 || s->height > 4096 || s->count < 1 || !s->kinds || s->kinds > 3 || s->iterations < 0 ||
         (s->importance != 0 && s->importance != 1) || !s->covered || s->covered > n || emits > 1 ||

@@ -86,6 +86,8 @@ static bool shadow_samples(const prt_transfer *t, prt__offset_set *s)
     const prt__mesh *m = &t->mesh;
     uint32_t *owner = prt__calloc(n, sizeof *owner);
     float *bary = malloc(n * 2 * sizeof *bary);
+    free(s->sample_pos);   /* an earlier attempt that failed */
+    free(s->sample_nrm);
     s->sample_pos = malloc(nc * S * 3 * sizeof(float));
     s->sample_nrm = malloc(nc * S * 3 * sizeof(float));
     size_t overlap, outside;
@@ -170,6 +172,8 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
                          s->map_bounces);
     if (bounces < lo || bounces > hi) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range %d..%d", bounces, lo, hi);
     if (d->brdf) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf does not apply to offset transfer maps (they reflect diffusely)");
+    if (d->gpu_finish && (d->per_vertex || d->with_indirect))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "gpu_finish leaves the light map to the renderer: per-vertex light and a separate indirect part need the CPU's");
     const size_t nc = s->covered, n = (size_t)s->width * s->height, nv = t->mesh.vertex_count;
     prt_status st = prt__relit_alloc(ctx, t, r, !d->gpu_finish && (d->with_indirect || d->component == PRT_COMPONENT_INDIRECT));
     if (st) return st;

@@ -338,8 +338,12 @@ prt_status prt__draw_upload_gpu(prt__draw *d, const prt_render_mesh *m)
         return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU accumulation: a %dx%d input for a %dx%d light map", m->texel_width, m->texel_height, d->offset.width,
                          d->offset.height);
     if (!d->tex_first) glGenTextures(1, &d->tex_first);
-    display_map(d->tex, d->offset.width, d->offset.height);
-    display_map(d->tex_first, d->offset.width, d->offset.height);
+    if (d->gpu_width != d->offset.width || d->gpu_height != d->offset.height) {   /* not on every light drag */
+        display_map(d->tex, d->offset.width, d->offset.height);
+        display_map(d->tex_first, d->offset.width, d->offset.height);
+        d->gpu_width = d->offset.width;
+        d->gpu_height = d->offset.height;
+    }
     prt__offset_gl_run(&d->offset, m->gpu_input, m->gpu_emission, m->gpu_bounces, m->gpu_component, d->tex, d->tex_first);
     d->texel_width = d->offset.width;
     d->texel_height = d->offset.height;
@@ -359,6 +363,7 @@ void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int heig
     glBindTexture(GL_TEXTURE_2D, d->tex);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB32F, width, height, 0, GL_RGB, GL_FLOAT, rgb);   /* row 0 = v near 0, as GL wants */
+    d->gpu_width = d->gpu_height = 0;   /* no longer a render target */
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);

@@ -39,6 +39,7 @@ typedef struct prt__draw {
     prt__offset_gl offset;
     GLuint tex_first;
     bool side_by_side;
+    int gpu_width, gpu_height;   /* tex and tex_first allocated as render targets of this size (0: not) */
 } prt__draw;
 
 /* Compiles and links vs (+ gs, may be NULL) + fs; 0 after recording the compiler's message. */

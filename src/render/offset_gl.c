@@ -291,7 +291,10 @@ void prt__offset_gl_run(prt__offset_gl *g, const float *input, float emission, i
     const float zero[4] = {0, 0, 0, 0};
     GLint viewport[4];
     glGetIntegerv(GL_VIEWPORT, viewport);
-    const GLboolean multisample = glIsEnabled(GL_MULTISAMPLE), depth = glIsEnabled(GL_DEPTH_TEST);
+    const GLboolean multisample = glIsEnabled(GL_MULTISAMPLE), depth = glIsEnabled(GL_DEPTH_TEST), cull = glIsEnabled(GL_CULL_FACE),
+                    blend = glIsEnabled(GL_BLEND);
+    GLint program = 0;
+    glGetIntegerv(GL_CURRENT_PROGRAM, &program);
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_CULL_FACE);
     glDisable(GL_MULTISAMPLE);
@@ -343,6 +346,15 @@ void prt__offset_gl_run(prt__offset_gl *g, const float *input, float emission, i
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glActiveTexture(GL_TEXTURE0);
     glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
-    if (multisample) glEnable(GL_MULTISAMPLE);   /* the mesh is drawn next, antialiased */
+    /* As found: the mesh is drawn next (antialiased, depth-tested). */
+    if (multisample) glEnable(GL_MULTISAMPLE);
     if (depth) glEnable(GL_DEPTH_TEST);
+    if (cull) glEnable(GL_CULL_FACE);
+    if (blend) glEnable(GL_BLEND);
+    for (int unit = 4; unit >= 0; --unit) {
+        glActiveTexture(GL_TEXTURE0 + (GLenum)unit);
+        glBindTexture(GL_TEXTURE_2D, 0);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, 0);
+    }
+    glUseProgram((GLuint)program);
 }

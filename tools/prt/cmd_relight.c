@@ -77,9 +77,11 @@ static prt_status clear_offset_maps(cli *c, const char *dir)
     prt_status st = PRT_OK;
     for (struct dirent *e; !st && (e = readdir(d));) {
         const char *n = e->d_name;
-        int k = -1, used = 0;
-        const bool map = (sscanf(n, "radiosity_%4d.exr%n", &k, &used) == 1 || sscanf(n, "subsurface_%4d.exr%n", &k, &used) == 1) && used > 0 &&
-                         !n[used] && k >= 0;
+        /* kind_NNNN.exr, four digits or more (%04d) */
+        const char *digits = !strncmp(n, "radiosity_", 10) ? n + 10 : !strncmp(n, "subsurface_", 11) ? n + 11 : NULL;
+        size_t nd = 0;
+        while (digits && digits[nd] >= '0' && digits[nd] <= '9') nd++;
+        const bool map = digits && nd >= 4 && !strcmp(digits + nd, ".exr");
         if (!map && strcmp(n, "medium.exr") && strcmp(n, "surface.exr") && strcmp(n, "index.json")) continue;
         char path[4200];
         snprintf(path, sizeof path, "%s/%s", dir, n);

@@ -332,6 +332,18 @@ int view_frame(viewer *v)
     char overlay[4096] = "";
     if (v->hud) status_line(v, overlay, sizeof overlay);
     prt_status st = prt_window_draw(v->win, &cam, v->background, v->exposure, v->tonemap, overlay);
+    if (st && v->shown.gpu_input) {
+        /* The GPU could not take the maps (too many atlases, too little memory): the same passes
+         * on the CPU, and say so. */
+        snprintf(v->message, sizeof v->message, "GPU passes failed (%.160s): on the CPU now", prt_last_error());
+        if (!v->c->quiet) fprintf(stderr, "prt view: %s\n", v->message);
+        v->want.gpu = false;
+        v->side_by_side = false;
+        view_sync(v);   /* the CPU's result replaces the GPU input */
+        view_request_relight(v);
+        view_sync(v);
+        st = prt_window_draw(v->win, &cam, v->background, v->exposure, v->tonemap, overlay);
+    }
     v->draw_ms_sum += (now() - t0) * 1e3;
     v->draws++;
     v->dirty = false;
