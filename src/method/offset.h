@@ -39,7 +39,7 @@ typedef struct prt__offset_set {
     prt_medium *media;
     uint8_t *medium;
     int32_t *index;               /* [width * height] covered index, -1 off the surface (derived) */
-    int32_t *xy;                  /* [covered][2] texel column and row (derived) */
+    int32_t *xy;                  /* [2][covered] texel columns, then rows (derived) */
     int32_t *source;              /* [width * height] the covered texel each texel reads: itself, or
                                    * its gutter's source (prt__texel_gutter_sources; derived) */
     /* Run-time: shadow rays for local lights, built on first use, from PRT__OFFSET_SHADOW_SAMPLES
