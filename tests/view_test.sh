@@ -171,7 +171,8 @@ awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.005) }' && ok || bad "recolouring
 # Offset maps: accumulated on the GPU by default, the picture prt render draws on the CPU; b puts
 # the first-order light beside the final one; g back on the CPU draws the same again.
 "$PRT" bake -q "$T/demo.obj" -o "$T/off.prt" --method offset --texels 32 --offsets 40 --iterations 60 || bad "offset bake"
-printf '%s\n' "0 screenshot $T/o1.exr" "0 key b" "0.05 screenshot $T/o2.exr" "0.05 key g" "0.1 screenshot $T/o3.exr" "0.1 key b" "0.1 quit" >"$T/oscript.txt"
+printf '%s\n' "0 screenshot $T/o1.exr" "0 key b" "0.05 screenshot $T/o2.exr" "0.05 key g" "0.1 screenshot $T/o3.exr" "0.1 key b" \
+    "0.15 screenshot $T/o4.exr" "0.2 quit" >"$T/oscript.txt"
 xrun -a -s "-screen 0 1024x768x24" "$PRT" view "$T/off.prt" --env none --light point:0.3,1.5,0.4:4 --width 320 --height 240 --script "$T/oscript.txt" >/dev/null 2>"$T/err"
 rc=$?
 [ "$rc" -eq 0 ] && ok || { bad "offset script exited $rc"; cat "$T/err"; }
@@ -181,6 +182,7 @@ within "$T/o3.exr" "$T/ro1.exr" 0.002
 "$PRT" compare --json - -q "$T/o2.exr" "$T/o1.exr" >"$T/cmp"
 r=$(field relative_l2 "$T/cmp")
 awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "side by side drew the same as the final view (relative L2 $r)"
+within "$T/o4.exr" "$T/o2.exr" 0.002   # b on the CPU turns the GPU passes back on, side by side
 
 # Light cloud: a light dragged about in the viewer and back to where it started gives the picture
 # prt render draws there (relighting keeps no history: nothing lags or sticks).

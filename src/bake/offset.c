@@ -210,7 +210,9 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
                 for (int o = 0; o < K; ++o) maps[((size_t)o * nc + i) * 3 + c] *= (float)(limit / sum);
             }
         if (capped)
-            prt__log(ctx, PRT_LOG_INFO, "%s maps: %zu of %zu texels gathered more than they can; scaled to the bound", k ? "subsurface" : "radiosity", capped, nc);
+            prt__log(ctx, PRT_LOG_INFO, "%s maps: %zu of %zu texels would gather more than they %s (their offsets' cells overlap; %s); scaled down to that",
+                     k ? "subsurface" : "radiosity", capped, nc, k ? "scatter" : "reflect",
+                     k ? "scattering wider than the light map's reach or texels, see --mm-per-unit" : "more offsets make it rarer");
         if (k == 0) s->radiosity = maps;
         else s->subsurface = maps;
         if (prt__progress_cancelled(p)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
@@ -415,7 +417,12 @@ static void offset_release(prt__bake_job *base)
 static prt_status layout(prt_context *ctx, const prt__offset_bake_desc *d, prt_transfer *t)
 {
     char why[160] = "asked for";
-    if (d->uv_layout == PRT_UV_MESH) return PRT_OK;
+    if (d->uv_layout == PRT_UV_MESH) {
+        /* The mesh's own layout, as asked: it must be one (the input's fault when it is not). */
+        if (prt__uv_layout_unusable(&t->mesh, d->texels, why, sizeof why))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "--uv mesh: '%s' has no usable UV layout (%s); --uv auto generates an atlas", t->source, why);
+        return PRT_OK;
+    }
     if (d->uv_layout == PRT_UV_AUTO && !prt__uv_layout_unusable(&t->mesh, d->texels, why, sizeof why)) return PRT_OK;
     prt__atlas_report r;
     prt_status st = prt__uv_atlas(ctx, &t->mesh, &(prt__atlas_desc){.resolution = d->texels}, &r);

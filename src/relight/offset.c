@@ -177,7 +177,7 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     prt_transfer_control_range(t, 0, &lo, &hi, &def);
     const int bounces = d->controls ? d->controls[0] : def;
     if ((bounces < lo || bounces > hi) && s->map_bounces > 1)
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range %d..%d: this file's maps hold %d bounces, given by one pass", bounces, lo, hi,
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range %d..%d: this file's maps hold %d bounces, given by one pass (bake with --map-bounces 1 to bounce at run time)", bounces, lo, hi,
                          s->map_bounces);
     if (bounces < lo || bounces > hi) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range %d..%d", bounces, lo, hi);
     if (d->brdf) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf does not apply to offset transfer maps (they reflect diffusely)");

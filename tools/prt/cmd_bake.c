@@ -163,10 +163,12 @@ static prt_status refine_scene(cli *c, prt_scene *scene, const prt_refine_desc *
 
 /* Per-vertex transfer cannot show a shadow that falls between vertices: say so, with the option
  * that fixes it, when a quick sample finds such triangles (per-texel bakes sample texels). */
-static void suggest_refinement(cli *c, const prt_scene *scene, const prt_options *o, bool coarse_check)
+static void suggest_refinement(cli *c, const prt_method *m, const prt_scene *scene, const prt_options *o, bool coarse_check)
 {
     const char *texels = prt_options_get(o, "texels");
     if (texels && strcmp(texels, "0") != 0) return;
+    const prt_option_desc *td = prt_method_option(m, "texels");
+    if (td && td->min > 0) return;   /* a method that always bakes a light map */
     if (coarse_check) coarse_mesh_warning(scene);
     prt_refine_stats rs;
     if (prt_scene_refine_estimate(c->ctx, scene, NULL, &rs)) return;   /* a hint only */
@@ -285,7 +287,7 @@ int cmd_bake(int argc, char **argv)
     if (!st && !c.quiet)
         fprintf(stderr, "prt bake: %s: %zu vertices, %zu triangles\n", argv[optind], prt_scene_vertex_count(scene), prt_scene_triangle_count(scene));
     if (!st && refine) st = refine_scene(&c, scene, &rd);
-    else if (!st && !c.quiet) suggest_refinement(&c, scene, o, sd.max_edge == 0);
+    else if (!st && !c.quiet) suggest_refinement(&c, method, scene, o, sd.max_edge == 0);
     if (!st) {
         uint64_t recovered = 0, total = 0;
         prt_bake_run_desc run = {.progress = cli_progress, .progress_user = &c, .checkpoint = checkpoint ? checkpoint_path : NULL,

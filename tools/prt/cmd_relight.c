@@ -98,8 +98,8 @@ static prt_status write_offset_maps(cli *c, const prt_transfer *t, const char *d
 {
     prt_offset_info info;
     if (!prt_transfer_offset_info(t, &info)) { cli_error(c, "--maps writes the maps of offset transfer files (bake with --method offset)"); return PRT_ERR_INVALID_ARG; }
-    if (mkdir(dir, 0777) != 0 && errno != EEXIST) { cli_error(c, "cannot create '%s': %s", dir, strerror(errno)); return PRT_ERR_IO; }
-    if (clear_offset_maps(c, dir)) return PRT_ERR_IO;
+    if (mkdir(dir, 0777) != 0 && errno != EEXIST) { cli_error(c, "cannot create '%s': %s", dir, strerror(errno)); c->reported = true; return PRT_ERR_IO; }
+    if (clear_offset_maps(c, dir)) { c->reported = true; return PRT_ERR_IO; }
     const int W = info.width, H = info.height;
     float *map = malloc((size_t)W * H * 3 * sizeof *map);
     cJSON *index = cJSON_CreateObject(), *kinds = index ? cJSON_AddObjectToObject(index, "kinds") : NULL;
@@ -195,6 +195,7 @@ static prt_status write_offset_maps(cli *c, const prt_transfer *t, const char *d
     cJSON_Delete(index);
     free(map);
     if (st == PRT_ERR_NO_MEMORY) cli_error(c, "out of memory writing the maps");
+    if (st && st != PRT_ERR_INVALID_ARG) c->reported = true;   /* every failure above said why in its one line */
     return st;
 }
 

@@ -109,16 +109,22 @@ static void toggle_gpu(viewer *v, int arg)
         if (!prt_transfer_offset_info(v->t, &info)) { snprintf(v->message, sizeof v->message, "GPU passes are for offset transfer maps"); return; }
     }
     v->want.gpu = !v->want.gpu;
+    snprintf(v->message, sizeof v->message, "transfer passes on the %s%s", v->want.gpu ? "GPU" : "CPU",
+             !v->want.gpu && v->side_by_side ? " (side by side needs the GPU's: off)" : "");
     if (!v->want.gpu) v->side_by_side = false;
-    snprintf(v->message, sizeof v->message, "transfer passes on the %s", v->want.gpu ? "GPU" : "CPU");
     view_request_relight(v);
 }
 static void toggle_side_by_side(viewer *v, int arg)
 {
     (void)arg;
-    if (!v->shown.gpu_input) { snprintf(v->message, sizeof v->message, "side by side shows offset maps finished on the GPU (g)"); return; }
+    prt_offset_info info;
+    if (!prt_transfer_offset_info(v->t, &info)) { snprintf(v->message, sizeof v->message, "side by side shows offset transfer maps"); return; }
     v->side_by_side = !v->side_by_side;
     v->message[0] = 0;
+    if (v->side_by_side && !v->want.gpu) {   /* the GPU passes make both maps */
+        v->want.gpu = true;
+        snprintf(v->message, sizeof v->message, "side by side: transfer passes on the GPU");
+    }
     view_request_relight(v);
 }
 

@@ -67,7 +67,7 @@ int view_script_load(const cli *c, const char *path, view_script **out)
         char verb[32] = "", arg[4][512] = {"", "", "", ""};
         double t;
         int n = sscanf(line, "%lf %31s %511s %511s %511s %511s", &t, verb, arg[0], arg[1], arg[2], arg[3]);
-        if (n <= 0) continue;   /* blank or comment */
+        if (n == EOF) continue;   /* blank or comment; a line not starting with a time is an error */
         int k = -1;
         for (int i = 0; i < (int)(sizeof verbs / sizeof verbs[0]); ++i)
             if (n >= 2 && !strcmp(verb, verbs[i].name)) k = i;
