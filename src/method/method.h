@@ -92,6 +92,7 @@ struct prt_method {
     const char *summary;    /* one line */
     unsigned lighting;      /* PRT_LIGHTS_* it relights */
     bool runtime_albedo;    /* relight honours prt_relight_desc.albedo */
+    bool light_map;         /* always bakes a light map (prt_method_light_map) */
     const prt_option_desc *options;
     int option_count;
     const prt_control_desc *controls;

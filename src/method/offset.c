@@ -428,6 +428,7 @@ const prt__method prt__method_offset = {
     .summary = "offset transfer maps (Sunshine-Hill & Faloutsos): radiosity and subsurface scattering in texture space, any first-order light",
     .lighting = PRT_LIGHTS_ENVIRONMENT | PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_DIRECTIONAL | PRT_LIGHTS_SPHERE | PRT_LIGHTS_EMISSIVE,
     .runtime_albedo = false,
+    .light_map = true,
     .options = options,
     .option_count = (int)(sizeof options / sizeof options[0]),
     .controls = controls,

@@ -167,8 +167,7 @@ static void suggest_refinement(cli *c, const prt_method *m, const prt_scene *sce
 {
     const char *texels = prt_options_get(o, "texels");
     if (texels && strcmp(texels, "0") != 0) return;
-    const prt_option_desc *td = prt_method_option(m, "texels");
-    if (td && td->min > 0) return;   /* a method that always bakes a light map */
+    if (prt_method_light_map(m)) return;   /* its light map is the resolution, not the mesh */
     if (coarse_check) coarse_mesh_warning(scene);
     prt_refine_stats rs;
     if (prt_scene_refine_estimate(c->ctx, scene, NULL, &rs)) return;   /* a hint only */
