@@ -115,7 +115,7 @@ expect 0 "GPU and CPU accumulation draw the same" -- "$PRT" compare --json "$T/c
 r=$(sed -n 's/.*"relative_l2":[[:space:]]*\([-0-9.eE+]*\).*/\1/p' "$T/cmp.json" | head -n 1)
 awk -v r="$r" 'BEGIN { exit !(r != "" && r + 0 < 1e-3) }' && ok || bad "GPU and CPU offset renders differ (relative L2 '$r')"
 expect 2 "--accumulate of an SH file" -- "$PRT" render "$T/demo.prt" --accumulate gpu -o "$T/x.png"
-says "offset transfer maps"
+says "methods with GPU passes (offset)"
 expect 2 "--accumulate gpu with --per-vertex" -- "$PRT" render "$T/offset.prt" --accumulate gpu --per-vertex -o "$T/x.png"
 expect 2 "--accumulate nonsense" -- "$PRT" render "$T/offset.prt" --accumulate fpga -o "$T/x.png"
 mkdir -p "$T/maps" && : >"$T/maps/radiosity_0999.exr" && : >"$T/maps/mine.txt"

@@ -44,6 +44,9 @@ int prt_method_runtime_albedo(const prt_method *m);
 /* 1 when the method always bakes into a light map over the UVs (its resolution is the map's, not
  * the mesh's: subdividing the mesh does not sharpen it). */
 int prt_method_light_map(const prt_method *m);
+/* 1 when m's relighting can leave its last passes to the renderer (prt_relight_desc.gpu_finish),
+ * as offset transfer maps do. */
+int prt_method_gpu_passes(const prt_method *m);
 /* Checks that m relights everything `what` (PRT_LIGHTS_* bits) holds. On failure the error names
  * what is missing and the methods of the table that relight it, or says that none does. */
 prt_status prt_method_check_lighting(const prt_method *m, unsigned what);

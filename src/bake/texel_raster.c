@@ -220,57 +220,48 @@ bool prt__texel_fill_gutters(int width, int height, uint8_t *covered, float **pl
     return true;
 }
 
+/* Neighbour k (left, right, down, up) of texel i inside a width x height map, or false. */
+static bool neighbour(int width, int height, size_t i, int k, size_t *j)
+{
+    static const int dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
+    const int u = (int)(i % (size_t)width) + dx[k], v = (int)(i / (size_t)width) + dy[k];
+    if (u < 0 || u >= width || v < 0 || v >= height) return false;
+    *j = (size_t)v * width + u;
+    return true;
+}
+
 bool prt__texel_gutter_sources(int width, int height, const int32_t *index, int32_t *source)
 {
     const size_t n = (size_t)width * height;
     uint32_t *ring = malloc(n * sizeof *ring + 1), *next = malloc(n * sizeof *next + 1);
-    uint8_t *done = malloc(n + 1);
-    if (!ring || !next || !done) { free(ring); free(next); free(done); return false; }
-    const int dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
-    size_t count = 0;
+    uint8_t *state = malloc(n + 1);   /* 0 unreached, 1 in an earlier ring, 2 queued for the next */
+    if (!ring || !next || !state) { free(ring); free(next); free(state); return false; }
+    size_t count = 0, j;
     for (size_t i = 0; i < n; ++i) {
         source[i] = index[i] >= 0 ? index[i] : -1;
-        done[i] = index[i] >= 0;
+        state[i] = index[i] >= 0;
     }
     /* The first ring: uncovered texels beside the surface. */
     for (size_t i = 0; i < n; ++i) {
-        if (done[i]) continue;
-        const int x = (int)(i % (size_t)width), y = (int)(i / (size_t)width);
-        for (int k = 0; k < 4; ++k) {
-            const int u = x + dx[k], v = y + dy[k];
-            if (u >= 0 && u < width && v >= 0 && v < height && index[(size_t)v * width + u] >= 0) { ring[count++] = (uint32_t)i; break; }
-        }
+        if (state[i]) continue;
+        for (int k = 0; k < 4; ++k)
+            if (neighbour(width, height, i, k, &j) && state[j] == 1) { ring[count++] = (uint32_t)i; state[i] = 2; break; }
     }
     while (count) {
-        /* Sources come only from earlier rings: read them all before marking this one done. */
-        for (size_t r = 0; r < count; ++r) {
-            const size_t i = ring[r];
-            const int x = (int)(i % (size_t)width), y = (int)(i / (size_t)width);
-            for (int k = 0; k < 4; ++k) {
-                const int u = x + dx[k], v = y + dy[k];
-                if (u < 0 || u >= width || v < 0 || v >= height) continue;
-                const size_t j = (size_t)v * width + u;
-                if (done[j]) { source[i] = source[j]; break; }
-            }
-        }
-        for (size_t r = 0; r < count; ++r) done[ring[r]] = 1;
+        /* Sources come only from earlier rings: read them all before marking this one. */
+        for (size_t r = 0; r < count; ++r)
+            for (int k = 0; k < 4; ++k)
+                if (neighbour(width, height, ring[r], k, &j) && state[j] == 1) { source[ring[r]] = source[j]; break; }
+        for (size_t r = 0; r < count; ++r) state[ring[r]] = 1;
         size_t next_count = 0;
-        for (size_t r = 0; r < count; ++r) {
-            const size_t i = ring[r];
-            const int x = (int)(i % (size_t)width), y = (int)(i / (size_t)width);
-            for (int k = 0; k < 4; ++k) {
-                const int u = x + dx[k], v = y + dy[k];
-                if (u < 0 || u >= width || v < 0 || v >= height) continue;
-                const size_t j = (size_t)v * width + u;
-                if (!done[j] && done[j] != 2) { done[j] = 2; next[next_count++] = (uint32_t)j; }
-            }
-        }
-        for (size_t r = 0; r < next_count; ++r) done[next[r]] = 0;
+        for (size_t r = 0; r < count; ++r)
+            for (int k = 0; k < 4; ++k)
+                if (neighbour(width, height, ring[r], k, &j) && state[j] == 0) { state[j] = 2; next[next_count++] = (uint32_t)j; }
         uint32_t *tmp = ring; ring = next; next = tmp;
         count = next_count;
     }
     free(ring);
     free(next);
-    free(done);
+    free(state);
     return true;
 }

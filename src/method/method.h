@@ -93,6 +93,7 @@ struct prt_method {
     unsigned lighting;      /* PRT_LIGHTS_* it relights */
     bool runtime_albedo;    /* relight honours prt_relight_desc.albedo */
     bool light_map;         /* always bakes a light map (prt_method_light_map) */
+    bool gpu_passes;        /* relight honours prt_relight_desc.gpu_finish (prt_method_gpu_passes) */
     const prt_option_desc *options;
     int option_count;
     const prt_control_desc *controls;

@@ -429,6 +429,7 @@ const prt__method prt__method_offset = {
     .lighting = PRT_LIGHTS_ENVIRONMENT | PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_DIRECTIONAL | PRT_LIGHTS_SPHERE | PRT_LIGHTS_EMISSIVE,
     .runtime_albedo = false,
     .light_map = true,
+    .gpu_passes = true,
     .options = options,
     .option_count = (int)(sizeof options / sizeof options[0]),
     .controls = controls,

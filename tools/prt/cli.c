@@ -611,9 +611,13 @@ bool cli_parse_accumulate(const char *arg, bool *gpu)
 
 bool cli_check_accumulate(const cli *c, const prt_transfer *t, bool per_vertex)
 {
-    prt_offset_info info;
-    if (!prt_transfer_offset_info(t, &info)) {
-        cli_error(c, "--accumulate gpu applies to offset transfer maps, and this is a %s file (prt info says what it holds)", prt_method_name(prt_transfer_method(t)));
+    if (!prt_method_gpu_passes(prt_transfer_method(t))) {
+        char names[256] = "";
+        for (int i = 0, at = 0; i < prt_method_count() && at < (int)sizeof names; ++i)
+            if (prt_method_gpu_passes(prt_method_at(i)))
+                at += snprintf(names + at, sizeof names - (size_t)at, "%s%s", at ? ", " : "", prt_method_name(prt_method_at(i)));
+        cli_error(c, "--accumulate gpu applies to files of methods with GPU passes (%s), and this is a %s file", names,
+                  prt_method_name(prt_transfer_method(t)));
         return false;
     }
     if (per_vertex) {

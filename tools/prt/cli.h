@@ -153,7 +153,7 @@ prt_status cli_painted_albedo(const cli *c, const cli_light *l, const prt_transf
 int cli_controls(const cli *c, const cli_light *l, const prt_transfer *t, int values[PRT_MAX_CONTROLS]);
 /* --accumulate cpu|gpu; false when it is neither. */
 bool cli_parse_accumulate(const char *arg, bool *gpu);
-/* Whether --accumulate gpu applies to t (offset maps drawn per texel); reports when not. */
+/* Whether --accumulate gpu applies to t (its method has GPU passes, drawn per texel); reports when not. */
 bool cli_check_accumulate(const cli *c, const prt_transfer *t, bool per_vertex);
 /* Relights t into out with l (variant index, per-vertex only when asked). */
 prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,

@@ -464,8 +464,9 @@ int cmd_view(int argc, char **argv)
         /* The file's lights become the viewer's to edit; the worker relights with a copy per job. */
         view_take_lights(&v);
         v.want.variant = prt_transfer_default_variant(v.t, 1);
-        /* Offset maps accumulate on the GPU unless asked otherwise: the paper's run time. */
-        if (!accumulate_given) v.light.gpu_finish = prt_transfer_offset_info(v.t, NULL);
+        /* Methods with GPU passes run them on the GPU unless asked otherwise (offset maps: the
+         * paper's run time). */
+        if (!accumulate_given) v.light.gpu_finish = prt_method_gpu_passes(prt_transfer_method(v.t));
         else if (v.light.gpu_finish && !cli_check_accumulate(&c, v.t, false)) { c.reported = true; st = PRT_ERR_INVALID_ARG; }
         v.want.gpu = v.light.gpu_finish;
         if (cli_controls(&c, &v.light, v.t, v.want.controls) < 0) { c.reported = true; st = PRT_ERR_INVALID_ARG; }

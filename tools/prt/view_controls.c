@@ -103,10 +103,9 @@ static void next_component(viewer *v, int arg)
 static void toggle_gpu(viewer *v, int arg)
 {
     (void)arg;
-    if (!v->shown.gpu_input && !v->want.gpu) {
-        /* Asked of the method: a result comes back with GPU input only where it has GPU passes. */
-        prt_offset_info info;
-        if (!prt_transfer_offset_info(v->t, &info)) { snprintf(v->message, sizeof v->message, "GPU passes are for offset transfer maps"); return; }
+    if (!prt_method_gpu_passes(prt_transfer_method(v->t))) {
+        snprintf(v->message, sizeof v->message, "method %s has no GPU passes", prt_method_name(prt_transfer_method(v->t)));
+        return;
     }
     v->want.gpu = !v->want.gpu;
     snprintf(v->message, sizeof v->message, "transfer passes on the %s%s", v->want.gpu ? "GPU" : "CPU",
@@ -117,8 +116,10 @@ static void toggle_gpu(viewer *v, int arg)
 static void toggle_side_by_side(viewer *v, int arg)
 {
     (void)arg;
-    prt_offset_info info;
-    if (!prt_transfer_offset_info(v->t, &info)) { snprintf(v->message, sizeof v->message, "side by side shows offset transfer maps"); return; }
+    if (!prt_method_gpu_passes(prt_transfer_method(v->t))) {
+        snprintf(v->message, sizeof v->message, "side by side shows the first-order light of methods with GPU passes");
+        return;
+    }
     v->side_by_side = !v->side_by_side;
     v->message[0] = 0;
     if (v->side_by_side && !v->want.gpu) {   /* the GPU passes make both maps */
@@ -146,8 +147,8 @@ static const view_control core[] = {
     {'P', "p", "screenshot (prt-screenshot-N.png)", screenshot, 0},
     {'K', "k", "relight the file as its next kind (prt info lists them)", next_variant, 0},
     {'D', "d", "full / direct only / indirect only", next_component, 0},
-    {'G', "g", "offset maps: transfer passes on the GPU / the CPU", toggle_gpu, 0},
-    {'B', "b", "offset maps on the GPU: first-order and final light side by side", toggle_side_by_side, 0},
+    {'G', "g", "the method's last passes on the GPU / the CPU (offset maps)", toggle_gpu, 0},
+    {'B', "b", "first-order and final light side by side (with the GPU passes)", toggle_side_by_side, 0},
 };
 
 void view_register_core(viewer *v) { view_register(v, core, (int)(sizeof core / sizeof core[0])); }
