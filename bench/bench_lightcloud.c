@@ -16,7 +16,7 @@
  * Without MESH: ../shared/data's Cornell box (max edge 0.1) when present, else the procedural
  * room. Prints JSON on stdout and a summary on stderr. */
 #include "bench_common.h"
-#include "method/lightcloud.h"
+#include "methods/lightcloud/lightcloud.h"
 
 #include <string.h>
 #include <sys/resource.h>

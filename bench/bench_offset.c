@@ -13,7 +13,7 @@
  * Without MESH it uses ../shared/data's bunny_lowres.obj (3.7k vertices, as the paper's face) if
  * present, else the procedural demo scene. JSON on stdout, a table on stderr. */
 #include "bench_common.h"
-#include "method/offset.h"
+#include "methods/offset/offset.h"
 
 #include <string.h>
 

@@ -11,7 +11,7 @@
  * bakes the procedural room of the paper's Fig. 6 (prt demo-scene --room, about 30k vertices).
  * Prints JSON on stdout and a summary on stderr. */
 #include "bench_common.h"
-#include "method/spectral.h"
+#include "methods/spectral/spectral.h"
 
 #include <string.h>
 #include <unistd.h>

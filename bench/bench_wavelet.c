@@ -11,7 +11,7 @@
  * JSON on stdout and a summary on stderr. */
 #include "bench_common.h"
 #include "core/cubemap.h"
-#include "method/wavelet.h"
+#include "methods/wavelet/wavelet.h"
 
 #include <immintrin.h>
 #include <string.h>

@@ -3,7 +3,7 @@
  * clustering against a brute-force one, no light through a closed wall, no popping while a light
  * is dragged, the Cornell box against the path tracer, files and bad input. */
 #include "common.h"
-#include "method/lightcloud.h"
+#include "methods/lightcloud/lightcloud.h"
 
 /* Closed box of side 1 (inward normals), its floor at y = 0, centred at x = cx. */
 static void closed_box(test_mesh *m, int n, float cx)

@@ -4,13 +4,13 @@
  * the texel areas themselves when every integer offset is chosen. */
 #include "common.h"
 
-#include "bake/offset_sampling.h"
-#include "bake/offset_bins.h"
-#include "bake/offset_transfer.h"
-#include "bake/texel_raster.h"
+#include "methods/offset/sampling.h"
+#include "methods/offset/bins.h"
+#include "methods/offset/transfer.h"
+#include "geom/texel_raster.h"
 #include "geom/uv_atlas.h"
-#include "method/offset.h"
-#include "method/transfer.h"
+#include "methods/offset/offset.h"
+#include "transfer/transfer.h"
 
 static uint64_t rng_state = 12345;
 static double rnd(void)

@@ -5,10 +5,10 @@
  * paper's 2006 GPU avoided with dilated gutters) gives exactly the CPU's sum (relight/offset.c). */
 #include "render/offset_gl.h"
 
-#include "bake/offset_bins.h"
+#include "methods/offset/bins.h"
 #include "render/draw.h"
-#include "method/offset.h"
-#include "method/transfer.h"
+#include "methods/offset/offset.h"
+#include "transfer/transfer.h"
 
 #include <string.h>
 

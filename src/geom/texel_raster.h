@@ -1,0 +1,30 @@
+/* Texel patches of a UV layout. */
+#ifndef PRT_GEOM_TEXEL_RASTER_H
+#define PRT_GEOM_TEXEL_RASTER_H
+
+#include "geom/mesh.h"
+
+/* Rasterizes the mesh's UVs (every vertex has them) into a W x H grid: texel (x, y) has its
+ * centre at ((x + .5) / W, (y + .5) / H) and belongs to the first triangle covering it (owner:
+ * triangle + 1, 0 = none; bary: 2 barycentrics per texel); triangles no centre falls in take the
+ * texels they touch. Counts centres claimed twice inside triangles (overlap) and vertex uses
+ * outside [0, 1] (outside). False when out of memory. */
+bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float *bary, size_t *overlap, size_t *outside);
+
+/* The world-space surface area inside each texel of the W x H grid (each triangle clipped to
+ * each texel square in UV space, scaled by its world-to-UV area ratio): the patch areas TA(t)
+ * of offset transfer maps; their sum is the mesh's area when the layout covers it once. */
+bool prt__texel_areas(const prt__mesh *m, int W, int H, float *area);
+
+/* Fills every uncovered texel, ring by ring outwards from the baked ones, with the mean of its
+ * neighbours in earlier rings, so that bilinear filtering and mip-maps never pull in black across
+ * a chart's border. covered: 1 = baked; 0 -> 2 filled. planes[k] holds floats[k] per texel (NULL
+ * planes are skipped). False when out of memory. */
+bool prt__texel_fill_gutters(int width, int height, uint8_t *covered, float **planes, const int *floats, int nplanes);
+/* For every texel, the surface texel whose value it takes when read: itself on the surface
+ * (index[t] >= 0, the covered index), else the source of its first neighbour (left, right, down,
+ * up) in the ring before its own, rings growing outwards from the charts; -1 when the map holds
+ * no surface. A fixed gather that a CPU loop and a GPU shader both apply exactly. */
+bool prt__texel_gutter_sources(int width, int height, const int32_t *index, int32_t *source);
+
+#endif

@@ -1,0 +1,115 @@
+/* The light-cloud method's state (Kristensen, Akenine-Moller & Jensen 2005: precomputed local
+ * radiance transfer). bake/lightcloud.c, bake/lightcloud_cluster.c, relight/lightcloud.c and the
+ * table entry method/lightcloud.c look inside.
+ *
+ * A cloud of unit point lights (1 W/sr, white) was placed over a region; for each, the exit
+ * radiance of every vertex was computed (the indirect part, or all of it with store_direct).
+ * The mesh is cut into zones (boxes split along their longest axis); within a zone the lights
+ * are clustered (each cloud light belongs to one merged light of the zone) and the zone's
+ * per-vertex response vectors - per channel c and merged light l, [c][l] for the diffuse exit
+ * radiance and [c][k][l] for the 16 SH coefficients k of a glossy vertex's glossy part - are
+ * compressed with clustered PCA (or kept raw). */
+#ifndef PRT_METHODS_LIGHTCLOUD_H
+#define PRT_METHODS_LIGHTCLOUD_H
+
+#include "compress/cpca.h"
+#include "geom/kdtree.h"
+#include "transfer/method.h"
+#include "light/vertex_lights.h"
+
+#define PRT__LIGHTCLOUD_MAX_LIGHTS 4096
+#define PRT__LIGHTCLOUD_GLOSSY_N 16      /* SH order 4 exit radiance for glossy vertices, as the paper's n_b = 16 */
+
+/* One zone's responses in one form: raw [vertex][dim] or CPCA over the zone's vertices. */
+typedef struct prt__lightcloud_block {
+    uint32_t vertices, dim;
+    float *raw;                  /* NULL when compressed */
+    prt__cpca *cpca;
+} prt__lightcloud_block;
+
+typedef struct prt__lightcloud_zone {
+    uint32_t lights;             /* merged lights */
+    uint32_t *light_of;          /* [cloud light] the merged light it belongs to */
+    float *positions;            /* [light][3] the merged lights' mean positions */
+    prt__lightcloud_block diffuse;   /* over the zone's vertices in member order; dim 3 x lights */
+    prt__lightcloud_block glossy;    /* over its glossy vertices in member order; dim 3 x 16 x lights */
+} prt__lightcloud_zone;
+
+typedef struct prt__lightcloud_cache {
+    prt__vertex_lights lights;
+    prt__kdtree tree;
+    bool tree_ready;
+    pthread_mutex_t lock;
+    int warned;                  /* a light outside the cloud or seeing none of it was reported (atomic) */
+} prt__lightcloud_cache;
+
+typedef struct prt__lightcloud_set {
+    uint32_t cloud_count;
+    float *cloud;                /* [light][3] */
+    float spacing;               /* median distance from a cloud light to its nearest neighbour (one light: half the region's largest side) */
+    float region[6];             /* min xyz, max xyz: where the cloud covers (the grid's box, the lights' bounds grown by half a spacing) */
+    bool store_direct;           /* responses hold direct light too; else the run time adds it */
+    int bounces, samples;
+    float ray_offset;
+    float merge_distance, merge_error;   /* as baked (informational) */
+    uint32_t zone_count;
+    uint32_t *zone_of;           /* [vertex] */
+    uint32_t *glossy_of;         /* [vertex] glossy index or UINT32_MAX (derived from materials) */
+    uint32_t glossy_count;
+    uint32_t *members;           /* derived: vertices grouped by zone, ascending within each */
+    uint32_t *member_start;      /* [zone + 1] */
+    uint32_t *glossy_start;      /* [zone + 1] glossy members before each zone */
+    prt__lightcloud_zone *zones;
+    /* The scene's emissive surfaces at emission scale 1: the light they cause, per vertex (direct,
+     * then indirect), and its glossy part; NULL when nothing emits. */
+    float *emit;                 /* [vertex][3] direct, then [vertex][3] indirect */
+    float *emit_sh;              /* [glossy vertex][3][16] */
+    prt__lightcloud_cache *cache;
+} prt__lightcloud_set;
+
+extern const prt__method prt__method_lightcloud;
+
+static inline prt__lightcloud_set *prt__lightcloud(const prt_transfer *t) { return prt__state_of(t, &prt__method_lightcloud); }
+void prt__lightcloud_set_free(void *state);
+prt__lightcloud_cache *prt__lightcloud_cache_new(void);
+/* Numbers the glossy vertices (material with a glossy part) into s->glossy_of; derives members,
+ * member_start and glossy_start from zone_of. False when out of memory or zone_of is out of range
+ * or leaves a zone empty. */
+bool prt__lightcloud_index(const prt_transfer *t, prt__lightcloud_set *s);
+/* Median nearest-neighbour distance of the cloud (0 for a single light). */
+float prt__lightcloud_spacing(const float *cloud, uint32_t count);
+void prt__lightcloud_block_free(prt__lightcloud_block *b);
+
+/* Bake (bake/lightcloud.c). */
+typedef struct prt__lightcloud_bake_desc {
+    int grid[3];                 /* cloud grid cells; 0 = 6 x 6 x 6 */
+    bool has_box;
+    float box[6];                /* min xyz, max xyz; default the scene's bounds */
+    const char *list_path;       /* JSON list of positions instead of (or besides) the grid */
+    int surface_lights;          /* extra lights just off the surfaces */
+    int zone_vertices;           /* 0 = 2000 */
+    float merge_distance;        /* < 0: default (3 x spacing); 0: no merging */
+    float merge_error;           /* < 0: default 0.1; 0: the response term is left out */
+    bool store_direct;
+    int bounces;                 /* 0 = 4 */
+    bool raw;                    /* no CPCA */
+    int clusters, vectors;       /* per zone; 0 = 8, 8 */
+} prt__lightcloud_bake_desc;
+prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, const prt__lightcloud_bake_desc *d,
+                                      prt_transfer *t, prt__bake_job **job);
+
+/* Clustering (bake/lightcloud_cluster.c): merges n lights bottom-up while every pair across two
+ * clusters has metric(j, k) < 1, smallest first; cluster_of[i] numbers the clusters in order of
+ * their first member. */
+typedef float (*prt__light_metric_fn)(void *user, uint32_t j, uint32_t k);
+prt_status prt__lightcloud_cluster(prt_context *ctx, uint32_t n, prt__light_metric_fn metric, void *user, uint32_t *cluster_of, uint32_t *clusters);
+
+/* Run time (relight/lightcloud.c): weights over the cloud (3 per light: colour) for the point and
+ * sphere lights of l, by interpolation among the `neighbours` nearest cloud lights visible from
+ * each light. */
+prt_status prt__lightcloud_weights(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, int neighbours, float *w);
+/* Exit radiance from cloud weights: rgb (3 per vertex, added to) and, for glossy vertices, the
+ * glossy part's SH (3 x 16 per vertex, added to; may be NULL). */
+prt_status prt__lightcloud_eval(prt_context *ctx, const prt_transfer *t, const float *w, float *rgb, float *exit_sh);
+
+#endif

@@ -1,0 +1,549 @@
+/* Baking offset transfer maps: a light map over the mesh's UVs (or a generated atlas), offsets
+ * chosen by the largest (or mean) transfer they carry, the maps TR TVA for radiosity and/or
+ * subsurface scattering, and each texel's shadowed SH transfer for first-order light from the
+ * environment. Stages: offsets, transfer maps, environment. */
+#include "methods/offset/sampling.h"
+#include "methods/offset/transfer.h"
+#include "geom/uv_atlas.h"
+#include "light/light_sample.h"
+#include "methods/offset/offset.h"
+
+#define IMPORTANCE_TEXELS 4096   /* texels an offset's importance looks at (evenly spread) */
+#define ENV_DIRECTIONS 256       /* rays per texel for its environment visibility */
+#define EMITTER_SAMPLES 256      /* light samples per texel on the emissive surfaces */
+#define CENTRE_RING 8            /* how far the centre offset's exact sum reaches, texels */
+
+typedef struct obake {
+    prt__bake_job base;
+    prt__offset_bake_desc d;
+    prt_transfer *t;
+    prt__offset_set *s;
+    prt__texel_patches patches;
+    prt__raycaster rc;
+    prt__offset_transfer x[2];   /* radiosity, subsurface */
+    uint8_t *texel_medium;       /* [width * height] */
+    prt__dipole (*dipoles)[3];   /* per medium */
+    prt__progress *progress;
+} obake;
+
+/* ---- offsets ---- */
+
+typedef struct importance_job {
+    obake *ob;
+    const uint32_t *sample;      /* texels looked at */
+    size_t count;
+    double *value;               /* scratch, count entries */
+    prt__progress *p;
+} importance_job;
+
+/* How much an offset carries: the largest (or mean) transfer times source area over the sampled
+ * texels, both kinds together. */
+static double importance(void *user, int dx, int dy)
+{
+    importance_job *j = user;
+    const obake *ob = j->ob;
+    const int W = ob->patches.width, H = ob->patches.height;
+    prt__progress_add(j->p, 1);
+    if (prt__progress_cancelled(j->p)) return 0;
+    double *value = j->value;
+#pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ob->base.ctx))
+    for (size_t i = 0; i < j->count; ++i) {
+        value[i] = 0;
+        const size_t t = j->sample[i];
+        const int sx = (int)(t % (size_t)W) + dx, sy = (int)(t / (size_t)W) + dy;
+        if (sx < 0 || sx >= W || sy < 0 || sy >= H) continue;
+        const size_t s = (size_t)sy * W + sx;
+        double v = 0;
+        for (int k = 0; k < 2; ++k) {
+            if (!(ob->d.kinds & (1u << k))) continue;
+            float tr[3];
+            prt__offset_tr(&ob->x[k], t, s, tr);
+            v += fmax(tr[0], fmax(tr[1], tr[2])) * ob->patches.area[s];
+        }
+        value[i] = v;
+    }
+    /* Summed in order: the same offsets whatever the thread count. */
+    double top = 0, sum = 0;
+    for (size_t i = 0; i < j->count; ++i) { top = fmax(top, value[i]); sum += value[i]; }
+    return ob->d.importance ? sum / (double)j->count : top;
+}
+
+static prt_status offsets_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
+{
+    obake *ob = (obake *)base;
+    prt__offset_set *s = ob->s;
+    const size_t n = (size_t)s->width * s->height;
+    uint32_t *sample = malloc(((size_t)s->covered + 1) * sizeof *sample);
+    if (!sample) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory choosing offsets");
+    size_t count = 0;
+    const size_t stride = s->covered > IMPORTANCE_TEXELS ? (s->covered + IMPORTANCE_TEXELS - 1) / IMPORTANCE_TEXELS : 1;
+    for (size_t i = 0, seen = 0; i < n; ++i)
+        if (ob->patches.area[i] > 0 && seen++ % stride == 0) sample[count++] = (uint32_t)i;
+    prt__progress_begin(p, p->stage, (uint64_t)(121 + ob->d.iterations));
+    double *value = malloc((count + 1) * sizeof *value);
+    if (!value) { free(sample); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory choosing offsets"); }
+    importance_job j = {ob, sample, count, value, p};
+    const prt__offset_desc od = {s->width, s->height, ob->d.count, ob->d.iterations, (uint64_t)ob->d.seed};
+    int got = 0;
+    prt_status st = prt__choose_offsets(ctx, &od, importance, &j, &s->offsets, &got);
+    free(sample);
+    free(value);
+    if (!st && prt__progress_cancelled(p)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    if (!st) s->count = got;
+    return st;
+}
+
+/* ---- maps ---- */
+
+/* The texel whose transfer stands for offset o's cell from texel (tx, ty): the one whose light the
+ * run time multiplies by it - the offset itself on the surface, else its gutter's source
+ * (s->source), so that map and light always describe the same patch. False off the map or when
+ * the map holds no surface. */
+static bool representative(const prt__offset_set *s, int tx, int ty, int o, size_t *out)
+{
+    const int W = s->width, H = s->height, x = tx + s->offsets[o * 2], y = ty + s->offsets[o * 2 + 1];
+    if (x < 0 || x >= W || y < 0 || y >= H) return false;
+    const int32_t src = s->source[(size_t)y * W + x];
+    if (src < 0) return false;
+    *out = s->texel[src];
+    return true;
+}
+
+/* The integer offsets whose nearest chosen offset is offsets[0] = (0, 0) (the labelling of eq. 8:
+ * normalised coordinates, ties to the lower index), grown ring by ring until a ring adds none. */
+static int *centre_cell(const int *offsets, int count, int W, int H, int *n_out)
+{
+    const double sx = 1.0 / (W - 1), sy = 1.0 / (H - 1);
+    int *list = NULL, n = 0, cap = 0;
+    /* At most CENTRE_RING texels out: with few offsets the cell would be the whole map, and its
+     * exact sum a gather over every texel pair. */
+    for (int ring = 0; ring <= CENTRE_RING && (ring < W || ring < H); ++ring) {
+        int added = 0;
+        for (int dy = -ring; dy <= ring; ++dy)
+            for (int dx = -ring; dx <= ring; ++dx) {
+                if (abs(dx) != ring && abs(dy) != ring) continue;   /* this ring only */
+                if (abs(dx) >= W || abs(dy) >= H) continue;
+                const double px = dx * sx, py = dy * sy, own = px * px + py * py;
+                bool nearest = true;
+                for (int k = 1; k < count && nearest; ++k) {
+                    const double ex = px - offsets[k * 2] * sx, ey = py - offsets[k * 2 + 1] * sy;
+                    nearest = own <= ex * ex + ey * ey;
+                }
+                if (!nearest) continue;
+                if (n == cap) {
+                    int *l = realloc(list, (size_t)(cap = cap ? cap * 2 : 64) * 2 * sizeof *l);
+                    if (!l) { free(list); return NULL; }
+                    list = l;
+                }
+                list[n * 2] = dx;
+                list[n * 2 + 1] = dy;
+                n++;
+                added++;
+            }
+        if (!added) break;
+    }
+    *n_out = n;
+    return list;
+}
+
+static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
+{
+    obake *ob = (obake *)base;
+    prt__offset_set *s = ob->s;
+    const int W = s->width, H = s->height, K = s->count;
+    const size_t n = (size_t)W * H, nc = s->covered;
+    float *tva = malloc(n * (size_t)K * sizeof *tva + 1);
+    if (!tva) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the Voronoi areas of %d offsets over %d x %d texels", K, W, H);
+    prt_status st = prt__offset_tva(ctx, ob->patches.area, W, H, s->offsets, K, tva);
+    /* The cell of (0, 0) holds the texel itself and its nearest neighbours, where transfer
+     * changes fastest (subsurface scattering falls off within a texel or two): there the map is
+     * the exact sum over the cell, not the transfer at (0, 0) times the cell's area. */
+    int ncell = 0, *cell = st ? NULL : centre_cell(s->offsets, K, W, H, &ncell);
+    if (!st && !cell) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the transfer maps");
+    if (!st && (s->offsets[0] != 0 || s->offsets[1] != 0)) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "the first offset must be (0, 0)");
+    prt__progress_begin(p, p->stage, (uint64_t)nc * (uint64_t)((ob->d.kinds & 1) + ((ob->d.kinds >> 1) & 1)));
+    for (int k = 0; k < 2 && !st; ++k) {
+        if (!(ob->d.kinds & (1u << k))) continue;
+        float *maps = malloc(nc * (size_t)K * 3 * sizeof *maps + 1);
+        if (!maps) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %d transfer maps", K); break; }
+#pragma omp parallel for schedule(dynamic, 16) num_threads(prt__threads(ctx))
+        for (size_t i = 0; i < nc; ++i) {
+            if (prt__progress_cancelled(p)) continue;
+            const size_t t = s->texel[i];
+            const int tx = (int)(t % (size_t)W), ty = (int)(t / (size_t)W);
+            for (int o = 0; o < K; ++o) {
+                float *m = maps + ((size_t)o * nc + i) * 3;
+                m[0] = m[1] = m[2] = 0;
+                if (o == 0) {
+                    for (int j = 0; j < ncell; ++j) {
+                        const int sx = tx + cell[j * 2], sy = ty + cell[j * 2 + 1];
+                        if (sx < 0 || sx >= W || sy < 0 || sy >= H) continue;
+                        const size_t src = (size_t)sy * W + sx;
+                        float tr[3];
+                        prt__offset_tr(&ob->x[k], t, src, tr);
+                        for (int c = 0; c < 3; ++c) m[c] += tr[c] * ob->patches.area[src];
+                    }
+                    continue;
+                }
+                if (!(tva[t * (size_t)K + o] > 0)) continue;   /* no surface in this cell from t */
+                size_t src;
+                if (!representative(s, tx, ty, o, &src)) continue;
+                float tr[3];
+                prt__offset_tr(&ob->x[k], t, src, tr);
+                for (int c = 0; c < 3; ++c) m[c] = tr[c] * tva[t * (size_t)K + o];
+            }
+            prt__progress_add(p, 1);
+        }
+        /* What a texel gathers is bounded: its form factors add up to at most 1 (all it sees),
+         * the dipole to its total diffuse reflectance. Where the offsets' cells overestimate it
+         * (a chart's texels crowding into a point, as at a sphere's pole), scale the texel's maps
+         * down to the bound: the bounces then converge, and no texel shines. */
+        size_t capped = 0;
+        for (size_t i = 0; i < nc; ++i)
+            for (int c = 0; c < 3; ++c) {
+                double sum = 0;
+                for (int o = 0; o < K; ++o) sum += maps[((size_t)o * nc + i) * 3 + c];
+                const prt__dipole *dm = k && s->medium[i] ? &ob->dipoles[s->medium[i] - 1][c] : NULL;
+                const double limit = k == 0 ? s->albedo[i * 3 + c] : dm ? prt__dipole_total(dm) * (dm->falloff > 0 ? s->albedo[i * 3 + c] : 1.0) : 0.0;
+                if (!(sum > limit) || !(sum > 0)) continue;
+                capped += c == 0;
+                for (int o = 0; o < K; ++o) maps[((size_t)o * nc + i) * 3 + c] *= (float)(limit / sum);
+            }
+        if (capped)
+            prt__log(ctx, PRT_LOG_INFO, "%s maps: %zu of %zu texels would gather more than they %s (their offsets' cells overlap; %s); scaled down to that",
+                     k ? "subsurface" : "radiosity", capped, nc, k ? "scatter" : "reflect",
+                     k ? "scattering wider than the light map's reach or texels, see --mm-per-unit" : "more offsets make it rarer");
+        if (k == 0) s->radiosity = maps;
+        else s->subsurface = maps;
+        if (prt__progress_cancelled(p)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    }
+    free(tva);
+    free(cell);
+    return st;
+}
+
+/* ---- first-order light from the environment ---- */
+
+/* Per texel, the SH projection of V(w) max(0, n . w) / pi over a Fibonacci sphere: the radiance a
+ * texel of albedo 1 reflects is this dotted with the lighting's SH. And, when the scene emits, the
+ * shadowed irradiance from its emissive surfaces by light samples on them (stratified, the same
+ * for every texel): their direct light is first-order light like any lamp's. */
+static prt_status env_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
+{
+    obake *ob = (obake *)base;
+    prt__offset_set *s = ob->s;
+    float *dirs = malloc(ENV_DIRECTIONS * 3 * sizeof *dirs), *y = malloc(ENV_DIRECTIONS * PRT__OFFSET_ENV_COEFFS * sizeof *y);
+    if (!dirs || !y) { free(dirs); free(y); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    for (int k = 0; k < ENV_DIRECTIONS; ++k) {
+        const float z = 1.0f - 2.0f * (k + 0.5f) / ENV_DIRECTIONS, r = sqrtf(fmaxf(0.0f, 1.0f - z * z)), phi = 2.39996323f * k;
+        dirs[k * 3] = r * cosf(phi); dirs[k * 3 + 1] = z; dirs[k * 3 + 2] = r * sinf(phi);
+        prt_sh_eval_f(3, dirs + k * 3, y + k * PRT__OFFSET_ENV_COEFFS);
+    }
+    prt__emitters em = {0};
+    if (s->emit && prt__emitters_init(&em, &ob->t->mesh, 1.0f)) { free(dirs); free(y); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    prt__progress_begin(p, p->stage, s->covered);
+    const float weight = (float)(4 * PRT_PI / ENV_DIRECTIONS / PRT_PI);
+#pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ctx))
+    for (size_t i = 0; i < s->covered; ++i) {
+        if (prt__progress_cancelled(p)) continue;
+        const float *n = s->nrm + i * 3, *q = s->pos + i * 3;
+        float o[3], *out = s->env + i * PRT__OFFSET_ENV_COEFFS;
+        for (int c = 0; c < 3; ++c) o[c] = q[c] + n[c] * s->ray_offset;
+        memset(out, 0, PRT__OFFSET_ENV_COEFFS * sizeof *out);
+        for (int k = 0; k < ENV_DIRECTIONS; ++k) {
+            const float cosine = prt__v3_dot(n, dirs + k * 3);
+            if (cosine <= 0 || prt__raycaster_occluded(&ob->rc, o, dirs + k * 3, INFINITY)) continue;
+            for (int c = 0; c < PRT__OFFSET_ENV_COEFFS; ++c) out[c] += weight * cosine * y[k * PRT__OFFSET_ENV_COEFFS + c];
+        }
+        double e[3] = {0, 0, 0};
+        for (int k = 0; em.count && k < EMITTER_SAMPLES; ++k) {
+            prt__light_sample ls;
+            const double u1 = fmod(0.5 + 0.7548776662466927 * k, 1.0), u2 = fmod(0.5 + 0.5698402909980532 * k, 1.0);
+            if (!prt__emitters_sample(&em, &ob->t->mesh, o, (k + 0.5) / EMITTER_SAMPLES, u1, u2, &ls)) continue;
+            const float cosine = prt__v3_dot(ls.wi, n);
+            if (cosine <= 0 || prt__raycaster_occluded(&ob->rc, o, ls.wi, ls.dist * (1.0f - 1e-3f))) continue;
+            for (int c = 0; c < 3; ++c) e[c] += ls.value[c] * cosine;   /* value = L_e / pdf */
+        }
+        for (int c = 0; s->emit_in && c < 3; ++c) s->emit_in[i * 3 + c] = (float)(e[c] / EMITTER_SAMPLES);
+        prt__progress_add(p, 1);
+    }
+    prt__emitters_free(&em);
+    free(dirs);
+    free(y);
+    return prt__progress_cancelled(p) ? prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled") : PRT_OK;
+}
+
+/* ---- multi-bounce radiosity maps ---- */
+
+static uint64_t walk_random(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+static double walk_uniform(uint64_t *s) { return (double)(walk_random(s) >> 11) * (1.0 / 9007199254740992.0); }
+
+static void cosine_direction(const float n[3], double u1, double u2, float d[3])
+{
+    float t1[3], t2[3], h[3] = {0, 0, 0};
+    h[fabsf(n[0]) < 0.6f ? 0 : fabsf(n[1]) < 0.6f ? 1 : 2] = 1;
+    prt__v3_cross(n, h, t1);
+    prt__v3_normalize(t1);
+    prt__v3_cross(n, t1, t2);
+    const double r = sqrt(u1), phi = 2 * PRT_PI * u2, z = sqrt(fmax(0.0, 1 - u1));
+    for (int c = 0; c < 3; ++c) d[c] = (float)(r * cos(phi) * t1[c] + r * sin(phi) * t2[c] + z * n[c]);
+}
+
+/* Bounces past the first, added to the single-bounce radiosity maps (the paper's maps hold every
+ * bounce: TR(t, t') is the radiosity solution with unit emission at t'). From each texel, paths
+ * of cosine-distributed rays: where the k-th ray (k >= 2) lands, the path's weight - the albedos
+ * met so far, the texel's own first - goes to the offset cell that holds the landing texel, as a
+ * unit emitter there would send it back. Summed over a cell this is the integral eq. 8's TVA
+ * approximates, so no cell's surface goes missing; the first bounce stays the exact one of
+ * maps_step. Seeded per texel: the same maps for any thread count. */
+static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
+{
+    obake *ob = (obake *)base;
+    prt__offset_set *s = ob->s;
+    const int W = s->width, H = s->height, K = s->count, B = s->map_bounces, N = ob->d.walks > 0 ? ob->d.walks : 256;
+    const size_t nc = s->covered;
+    const prt__mesh *m = &ob->t->mesh;
+    int32_t *label = NULL;
+    prt_status st = prt__offset_labels(ctx, W, H, s->offsets, K, &label);
+    if (st) return st;
+    const int gw = 2 * W - 1;
+    prt__progress_begin(p, p->stage, nc);
+    const int strata = (int)sqrt((double)N);
+    int short_of_memory = 0;
+#pragma omp parallel num_threads(prt__threads(ctx))
+    {
+        double *acc = malloc((size_t)K * 3 * sizeof *acc);
+        if (!acc) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
+#pragma omp for schedule(dynamic, 16)
+        for (size_t i = 0; i < nc; ++i) {
+            if (!acc || prt__progress_cancelled(p)) continue;
+            memset(acc, 0, (size_t)K * 3 * sizeof *acc);
+            const int tx = (int)(s->texel[i] % (uint32_t)W), ty = (int)(s->texel[i] / (uint32_t)W);
+            uint64_t rng = ((uint64_t)ob->d.seed << 32) ^ (i * 0xD1B54A32D192ED03ull);
+            for (int w = 0; w < N; ++w) {
+                float o[3], n[3], d[3];
+                double weight[3];
+                for (int c = 0; c < 3; ++c) {
+                    n[c] = s->nrm[i * 3 + c];
+                    o[c] = s->pos[i * 3 + c] + n[c] * s->ray_offset;
+                    weight[c] = s->albedo[i * 3 + c];
+                }
+                /* The first direction stratified: the paths spread evenly over the hemisphere. */
+                double u1 = walk_uniform(&rng), u2 = walk_uniform(&rng);
+                if (w < strata * strata) { u1 = (w / strata + u1) / strata; u2 = (w % strata + u2) / strata; }
+                for (int k = 1; k <= B; ++k) {
+                    if (k > 1) { u1 = walk_uniform(&rng); u2 = walk_uniform(&rng); }
+                    cosine_direction(n, u1, u2, d);
+                    prt__ray_hit h;
+                    if (!prt__raycaster_hit(&ob->rc, o, d, &h) || h.prim >= m->triangle_count) break;
+                    if (prt__v3_dot(h.ng, d) > 0) break;   /* a back face: surfaces reflect on their front only */
+                    const uint32_t *ix = m->indices + (size_t)h.prim * 3;
+                    const float b0 = 1 - h.u - h.v;
+                    const float hu = b0 * m->uv[ix[0] * 2] + h.u * m->uv[ix[1] * 2] + h.v * m->uv[ix[2] * 2];
+                    const float hv = b0 * m->uv[ix[0] * 2 + 1] + h.u * m->uv[ix[1] * 2 + 1] + h.v * m->uv[ix[2] * 2 + 1];
+                    const int hx = (int)fminf(fmaxf(floorf(hu * W), 0.0f), (float)(W - 1));   /* clamped before the cast: */
+                    const int hy = (int)fminf(fmaxf(floorf(hv * H), 0.0f), (float)(H - 1));   /* UVs may lie far out */
+                    const int32_t at = s->source[(size_t)hy * W + hx];
+                    if (at < 0) break;
+                    if (k > 1) {
+                        const int32_t cell = label[(size_t)(hy - ty + H - 1) * gw + (hx - tx + W - 1)];
+                        for (int c = 0; c < 3; ++c) acc[cell * 3 + c] += weight[c];
+                    }
+                    double most = 0;
+                    for (int c = 0; c < 3; ++c) { weight[c] *= s->albedo[(size_t)at * 3 + c]; most = fmax(most, weight[c]); }
+                    if (!(most > 1e-4)) break;
+                    /* On from the hit, off its surface along its (front-facing) shading normal. */
+                    float len = 0;
+                    for (int c = 0; c < 3; ++c) {
+                        n[c] = b0 * m->normals[ix[0] * 3 + c] + h.u * m->normals[ix[1] * 3 + c] + h.v * m->normals[ix[2] * 3 + c];
+                        len += n[c] * n[c];
+                    }
+                    if (!(len > 0) || prt__v3_dot(n, d) >= 0)   /* the front's geometric normal (it faces the ray) */
+                        for (int c = 0; c < 3; ++c) n[c] = h.ng[c];
+                    prt__v3_normalize(n);
+                    for (int c = 0; c < 3; ++c) o[c] = o[c] + d[c] * h.t + n[c] * s->ray_offset;
+                }
+            }
+            for (int k = 0; k < K; ++k)
+                for (int c = 0; c < 3; ++c) s->radiosity[((size_t)k * nc + i) * 3 + c] += (float)(acc[k * 3 + c] / N);
+            prt__progress_add(p, 1);
+        }
+        free(acc);
+    }
+    free(label);
+    if (short_of_memory) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory tracing the maps' bounces");
+    if (prt__progress_cancelled(p)) return prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    return PRT_OK;
+}
+
+static prt_status offset_stage(prt__bake_job *base, int index, prt__stage *out)
+{
+    static const char *const names[4] = {"offsets", "transfer maps", "first-order light", "bounces"};
+    static prt_status (*const steps[4])(prt__bake_job *, prt_context *, prt__progress *) = {offsets_step, maps_step, env_step, bounces_step};
+    const obake *ob = (const obake *)base;
+    if (index < 0 || index > 3 || (index == 3 && (ob->s->map_bounces < 2 || !ob->s->radiosity))) return PRT_OK;
+    snprintf(out->name, sizeof out->name, "%s", names[index]);
+    out->whole = steps[index];
+    return PRT_OK;
+}
+
+static prt_status offset_finish(prt__bake_job *base, prt_transfer *t)
+{
+    (void)base;
+    (void)t;
+    return PRT_OK;   /* the steps wrote into the state */
+}
+
+static void offset_release(prt__bake_job *base)
+{
+    obake *ob = (obake *)base;
+    prt__raycaster_release(&ob->rc);
+    prt__texel_patches_free(&ob->patches);
+    free(ob->texel_medium);
+    free(ob->dipoles);
+    free(ob);
+}
+
+/* ---- set-up ---- */
+
+/* The mesh's own UVs when they are a unique layout inside [0, 1], else a generated atlas (which
+ * copies the vertices on chart seams: before anything is sized by the vertex count). */
+static prt_status layout(prt_context *ctx, const prt__offset_bake_desc *d, prt_transfer *t)
+{
+    char why[160] = "asked for";
+    if (d->uv_layout == PRT_UV_MESH) {
+        /* The mesh's own layout, as asked: it must be one (the input's fault when it is not). */
+        if (prt__uv_layout_unusable(&t->mesh, d->texels, why, sizeof why))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "--uv mesh: '%s' has no usable UV layout (%s); --uv auto generates an atlas", t->source, why);
+        return PRT_OK;
+    }
+    if (d->uv_layout == PRT_UV_AUTO && !prt__uv_layout_unusable(&t->mesh, d->texels, why, sizeof why)) return PRT_OK;
+    prt__atlas_report r;
+    prt_status st = prt__uv_atlas(ctx, &t->mesh, &(prt__atlas_desc){.resolution = d->texels}, &r);
+    if (!st)
+        prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts cover %.0f%% of the %dx%d light map", t->source, why, r.charts,
+                 100 * r.coverage, d->texels, d->texels);
+    return st;
+}
+
+prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc *desc, prt_transfer *t, prt__bake_job **out)
+{
+    prt__offset_bake_desc d = *desc;
+    if (d.texels < 8 || d.texels > 4096) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "light map size %d out of range 8..4096", d.texels);
+    if (d.count < 1) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "offsets must be at least 1");
+    if ((uint64_t)d.texels * d.texels * (uint64_t)d.count > PRT__OFFSET_MAX_ENTRIES)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%d offsets over a %dx%d light map is more than %llu map entries; use fewer offsets or texels", d.count,
+                         d.texels, d.texels, (unsigned long long)PRT__OFFSET_MAX_ENTRIES);
+    if (!d.kinds) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "no transfer kind to bake");
+    prt_status st = layout(ctx, &d, t);
+    if (st) return st;
+    obake *ob = prt__calloc(1, sizeof *ob);
+    prt__offset_set *s = prt__calloc(1, sizeof *s);
+    if (!ob || !s) { free(ob); free(s); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    ob->base.stage = offset_stage;
+    ob->base.finish = offset_finish;
+    ob->base.release = offset_release;
+    ob->base.ctx = ctx;
+    ob->d = d;
+    ob->t = t;
+    ob->s = s;
+    t->state = s;   /* owned by t from here on */
+    if (!prt__offset_cache_new(s)) { offset_release(&ob->base); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    s->width = s->height = d.texels;
+    s->kinds = d.kinds;
+    s->iterations = d.iterations;
+    s->map_bounces = d.map_bounces > 1 ? d.map_bounces : 1;
+    s->importance = d.importance;
+    s->eta = d.eta;
+    s->mm_per_unit = d.mm_per_unit;
+    for (int c = 0; c < 3; ++c) { s->sigma_a[c] = d.sigma_a[c]; s->sigma_s[c] = d.sigma_s[c]; }
+    /* The media: the scene's translucent materials, or one for every surface. */
+    if (d.kinds & PRT__OFFSET_SUBSURFACE_BIT) {
+        s->medium_count = d.surface_medium ? d.medium_count : 1;
+        s->media = malloc((size_t)(s->medium_count + 1) * sizeof *s->media);
+        ob->dipoles = malloc((size_t)(s->medium_count + 1) * sizeof *ob->dipoles);
+        if (!s->media || !ob->dipoles) { offset_release(&ob->base); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+        for (int k = 0; k < s->medium_count; ++k) {
+            s->media[k] = d.surface_medium ? d.media[k] : (prt_medium){{d.sigma_a[0], d.sigma_a[1], d.sigma_a[2]}, {d.sigma_s[0], d.sigma_s[1], d.sigma_s[2]}, d.eta, 0};
+            /* Per mm in the medium; the scene's lengths become mm through mm_per_unit. */
+            for (int c = 0; c < 3 && !st; ++c) {
+                if (s->media[k].falloff_mm > 0) {   /* the mean distance in scene units */
+                    ob->dipoles[k][c] = (prt__dipole){.falloff = s->media[k].falloff_mm / d.mm_per_unit};
+                    continue;
+                }
+                st = prt__dipole_init(s->media[k].sigma_a[c] * d.mm_per_unit, s->media[k].sigma_s[c] * d.mm_per_unit, s->media[k].eta, &ob->dipoles[k][c]);
+            }
+        }
+        if (st) { offset_release(&ob->base); return st; }
+    }
+    s->ray_offset = d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh);
+    st = prt__texel_patches_build(ctx, &t->mesh, d.texels, d.texels, &ob->patches);
+    if (!st) st = prt__raycaster_create(ctx, &t->mesh, &ob->rc);
+    const size_t n = (size_t)d.texels * d.texels;
+    for (size_t i = 0; !st && i < n; ++i) s->covered += ob->patches.area[i] > 0;
+    if (!st && !s->covered) st = prt__fail(ctx, PRT_ERR_EMPTY, "no texel of the %dx%d light map lies on the surface", d.texels, d.texels);
+    if (!st) {
+        const size_t nc = s->covered;
+        s->texel = malloc(nc * sizeof *s->texel);
+        s->pos = malloc(nc * 3 * sizeof(float));
+        s->nrm = malloc(nc * 3 * sizeof(float));
+        s->albedo = malloc(nc * 3 * sizeof(float));
+        s->area = malloc(nc * sizeof(float));
+        s->env = prt__calloc(nc * PRT__OFFSET_ENV_COEFFS, sizeof(float));
+        bool emits = false;
+        for (size_t v = 0; t->mesh.emission && v < t->mesh.vertex_count * 3 && !emits; ++v) emits = t->mesh.emission[v] > 0;
+        if (emits) { s->emit = prt__calloc(nc * 3, sizeof(float)); s->emit_in = prt__calloc(nc * 3, sizeof(float)); }
+        if (s->medium_count) {
+            s->medium = prt__calloc(nc + 1, 1);
+            ob->texel_medium = prt__calloc(n + 1, 1);
+            if (!s->medium || !ob->texel_medium) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        }
+        if (!s->texel || !s->pos || !s->nrm || !s->albedo || !s->area || !s->env || (emits && (!s->emit || !s->emit_in)))
+            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    }
+    for (size_t i = 0, k = 0; !st && i < n; ++i) {
+        if (!(ob->patches.area[i] > 0)) continue;
+        s->texel[k] = (uint32_t)i;
+        memcpy(s->pos + k * 3, ob->patches.pos + i * 3, 3 * sizeof(float));
+        memcpy(s->nrm + k * 3, ob->patches.nrm + i * 3, 3 * sizeof(float));
+        memcpy(s->albedo + k * 3, ob->patches.albedo + i * 3, 3 * sizeof(float));
+        s->area[k] = ob->patches.area[i];
+        if (s->medium) {   /* the owning triangle's surface */
+            const uint32_t v0 = t->mesh.indices[(size_t)(ob->patches.owner[i] - 1) * 3];
+            const uint16_t sid = t->mesh.surface ? t->mesh.surface[v0] : 0;
+            s->medium[k] = ob->texel_medium[i] = d.surface_medium ? d.surface_medium[sid] : 1;
+        }
+        if (s->emit) {   /* the owning triangle's emission at the texel centre */
+            const uint32_t *ix = t->mesh.indices + (size_t)(ob->patches.owner[i] - 1) * 3;
+            for (int c = 0; c < 3; ++c)
+                s->emit[k * 3 + c] = (t->mesh.emission[ix[0] * 3 + c] + t->mesh.emission[ix[1] * 3 + c] + t->mesh.emission[ix[2] * 3 + c]) / 3.0f;
+        }
+        k++;
+    }
+    /* A translucent texel reflects light that bounced onto it through its medium, as it does first-
+     * order light: the dipole's total diffuse reflectance, not the mesh's colour, is the albedo its
+     * radiosity maps gather with (an exponential falloff keeps the albedo: it integrates to 1). */
+    for (size_t k = 0; !st && s->medium && k < s->covered; ++k) {
+        if (!s->medium[k]) continue;
+        for (int c = 0; c < 3; ++c) {
+            const prt__dipole *dm = &ob->dipoles[s->medium[k] - 1][c];
+            if (dm->falloff > 0) continue;
+            s->albedo[k * 3 + c] = ob->patches.albedo[(size_t)s->texel[k] * 3 + c] = (float)fmin(1.0, prt__dipole_total(dm));
+        }
+    }
+    if (!st && !prt__offset_set_index(s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!st) {
+        ob->x[0] = (prt__offset_transfer){.kind = PRT__OFFSET_RADIOSITY, .patches = &ob->patches, .rc = &ob->rc, .ray_offset = s->ray_offset};
+        ob->x[1] = (prt__offset_transfer){.kind = PRT__OFFSET_DIPOLE, .patches = &ob->patches, .medium = ob->texel_medium,
+                                          .media = (const prt__dipole (*)[3])ob->dipoles};
+    }
+    if (st) { offset_release(&ob->base); return st; }
+    *out = &ob->base;
+    return PRT_OK;
+}

@@ -1,0 +1,84 @@
+/* The offset method's state (offset radiance transfer mapping, Sunshine-Hill & Faloutsos 2006):
+ * the texel patches of a light map over the mesh's UVs, the chosen offsets and, per transfer kind,
+ * one map per offset of TR(t, t + dt) TVA(t, dt) over the covered texels. Shared by
+ * bake/offset.c, relight/offset.c and method/offset.c only. */
+#ifndef PRT_METHODS_OFFSET_H
+#define PRT_METHODS_OFFSET_H
+
+#include "transfer/method.h"
+#include "light/vertex_lights.h"
+
+#include <pthread.h>
+
+#define PRT__OFFSET_RADIOSITY_BIT 1
+#define PRT__OFFSET_SUBSURFACE_BIT 2
+#define PRT__OFFSET_ENV_COEFFS 9    /* first-order light from the environment: SH order 3 */
+#define PRT__OFFSET_SHADOW_SAMPLES 4 /* shadow-ray points per texel: a rotated grid */
+#define PRT__OFFSET_MAX_ENTRIES ((uint64_t)1 << 28)   /* texels x offsets, each 3 floats: 3 GiB */
+
+typedef struct prt__offset_set {
+    int width, height, count;     /* the light map; offsets */
+    unsigned kinds;               /* PRT__OFFSET_*_BIT */
+    int iterations, importance;   /* how offsets were chosen: refinements, 0 = max, 1 = mean */
+    int map_bounces;              /* bounces the radiosity maps hold: 1 (the run time repeats the
+                                   * pass per bounce) or 2..16 (one pass gives them all) */
+    float ray_offset;
+    float sigma_a[3], sigma_s[3], eta, mm_per_unit;   /* the medium of subsurface transfer */
+    int *offsets;                 /* count x (dx, dy) texels */
+    uint32_t covered;             /* texels on the surface */
+    uint32_t *texel;              /* [covered] y * width + x, increasing */
+    float *pos, *nrm, *albedo;    /* [covered][3] */
+    float *area;                  /* [covered] world area */
+    float *emit;                  /* [covered][3] emitted radiance; NULL when nothing emits */
+    float *emit_in;               /* [covered][3] irradiance from the emissive surfaces (scale 1),
+                                   * shadowed; with emit */
+    float *env;                   /* [covered][9] shadowed SH transfer (cosine / pi folded in) */
+    float *radiosity, *subsurface;   /* [count][covered][3] or NULL */
+    /* Subsurface: the media (up to 255) and each covered texel's (0 = opaque: diffuse). */
+    int medium_count;
+    prt_medium *media;
+    uint8_t *medium;
+    int32_t *index;               /* [width * height] covered index, -1 off the surface (derived) */
+    int32_t *xy;                  /* [2][covered] texel columns, then rows (derived) */
+    int32_t *source;              /* [width * height] the covered texel each texel reads: itself, or
+                                   * its gutter's source (prt__texel_gutter_sources; derived) */
+    /* Run-time: shadow rays for local lights, built on first use, from PRT__OFFSET_SHADOW_SAMPLES
+     * points per texel on its own triangle (sample_pos, sample_nrm). */
+    pthread_mutex_t *lock;
+    prt__vertex_lights *lights;
+    float *sample_pos, *sample_nrm;
+} prt__offset_set;
+
+extern const prt__method prt__method_offset;
+
+void prt__offset_set_free(void *state);
+/* The run-time cache (lock and shadow-ray state) of a new state; false when out of memory. */
+bool prt__offset_cache_new(prt__offset_set *s);
+/* Builds the covered-texel index (after load or bake); false when out of memory or the texel
+ * list is not increasing and inside the map. */
+bool prt__offset_set_index(prt__offset_set *s);
+
+#define PRT__OFFSET_MAX_MEDIA 255
+
+typedef struct prt__offset_bake_desc {
+    int texels, count, iterations, importance, seed;
+    int map_bounces, walks;       /* radiosity maps holding map_bounces bounces (1: one, bounced at
+                                   * run time); paths per texel for those past the first */
+    unsigned kinds;
+    prt_uv_layout uv_layout;
+    float sigma_a[3], sigma_s[3], eta, mm_per_unit, ray_offset;
+    /* Translucent surfaces by surface id of the transfer's mesh (surface_count + 1 entries, 0 =
+     * opaque, else media[k - 1]); NULL: with subsurface transfer, every surface is of the
+     * medium sigma_a, sigma_s, eta. */
+    const uint8_t *surface_medium;
+    int medium_count;
+    const prt_medium *media;
+} prt__offset_bake_desc;
+
+prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc *d, prt_transfer *t, prt__bake_job **out);
+
+/* Run time: the light map after `bounces` (texels, width x height x 3, gutters filled) and its
+ * first-order part; per vertex radiance and indirect light sampled from them. */
+prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *r);
+
+#endif

@@ -1,0 +1,724 @@
+/* SH PRT for diffuse surfaces (Sloan, Kautz & Snyder 2002; Kautz course notes): per vertex
+ *   unshadowed   T_i = 1/pi  integral max(n.s, 0) y_i(s) ds
+ *   shadowed     T_i = 1/pi  integral V(s) max(n.s, 0) y_i(s) ds
+ *   bounce b     T^b_i = rho/pi integral T^{b-1}_i(q(s)) (1 - V(s)) max(n.s, 0) ds
+ * estimated with one shared low-discrepancy direction set of N directions (weight 4 pi / N).
+ * The glossy shadowed matrix M_ji = integral V(s) H(n.s) y_j(s) y_i(s) ds shares the rays; glossy
+ * bounces live in sh_glossy.c.
+ * Every vertex's result depends only on its own inputs and the fixed direction set, so the
+ * result is bit-identical for any thread count and schedule. */
+#include "methods/sh/bake.h"
+#include "geom/uv_atlas.h"
+#include "geom/raycast.h"
+
+#include <string.h>
+
+#define PACKET 16
+
+typedef prt__hit hit_entry;
+
+typedef struct bake_job {
+    const prt__mesh *mesh;
+    int order, ncoeff, samples;
+    uint32_t seed;
+    float offset;
+    float *origins;       /* [vertex][3], see prt__vertex_origins */
+    uint8_t *buried;      /* [vertex] prt__unbury_origins' status: 2 = filled from neighbours */
+    size_t buried_count;
+    float *dirs;          /* [samples][3] */
+    float *basis;         /* [samples][ncoeff] */
+    prt__raycaster rc;
+    bool need_hits;
+    hit_entry **hits;     /* per vertex, for interreflection */
+    uint32_t *hit_count;
+} bake_job;
+
+prt_bake_desc prt_bake_desc_defaults(void)
+{
+    prt_bake_desc d = {0};
+    d.order = 5;
+    d.samples = 1024;
+    d.kinds = PRT_TRANSFER_UNSHADOWED | PRT_TRANSFER_SHADOWED | PRT_TRANSFER_INTERREFLECTED;
+    d.bounces = 3;
+    return d;
+}
+
+/* A rotation of its own for each vertex, from (seed, vertex) alone: Shoemake's uniform random
+ * quaternion from three hashed numbers. */
+static void vertex_rotation(uint32_t seed, size_t v, double R[9])
+{
+    uint64_t h = (uint64_t)v * 0x9E3779B97F4A7C15ull ^ ((uint64_t)seed << 32 | 0x5bd1e995u);
+    double u[3];
+    for (int k = 0; k < 3; ++k) {
+        h ^= h >> 33; h *= 0xff51afd7ed558ccdull; h ^= h >> 33; h *= 0xc4ceb9fe1a85ec53ull; h ^= h >> 33;
+        u[k] = (double)(h >> 11) * (1.0 / 9007199254740992.0);
+        h += 0x9E3779B97F4A7C15ull;
+    }
+    const double a = sqrt(1 - u[0]), b = sqrt(u[0]);
+    const double x = a * sin(2 * PRT_PI * u[1]), y = a * cos(2 * PRT_PI * u[1]), z = b * sin(2 * PRT_PI * u[2]), w = b * cos(2 * PRT_PI * u[2]);
+    R[0] = 1 - 2 * (y * y + z * z); R[1] = 2 * (x * y - z * w);     R[2] = 2 * (x * z + y * w);
+    R[3] = 2 * (x * y + z * w);     R[4] = 1 - 2 * (x * x + z * z); R[5] = 2 * (y * z - x * w);
+    R[6] = 2 * (x * z - y * w);     R[7] = 2 * (y * z + x * w);     R[8] = 1 - 2 * (x * x + y * y);
+}
+
+/* Visibility pass for one vertex: fills the unshadowed and shadowed sums and, when needed, the
+ * list of occluded directions with what they hit. Returns false on allocation failure. */
+static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, float *glossy, hit_entry *scratch,
+                              hit_entry **hits_out, uint32_t *nhits_out, float *rdirs, float *noise)
+{
+    double sq = 0;   /* sum of squared T_00 terms: the estimate's variance, for the noise report */
+    const prt__mesh *m = job->mesh;
+    const float *n = m->normals + v * 3;
+    /* Each vertex sees the direction set turned by its own rotation (rdirs), so that neighbours'
+     * errors do not line up into streaks; sums run over the unturned basis and are turned back
+     * at the end (Y(R d) is the rotated basis). Glossy matrices keep the shared set. */
+    prt_sh_rotation *rot = NULL;
+    const float *dirs = job->dirs;
+    if (rdirs && !glossy) {
+        double R[9];
+        vertex_rotation(job->seed, v, R);
+        if (prt_sh_rotation_create(job->order, R, &rot) == PRT_OK) {
+            for (int j = 0; j < job->samples; ++j) {
+                const float *d = job->dirs + (size_t)j * 3;
+                for (int r = 0; r < 3; ++r) rdirs[j * 3 + r] = (float)(R[r * 3] * d[0] + R[r * 3 + 1] * d[1] + R[r * 3 + 2] * d[2]);
+            }
+            dirs = rdirs;
+        }
+    }
+    const float w = (float)(4.0 * PRT_PI / job->samples) / (float)PRT_PI;   /* 4pi/N and the 1/pi of the BRDF */
+    const int nc = job->ncoeff;
+    const float *org = job->origins + v * 3;
+    uint32_t nhits = 0;   /* scratch holds one entry per sample, so it never overflows */
+    int lane_sample[PACKET];
+    float lane_cos[PACKET];
+    int j = 0;
+    struct RTCIntersectContext ictx;
+    rtcInitIntersectContext(&ictx);
+    while (j < job->samples) {
+        int lanes = 0;
+        for (; j < job->samples && lanes < PACKET; ++j) {
+            float c = prt__v3_dot(dirs + (size_t)j * 3, n);
+            if (c <= 0.0f) continue;
+            lane_sample[lanes] = j;
+            lane_cos[lanes] = c;
+            lanes++;
+        }
+        if (!lanes) break;
+        _Alignas(64) int valid[PACKET];   /* Embree reads the mask with aligned 512-bit loads */
+        bool blocked[PACKET];
+        if (job->need_hits) {
+            _Alignas(64) struct RTCRayHit16 rh;
+            prt__packet_rayhits(&rh, valid, org, dirs, lane_sample, lanes);
+            rtcIntersect16(valid, job->rc.scene, &ictx, &rh);
+            for (int k = 0; k < lanes; ++k) {
+                blocked[k] = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+                if (!blocked[k]) continue;
+                /* Embree's unnormalized Ng points to the side from which the triangle winds
+                 * counter-clockwise, like prt's normals (the pit and colour-bleeding tests pin
+                 * this). The back of a surface emits nothing: only front-face hits carry light. */
+                const float *d = dirs + (size_t)lane_sample[k] * 3;
+                if (rh.hit.Ng_x[k] * d[0] + rh.hit.Ng_y[k] * d[1] + rh.hit.Ng_z[k] * d[2] >= 0.0f) continue;
+                scratch[nhits++] = (hit_entry){rh.hit.primID[k], (uint32_t)lane_sample[k], rh.hit.u[k], rh.hit.v[k],
+                                               lane_cos[k] * (float)(4.0 * PRT_PI / job->samples)};
+            }
+        } else {
+            _Alignas(64) struct RTCRay16 r;
+            prt__packet_rays(&r, valid, org, dirs, lane_sample, lanes);
+            rtcOccluded16(valid, job->rc.scene, &ictx, &r);
+            for (int k = 0; k < lanes; ++k) blocked[k] = r.tfar[k] < 0.0f;
+        }
+        for (int k = 0; k < lanes; ++k) {
+            const float *y = job->basis + (size_t)lane_sample[k] * nc;
+            float c = lane_cos[k] * w;
+            if (unsh)
+                for (int i = 0; i < nc; ++i) unsh[i] += c * y[i];
+            if (sh && !blocked[k]) {
+                for (int i = 0; i < nc; ++i) sh[i] += c * y[i];
+                sq += (double)(c * y[0]) * (c * y[0]);
+            } else if (!sh && unsh) {
+                sq += (double)(c * y[0]) * (c * y[0]);
+            }
+            if (glossy && !blocked[k]) {
+                const float wg = (float)(4.0 * PRT_PI / job->samples);
+                for (int j = 0; j < nc; ++j) {
+                    float s = wg * y[j];
+                    for (int i = 0; i < nc; ++i) glossy[j * nc + i] += s * y[i];
+                }
+            }
+        }
+    }
+    if (noise) {
+        /* Standard error of T_00 over the N directions: sqrt(sum x^2 - T^2 / N), x each term. */
+        const double t00 = sh ? sh[0] : unsh ? unsh[0] : 0;
+        const double var = sq - t00 * t00 / job->samples;
+        *noise = var > 0 ? (float)sqrt(var) : 0.0f;
+    }
+    if (rot) {
+        float tmp[PRT_SH_MAX_COEFFS];
+        if (unsh) { memcpy(tmp, unsh, (size_t)nc * sizeof *tmp); prt_sh_rotation_apply(rot, 1, tmp, unsh); }
+        if (sh) { memcpy(tmp, sh, (size_t)nc * sizeof *tmp); prt_sh_rotation_apply(rot, 1, tmp, sh); }
+        prt_sh_rotation_release(rot);
+    }
+    if (hits_out) {
+        *nhits_out = nhits;
+        *hits_out = NULL;
+        if (nhits) {
+            *hits_out = malloc(nhits * sizeof(hit_entry));
+            if (!*hits_out) return false;
+            memcpy(*hits_out, scratch, nhits * sizeof(hit_entry));
+        }
+    }
+    return true;
+}
+
+/* Interpolates a 3-channel transfer at a hit point. */
+static inline void gather_hit(const prt__mesh *m, const float *prev, int nc3, const hit_entry *h, float *acc)
+{
+    const uint32_t *t = m->indices + (size_t)h->prim * 3;
+    float b0 = (1.0f - h->u - h->v) * h->weight, b1 = h->u * h->weight, b2 = h->v * h->weight;
+    const float *t0 = prev + (size_t)t[0] * nc3, *t1 = prev + (size_t)t[1] * nc3, *t2 = prev + (size_t)t[2] * nc3;
+    for (int i = 0; i < nc3; ++i) acc[i] += b0 * t0[i] + b1 * t1[i] + b2 * t2[i];
+}
+
+/* The bake as stages (method/method.h): visibility per block of vertices, then either the
+ * coupled glossy bounce loop or one stage per diffuse bounce, then texels and the BRDF. */
+#define BLOCK 64
+
+typedef enum { ST_VISIBILITY, ST_GLOSSY_BOUNCES, ST_BOUNCE, ST_TEXELS, ST_BRDF_IN, ST_COMPRESS, ST_QUANTIZE } stage_kind;
+
+typedef struct sh_bake {
+    prt__bake_job base;
+    prt_bake_desc d;
+    prt_transfer *t;
+    prt__sh_state *s;
+    bake_job job;
+    float *unsh, *shad, *gshad;
+    float *noise;                  /* [vertex] T_00's standard error; NaN where restored from a checkpoint */
+    bool want_gsh, want_gir, coupled;
+    float *total, *prev, *next;    /* diffuse bounce buffers, [vertex][3][order^2] */
+    hit_entry **scratch;           /* per thread, one entry per sample */
+    int nscratch;
+    float **rdirs;                 /* per thread, the direction set turned for one vertex */
+    int nrdirs;
+    stage_kind plan[80];
+    int bounce_of[80];            /* ST_BOUNCE: its number; ST_COMPRESS: the set it compresses */
+    int stages;
+    prt__sh_extra extra;          /* compression, quantization, the normal map (owned) */
+    prt_brdf brdf;                /* d.glossy_brdf points here */
+    int compressing_set;
+} sh_bake;
+
+static uint64_t blocks(size_t nv) { return (nv + BLOCK - 1) / BLOCK; }
+
+static prt_status run_visibility(prt__bake_job *b, uint64_t unit, int thread)
+{
+    sh_bake *sb = (sh_bake *)b;
+    bake_job *job = &sb->job;
+    const size_t nv = sb->t->mesh.vertex_count, nc = (size_t)job->ncoeff, nn = nc * nc;
+    for (size_t v = unit * BLOCK; v < nv && v < (unit + 1) * BLOCK; ++v)
+        if (!visibility_vertex(job, v, sb->unsh ? sb->unsh + v * nc : NULL, sb->shad ? sb->shad + v * nc : NULL, sb->gshad ? sb->gshad + v * nn : NULL,
+                               job->need_hits ? sb->scratch[thread] : NULL, job->need_hits ? &job->hits[v] : NULL,
+                               job->need_hits ? &job->hit_count[v] : NULL, thread < sb->nrdirs ? sb->rdirs[thread] : NULL,
+                               sb->noise ? sb->noise + v : NULL))
+            return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory recording ray hits");
+    return PRT_OK;
+}
+
+static prt_status run_bounce(prt__bake_job *b, uint64_t unit, int thread)
+{
+    (void)thread;
+    sh_bake *sb = (sh_bake *)b;
+    const prt__mesh *m = &sb->t->mesh;
+    const int nc = sb->job.ncoeff, nc3 = 3 * nc;
+    for (size_t v = unit * BLOCK; v < m->vertex_count && v < (unit + 1) * BLOCK; ++v) {
+        float acc[3 * PRT_SH_MAX_COEFFS];
+        memset(acc, 0, (size_t)nc3 * sizeof(float));
+        for (uint32_t h = 0; h < sb->job.hit_count[v]; ++h) gather_hit(m, sb->prev, nc3, &sb->job.hits[v][h], acc);
+        for (int c = 0; c < 3; ++c) {
+            float k = m->albedo[v * 3 + c] / (float)PRT_PI;
+            for (int i = 0; i < nc; ++i) {
+                float x = k * acc[c * nc + i];
+                sb->next[v * nc3 + c * nc + i] = x;
+                sb->total[v * nc3 + c * nc + i] += x;
+            }
+        }
+    }
+    return PRT_OK;
+}
+
+/* Checkpoint records (method/checkpoint.h): a unit's rows of every array it wrote, and for
+ * visibility the hit lists the bounces gather over. */
+typedef struct rows { float *base; size_t per_vertex; } rows;
+
+static int visibility_rows(const sh_bake *sb, rows r[3])
+{
+    const size_t nc = (size_t)sb->job.ncoeff;
+    int n = 0;
+    if (sb->unsh) r[n++] = (rows){sb->unsh, nc};
+    if (sb->shad) r[n++] = (rows){sb->shad, nc};
+    if (sb->gshad) r[n++] = (rows){sb->gshad, nc * nc};
+    return n;
+}
+
+static int bounce_rows(const sh_bake *sb, rows r[3])
+{
+    const size_t nc3 = 3 * (size_t)sb->job.ncoeff;
+    r[0] = (rows){sb->next, nc3};
+    r[1] = (rows){sb->total, nc3};
+    return 2;
+}
+
+static void unit_range(const sh_bake *sb, uint64_t unit, size_t *v0, size_t *v1)
+{
+    const size_t nv = sb->t->mesh.vertex_count;
+    *v0 = unit * BLOCK;
+    *v1 = *v0 + BLOCK < nv ? *v0 + BLOCK : nv;
+}
+
+static void save_rows(const rows *r, int n, size_t v0, size_t v1, prt__bytes *out)
+{
+    for (int i = 0; i < n; ++i) prt__bytes_put(out, r[i].base + v0 * r[i].per_vertex, (v1 - v0) * r[i].per_vertex * sizeof(float));
+}
+
+/* Reads the rows back; false (having written nothing) when the record is too short. */
+static bool load_rows(const rows *r, int n, size_t v0, size_t v1, const unsigned char **data, size_t *size)
+{
+    size_t need = 0;
+    for (int i = 0; i < n; ++i) need += (v1 - v0) * r[i].per_vertex * sizeof(float);
+    if (need > *size) return false;
+    for (int i = 0; i < n; ++i) {
+        size_t bytes = (v1 - v0) * r[i].per_vertex * sizeof(float);
+        memcpy(r[i].base + v0 * r[i].per_vertex, *data, bytes);
+        *data += bytes;
+        *size -= bytes;
+    }
+    return true;
+}
+
+static void save_visibility(prt__bake_job *b, uint64_t unit, prt__bytes *out)
+{
+    sh_bake *sb = (sh_bake *)b;
+    rows r[3];
+    size_t v0, v1;
+    unit_range(sb, unit, &v0, &v1);
+    save_rows(r, visibility_rows(sb, r), v0, v1, out);
+    if (!sb->job.need_hits) return;
+    for (size_t v = v0; v < v1; ++v) {
+        prt__bytes_put(out, &sb->job.hit_count[v], sizeof(uint32_t));
+        prt__bytes_put(out, sb->job.hits[v], sb->job.hit_count[v] * sizeof(hit_entry));
+    }
+}
+
+static bool load_visibility(prt__bake_job *b, uint64_t unit, const unsigned char *data, size_t size)
+{
+    sh_bake *sb = (sh_bake *)b;
+    const prt__mesh *m = &sb->t->mesh;
+    rows r[3];
+    size_t v0, v1;
+    unit_range(sb, unit, &v0, &v1);
+    /* Check the hit lists before anything is written: a unit is restored whole or not at all. */
+    const unsigned char *p = data;
+    size_t left = size, fixed = 0;
+    const int n = visibility_rows(sb, r);
+    for (int i = 0; i < n; ++i) fixed += (v1 - v0) * r[i].per_vertex * sizeof(float);
+    if (fixed > left) return false;
+    if (sb->job.need_hits) {
+        const unsigned char *q = p + fixed;
+        size_t rest = left - fixed;
+        for (size_t v = v0; v < v1; ++v) {
+            uint32_t count;
+            if (rest < sizeof count) return false;
+            memcpy(&count, q, sizeof count);
+            q += sizeof count; rest -= sizeof count;
+            if (count > (uint32_t)sb->d.samples || (size_t)count * sizeof(hit_entry) > rest) return false;
+            for (uint32_t h = 0; h < count; ++h) {
+                hit_entry e;
+                memcpy(&e, q + (size_t)h * sizeof e, sizeof e);
+                if (e.prim >= m->triangle_count || e.sample >= (uint32_t)sb->d.samples) return false;   /* the bounces index with them */
+            }
+            q += (size_t)count * sizeof(hit_entry); rest -= (size_t)count * sizeof(hit_entry);
+        }
+        if (rest) return false;
+    } else if (fixed != left) {
+        return false;
+    }
+    load_rows(r, n, v0, v1, &p, &left);
+    for (size_t v = v0; sb->job.need_hits && v < v1; ++v) {
+        uint32_t count;
+        memcpy(&count, p, sizeof count);
+        p += sizeof count;
+        free(sb->job.hits[v]);
+        sb->job.hits[v] = count ? malloc((size_t)count * sizeof(hit_entry)) : NULL;
+        if (count && !sb->job.hits[v]) { sb->job.hit_count[v] = 0; return false; }
+        if (count) memcpy(sb->job.hits[v], p, (size_t)count * sizeof(hit_entry));
+        sb->job.hit_count[v] = count;
+        p += (size_t)count * sizeof(hit_entry);
+    }
+    return true;
+}
+
+static void save_bounce(prt__bake_job *b, uint64_t unit, prt__bytes *out)
+{
+    sh_bake *sb = (sh_bake *)b;
+    rows r[3];
+    size_t v0, v1;
+    unit_range(sb, unit, &v0, &v1);
+    save_rows(r, bounce_rows(sb, r), v0, v1, out);
+}
+
+static bool load_bounce(prt__bake_job *b, uint64_t unit, const unsigned char *data, size_t size)
+{
+    sh_bake *sb = (sh_bake *)b;
+    rows r[3];
+    size_t v0, v1;
+    unit_range(sb, unit, &v0, &v1);
+    const int n = bounce_rows(sb, r);
+    return size == 2 * (v1 - v0) * r[0].per_vertex * sizeof(float) && load_rows(r, n, v0, v1, &data, &size);
+}
+
+static prt_status run_glossy_bounces(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    sh_bake *sb = (sh_bake *)b;
+    prt_transfer *t = sb->t;
+    prt__bounce_input bi = {&t->mesh, sb->d.order, sb->d.samples, sb->job.basis, sb->job.hits, sb->job.hit_count, sb->shad, sb->gshad,
+                            t->brdfs, t->brdf_count, sb->d.bounces, sb->want_gir, p};
+    float *dtot = NULL, *gtot = NULL;
+    prt_status st = prt__bake_glossy_bounces(ctx, &bi, &dtot, sb->want_gir ? &gtot : NULL);
+    if (st) return st;
+    if (sb->job.buried_count) {
+        const size_t nc = (size_t)sb->d.order * sb->d.order;
+        prt__fill_buried(&t->mesh, sb->job.buried, dtot, 3 * nc);
+        if (gtot) prt__fill_buried(&t->mesh, sb->job.buried, gtot, 3 * nc * nc);
+    }
+    if (sb->d.kinds & PRT_TRANSFER_INTERREFLECTED) { sb->s->sets[2].channels = 3; sb->s->sets[2].coeffs = dtot; }
+    else free(dtot);
+    if (sb->want_gir) { sb->s->sets[4].channels = 3; sb->s->sets[4].coeffs = gtot; }
+    return PRT_OK;
+}
+
+static prt_status run_texels(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    sh_bake *sb = (sh_bake *)b;
+    prt_transfer *t = sb->t;
+    prt__texel_input ti = {&t->mesh, t->source, sb->d.order, sb->d.samples, sb->job.dirs, sb->job.basis, sb->job.rc.scene, sb->job.offset,
+                           sb->s->sets[2].coeffs, sb->d.kinds & 7u, sb->d.texels, sb->d.texels, sb->d.normal_map, p};
+    return prt__bake_texels(ctx, &ti, &sb->s->texels);
+}
+
+static prt_status run_brdf_in(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    (void)p;
+    sh_bake *sb = (sh_bake *)b;
+    return prt__bake_brdf_in(ctx, sb->t, sb->d.glossy_brdf);
+}
+
+static prt_status run_compress(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    sh_bake *sb = (sh_bake *)b;
+    p->total = (uint64_t)sb->extra.compress.iterations;
+    return prt__sh_compress_set(ctx, sb->s, sb->t->mesh.vertex_count, sb->compressing_set, &sb->extra.compress, p);
+}
+
+static prt_status run_quantize(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    (void)p;
+    sh_bake *sb = (sh_bake *)b;
+    return prt__sh_quantize(ctx, sb->s, sb->t->mesh.vertex_count, sb->extra.quantize);
+}
+
+static int by_float(const void *a, const void *b)
+{
+    const float x = *(const float *)a, y = *(const float *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* How noisy the Monte Carlo transfer is: each vertex's standard error of T_00 relative to its
+ * value, summarised as the median and 95th percentile (vertices that see almost nothing are
+ * left out: relative error means little there). */
+static void report_noise(prt_context *ctx, const sh_bake *sb)
+{
+    const size_t nv = sb->t->mesh.vertex_count, nc = (size_t)sb->job.ncoeff;
+    const float *T = sb->shad ? sb->shad : sb->unsh;
+    if (!T || !nv) return;
+    float *rel = malloc(nv * sizeof *rel);
+    if (!rel) return;
+    size_t n = 0;
+    for (size_t v = 0; v < nv; ++v)
+        if (isfinite(sb->noise[v]) && T[v * nc] > 0.01f) rel[n++] = sb->noise[v] / T[v * nc];
+    if (n) {
+        qsort(rel, n, sizeof *rel, by_float);
+        prt__log(ctx, PRT_LOG_INFO, "estimated Monte Carlo noise of %s T_00 with %d directions: median %.2f%%, 95th percentile %.2f%% of each vertex's value "
+                                    "(over %zu vertices, as if the directions were independent: the low-discrepancy set does better; 4x the samples halves it)",
+                 sb->shad ? "shadowed" : "unshadowed", sb->d.samples, 100.0 * rel[n / 2], 100.0 * rel[(size_t)(0.95 * (double)(n - 1))], n);
+    }
+    free(rel);
+}
+
+static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
+{
+    sh_bake *sb = (sh_bake *)b;
+    const size_t nv = sb->t->mesh.vertex_count;
+    const int nc = sb->job.ncoeff, nc3 = 3 * nc;
+    if (index > 0 && sb->plan[index - 1] == ST_VISIBILITY && sb->noise) {
+        report_noise(b->ctx, sb);
+        free(sb->noise);
+        sb->noise = NULL;
+    }
+    if (index > 0 && sb->plan[index - 1] == ST_VISIBILITY) {
+        /* Visibility is done: vertices whose whole fan is buried take their neighbours' transfer
+         * (their own rays all start inside geometry); hand the sets over, and start the diffuse
+         * bounces from them. */
+        prt__sh_state *s = sb->s;
+        if (sb->job.buried_count) {
+            if (sb->unsh) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->unsh, (size_t)nc);
+            if (sb->shad) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->shad, (size_t)nc);
+            if (sb->gshad) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->gshad, (size_t)nc * nc);
+        }
+        if (sb->d.kinds & PRT_TRANSFER_UNSHADOWED) { s->sets[0].channels = 1; s->sets[0].coeffs = sb->unsh; sb->unsh = NULL; }
+        if (!sb->coupled && (sb->d.kinds & PRT_TRANSFER_INTERREFLECTED)) {
+            sb->total = prt__calloc(nv * nc3, sizeof(float));
+            sb->prev = prt__calloc(nv * nc3, sizeof(float));
+            sb->next = prt__calloc(nv * nc3, sizeof(float));
+            if (!sb->total || !sb->prev || !sb->next) return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory for interreflection");
+            /* Bounce 0 is the shadowed transfer times the (coloured) albedo. */
+            for (size_t v = 0; v < nv; ++v)
+                for (int c = 0; c < 3; ++c)
+                    for (int i = 0; i < nc; ++i)
+                        sb->prev[v * nc3 + c * nc + i] = sb->total[v * nc3 + c * nc + i] = sb->t->mesh.albedo[v * 3 + c] * sb->shad[v * nc + i];
+        }
+    }
+    if (index > 0 && sb->plan[index - 1] == ST_BOUNCE) {
+        float *tmp = sb->prev; sb->prev = sb->next; sb->next = tmp;
+    }
+    if (index > 0 && (index == sb->stages || sb->plan[index] != ST_BOUNCE) && sb->plan[index - 1] == ST_BOUNCE) {
+        if (sb->job.buried_count) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->total, (size_t)nc3);
+        sb->s->sets[2].channels = 3;
+        sb->s->sets[2].coeffs = sb->total;
+        sb->total = NULL;
+    }
+    if (index > 0 && (index == sb->stages || sb->plan[index] >= ST_TEXELS)) {
+        /* Every stage that reads the shadowed and glossy-shadowed sets has run. */
+        if (sb->shad && (sb->d.kinds & PRT_TRANSFER_SHADOWED)) { sb->s->sets[1].channels = 1; sb->s->sets[1].coeffs = sb->shad; sb->shad = NULL; }
+        if (sb->gshad && sb->want_gsh) { sb->s->sets[3].channels = 1; sb->s->sets[3].coeffs = sb->gshad; sb->gshad = NULL; }
+    }
+    if (index >= sb->stages) return PRT_OK;
+    switch (sb->plan[index]) {
+    case ST_VISIBILITY: {
+        snprintf(out->name, sizeof out->name, "visibility");
+        if (sb->job.need_hits && !sb->scratch) {
+            sb->scratch = prt__calloc((size_t)b->threads, sizeof *sb->scratch);
+            if (!sb->scratch) return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+            sb->nscratch = b->threads;
+            for (int i = 0; i < b->threads; ++i)
+                if (!(sb->scratch[i] = malloc((size_t)sb->d.samples * sizeof(hit_entry)))) return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        }
+        if (!sb->rdirs) {
+            sb->rdirs = prt__calloc((size_t)b->threads, sizeof *sb->rdirs);
+            if (!sb->rdirs) return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+            sb->nrdirs = b->threads;
+            for (int i = 0; i < b->threads; ++i)
+                if (!(sb->rdirs[i] = malloc((size_t)sb->d.samples * 3 * sizeof(float)))) return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        }
+        out->units = blocks(nv);
+        out->run = run_visibility;
+        out->save_unit = save_visibility;
+        out->load_unit = load_visibility;
+        break;
+    }
+    case ST_GLOSSY_BOUNCES: snprintf(out->name, sizeof out->name, "glossy bounces"); out->whole = run_glossy_bounces; break;
+    case ST_BOUNCE:
+        snprintf(out->name, sizeof out->name, "bounce %d/%d", sb->bounce_of[index], sb->d.bounces);
+        out->units = blocks(nv);
+        out->run = run_bounce;
+        out->save_unit = save_bounce;
+        out->load_unit = load_bounce;
+        break;
+    case ST_TEXELS: snprintf(out->name, sizeof out->name, "texels"); out->whole = run_texels; break;
+    case ST_BRDF_IN: snprintf(out->name, sizeof out->name, "bake BRDF in"); out->whole = run_brdf_in; break;
+    case ST_COMPRESS:
+        sb->compressing_set = sb->bounce_of[index];
+        snprintf(out->name, sizeof out->name, "compress %s", prt_transfer_kind_name(prt__kind_from_index(sb->compressing_set)));
+        out->whole = run_compress;
+        break;
+    case ST_QUANTIZE: snprintf(out->name, sizeof out->name, "quantize"); out->whole = run_quantize; break;
+    }
+    return PRT_OK;
+}
+
+static prt_status sh_finish(prt__bake_job *b, prt_transfer *t)
+{
+    (void)b;
+    (void)t;
+    return PRT_OK;   /* every stage wrote into the state already */
+}
+
+static void sh_release(prt__bake_job *b)
+{
+    sh_bake *sb = (sh_bake *)b;
+    bake_job *job = &sb->job;
+    prt__raycaster_release(&job->rc);
+    if (job->hits)
+        for (size_t v = 0; v < sb->t->mesh.vertex_count; ++v) free(job->hits[v]);
+    for (int i = 0; i < sb->nscratch; ++i) free(sb->scratch[i]);
+    for (int i = 0; i < sb->nrdirs; ++i) free(sb->rdirs[i]);
+    free(sb->rdirs);
+    free(sb->noise);
+    free(sb->scratch);
+    free(job->hits); free(job->hit_count); free(job->origins); free(job->buried); free(job->dirs); free(job->basis);
+    free(sb->unsh); free(sb->shad); free(sb->gshad); free(sb->total); free(sb->prev); free(sb->next);
+    prt_image_free(&sb->extra.normal_map);
+    free(sb);
+}
+
+/* Per-texel transfer needs a unique layout inside [0, 1]: the mesh's own, or one generated here
+ * (which copies the vertices on chart seams, before anything is sized by the vertex count). */
+static prt_status texel_layout(prt_context *ctx, const prt_bake_desc *d, prt_transfer *t)
+{
+    char why[160] = "asked for";
+    if (d->uv_layout == PRT_UV_MESH) return PRT_OK;   /* the texel bake says what is wrong with them */
+    if (d->uv_layout == PRT_UV_AUTO && !prt__uv_layout_unusable(&t->mesh, d->texels, why, sizeof why)) return PRT_OK;
+    if (d->normal_map)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a normal map follows the mesh's own texture coordinates, and '%s' cannot use them for texels (%s)",
+                         t->source, why);
+    prt__atlas_report r;
+    const size_t nv = t->mesh.vertex_count;
+    prt_status st = prt__uv_atlas(ctx, &t->mesh, &(prt__atlas_desc){.resolution = d->texels}, &r);
+    if (st) return st;
+    prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts cover %.0f%% of the %dx%d map; %zu of %zu vertices copied along seams",
+             t->source, why, r.charts, 100 * r.coverage, d->texels, d->texels, r.added_vertices, nv);
+    return PRT_OK;
+}
+
+prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *desc_in, prt__sh_extra *extra, prt_transfer *t, prt__bake_job **out)
+{
+    prt_bake_desc d = desc_in ? *desc_in : (prt_bake_desc){0};
+    if (extra && extra->normal_map.rgb) d.normal_map = &extra->normal_map;
+    prt_bake_desc def = prt_bake_desc_defaults();
+    if (d.order == 0) d.order = def.order;
+    if (d.samples == 0) d.samples = def.samples;
+    if (d.kinds == 0) d.kinds = def.kinds;
+    if (d.bounces == 0) d.bounces = def.bounces;
+    if (d.order < 1 || d.order > PRT_SH_MAX_ORDER)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "SH order %d out of range 1..%d", d.order, PRT_SH_MAX_ORDER);
+    if (d.samples < 16 || d.samples > (1 << 20))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "samples %d out of range 16..%d", d.samples, 1 << 20);
+    if (d.bounces < 1 || d.bounces > 64) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range 1..64", d.bounces);
+    if (d.kinds & ~PRT_TRANSFER_ALL_KINDS) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown transfer kind bits 0x%x", d.kinds);
+    if (d.glossy_brdf) {
+        prt_status bst = prt_brdf_validate(d.glossy_brdf);
+        if (bst) return prt__fail(ctx, bst, "glossy BRDF: %s", prt_last_error());
+        if (!d.glossy_exit) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a glossy BRDF at bake time needs glossy_exit (it is baked in)");
+    }
+    if (d.texels < 0 || d.texels > 8192) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "texels %d out of range 0..8192", d.texels);
+    if (d.normal_map && !d.texels) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a normal map needs per-texel transfer (texels > 0)");
+    if (d.normal_map && (d.normal_map->width < 1 || d.normal_map->height < 1 || !d.normal_map->rgb))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the normal map is empty");
+    if (d.glossy_exit && !(d.kinds & (PRT_TRANSFER_GLOSSY_SHADOWED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "baking a BRDF in needs a glossy kind (glossy-shadowed or glossy-interreflected)");
+    if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
+
+    if ((unsigned)d.uv_layout > PRT_UV_GENERATE) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown UV layout %d", (int)d.uv_layout);
+    if (d.texels) {
+        prt_status lst = texel_layout(ctx, &d, t);
+        if (lst) return lst;
+    }
+
+    sh_bake *sb = prt__calloc(1, sizeof *sb);
+    prt__sh_state *s = prt__sh_state_new();
+    if (!sb || !s) { free(sb); free(s); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    sb->base.stage = sh_stage;
+    sb->base.finish = sh_finish;
+    sb->base.release = sh_release;
+    if (extra) {   /* the job owns the normal map from here on */
+        sb->extra = *extra;
+        memset(&extra->normal_map, 0, sizeof extra->normal_map);
+        if (d.normal_map == &extra->normal_map) d.normal_map = &sb->extra.normal_map;
+    }
+    if (d.glossy_brdf) { sb->brdf = *d.glossy_brdf; d.glossy_brdf = &sb->brdf; }
+    sb->d = d;
+    sb->t = t;
+    sb->s = s;
+    t->state = s;   /* owned by t from here on, so a failed bake frees it with t */
+    s->order = d.order;
+    s->samples = d.samples;
+    s->bounces = (d.kinds & (PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)) ? d.bounces : 0;
+    s->seed = d.seed;
+    bool scene_glossy = false;   /* some vertex has a material with a glossy part */
+    for (size_t v = 0; v < t->mesh.vertex_count && !scene_glossy; ++v) {
+        uint8_t k = t->mesh.material[v];
+        scene_glossy = k && k <= t->brdf_count && prt_brdf_is_glossy(&t->brdfs[k - 1]);
+    }
+    sb->want_gsh = d.kinds & PRT_TRANSFER_GLOSSY_SHADOWED;
+    sb->want_gir = d.kinds & PRT_TRANSFER_GLOSSY_INTERREFLECTED;
+    const bool want_ir = d.kinds & (PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED);
+    /* Glossy surfaces in the scene or glossy receivers put the glossy matrices into the bounce loop. */
+    sb->coupled = want_ir && (sb->want_gir || scene_glossy);
+    const bool need_glossy_sh = sb->want_gsh || sb->coupled;
+
+    const size_t nv = t->mesh.vertex_count;
+    bake_job *job = &sb->job;
+    job->mesh = &t->mesh;
+    job->order = d.order;
+    job->ncoeff = d.order * d.order;
+    job->samples = d.samples;
+    job->seed = d.seed;
+    job->offset = d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh);
+    job->need_hits = want_ir;
+    const int nc = job->ncoeff;
+    const bool want_unsh = d.kinds & PRT_TRANSFER_UNSHADOWED;
+    const bool want_sh = d.kinds & (PRT_TRANSFER_SHADOWED | PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED);
+    const size_t nn = (size_t)nc * nc;
+    job->dirs = prt__calloc((size_t)d.samples * 3, sizeof(float));
+    job->basis = prt__calloc((size_t)d.samples * nc, sizeof(float));
+    sb->unsh = want_unsh ? prt__calloc(nv * nc, sizeof(float)) : NULL;
+    sb->shad = want_sh ? prt__calloc(nv * nc, sizeof(float)) : NULL;
+    if ((sb->noise = malloc((nv ? nv : 1) * sizeof(float))))
+        for (size_t v = 0; v < nv; ++v) sb->noise[v] = NAN;   /* a report only: no memory, no report */
+    sb->gshad = need_glossy_sh ? prt__calloc(nv * nn, sizeof(float)) : NULL;
+    if (job->need_hits) {
+        job->hits = prt__calloc(nv, sizeof *job->hits);
+        job->hit_count = prt__calloc(nv, sizeof *job->hit_count);
+    }
+    prt_status st = PRT_OK;
+    if (!job->dirs || !job->basis || (want_unsh && !sb->unsh) || (want_sh && !sb->shad) || (need_glossy_sh && !sb->gshad) ||
+        (job->need_hits && (!job->hits || !job->hit_count)))
+        st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for a bake of %zu vertices", nv);
+    for (int j = 0; j < d.samples && !st; ++j) {
+        double u, v, dir[3], y[PRT_SH_MAX_COEFFS];
+        prt__sobol2((uint32_t)j, d.seed, &u, &v);
+        prt__sphere_dir(u, v, dir);
+        prt_sh_eval(d.order, dir, y);
+        for (int c = 0; c < 3; ++c) job->dirs[(size_t)j * 3 + c] = (float)dir[c];
+        for (int i = 0; i < nc; ++i) job->basis[(size_t)j * nc + i] = (float)y[i];
+    }
+    if (!st) st = prt__raycaster_create(ctx, &t->mesh, &job->rc);
+    if (!st) st = prt__vertex_origins(&t->mesh, job->offset, &job->origins);
+    if (!st && !(job->buried = malloc(nv ? nv : 1))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!st) st = prt__unbury_origins(ctx, &job->rc, &t->mesh, job->offset, job->origins, job->buried, PRT_LOG_INFO);
+    for (size_t v = 0; !st && v < nv; ++v) job->buried_count += job->buried[v] == 2;
+    if (st) { sh_release(&sb->base); return st; }
+    sb->plan[sb->stages++] = ST_VISIBILITY;
+    if (sb->coupled) sb->plan[sb->stages++] = ST_GLOSSY_BOUNCES;
+    else if (d.kinds & PRT_TRANSFER_INTERREFLECTED)
+        for (int bnc = 1; bnc <= d.bounces; ++bnc) { sb->bounce_of[sb->stages] = bnc; sb->plan[sb->stages++] = ST_BOUNCE; }
+    if (d.texels) sb->plan[sb->stages++] = ST_TEXELS;
+    if (d.glossy_exit) sb->plan[sb->stages++] = ST_BRDF_IN;
+    if (sb->extra.compressing)
+        for (int k = 0; k < PRT__KIND_COUNT; ++k)
+            if (d.kinds & prt__kind_from_index(k)) { sb->bounce_of[sb->stages] = k; sb->plan[sb->stages++] = ST_COMPRESS; }
+    if (sb->extra.quantize) sb->plan[sb->stages++] = ST_QUANTIZE;
+    *out = &sb->base;
+    return PRT_OK;
+}
+
+static prt_status begin_from_desc(prt_context *ctx, const prt_scene *scene, const void *desc, prt_transfer *t, prt__bake_job **job)
+{
+    (void)scene;
+    return prt__sh_bake_begin(ctx, desc, NULL, t, job);
+}
+
+prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_desc *desc, prt_transfer **out)
+{
+    prt_bake_run_desc run = {.progress = desc ? desc->progress : NULL, .progress_user = desc ? desc->progress_user : NULL};
+    return prt__bake_with(ctx, scene, &prt__method_sh, begin_from_desc, desc, &run, out);
+}

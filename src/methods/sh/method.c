@@ -1,0 +1,776 @@
+/* The spherical-harmonic method's table entry: bake options, its chunks (SHTR, CPCA, TXAL, TXLS),
+ * its description, variants (the transfer kinds), controls and relighting. The bake itself lives
+ * in bake/sh_*.c, relighting kernels in relight/sh_*.c, compression in compress/. */
+#include "methods/sh/sh.h"
+#include "light/envmap_internal.h"
+
+#include <strings.h>
+
+#define CHUNK_SHTR PRT__FOURCC('S', 'H', 'T', 'R')
+#define CHUNK_CPCA PRT__FOURCC('C', 'P', 'C', 'A')
+#define CHUNK_TXAL PRT__FOURCC('T', 'X', 'A', 'L')
+#define CHUNK_TXLS PRT__FOURCC('T', 'X', 'L', 'S')
+#define CPCA_HEADER 64
+
+/* ---- state and kinds ---- */
+prt__sh_state *prt__sh_state_new(void) { return prt__calloc(1, sizeof(prt__sh_state)); }
+
+void prt__sh_state_free(void *state)
+{
+    prt__sh_state *s = state;
+    if (!s) return;
+    for (int i = 0; i < PRT__KIND_COUNT; ++i) {
+        free(s->sets[i].coeffs);
+        prt__cpca_free(s->sets[i].cpca);
+    }
+    prt__texel_sets_free(&s->texels);
+    free(s);
+}
+
+prt__sh_state *prt__sh_need(prt_context *ctx, const prt_transfer *t)
+{
+    prt__sh_state *s = prt__sh(t);
+    if (!s) prt__fail(ctx, PRT_ERR_INVALID_ARG, "this is %s transfer, not spherical-harmonic transfer", t ? t->method->name : "no");
+    return s;
+}
+
+int prt__kind_index(prt_transfer_kind kind)
+{
+    switch (kind) {
+    case PRT_TRANSFER_UNSHADOWED: return 0;
+    case PRT_TRANSFER_SHADOWED: return 1;
+    case PRT_TRANSFER_INTERREFLECTED: return 2;
+    case PRT_TRANSFER_GLOSSY_SHADOWED: return 3;
+    case PRT_TRANSFER_GLOSSY_INTERREFLECTED: return 4;
+    }
+    return -1;
+}
+
+prt_transfer_kind prt__kind_from_index(int index) { return (prt_transfer_kind)(1u << index); }
+
+const char *prt_transfer_kind_name(prt_transfer_kind kind)
+{
+    static const char *names[PRT__KIND_COUNT] = {"unshadowed", "shadowed", "interreflected", "glossy-shadowed", "glossy-interreflected"};
+    int i = prt__kind_index(kind);
+    return i < 0 ? "unknown" : names[i];
+}
+
+prt_status prt_transfer_kind_parse(const char *name, prt_transfer_kind *out)
+{
+    for (int i = 0; i < PRT__KIND_COUNT; ++i) {
+        prt_transfer_kind k = prt__kind_from_index(i);
+        const char *full = prt_transfer_kind_name(k);
+        if (!strcasecmp(name, full) || (i < 3 && name[0] && !name[1] && name[0] == full[0])) { *out = k; return PRT_OK; }
+    }
+    return prt__fail(NULL, PRT_ERR_INVALID_ARG,
+                     "unknown transfer kind '%s' (use unshadowed, shadowed, interreflected, glossy-shadowed or glossy-interreflected)", name);
+}
+
+int prt_transfer_kind_is_glossy(prt_transfer_kind kind) { return kind == PRT_TRANSFER_GLOSSY_SHADOWED || kind == PRT_TRANSFER_GLOSSY_INTERREFLECTED; }
+
+prt_transfer_kind prt_transfer_kind_diffuse_part(prt_transfer_kind glossy)
+{
+    return glossy == PRT_TRANSFER_GLOSSY_INTERREFLECTED ? PRT_TRANSFER_INTERREFLECTED : PRT_TRANSFER_SHADOWED;
+}
+
+/* ---- the SH public accessors ---- */
+static size_t texel_bytes(const prt__sh_state *s)
+{
+    const prt__texel_sets *tx = &s->texels;
+    if (!tx->width) return 0;
+    const size_t ntex = (size_t)tx->width * tx->height;
+    size_t bytes = ntex * (3 * sizeof(float) + 1);
+    for (int k = 0; k < 3; ++k) bytes += ntex * (size_t)tx->channels[k] * s->order * s->order * sizeof(float);
+    return bytes;
+}
+
+void prt_transfer_get_info(const prt_transfer *t, prt_transfer_info *info)
+{
+    memset(info, 0, sizeof *info);
+    info->vertex_count = t->mesh.vertex_count;
+    info->triangle_count = t->mesh.triangle_count;
+    info->bake_seconds = t->bake_seconds;
+    info->threads = t->threads;
+    info->transfer_bytes = t->method->transfer_bytes(t);
+    snprintf(info->source, sizeof info->source, "%s", t->source);
+    const prt__sh_state *s = prt__sh(t);
+    if (!s) return;
+    info->order = s->order;
+    info->samples = s->samples;
+    info->bounces = s->bounces;
+    info->seed = s->seed;
+    for (int i = 0; i < PRT__KIND_COUNT; ++i)
+        if (s->sets[i].channels) info->kinds |= prt__kind_from_index(i);
+    const prt__texel_sets *tx = &s->texels;
+    info->texel_width = tx->width;
+    info->texel_height = tx->height;
+    info->texel_bytes = texel_bytes(s);
+}
+
+int prt_transfer_channels(const prt_transfer *t, prt_transfer_kind kind)
+{
+    const prt__sh_state *s = prt__sh(t);
+    int i = prt__kind_index(kind);
+    return !s || i < 0 ? 0 : s->sets[i].channels;
+}
+
+const float *prt_transfer_coeffs(const prt_transfer *t, prt_transfer_kind kind)
+{
+    const prt__sh_state *s = prt__sh(t);
+    int i = prt__kind_index(kind);
+    return !s || i < 0 || !s->sets[i].channels ? NULL : s->sets[i].coeffs;   /* NULL for compressed sets */
+}
+
+size_t prt_transfer_set_floats(const prt_transfer *t, prt_transfer_kind kind)
+{
+    const prt__sh_state *s = prt__sh(t);
+    int i = prt__kind_index(kind);
+    return !s || i < 0 ? 0 : prt__set_dim(s, i);
+}
+
+int prt_transfer_glossy_mirror(const prt_transfer *t)
+{
+    const prt__sh_state *s = prt__sh(t);
+    return s && !s->glossy_exit;
+}
+
+int prt_transfer_texel_size(const prt_transfer *t, int *width, int *height)
+{
+    const prt__sh_state *s = prt__sh(t);
+    if (width) *width = s ? s->texels.width : 0;
+    if (height) *height = s ? s->texels.height : 0;
+    return s && s->texels.width > 0;
+}
+
+const float *prt_transfer_texel_coeffs(const prt_transfer *t, prt_transfer_kind kind, int *channels)
+{
+    const prt__sh_state *s = prt__sh(t);
+    int i = prt__kind_index(kind);
+    if (!s || i < 0 || i > 2 || !s->texels.coeffs[i]) return NULL;
+    if (channels) *channels = s->texels.channels[i];
+    return s->texels.coeffs[i];
+}
+
+void prt__texel_sets_free(prt__texel_sets *s)
+{
+    for (int k = 0; k < 3; ++k) free(s->coeffs[k]);
+    free(s->albedo);
+    free(s->covered);
+    memset(s, 0, sizeof *s);
+}
+
+prt_status prt__texel_sets_copy(prt__texel_sets *dst, const prt__texel_sets *src, int order)
+{
+    memset(dst, 0, sizeof *dst);
+    if (!src->width) return PRT_OK;
+    const size_t ntex = (size_t)src->width * src->height, nc = (size_t)order * order;
+    dst->width = src->width;
+    dst->height = src->height;
+    dst->albedo = malloc(ntex * 3 * sizeof(float));
+    dst->covered = malloc(ntex);
+    bool ok = dst->albedo && dst->covered;
+    if (ok) { memcpy(dst->albedo, src->albedo, ntex * 3 * sizeof(float)); memcpy(dst->covered, src->covered, ntex); }
+    for (int k = 0; k < 3 && ok; ++k) {
+        if (!src->coeffs[k]) continue;
+        dst->channels[k] = src->channels[k];
+        size_t bytes = ntex * (size_t)src->channels[k] * nc * sizeof(float);
+        ok = (dst->coeffs[k] = malloc(bytes)) != NULL;
+        if (ok) memcpy(dst->coeffs[k], src->coeffs[k], bytes);
+    }
+    if (!ok) { prt__texel_sets_free(dst); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory copying texel sets"); }
+    return PRT_OK;
+}
+
+/* ---- bake options ---- */
+static const prt_option_desc options[] = {
+    {"order", "N", PRT_OPTION_INT, 1, PRT_SH_MAX_ORDER, NULL, "SH order, bands 1..10 (default 5 = 25 coefficients)"},
+    {"samples", "N", PRT_OPTION_INT, 16, 1 << 20, NULL, "directions per vertex over the sphere (default 1024)"},
+    {"kinds", "LIST", PRT_OPTION_LIST, 0, 0, "all|unshadowed|shadowed|interreflected|glossy-shadowed|glossy-interreflected|u|s|i",
+     "comma list of unshadowed, shadowed, interreflected (u, s, i for short; or 'all': these\n"
+     "three, the default) and glossy-shadowed, glossy-interreflected: per-vertex transfer matrices\n"
+     "(order^4 floats each; use --order 4 or 5) for view-dependent surfaces"},
+    {"bounces", "N", PRT_OPTION_INT, 1, 64, NULL, "interreflection bounces (default 3)"},
+    {"seed", "N", PRT_OPTION_INT, 0, 2147483647, NULL, "rotates the low-discrepancy directions (default 0)"},
+    {"brdf", "SPEC", PRT_OPTION_TEXT, 0, 0, NULL,
+     "bake this BRDF into the glossy sets for every vertex (any isotropic model: lambert,\n"
+     "phong, blinn, ashikhmin:N:N, lafortune:clay|skin)"},
+    {"bake-materials", NULL, PRT_OPTION_FLAG, 0, 0, NULL,
+     "bake each vertex's scene material BRDF into the glossy sets (without this or --brdf,\n"
+     "glossy sets hold incident radiance and the lobe is chosen when rendering)"},
+    {"texels", "N", PRT_OPTION_INT, 1, 8192, NULL,
+     "also bake per-texel transfer (the diffuse kinds) into an N x N map, over the\n"
+     "mesh's UVs or a generated atlas (see --uv)"},
+    {"uv", "FROM", PRT_OPTION_CHOICE, 0, 0, "auto|mesh|atlas",
+     "UV layout of --texels: the mesh's own when unique and inside [0, 1], else a generated\n"
+     "atlas (auto, the default); only the mesh's (mesh); always an atlas (atlas)"},
+    {"normal-map", "FILE", PRT_OPTION_TEXT, 0, 0, NULL,
+     "tangent-space normal map perturbing the per-texel normals (.png/.jpg values as\n"
+     "stored; .exr/.hdr/.pfm values in [0, 1])"},
+    {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
+    {"compress", "M", PRT_OPTION_CHOICE, 0, 0, "cpca|pca|vq",
+     "store the sets compressed: clustered PCA (cpca), one cluster (pca), or clusters only\n"
+     "(vq); "
+     "relighting reads them directly"},
+    {"clusters", "K", PRT_OPTION_INT, 1, 65536, NULL, "clusters for cpca (default 64) and vq (default 256); alone: cpca"},
+    {"vectors", "N", PRT_OPTION_INT, 1, 300, NULL, "average PCA vectors per cluster for cpca and pca (default 8); alone: cpca"},
+    {"quantize", "B", PRT_OPTION_CHOICE, 0, 0, "8|16", "store uncompressed sets as 8- or 16-bit integers (scale and bias per coefficient)"},
+};
+
+static const prt_control_desc controls[] = {
+    {"order", "SH order used for lighting (truncates the file's)", '[', ']', 0},
+};
+
+static prt_status load_normal_map(prt_context *ctx, const char *path, prt_image *out)
+{
+    prt_status st = prt_image_load(path, out);
+    if (st) return prt__fail(ctx, st, "normal map: %s", prt_last_error());
+    /* 8-bit images come back sRGB-decoded; a normal map stores plain numbers, so undo it. */
+    const char *ext = strrchr(path, '.');
+    if (ext && (!strcasecmp(ext, ".png") || !strcasecmp(ext, ".jpg") || !strcasecmp(ext, ".jpeg")))
+        for (size_t i = 0; i < (size_t)out->width * out->height * 3; ++i) {
+            float x = out->rgb[i];
+            out->rgb[i] = x <= 0.0031308f ? 12.92f * x : 1.055f * powf(x, 1.0f / 2.4f) - 0.055f;
+        }
+    return PRT_OK;
+}
+
+static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **out)
+{
+    (void)scene;
+    prt_bake_desc d = {0};
+    prt__sh_extra extra;
+    memset(&extra, 0, sizeof extra);
+    prt_brdf brdf;
+    d.order = prt__opt_int(o, "order", 0);
+    d.samples = prt__opt_int(o, "samples", 0);
+    d.bounces = prt__opt_int(o, "bounces", 0);
+    d.seed = (uint32_t)prt__opt_int(o, "seed", 0);
+    d.texels = prt__opt_int(o, "texels", 0);
+    d.uv_layout = (prt_uv_layout)prt__opt_choice(o, "uv", PRT_UV_AUTO);
+    d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
+    prt_status st = PRT_OK;
+    if (prt__opt(o, "kinds")) {
+        char buf[256], *save = NULL;
+        snprintf(buf, sizeof buf, "%s", prt__opt(o, "kinds"));
+        for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+            prt_transfer_kind k;
+            if (!strcmp(tok, "all")) d.kinds |= 7u;
+            else if (!prt_transfer_kind_parse(tok, &k)) d.kinds |= (unsigned)k;
+        }
+    }
+    if (prt__opt(o, "brdf")) {
+        if ((st = prt_brdf_parse(prt__opt(o, "brdf"), &brdf))) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf: %s", prt_last_error());
+        d.glossy_brdf = &brdf;
+        d.glossy_exit = 1;
+    }
+    if (prt__opt_flag(o, "bake-materials")) d.glossy_exit = 1;
+    if (!st && prt__opt(o, "uv") && !d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--uv needs --texels N");
+    if (!st && prt__opt(o, "normal-map")) {
+        if (!d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--normal-map needs --texels N");
+        else st = load_normal_map(ctx, prt__opt(o, "normal-map"), &extra.normal_map);
+    }
+    /* --clusters or --vectors alone ask for clustered PCA. */
+    extra.compressing = prt__opt(o, "compress") || prt__opt(o, "clusters") || prt__opt(o, "vectors");
+    extra.compress.method = (prt_compress_method)prt__opt_choice(o, "compress", 0);
+    extra.compress.clusters = prt__opt_int(o, "clusters", 0);
+    extra.compress.vectors = prt__opt_int(o, "vectors", 0);
+    extra.compress.seed = d.seed;
+    extra.quantize = prt__opt_int(o, "quantize", 0);
+    if (!st && extra.compressing && extra.quantize)
+        st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--quantize applies to uncompressed sets; drop --compress or --quantize");
+    if (!st && extra.compressing) st = prt__compress_desc_check(ctx, &extra.compress);
+    if (!st) st = prt__sh_bake_begin(ctx, &d, &extra, t, out);
+    prt_image_free(&extra.normal_map);   /* empty when the job took it */
+    return st;
+}
+
+/* ---- files ---- */
+static void sh_save_meta(const prt_transfer *t, cJSON *meta)
+{
+    const prt__sh_state *s = t->state;
+    cJSON_AddNumberToObject(meta, "order", s->order);
+    cJSON_AddNumberToObject(meta, "samples", s->samples);
+    cJSON_AddNumberToObject(meta, "bounces", s->bounces);
+    cJSON_AddNumberToObject(meta, "seed", s->seed);
+    if (s->glossy_exit) cJSON_AddBoolToObject(meta, "glossy_exit", 1);
+}
+
+static prt_status sh_save(const prt_transfer *t, prt__chunk_list *l)
+{
+    const prt__sh_state *sh = t->state;
+    const prt__mesh *m = &t->mesh;
+    for (int k = 0; k < PRT__KIND_COUNT; ++k) {
+        const prt__sh_set *s = &sh->sets[k];
+        if (!s->channels) continue;
+        unsigned char *h = prt__chunks_alloc(l, CPCA_HEADER);
+        if (!h) break;
+        prt__put32(h, (uint32_t)prt__kind_from_index(k));
+        prt__put32(h + 4, (uint32_t)s->channels);
+        prt__put32(h + 8, (uint32_t)sh->order);
+        if (!s->cpca) {
+            const size_t dim = prt__set_dim(sh, k), n = m->vertex_count * dim;
+            prt__put64(h + 16, m->vertex_count);
+            if (!s->quant_bits) {
+                prt__chunks_add(l, CHUNK_SHTR, h, (size_t)24, s->coeffs, n * sizeof(float), NULL);
+                continue;
+            }
+            /* Quantized: scale[dim], bias[dim], then the integers, padded to 4 bytes. */
+            prt__put32(h + 12, (uint32_t)s->quant_bits);
+            const size_t qbytes = n * (size_t)(s->quant_bits / 8), padded = (qbytes + 3) & ~(size_t)3;
+            float *grid = prt__chunks_alloc(l, 2 * dim * sizeof(float));
+            unsigned char *q = prt__chunks_alloc(l, padded);
+            if (!grid || !q) break;
+            prt__quant_grid(s->coeffs, m->vertex_count, (int)dim, s->quant_bits, grid, grid + dim);
+            for (size_t i = 0; i < n; ++i) {
+                size_t j = i % dim;
+                float lv = grid[j] > 0 ? roundf((s->coeffs[i] - grid[dim + j]) / grid[j]) : 0.0f;
+                uint32_t u = (uint32_t)fminf(fmaxf(lv, 0.0f), (float)((1u << s->quant_bits) - 1));
+                if (s->quant_bits == 8) q[i] = (unsigned char)u;
+                else { uint16_t w = (uint16_t)u; memcpy(q + 2 * i, &w, 2); }
+            }
+            prt__chunks_add(l, CHUNK_SHTR, h, (size_t)24, grid, 2 * dim * sizeof(float), q, padded, NULL);
+            continue;
+        }
+        const prt__cpca *c = s->cpca;
+        prt__put32(h + 12, (uint32_t)c->method);
+        prt__put32(h + 16, (uint32_t)c->clusters);
+        prt__put32(h + 20, (uint32_t)c->dim);
+        prt__put64(h + 24, m->vertex_count);
+        prt__put64(h + 32, c->vectors_total);
+        prt__put64(h + 40, c->weights_total);
+        memcpy(h + 48, &c->rms_error, 8);
+        memcpy(h + 56, &c->relative_error, 8);
+        const size_t dim = (size_t)c->dim;
+        prt__chunks_add(l, CHUNK_CPCA, h, (size_t)CPCA_HEADER, c->counts, (size_t)c->clusters * 4, c->means, (size_t)c->clusters * dim * 4,
+                        c->basis, c->vectors_total * dim * 4, c->cluster_of, m->vertex_count * 4, c->weights, c->weights_total * 4, NULL);
+    }
+    const prt__texel_sets *tx = &sh->texels;
+    if (tx->width) {
+        static const unsigned char pad4[4] = {0};
+        const size_t ntex = (size_t)tx->width * tx->height;
+        unsigned char *head = prt__chunks_alloc(l, 8);
+        if (head) {
+            prt__put32(head, (uint32_t)tx->width);
+            prt__put32(head + 4, (uint32_t)tx->height);
+        }
+        const size_t pad = ((ntex + 3) & ~(size_t)3) - ntex;
+        if (pad) prt__chunks_add(l, CHUNK_TXAL, head, (size_t)8, tx->albedo, ntex * 12, tx->covered, ntex, pad4, pad, NULL);
+        else prt__chunks_add(l, CHUNK_TXAL, head, (size_t)8, tx->albedo, ntex * 12, tx->covered, ntex, NULL);
+        for (int k = 0; k < 3; ++k) {
+            if (!tx->coeffs[k]) continue;
+            unsigned char *h = prt__chunks_alloc(l, 24);
+            if (!h) break;
+            prt__put32(h, (uint32_t)prt__kind_from_index(k));
+            prt__put32(h + 4, (uint32_t)tx->channels[k]);
+            prt__put32(h + 8, (uint32_t)sh->order);
+            prt__put32(h + 12, (uint32_t)tx->width);
+            prt__put32(h + 16, (uint32_t)tx->height);
+            prt__chunks_add(l, CHUNK_TXLS, h, (size_t)24, tx->coeffs[k], ntex * (size_t)tx->channels[k] * sh->order * sh->order * 4, NULL);
+        }
+    }
+    return PRT_OK;   /* allocation failures are recorded in the list and reported when writing */
+}
+
+static prt_status bad(prt_context *ctx, const char *msg) { return prt__fail(ctx, PRT_ERR_FORMAT, "%s", msg); }
+
+static prt_status load_cpca(prt_context *ctx, prt__sh_state *sh, const prt__chunk_in *in, uint64_t vertex_count)
+{
+    const unsigned char *p = in->data;
+    const uint64_t len = in->size;
+    if (len < CPCA_HEADER) return bad(ctx, "corrupt .prt file: bad compressed transfer chunk");
+    uint32_t kind = prt__get32(p), channels = prt__get32(p + 4), order = prt__get32(p + 8), method = prt__get32(p + 12);
+    uint32_t clusters = prt__get32(p + 16), dim = prt__get32(p + 20);
+    uint64_t nv = prt__get64(p + 24), nvec = prt__get64(p + 32), nw = prt__get64(p + 40);
+    int k = prt__kind_index((prt_transfer_kind)kind);
+    /* Every count is bounded by the chunk's own length before it sizes anything. */
+    if (k < 0 || (channels != 1 && channels != 3) || order < 1 || order > PRT_SH_MAX_ORDER || method > PRT_COMPRESS_VQ ||
+        dim != channels * order * order * (prt__kind_glossy(k) ? order * order : 1) || nv != vertex_count || (sh->order && (int)order != sh->order) ||
+        sh->sets[k].channels || clusters == 0 || clusters > len / 4 || nvec > len / 4 || nw > len / 4 || (uint64_t)clusters * dim > len / 4 ||
+        nvec * dim > len / 4 || CPCA_HEADER + 4 * ((uint64_t)clusters + (uint64_t)clusters * dim + nvec * dim + nv + nw) != len)
+        return bad(ctx, "corrupt .prt file: invalid compressed transfer chunk");
+    prt__cpca *c = prt__calloc(1, sizeof *c);
+    if (c) {
+        c->method = (prt_compress_method)method;
+        c->clusters = (int)clusters;
+        c->dim = (int)dim;
+        c->vectors_total = nvec;
+        c->weights_total = nw;
+        memcpy(&c->rms_error, p + 48, 8);
+        memcpy(&c->relative_error, p + 56, 8);
+        c->counts = malloc(clusters * 4ull);
+        c->means = malloc((size_t)clusters * dim * 4);
+        c->basis = malloc(nvec * dim * 4 + 4);
+        c->cluster_of = malloc(nv * 4);
+        c->weights = malloc(nw * 4 + 4);
+    }
+    if (!c || !c->counts || !c->means || !c->basis || !c->cluster_of || !c->weights) {
+        prt__cpca_free(c);
+        return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    }
+    const unsigned char *q = p + CPCA_HEADER;
+    memcpy(c->counts, q, clusters * 4ull); q += clusters * 4ull;
+    memcpy(c->means, q, (size_t)clusters * dim * 4); q += (size_t)clusters * dim * 4;
+    memcpy(c->basis, q, nvec * dim * 4); q += nvec * dim * 4;
+    memcpy(c->cluster_of, q, nv * 4); q += nv * 4;
+    memcpy(c->weights, q, nw * 4);
+    if (!prt__cpca_index(c, nv)) {
+        prt__cpca_free(c);
+        return bad(ctx, "corrupt .prt file: compressed transfer indices are inconsistent");
+    }
+    if (!prt__all_finite(c->means, (size_t)clusters * dim) || !prt__all_finite(c->basis, nvec * dim) || !prt__all_finite(c->weights, nw)) {
+        prt__cpca_free(c);
+        return bad(ctx, "corrupt .prt file: non-finite compressed transfer");
+    }
+    sh->order = (int)order;
+    sh->sets[k].channels = (int)channels;
+    sh->sets[k].cpca = c;
+    return PRT_OK;
+}
+
+static prt_status load_set(prt_context *ctx, prt__sh_state *sh, const prt__chunk_in *in, uint64_t vertex_count)
+{
+    const unsigned char *p = in->data;
+    const uint64_t len = in->size;
+    if (len < 24) return bad(ctx, "corrupt .prt file: short transfer chunk");
+    uint32_t kind = prt__get32(p), channels = prt__get32(p + 4), order = prt__get32(p + 8), bits = prt__get32(p + 12);
+    uint64_t nv = prt__get64(p + 16);
+    int k = prt__kind_index((prt_transfer_kind)kind);
+    if (k < 0 || (channels != 1 && channels != 3) || order < 1 || order > PRT_SH_MAX_ORDER || nv != vertex_count ||
+        (sh->order && (int)order != sh->order) || sh->sets[k].channels)
+        return bad(ctx, "corrupt .prt file: invalid transfer chunk header");
+    uint64_t dim = (uint64_t)channels * order * order * (prt__kind_glossy(k) ? order * order : 1), n = nv * dim;
+    uint64_t need = bits == 0 ? 24 + n * 4 : 24 + 8 * dim + ((n * (bits / 8) + 3) & ~3ull);
+    if ((bits != 0 && bits != 8 && bits != 16) || n > len || need != len) return bad(ctx, "corrupt .prt file: transfer chunk size mismatch");
+    float *c = malloc(n * 4);
+    if (!c) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (bits == 0) {
+        memcpy(c, p + 24, n * 4);
+    } else {
+        const unsigned char *grid = p + 24, *q = p + 24 + 8 * dim;
+        for (uint64_t i = 0; i < n; ++i) {
+            uint64_t j = i % dim;
+            float scale, bias;
+            memcpy(&scale, grid + 4 * j, 4);
+            memcpy(&bias, grid + 4 * (dim + j), 4);
+            uint32_t u = q[i];
+            if (bits == 16) { uint16_t w; memcpy(&w, q + 2 * i, 2); u = w; }
+            c[i] = bias + (float)u * scale;
+        }
+    }
+    if (!prt__all_finite(c, n)) { free(c); return bad(ctx, "corrupt .prt file: non-finite transfer coefficients"); }
+    sh->sets[k].quant_bits = (int)bits;
+    sh->order = (int)order;
+    sh->sets[k].channels = (int)channels;
+    sh->sets[k].coeffs = c;
+    return PRT_OK;
+}
+
+static prt_status load_texels(prt_context *ctx, prt__sh_state *sh, prt__chunk_in *chunks, int count)
+{
+    prt__chunk_in *in = prt__chunk_take(chunks, count, CHUNK_TXAL);
+    prt__texel_sets *tx = &sh->texels;
+    if (!in) {
+        if (prt__chunk_take(chunks, count, CHUNK_TXLS)) return bad(ctx, "corrupt .prt file: texel transfer without its albedo chunk");
+        return PRT_OK;
+    }
+    const unsigned char *p = in->data;
+    uint64_t len = in->size;
+    uint32_t w = len >= 8 ? prt__get32(p) : 0, h = len >= 8 ? prt__get32(p + 4) : 0;
+    uint64_t ntex = (uint64_t)w * h;
+    if (w == 0 || h == 0 || w > 8192 || h > 8192 || 8 + ntex * 12 + ((ntex + 3) & ~3ull) != len) return bad(ctx, "corrupt .prt file: invalid texel albedo chunk");
+    tx->albedo = malloc(ntex * 12);
+    tx->covered = malloc(ntex);
+    if (!tx->albedo || !tx->covered) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(tx->albedo, p + 8, ntex * 12);
+    memcpy(tx->covered, p + 8 + ntex * 12, ntex);
+    tx->width = (int)w;
+    tx->height = (int)h;
+    if (!prt__all_finite(tx->albedo, ntex * 3)) return bad(ctx, "corrupt .prt file: non-finite texel albedo");
+    while ((in = prt__chunk_take(chunks, count, CHUNK_TXLS))) {
+        p = in->data;
+        len = in->size;
+        uint32_t kind = len >= 24 ? prt__get32(p) : 0, channels = len >= 24 ? prt__get32(p + 4) : 0, order = len >= 24 ? prt__get32(p + 8) : 0;
+        uint32_t tw = len >= 24 ? prt__get32(p + 12) : 0, th = len >= 24 ? prt__get32(p + 16) : 0;
+        int k = prt__kind_index((prt_transfer_kind)kind);
+        uint64_t n = (uint64_t)tw * th * channels * order * order;
+        if (k < 0 || k > 2 || (channels != 1 && channels != 3) || (int)order != sh->order || (int)tw != tx->width || (int)th != tx->height ||
+            tx->coeffs[k] || 24 + n * 4 != len)
+            return bad(ctx, "corrupt .prt file: invalid texel transfer chunk");
+        if (!(tx->coeffs[k] = malloc(n * 4))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        memcpy(tx->coeffs[k], p + 24, n * 4);
+        tx->channels[k] = (int)channels;
+        if (!prt__all_finite(tx->coeffs[k], n)) return bad(ctx, "corrupt .prt file: non-finite texel transfer");
+    }
+    return PRT_OK;
+}
+
+static prt_status sh_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count)
+{
+    prt__sh_state *sh = prt__sh_state_new();
+    if (!sh) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    t->state = sh;
+    const cJSON *x;
+    if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "samples"))) sh->samples = x->valueint;
+    if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "bounces"))) sh->bounces = x->valueint;
+    if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "seed"))) sh->seed = (uint32_t)x->valuedouble;
+    sh->glossy_exit = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(meta, "glossy_exit"));
+    prt_status st = PRT_OK;
+    const prt__chunk_in *in;
+    while (!st && (in = prt__chunk_take(chunks, count, CHUNK_SHTR))) st = load_set(ctx, sh, in, t->mesh.vertex_count);
+    while (!st && (in = prt__chunk_take(chunks, count, CHUNK_CPCA))) st = load_cpca(ctx, sh, in, t->mesh.vertex_count);
+    if (!st && !sh->order) st = bad(ctx, ".prt file holds no transfer");
+    if (!st) st = load_texels(ctx, sh, chunks, count);
+    if (!st && prt__chunk_take(chunks, count, CHUNK_TXAL)) st = bad(ctx, "corrupt .prt file: two texel albedo chunks");
+    return st;
+}
+
+/* ---- description ---- */
+static size_t sh_bytes(const prt_transfer *t)
+{
+    const prt__sh_state *s = t->state;
+    size_t bytes = 0;
+    for (int i = 0; i < PRT__KIND_COUNT; ++i)
+        if (s->sets[i].channels) {
+            prt_compress_info ci;
+            prt_transfer_compress_info(t, prt__kind_from_index(i), &ci);
+            bytes += ci.bytes;
+        }
+    return bytes + texel_bytes(s);
+}
+
+static void sh_describe(const prt_transfer *t, prt__describe *d)
+{
+    const prt__sh_state *s = t->state;
+    const size_t nv = t->mesh.vertex_count;
+    bool glossy = s->sets[3].channels || s->sets[4].channels;
+    prt_transfer_info info;
+    prt_transfer_get_info(t, &info);
+    static const char *cnames[3] = {"cpca", "pca", "vq"}, *long_names[3] = {"clustered PCA", "PCA", "VQ"};
+    cJSON *j = prt__describe_json(d);
+    if (j) {
+        cJSON_AddNumberToObject(j, "order", s->order);
+        cJSON_AddNumberToObject(j, "coefficients", s->order * s->order);
+        cJSON *kinds = cJSON_AddArrayToObject(j, "kinds");
+        for (int k = 0; k < PRT__KIND_COUNT; ++k) {
+            if (!s->sets[k].channels) continue;
+            const prt_transfer_kind kind = prt__kind_from_index(k);
+            cJSON *o = cJSON_CreateObject();
+            cJSON_AddStringToObject(o, "kind", prt_transfer_kind_name(kind));
+            cJSON_AddNumberToObject(o, "channels", s->sets[k].channels);
+            cJSON_AddNumberToObject(o, "floats_per_vertex", (double)prt__set_dim(s, k));
+            prt_compress_info ci;
+            prt_transfer_compress_info(t, kind, &ci);
+            cJSON_AddNumberToObject(o, "bytes", (double)ci.bytes);
+            if (ci.quantize_bits) cJSON_AddNumberToObject(o, "quantize_bits", ci.quantize_bits);
+            if (ci.compressed) {
+                cJSON_AddStringToObject(o, "compression", cnames[ci.method]);
+                cJSON_AddNumberToObject(o, "clusters", ci.clusters);
+                cJSON_AddNumberToObject(o, "pca_vectors", ci.vectors_total);
+                cJSON_AddNumberToObject(o, "relative_error", ci.relative_error);
+                cJSON_AddNumberToObject(o, "compression_ratio", (double)nv * (double)prt__set_dim(s, k) * 4.0 / (double)ci.bytes);
+            }
+            cJSON_AddItemToArray(kinds, o);
+        }
+        if (s->texels.width) {
+            cJSON *tx = cJSON_AddObjectToObject(j, "texels");
+            cJSON_AddNumberToObject(tx, "width", s->texels.width);
+            cJSON_AddNumberToObject(tx, "height", s->texels.height);
+            cJSON_AddNumberToObject(tx, "bytes", (double)info.texel_bytes);
+            cJSON *tk = cJSON_AddArrayToObject(tx, "kinds");
+            for (int k = 0; k < 3; ++k)
+                if (s->texels.coeffs[k]) cJSON_AddItemToArray(tk, cJSON_CreateString(prt_transfer_kind_name(prt__kind_from_index(k))));
+        }
+        cJSON_AddNumberToObject(j, "samples", s->samples);
+        cJSON_AddNumberToObject(j, "bounces", s->bounces);
+        cJSON_AddNumberToObject(j, "seed", s->seed);
+        if (glossy) cJSON_AddStringToObject(j, "glossy", s->glossy_exit ? "exit radiance (BRDF baked in)" : "incident radiance (lobe at render time)");
+        return;
+    }
+    prt__describe_line(d, "order:", "%d (%d coefficients)", s->order, s->order * s->order);
+    char kinds[512] = "";
+    size_t at = 0;
+    for (int k = 0; k < PRT__KIND_COUNT; ++k)
+        if (s->sets[k].channels && at < sizeof kinds)
+            at += (size_t)snprintf(kinds + at, sizeof kinds - at, "%s%s (%d ch)", at ? " " : "", prt_transfer_kind_name(prt__kind_from_index(k)),
+                                   s->sets[k].channels);
+    prt__describe_line(d, "kinds:", "%s", kinds);
+    if (glossy)
+        prt__describe_line(d, "glossy:", "%s", s->glossy_exit ? "transfer matrices to exit radiance (BRDF baked in)"
+                                                              : "transfer matrices to incident radiance; the lobe is applied when rendering");
+    for (int k = 1; k <= t->brdf_count; ++k) {
+        char spec[128], label[32];
+        prt_brdf_format(&t->brdfs[k - 1], spec, sizeof spec);
+        snprintf(label, sizeof label, "material %d:", k);
+        prt__describe_line(d, label, "%s", spec);
+    }
+    for (int k = 0; k < PRT__KIND_COUNT; ++k) {
+        prt_compress_info ci;
+        const prt_transfer_kind kind = prt__kind_from_index(k);
+        if (!s->sets[k].channels || prt_transfer_compress_info(t, kind, &ci)) continue;
+        if (ci.quantize_bits) prt__describe_line(d, "quantized:", "%s %d-bit", prt_transfer_kind_name(kind), ci.quantize_bits);
+        if (!ci.compressed) continue;
+        double raw = (double)nv * (double)prt__set_dim(s, k) * 4.0;
+        prt__describe_line(d, "compressed:", "%s %s, %d clusters, %d PCA vectors, %.1f bytes/vertex (%.1fx smaller), relative error %.4f",
+                           prt_transfer_kind_name(kind), long_names[ci.method], ci.clusters, ci.vectors_total, (double)ci.bytes / (double)nv,
+                           raw / (double)ci.bytes, ci.relative_error);
+    }
+    if (s->texels.width) {
+        char tk[128] = "";
+        size_t n = 0;
+        for (int k = 0; k < 3; ++k)
+            if (s->texels.coeffs[k]) n += (size_t)snprintf(tk + n, sizeof tk - n, "%s%s", n ? ", " : "", prt_transfer_kind_name(prt__kind_from_index(k)));
+        prt__describe_line(d, "texels:", "%d x %d (%s), %.2f MiB", s->texels.width, s->texels.height, tk, info.texel_bytes / 1048576.0);
+    }
+    prt__describe_line(d, "bake:", "%d samples, %d bounces, seed %u", s->samples, s->bounces, s->seed);
+}
+
+/* ---- variants and controls ---- */
+static int sh_variant_count(const prt_transfer *t)
+{
+    const prt__sh_state *s = t->state;
+    int n = 0;
+    for (int k = 0; k < PRT__KIND_COUNT; ++k) n += s->sets[k].channels != 0;
+    return n;
+}
+
+/* The set index of variant i. */
+static int set_of_variant(const prt__sh_state *s, int i)
+{
+    for (int k = 0; k < PRT__KIND_COUNT; ++k)
+        if (s->sets[k].channels && i-- == 0) return k;
+    return -1;
+}
+
+static int variant_of_set(const prt__sh_state *s, int k)
+{
+    if (k < 0 || !s->sets[k].channels) return -1;
+    int i = 0;
+    for (int j = 0; j < k; ++j) i += s->sets[j].channels != 0;
+    return i;
+}
+
+static const char *sh_variant_name(const prt_transfer *t, int i) { return prt_transfer_kind_name(prt__kind_from_index(set_of_variant(t->state, i))); }
+
+static int sh_default_variant(const prt_transfer *t, int drawing)
+{
+    const prt__sh_state *s = t->state;
+    static const int draw_order[] = {4, 3, 2, 1, 0}, plain_order[] = {2, 1, 0, 4, 3};
+    const int *order = drawing ? draw_order : plain_order;
+    for (int i = 0; i < PRT__KIND_COUNT; ++i)
+        if (s->sets[order[i]].channels) return variant_of_set(s, order[i]);
+    return 0;
+}
+
+static int sh_find_variant(const prt_transfer *t, const char *name)
+{
+    prt_transfer_kind k;
+    if (prt_transfer_kind_parse(name, &k)) return -1;
+    return variant_of_set(t->state, prt__kind_index(k));
+}
+
+static void sh_control_range(const prt_transfer *t, int i, int *lo, int *hi, int *def)
+{
+    (void)i;
+    const prt__sh_state *s = t->state;
+    *lo = 1;
+    *hi = s->order;
+    *def = s->order;
+}
+
+/* ---- relighting ---- */
+static prt_status project(prt_context *ctx, const prt_lighting *l, int order, prt_sh_light *out)
+{
+    const prt_status st = prt_lighting_sh(l, order, out);
+    return st ? prt__fail(ctx, st, "%s", prt_last_error()) : PRT_OK;
+}
+
+static prt_status relight_kind(prt_context *ctx, const prt_transfer *t, int k, const prt_sh_light *sh, const prt_relight_desc *d, float *rgb, float *exit)
+{
+    const prt_transfer_kind kind = prt__kind_from_index(k);
+    if (!prt__kind_glossy(k)) return prt_relight_sh(ctx, t, kind, sh, rgb);
+    const prt_transfer_kind diffuse = prt_transfer_kind_diffuse_part(kind);
+    prt_status st = PRT_OK;
+    if (prt_transfer_channels(t, diffuse)) st = prt_relight_sh(ctx, t, diffuse, sh, rgb);
+    else memset(rgb, 0, t->mesh.vertex_count * 3 * sizeof(float));
+    if (!st) st = prt_relight_sh_glossy(ctx, t, kind, sh, d->brdf, exit);
+    return st;
+}
+
+static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *r)
+{
+    const prt__sh_state *s = t->state;
+    const size_t nv = t->mesh.vertex_count;
+    int k = set_of_variant(s, d->variant);
+    const int order = d->controls && d->controls[0] >= 1 && d->controls[0] < s->order ? d->controls[0] : s->order;
+    /* A run-time lobe shapes glossy kinds only; the diffuse kinds drawn beside them ignore it. */
+    if (d->brdf && prt__kind_glossy(k) && s->glossy_exit)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this transfer has its BRDF baked in; a run-time BRDF cannot replace it (re-bake without --brdf)");
+    prt_sh_light sh;
+    prt_status st = project(ctx, l, s->order, &sh);
+    if (st) return st;
+    sh.order = order;
+    /* Direct light is the shadowed pair; indirect the inter-reflected pair minus it. */
+    const bool split_ok = s->sets[1].channels && s->sets[2].channels && (!prt__kind_glossy(k) || (s->sets[3].channels && s->sets[4].channels));
+    if (d->component && !split_ok)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "separating direct and indirect light needs shadowed and inter-reflected sets%s",
+                         prt__kind_glossy(k) ? " (diffuse and glossy)" : "");
+    if (d->component == PRT_COMPONENT_DIRECT) k = prt__kind_glossy(k) ? 3 : 1;
+    else if (d->component == PRT_COMPONENT_INDIRECT) k = prt__kind_glossy(k) ? 4 : 2;
+    const bool want_indirect = (d->with_indirect || d->component == PRT_COMPONENT_INDIRECT) && split_ok && (k == 2 || k == 4);
+    if ((st = prt__relit_alloc(ctx, t, r, want_indirect))) return st;
+    const size_t exit_floats = 3 * (size_t)s->order * s->order;
+    if (prt__kind_glossy(k)) {
+        r->exit_sh = prt__calloc(nv * exit_floats, sizeof(float));
+        if (!r->exit_sh) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        r->exit_order = s->order;
+        r->exit_mirror = !s->glossy_exit;
+    }
+    if ((st = relight_kind(ctx, t, k, &sh, d, r->radiance, r->exit_sh))) return st;
+    if (want_indirect) {
+        /* The part that bounced: this kind minus its shadowed counterpart. */
+        const int direct = k == 4 ? 3 : 1;
+        float *dexit = direct == 3 ? prt__calloc(nv * exit_floats, sizeof(float)) : NULL;
+        if (direct == 3 && !dexit) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        st = relight_kind(ctx, t, direct, &sh, d, r->indirect, dexit);
+        for (size_t i = 0; !st && i < nv * 3; ++i) r->indirect[i] = r->radiance[i] - r->indirect[i];
+        if (!st && d->component == PRT_COMPONENT_INDIRECT) {
+            memcpy(r->radiance, r->indirect, nv * 3 * sizeof(float));
+            for (size_t i = 0; dexit && i < nv * exit_floats; ++i) r->exit_sh[i] -= dexit[i];
+        }
+        free(dexit);
+        if (st) return st;
+        if (!d->with_indirect) { free(r->indirect); r->indirect = NULL; }
+    }
+    if (!d->per_vertex && d->component == PRT_COMPONENT_ALL && k <= 2 && s->texels.coeffs[k]) {
+        r->texel_width = s->texels.width;
+        r->texel_height = s->texels.height;
+        r->texels = prt__calloc((size_t)r->texel_width * r->texel_height * 3, sizeof(float));
+        if (!r->texels) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        if ((st = prt_relight_sh_texels(ctx, t, prt__kind_from_index(k), &sh, r->texels))) return st;
+    }
+    return PRT_OK;
+}
+
+const prt__method prt__method_sh = {
+    .name = "sh",
+    .title = "spherical-harmonic PRT",
+    .summary = "spherical-harmonic PRT (Sloan et al.): diffuse and glossy, per vertex or texel, compressible",
+    .lighting = PRT_LIGHTS_ENVIRONMENT | PRT_LIGHTS_DIRECTIONAL,
+    .options = options,
+    .option_count = (int)(sizeof options / sizeof options[0]),
+    .controls = controls,
+    .control_count = (int)(sizeof controls / sizeof controls[0]),
+    .bake_begin = sh_bake_begin,
+    .free_state = prt__sh_state_free,
+    .save_meta = sh_save_meta,
+    .save = sh_save,
+    .load = sh_load,
+    .describe = sh_describe,
+    .transfer_bytes = sh_bytes,
+    .variant_count = sh_variant_count,
+    .variant_name = sh_variant_name,
+    .default_variant = sh_default_variant,
+    .find_variant = sh_find_variant,
+    .control_range = sh_control_range,
+    .relight = sh_relight,
+};

@@ -1,0 +1,174 @@
+/* Run-time SH relighting: per vertex, exit radiance = transfer . lighting per channel.
+ *
+ * The transfer is vertex-major with n = order^2 floats per channel, n rarely a multiple of the
+ * vector width. Each vertex is done with full 8-wide multiply-adds plus a scalar tail; the
+ * kernels are instantiated per order so the compiler unrolls them completely. Vertices are split
+ * statically across threads. */
+#include "methods/sh/sh.h"
+
+#include <immintrin.h>
+#include <omp.h>
+#include <string.h>
+
+typedef float v8 __attribute__((vector_size(32)));
+
+static inline v8 load8(const float *p)
+{
+    v8 v;
+    memcpy(&v, p, sizeof v);   /* unaligned load */
+    return v;
+}
+
+typedef float v4 __attribute__((vector_size(16)));
+
+static inline v4 fold8(v8 v)
+{
+    v4 lo, hi;
+    memcpy(&lo, &v, 16);
+    memcpy(&hi, (const char *)&v + 16, 16);
+    return lo + hi;
+}
+
+/* Horizontal sums of three vectors at once: {sum r, sum g, sum b, 0}, sharing the shuffles
+ * (SSE unpacks rather than a compiler's generic shuffle, so gcc and clang both build it). */
+static inline v4 hsum8x3(v8 r, v8 g, v8 b)
+{
+    const __m128 r4 = (__m128)fold8(r), g4 = (__m128)fold8(g), b4 = (__m128)fold8(b), z = _mm_setzero_ps();
+    const __m128 rg = _mm_add_ps(_mm_unpacklo_ps(r4, g4), _mm_unpackhi_ps(r4, g4));   /* r0+r2 g0+g2 r1+r3 g1+g3 */
+    const __m128 bz = _mm_add_ps(_mm_unpacklo_ps(b4, z), _mm_unpackhi_ps(b4, z));
+    return (v4)_mm_add_ps(_mm_movelh_ps(rg, bz), _mm_movehl_ps(bz, rg));
+}
+
+/* One-channel sets: the same n coefficients dot three lighting vectors, times albedo. */
+static inline __attribute__((always_inline)) void relight1(const float *restrict coeffs, const float *restrict albedo,
+                                                            const float (*restrict light)[PRT_SH_MAX_COEFFS + 8], int stride,
+                                                            int n, long v0, long v1, float *restrict out)
+{
+    const int full = n & ~7;
+    for (long v = v0; v < v1; ++v) {
+        const float *t = coeffs + (size_t)v * stride;
+        v8 r = {0}, g = {0}, b = {0};
+        for (int i = 0; i < full; i += 8) {
+            v8 x = load8(t + i);
+            r += x * load8(light[0] + i);
+            g += x * load8(light[1] + i);
+            b += x * load8(light[2] + i);
+        }
+        v4 sum = hsum8x3(r, g, b);
+        for (int i = full; i < n; ++i) sum += t[i] * (v4){light[0][i], light[1][i], light[2][i], 0};
+        out[v * 3] = sum[0] * albedo[v * 3];
+        out[v * 3 + 1] = sum[1] * albedo[v * 3 + 1];
+        out[v * 3 + 2] = sum[2] * albedo[v * 3 + 2];
+    }
+}
+
+/* Three-channel sets: channel c's n coefficients dot lighting channel c. */
+static inline __attribute__((always_inline)) void relight3(const float *restrict coeffs,
+                                                            const float (*restrict light)[PRT_SH_MAX_COEFFS + 8], int stride,
+                                                            int n, long v0, long v1, float *restrict out)
+{
+    const int full = n & ~7;
+    for (long v = v0; v < v1; ++v) {
+        const float *t = coeffs + (size_t)v * 3 * stride;
+        v8 acc[3] = {{0}, {0}, {0}};
+        for (int c = 0; c < 3; ++c)
+            for (int i = 0; i < full; i += 8) acc[c] += load8(t + c * stride + i) * load8(light[c] + i);
+        v4 sum = hsum8x3(acc[0], acc[1], acc[2]);
+        for (int i = full; i < n; ++i) sum += (v4){t[i], t[stride + i], t[2 * stride + i], 0} * (v4){light[0][i], light[1][i], light[2][i], 0};
+        out[v * 3] = sum[0];
+        out[v * 3 + 1] = sum[1];
+        out[v * 3 + 2] = sum[2];
+    }
+}
+
+/* Instantiates both kernels for a compile-time n. */
+#define DISPATCH(N)                                                               \
+    case N:                                                                       \
+        if (ch == 1) relight1(coeffs, albedo, (const float (*)[PRT_SH_MAX_COEFFS + 8])lt, stride, N, v0, v1, out_rgb); \
+        else relight3(coeffs, (const float (*)[PRT_SH_MAX_COEFFS + 8])lt, stride, N, v0, v1, out_rgb);                 \
+        break;
+
+/* Compressed sets: project every cluster mean and PCA vector on the lighting once (a few
+ * thousand dot products), then each vertex is its mean's value plus a short weighted sum. */
+static prt_status relight_cpca(prt_context *ctx, const prt_transfer *t, const prt__sh_set *set, const float (*light)[PRT_SH_MAX_COEFFS + 8],
+                               int n, float *out)
+{
+    const prt__cpca *c = set->cpca;
+    const prt__sh_state *sh = t->state;
+    const int stride = sh->order * sh->order, ch = set->channels;
+    const size_t rows = (size_t)c->clusters + c->vectors_total;
+    v4 *proj = malloc(rows * sizeof(v4));   /* [cluster means..., vectors...] x {r, g, b, 0} */
+    if (!proj) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (size_t r = 0; r < rows; ++r) {
+        const float *x = r < (size_t)c->clusters ? c->means + r * c->dim : c->basis + (r - (size_t)c->clusters) * c->dim;
+        v4 p = {0, 0, 0, 0};
+        for (int l = 0; l < 3; ++l) {
+            const float *seg = x + (ch == 3 ? l * stride : 0);
+            float s = 0;
+            for (int i = 0; i < n; ++i) s += seg[i] * light[l][i];
+            p[l] = s;
+        }
+        proj[r] = p;
+    }
+    const float *albedo = t->mesh.albedo;
+    const long nv = (long)t->mesh.vertex_count;
+#pragma omp parallel for schedule(static) num_threads(nv < 4096 ? 1 : prt__threads(ctx))
+    for (long v = 0; v < nv; ++v) {
+        uint32_t k = c->cluster_of[v];
+        const float *w = c->weights + c->weight_start[v];
+        const v4 *b = proj + (size_t)c->clusters + c->basis_start[k];
+        /* Two running sums halve the dependency chain of the multiply-adds. */
+        v4 acc = proj[k], acc2 = {0, 0, 0, 0};
+        const uint32_t cnt = c->counts[k];
+        uint32_t j = 0;
+        for (; j + 1 < cnt; j += 2) {
+            acc += w[j] * b[j];
+            acc2 += w[j + 1] * b[j + 1];
+        }
+        if (j < cnt) acc += w[j] * b[j];
+        acc += acc2;
+        if (ch == 1) { acc[0] *= albedo[v * 3]; acc[1] *= albedo[v * 3 + 1]; acc[2] *= albedo[v * 3 + 2]; }
+        out[v * 3] = acc[0];
+        out[v * 3 + 1] = acc[1];
+        out[v * 3 + 2] = acc[2];
+    }
+    free(proj);
+    return PRT_OK;
+}
+
+prt_status prt_relight_sh(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light, float *out_rgb)
+{
+    if (!t || !light || !out_rgb) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_sh: transfer, light and output are required");
+    const prt__sh_state *sh = prt__sh_need(ctx, t);
+    if (!sh) return PRT_ERR_INVALID_ARG;
+    int k = prt__kind_index(kind);
+    if (k < 0 || !sh->sets[k].channels)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the transfer holds no %s set", prt_transfer_kind_name(kind));
+    if (prt__kind_glossy(k))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s is view-dependent: relight it with prt_relight_sh_glossy", prt_transfer_kind_name(kind));
+    if (light->order < 1 || light->order > PRT_SH_MAX_ORDER)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "lighting SH order %d out of range", light->order);
+    const int stride = sh->order * sh->order;
+    const int order = light->order < sh->order ? light->order : sh->order;
+    const int n = order * order, ch = sh->sets[k].channels;
+    const float *coeffs = sh->sets[k].coeffs, *albedo = t->mesh.albedo;
+    const long nv = (long)t->mesh.vertex_count;
+    /* Zero-padded so vector loads of the lighting may run past n. */
+    float lt[3][PRT_SH_MAX_COEFFS + 8];
+    memset(lt, 0, sizeof lt);
+    for (int c = 0; c < 3; ++c) memcpy(lt[c], light->coeffs[c], (size_t)n * sizeof(float));
+    if (sh->sets[k].cpca) return relight_cpca(ctx, t, &sh->sets[k], lt, n, out_rgb);
+    const int threads = prt__threads(ctx);
+    /* Below a few thousand vertices a thread team costs more than it saves. */
+    const int team = nv < 4096 ? 1 : threads;
+#pragma omp parallel num_threads(team)
+    {
+        int tid = omp_get_thread_num(), nt = omp_get_num_threads();
+        long v0 = nv * tid / nt, v1 = nv * (tid + 1) / nt;
+        switch (n) {
+            DISPATCH(1) DISPATCH(4) DISPATCH(9) DISPATCH(16) DISPATCH(25)
+            DISPATCH(36) DISPATCH(49) DISPATCH(64) DISPATCH(81) DISPATCH(100)
+        }
+    }
+    return PRT_OK;
+}

@@ -1,0 +1,78 @@
+/* The spherical-harmonic method's state (bake/sh_*.c, relight/sh_*.c, compress/compress.c and
+ * its table entry method/sh.c look inside; nothing else does). */
+#ifndef PRT_METHODS_SH_H
+#define PRT_METHODS_SH_H
+
+#include "compress/cpca.h"
+#include "transfer/method.h"
+
+#define PRT__KIND_COUNT 5
+
+typedef struct prt__sh_set {
+    int channels;       /* 0 = absent, 1 = albedo applied at relight, 3 = RGB with albedo */
+    float *coeffs;      /* [vertex][channel][order^2]; NULL when compressed */
+    prt__cpca *cpca;    /* non-NULL when compressed */
+    int quant_bits;     /* 0, or 8 / 16: coeffs hold dequantized values and files store integers */
+} prt__sh_set;
+
+/* Per-texel transfer over the UV layout: texel (x, y) has its centre at uv ((x + .5) / W,
+ * (y + .5) / H); row 0 is v near 0. Diffuse kinds only (index 0..2 as for vertex sets). */
+typedef struct prt__texel_sets {
+    int width, height;
+    float *albedo;        /* [texel][3] */
+    uint8_t *covered;     /* [texel]: 1 baked, 2 filled from neighbours, 0 outside every chart */
+    int channels[3];
+    float *coeffs[3];     /* [texel][channel][order^2] */
+} prt__texel_sets;
+
+typedef struct prt__sh_state {
+    int order;
+    prt__sh_set sets[PRT__KIND_COUNT];   /* indexed by prt__kind_index */
+    int samples, bounces;
+    uint32_t seed;
+    bool glossy_exit;                    /* glossy sets hold exit radiance (BRDF baked in) */
+    prt__texel_sets texels;
+} prt__sh_state;
+
+extern const prt__method prt__method_sh;
+
+/* t's SH state, or NULL after recording an error naming t's method when t is not SH transfer. */
+prt__sh_state *prt__sh_need(prt_context *ctx, const prt_transfer *t);
+static inline prt__sh_state *prt__sh(const prt_transfer *t) { return prt__state_of(t, &prt__method_sh); }
+prt__sh_state *prt__sh_state_new(void);
+void prt__sh_state_free(void *state);
+
+void prt__texel_sets_free(prt__texel_sets *s);
+prt_status prt__texel_sets_copy(prt__texel_sets *dst, const prt__texel_sets *src, int order);
+
+static inline bool prt__kind_glossy(int index) { return index >= 3; }
+/* Floats per vertex of set k when uncompressed. */
+static inline size_t prt__set_dim(const prt__sh_state *s, int k)
+{
+    size_t n = (size_t)s->order * (size_t)s->order;
+    return (size_t)s->sets[k].channels * n * (prt__kind_glossy(k) ? n : 1);
+}
+/* 0..4 for UNSHADOWED, SHADOWED, INTERREFLECTED, GLOSSY_SHADOWED, GLOSSY_INTERREFLECTED; -1 otherwise. */
+int prt__kind_index(prt_transfer_kind kind);
+prt_transfer_kind prt__kind_from_index(int index);
+
+/* What the SH bake does after transfer: compression or quantization (the bake's last stages),
+ * and a normal map the job takes over. */
+typedef struct prt__sh_extra {
+    bool compressing;
+    prt_compress_desc compress;   /* defaults filled in (prt__compress_desc_check) */
+    int quantize;                 /* 0, 8 or 16 */
+    prt_image normal_map;         /* moved into the job when it holds pixels */
+} prt__sh_extra;
+
+/* The SH bake (bake/sh_diffuse.c) as stages of work units: validates d (defaults filled in),
+ * and sets up the job for t (which holds the scene's mesh and materials). extra may be NULL. */
+prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *d, prt__sh_extra *extra, prt_transfer *t, prt__bake_job **job);
+
+/* Compression steps (compress/compress.c): defaults filled in and checked; one set compressed in
+ * place; every set quantized in place. */
+prt_status prt__compress_desc_check(prt_context *ctx, prt_compress_desc *d);
+prt_status prt__sh_compress_set(prt_context *ctx, prt__sh_state *s, size_t vertex_count, int k, const prt_compress_desc *d, prt__progress *prog);
+prt_status prt__sh_quantize(prt_context *ctx, prt__sh_state *s, size_t vertex_count, int bits);
+
+#endif

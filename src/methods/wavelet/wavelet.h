@@ -1,0 +1,35 @@
+/* The wavelet method's state (bake/wavelet.c, relight/wavelet.c and its table entry
+ * method/wavelet.c look inside): per vertex term_count[v] sparse transport vectors, vertex v's
+ * first at vec_start[v]. */
+#ifndef PRT_METHODS_WAVELET_H
+#define PRT_METHODS_WAVELET_H
+
+#include "brdf/separable.h"
+#include "compress/sparse.h"
+#include "transfer/method.h"
+#include "prt/wavelet.h"
+
+typedef struct prt__wavelet_set {
+    int terms, supersample, bounces, gather_resolution, brdf_resolution;
+    prt_brdf_param param;
+    uint8_t *term_count;                          /* [vertex] */
+    size_t *vec_start;                            /* [vertex + 1], derived */
+    prt__sparse_store store;
+    prt_brdf_factors *factors[PRT__MAX_BRDFS];    /* per material (k - 1); NULL = Lambertian */
+    float *view_maps;                             /* prt_wavelet_view_maps' arrays, built on first use */
+    uint8_t *vertex_set;
+    int view_sets;
+} prt__wavelet_set;
+
+extern const prt__method prt__method_wavelet;
+
+static inline prt__wavelet_set *prt__wavelet(const prt_transfer *t) { return prt__state_of(t, &prt__method_wavelet); }
+void prt__wavelet_set_free(void *w);
+/* Fills vec_start from term_count; false if a count is 0 or above 16. */
+bool prt__wavelet_index(prt__wavelet_set *w, size_t vertex_count, size_t *vectors);
+/* Packs the factored materials' view maps for the renderer (prt_wavelet_view_maps). */
+prt_status prt__wavelet_build_view_maps(const prt_transfer *t, prt__wavelet_set *w);
+/* The wavelet bake (bake/wavelet.c) as stages of work units, for t holding the scene. */
+prt_status prt__wavelet_bake_begin(prt_context *ctx, const prt_wavelet_bake_desc *d, prt_transfer *t, prt__bake_job **job);
+
+#endif

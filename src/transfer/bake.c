@@ -1,0 +1,199 @@
+/* The bake driver shared by every method: stages of independent work units on all threads, with
+ * progress, cancellation, checkpoints and timing written once (see prt__bake_job in
+ * method/method.h and method/checkpoint.h). */
+#include "transfer/method.h"
+#include "transfer/checkpoint.h"
+
+#include <omp.h>
+
+/* Puts back the units of stage `index` that the checkpoint holds; marks them in restored. */
+static prt_status restore_units(prt_context *ctx, prt__bake_job *job, const prt__stage *s, int index, prt__checkpoint *cp,
+                                unsigned char *restored, uint64_t *count)
+{
+    int bad = 0;
+    uint64_t n = 0, bad_unit = 0;
+#pragma omp parallel num_threads(job->threads) reduction(+ : n)
+    {
+        prt__bytes buf = {0};
+#pragma omp for schedule(dynamic, 16)
+        for (uint64_t u = 0; u < s->units; ++u) {
+            if (__atomic_load_n(&bad, __ATOMIC_RELAXED) || !prt__checkpoint_find(cp, index, u, &buf)) continue;
+            if (!s->load_unit(job, u, buf.data, buf.size)) {
+                if (!__atomic_exchange_n(&bad, 1, __ATOMIC_RELAXED)) bad_unit = u;
+                continue;
+            }
+            restored[u] = 1;
+            n++;
+        }
+        prt__bytes_free(&buf);
+    }
+    *count = n;
+    if (bad)
+        return prt__fail(ctx, PRT_ERR_FORMAT, "the checkpoint's record of %s, unit %llu, does not fit this bake (a damaged file?); "
+                         "delete the checkpoint, or bake without resuming", s->name, (unsigned long long)bad_unit);
+    return PRT_OK;
+}
+
+prt_status prt__bake_drive_checkpointed(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt__checkpoint *cp,
+                                        prt_transfer *t)
+{
+    const double start = prt__now();
+    prt__progress prog = {run ? run->progress : NULL, run ? run->progress_user : NULL, NULL, 0, 0, 0.0, 0, ctx};
+    job->ctx = ctx;
+    job->threads = prt__threads(ctx);
+    uint64_t recovered = 0, total = 0;
+    prt__bytes *out = cp ? prt__calloc((size_t)job->threads, sizeof *out) : NULL;
+    prt_status st = cp && !out ? prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory") : PRT_OK;
+    for (int index = 0; !st; ++index) {
+        prt__stage s;
+        memset(&s, 0, sizeof s);
+        if ((st = job->stage(job, index, &s))) break;
+        if (!s.units && !s.whole) break;
+        prt__progress_begin(&prog, s.name, s.whole ? 1 : s.units);
+        if (s.whole) {
+            st = s.whole(job, ctx, &prog);
+        } else {
+            total += s.units;
+            unsigned char *restored = NULL;
+            uint64_t from_checkpoint = 0;
+            if (cp && s.load_unit && prt__checkpoint_count(cp, index)) {
+                if (!(restored = prt__calloc((size_t)s.units, 1))) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+                if ((st = restore_units(ctx, job, &s, index, cp, restored, &from_checkpoint))) { free(restored); break; }
+                prt__log(ctx, PRT_LOG_INFO, "%s: %llu of %llu work units recovered from the checkpoint", s.name,
+                         (unsigned long long)from_checkpoint, (unsigned long long)s.units);
+                recovered += from_checkpoint;
+                prt__progress_add(&prog, from_checkpoint);
+            }
+            int failed = 0;
+            prt_status first = PRT_OK;
+            char why[512] = "";   /* errors are recorded per thread: keep the failing unit's */
+            /* Units are claimed in order by whichever thread is free; each writes only its own
+             * outputs, so the result is the same for any thread count and schedule. */
+#pragma omp parallel for schedule(dynamic, 1) num_threads(job->threads)
+            for (uint64_t u = 0; u < s.units; ++u) {
+                if ((restored && restored[u]) || __atomic_load_n(&failed, __ATOMIC_RELAXED) || prt__progress_cancelled(&prog)) continue;
+                const int thread = omp_get_thread_num();
+                prt_status r = s.run(job, u, thread);
+                if (r && !__atomic_exchange_n(&failed, 1, __ATOMIC_RELAXED)) {
+                    first = r;
+                    snprintf(why, sizeof why, "%s", prt_last_error());
+                }
+                if (!r && cp && s.save_unit) {
+                    out[thread].size = 0;
+                    out[thread].failed = false;   /* out of memory loses this unit's record, not the rest */
+                    s.save_unit(job, u, &out[thread]);
+                    if (!out[thread].failed) prt__checkpoint_append(cp, index, u, out[thread].data, out[thread].size);
+                }
+                prt__progress_add(&prog, 1);
+            }
+            free(restored);
+            if (first) st = prt__fail(ctx, first, "%s", why[0] ? why : prt_status_string(first));
+        }
+        if (!st) prt__progress_end(&prog);
+        if (!st && prt__progress_cancelled(&prog)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    }
+    if (!st) st = job->finish(job, t);
+    const int threads = job->threads;   /* release frees the job */
+    job->release(job);
+    for (int i = 0; out && i < threads; ++i) prt__bytes_free(&out[i]);
+    free(out);
+    if (run && run->recovered_units) *run->recovered_units = recovered;
+    if (run && run->total_units) *run->total_units = total;
+    if (!st) {
+        t->bake_seconds = prt__now() - start;
+        t->threads = prt__threads(ctx);
+    }
+    return st;
+}
+
+prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt_transfer *t)
+{
+    return prt__bake_drive_checkpointed(ctx, job, run, NULL, t);
+}
+
+/* Everything a bake's results depend on, so that a checkpoint is only ever resumed by the same
+ * bake: the library version, the method and its options, and the scene as the transfer holds it. */
+static void fingerprint(const prt__method *m, const prt_options *o, const prt_transfer *t, prt__fingerprint *fp)
+{
+    memset(fp, 0, sizeof *fp);
+    const char *v = prt_version_string();
+    prt__fingerprint_add(fp, v, strlen(v) + 1);
+    prt__fingerprint_add(fp, m->name, strlen(m->name) + 1);
+    prt__options_fingerprint(o, fp);
+    const prt__mesh *mesh = &t->mesh;
+    const size_t nv = mesh->vertex_count, nt = mesh->triangle_count;
+    prt__fingerprint_add(fp, &nv, sizeof nv);
+    prt__fingerprint_add(fp, &nt, sizeof nt);
+    prt__fingerprint_add(fp, mesh->positions, nv * 3 * sizeof(float));
+    prt__fingerprint_add(fp, mesh->normals, nv * 3 * sizeof(float));
+    prt__fingerprint_add(fp, mesh->albedo, nv * 3 * sizeof(float));
+    prt__fingerprint_add(fp, mesh->material, nv);
+    if (mesh->uv) prt__fingerprint_add(fp, mesh->uv, nv * 2 * sizeof(float));
+    if (mesh->emission) prt__fingerprint_add(fp, mesh->emission, nv * 3 * sizeof(float));
+    prt__fingerprint_add(fp, mesh->indices, nt * 3 * sizeof(uint32_t));
+    prt__fingerprint_add(fp, &t->brdf_count, sizeof t->brdf_count);
+    for (int i = 0; i < t->brdf_count; ++i) {
+        /* Field by field at full precision: not the struct's padding, not lobes it does not use. */
+        const prt_brdf *b = &t->brdfs[i];
+        const int model = (int)b->model, lobes = b->lobes > 0 && b->lobes <= PRT_BRDF_MAX_LOBES ? b->lobes : 0;
+        prt__fingerprint_add(fp, &model, sizeof model);
+        prt__fingerprint_add(fp, b->diffuse, sizeof b->diffuse);
+        prt__fingerprint_add(fp, b->specular, sizeof b->specular);
+        prt__fingerprint_add(fp, &b->exponent, sizeof b->exponent);
+        prt__fingerprint_add(fp, &b->exponent_v, sizeof b->exponent_v);
+        prt__fingerprint_add(fp, &lobes, sizeof lobes);
+        for (int l = 0; l < lobes; ++l) {
+            prt__fingerprint_add(fp, b->cxy[l], sizeof b->cxy[l]);
+            prt__fingerprint_add(fp, b->cz[l], sizeof b->cz[l]);
+            prt__fingerprint_add(fp, b->n[l], sizeof b->n[l]);
+        }
+    }
+}
+
+prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__method *m, prt__bake_begin_fn begin, const void *desc,
+                          const prt_bake_run_desc *run, prt_transfer **out)
+{
+    if (!ctx || !scene || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bake: context, scene and out are required");
+    *out = NULL;
+    prt_transfer *t = NULL;
+    prt_status st = prt__transfer_from_scene(ctx, m, scene, &t);
+    prt__bake_job *job = NULL;
+    prt__checkpoint *cp = NULL;
+    /* Setting up a bake of tens of millions of triangles takes seconds a step: look between steps. */
+    if (!st && prt__cancelled(ctx)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    if (!st && run && run->checkpoint) {
+        /* Only prt_bake passes options as desc (checkpoints need them for the fingerprint). */
+        prt__fingerprint fp;
+        fingerprint(m, desc, t, &fp);
+        st = prt__checkpoint_open(ctx, run->checkpoint, &fp, run->resume != 0, &cp);
+    }
+    if (!st) st = begin(ctx, scene, desc, t, &job);
+    if (!st && prt__cancelled(ctx)) {
+        job->release(job);
+        st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    }
+    if (!st) st = prt__bake_drive_checkpointed(ctx, job, run, cp, t);
+    /* A checkpoint stays when its bake can go on later: cancelled, or stopped by memory, I/O or a
+     * backend. One without a finished unit, or of a bake that would fail the same way again (bad
+     * options, bad input), goes, so that the next bake is not asked whether to resume it. */
+    const bool worth_keeping = st == PRT_ERR_CANCELLED || st == PRT_ERR_NO_MEMORY || st == PRT_ERR_IO || st == PRT_ERR_BACKEND;
+    prt__checkpoint_close(cp, st != PRT_OK && (!worth_keeping || prt__checkpoint_records(cp) == 0));
+    if (st) { prt_transfer_release(t); return st; }
+    *out = t;
+    return PRT_OK;
+}
+
+/* The table entry's begin, with the options as its desc. */
+static prt_status begin_from_options(prt_context *ctx, const prt_scene *scene, const void *desc, prt_transfer *t, prt__bake_job **job)
+{
+    return t->method->bake_begin(ctx, scene, desc, t, job);
+}
+
+prt_status prt_bake(prt_context *ctx, const prt_scene *scene, const prt_method *m, const prt_options *o, const prt_bake_run_desc *run,
+                    prt_transfer **out)
+{
+    if (!m) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake: a method is required");
+    if (o && prt_options_method(o) != m)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake: options made for method %s, not %s", prt_method_name(prt_options_method(o)), m->name);
+    return prt__bake_with(ctx, scene, m, begin_from_options, o, run, out);
+}

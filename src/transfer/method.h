@@ -1,0 +1,137 @@
+/* A method's entry in the method table (method/table.c) and what the method-independent layer
+ * (method/bake.c, file.c, describe.c, transfer.c, options.c) offers the entries. A method is
+ * its own files (bake/NAME.c, relight/NAME.c, method/NAME.c with its state in method/NAME.h)
+ * plus one line in the table; see docs/ARCHITECTURE.md. */
+#ifndef PRT_TRANSFER_METHOD_H
+#define PRT_TRANSFER_METHOD_H
+
+#include "core/progress.h"
+#include "io/container.h"
+#include "transfer/checkpoint.h"
+#include "transfer/transfer.h"
+
+#include <cjson/cJSON.h>
+
+typedef struct prt_method prt__method;
+
+/* ---- Bakes as stages of independent work units ----
+ * method/bake.c drives every method's bake: it asks for stage 0, runs its units on all threads
+ * (in any order: a unit's result depends only on its inputs), reports progress and honours
+ * cancellation between units, then asks for stage 1, and so on; a stage with no units and no
+ * `whole` step ends the bake. Progress, cancellation and (later) checkpoints and sharding are
+ * written once, here, for every method. */
+typedef struct prt__bake_job prt__bake_job;
+
+typedef struct prt__stage {
+    char name[48];                 /* shown in progress ("visibility", "bounce 2/3") */
+    uint64_t units;
+    /* Runs one unit; thread in 0..job->threads-1 picks per-thread scratch. */
+    prt_status (*run)(prt__bake_job *job, uint64_t unit, int thread);
+    /* A step with parallel loops of its own (k-means, a BRDF fit), run once instead of units;
+     * it reports through p and checks p for cancellation. */
+    prt_status (*whole)(prt__bake_job *job, prt_context *ctx, prt__progress *p);
+    /* Resumable bakes (method/checkpoint.h): writes everything unit `unit` produced into out, and
+     * puts it back from those bytes (false when they do not fit the job: a corrupt checkpoint).
+     * NULL: the stage's units run again on resume. */
+    void (*save_unit)(prt__bake_job *job, uint64_t unit, prt__bytes *out);
+    bool (*load_unit)(prt__bake_job *job, uint64_t unit, const unsigned char *data, size_t size);
+} prt__stage;
+
+struct prt__bake_job {
+    /* Describes stage `index` (all earlier stages have finished); leave *out zeroed to end. */
+    prt_status (*stage)(prt__bake_job *job, int index, prt__stage *out);
+    /* Moves the results into t's state after the last stage. */
+    prt_status (*finish)(prt__bake_job *job, prt_transfer *t);
+    void (*release)(prt__bake_job *job);
+    prt_context *ctx;
+    int threads;                   /* set before the first stage */
+};
+
+/* Runs a job to the end (progress and cancellation through run, which may be NULL), then frees
+ * it; t's bake_seconds and threads are filled in. Used by prt_bake and the methods' own bake
+ * functions (prt_bake_sh, prt_bake_wavelet). */
+prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt_transfer *t);
+/* The same with a checkpoint (NULL = none); the driver takes units from it and adds to it. */
+prt_status prt__bake_drive_checkpointed(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt__checkpoint *cp,
+                                        prt_transfer *t);
+
+/* The frame every bake entry point shares: a transfer of method m made from the scene, the job
+ * `begin` sets up from desc, the driver. */
+typedef prt_status (*prt__bake_begin_fn)(prt_context *ctx, const prt_scene *scene, const void *desc, prt_transfer *t, prt__bake_job **job);
+prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__method *m, prt__bake_begin_fn begin, const void *desc,
+                          const prt_bake_run_desc *run, prt_transfer **out);
+
+/* ---- Options (method/options.c) ---- */
+const char *prt__opt(const prt_options *o, const char *name);   /* NULL when not given */
+int prt__opt_int(const prt_options *o, const char *name, int fallback);
+float prt__opt_float(const prt_options *o, const char *name, float fallback);
+bool prt__opt_flag(const prt_options *o, const char *name);
+/* Index of the given item of a CHOICE option's choices, or fallback. */
+int prt__opt_choice(const prt_options *o, const char *name, int fallback);
+/* Adds the options as given (sorted by name, so the order on a command line does not matter). */
+void prt__options_fingerprint(const prt_options *o, prt__fingerprint *fp);
+
+/* ---- Descriptions (method/describe.c) ----
+ * One code path writes both forms: text lines for people, fields for JSON. */
+typedef struct prt__describe {
+    bool json;
+    cJSON *root;        /* JSON mode: the object fields go into */
+    char *text;         /* text mode: the lines so far */
+    size_t length, capacity;
+    bool failed;
+} prt__describe;
+/* A "label:   value" text line (nothing in JSON mode). */
+void prt__describe_line(prt__describe *d, const char *label, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* The JSON object to add fields to, or NULL in text mode. */
+static inline cJSON *prt__describe_json(prt__describe *d) { return d->json ? d->root : NULL; }
+
+/* ---- The entry ---- */
+struct prt_method {
+    const char *name;       /* what --method and the file's META call it */
+    const char *title;      /* "spherical-harmonic PRT" */
+    const char *summary;    /* one line */
+    unsigned lighting;      /* PRT_LIGHTS_* it relights */
+    bool runtime_albedo;    /* relight honours prt_relight_desc.albedo */
+    bool light_map;         /* always bakes a light map (prt_method_light_map) */
+    bool gpu_passes;        /* relight honours prt_relight_desc.gpu_finish (prt_method_gpu_passes) */
+    const prt_option_desc *options;
+    int option_count;
+    const prt_control_desc *controls;
+    int control_count;
+
+    /* Bake: set up a job for t (which holds the scene's mesh, materials and lighting). */
+    prt_status (*bake_begin)(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job);
+    void (*free_state)(void *state);
+
+    /* Files: the method's META fields and chunks; load consumes its chunks (marking them used),
+     * checks every count against the file and the mesh, and builds t->state. */
+    void (*save_meta)(const prt_transfer *t, cJSON *meta);
+    prt_status (*save)(const prt_transfer *t, prt__chunk_list *out);
+    prt_status (*load)(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count);
+
+    /* What the file holds: description lines/fields and the bytes of the method's data. */
+    void (*describe)(const prt_transfer *t, prt__describe *d);
+    /* Lines worth showing once after a bake (fit errors, warnings); may be NULL. */
+    void (*report)(const prt_transfer *t, prt__describe *d);
+    size_t (*transfer_bytes)(const prt_transfer *t);
+
+    /* Variants and controls. find_variant may be NULL (exact names only); without variant_count,
+     * variant_name and default_variant the file has one variant, named after the method. */
+    int (*variant_count)(const prt_transfer *t);
+    const char *(*variant_name)(const prt_transfer *t, int index);
+    int (*default_variant)(const prt_transfer *t, int drawing);
+    int (*find_variant)(const prt_transfer *t, const char *name);
+    void (*control_range)(const prt_transfer *t, int index, int *lo, int *hi, int *def);
+
+    /* Relight: lighting (already checked against `lighting`) + desc (defaults filled) -> out.
+     * shade (may be NULL) adds the view-dependent part of r that only the method can evaluate on
+     * the CPU (beyond exit_sh, which is generic), and the direct light of r's pixel_lights, to
+     * rgb. */
+    prt_status (*relight)(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *out);
+    prt_status (*shade)(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb);
+};
+
+/* Allocates the relit arrays of a result for t (radiance always; the rest as flags say). */
+prt_status prt__relit_alloc(prt_context *ctx, const prt_transfer *t, prt_relit *r, bool indirect);
+
+#endif
