@@ -3,6 +3,7 @@
 #ifndef PRT_BENCH_COMMON_H
 #define PRT_BENCH_COMMON_H
 
+#include "prt/prt.h"
 #include "core/internal.h"
 #include "core/progress.h"
 #include "geom/raycast.h"

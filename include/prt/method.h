@@ -176,7 +176,6 @@ typedef struct prt_relight_desc {
 
 /* What relighting produced: everything the renderer draws. Arrays are owned by the result
  * (prt_relit_free) except view_maps/view_set, which are borrowed from the transfer. */
-#define PRT_MAX_PIXEL_LIGHTS 8   /* lights a renderer draws per pixel; the rest stay per vertex */
 typedef struct prt_relit {
     size_t vertex_count;
     float *radiance;          /* 3 per vertex, linear: the view-independent part */

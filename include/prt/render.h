@@ -15,6 +15,8 @@ extern "C" {
 
 typedef struct prt_renderer prt_renderer;
 
+#define PRT_MAX_PIXEL_LIGHTS 8   /* lights a renderer draws per pixel; the rest stay per vertex */
+
 typedef struct prt_renderer_desc {
     int width, height;       /* 0 = 800 x 600 */
     int samples;             /* MSAA samples; 0 = 4 */

@@ -1,13 +1,8 @@
-/* The context: Embree device, threads, log hook. */
+/* The context: threads, log and cancel hooks, and the services made on first use. */
 #include "core/internal.h"
 
 #include <omp.h>
 #include <stdio.h>
-
-static void embree_error(void *user, enum RTCError code, const char *str)
-{
-    prt__log((const prt_context *)user, PRT_LOG_ERROR, "embree error %d: %s", (int)code, str ? str : "");
-}
 
 prt_status prt_context_create(const prt_context_desc *desc, prt_context **out)
 {
@@ -22,14 +17,6 @@ prt_status prt_context_create(const prt_context_desc *desc, prt_context **out)
     ctx->log_user = d.log_user;
     ctx->cancel = d.cancel;
     ctx->cancel_user = d.cancel_user;
-    char cfg[64];
-    snprintf(cfg, sizeof cfg, "threads=%d", ctx->threads);
-    ctx->device = rtcNewDevice(cfg);
-    if (!ctx->device) {
-        free(ctx);
-        return prt__fail(NULL, PRT_ERR_BACKEND, "could not create the Embree device");
-    }
-    rtcSetDeviceErrorFunction(ctx->device, embree_error, ctx);
     *out = ctx;
     return PRT_OK;
 }
@@ -37,7 +24,7 @@ prt_status prt_context_create(const prt_context_desc *desc, prt_context **out)
 void prt_context_release(prt_context *ctx)
 {
     if (!ctx) return;
-    if (ctx->device) rtcReleaseDevice(ctx->device);
+    if (ctx->ray_device && ctx->ray_device_release) ctx->ray_device_release(ctx->ray_device);
     free(ctx);
 }
 

@@ -1,10 +1,11 @@
-/* Private helpers shared by every layer of libprt. Nothing here is part of the API. */
+/* Private helpers shared by every layer of libprt. Nothing here is part of the API, and nothing
+ * here knows the layers above core: each layer includes the public headers it implements. */
 #ifndef PRT_INTERNAL_H
 #define PRT_INTERNAL_H
 
-#include "prt/prt.h"
+#include "prt/base.h"
+#include "prt/sh.h"
 
-#include <embree3/rtcore.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -22,7 +23,10 @@ struct prt_context {
     void *log_user;
     prt_cancel_fn cancel;
     void *cancel_user;
-    RTCDevice device;
+    /* The ray-casting device (geom/raycast.c: Embree's), made on first use and published
+     * atomically; core only releases it, through the function its maker left. */
+    void *ray_device;
+    void (*ray_device_release)(void *device);
 };
 
 /* True when the context's cancel hook asks to stop (ctx may be NULL). */

@@ -2,7 +2,36 @@
  * the mesh may be freed independently and Embree's padding rules are met. */
 #include "geom/raycast.h"
 
+#include <stdio.h>
 #include <string.h>
+
+static void embree_error(void *user, enum RTCError code, const char *str)
+{
+    prt__log((const prt_context *)user, PRT_LOG_ERROR, "embree error %d: %s", (int)code, str ? str : "");
+}
+
+static void release_device(void *device) { rtcReleaseDevice(device); }
+
+/* The context's Embree device, made on first use: concurrent first calls may both make one; one
+ * is published, the other released. NULL when Embree cannot make one. */
+static RTCDevice device_of(const prt_context *ctx)
+{
+    prt_context *c = (prt_context *)ctx;   /* a memo: the device is the context's, made once */
+    RTCDevice d = __atomic_load_n(&c->ray_device, __ATOMIC_ACQUIRE);
+    if (d) return d;
+    char cfg[64];
+    snprintf(cfg, sizeof cfg, "threads=%d", prt__threads(ctx));
+    RTCDevice made = rtcNewDevice(cfg);
+    if (!made) return NULL;
+    rtcSetDeviceErrorFunction(made, embree_error, c);
+    __atomic_store_n(&c->ray_device_release, release_device, __ATOMIC_RELEASE);
+    void *expected = NULL;
+    if (!__atomic_compare_exchange_n(&c->ray_device, &expected, (void *)made, false, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE)) {
+        rtcReleaseDevice(made);
+        return expected;
+    }
+    return made;
+}
 
 static bool build_progress(void *ctx, double done)
 {
@@ -13,8 +42,10 @@ static bool build_progress(void *ctx, double done)
 prt_status prt__raycaster_create(const prt_context *ctx, const prt__mesh *m, prt__raycaster *out)
 {
     memset(out, 0, sizeof *out);
-    RTCScene scene = rtcNewScene(ctx->device);
-    RTCGeometry geom = rtcNewGeometry(ctx->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    RTCDevice device = device_of(ctx);
+    if (!device) return prt__fail(ctx, PRT_ERR_BACKEND, "could not create the Embree device");
+    RTCScene scene = rtcNewScene(device);
+    RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     if (!scene || !geom) {
         if (scene) rtcReleaseScene(scene);
         if (geom) rtcReleaseGeometry(geom);
@@ -41,7 +72,7 @@ prt_status prt__raycaster_create(const prt_context *ctx, const prt__mesh *m, prt
         return prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled while building the ray-tracing structure");
     }
     rtcCommitScene(scene);
-    enum RTCError err = rtcGetDeviceError(ctx->device);
+    enum RTCError err = rtcGetDeviceError(device);
     if (err != RTC_ERROR_NONE) {
         rtcReleaseScene(scene);
         if (err == RTC_ERROR_CANCELLED || prt__cancelled(ctx)) return prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled while building the ray-tracing structure");

@@ -1,8 +1,11 @@
-/* Ray casting over a mesh with Embree. */
+/* Ray casting over a mesh with Embree: the one header through which the rest of prt reaches
+ * Embree (its device is the context's, made on first use). */
 #ifndef PRT_GEOM_RAYCAST_H
 #define PRT_GEOM_RAYCAST_H
 
 #include "geom/mesh.h"
+
+#include <embree3/rtcore.h>
 
 typedef struct prt__raycaster {
     RTCScene scene;

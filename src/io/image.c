@@ -3,6 +3,7 @@
  * sees the formats prt does not document (PNM, BMP, TGA, PSD, GIF: stb's weakest readers).
  * Everything decodes from memory; the file variants are thin wrappers. */
 #include "core/internal.h"
+#include "prt/image.h"
 #include "io/rgbe.h"
 
 #include <OpenEXR/openexr.h>

@@ -4,6 +4,7 @@
 #define PRT_IO_RGBE_H
 
 #include "core/internal.h"
+#include "prt/image.h"
 
 /* True when data starts like a Radiance file ("#?RADIANCE" or "#?RGBE"). */
 bool prt__is_rgbe(const unsigned char *data, size_t size);

@@ -3,6 +3,7 @@
 #define PRT_LIGHT_ENVMAP_INTERNAL_H
 
 #include "core/internal.h"
+#include "prt/lighting.h"
 
 struct prt_envmap {
     prt_image img;

@@ -1,5 +1,6 @@
 /* Operations on SH lighting vectors: rotation, evaluation, band-limited images. */
 #include "core/internal.h"
+#include "prt/lighting.h"
 #include "light/envmap_internal.h"
 
 #include <string.h>

@@ -1,6 +1,7 @@
 /* A procedural sky for the demo and for tests: a gradient dome, a darker ground and a sun disc,
  * rendered into a lat-long map so that it goes through the same projection as any probe. */
 #include "core/internal.h"
+#include "prt/lighting.h"
 
 #include <string.h>
 

@@ -2,7 +2,6 @@
  * light; sphere lights exactly unoccluded times the visible fraction of their cone. Rays start
  * from each vertex moved off its surface (prt__vertex_origins). */
 #include "light/vertex_lights.h"
-#include "methods/sh/bake.h"
 #include "light/light_sample.h"
 
 #include <omp.h>

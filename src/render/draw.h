@@ -4,6 +4,8 @@
 #define PRT_RENDER_DRAW_H
 
 #include "core/internal.h"
+#include "prt/lighting.h"
+#include "prt/render.h"
 #include "render/offset_gl.h"
 #include "render/pixel_lights.h"
 

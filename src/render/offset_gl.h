@@ -10,6 +10,8 @@
 
 #include <epoxy/gl.h>
 
+struct prt_transfer;
+
 typedef struct prt__offset_gl {
     uint64_t serial;              /* the transfer uploaded (prt_transfer serial), 0 = none */
     int width, height, bin_size, layers;

@@ -15,6 +15,7 @@
  * Sphere lights are not part of the ray-cast scene: they are transparent emitters, adding their
  * radiance to every ray that crosses them and blocking nothing (no other light, no surface). */
 #include "core/progress.h"
+#include "prt/reference.h"
 #include "geom/raycast.h"
 #include "light/env_sample.h"
 #include "light/light_sample.h"

@@ -8,6 +8,8 @@
 #define PRT_RENDER_PIXEL_LIGHTS_H
 
 #include "core/internal.h"
+#include "prt/lighting.h"
+#include "prt/render.h"
 
 #include <epoxy/gl.h>
 

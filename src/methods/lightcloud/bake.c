@@ -11,7 +11,6 @@
  * error it costs a few sparse products per light instead of a photon map per light. Every result
  * depends only on its unit's inputs: the file is the same for any thread count. */
 #include "methods/lightcloud/lightcloud.h"
-#include "methods/sh/bake.h"
 #include "methods/spectral/spectral.h"
 
 #include <cjson/cJSON.h>

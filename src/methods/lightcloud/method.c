@@ -3,7 +3,6 @@
  * description, the neighbours control and relighting of point and sphere lights. The bake is
  * bake/lightcloud.c (+ lightcloud_cluster.c), the run time relight/lightcloud.c. */
 #include "methods/lightcloud/lightcloud.h"
-#include "methods/sh/bake.h"
 
 #define CHUNK_LCPR PRT__FOURCC('L', 'C', 'P', 'R')
 #define CHUNK_LCZN PRT__FOURCC('L', 'C', 'Z', 'N')

@@ -6,6 +6,7 @@
 #define PRT_METHODS_OFFSET_H
 
 #include "transfer/method.h"
+#include "prt/offset.h"
 #include "light/vertex_lights.h"
 
 #include <pthread.h>

@@ -3,9 +3,9 @@
 #define PRT_METHODS_SH_BAKE_H
 
 #include "core/progress.h"
+#include "brdf/sh_matrix.h"
+#include "geom/raycast.h"
 #include "methods/sh/sh.h"
-
-#include <embree3/rtcore.h>
 
 /* One occluded direction of a vertex and the front face it hit. */
 typedef struct prt__hit {
@@ -34,10 +34,6 @@ typedef struct prt__bounce_input {
  * ([vertex][3][order^2][order^2]). */
 prt_status prt__bake_glossy_bounces(prt_context *ctx, const prt__bounce_input *in, float **diffuse_total, float **glossy_total);
 
-/* Per material, the local-frame SH matrix of its glossy part (NULL for materials without one):
- * out[k] holds 3 x order^4 floats for material k + 1. */
-prt_status prt__brdf_matrices(prt_context *ctx, const prt_brdf *brdfs, int count, int order, float **out);
-
 typedef struct prt__texel_input {
     const prt__mesh *mesh;
     const char *source;
@@ -58,15 +54,5 @@ prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__t
 /* Turns t's glossy sets from incident into exit radiance (3 channels) with each vertex's
  * material BRDF, or `override` for all; vertices without a glossy part get zero. */
 prt_status prt__bake_brdf_in(prt_context *ctx, prt_transfer *t, const prt_brdf *override);
-
-/* Rotations between the world frame and a vertex's local frame (z = normal). */
-typedef struct prt__frame_rot {
-    prt_sh_rotation *to_local, *to_world;
-} prt__frame_rot;
-prt_status prt__frame_rot_create(int order, const float normal[3], prt__frame_rot *out);
-void prt__frame_rot_release(prt__frame_rot *r);
-/* rows x order^2 world-frame incident vectors (row stride order^2) through B (3 x order^4, channel
- * c) into world-frame exit vectors; in and out may not alias. */
-void prt__apply_brdf(const prt__frame_rot *r, const float *B, int c, int order, const float *in, float *out, int rows);
 
 #endif

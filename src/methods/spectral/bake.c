@@ -11,7 +11,7 @@
  * the same for any thread count. Rows are kept as floats until the end, then quantized to 16 bits
  * against the largest entry of the whole matrix (as the paper: one scale, zeros dropped). */
 #include "methods/spectral/spectral.h"
-#include "methods/sh/bake.h"
+#include "brdf/sh_matrix.h"
 #include "core/progress.h"
 
 #include <omp.h>

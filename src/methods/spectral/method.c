@@ -3,7 +3,7 @@
  * bounce control and relighting with run-time albedo. The basis is built in
  * bake/spectral_basis.c, the transfer in bake/spectral.c, the run time in relight/spectral.c. */
 #include "methods/spectral/spectral.h"
-#include "methods/sh/bake.h"
+#include "brdf/sh_matrix.h"
 
 #define CHUNK_SPCP PRT__FOURCC('S', 'P', 'C', 'P')
 #define CHUNK_SPCB PRT__FOURCC('S', 'P', 'C', 'B')

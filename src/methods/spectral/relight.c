@@ -8,7 +8,7 @@
  * environment through what the bake stored per vertex (emitters' irradiance at scale 1, shadowed
  * SH transfer). Shadow rays need the mesh in Embree: built on first use and kept. */
 #include "methods/spectral/spectral.h"
-#include "methods/sh/bake.h"
+#include "brdf/sh_matrix.h"
 #include "light/envmap_internal.h"
 
 #include <omp.h>

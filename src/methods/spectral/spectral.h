@@ -13,6 +13,7 @@
 #include "geom/raycast.h"
 #include "light/light_sample.h"
 #include "transfer/method.h"
+#include "prt/spectral.h"
 #include "light/vertex_lights.h"
 
 #include <pthread.h>

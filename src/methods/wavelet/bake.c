@@ -5,7 +5,6 @@
  *   T^{i+1}_k(x) = sum_w [sum_l h_l(x~, -w) T^i_l(x~)] g_k(w) (1 - V(x, w)) cos dw.
  * Every vertex depends only on its own rays and the previous pass, so results are identical for
  * any thread count. */
-#include "methods/sh/bake.h"
 #include "methods/wavelet/wavelet.h"
 #include "core/cubemap.h"
 #include "core/haar.h"
