@@ -1,4 +1,6 @@
-/* prt/compress.h - compression of transfer sets: PCA, VQ (k-means) and clustered PCA.
+/* prt/compress.h - compression of transfer data: PCA, VQ (k-means) and clustered PCA, the
+ * settings and the error report; the SH method compresses its sets with them
+ * (prt_transfer_compress, prt/sh_transfer.h), the light cloud its zones.
  *
  * Clustered PCA (Sloan et al. 2003, as used by Kristensen et al. 2005, section 5) approximates
  * each vertex's transfer vector x in its cluster c as x ~ mean_c + sum_i z_i B_ci. Vertices
@@ -12,7 +14,7 @@
 #ifndef PRT_COMPRESS_H
 #define PRT_COMPRESS_H
 
-#include "prt/transfer.h"
+#include "prt/base.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -34,9 +36,6 @@ typedef struct prt_compress_desc {
     void *progress_user;
 } prt_compress_desc;
 
-/* Compresses every set of `in` into a new transfer (the mesh is copied). */
-prt_status prt_transfer_compress(prt_context *ctx, const prt_transfer *in, const prt_compress_desc *desc, prt_transfer **out);
-
 typedef struct prt_compress_info {
     int compressed;          /* 0 if the set is stored uncompressed */
     int quantize_bits;       /* 8 or 16 when quantized, 0 for 32-bit floats */
@@ -46,15 +45,6 @@ typedef struct prt_compress_info {
     double relative_error;   /* rms_error / RMS |x| */
     size_t bytes;            /* storage of the set */
 } prt_compress_info;
-
-/* Rounds every uncompressed set to `bits` (8 or 16) per coefficient with a scale and bias per
- * coefficient index (each SH coefficient of each channel gets the range it uses over the mesh);
- * the file then stores the integers. Every value moves by at most half its scale. */
-prt_status prt_transfer_quantize(prt_context *ctx, const prt_transfer *in, int bits, prt_transfer **out);
-
-prt_status prt_transfer_compress_info(const prt_transfer *t, prt_transfer_kind kind, prt_compress_info *out);
-/* Writes a set's coefficients (reconstructed when compressed), laid out as prt_transfer_coeffs. */
-prt_status prt_transfer_reconstruct(const prt_transfer *t, prt_transfer_kind kind, float *out);
 
 #ifdef __cplusplus
 }

@@ -44,6 +44,9 @@ int prt_method_runtime_albedo(const prt_method *m);
 /* 1 when the method always bakes into a light map over the UVs (its resolution is the map's, not
  * the mesh's: subdividing the mesh does not sharpen it). */
 int prt_method_light_map(const prt_method *m);
+/* The bake option of m that bakes a light map over the UVs instead of per-vertex transfer (its
+ * value the map's size, 0 = off), or NULL when m has none (or always bakes one). */
+const char *prt_method_light_map_option(const prt_method *m);
 /* 1 when m's relighting can leave its last passes to the renderer (prt_relight_desc.gpu_finish),
  * as offset transfer maps do. */
 int prt_method_gpu_passes(const prt_method *m);
@@ -88,6 +91,9 @@ prt_status prt_options_set(prt_options *o, const char *name, const char *value);
 /* The value given for name, NULL when not given ("" for a given flag). */
 const char *prt_options_get(const prt_options *o, const char *name);
 const prt_method *prt_options_method(const prt_options *o);
+/* 1 when a bake with these options writes a light map (prt_method_light_map, or the method's
+ * light-map option given and not 0): its resolution is the map's, not the mesh's. */
+int prt_options_light_map(const prt_options *o);
 
 /* ---- Baking ---- */
 typedef struct prt_bake_run_desc {
@@ -124,6 +130,15 @@ const prt_method *prt_transfer_method(const prt_transfer *t);
  * own). The string is malloc'd: free() it. `name` is shown as the file name. */
 prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int json, char **out);
 
+/* Bytes of the method's data in t (what files store beyond the mesh): the storage every method's
+ * description and bake summary report. */
+size_t prt_transfer_bytes(const prt_transfer *t);
+/* How long the bake took and on how many threads (informational: the result is the same for any
+ * thread count), and the scene it read. */
+double prt_transfer_bake_seconds(const prt_transfer *t);
+int prt_transfer_bake_threads(const prt_transfer *t);
+const char *prt_transfer_source(const prt_transfer *t);
+
 /* Text lines the method shows once after a bake (for example the separable BRDF fit error per
  * number of terms); *out is malloc'd (free it) and "" when there is nothing to say. */
 prt_status prt_transfer_bake_report(const prt_transfer *t, char **out);
@@ -150,6 +165,55 @@ typedef struct prt_control_desc {
 int prt_transfer_controls(const prt_transfer *t, const prt_control_desc **out);
 /* Range and default of control i for this file. */
 void prt_transfer_control_range(const prt_transfer *t, int index, int *lo, int *hi, int *def);
+
+/* ---- Export: what a method hands other tools beyond relit meshes ----
+ * A method may declare export options (prt export --help lists them under the method): the SH
+ * method's transfer as glTF attributes and a shader, offset transfer maps as images. A program
+ * makes the options for the file's method, sets what the user gave, and calls prt_transfer_export
+ * before it writes the relit mesh (if any): the method writes its own files and hands back
+ * attributes for a glTF mesh. */
+int prt_method_export_options(const prt_method *m, const prt_option_desc **out);
+const prt_option_desc *prt_method_export_option(const prt_method *m, const char *name);
+/* Options checked against m's export declarations (prt_options_set, prt_options_get and
+ * prt_options_release as for bake options; an option of another method's exports is an error
+ * naming that method). */
+prt_status prt_export_options_create(const prt_method *m, prt_options **out);
+
+typedef enum prt_export_mesh {
+    PRT_EXPORT_NO_MESH = 0,   /* only the method's own files */
+    PRT_EXPORT_MESH_GLTF,     /* a glTF mesh is written beside them: custom attributes possible */
+    PRT_EXPORT_MESH_OTHER     /* a PLY or OBJ mesh: colours only */
+} prt_export_mesh;
+
+typedef struct prt_export_desc {
+    const prt_options *options;     /* made by prt_export_options_create for t's method; NULL = none given */
+    const prt_lighting *lighting;   /* what the mesh is relit under (required with a mesh) */
+    int variant;                    /* what it is relit as; -1 = prt_transfer_default_variant(t, 0) */
+    const int *controls;            /* run-time controls the user gave (prt_relight_desc.controls); NULL = none */
+    prt_export_mesh mesh;
+    const char *source;             /* the file's name, for what exported files say of their origin */
+} prt_export_desc;
+
+typedef struct prt_export_result {
+    /* Per-vertex attributes for a glTF mesh, as prt_mesh_export_desc takes them. */
+    int attribute_count;
+    float *attributes;
+    const char *const *attribute_names;   /* static strings */
+    /* When not NULL, the per-vertex colours (3 per vertex, linear) the mesh must carry so that
+     * they agree with what the attributes give under the lighting (for example relit at the
+     * attributes' SH order); NULL = the relit radiance as usual. */
+    float *radiance;
+    /* Files written; a program removes them when it then cannot write the mesh. */
+    int file_count;
+    char **files;
+    char *report;                   /* lines saying what was written ("" when nothing) */
+} prt_export_result;
+
+/* Runs t's method's export with the options given: writes its files (atomically) and fills out.
+ * A method without export options accepts only none. PRT_ERR_INVALID_ARG when the options do not
+ * fit the file or the mesh (an SH attribute export to PLY, say), with nothing written. */
+prt_status prt_transfer_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *desc, prt_export_result *out);
+void prt_export_result_free(prt_export_result *r);
 
 /* ---- Relighting ---- */
 enum { PRT_COMPONENT_ALL = 0, PRT_COMPONENT_DIRECT, PRT_COMPONENT_INDIRECT };

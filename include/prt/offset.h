@@ -4,7 +4,8 @@
  * at run time the first-order light map, shifted by dt, is multiplied by it and summed over the
  * offsets (eq. 9). The maps are what prt_render bins into atlases and blends (prt_render_mesh's
  * gpu_* fields), and what prt export --maps writes as OpenEXR files with an index. Everything else goes through
- * prt/method.h. */
+ * prt/method.h.
+ * prt-method: offset */
 #ifndef PRT_OFFSET_H
 #define PRT_OFFSET_H
 

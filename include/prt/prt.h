@@ -7,6 +7,7 @@
 
 #include "prt/base.h"
 #include "prt/sh.h"
+#include "prt/haar.h"
 #include "prt/image.h"
 #include "prt/lighting.h"
 #include "prt/brdf.h"
@@ -16,6 +17,7 @@
 #include "prt/render.h"
 #include "prt/reference.h"
 #include "prt/compress.h"
+#include "prt/sh_transfer.h"
 #include "prt/wavelet.h"
 #include "prt/spectral.h"
 #include "prt/offset.h"

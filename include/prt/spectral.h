@@ -7,7 +7,8 @@
  * front (sparse, 16-bit). Relighting computes direct light per vertex from any lighting, and per
  * bounce projects the reflected radiance B onto the basis (c_l = sum_v s_l(v) B(v)) and gathers
  * E(x) = sum_l T(x, l) c_l, B' = albedo / pi E: albedo can change without a rebake
- * (prt_relight_desc.albedo). Everything else goes through prt/method.h. */
+ * (prt_relight_desc.albedo). Everything else goes through prt/method.h.
+ * prt-method: spectral */
 #ifndef PRT_SPECTRAL_H
 #define PRT_SPECTRAL_H
 

@@ -1,14 +1,11 @@
-/* prt/transfer.h - baked radiance transfer, its .prt file, and spherical-harmonic relighting.
+/* prt/transfer.h - baked radiance transfer and its .prt file, whatever the method.
  *
  * A prt_transfer holds the (possibly subdivided) mesh it was baked on, its materials and the
  * lighting its scene named, and the transfer of one method (prt/method.h: every method is
- * reached through the method table; the functions below that name SH are the SH method's own
- * API and fail clearly on other methods' files). An SH transfer set stores per vertex the
- * vector T with exit radiance
- *     L_out(p) = sum_i L_i T_i(p)
- * for SH lighting L (prt_sh_light). Sets with one channel exclude the albedo (it is applied at
- * relight time from the stored per-vertex albedo); three-channel sets include it, because
- * inter-reflection bleeds colour. See docs/FORMAT.md for the file layout. */
+ * reached through the method table, which bakes, describes and relights any file; a method's own
+ * API, for programs that want more, is in its header: prt/sh_transfer.h, prt/wavelet.h,
+ * prt/spectral.h, prt/offset.h). Files are written atomically and validated on read; see
+ * docs/FORMAT.md for the layout. */
 #ifndef PRT_TRANSFER_H
 #define PRT_TRANSFER_H
 
@@ -23,21 +20,6 @@
 extern "C" {
 #endif
 
-typedef enum prt_transfer_kind {
-    PRT_TRANSFER_UNSHADOWED = 1,
-    PRT_TRANSFER_SHADOWED = 2,
-    PRT_TRANSFER_INTERREFLECTED = 4,
-    /* Glossy transfer matrices (Sloan et al. 2002, section 6): per vertex and channel an
-     * order^2 x order^2 matrix M from source lighting L to transferred incident radiance
-     * M L (world frame, lower hemisphere cut off), or - with a BRDF baked in - to exit radiance.
-     * Stored lighting-coefficient-major: M[j][i] is the response of incident coefficient i to
-     * lighting coefficient j. */
-    PRT_TRANSFER_GLOSSY_SHADOWED = 8,
-    PRT_TRANSFER_GLOSSY_INTERREFLECTED = 16   /* diffuse-to-glossy and glossy-to-glossy bounces */
-} prt_transfer_kind;
-
-#define PRT_TRANSFER_ALL_KINDS 31u
-
 /* Where per-texel transfer's UV layout comes from. */
 typedef enum prt_uv_layout {
     PRT_UV_AUTO = 0,       /* the mesh's own when unique and inside [0, 1], else a generated atlas */
@@ -45,39 +27,8 @@ typedef enum prt_uv_layout {
     PRT_UV_GENERATE = 2    /* always a generated atlas (charts, least-squares conformal maps, gutters) */
 } prt_uv_layout;
 
-typedef struct prt_bake_desc {
-    int order;            /* SH order (bands); 0 = 5 (25 coefficients); 1..10 */
-    int samples;          /* directions per vertex over the sphere; 0 = 1024 */
-    unsigned kinds;       /* OR of prt_transfer_kind; 0 = the three diffuse kinds */
-    int bounces;          /* extra bounces for INTERREFLECTED; 0 = 3 */
-    uint32_t seed;        /* rotates the low-discrepancy direction set; results are identical
-                             for the same seed whatever the thread count */
-    float ray_offset;     /* origin offset along the normal, scene units; 0 = 1e-4 x bbox diagonal */
-    /* Glossy sets: 0 stores transferred incident radiance, convolved with a reflection lobe at
-     * run time (prt_relight_sh_glossy); 1 bakes each vertex's scene material BRDF in (any
-     * isotropic model, through its SH matrix), so the sets hold exit radiance. */
-    int glossy_exit;
-    const prt_brdf *glossy_brdf;   /* with glossy_exit: this BRDF for every vertex instead */
-    /* Per-texel transfer (the diffuse kinds asked for) into a texels x texels map; 0 = none. Over
-     * the layout uv_layout picks: a generated atlas copies the vertices on its seams, so the
-     * transfer then has more vertices than the scene. */
-    int texels;
-    prt_uv_layout uv_layout;
-    /* Tangent-space normal map for the per-texel transfer: RGB in [0, 1] as stored in the file
-     * (0.5, 0.5, 1 = unperturbed; +y of the map along +v), or NULL. It follows the mesh's own
-     * texture coordinates, so it cannot go with a generated atlas. */
-    const prt_image *normal_map;
-    prt_progress_fn progress;
-    void *progress_user;
-} prt_bake_desc;
-
-/* Shows what a zero-initialised desc becomes. */
-prt_bake_desc prt_bake_desc_defaults(void);
-
 typedef struct prt_transfer prt_transfer;
 
-prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_desc *desc,
-                       prt_transfer **out);
 void prt_transfer_release(prt_transfer *t);
 
 /* Files. Saving is atomic (temporary + rename); loading checks magic, version, sizes and CRCs. */
@@ -85,59 +36,18 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path);
 prt_status prt_transfer_load(prt_context *ctx, const char *path, prt_transfer **out);
 prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t size, prt_transfer **out);
 
-/* Method-independent facts plus, for SH files, the SH settings (order, kinds, samples, bounces,
- * seed, texels; zero for other methods). prt_transfer_describe covers every method. */
-typedef struct prt_transfer_info {
-    size_t vertex_count, triangle_count;
-    int order;                /* SH order of the sets */
-    unsigned kinds;           /* which kinds the file holds */
-    int samples, bounces;
-    uint32_t seed;
-    double bake_seconds;
-    int threads;              /* threads the bake used (does not change the result) */
-    size_t transfer_bytes;    /* bytes of all transfer sets (vertex and texel) */
-    int texel_width, texel_height;   /* per-texel sets' size, 0 without */
-    size_t texel_bytes;       /* bytes of the per-texel sets and their albedo */
-    char source[512];         /* the scene the bake read */
-} prt_transfer_info;
-
-void prt_transfer_get_info(const prt_transfer *t, prt_transfer_info *info);
-int prt_transfer_channels(const prt_transfer *t, prt_transfer_kind kind);  /* 0 if absent */
-/* Borrowed pointer to a set's coefficients: vertex-major, channel, coefficient; NULL if absent. */
-const float *prt_transfer_coeffs(const prt_transfer *t, prt_transfer_kind kind);
-
 /* The lighting the baked scene named, if any (0 when none); see prt_scene_environment. */
 int prt_transfer_environment(const prt_transfer *t, prt_environment_desc *out);
 
-/* The mesh the transfer was baked on. */
+/* The mesh the transfer was baked on, and its UVs (2 per vertex, NULL without). */
 size_t prt_transfer_vertex_count(const prt_transfer *t);
 size_t prt_transfer_triangle_count(const prt_transfer *t);
 const float *prt_transfer_positions(const prt_transfer *t);
 const float *prt_transfer_normals(const prt_transfer *t);
 const float *prt_transfer_albedo(const prt_transfer *t);
 const uint32_t *prt_transfer_indices(const prt_transfer *t);
+const float *prt_transfer_uvs(const prt_transfer *t);
 
-/* Exit radiance per vertex (RGB, 3 floats per vertex) under light. The light's order may differ
- * from the transfer's: the common bands are used. */
-prt_status prt_relight_sh(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind,
-                          const prt_sh_light *light, float *out_rgb);
-
-/* Glossy relighting: per vertex 3 x order^2 SH coefficients (world frame) of view-dependent exit
- * radiance, for the renderer to evaluate per pixel (prt_render_mesh.exit_sh). For sets that hold
- * incident radiance, the reflection lobe comes from `brdf` (NULL: each vertex's material; Lambert
- * vertices get zero) and the result is to be evaluated at the mirror of the view direction; for
- * sets with the BRDF baked in, `brdf` must be NULL and the result is evaluated at the view
- * direction itself (see prt_transfer_glossy_mirror). */
-prt_status prt_relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light,
-                                 const prt_brdf *brdf, float *out_exit);
-/* 1 when glossy exit coefficients are evaluated at the mirror direction (run-time lobes), 0
- * when at the view direction (BRDF baked in). */
-int prt_transfer_glossy_mirror(const prt_transfer *t);
-/* Floats per vertex a set holds uncompressed: channels x order^2 (x order^2 for glossy sets). */
-size_t prt_transfer_set_floats(const prt_transfer *t, prt_transfer_kind kind);
-/* The diffuse kind that supplies the view-independent part beside a glossy kind. */
-prt_transfer_kind prt_transfer_kind_diffuse_part(prt_transfer_kind glossy);
-int prt_transfer_kind_is_glossy(prt_transfer_kind kind);
 /* Scene materials with a BRDF: count, and the model of material k (1-based, as per-vertex ids). */
 int prt_transfer_brdf_count(const prt_transfer *t);
 const prt_brdf *prt_transfer_brdf(const prt_transfer *t, int k);
@@ -152,24 +62,9 @@ const uint16_t *prt_transfer_surfaces(const prt_transfer *t);
  * vertex of the surface called name to rgb, in [0, 1]: what prt_relight_desc.albedo takes for
  * methods that change colours at run time. An unknown name is an error that lists the names. */
 prt_status prt_transfer_paint_albedo(const prt_transfer *t, const char *name, const float rgb[3], float *albedo);
-/* CPU evaluation of glossy exit coefficients (as prt_relight_sh_glossy returns) for one vertex:
+/* CPU evaluation of glossy exit coefficients (prt_relit.exit_sh) for one vertex:
  * to_eye points from the surface to the viewer; normal is the shading normal. */
 void prt_glossy_eval(int order, const float *exit_coeffs, int mirror, const float normal[3], const float to_eye[3], float rgb[3]);
-
-/* Per-texel transfer: its size (returns 0 when the file has none), a set's coefficients
- * ([texel][channel][order^2], row 0 at v near 0; channels as for vertex sets), the mesh's UVs
- * (2 per vertex, NULL without), and relighting into a width x height RGB radiance map (albedo
- * applied; row 0 at v near 0). */
-int prt_transfer_texel_size(const prt_transfer *t, int *width, int *height);
-const float *prt_transfer_texel_coeffs(const prt_transfer *t, prt_transfer_kind kind, int *channels);
-const float *prt_transfer_uvs(const prt_transfer *t);
-prt_status prt_relight_sh_texels(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light,
-                                 float *out_rgb);
-
-const char *prt_transfer_kind_name(prt_transfer_kind kind);
-/* Parses "unshadowed", "shadowed", "interreflected" (or their first letter), "glossy-shadowed",
- * "glossy-interreflected". */
-prt_status prt_transfer_kind_parse(const char *name, prt_transfer_kind *out);
 
 #ifdef __cplusplus
 }

@@ -10,12 +10,14 @@
  *     L_out(wo) = sum_k h_k(wo) g_k   (per view change).
  * Lambertian vertices (no glossy material) have one term with g = 1 and h = albedo / pi: this is
  * Ng et al. 2003's diffuse all-frequency PRT. The set lives in a prt_transfer with the mesh and
- * is saved in the same .prt container. */
+ * is saved in the same .prt container.
+ * prt-method: wavelet */
 #ifndef PRT_WAVELET_H
 #define PRT_WAVELET_H
 
 #include "prt/base.h"
 #include "prt/brdf.h"
+#include "prt/haar.h"
 #include "prt/lighting.h"
 #include "prt/scene.h"
 #include "prt/transfer.h"
@@ -108,10 +110,6 @@ int prt_wavelet_view_maps(const prt_transfer *t, const float **maps, int *sets, 
 /* Vertex v's term k decoded: its kept coefficients' indices and RGB values (dequantized), at
  * most info.coefficients of each; returns how many (0 when v or k is out of range). */
 int prt_transfer_wavelet_vector(const prt_transfer *t, size_t v, int k, int *index, float *rgb);
-
-/* The orthonormal 2D Haar transform used per cube face (non-standard decomposition, Mallat
- * layout), in place on an n x n image, n a power of two from 1 to 128; inverse != 0 undoes it. */
-prt_status prt_haar2d(float *img, int n, int inverse);
 
 /* Cube map geometry, for tests and tools: the unit direction through the centre of texel i and
  * its solid angle. */

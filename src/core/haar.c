@@ -3,7 +3,7 @@
  * by 1/2 so that the step is orthonormal. */
 #include "core/haar.h"
 #include "core/internal.h"
-#include "prt/wavelet.h"
+#include "prt/haar.h"
 
 #include <string.h>
 

@@ -34,11 +34,25 @@ unsigned prt_method_lighting(const prt_method *m) { return m ? m->lighting : 0; 
 int prt_method_runtime_albedo(const prt_method *m) { return m && m->runtime_albedo; }
 int prt_method_light_map(const prt_method *m) { return m && m->light_map; }
 int prt_method_gpu_passes(const prt_method *m) { return m && m->gpu_passes; }
+const char *prt_method_light_map_option(const prt_method *m) { return m ? m->light_map_option : NULL; }
 
 int prt_method_options(const prt_method *m, const prt_option_desc **out)
 {
     if (out) *out = m ? m->options : NULL;
     return m ? m->option_count : 0;
+}
+
+int prt_method_export_options(const prt_method *m, const prt_option_desc **out)
+{
+    if (out) *out = m ? m->export_options : NULL;
+    return m ? m->export_option_count : 0;
+}
+
+const prt_option_desc *prt_method_export_option(const prt_method *m, const char *name)
+{
+    for (int i = 0; m && name && i < m->export_option_count; ++i)
+        if (!strcmp(m->export_options[i].name, name)) return &m->export_options[i];
+    return NULL;
 }
 
 const prt_option_desc *prt_method_option(const prt_method *m, const char *name)

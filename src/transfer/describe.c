@@ -155,6 +155,8 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
     return PRT_OK;
 }
 
+size_t prt_transfer_bytes(const prt_transfer *t) { return t ? t->method->transfer_bytes(t) : 0; }
+
 prt_status prt_transfer_bake_report(const prt_transfer *t, char **out)
 {
     if (!t || !out) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_transfer_bake_report: transfer and out are required");

@@ -93,11 +93,18 @@ struct prt_method {
     unsigned lighting;      /* PRT_LIGHTS_* it relights */
     bool runtime_albedo;    /* relight honours prt_relight_desc.albedo */
     bool light_map;         /* always bakes a light map (prt_method_light_map) */
+    const char *light_map_option;   /* its INT option that bakes a light map of that size instead of
+                                     * per-vertex transfer (0 = off), or NULL (prt_method_light_map_option) */
     bool gpu_passes;        /* relight honours prt_relight_desc.gpu_finish (prt_method_gpu_passes) */
     const prt_option_desc *options;
     int option_count;
     const prt_control_desc *controls;
     int control_count;
+    /* prt export: options of its own and what they write (prt_transfer_export: d has its
+     * defaults filled and its options checked against export_options; out is zeroed). */
+    const prt_option_desc *export_options;
+    int export_option_count;
+    prt_status (*export_files)(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);
 
     /* Bake: set up a job for t (which holds the scene's mesh, materials and lighting). */
     prt_status (*bake_begin)(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job);
@@ -130,6 +137,11 @@ struct prt_method {
     prt_status (*relight)(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *out);
     prt_status (*shade)(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb);
 };
+
+/* Adds a line to an export's report. */
+void prt__export_report(prt_export_result *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Records a file an export wrote (for removal should the mesh fail); false when out of memory. */
+bool prt__export_file(prt_export_result *r, const char *path);
 
 /* Allocates the relit arrays of a result for t (radiance always; the rest as flags say). */
 prt_status prt__relit_alloc(prt_context *ctx, const prt_transfer *t, prt_relit *r, bool indirect);

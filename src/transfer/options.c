@@ -1,4 +1,4 @@
-/* Bake options as the user gave them, checked against the method's declarations. */
+/* Bake and export options as the user gave them, checked against the method's declarations. */
 #include "transfer/method.h"
 
 #include <errno.h>
@@ -7,6 +7,7 @@
 
 struct prt_options {
     const prt_method *method;
+    bool exporting;   /* checked against the method's export options, not its bake options */
     int count;
     const prt_option_desc *desc[MAX_VALUES];
     char *value[MAX_VALUES];
@@ -19,6 +20,18 @@ prt_status prt_options_create(const prt_method *m, prt_options **out)
     if (!*out) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
     (*out)->method = m;
     return PRT_OK;
+}
+
+prt_status prt_export_options_create(const prt_method *m, prt_options **out)
+{
+    prt_status st = prt_options_create(m, out);
+    if (!st) (*out)->exporting = true;
+    return st;
+}
+
+static const prt_option_desc *declared(const prt_method *m, bool exporting, const char *name)
+{
+    return exporting ? prt_method_export_option(m, name) : prt_method_option(m, name);
 }
 
 void prt_options_release(prt_options *o)
@@ -105,16 +118,17 @@ static prt_status check(const prt_option_desc *d, const char *v)
 prt_status prt_options_set(prt_options *o, const char *name, const char *value)
 {
     if (!o || !name) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_options_set: options and name are required");
-    const prt_option_desc *d = prt_method_option(o->method, name);
+    const prt_option_desc *d = declared(o->method, o->exporting, name);
     if (!d) {
         char owners[256] = "";
         size_t at = 0;
         for (int i = 0; i < prt_method_count(); ++i)
-            if (prt_method_option(prt_method_at(i), name) && at < sizeof owners)
+            if (declared(prt_method_at(i), o->exporting, name) && at < sizeof owners)
                 at += (size_t)snprintf(owners + at, sizeof owners - at, "%s%s", at ? ", " : "", prt_method_name(prt_method_at(i)));
+        const char *what = o->exporting ? "an export option" : "an option";
         if (owners[0])
-            return prt__fail(NULL, PRT_ERR_INVALID_ARG, "--%s is an option of method %s, not of method %s", name, owners, o->method->name);
-        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "method %s has no option --%s", o->method->name, name);
+            return prt__fail(NULL, PRT_ERR_INVALID_ARG, "--%s is %s of method %s, not of method %s", name, what, owners, o->method->name);
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "method %s has no %s --%s", o->method->name, o->exporting ? "export option" : "option", name);
     }
     prt_status st = check(d, value);
     if (st) return st;
@@ -136,6 +150,14 @@ const char *prt_options_get(const prt_options *o, const char *name)
 }
 
 const char *prt__opt(const prt_options *o, const char *name) { return prt_options_get(o, name); }
+
+int prt_options_light_map(const prt_options *o)
+{
+    if (!o || o->exporting) return 0;
+    if (o->method->light_map) return 1;
+    const char *v = o->method->light_map_option ? prt_options_get(o, o->method->light_map_option) : NULL;
+    return v && strtol(v, NULL, 10) != 0;
+}
 
 int prt__opt_int(const prt_options *o, const char *name, int fallback)
 {

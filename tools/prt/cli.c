@@ -630,16 +630,6 @@ bool cli_check_accumulate(const cli *c, const prt_transfer *t, bool per_vertex)
 prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,
                        bool with_indirect, prt_relit *out)
 {
-    /* A run-time lobe shapes SH glossy sets that hold incident light, and nothing else. */
-    const bool sh_sets = prt_transfer_channels(t, PRT_TRANSFER_UNSHADOWED) || prt_transfer_channels(t, PRT_TRANSFER_SHADOWED) ||
-                         prt_transfer_channels(t, PRT_TRANSFER_INTERREFLECTED);
-    if (l && l->have_brdf && sh_sets && !prt_transfer_channels(t, PRT_TRANSFER_GLOSSY_SHADOWED) && !prt_transfer_channels(t, PRT_TRANSFER_GLOSSY_INTERREFLECTED)) {
-        /* Other methods refuse a run-time lobe themselves, saying why. */
-        cli_error(c, "--brdf shapes glossy SH sets baked without a BRDF, and this %s file has none (prt info lists what it holds)",
-                  prt_method_name(prt_transfer_method(t)));
-        ((cli *)c)->reported = true;
-        return PRT_ERR_INVALID_ARG;
-    }
     prt_relight_desc d;
     memset(&d, 0, sizeof d);
     d.variant = variant;
@@ -717,12 +707,16 @@ void cli_print_wrapped(FILE *f, int col, int indent, const char *text)
     fputc('\n', f);
 }
 
-void cli_print_method_options(FILE *f, const prt_method *m)
+void cli_print_method_options(FILE *f, const prt_method *m, cli_option_list_fn list, const char *heading, bool summary)
 {
     const prt_option_desc *o;
-    int n = prt_method_options(m, &o);
+    int n = list(m, &o);
+    if (!n) return;
+    char head[128];
+    snprintf(head, sizeof head, heading, prt_method_name(m));
     /* Option texts are reflowed: their authors' line breaks cannot know where they start. */
-    cli_print_wrapped(f, fprintf(f, "Method %s: ", prt_method_name(m)), 6, prt_method_summary(m));
+    if (summary) cli_print_wrapped(f, fprintf(f, "%s ", head), 6, prt_method_summary(m));
+    else fprintf(f, "%s\n", head);
     for (int i = 0; i < n; ++i) {
         char head[64];
         snprintf(head, sizeof head, "--%s%s%s", o[i].name, o[i].arg ? " " : "", o[i].arg ? o[i].arg : "");
@@ -731,6 +725,28 @@ void cli_print_method_options(FILE *f, const prt_method *m)
         else fprintf(f, "      %s\n", head);
         cli_print_wrapped(f, col, 25, o[i].help);
     }
+}
+
+int cli_collect_method_options(const prt_method *chosen, cli_option_list_fn list, struct option *opts, int n, int max, const char **names,
+                               int max_names, int first_code)
+{
+    int extra = 0;
+    for (int m = -1; m < prt_method_count(); ++m) {
+        const prt_method *method = m < 0 ? chosen : prt_method_at(m);
+        if (!method || (m >= 0 && method == chosen)) continue;
+        const prt_option_desc *o;
+        const int count = list(method, &o);
+        for (int i = 0; i < count && n < max - 1 && extra < max_names; ++i) {
+            bool seen = false;
+            for (int k = 0; k < extra && !seen; ++k) seen = !strcmp(names[k], o[i].name);
+            if (seen) continue;
+            names[extra] = o[i].name;
+            opts[n++] = (struct option){o[i].name, o[i].type == PRT_OPTION_FLAG ? no_argument : required_argument, 0, first_code + extra};
+            extra++;
+        }
+    }
+    opts[n] = (struct option){0, 0, 0, 0};
+    return n;
 }
 
 void cli_print_lines(FILE *f, const char *prefix, const char *text)

@@ -264,8 +264,20 @@ const prt_method *cli_method_from_argv(const cli *c, int argc, char **argv);
 /* Prints text (its line breaks taken as spaces) from column col, wrapped at CLI_HELP_COLUMNS
  * with continuation lines indented by indent spaces, and ends the line. */
 void cli_print_wrapped(FILE *f, int col, int indent, const char *text);
-/* Prints a method's bake options as help text, wrapped at CLI_HELP_COLUMNS. */
-void cli_print_method_options(FILE *f, const prt_method *m);
+/* A method's list of option declarations: its bake options (prt_method_options) or its export
+ * options (prt_method_export_options). */
+typedef int (*cli_option_list_fn)(const prt_method *m, const prt_option_desc **out);
+/* Prints a method's options of that list as help text under heading (printf format with the
+ * method's name, "Method %s:") and, with summary, the method's summary, wrapped at
+ * CLI_HELP_COLUMNS; nothing when it has none. */
+void cli_print_method_options(FILE *f, const prt_method *m, cli_option_list_fn list, const char *heading, bool summary);
+/* Appends to opts (n entries so far, room for max with the terminator) every method's options of
+ * that list, so that one of another method gets an error naming the method it belongs to rather
+ * than "unknown option"; `chosen`'s come first, so a name two methods share is parsed as the
+ * chosen one declares it (NULL: in table order). Option i of names[] gets code first_code + i.
+ * Terminates opts and returns the new count. */
+int cli_collect_method_options(const prt_method *chosen, cli_option_list_fn list, struct option *opts, int n, int max, const char **names,
+                               int max_names, int first_code);
 /* Prints a library-made text (describe, bake report) to f, each line prefixed. */
 void cli_print_lines(FILE *f, const char *prefix, const char *text);
 

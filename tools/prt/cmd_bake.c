@@ -58,13 +58,10 @@ static void help(const prt_method *only)
         if (!only || prt_method_at(i) == only) print_method_line(prt_method_at(i));
     fputs("Scene:\n" CLI_SCENE_FILE_HELP, stdout);
     for (int i = 0; i < prt_method_count(); ++i)
-        if (!only || prt_method_at(i) == only) cli_print_method_options(stdout, prt_method_at(i));
+        if (!only || prt_method_at(i) == only) cli_print_method_options(stdout, prt_method_at(i), prt_method_options, "Method %s:", true);
     fputs(HELP_TAIL, stdout);
 }
 
-/* Every method's options are accepted by the parser, so that an option of another method gets
- * an error naming the method it belongs to rather than "unknown option"; the chosen method's
- * come first, so a name two methods share is parsed as the chosen one declares it. */
 static int collect_options(const prt_method *chosen, struct option *opts, int max, const char **names, int max_names)
 {
     static const struct option fixed[] = {
@@ -75,29 +72,13 @@ static int collect_options(const prt_method *chosen, struct option *opts, int ma
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}};
     int n = 0;
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; ++i) opts[n++] = fixed[i];
-    int extra = 0;
-    for (int m = -1; m < prt_method_count(); ++m) {
-        const prt_method *method = m < 0 ? chosen : prt_method_at(m);
-        if (m >= 0 && method == chosen) continue;
-        const prt_option_desc *o;
-        int count = prt_method_options(method, &o);
-        for (int i = 0; i < count && n < max - 1 && extra < max_names; ++i) {
-            bool seen = false;
-            for (int k = 0; k < extra && !seen; ++k) seen = !strcmp(names[k], o[i].name);
-            if (seen) continue;
-            names[extra] = o[i].name;
-            opts[n++] = (struct option){o[i].name, o[i].type == PRT_OPTION_FLAG ? no_argument : required_argument, 0, OPT_METHOD_OPTION + extra};
-            extra++;
-        }
-    }
-    opts[n] = (struct option){0, 0, 0, 0};
-    return n;
+    return cli_collect_method_options(chosen, prt_method_options, opts, n, max, names, max_names, OPT_METHOD_OPTION);
 }
 
 /* Transfer lives at vertices: where big triangles cover much of the surface (a teapot of a few
  * hundred triangles, the floor and walls of an interior), shading is blocky there. Suggests an
  * edge length that splits them, with the triangle count it would give. */
-static void coarse_mesh_warning(const prt_scene *scene)
+static void coarse_mesh_warning(const prt_method *m, const prt_scene *scene)
 {
     float lo[3], hi[3];
     prt_scene_bounds(scene, lo, hi);
@@ -138,8 +119,10 @@ static void coarse_mesh_warning(const prt_scene *scene)
         }
         if (after <= fmax(4.0 * nt, 250000.0)) break;
     }
+    const char *map = prt_method_light_map_option(m);
     fprintf(stderr, "prt bake: warning: %zu large triangles (edges over %.3g) cover %.0f%% of the surface; per-vertex transfer will look "
-            "blocky there (try --max-edge %.3g: about %.0f triangles, or --texels N for a light map)\n", big_count, big, 100 * big_area / area, edge, after);
+            "blocky there (try --max-edge %.3g: about %.0f triangles%s%s%s)\n", big_count, big, 100 * big_area / area, edge, after,
+            map ? ", or --" : "", map ? map : "", map ? " N for a light map" : "");
 }
 
 static prt_status refine_scene(cli *c, prt_scene *scene, const prt_refine_desc *desc)
@@ -165,10 +148,8 @@ static prt_status refine_scene(cli *c, prt_scene *scene, const prt_refine_desc *
  * that fixes it, when a quick sample finds such triangles (per-texel bakes sample texels). */
 static void suggest_refinement(cli *c, const prt_method *m, const prt_scene *scene, const prt_options *o, bool coarse_check)
 {
-    const char *texels = prt_options_get(o, "texels");
-    if (texels && strcmp(texels, "0") != 0) return;
-    if (prt_method_light_map(m)) return;   /* its light map is the resolution, not the mesh */
-    if (coarse_check) coarse_mesh_warning(scene);
+    if (prt_options_light_map(o)) return;   /* its light map is the resolution, not the mesh */
+    if (coarse_check) coarse_mesh_warning(m, scene);
     prt_refine_stats rs;
     if (prt_scene_refine_estimate(c->ctx, scene, NULL, &rs)) return;   /* a hint only */
     const size_t nt = prt_scene_triangle_count(scene);
@@ -180,16 +161,14 @@ static void suggest_refinement(cli *c, const prt_method *m, const prt_scene *sce
 /* The bake as JSON for scripts and CI: what went in, what came out, where the time went. */
 static prt_status write_summary(cli *c, const char *path, const char *input, const char *output, const prt_transfer *t)
 {
-    prt_transfer_info info;
-    prt_transfer_get_info(t, &info);
     cJSON *j = cJSON_CreateObject(), *stages = j ? cJSON_AddArrayToObject(j, "stages") : NULL;
     if (!j || !stages) { cJSON_Delete(j); return PRT_ERR_NO_MEMORY; }
     cJSON_AddStringToObject(j, "input", input);
     cJSON_AddStringToObject(j, "output", output);
     cJSON_AddStringToObject(j, "method", prt_method_name(prt_transfer_method(t)));
-    cJSON_AddNumberToObject(j, "vertices", (double)info.vertex_count);
-    cJSON_AddNumberToObject(j, "triangles", (double)info.triangle_count);
-    cJSON_AddNumberToObject(j, "transfer_bytes", (double)info.transfer_bytes);
+    cJSON_AddNumberToObject(j, "vertices", (double)prt_transfer_vertex_count(t));
+    cJSON_AddNumberToObject(j, "triangles", (double)prt_transfer_triangle_count(t));
+    cJSON_AddNumberToObject(j, "transfer_bytes", (double)prt_transfer_bytes(t));
     const char *const *names;
     const double *secs;
     const int ns = cli_stage_times(&names, &secs);
@@ -199,7 +178,7 @@ static prt_status write_summary(cli *c, const char *path, const char *input, con
         cJSON_AddNumberToObject(o, "seconds", secs[i]);
         cJSON_AddItemToArray(stages, o);
     }
-    cJSON_AddNumberToObject(j, "bake_seconds", info.bake_seconds);
+    cJSON_AddNumberToObject(j, "bake_seconds", prt_transfer_bake_seconds(t));
     char *text = cJSON_Print(j);
     cJSON_Delete(j);
     if (!text) return PRT_ERR_NO_MEMORY;

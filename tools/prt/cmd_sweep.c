@@ -239,9 +239,7 @@ int cmd_sweep(int argc, char **argv)
             rgb = grown;
             rgb_vertices = tnv;
         }
-        prt_transfer_info info;
-        prt_transfer_get_info(t, &info);
-        const double bytes = (double)info.transfer_bytes / (double)ref.nv;
+        const double bytes = (double)prt_transfer_bytes(t) / (double)ref.nv;
         for (int v = 0; v < prt_transfer_variant_count(t) && !st; ++v) {
             prt_relit r;
             if ((st = cli_relight(&c, t, lighting, &light, v, true, indirect, &r))) break;
@@ -266,7 +264,7 @@ int cmd_sweep(int argc, char **argv)
             for (int k = 0; k < nnames && !known; ++k) known = !strcmp(names[k], name);
             if (!known && nnames < MAX_VARIANTS) snprintf(names[nnames++], sizeof names[0], "%s", name);
             fprintf(csv, "%s,%s,%s,%.6g,%.6g,%.6g,%.0f,%.3f,%.6g\n", pd->name, list_text[i], name, sqrt(se / (3.0 * ref.nv)), sb > 0 ? sqrt(se / sb) : INFINITY,
-                    mx, bytes, info.bake_seconds, above);
+                    mx, bytes, prt_transfer_bake_seconds(t), above);
             if (!c.quiet)
                 fprintf(stderr, "prt sweep: %s %s %-21s relative L2 %.5f (%.5f above the reference's noise)\n", pd->name, list_text[i], name,
                         sb > 0 ? sqrt(se / sb) : INFINITY, above);

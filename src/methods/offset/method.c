@@ -71,6 +71,12 @@ static const prt_option_desc options[] = {
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
 };
 
+/* prt export's options for offset files (export.c). */
+static const prt_option_desc export_options[] = {
+    {"maps", "DIR", PRT_OPTION_TEXT, 0, 0, NULL,
+     "each transfer map as an OpenEXR file cropped to its non-zero box, the surface and medium masks, and DIR/index.json naming "
+     "kind, offset and box (with or without -o); replaces what an earlier export left in DIR"},
+};
 static const prt_control_desc controls[] = {
     {"bounces", "inter-reflection passes over the light map (radiosity; 0 = first-order and subsurface only)", '[', ']', 0},
 };
@@ -434,6 +440,9 @@ const prt__method prt__method_offset = {
     .option_count = (int)(sizeof options / sizeof options[0]),
     .controls = controls,
     .control_count = (int)(sizeof controls / sizeof controls[0]),
+    .export_options = export_options,
+    .export_option_count = (int)(sizeof export_options / sizeof export_options[0]),
+    .export_files = prt__offset_export,
     .bake_begin = offset_bake_begin,
     .free_state = prt__offset_set_free,
     .save = offset_save,

@@ -82,4 +82,7 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
  * first-order part; per vertex radiance and indirect light sampled from them. */
 prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *r);
 
+/* prt export (export.c): --maps DIR. */
+prt_status prt__offset_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);
+
 #endif

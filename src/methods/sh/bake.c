@@ -33,15 +33,17 @@ typedef struct bake_job {
     uint32_t *hit_count;
 } bake_job;
 
-prt_bake_desc prt_bake_desc_defaults(void)
+prt_sh_bake_desc prt_sh_bake_desc_defaults(void)
 {
-    prt_bake_desc d = {0};
+    prt_sh_bake_desc d = {0};
     d.order = 5;
     d.samples = 1024;
     d.kinds = PRT_TRANSFER_UNSHADOWED | PRT_TRANSFER_SHADOWED | PRT_TRANSFER_INTERREFLECTED;
     d.bounces = 3;
     return d;
 }
+
+prt_sh_bake_desc prt_bake_desc_defaults(void) { return prt_sh_bake_desc_defaults(); }
 
 /* A rotation of its own for each vertex, from (seed, vertex) alone: Shoemake's uniform random
  * quaternion from three hashed numbers. */
@@ -188,7 +190,7 @@ typedef enum { ST_VISIBILITY, ST_GLOSSY_BOUNCES, ST_BOUNCE, ST_TEXELS, ST_BRDF_I
 
 typedef struct sh_bake {
     prt__bake_job base;
-    prt_bake_desc d;
+    prt_sh_bake_desc d;
     prt_transfer *t;
     prt__sh_state *s;
     bake_job job;
@@ -572,7 +574,7 @@ static void sh_release(prt__bake_job *b)
 
 /* Per-texel transfer needs a unique layout inside [0, 1]: the mesh's own, or one generated here
  * (which copies the vertices on chart seams, before anything is sized by the vertex count). */
-static prt_status texel_layout(prt_context *ctx, const prt_bake_desc *d, prt_transfer *t)
+static prt_status texel_layout(prt_context *ctx, const prt_sh_bake_desc *d, prt_transfer *t)
 {
     char why[160] = "asked for";
     if (d->uv_layout == PRT_UV_MESH) return PRT_OK;   /* the texel bake says what is wrong with them */
@@ -589,11 +591,11 @@ static prt_status texel_layout(prt_context *ctx, const prt_bake_desc *d, prt_tra
     return PRT_OK;
 }
 
-prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *desc_in, prt__sh_extra *extra, prt_transfer *t, prt__bake_job **out)
+prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in, prt__sh_extra *extra, prt_transfer *t, prt__bake_job **out)
 {
-    prt_bake_desc d = desc_in ? *desc_in : (prt_bake_desc){0};
+    prt_sh_bake_desc d = desc_in ? *desc_in : (prt_sh_bake_desc){0};
     if (extra && extra->normal_map.rgb) d.normal_map = &extra->normal_map;
-    prt_bake_desc def = prt_bake_desc_defaults();
+    prt_sh_bake_desc def = prt_sh_bake_desc_defaults();
     if (d.order == 0) d.order = def.order;
     if (d.samples == 0) d.samples = def.samples;
     if (d.kinds == 0) d.kinds = def.kinds;
@@ -717,7 +719,7 @@ static prt_status begin_from_desc(prt_context *ctx, const prt_scene *scene, cons
     return prt__sh_bake_begin(ctx, desc, NULL, t, job);
 }
 
-prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_bake_desc *desc, prt_transfer **out)
+prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_sh_bake_desc *desc, prt_transfer **out)
 {
     prt_bake_run_desc run = {.progress = desc ? desc->progress : NULL, .progress_user = desc ? desc->progress_user : NULL};
     return prt__bake_with(ctx, scene, &prt__method_sh, begin_from_desc, desc, &run, out);

@@ -216,6 +216,15 @@ static const prt_option_desc options[] = {
     {"quantize", "B", PRT_OPTION_CHOICE, 0, 0, "8|16", "store uncompressed sets as 8- or 16-bit integers (scale and bias per coefficient)"},
 };
 
+/* prt export's options for SH files (export.c). */
+static const prt_option_desc export_options[] = {
+    {"sh", NULL, PRT_OPTION_FLAG, 0, 0, NULL,
+     "glTF only: add the per-vertex SH transfer of the diffuse kind exported as custom attributes _SH0, _SH1, ... (order 3: the "
+     "first 9 coefficients of each channel, channel-major, VEC4 float, zero-padded) and, for one-channel kinds, the albedo as _ALBEDO; "
+     "COLOR_0 is then relit at order 3 too, so both agree"},
+    {"glsl", "FILE", PRT_OPTION_TEXT, 0, 0, NULL, "write the GLSL function prtRadiance() that relights those attributes, with the lighting "
+     "exported under as its default (implies --sh)"},
+};
 static const prt_control_desc controls[] = {
     {"order", "SH order used for lighting (truncates the file's)", '[', ']', 0},
 };
@@ -237,7 +246,7 @@ static prt_status load_normal_map(prt_context *ctx, const char *path, prt_image 
 static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **out)
 {
     (void)scene;
-    prt_bake_desc d = {0};
+    prt_sh_bake_desc d = {0};
     prt__sh_extra extra;
     memset(&extra, 0, sizeof extra);
     prt_brdf brdf;
@@ -702,7 +711,11 @@ static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_
     const size_t nv = t->mesh.vertex_count;
     int k = set_of_variant(s, d->variant);
     const int order = d->controls && d->controls[0] >= 1 && d->controls[0] < s->order ? d->controls[0] : s->order;
-    /* A run-time lobe shapes glossy kinds only; the diffuse kinds drawn beside them ignore it. */
+    /* A run-time lobe shapes glossy kinds only; the diffuse kinds drawn beside them ignore it, and
+     * a file with none has nothing it could shape. */
+    if (d->brdf && !s->sets[3].channels && !s->sets[4].channels)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a run-time BRDF (--brdf) shapes glossy SH sets baked without a BRDF, and this file holds none "
+                         "(prt info lists what it holds)");
     if (d->brdf && prt__kind_glossy(k) && s->glossy_exit)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this transfer has its BRDF baked in; a run-time BRDF cannot replace it (re-bake without --brdf)");
     prt_sh_light sh;
@@ -756,10 +769,14 @@ const prt__method prt__method_sh = {
     .title = "spherical-harmonic PRT",
     .summary = "spherical-harmonic PRT (Sloan et al.): diffuse and glossy, per vertex or texel, compressible",
     .lighting = PRT_LIGHTS_ENVIRONMENT | PRT_LIGHTS_DIRECTIONAL,
+    .light_map_option = "texels",
     .options = options,
     .option_count = (int)(sizeof options / sizeof options[0]),
     .controls = controls,
     .control_count = (int)(sizeof controls / sizeof controls[0]),
+    .export_options = export_options,
+    .export_option_count = (int)(sizeof export_options / sizeof export_options[0]),
+    .export_files = prt__sh_export,
     .bake_begin = sh_bake_begin,
     .free_state = prt__sh_state_free,
     .save_meta = sh_save_meta,

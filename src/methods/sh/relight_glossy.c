@@ -148,24 +148,3 @@ prt_status prt_relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_tr
     free(proj_basis);
     return PRT_OK;
 }
-
-void prt_glossy_eval(int order, const float *exit_coeffs, int mirror, const float normal[3], const float to_eye[3], float rgb[3])
-{
-    float d[3] = {to_eye[0], to_eye[1], to_eye[2]}, y[PRT_SH_MAX_COEFFS];
-    if (mirror) {
-        float k = 2.0f * prt__v3_dot(normal, to_eye);
-        for (int c = 0; c < 3; ++c) d[c] = k * normal[c] - to_eye[c];
-    }
-    /* Run-time lobes leave out the BRDF's cosine: near the mirror direction it is n.v. */
-    float v[3] = {to_eye[0], to_eye[1], to_eye[2]};
-    prt__v3_normalize(v);
-    const float cosine = mirror ? fmaxf(prt__v3_dot(normal, v), 0.0f) : 1.0f;
-    prt__v3_normalize(d);
-    prt_sh_eval_f(order, d, y);
-    const int n = order * order;
-    for (int c = 0; c < 3; ++c) {
-        float s = 0.0f;
-        for (int i = 0; i < n; ++i) s += exit_coeffs[c * n + i] * y[i];
-        rgb[c] = s > 0.0f ? cosine * s : 0.0f;   /* truncated SH rings below zero near sharp features */
-    }
-}

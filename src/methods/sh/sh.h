@@ -5,6 +5,7 @@
 
 #include "compress/cpca.h"
 #include "transfer/method.h"
+#include "prt/sh_transfer.h"
 
 #define PRT__KIND_COUNT 5
 
@@ -67,12 +68,15 @@ typedef struct prt__sh_extra {
 
 /* The SH bake (bake/sh_diffuse.c) as stages of work units: validates d (defaults filled in),
  * and sets up the job for t (which holds the scene's mesh and materials). extra may be NULL. */
-prt_status prt__sh_bake_begin(prt_context *ctx, const prt_bake_desc *d, prt__sh_extra *extra, prt_transfer *t, prt__bake_job **job);
+prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *d, prt__sh_extra *extra, prt_transfer *t, prt__bake_job **job);
 
 /* Compression steps (compress/compress.c): defaults filled in and checked; one set compressed in
  * place; every set quantized in place. */
 prt_status prt__compress_desc_check(prt_context *ctx, prt_compress_desc *d);
 prt_status prt__sh_compress_set(prt_context *ctx, prt__sh_state *s, size_t vertex_count, int k, const prt_compress_desc *d, prt__progress *prog);
 prt_status prt__sh_quantize(prt_context *ctx, prt__sh_state *s, size_t vertex_count, int bits);
+
+/* prt export (export.c): --sh and --glsl. */
+prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);
 
 #endif
