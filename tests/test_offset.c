@@ -925,23 +925,24 @@ static void test_gpu_accumulation(void **state)
     prt_image_free(&both);
     prt_image_free(&left);
     prt_image_free(&right);
-    /* Refused: another method's file, an input of the wrong size. */
-    rm.gpu_transfer = t;
+    /* Refused: an input of the wrong size, a description whose slice leaves the map. */
+    assert_non_null(fin.gpu_passes);
+    rm.gpu_passes = fin.gpu_passes;
     rm.gpu_input = fin.gpu_input;
     rm.texel_width = W / 2;
     assert_int_equal(prt_render_light_map(ren, &rm, gpu, NULL), PRT_ERR_INVALID_ARG);
     assert_non_null(strstr(prt_last_error(), "input for a"));
-    prt_transfer *sh = NULL;
-    prt_options *o = NULL;
-    assert_int_equal(prt_options_create(prt_method_find("sh"), &o), PRT_OK);
-    assert_int_equal(prt_options_set(o, "order", "2"), PRT_OK);
-    assert_int_equal(prt_bake(ctx, scene, prt_method_find("sh"), o, NULL, &sh), PRT_OK);
-    prt_options_release(o);
-    rm.gpu_transfer = sh;
+    prt_render_passes bad = *fin.gpu_passes;
+    assert_true(bad.bounce.slice_count > 0);
+    prt_render_slice outside = bad.bounce.slices[0];
+    outside.x = W - outside.w + 1;
+    bad.bounce.slices = &outside;
+    bad.bounce.slice_count = 1;
+    bad.id = 0;
+    rm.gpu_passes = &bad;
     rm.texel_width = W;
     assert_int_equal(prt_render_light_map(ren, &rm, gpu, NULL), PRT_ERR_INVALID_ARG);
-    assert_non_null(strstr(prt_last_error(), "method offset"));
-    prt_transfer_release(sh);
+    assert_non_null(strstr(prt_last_error(), "inconsistent"));
     prt_relit_free(&cpu);
     prt_relit_free(&direct);
     prt_relit_free(&fin);

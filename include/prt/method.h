@@ -216,7 +216,6 @@ prt_status prt_transfer_export(prt_context *ctx, const prt_transfer *t, const pr
 void prt_export_result_free(prt_export_result *r);
 
 /* ---- Relighting ---- */
-enum { PRT_COMPONENT_ALL = 0, PRT_COMPONENT_DIRECT, PRT_COMPONENT_INDIRECT };
 
 typedef struct prt_relight_desc {
     int variant;            /* 0..count-1; -1 = prt_transfer_default_variant(t, 1) */
@@ -232,9 +231,10 @@ typedef struct prt_relight_desc {
      * methods that let surface colours change without a rebake (prt_method_runtime_albedo); NULL
      * = as baked. Other methods refuse it. */
     const float *albedo;
-    /* Leave the last step to the GPU where the method has one (offset maps: the modulate-shift-
-     * accumulate passes): prt_relit.gpu_input is filled instead of texels, and a renderer given
-     * the result (prt_relit_render_mesh) finishes it. Other methods ignore it. */
+    /* Leave the last step to the GPU where the method has one (prt_method_gpu_passes; offset
+     * maps: the modulate-shift-accumulate passes): prt_relit.gpu_passes and gpu_input are filled
+     * instead of texels, and a renderer given the result (prt_relit_render_mesh) finishes it.
+     * Other methods ignore it. */
     int gpu_finish;
 } prt_relight_desc;
 
@@ -271,11 +271,12 @@ typedef struct prt_relit {
      * triangles none of whose vertices see it, so that a shadow map's texels cannot leak light
      * along a room's seams. */
     float *pixel_visibility;
-    /* With desc.gpu_finish, for offset maps: the first-order input the GPU passes start from,
-     * per texel over the texel map (texel_width x texel_height RGB: irradiance / pi, zero off
-     * the surface), the emission scale, and the bounces and component asked for; texels is NULL
-     * and radiance holds albedo x irradiance / pi plus emission (the light before subsurface
-     * scattering and bounces). NULL otherwise. */
+    /* With desc.gpu_finish, for methods with GPU passes: the passes (borrowed from the transfer),
+     * the first-order input they start from, per texel over the texel map (texel_width x
+     * texel_height RGB: irradiance / pi, zero off the surface), the emission scale, and the
+     * bounces and component asked for; texels is NULL and radiance holds albedo x irradiance /
+     * pi plus emission (the light before scattering and bounces). NULL otherwise. */
+    const prt_render_passes *gpu_passes;
     float *gpu_input;
     float gpu_emission;
     int gpu_bounces, gpu_component;

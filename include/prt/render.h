@@ -16,6 +16,8 @@ extern "C" {
 typedef struct prt_renderer prt_renderer;
 
 #define PRT_MAX_PIXEL_LIGHTS 8   /* lights a renderer draws per pixel; the rest stay per vertex */
+/* Which light a relit result (prt_relight_desc.component) or a GPU-finished light map holds. */
+enum { PRT_COMPONENT_ALL = 0, PRT_COMPONENT_DIRECT, PRT_COMPONENT_INDIRECT };
 
 typedef struct prt_renderer_desc {
     int width, height;       /* 0 = 800 x 600 */
@@ -26,6 +28,46 @@ typedef struct prt_camera {
     float eye[3], target[3], up[3];  /* up all zero = +y */
     float fov_y_deg;                 /* 0 = 40 */
 } prt_camera;
+
+/* ---- Light maps finished on the GPU ----
+ * A light map of width x height texels, `covered` of them on the surface, and passes over it
+ * described as data (as sokol or bgfx take buffers and images): the renderer knows no method. A
+ * pass over a set of maps adds, for every map k and texel t, map_k(t) x light(source(t + dt_k)),
+ * where source(u) is the covered texel u reads its light from (itself, or the one that fills its
+ * gutter). The order is fixed:
+ *   sub   = the scatter set's pass over the input (when it has maps),
+ *   first = albedo x input, or sub on texels whose scatter_mask is set,
+ *   b_1   = the bounce set's pass over first, b_k = its pass over b_(k-1), for gpu_bounces passes,
+ *   final = first + emission scale x emission (PRT_COMPONENT_DIRECT), sum of b_k (INDIRECT), or
+ *           both (ALL).
+ * The maps are uploaded packed into square texture-array atlases as the slices say (the method
+ * packs them: rectangles of its maps, each placed in one atlas layer). */
+typedef struct prt_render_slice {
+    int map;                  /* which map of the set */
+    int x, y, w, h;           /* the light-map texels it covers */
+    int layer, ax, ay;        /* where they lie in the atlas array */
+} prt_render_slice;
+
+typedef struct prt_render_map_set {
+    int map_count;            /* 0: the set is absent */
+    const float *maps;        /* [map][covered][3]: map k at covered texel i */
+    const int *offsets;       /* [map][2]: the shift dt_k, texels */
+    int slice_count;
+    const prt_render_slice *slices;
+    int atlas_size, atlas_layers;   /* layers of atlas_size^2 texels (a power of two) */
+} prt_render_map_set;
+
+typedef struct prt_render_passes {
+    uint64_t id;              /* the renderer keeps one upload per id: equal ids describe equal data */
+    int width, height;
+    size_t covered;
+    const uint32_t *texel;    /* [covered] y * width + x, increasing */
+    const int32_t *source;    /* [width * height] the covered texel each texel reads, -1 none */
+    const float *albedo;      /* [covered][3] */
+    const uint8_t *scatter_mask;   /* [covered] non-zero: the scatter pass replaces albedo x input; NULL: nowhere */
+    const float *emission;    /* [covered][3] radiance at emission scale 1; NULL: none */
+    prt_render_map_set scatter, bounce;
+} prt_render_passes;
 
 /* Borrowed arrays describing what to draw. */
 typedef struct prt_render_mesh {
@@ -70,18 +112,19 @@ typedef struct prt_render_mesh {
      * (shadow rays); a triangle none of whose vertices sees a light gets none of it, whatever its
      * shadow map says. NULL = the shadow maps alone. */
     const float *light_visibility;
-    /* Optional: offset transfer maps (prt/offset.h) finished by the GPU, as the paper's run time.
-     * The renderer packs the file's maps into atlases (power-of-two vertical slices, texture
-     * arrays) once per transfer, then on each upload accumulates the light map from gpu_input with
-     * additive blending - for every offset, the map times the input shifted by the offset (eq. 9),
-     * subsurface first, then gpu_bounces inter-reflection passes - and draws it per texel (needs
-     * uv; texel_width x texel_height as the file's map). The fields are prt_relit's (see
-     * prt_relight_desc.gpu_finish); prt_relit_render_mesh fills them. */
-    const struct prt_transfer *gpu_transfer;
+    /* Optional: a light map the GPU finishes (prt_render_passes: the modulate-shift-accumulate
+     * passes of offset radiance transfer maps). The renderer uploads the description's maps once
+     * per id, then on each upload runs its passes from gpu_input (width x height RGB irradiance /
+     * pi, zero off the surface) - the scatter set, the first-order light, gpu_bounces passes of
+     * the bounce set, the final combination for gpu_component (PRT_COMPONENT_* of prt/method.h)
+     * with gpu_emission times the emission - and draws the result per texel (needs uv;
+     * texel_width x texel_height as the description's). prt_relit_render_mesh fills these from
+     * what relighting with prt_relight_desc.gpu_finish gave. */
+    const struct prt_render_passes *gpu_passes;
     const float *gpu_input;
     float gpu_emission;
     int gpu_bounces, gpu_component;
-    /* With gpu_transfer: the first-order light map on the left half of the image, the final one
+    /* With gpu_passes: the first-order light map on the left half of the image, the final one
      * on the right (the paper's side-by-side viewer). */
     int side_by_side;
 } prt_render_mesh;
@@ -92,8 +135,8 @@ void prt_renderer_release(prt_renderer *r);
 prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_camera *cam,
                       const float background[3], prt_image *out);
 /* The per-texel light map the renderer draws for mesh (texel_width x texel_height RGB, row 0 at v
- * near 0) read back: for offset maps finished on the GPU (gpu_transfer) the accumulation's
- * result, and in first_rgb (may be NULL) the first-order map; else texel_radiance as uploaded.
+ * near 0) read back: for light maps finished on the GPU (gpu_passes) the passes' result, and in
+ * first_rgb (may be NULL) the first-order map; else texel_radiance as uploaded.
  * Fails when the mesh draws no per-texel map, or first_rgb is asked of one not GPU-finished. */
 prt_status prt_render_light_map(prt_renderer *r, const prt_render_mesh *mesh, float *rgb, float *first_rgb);
 /* A camera that frames the box [lo, hi] from direction `from` (towards the eye; NULL = a

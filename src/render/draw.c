@@ -233,7 +233,7 @@ void prt__draw_free(prt__draw *d)
     if (d->vbo_uv) glDeleteBuffers(1, &d->vbo_uv);
     if (d->tex) glDeleteTextures(1, &d->tex);
     if (d->tex_first) glDeleteTextures(1, &d->tex_first);
-    prt__offset_gl_free(&d->offset);
+    prt__light_map_gl_free(&d->light_map);
     if (d->vbo_nrm) { GLuint b[2] = {d->vbo_nrm, d->tbo}; glDeleteBuffers(2, b); }
     if (d->tbo_tex) glDeleteTextures(1, &d->tbo_tex);
     free(d->pack);
@@ -330,23 +330,23 @@ static void display_map(GLuint tex, int width, int height)
 prt_status prt__draw_upload_gpu(prt__draw *d, const prt_render_mesh *m)
 {
     d->side_by_side = false;
-    if (!m->gpu_transfer) return PRT_OK;
+    if (!m->gpu_passes) return PRT_OK;
     if (!m->gpu_input || !d->has_uv) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU accumulation needs the first-order input and texture coordinates");
-    prt_status st = prt__offset_gl_load(&d->offset, m->gpu_transfer);
+    prt_status st = prt__light_map_gl_load(&d->light_map, m->gpu_passes);
     if (st) return st;
-    if (m->texel_width != d->offset.width || m->texel_height != d->offset.height)
-        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU accumulation: a %dx%d input for a %dx%d light map", m->texel_width, m->texel_height, d->offset.width,
-                         d->offset.height);
+    if (m->texel_width != d->light_map.width || m->texel_height != d->light_map.height)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU accumulation: a %dx%d input for a %dx%d light map", m->texel_width, m->texel_height, d->light_map.width,
+                         d->light_map.height);
     if (!d->tex_first) glGenTextures(1, &d->tex_first);
-    if (d->gpu_width != d->offset.width || d->gpu_height != d->offset.height) {   /* not on every light drag */
-        display_map(d->tex, d->offset.width, d->offset.height);
-        display_map(d->tex_first, d->offset.width, d->offset.height);
-        d->gpu_width = d->offset.width;
-        d->gpu_height = d->offset.height;
+    if (d->gpu_width != d->light_map.width || d->gpu_height != d->light_map.height) {   /* not on every light drag */
+        display_map(d->tex, d->light_map.width, d->light_map.height);
+        display_map(d->tex_first, d->light_map.width, d->light_map.height);
+        d->gpu_width = d->light_map.width;
+        d->gpu_height = d->light_map.height;
     }
-    prt__offset_gl_run(&d->offset, m->gpu_input, m->gpu_emission, m->gpu_bounces, m->gpu_component, d->tex, d->tex_first);
-    d->texel_width = d->offset.width;
-    d->texel_height = d->offset.height;
+    prt__light_map_gl_run(&d->light_map, m->gpu_input, m->gpu_emission, m->gpu_bounces, m->gpu_component, d->tex, d->tex_first);
+    d->texel_width = d->light_map.width;
+    d->texel_height = d->light_map.height;
     d->side_by_side = m->side_by_side != 0;
     return PRT_OK;
 }

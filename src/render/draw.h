@@ -6,7 +6,7 @@
 #include "core/internal.h"
 #include "prt/lighting.h"
 #include "prt/render.h"
-#include "render/offset_gl.h"
+#include "render/light_map_gl.h"
 #include "render/pixel_lights.h"
 
 #include <epoxy/gl.h>
@@ -26,7 +26,7 @@ typedef struct prt__draw {
     GLint ut_mvp, ut_map;
     int texel_width, texel_height;   /* 0: the per-texel path is off */
     bool has_uv;
-    /* Separable view factor (wavelet PRT): K-vectors and view-map sets in a texture buffer,
+    /* Separable view factor (K-vectors and view maps, as the wavelet method relights): K-vectors and view-map sets in a texture buffer,
      * view maps in a texture array. */
     GLuint program_s, tbo_k, tbo_k_tex, maps_tex;
     GLint us_mvp, us_eye, us_terms, us_polar, us_kvec, us_maps;
@@ -36,9 +36,9 @@ typedef struct prt__draw {
     size_t kpack_vertices;
     /* Local lights drawn per pixel with shadow maps, added after the main pass. */
     prt__pixel_lights lights;
-    /* Offset transfer maps finished on the GPU: the final light map goes into tex, the
-     * first-order one into tex_first, drawn beside it when side_by_side. */
-    prt__offset_gl offset;
+    /* Light maps finished on the GPU: the final light map goes into tex, the first-order one
+     * into tex_first, drawn beside it when side_by_side. */
+    prt__light_map_gl light_map;
     GLuint tex_first;
     bool side_by_side;
     int gpu_width, gpu_height;   /* tex and tex_first allocated as render targets of this size (0: not) */
@@ -51,8 +51,8 @@ void prt__draw_free(prt__draw *d);
 /* Uploads geometry and radiance (re-uploads everything; the radiance changes per relight). Fails
  * only where the mesh asks for GPU accumulation the GPU cannot run. */
 prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *mesh);
-/* Runs the GPU accumulation of mesh's gpu_* fields into the per-texel map (the transfer's atlases
- * uploaded when new); nothing when mesh has no gpu_transfer. */
+/* Runs the GPU passes of mesh's gpu_* fields into the per-texel map (the description's atlases
+ * uploaded when new); nothing when mesh has no gpu_passes. */
 prt_status prt__draw_upload_gpu(prt__draw *d, const prt_render_mesh *mesh);
 /* Replaces the lights drawn per pixel and the albedo they shade (count 0: none). */
 void prt__draw_set_lights(prt__draw *d, const float *positions, const float *albedo, size_t vertex_count, const prt_light *lights, int count,
@@ -61,7 +61,7 @@ void prt__draw_set_lights(prt__draw *d, const float *positions, const float *alb
 void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int height);
 /* Replaces the glossy exit coefficients (mesh layout: vertex, channel, coefficient). */
 void prt__draw_upload_exit(prt__draw *d, const float *exit_sh, size_t vertex_count);
-/* Replaces the wavelet K-vectors (prt_render_mesh.kvec layout). */
+/* Replaces the K-vectors (prt_render_mesh.kvec layout). */
 void prt__draw_upload_kvec(prt__draw *d, const float *kvec, size_t vertex_count);
 /* Draws into the bound framebuffer of size w x h. */
 void prt__draw_mesh(prt__draw *d, const prt_camera *cam, int w, int h, const float background[3]);

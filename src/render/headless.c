@@ -90,7 +90,7 @@ prt_status prt_render_light_map(prt_renderer *r, const prt_render_mesh *mesh, fl
     prt_status st = prt__draw_upload(&r->draw, mesh);
     if (st) return st;
     if (!r->draw.texel_width) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_light_map: the mesh draws no per-texel map");
-    if (first_rgb && !mesh->gpu_transfer) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_light_map: a first-order map comes only from GPU accumulation");
+    if (first_rgb && !mesh->gpu_passes) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_light_map: a first-order map comes only from GPU accumulation");
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
     glBindTexture(GL_TEXTURE_2D, r->draw.tex);
     glGetTexImage(GL_TEXTURE_2D, 0, GL_RGB, GL_FLOAT, rgb);

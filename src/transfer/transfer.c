@@ -289,7 +289,7 @@ void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render
     m->albedo = r->pixel_albedo;
     m->light_visibility = r->pixel_lights ? r->pixel_visibility : NULL;
     if (r->gpu_input) {
-        m->gpu_transfer = t;
+        m->gpu_passes = r->gpu_passes;
         m->gpu_input = r->gpu_input;
         m->gpu_emission = r->gpu_emission;
         m->gpu_bounces = r->gpu_bounces;

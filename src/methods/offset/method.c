@@ -22,6 +22,9 @@ void prt__offset_set_free(void *state)
     if (s->lights) { prt__vertex_lights_free(s->lights); free(s->lights); }
     free(s->sample_pos);
     free(s->sample_nrm);
+    free(s->passes);
+    free(s->slices[0]);
+    free(s->slices[1]);
     if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
     free(s);
 }

@@ -48,6 +48,10 @@ typedef struct prt__offset_set {
     pthread_mutex_t *lock;
     prt__vertex_lights *lights;
     float *sample_pos, *sample_nrm;
+    /* Run-time: the passes the renderer runs (gpu.c), built on first use under lock and published
+     * atomically; its slices are owned here. */
+    prt_render_passes *passes;
+    prt_render_slice *slices[2];
 } prt__offset_set;
 
 extern const prt__method prt__method_offset;
@@ -81,6 +85,10 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
 /* Run time: the light map after `bounces` (texels, width x height x 3, gutters filled) and its
  * first-order part; per vertex radiance and indirect light sampled from them. */
 prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *r);
+
+/* The GPU passes for t (gpu.c): the maps cropped to their non-zero boxes and sliced into atlases
+ * (bins.c, section 5.2), described for the renderer; built once, then borrowed from t. */
+prt_status prt__offset_gpu_passes(prt_context *ctx, const prt_transfer *t, const prt_render_passes **out);
 
 /* prt export (export.c): --maps DIR. */
 prt_status prt__offset_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);

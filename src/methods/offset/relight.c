@@ -229,7 +229,8 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
             a[i * 3 + c] = e > 0 ? e : 0;
             first[i * 3 + c] = s->albedo[i * 3 + c] * a[i * 3 + c];
         }
-    if (d->gpu_finish) {   /* the renderer runs the passes below (render/offset_gl.c) */
+    if (d->gpu_finish) {   /* the renderer runs the passes below (gpu.c describes them) */
+        if ((st = prt__offset_gpu_passes(ctx, t, &r->gpu_passes))) goto done;
         r->gpu_input = prt__calloc(n * 3, sizeof(float));
         if (!r->gpu_input) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
         for (size_t i = 0; i < nc; ++i) {

@@ -1,14 +1,12 @@
-/* Offset transfer maps accumulated by the GPU: the paper's run time. Light maps are RGBA32F
- * render targets of the light map's size; a pass draws, for every slice of every map, a quad over
- * the slice's texels whose fragments add map(t) x light(source(t + offset)) into the target with
- * GL_ONE, GL_ONE blending. Reading the light through the gutter-source map (a dependent read the
- * paper's 2006 GPU avoided with dilated gutters) gives exactly the CPU's sum (relight/offset.c). */
-#include "render/offset_gl.h"
+/* Light maps finished by the GPU (offset radiance transfer mapping's run time, Sunshine-Hill &
+ * Faloutsos 2006, sections 5.1-5.2). Light maps are RGBA32F render targets of the light map's size;
+ * a pass draws, for every slice of every map, a quad over the slice's texels whose fragments add
+ * map(t) x light(source(t + offset)) into the target with GL_ONE, GL_ONE blending. Reading the
+ * light through the gutter-source map (a dependent read the paper's 2006 GPU avoided with dilated
+ * gutters) gives exactly the sum a CPU takes over the same description. */
+#include "render/light_map_gl.h"
 
-#include "methods/offset/bins.h"
 #include "render/draw.h"
-#include "methods/offset/offset.h"
-#include "transfer/transfer.h"
 
 #include <string.h>
 
@@ -41,17 +39,16 @@ static const char *FS_ACCUM =
 static const char *VS_FULL =
     "#version 330 core\n"
     "void main() { vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0); gl_Position = vec4(p, 0.0, 1.0); }\n";
-/* First-order light: albedo x irradiance / pi, or on translucent texels what subsurface scattering
- * gathered. */
+/* First-order light: albedo x irradiance / pi, or on masked texels what the scatter pass gathered. */
 static const char *FS_FIRST =
     "#version 330 core\n"
-    "uniform isampler2D source; uniform sampler2D input_map, albedo, medium, sub; uniform int has_sub;\n"
+    "uniform isampler2D source; uniform sampler2D input_map, albedo, mask, sub; uniform int has_sub;\n"
     "out vec4 color;\n"
     "void main() {\n"
     "  ivec2 s = texelFetch(source, ivec2(gl_FragCoord.xy), 0).xy;\n"
     "  if (s.x < 0) { color = vec4(0.0); return; }\n"
     "  vec3 f = texelFetch(albedo, s, 0).rgb * texelFetch(input_map, s, 0).rgb;\n"
-    "  if (has_sub != 0 && texelFetch(medium, s, 0).r > 0.0) f = texelFetch(sub, s, 0).rgb;\n"
+    "  if (has_sub != 0 && texelFetch(mask, s, 0).r > 0.0) f = texelFetch(sub, s, 0).rgb;\n"
     "  color = vec4(f, 1.0);\n"
     "}\n";
 /* What is shown: first-order plus emission, bounced light, or both (component 0 all, 1 direct,
@@ -89,25 +86,26 @@ static GLuint new_map(int w, int h, GLenum internal, GLenum format, GLenum type,
     return tex;
 }
 
-/* A per-texel map of a covered-texel array (floats per texel, 1 or 3), zero off the surface. */
-static GLuint texel_map(const prt__offset_set *s, const float *values, const uint8_t *bytes, int floats, float *scratch)
+/* A per-texel map of a covered-texel array (floats per texel, 1 or 3; none: zeros), zero off the
+ * surface. */
+static GLuint texel_map(const prt_render_passes *lm, const float *values, const uint8_t *bytes, int floats, float *scratch)
 {
-    const size_t n = (size_t)s->width * s->height;
+    const size_t n = (size_t)lm->width * lm->height;
     memset(scratch, 0, n * 3 * sizeof *scratch);
-    for (size_t i = 0; i < s->covered; ++i)
+    for (size_t i = 0; (values || bytes) && i < lm->covered; ++i)
         for (int c = 0; c < floats; ++c)
-            scratch[(size_t)s->texel[i] * floats + c] = values ? values[i * floats + c] : (float)bytes[i];
-    return new_map(s->width, s->height, floats == 3 ? GL_RGB32F : GL_R32F, floats == 3 ? GL_RGB : GL_RED, GL_FLOAT, scratch);
+            scratch[(size_t)lm->texel[i] * floats + c] = values ? values[i * floats + c] : (float)bytes[i];
+    return new_map(lm->width, lm->height, floats == 3 ? GL_RGB32F : GL_R32F, floats == 3 ? GL_RGB : GL_RED, GL_FLOAT, scratch);
 }
 
-void prt__offset_gl_free(prt__offset_gl *g)
+void prt__light_map_gl_free(prt__light_map_gl *g)
 {
     for (int k = 0; k < 2; ++k) {
         if (g->atlas[k]) glDeleteTextures(1, &g->atlas[k]);
         if (g->vbo[k]) glDeleteBuffers(1, &g->vbo[k]);
         if (g->vao[k]) glDeleteVertexArrays(1, &g->vao[k]);
     }
-    GLuint tex[] = {g->source, g->albedo, g->medium, g->emit, g->input, g->sub, g->first, g->bounce[0], g->bounce[1], g->total};
+    GLuint tex[] = {g->source, g->albedo, g->mask, g->emit, g->input, g->sub, g->first, g->bounce[0], g->bounce[1], g->total};
     for (size_t i = 0; i < sizeof tex / sizeof *tex; ++i)
         if (tex[i]) glDeleteTextures(1, &tex[i]);
     if (g->fbo) glDeleteFramebuffers(1, &g->fbo);
@@ -117,139 +115,146 @@ void prt__offset_gl_free(prt__offset_gl *g)
     memset(g, 0, sizeof *g);
 }
 
-/* Crops kind k's maps, bins their slices and uploads the atlases and the slices' quads. */
-static prt_status upload_kind(prt__offset_gl *g, const prt__offset_set *s, const float *maps, int k, int max_layers)
+/* Every slice inside the light map and its atlas, of a map of the set; false otherwise. */
+static bool set_valid(const prt_render_passes *lm, const prt_render_map_set *set)
 {
-    const int W = s->width, H = s->height, K = s->count;
-    const size_t n = (size_t)W * H, nc = s->covered;
-    float *full = malloc(n * 3 * sizeof *full);
-    int *box = malloc((size_t)K * 4 * sizeof *box), *bw = malloc((size_t)K * sizeof *bw), *bh = malloc((size_t)K * sizeof *bh);
-    prt__bin_piece *pieces = NULL;
-    int npieces = 0, nbins = 0;
-    float *layer = NULL;
-    quad_vertex *quads = NULL;
-    prt_status st = full && box && bw && bh ? PRT_OK : prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for the offset atlases");
-    for (int o = 0; o < K && !st; ++o) {
-        memset(full, 0, n * 3 * sizeof *full);
-        for (size_t i = 0; i < nc; ++i) memcpy(full + (size_t)s->texel[i] * 3, maps + ((size_t)o * nc + i) * 3, 3 * sizeof *full);
-        if (!prt__map_crop(full, W, H, &box[o * 4], &box[o * 4 + 1], &box[o * 4 + 2], &box[o * 4 + 3])) box[o * 4 + 2] = box[o * 4 + 3] = 0;
-        bw[o] = box[o * 4 + 2];
-        bh[o] = box[o * 4 + 3];
+    if (!set->map_count) return true;
+    if (set->map_count < 0 || !set->maps || !set->offsets || set->slice_count < 0 || (set->slice_count && !set->slices) || set->atlas_size < 1 ||
+        (set->atlas_size & (set->atlas_size - 1)) || set->atlas_layers < 0)
+        return false;
+    for (int i = 0; i < set->slice_count; ++i) {
+        const prt_render_slice *p = &set->slices[i];
+        if (p->map < 0 || p->map >= set->map_count || p->w < 1 || p->h < 1 || p->x < 0 || p->y < 0 || p->x > lm->width - p->w ||
+            p->y > lm->height - p->h || p->layer < 0 || p->layer >= set->atlas_layers || p->ax < 0 || p->ay < 0 || p->ax > set->atlas_size - p->w ||
+            p->ay > set->atlas_size - p->h)
+            return false;
     }
-    if (!st) st = prt__bin_maps(NULL, bw, bh, K, g->bin_size, &pieces, &npieces, &nbins);
-    if (!st && nbins > max_layers)
-        st = prt__fail(NULL, PRT_ERR_BACKEND, "the offset maps need %d atlases of %d^2 texels; this GPU holds %d in one texture array", nbins, g->bin_size, max_layers);
-    if (!st && nbins > 0) {
-        const size_t bin_texels = (size_t)g->bin_size * g->bin_size;
-        layer = malloc(bin_texels * 3 * sizeof *layer);
-        quads = malloc((size_t)npieces * 6 * sizeof *quads + 1);
-        if (!layer || !quads) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for the offset atlases");
-        if (!st) {
-            glGenTextures(1, &g->atlas[k]);
-            glBindTexture(GL_TEXTURE_2D_ARRAY, g->atlas[k]);
-            glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGB32F, g->bin_size, g->bin_size, nbins, 0, GL_RGB, GL_FLOAT, NULL);
-            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-            glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-        }
-        /* One atlas at a time: its pieces' texels straight from the covered-texel maps. */
-        for (int b = 0; b < nbins && !st; ++b) {
-            memset(layer, 0, bin_texels * 3 * sizeof *layer);
-            for (int p = 0; p < npieces; ++p) {
-                const prt__bin_piece *pc = &pieces[p];
-                if (pc->bin != b) continue;
-                const int o = pc->map, x0 = box[o * 4] + pc->sx, y0 = box[o * 4 + 1] + pc->sy;
-                for (int y = 0; y < pc->h; ++y)
-                    for (int x = 0; x < pc->w; ++x) {
-                        const int32_t i = s->index[(size_t)(y0 + y) * W + x0 + x];
-                        if (i >= 0) memcpy(layer + ((size_t)(pc->dy + y) * g->bin_size + pc->dx + x) * 3, maps + ((size_t)o * nc + (size_t)i) * 3, 3 * sizeof *layer);
-                    }
-            }
-            glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, b, g->bin_size, g->bin_size, 1, GL_RGB, GL_FLOAT, layer);
-        }
-        for (int p = 0; p < npieces && !st; ++p) {
-            const prt__bin_piece *pc = &pieces[p];
-            const int o = pc->map, x0 = box[o * 4] + pc->sx, y0 = box[o * 4 + 1] + pc->sy;
-            const quad_vertex v = {0, 0, pc->dx - x0, pc->dy - y0, s->offsets[o * 2], s->offsets[o * 2 + 1], pc->bin};
-            const float xs[6] = {0, 1, 1, 0, 1, 0}, ys[6] = {0, 0, 1, 0, 1, 1};
-            for (int c = 0; c < 6; ++c) {
-                quads[p * 6 + c] = v;
-                quads[p * 6 + c].x = (float)(x0 + xs[c] * pc->w);
-                quads[p * 6 + c].y = (float)(y0 + ys[c] * pc->h);
-            }
-        }
-        if (!st) {
-            glGenVertexArrays(1, &g->vao[k]);
-            glGenBuffers(1, &g->vbo[k]);
-            glBindVertexArray(g->vao[k]);
-            glBindBuffer(GL_ARRAY_BUFFER, g->vbo[k]);
-            glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)((size_t)npieces * 6 * sizeof *quads), quads, GL_STATIC_DRAW);
-            glEnableVertexAttribArray(0);
-            glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, sizeof *quads, (void *)offsetof(quad_vertex, x));
-            glEnableVertexAttribArray(1);
-            glVertexAttribIPointer(1, 4, GL_INT, sizeof *quads, (void *)offsetof(quad_vertex, shift_x));
-            glEnableVertexAttribArray(2);
-            glVertexAttribIPointer(2, 1, GL_INT, sizeof *quads, (void *)offsetof(quad_vertex, layer));
-            glBindVertexArray(0);
-            g->vertices[k] = npieces * 6;
-            g->layers += nbins;
-        }
-    }
-    free(full); free(box); free(bw); free(bh); free(pieces); free(layer); free(quads);
-    return st;
+    return true;
 }
 
-prt_status prt__offset_gl_load(prt__offset_gl *g, const prt_transfer *t)
+/* Uploads set k's atlases (layer by layer, each slice's texels from the covered-texel maps through
+ * index) and the slices' quads. */
+static prt_status upload_set(prt__light_map_gl *g, const prt_render_passes *lm, const prt_render_map_set *set, const int32_t *index, int k,
+                             int max_size, int max_layers)
 {
-    const prt__offset_set *s = t ? prt__state_of(t, &prt__method_offset) : NULL;
-    if (!s) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU accumulation needs a transfer of method offset");
-    if (g->serial == t->serial) return PRT_OK;
-    prt__offset_gl_free(g);
-    const int W = s->width, H = s->height;
+    if (!set->map_count || !set->slice_count) return PRT_OK;
+    const int W = lm->width, size = set->atlas_size, layers = set->atlas_layers;
+    const size_t nc = lm->covered;
+    if (size > max_size) return prt__fail(NULL, PRT_ERR_BACKEND, "atlases of %d^2 texels are beyond this GPU's %d-texel textures", size, max_size);
+    if (layers > max_layers)
+        return prt__fail(NULL, PRT_ERR_BACKEND, "the light map's passes need %d atlases of %d^2 texels; this GPU holds %d in one texture array", layers, size,
+                         max_layers);
+    const size_t layer_texels = (size_t)size * size;
+    float *layer = malloc(layer_texels * 3 * sizeof *layer);
+    quad_vertex *quads = malloc((size_t)set->slice_count * 6 * sizeof *quads);
+    if (!layer || !quads) { free(layer); free(quads); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for the light map's atlases"); }
+    glGenTextures(1, &g->atlas[k]);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, g->atlas[k]);
+    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGB32F, size, size, layers, 0, GL_RGB, GL_FLOAT, NULL);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    /* One atlas at a time: its slices' texels straight from the covered-texel maps. */
+    for (int b = 0; b < layers; ++b) {
+        memset(layer, 0, layer_texels * 3 * sizeof *layer);
+        for (int p = 0; p < set->slice_count; ++p) {
+            const prt_render_slice *pc = &set->slices[p];
+            if (pc->layer != b) continue;
+            const float *map = set->maps + (size_t)pc->map * nc * 3;
+            for (int y = 0; y < pc->h; ++y)
+                for (int x = 0; x < pc->w; ++x) {
+                    const int32_t i = index[(size_t)(pc->y + y) * W + pc->x + x];
+                    if (i >= 0) memcpy(layer + ((size_t)(pc->ay + y) * size + pc->ax + x) * 3, map + (size_t)i * 3, 3 * sizeof *layer);
+                }
+        }
+        glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, b, size, size, 1, GL_RGB, GL_FLOAT, layer);
+    }
+    for (int p = 0; p < set->slice_count; ++p) {
+        const prt_render_slice *pc = &set->slices[p];
+        const quad_vertex v = {0, 0, pc->ax - pc->x, pc->ay - pc->y, set->offsets[pc->map * 2], set->offsets[pc->map * 2 + 1], pc->layer};
+        const float xs[6] = {0, 1, 1, 0, 1, 0}, ys[6] = {0, 0, 1, 0, 1, 1};
+        for (int c = 0; c < 6; ++c) {
+            quads[p * 6 + c] = v;
+            quads[p * 6 + c].x = (float)(pc->x + xs[c] * pc->w);
+            quads[p * 6 + c].y = (float)(pc->y + ys[c] * pc->h);
+        }
+    }
+    glGenVertexArrays(1, &g->vao[k]);
+    glGenBuffers(1, &g->vbo[k]);
+    glBindVertexArray(g->vao[k]);
+    glBindBuffer(GL_ARRAY_BUFFER, g->vbo[k]);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)((size_t)set->slice_count * 6 * sizeof *quads), quads, GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, sizeof *quads, (void *)offsetof(quad_vertex, x));
+    glEnableVertexAttribArray(1);
+    glVertexAttribIPointer(1, 4, GL_INT, sizeof *quads, (void *)offsetof(quad_vertex, shift_x));
+    glEnableVertexAttribArray(2);
+    glVertexAttribIPointer(2, 1, GL_INT, sizeof *quads, (void *)offsetof(quad_vertex, layer));
+    glBindVertexArray(0);
+    g->vertices[k] = set->slice_count * 6;
+    free(layer);
+    free(quads);
+    return PRT_OK;
+}
+
+prt_status prt__light_map_gl_load(prt__light_map_gl *g, const prt_render_passes *lm)
+{
+    if (!lm) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU accumulation needs a light-map description");
+    if (lm->id && g->id == lm->id) return PRT_OK;
+    prt__light_map_gl_free(g);
+    const int W = lm->width, H = lm->height;
+    const size_t n = (size_t)(W > 0 ? W : 0) * (size_t)(H > 0 ? H : 0);
+    bool ok = W > 0 && H > 0 && lm->covered <= n && (lm->texel || !lm->covered) && lm->source && lm->albedo && set_valid(lm, &lm->scatter) &&
+              set_valid(lm, &lm->bounce);
+    for (size_t i = 0; ok && i < lm->covered; ++i) ok = lm->texel[i] < n && (i == 0 || lm->texel[i] > lm->texel[i - 1]);
+    for (size_t i = 0; ok && i < n; ++i) ok = lm->source[i] >= -1 && lm->source[i] < (int64_t)lm->covered;
+    if (!ok) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "the light map's description is inconsistent (sizes, texels, sources or slices)");
     GLint max_size = 0, max_layers = 0;
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
     glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+    if (W > max_size || H > max_size) return prt__fail(NULL, PRT_ERR_BACKEND, "a %dx%d light map is beyond this GPU's %d-texel textures", W, H, max_size);
     g->width = W;
     g->height = H;
-    for (g->bin_size = 1; g->bin_size < W || g->bin_size < H; g->bin_size *= 2) {}
-    if (g->bin_size > max_size) return prt__fail(NULL, PRT_ERR_BACKEND, "a %dx%d light map is beyond this GPU's %d-texel textures", W, H, max_size);
     g->p_accum = prt__gl_program(VS_ACCUM, NULL, FS_ACCUM);
     g->p_first = g->p_accum ? prt__gl_program(VS_FULL, NULL, FS_FIRST) : 0;
     g->p_final = g->p_first ? prt__gl_program(VS_FULL, NULL, FS_FINAL) : 0;
-    if (!g->p_final) { prt__offset_gl_free(g); return PRT_ERR_BACKEND; }   /* prt__gl_program said why */
+    if (!g->p_final) { prt__light_map_gl_free(g); return PRT_ERR_BACKEND; }   /* prt__gl_program said why */
     while (glGetError() != GL_NO_ERROR) {}
-    prt_status st = PRT_OK;
-    if (s->radiosity) st = upload_kind(g, s, s->radiosity, 0, max_layers);
-    if (!st && s->subsurface) st = upload_kind(g, s, s->subsurface, 1, max_layers);
-    const size_t n = (size_t)W * H;
-    float *scratch = st ? NULL : malloc(n * 3 * sizeof *scratch);
-    int32_t *src = st ? NULL : malloc(n * 2 * sizeof *src);
-    if (!st && (!scratch || !src)) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for the offset maps");
+    float *scratch = malloc(n * 3 * sizeof *scratch);
+    int32_t *index = malloc(n * sizeof *index), *src = malloc(n * 2 * sizeof *src);
+    prt_status st = scratch && index && src ? PRT_OK : prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory for the light map");
+    if (!st) {
+        for (size_t i = 0; i < n; ++i) index[i] = -1;
+        for (size_t i = 0; i < lm->covered; ++i) index[lm->texel[i]] = (int32_t)i;
+        st = upload_set(g, lm, &lm->bounce, index, 0, max_size, max_layers);
+    }
+    if (!st) st = upload_set(g, lm, &lm->scatter, index, 1, max_size, max_layers);
     if (!st) {
         for (size_t i = 0; i < n; ++i) {
-            const int32_t c = s->source[i];
-            src[i * 2] = c < 0 ? -1 : (int32_t)(s->texel[c] % (uint32_t)W);
-            src[i * 2 + 1] = c < 0 ? -1 : (int32_t)(s->texel[c] / (uint32_t)W);
+            const int32_t c = lm->source[i];
+            src[i * 2] = c < 0 ? -1 : (int32_t)(lm->texel[c] % (uint32_t)W);
+            src[i * 2 + 1] = c < 0 ? -1 : (int32_t)(lm->texel[c] / (uint32_t)W);
         }
         g->source = new_map(W, H, GL_RG32I, GL_RG_INTEGER, GL_INT, src);
-        g->albedo = texel_map(s, s->albedo, NULL, 3, scratch);
-        g->has_medium = s->medium != NULL;
-        g->medium = s->medium ? texel_map(s, NULL, s->medium, 1, scratch) : texel_map(s, NULL, NULL, 0, scratch);
-        g->has_emit = s->emit != NULL;
-        g->emit = texel_map(s, s->emit, NULL, s->emit ? 3 : 0, scratch);
+        g->albedo = texel_map(lm, lm->albedo, NULL, 3, scratch);
+        g->has_mask = lm->scatter_mask != NULL;
+        g->mask = texel_map(lm, NULL, lm->scatter_mask, 1, scratch);
+        g->has_emit = lm->emission != NULL;
+        g->emit = texel_map(lm, lm->emission, NULL, 3, scratch);
         GLuint *work[] = {&g->input, &g->sub, &g->first, &g->bounce[0], &g->bounce[1], &g->total};
         for (size_t i = 0; i < sizeof work / sizeof *work; ++i) *work[i] = new_map(W, H, GL_RGBA32F, GL_RGBA, GL_FLOAT, NULL);
         glGenFramebuffers(1, &g->fbo);
     }
     free(scratch);
+    free(index);
     free(src);
     if (!st) {
         const GLenum e = glGetError();
-        if (e == GL_OUT_OF_MEMORY) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "the GPU has no room for the offset atlases (%d of %d^2 texels)", g->layers, g->bin_size);
-        else if (e != GL_NO_ERROR) st = prt__fail(NULL, PRT_ERR_BACKEND, "uploading the offset atlases failed (GL error 0x%x)", e);
+        if (e == GL_OUT_OF_MEMORY) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "the GPU has no room for the light map's atlases");
+        else if (e != GL_NO_ERROR) st = prt__fail(NULL, PRT_ERR_BACKEND, "uploading the light map's atlases failed (GL error 0x%x)", e);
     }
-    if (st) { prt__offset_gl_free(g); return st; }
-    g->serial = t->serial;
+    if (st) { prt__light_map_gl_free(g); return st; }
+    g->id = lm->id;
     return PRT_OK;
 }
 
@@ -270,7 +275,7 @@ static void target(GLuint fbo, GLuint color0, GLuint color1)
 }
 
 /* Adds every slice of kind k's maps times `light` into the bound targets. */
-static void accumulate(prt__offset_gl *g, int k, GLuint light)
+static void accumulate(prt__light_map_gl *g, int k, GLuint light)
 {
     glUseProgram(g->p_accum);
     glUniform2f(glGetUniformLocation(g->p_accum, "size"), (float)g->width, (float)g->height);
@@ -286,7 +291,7 @@ static void accumulate(prt__offset_gl *g, int k, GLuint light)
     glDisable(GL_BLEND);
 }
 
-void prt__offset_gl_run(prt__offset_gl *g, const float *input, float emission, int bounces, int component, GLuint final_tex, GLuint first_tex)
+void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, float emission, int bounces, int component, GLuint final_tex, GLuint first_tex)
 {
     const float zero[4] = {0, 0, 0, 0};
     GLint viewport[4];
@@ -304,7 +309,7 @@ void prt__offset_gl_run(prt__offset_gl *g, const float *input, float emission, i
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, g->width, g->height, GL_RGB, GL_FLOAT, input);
     GLuint empty_vao;
     glGenVertexArrays(1, &empty_vao);
-    /* Subsurface scattering of the irradiance, then the first-order light map. */
+    /* The scatter pass over the irradiance (subsurface scattering), then the first-order light map. */
     if (g->vertices[1]) {
         target(g->fbo, g->sub, 0);
         glClearBufferfv(GL_COLOR, 0, zero);
@@ -315,9 +320,9 @@ void prt__offset_gl_run(prt__offset_gl *g, const float *input, float emission, i
     bind(g->p_first, "source", 0, GL_TEXTURE_2D, g->source);
     bind(g->p_first, "input_map", 1, GL_TEXTURE_2D, g->input);
     bind(g->p_first, "albedo", 2, GL_TEXTURE_2D, g->albedo);
-    bind(g->p_first, "medium", 3, GL_TEXTURE_2D, g->medium);
+    bind(g->p_first, "mask", 3, GL_TEXTURE_2D, g->mask);
     bind(g->p_first, "sub", 4, GL_TEXTURE_2D, g->sub);
-    glUniform1i(glGetUniformLocation(g->p_first, "has_sub"), g->vertices[1] && g->has_medium);
+    glUniform1i(glGetUniformLocation(g->p_first, "has_sub"), g->vertices[1] && g->has_mask);
     glBindVertexArray(empty_vao);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     /* Inter-reflection: each bounce gathers the last one's light; all of them add into total. */

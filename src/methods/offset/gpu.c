@@ -1,0 +1,80 @@
+/* The offset method's run time on the GPU (Sunshine-Hill & Faloutsos 2006, sections 5.1-5.2),
+ * described for the renderer (prt_render_passes): each map cropped to its non-zero box, cut into
+ * power-of-two vertical slices and binned into square atlases (bins.c); the subsurface maps are
+ * the scatter set (replacing albedo x irradiance on translucent texels), the radiosity maps the
+ * bounce set. The renderer packs and blends them (render/light_map_gl.c), the same sums as the
+ * CPU pass (relight.c). */
+#include "methods/offset/bins.h"
+#include "methods/offset/offset.h"
+
+/* Slices of one kind's maps in atlases of bin_size^2 texels: set->slices is owned by *slices. */
+static prt_status slice_maps(prt_context *ctx, const prt__offset_set *s, const float *maps, int bin_size, prt_render_map_set *set,
+                             prt_render_slice **slices)
+{
+    const int W = s->width, H = s->height, K = s->count;
+    const size_t n = (size_t)W * H, nc = s->covered;
+    float *full = malloc(n * 3 * sizeof *full);
+    int *box = malloc((size_t)K * 4 * sizeof *box), *bw = malloc((size_t)K * sizeof *bw), *bh = malloc((size_t)K * sizeof *bh);
+    prt__bin_piece *pieces = NULL;
+    int npieces = 0, nbins = 0;
+    prt_status st = full && box && bw && bh ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the offset atlases");
+    for (int o = 0; o < K && !st; ++o) {
+        memset(full, 0, n * 3 * sizeof *full);
+        for (size_t i = 0; i < nc; ++i) memcpy(full + (size_t)s->texel[i] * 3, maps + ((size_t)o * nc + i) * 3, 3 * sizeof *full);
+        if (!prt__map_crop(full, W, H, &box[o * 4], &box[o * 4 + 1], &box[o * 4 + 2], &box[o * 4 + 3])) box[o * 4 + 2] = box[o * 4 + 3] = 0;
+        bw[o] = box[o * 4 + 2];
+        bh[o] = box[o * 4 + 3];
+    }
+    if (!st) st = prt__bin_maps(ctx, bw, bh, K, bin_size, &pieces, &npieces, &nbins);
+    prt_render_slice *out = !st ? malloc((size_t)npieces * sizeof *out + 1) : NULL;
+    if (!st && !out) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the offset atlases");
+    for (int p = 0; !st && p < npieces; ++p) {
+        const prt__bin_piece *pc = &pieces[p];
+        out[p] = (prt_render_slice){pc->map, box[pc->map * 4] + pc->sx, box[pc->map * 4 + 1] + pc->sy, pc->w, pc->h, pc->bin, pc->dx, pc->dy};
+    }
+    if (!st) {
+        *set = (prt_render_map_set){K, maps, s->offsets, npieces, out, bin_size, nbins};
+        *slices = out;
+    } else {
+        free(out);
+    }
+    free(full); free(box); free(bw); free(bh); free(pieces);
+    return st;
+}
+
+prt_status prt__offset_gpu_passes(prt_context *ctx, const prt_transfer *t, const prt_render_passes **out)
+{
+    prt__offset_set *s = t->state;
+    const prt_render_passes *ready = __atomic_load_n(&s->passes, __ATOMIC_ACQUIRE);
+    if (ready) { *out = ready; return PRT_OK; }
+    pthread_mutex_lock(s->lock);
+    prt_status st = PRT_OK;
+    if (!s->passes) {
+        prt_render_passes *p = prt__calloc(1, sizeof *p);
+        int bin_size = 1;
+        while (bin_size < s->width || bin_size < s->height) bin_size *= 2;
+        if (!p) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        if (!st && s->radiosity) st = slice_maps(ctx, s, s->radiosity, bin_size, &p->bounce, &s->slices[0]);
+        if (!st && s->subsurface) st = slice_maps(ctx, s, s->subsurface, bin_size, &p->scatter, &s->slices[1]);
+        if (!st) {
+            p->id = t->serial;
+            p->width = s->width;
+            p->height = s->height;
+            p->covered = s->covered;
+            p->texel = s->texel;
+            p->source = s->source;
+            p->albedo = s->albedo;
+            p->scatter_mask = s->subsurface ? s->medium : NULL;
+            p->emission = s->emit;
+            __atomic_store_n(&s->passes, p, __ATOMIC_RELEASE);
+        } else {
+            free(p);
+            free(s->slices[0]);
+            free(s->slices[1]);
+            s->slices[0] = s->slices[1] = NULL;
+        }
+    }
+    pthread_mutex_unlock(s->lock);
+    if (!st) *out = s->passes;
+    return st;
+}
