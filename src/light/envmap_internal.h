@@ -9,7 +9,7 @@ struct prt_envmap {
     prt_image img;
     prt_env_layout layout;
     /* The map integrated into a 6 x 256 x 256 cube of RGB energies (radiance times solid
-     * angle per texel), built on the first wavelet lighting (light/wavelet_light.c) and
+     * angle per texel), built on first use by light/env_cube.c and
      * published atomically: rotations resample it, not the map. */
     float *cube_cache;
     /* The map's SH projection per order, built on first use and published atomically: every
