@@ -62,14 +62,11 @@ fuzz: deps
 fuzz-regress: build
 	cd $(BUILD) && ctest -R fuzz-regress --output-on-failure
 
+# Every bench (bench/bench_NAME.c, built as prt_bench_NAME) with its defaults, then the runs that
+# need more: the spectral method's closed room, the light cloud on Sponza.
 bench: build
-	$(BUILD)/prt_bench
-	$(BUILD)/prt_bench_wavelet
-	$(BUILD)/prt_bench_lights
+	@for b in $(BUILD)/prt_bench_*; do echo "== $$b"; $$b || exit 1; done
 	$(BUILD)/prt_bench_spectral --room
-	$(BUILD)/prt_bench_spectral
-	$(BUILD)/prt_bench_lightcloud
-	$(BUILD)/prt_bench_offset
 	@if [ -f ../shared/data/meshes/sponza/sponza_dabrovic.obj ]; then $(BUILD)/prt_bench_lightcloud ../shared/data/meshes/sponza/sponza_dabrovic.obj --grid 12,4,8 --zone-vertices 500; \
 	else echo "bench: ../shared/data/meshes/sponza is absent: skipping the Sponza light cloud"; fi
 

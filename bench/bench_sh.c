@@ -2,7 +2,7 @@
  *   bake:    transfer-bake rays/s  vs  raw Embree rays/s on exactly the same rays
  *            (rtcOccluded16 for shadowed-only bakes, rtcIntersect16 when hits are needed)
  *   relight: bytes of transfer read per frame / frame time  vs  plain memory read bandwidth
- * Usage: prt_bench [MESH] [--samples N] [--order N] [--threads N]
+ * Usage: prt_bench_sh [MESH] [--samples N] [--order N] [--threads N]
  * Without MESH it uses ../shared/data's bunny if present, else the procedural demo scene.
  * Prints JSON on stdout (with the process's peak resident memory) and a summary on stderr. */
 #include "bench_common.h"
@@ -36,7 +36,7 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--order") && i + 1 < argc) order = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
         else if (argv[i][0] != '-') mesh = argv[i];
-        else { fprintf(stderr, "usage: prt_bench [MESH] [--samples N] [--order N] [--threads N]\n"); return 2; }
+        else { fprintf(stderr, "usage: prt_bench_sh [MESH] [--samples N] [--order N] [--threads N]\n"); return 2; }
     }
     prt_context *ctx = NULL;
     prt_scene *s = NULL;

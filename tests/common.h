@@ -15,6 +15,7 @@
 
 #include <cmocka.h>
 #include <prt/prt.h>
+#include <zlib.h>
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -185,6 +186,53 @@ static inline int test_dir_teardown(void **state)
 }
 
 /* Writes text into the scratch directory as name; path gets the full path. */
+/* A whole file's bytes (malloc'd), and back. */
+static inline void *test_slurp(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    *size = (size_t)ftell(f);
+    rewind(f);
+    void *p = malloc(*size);
+    assert_int_equal(fread(p, 1, *size, f), *size);
+    fclose(f);
+    return p;
+}
+
+static inline void test_spit(const char *path, const void *p, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(p, 1, n, f), n);
+    fclose(f);
+}
+
+/* Overwrites bytes of chunk `id` of a .prt file held in memory at `offset` and fixes every
+ * checksum, so that only the loader's own checks can catch the change. */
+static inline void test_patch_chunk(unsigned char *file, const char *id, size_t offset, const void *bytes, size_t n)
+{
+    uint32_t count;
+    memcpy(&count, file + 12, 4);
+    for (uint32_t i = 0; i < count; ++i) {
+        unsigned char *e = file + 24 + 24 * (size_t)i;
+        if (memcmp(e, id, 4)) continue;
+        uint64_t off, len;
+        memcpy(&off, e + 8, 8);
+        memcpy(&len, e + 16, 8);
+        assert_true(offset + n <= len);
+        memcpy(file + off + offset, bytes, n);
+        uint32_t crc = (uint32_t)crc32(0L, file + off, (uInt)len);
+        memcpy(e + 4, &crc, 4);
+        uint32_t zero = 0;
+        memcpy(file + 20, &zero, 4);
+        crc = (uint32_t)crc32(0L, file, (uInt)(24 + 24 * (size_t)count));
+        memcpy(file + 20, &crc, 4);
+        return;
+    }
+    fail_msg("no chunk %s", id);
+}
+
 static inline void write_text(const char *name, const char *text, char *path, size_t n)
 {
     snprintf(path, n, "%s/%s", test_dir, name);

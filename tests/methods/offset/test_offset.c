@@ -956,6 +956,67 @@ static void test_gpu_accumulation(void **state)
     prt_context_release(ctx);
 }
 
+/* Offset files (texel patches, maps, media) whose checksums are right but whose contents are
+ * not: each is refused with a message that says what. */
+static void test_crafted_files(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    test_mesh m = {0};
+    tm_quad(&m, (float[3]){0, 0, 1}, (float[3]){1, 0, 0}, (float[3]){0, 0, -1}, 4);   /* a floor, up */
+    tm_quad(&m, (float[3]){0, 0, 0}, (float[3]){1, 0, 0}, (float[3]){0, 1, 0}, 4);    /* a wall, facing +z */
+    prt_scene *scene = tm_scene(ctx, &m, 0.6f);
+    float *uv = malloc(m.nv * 2 * sizeof *uv);
+    for (size_t v = 0; v < m.nv; ++v) {   /* the floor left, the wall right */
+        const bool wall = v >= 25;
+        uv[v * 2] = 0.5f * m.pos[v * 3] + (wall ? 0.5f : 0.0f);
+        uv[v * 2 + 1] = wall ? m.pos[v * 3 + 1] : 1.0f - m.pos[v * 3 + 2];
+    }
+    assert_int_equal(prt_scene_set_uv(scene, 0, m.nv, uv), PRT_OK);
+    free(uv);
+    prt_options *o = NULL;
+    assert_int_equal(prt_options_create(prt_method_find("offset"), &o), PRT_OK);
+    const char *kv[] = {"texels", "8", "offsets", "5", "iterations", "10", "transfer", "both", "uv", "mesh"};
+    for (int i = 0; i < 10; i += 2) assert_int_equal(prt_options_set(o, kv[i], kv[i + 1]), PRT_OK);
+    prt_transfer *t = NULL, *u = NULL;
+    assert_int_equal(prt_bake(ctx, scene, prt_method_find("offset"), o, NULL, &t), PRT_OK);
+    prt_offset_info info;
+    assert_int_equal(prt_transfer_offset_info(t, &info), 1);
+    char path[512];
+    snprintf(path, sizeof path, "%s/o.prt", test_dir);
+    assert_int_equal(prt_transfer_save(t, path), PRT_OK);
+    assert_int_equal(prt_transfer_load(ctx, path, &u), PRT_OK);   /* as saved, it loads */
+    prt_transfer_release(u);
+    size_t size;
+    unsigned char *orig = test_slurp(path, &size), *f = malloc(size);
+    const uint32_t five = 5, big_offset = 8, zero = 0, medium_9 = 0x09090909u;
+    const float far = 1e6f, bright = 100.0f, long_normal[3] = {0, 2, 0};
+    struct { const char *chunk; size_t offset; const void *bytes; size_t n; const char *says; } cases[] = {
+        {"OFSP", 0, &five, 4, "parameters out of range"},                     /* a map of 5 texels a side */
+        {"OFSP", 72, &big_offset, 4, "beyond the light map"},                 /* an offset as wide as the map */
+        {"OFST", 0, &medium_9, 4, "out of order or beyond"},                  /* a texel index past the map */
+        {"OFST", (size_t)info.covered * 4, &far, 4, "outside the mesh"},        /* a texel point far away */
+        {"OFST", (size_t)info.covered * 4 + 12, long_normal, 12, "unit length"},
+        {"OFSR", 0, &bright, 4, "more light than it can"},                    /* a map entry of 100 */
+        {"OFSD", 0, &zero, 4, "media chunk"},                                 /* no media */
+        {"OFSD", 4 + 32, &medium_9, 4, "medium is out of range"},             /* texels of medium 9 of 1 */
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        memcpy(f, orig, size);
+        test_patch_chunk(f, cases[i].chunk, cases[i].offset, cases[i].bytes, cases[i].n);
+        assert_int_equal(prt_transfer_load_memory(ctx, f, size, &u), PRT_ERR_FORMAT);
+        if (!strstr(prt_last_error(), cases[i].says)) fail_msg("case %zu: '%s' does not say '%s'", i, prt_last_error(), cases[i].says);
+        assert_null(u);
+    }
+    free(orig);
+    free(f);
+    prt_transfer_release(t);
+    prt_options_release(o);
+    prt_scene_release(scene);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 int main(int argc, char **argv)
 {
     /* The GPU path runs on its own (ctest: offset-render), without leak checking: Mesa leaks
@@ -976,6 +1037,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_binning),
         cmocka_unit_test(test_offset_method),
         cmocka_unit_test(test_multi_bounce_maps),
+        cmocka_unit_test(test_crafted_files),
     };
     return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

@@ -960,6 +960,48 @@ static void test_wavelet_file(void **state)
     prt_context_release(ctx);
 }
 
+/* Wavelet files whose checksums are right but whose contents are not: each is refused by name. */
+static void test_crafted_files(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    prt_transfer *t = NULL, *u = NULL;
+    char path[512];
+    snprintf(path, sizeof path, "%s/w.prt", test_dir);
+    size_t size;
+    unsigned char *orig;
+    /* A wavelet file whose declared terms disagree with its vertices' term counts (the K-vector
+     * buffers are sized from the former). */
+    test_mesh m = {0};
+    tm_sphere(&m, (float[3]){0, 0, 0}, 1.0f, 6, 8);
+    prt_scene *s = tm_scene(ctx, &m, 0.5f);
+    prt_brdf phong;
+    assert_int_equal(prt_brdf_parse("phong:10:0.5:0.3", &phong), PRT_OK);
+    assert_int_equal(prt_scene_set_brdf(s, 0, prt_scene_vertex_count(s), &phong), PRT_OK);
+    prt_wavelet_bake_desc wd = {0};
+    wd.terms = 2;
+    wd.coefficients = 16;
+    wd.supersample = 1;
+    wd.brdf_resolution = 8;
+    assert_int_equal(prt_bake_wavelet(ctx, s, &wd, &t), PRT_OK);
+    assert_int_equal(prt_transfer_save(t, path), PRT_OK);
+    orig = test_slurp(path, &size);
+    const uint32_t one = 1, tiny = 4;
+    test_patch_chunk(orig, "WAVP", 0, &one, sizeof one);
+    assert_int_equal(prt_transfer_load_memory(ctx, orig, size, &u), PRT_ERR_FORMAT);
+    assert_non_null(strstr(prt_last_error(), "terms"));
+    free(orig);
+    orig = test_slurp(path, &size);
+    test_patch_chunk(orig, "WBRF", 12, &tiny, sizeof tiny);   /* a factorization of another resolution */
+    assert_int_equal(prt_transfer_load_memory(ctx, orig, size, &u), PRT_ERR_FORMAT);
+    assert_non_null(strstr(prt_last_error(), "factorization"));
+    free(orig);
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -978,6 +1020,7 @@ int main(void)
         cmocka_unit_test(test_glossy_bounce_paths),
         cmocka_unit_test(test_cancel),
         cmocka_unit_test_setup_teardown(test_wavelet_file, test_dir_setup, test_dir_teardown),
+        cmocka_unit_test_setup_teardown(test_crafted_files, test_dir_setup, test_dir_teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -18,7 +18,7 @@ static prt_transfer *bake_pit(prt_context *ctx, int order)
     return t;
 }
 
-static prt_transfer *compress(prt_context *ctx, const prt_transfer *t, prt_compress_method method, int clusters, int vectors)
+static prt_transfer *compress_set(prt_context *ctx, const prt_transfer *t, prt_compress_method method, int clusters, int vectors)
 {
     prt_compress_desc d = {0};
     d.method = method;
@@ -52,8 +52,8 @@ static void test_full_rank_is_exact(void **state)
     (void)state;
     prt_context *ctx = test_context(0);
     prt_transfer *t = bake_pit(ctx, 3);
-    prt_transfer *pca = compress(ctx, t, PRT_COMPRESS_PCA, 0, 27);   /* the 3-channel set has 27 dimensions */
-    prt_transfer *cpca = compress(ctx, t, PRT_COMPRESS_CPCA, 8, 27);
+    prt_transfer *pca = compress_set(ctx, t, PRT_COMPRESS_PCA, 0, 27);   /* the 3-channel set has 27 dimensions */
+    prt_transfer *cpca = compress_set(ctx, t, PRT_COMPRESS_CPCA, 8, 27);
     const prt_transfer_kind kinds[3] = {PRT_TRANSFER_UNSHADOWED, PRT_TRANSFER_SHADOWED, PRT_TRANSFER_INTERREFLECTED};
     for (int k = 0; k < 3; ++k) {
         assert_true(max_error(t, pca, kinds[k]) < 1e-5);
@@ -71,7 +71,7 @@ static void check_monotonic(prt_context *ctx, const prt_transfer *t, const char 
     const int vectors[4] = {1, 2, 4, 8}, clusters[4] = {1, 4, 16, 64};
     double last = INFINITY;
     for (int i = 0; i < 4; ++i) {
-        prt_transfer *z = compress(ctx, t, PRT_COMPRESS_CPCA, 8, vectors[i]);
+        prt_transfer *z = compress_set(ctx, t, PRT_COMPRESS_CPCA, 8, vectors[i]);
         prt_compress_info ci;
         assert_int_equal(prt_transfer_compress_info(z, PRT_TRANSFER_INTERREFLECTED, &ci), PRT_OK);
         print_message("%s: 8 clusters, %d vectors: relative error %.5f\n", what, vectors[i], ci.relative_error);
@@ -81,7 +81,7 @@ static void check_monotonic(prt_context *ctx, const prt_transfer *t, const char 
     }
     last = INFINITY;
     for (int i = 0; i < 4; ++i) {
-        prt_transfer *z = compress(ctx, t, PRT_COMPRESS_CPCA, clusters[i], 4);
+        prt_transfer *z = compress_set(ctx, t, PRT_COMPRESS_CPCA, clusters[i], 4);
         prt_compress_info ci;
         assert_int_equal(prt_transfer_compress_info(z, PRT_TRANSFER_INTERREFLECTED, &ci), PRT_OK);
         print_message("%s: %d clusters, 4 vectors: relative error %.5f\n", what, clusters[i], ci.relative_error);
@@ -125,7 +125,7 @@ static void test_relight_bound(void **state)
     (void)state;
     prt_context *ctx = test_context(0);
     prt_transfer *t = bake_pit(ctx, 4);
-    prt_transfer *z = compress(ctx, t, PRT_COMPRESS_CPCA, 6, 3);
+    prt_transfer *z = compress_set(ctx, t, PRT_COMPRESS_CPCA, 6, 3);
     prt_envmap *sky = NULL;
     prt_sh_light L;
     assert_int_equal(prt_sky_create(NULL, &sky), PRT_OK);
@@ -171,13 +171,13 @@ static void test_vq_files_and_determinism(void **state)
     (void)state;
     prt_context *one = test_context(1), *two = test_context(2);
     prt_transfer *t = bake_pit(two, 3);
-    prt_transfer *v1 = compress(one, t, PRT_COMPRESS_VQ, 16, 0), *v2 = compress(two, t, PRT_COMPRESS_VQ, 16, 0);
+    prt_transfer *v1 = compress_set(one, t, PRT_COMPRESS_VQ, 16, 0), *v2 = compress_set(two, t, PRT_COMPRESS_VQ, 16, 0);
     prt_compress_info ci;
     assert_int_equal(prt_transfer_compress_info(v1, PRT_TRANSFER_SHADOWED, &ci), PRT_OK);
     assert_int_equal(ci.vectors_total, 0);
     assert_true(ci.clusters <= 16 && ci.clusters > 1);
     assert_true(max_error(v1, v2, PRT_TRANSFER_INTERREFLECTED) == 0.0);
-    prt_transfer *c1 = compress(one, t, PRT_COMPRESS_CPCA, 5, 3), *c2 = compress(two, t, PRT_COMPRESS_CPCA, 5, 3);
+    prt_transfer *c1 = compress_set(one, t, PRT_COMPRESS_CPCA, 5, 3), *c2 = compress_set(two, t, PRT_COMPRESS_CPCA, 5, 3);
     assert_true(max_error(c1, c2, PRT_TRANSFER_INTERREFLECTED) == 0.0);
     /* Every byte of the files, the reported errors included, except META's timing fields. */
     for (int k = 0; k < 3; ++k) {
