@@ -106,6 +106,13 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
             cJSON_AddItemToArray(surfaces, o);
         }
         free(sizes);
+        cJSON *relights = cJSON_AddArrayToObject(j, "relights");
+        for (unsigned bit = 1; bit <= PRT_LIGHTS_EMISSIVE; bit <<= 1)
+            if (t->method->lighting & bit) cJSON_AddItemToArray(relights, cJSON_CreateString(prt_lights_bit_name(bit)));
+        cJSON_AddBoolToObject(j, "runtime_albedo", t->method->runtime_albedo);
+        cJSON_AddBoolToObject(j, "gpu_passes", t->method->gpu_passes);
+        cJSON *exports = cJSON_AddArrayToObject(j, "export_options");
+        for (int i = 0; i < t->method->export_option_count; ++i) cJSON_AddItemToArray(exports, cJSON_CreateString(t->method->export_options[i].name));
         cJSON *controls = cJSON_AddArrayToObject(j, "controls");
         for (int i = 0; i < t->method->control_count; ++i) {
             int lo, hi, def;
@@ -142,6 +149,16 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
     for (int k = 0; sizes && k < t->mesh.surface_count; ++k)
         prt__describe_line(&d, k ? "" : "surfaces:", "%s (%zu vertices)", t->mesh.surface_names[k], sizes[k + 1]);
     free(sizes);
+    /* What the file can be relit under and with, so that help texts can point here. */
+    char relights[256] = "";
+    size_t at = 0;
+    for (unsigned bit = 1; bit <= PRT_LIGHTS_EMISSIVE && at < sizeof relights; bit <<= 1)
+        if (t->method->lighting & bit) at += (size_t)snprintf(relights + at, sizeof relights - at, "%s%s", at ? ", " : "", prt_lights_bit_name(bit));
+    prt__describe_line(&d, "relights:", "%s%s%s", relights, t->method->runtime_albedo ? "; surface colours live (--albedo-of)" : "",
+                       t->method->gpu_passes ? "; GPU passes (--accumulate gpu)" : "");
+    for (int i = 0; i < t->method->export_option_count; ++i)
+        prt__describe_line(&d, i ? "" : "exports:", "--%s%s%s", t->method->export_options[i].name, t->method->export_options[i].arg ? " " : "",
+                           t->method->export_options[i].arg ? t->method->export_options[i].arg : "");
     for (int i = 0; i < t->method->control_count; ++i) {
         int lo, hi, def;
         prt_transfer_control_range(t, i, &lo, &hi, &def);

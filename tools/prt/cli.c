@@ -476,7 +476,7 @@ prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t,
      * by the procedural sky: --light added to a plain scene adds to the sky. */
     const bool own = (l->set_lights ? kept > 0 && l->light_count > 0 : kept > 0) || emits;
     prt_environment_desc e = environment(l, has_env, &file_env, own);
-    /* A method without distant light (lightcloud) is not given the fallback sky; an environment
+    /* A method that relights no distant light is not given the fallback sky; an environment
      * the scene names is left out with the warning below. */
     if (!(can & PRT_LIGHTS_ENVIRONMENT) && !l->set_source && !e.none) {
         if (has_env) dropped |= PRT_LIGHTS_ENVIRONMENT;

@@ -108,15 +108,13 @@ typedef struct cli_light {
     "                        sphere:X,Y,Z:RADIUS:R,G,B (radiance)\n" \
     "  --emission S          scale the scene's emissive surfaces (0 turns them off; default 1)\n"
 #define CLI_LIGHT_BRDF_HELP \
-    "  --brdf SPEC           reflection lobe for SH glossy sets: phong:N[:KS] or blinn:N[:KS]\n" \
-    "                        (default: the scene's materials; not with a BRDF baked in)\n"
+    "  --brdf SPEC           reflection lobe for glossy sets baked without a BRDF: phong:N[:KS]\n" \
+    "                        or blinn:N[:KS] (default: the scene's materials)\n"
 #define CLI_LIGHT_PAINT_HELP \
     "  --albedo-of NAME=R,G,B  recolour the surface NAME (prt info lists them), repeatable;\n" \
-    "                        for methods that change colours without a rebake (spectral)\n"
+    "                        for methods that change colours without a rebake (prt info says)\n"
 #define CLI_LIGHT_CONTROL_HELP \
-    "  --control NAME=V      a run-time setting of the file's method (prt info lists them: SH\n" \
-    "                        order, wavelet light-coefficients, spectral bounces, lightcloud\n" \
-    "                        neighbours)\n"
+    "  --control NAME=V      a run-time setting of the file's method (prt info lists them)\n"
 #define CLI_LIGHT_RELIGHT_HELP CLI_LIGHT_BRDF_HELP CLI_LIGHT_PAINT_HELP CLI_LIGHT_CONTROL_HELP
 /* Everything, for the commands that take every lighting option. */
 #define CLI_LIGHT_OPTIONS_HELP CLI_LIGHT_HEADER_HELP CLI_LIGHT_SOURCES_HELP CLI_LIGHT_RELIGHT_HELP

@@ -32,7 +32,8 @@ static const char *HELP_HEAD =
     "      --refine-threshold T\n"
     "                         probe difference (occlusion, shadowed share of a light) that\n"
     "                         splits, in (0, 1) (default 0.1; lower refines more; implies --refine)\n"
-    "      --method M         the PRT method (default sh); each has the options listed below\n"
+    "      --method M         the PRT method (default: the first listed); each has the options\n"
+    "                         listed below\n"
     "                         (prt bake --method M --help shows one method's)\n";
 
 static const char *HELP_TAIL =

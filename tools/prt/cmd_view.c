@@ -23,8 +23,8 @@ static const char *HELP =
     "       alt+left-drag moves the selected light in the view plane (turns a directional one),\n"
     "       alt+right-drag or alt+wheel moves it in depth.\n"
     "Keys:  h lists them all; k what the file is relit as, d full/direct/indirect, the method's\n"
-    "       own controls (h lists them, e.g. [ ] for the SH order), n add a light,\n"
-    "       g b offset maps' passes on the GPU or CPU, first-order and final side by side,\n"
+    "       own controls (h lists them), n add a light, g b the method's GPU passes on the\n"
+    "       GPU or CPU and first-order and final light side by side (where it has them),\n"
     "       tab select the next, x remove it, , . dim/brighten, c recolour,\n"
     "       + - exposure, t tone mapping, l reload probe, p screenshot, 0 reset, q quit;\n"
     "       f fly mode: w a s d move, e z rise and sink (walk into a room or Sponza).\n"
@@ -41,9 +41,9 @@ static const char *HELP =
     "                             light-move DX DY DZ, light-scale F, light-colour R G B,\n"
     "                             light-remove, screenshot FILE (.png .exr), quit\n"
     "      --stats                print frame and relight times as JSON on exit\n"
-    "      --accumulate W         offset transfer maps: where the transfer passes run - gpu (the\n"
-    "                             default: binned atlases, additive blending; b shows first-order\n"
-    "                             and final side by side) or cpu (threads); g switches\n"
+    "      --accumulate W         files whose method has GPU passes (prt info says): where they\n"
+    "                             run - gpu (the default: binned atlases, additive blending; b\n"
+    "                             shows first-order and final side by side) or cpu; g switches\n"
     CLI_LIGHT_OPTIONS_HELP
     "Other:\n"
     "  -j, --threads N            relighting threads\n"
@@ -464,8 +464,8 @@ int cmd_view(int argc, char **argv)
         /* The file's lights become the viewer's to edit; the worker relights with a copy per job. */
         view_take_lights(&v);
         v.want.variant = prt_transfer_default_variant(v.t, 1);
-        /* Methods with GPU passes run them on the GPU unless asked otherwise (offset maps: the
-         * paper's run time). */
+        /* Methods with GPU passes run them on the GPU unless asked otherwise (the papers they come
+         * from run them there). */
         if (!accumulate_given) v.light.gpu_finish = prt_method_gpu_passes(prt_transfer_method(v.t));
         else if (v.light.gpu_finish && !cli_check_accumulate(&c, v.t, false)) { c.reported = true; st = PRT_ERR_INVALID_ARG; }
         v.want.gpu = v.light.gpu_finish;

@@ -7,7 +7,7 @@
 static const struct { const char *name; int (*fn)(int, char **); const char *summary; } commands[] = {
     {"bake", cmd_bake, "precompute radiance transfer for a scene into a .prt file"},
     {"relight", cmd_relight, "per-vertex exit radiance of a .prt under a lighting: glTF, PLY, OBJ, JSON or a texel map"},
-    {"export", cmd_export, "a .prt as a mesh for other tools: radiance as vertex colours, SH transfer as glTF attributes"},
+    {"export", cmd_export, "a .prt as a mesh for other tools: radiance as vertex colours, and what its method exports"},
     {"render", cmd_render, "draw a relit .prt to an image: PNG, EXR, HDR or PFM (headless OpenGL)"},
     {"view", cmd_view, "interactive real-time relighting window (GLFW); --script replays input"},
     {"env", cmd_env, "project an environment probe to SH; optional band-limited / irradiance image"},

@@ -147,7 +147,7 @@ static const view_control core[] = {
     {'P', "p", "screenshot (prt-screenshot-N.png)", screenshot, 0},
     {'K', "k", "relight the file as its next kind (prt info lists them)", next_variant, 0},
     {'D', "d", "full / direct only / indirect only", next_component, 0},
-    {'G', "g", "the method's last passes on the GPU / the CPU (offset maps)", toggle_gpu, 0},
+    {'G', "g", "the method's GPU passes on the GPU / the CPU (where it has them)", toggle_gpu, 0},
     {'B', "b", "first-order and final light side by side (with the GPU passes)", toggle_side_by_side, 0},
 };
 
