@@ -241,7 +241,7 @@ prt_status prt_brdf_sh_matrix(const prt_brdf *b, int order, float *B)
     if (st) return st;
     if (!prt_brdf_is_isotropic(b))
         return prt__fail(NULL, PRT_ERR_INVALID_ARG, "the SH matrix needs an isotropic BRDF (ashikhmin with n_u = n_v); "
-                                                    "anisotropic ones belong to the wavelet method");
+                                                    "anisotropic ones need a method with separable BRDFs (prt bake --help)");
     const int nc = order * order;
     /* Equal-area cells in (cos theta, phi) on the upper hemisphere, midpoints. */
     enum { OZ = 24, OP = 48, IZ = 96, IP = 192 };

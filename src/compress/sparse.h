@@ -1,5 +1,5 @@
-/* Sparse top-N vectors of RGB Haar coefficients, quantized per vector and channel (the storage of
- * the wavelet method): a vector keeps the N coefficients of largest RGB magnitude, their indices
+/* Sparse top-N vectors of RGB coefficients (of Haar wavelets, for all-frequency transport: Ng et
+ * al. 2003, Wang et al. 2005), quantized per vector and channel: a vector keeps the N coefficients of largest RGB magnitude, their indices
  * ascending, each channel as a signed integer times the vector's scale for that channel. */
 #ifndef PRT_COMPRESS_SPARSE_H
 #define PRT_COMPRESS_SPARSE_H

@@ -1,5 +1,5 @@
-/* A static kd-tree over 3D points for k-nearest-neighbour queries (the light cloud's run time:
- * Kristensen et al. 2005, section 6.1, after Bentley 1975). */
+/* A static kd-tree over 3D points for k-nearest-neighbour queries (after Bentley 1975; as
+ * Kristensen et al. 2005, section 6.1, find the precomputed lights nearest a user's light). */
 #ifndef PRT_GEOM_KDTREE_H
 #define PRT_GEOM_KDTREE_H
 

@@ -1,5 +1,5 @@
 /* Texel patches of a UV layout: which triangle owns each texel centre, and how much surface each
- * texel covers. Shared by per-texel SH transfer and offset transfer maps. */
+ * texel covers. Shared by every method that bakes transfer per texel. */
 #include "geom/texel_raster.h"
 
 /* The point of triangle (u, v) nearest to (px, py), as barycentrics b1, b2; its squared distance. */

@@ -13,7 +13,7 @@ bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float 
 
 /* The world-space surface area inside each texel of the W x H grid (each triangle clipped to
  * each texel square in UV space, scaled by its world-to-UV area ratio): the patch areas TA(t)
- * of offset transfer maps; their sum is the mesh's area when the layout covers it once. */
+ * of texture-space transfer (Sunshine-Hill & Faloutsos 2006); their sum is the mesh's area when the layout covers it once. */
 bool prt__texel_areas(const prt__mesh *m, int W, int H, float *area);
 
 /* Fills every uncovered texel, ring by ring outwards from the baked ones, with the mean of its

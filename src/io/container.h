@@ -1,6 +1,6 @@
 /* The .prt container's framing (docs/FORMAT.md): magic, version, a chunk table with a CRC-32 per
  * chunk and one over the table, 8-byte aligned chunks. It knows nothing of what chunks mean:
- * method/file.c and each method's entry fill and read them. */
+ * transfer/file.c and each method's entry fill and read them. */
 #ifndef PRT_IO_CONTAINER_H
 #define PRT_IO_CONTAINER_H
 

@@ -1,5 +1,5 @@
-/* Local lights' direct light at mesh vertices with shadow rays: what the methods that relight
- * local lights per vertex (spectral, lightcloud) share. The mesh goes into Embree on first use and
+/* Local lights' direct light at mesh vertices (or any points with normals) with shadow rays: what
+ * every method that relights local lights per vertex or texel shares. The mesh goes into Embree on first use and
  * stays; `lock` keeps that safe when several threads relight at once. */
 #ifndef PRT_LIGHT_VERTEX_LIGHTS_H
 #define PRT_LIGHT_VERTEX_LIGHTS_H

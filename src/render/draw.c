@@ -90,9 +90,10 @@ static const char *FS_G =
     "  color = vec4(f_rad + cosine * max(acc, vec3(0.0)), 1.0);\n"
     "}\n";
 
-/* Separable view factor (wavelet PRT): the same geometry shader; each corner's K-vector (texel
- * v * K + k: rgb = g_k, a = its view-map set) meets the view maps at this pixel's direction in
- * the frame of eq. 10 built on the interpolated normal, as relight/wavelet.c does per vertex. */
+/* Separable view factor (Wang, Tran & Luebke 2005): the same geometry shader; each corner's
+ * K-vector (texel v * K + k: rgb = g_k, a = its view-map set) meets the view maps at this pixel's
+ * direction in the frame of eq. 10 built on the interpolated normal, as the CPU does per vertex
+ * (prt_relit_shade). */
 static const char *FS_S =
     "#version 330 core\n"
     "in vec3 f_pos; in vec3 f_nrm; in vec3 f_rad; in vec3 f_bary; flat in ivec3 f_ids;\n"

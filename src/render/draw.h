@@ -26,8 +26,8 @@ typedef struct prt__draw {
     GLint ut_mvp, ut_map;
     int texel_width, texel_height;   /* 0: the per-texel path is off */
     bool has_uv;
-    /* Separable view factor (K-vectors and view maps, as the wavelet method relights): K-vectors and view-map sets in a texture buffer,
-     * view maps in a texture array. */
+    /* Separable view factor: K-vectors and view-map sets in a texture buffer, view maps in a
+     * texture array. */
     GLuint program_s, tbo_k, tbo_k_tex, maps_tex;
     GLint us_mvp, us_eye, us_terms, us_polar, us_kvec, us_maps;
     int kvec_terms, view_polar;

@@ -1,6 +1,6 @@
 /* Local lights drawn per pixel with shadow maps: what methods that relight local lights leave out
- * of their per-vertex radiance (the paper of the spectral method draws direct light this way and
- * indirect light per vertex). Point, spot and sphere lights get a cube map of distances from the
+ * of their per-vertex radiance (direct light per pixel, indirect light per vertex, as Wang, Zhu &
+ * Humphreys 2007 draw it). Point, spot and sphere lights get a cube map of distances from the
  * light, directional lights an orthographic map; an additive pass shades each pixel as a
  * Lambertian surface of the interpolated albedo, with percentage-closer filtering (and a blocker
  * search that widens the penumbra for sphere lights). Requires a current OpenGL 3.3 context. */

@@ -1,6 +1,6 @@
 /* The bake driver shared by every method: stages of independent work units on all threads, with
  * progress, cancellation, checkpoints and timing written once (see prt__bake_job in
- * method/method.h and method/checkpoint.h). */
+ * transfer/method.h and transfer/checkpoint.h). */
 #include "transfer/method.h"
 #include "transfer/checkpoint.h"
 

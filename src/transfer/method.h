@@ -1,7 +1,8 @@
-/* A method's entry in the method table (method/table.c) and what the method-independent layer
- * (method/bake.c, file.c, describe.c, transfer.c, options.c) offers the entries. A method is
- * its own files (bake/NAME.c, relight/NAME.c, method/NAME.c with its state in method/NAME.h)
- * plus one line in the table; see docs/ARCHITECTURE.md. */
+/* A method's entry in the method table (methods/table.c) and what the method-independent layer
+ * (transfer/: bake.c, checkpoint.c, file.c, describe.c, export.c, transfer.c, options.c) offers
+ * the entries. A method is its own folder, src/methods/NAME/ (its entry, state header NAME.h,
+ * bake, run time, chunks, exports, GPU passes), plus one line in the table; see
+ * docs/ARCHITECTURE.md. */
 #ifndef PRT_TRANSFER_METHOD_H
 #define PRT_TRANSFER_METHOD_H
 
@@ -15,7 +16,7 @@
 typedef struct prt_method prt__method;
 
 /* ---- Bakes as stages of independent work units ----
- * method/bake.c drives every method's bake: it asks for stage 0, runs its units on all threads
+ * transfer/bake.c drives every method's bake: it asks for stage 0, runs its units on all threads
  * (in any order: a unit's result depends only on its inputs), reports progress and honours
  * cancellation between units, then asks for stage 1, and so on; a stage with no units and no
  * `whole` step ends the bake. Progress, cancellation and (later) checkpoints and sharding are
@@ -30,7 +31,7 @@ typedef struct prt__stage {
     /* A step with parallel loops of its own (k-means, a BRDF fit), run once instead of units;
      * it reports through p and checks p for cancellation. */
     prt_status (*whole)(prt__bake_job *job, prt_context *ctx, prt__progress *p);
-    /* Resumable bakes (method/checkpoint.h): writes everything unit `unit` produced into out, and
+    /* Resumable bakes (transfer/checkpoint.h): writes everything unit `unit` produced into out, and
      * puts it back from those bytes (false when they do not fit the job: a corrupt checkpoint).
      * NULL: the stage's units run again on resume. */
     void (*save_unit)(prt__bake_job *job, uint64_t unit, prt__bytes *out);
@@ -49,7 +50,7 @@ struct prt__bake_job {
 
 /* Runs a job to the end (progress and cancellation through run, which may be NULL), then frees
  * it; t's bake_seconds and threads are filled in. Used by prt_bake and the methods' own bake
- * functions (prt_bake_sh, prt_bake_wavelet). */
+ * functions (a method's own public bake function with its desc struct). */
 prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt_transfer *t);
 /* The same with a checkpoint (NULL = none); the driver takes units from it and adds to it. */
 prt_status prt__bake_drive_checkpointed(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt__checkpoint *cp,
@@ -61,7 +62,7 @@ typedef prt_status (*prt__bake_begin_fn)(prt_context *ctx, const prt_scene *scen
 prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__method *m, prt__bake_begin_fn begin, const void *desc,
                           const prt_bake_run_desc *run, prt_transfer **out);
 
-/* ---- Options (method/options.c) ---- */
+/* ---- Options (transfer/options.c) ---- */
 const char *prt__opt(const prt_options *o, const char *name);   /* NULL when not given */
 int prt__opt_int(const prt_options *o, const char *name, int fallback);
 float prt__opt_float(const prt_options *o, const char *name, float fallback);
@@ -71,7 +72,7 @@ int prt__opt_choice(const prt_options *o, const char *name, int fallback);
 /* Adds the options as given (sorted by name, so the order on a command line does not matter). */
 void prt__options_fingerprint(const prt_options *o, prt__fingerprint *fp);
 
-/* ---- Descriptions (method/describe.c) ----
+/* ---- Descriptions (transfer/describe.c) ----
  * One code path writes both forms: text lines for people, fields for JSON. */
 typedef struct prt__describe {
     bool json;

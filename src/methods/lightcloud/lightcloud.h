@@ -1,6 +1,6 @@
 /* The light-cloud method's state (Kristensen, Akenine-Moller & Jensen 2005: precomputed local
- * radiance transfer). bake/lightcloud.c, bake/lightcloud_cluster.c, relight/lightcloud.c and the
- * table entry method/lightcloud.c look inside.
+ * radiance transfer). bake.c, cluster.c, relight.c and the
+ * table entry method.c look inside.
  *
  * A cloud of unit point lights (1 W/sr, white) was placed over a region; for each, the exit
  * radiance of every vertex was computed (the indirect part, or all of it with store_direct).
@@ -80,7 +80,7 @@ bool prt__lightcloud_index(const prt_transfer *t, prt__lightcloud_set *s);
 float prt__lightcloud_spacing(const float *cloud, uint32_t count);
 void prt__lightcloud_block_free(prt__lightcloud_block *b);
 
-/* Bake (bake/lightcloud.c). */
+/* Bake (bake.c). */
 typedef struct prt__lightcloud_bake_desc {
     int grid[3];                 /* cloud grid cells; 0 = 6 x 6 x 6 */
     bool has_box;
@@ -98,13 +98,13 @@ typedef struct prt__lightcloud_bake_desc {
 prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, const prt__lightcloud_bake_desc *d,
                                       prt_transfer *t, prt__bake_job **job);
 
-/* Clustering (bake/lightcloud_cluster.c): merges n lights bottom-up while every pair across two
+/* Clustering (cluster.c): merges n lights bottom-up while every pair across two
  * clusters has metric(j, k) < 1, smallest first; cluster_of[i] numbers the clusters in order of
  * their first member. */
 typedef float (*prt__light_metric_fn)(void *user, uint32_t j, uint32_t k);
 prt_status prt__lightcloud_cluster(prt_context *ctx, uint32_t n, prt__light_metric_fn metric, void *user, uint32_t *cluster_of, uint32_t *clusters);
 
-/* Run time (relight/lightcloud.c): weights over the cloud (3 per light: colour) for the point and
+/* Run time (relight.c): weights over the cloud (3 per light: colour) for the point and
  * sphere lights of l, by interpolation among the `neighbours` nearest cloud lights visible from
  * each light. */
 prt_status prt__lightcloud_weights(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, int neighbours, float *w);

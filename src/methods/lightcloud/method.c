@@ -1,7 +1,7 @@
 /* The light-cloud method's table entry (precomputed local radiance transfer, Kristensen,
  * Akenine-Moller & Jensen 2005): bake options, its chunks (LCPR, LCZN per zone, LCEM),
  * description, the neighbours control and relighting of point and sphere lights. The bake is
- * bake/lightcloud.c (+ lightcloud_cluster.c), the run time relight/lightcloud.c. */
+ * bake.c (+ cluster.c), the run time relight.c. */
 #include "methods/lightcloud/lightcloud.h"
 
 #define CHUNK_LCPR PRT__FOURCC('L', 'C', 'P', 'R')

@@ -1,8 +1,8 @@
 /* The offset method's table entry (offset radiance transfer mapping, Sunshine-Hill & Faloutsos
  * 2006): bake options, its chunks (OFSP parameters and offsets, OFST texel patches, OFSR and OFSS
  * maps), description, the bounce control and relighting. The offsets and maps are made in
- * bake/offset.c (with bake/offset_sampling.c and bake/offset_transfer.c), the run time is
- * relight/offset.c. */
+ * bake.c (with sampling.c and transfer.c), the run time is
+ * relight.c. */
 #include "methods/offset/offset.h"
 
 #define CHUNK_OFSP PRT__FOURCC('O', 'F', 'S', 'P')

@@ -32,7 +32,7 @@ bool prt__offset_set_index(prt__offset_set *s)
 /* out[i] = sum_k in(texel i + offset k) maps[k][i], over covered texels. An offset landing off
  * the surface reads its gutter's source (s->source): a cell that does hold surface takes the light
  * of the chart's edge rather than nothing - as the paper's lightmap with dilated gutters gives it,
- * and exactly what the GPU path (render/offset_gl.c) reads. Blocks of texels take the maps one
+ * and exactly what the GPU path (render/light_map_gl.c) reads. Blocks of texels take the maps one
  * after the other, so that each map streams through memory once and the block's sums stay in
  * cache (texel by texel, every offset would touch a new cache line); each texel still sums its
  * offsets in order, so the result does not depend on the block or thread count. */

@@ -182,7 +182,7 @@ static inline void gather_hit(const prt__mesh *m, const float *prev, int nc3, co
     for (int i = 0; i < nc3; ++i) acc[i] += b0 * t0[i] + b1 * t1[i] + b2 * t2[i];
 }
 
-/* The bake as stages (method/method.h): visibility per block of vertices, then either the
+/* The bake as stages (transfer/method.h): visibility per block of vertices, then either the
  * coupled glossy bounce loop or one stage per diffuse bounce, then texels and the BRDF. */
 #define BLOCK 64
 
@@ -248,7 +248,7 @@ static prt_status run_bounce(prt__bake_job *b, uint64_t unit, int thread)
     return PRT_OK;
 }
 
-/* Checkpoint records (method/checkpoint.h): a unit's rows of every array it wrote, and for
+/* Checkpoint records (transfer/checkpoint.h): a unit's rows of every array it wrote, and for
  * visibility the hit lists the bounces gather over. */
 typedef struct rows { float *base; size_t per_vertex; } rows;
 

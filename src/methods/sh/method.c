@@ -1,6 +1,7 @@
 /* The spherical-harmonic method's table entry: bake options, its chunks (SHTR, CPCA, TXAL, TXLS),
  * its description, variants (the transfer kinds), controls and relighting. The bake itself lives
- * in bake/sh_*.c, relighting kernels in relight/sh_*.c, compression in compress/. */
+ * in bake*.c, relighting kernels in relight*.c, compression in compress.c, exports in
+ * export.c. */
 #include "methods/sh/sh.h"
 #include "light/envmap_internal.h"
 

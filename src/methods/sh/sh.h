@@ -1,5 +1,5 @@
-/* The spherical-harmonic method's state (bake/sh_*.c, relight/sh_*.c, compress/compress.c and
- * its table entry method/sh.c look inside; nothing else does). */
+/* The spherical-harmonic method's state (bake*.c, relight*.c, compress.c and
+ * its table entry method.c look inside; nothing else does). */
 #ifndef PRT_METHODS_SH_H
 #define PRT_METHODS_SH_H
 
@@ -66,11 +66,11 @@ typedef struct prt__sh_extra {
     prt_image normal_map;         /* moved into the job when it holds pixels */
 } prt__sh_extra;
 
-/* The SH bake (bake/sh_diffuse.c) as stages of work units: validates d (defaults filled in),
+/* The SH bake (bake.c) as stages of work units: validates d (defaults filled in),
  * and sets up the job for t (which holds the scene's mesh and materials). extra may be NULL. */
 prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *d, prt__sh_extra *extra, prt_transfer *t, prt__bake_job **job);
 
-/* Compression steps (compress/compress.c): defaults filled in and checked; one set compressed in
+/* Compression steps (compress.c): defaults filled in and checked; one set compressed in
  * place; every set quantized in place. */
 prt_status prt__compress_desc_check(prt_context *ctx, prt_compress_desc *d);
 prt_status prt__sh_compress_set(prt_context *ctx, prt__sh_state *s, size_t vertex_count, int k, const prt_compress_desc *d, prt__progress *prog);

@@ -1,7 +1,7 @@
 /* The spectral method's table entry (direct-to-indirect transfer in a spectral mesh basis, Wang,
  * Zhu & Humphreys 2007): bake options, its chunks (SPCP, SPCB, SPCT, SPCE), description, the
  * bounce control and relighting with run-time albedo. The basis is built in
- * bake/spectral_basis.c, the transfer in bake/spectral.c, the run time in relight/spectral.c. */
+ * basis.c, the transfer in bake.c, the run time in relight.c. */
 #include "methods/spectral/spectral.h"
 #include "brdf/sh_matrix.h"
 

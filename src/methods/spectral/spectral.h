@@ -1,6 +1,6 @@
 /* The spectral method's state (Wang, Zhu & Humphreys 2007: direct-to-indirect transfer in a
- * spectral mesh basis). bake/spectral_basis.c, bake/spectral.c, relight/spectral.c and the table
- * entry method/spectral.c look inside.
+ * spectral mesh basis). basis.c, bake.c, relight.c and the table
+ * entry method.c look inside.
  *
  * The mesh is cut into partitions; partition p carries count[p] basis functions, the lowest
  * frequencies of its own topological Laplacian, numbered first[p] .. first[p + 1] - 1. Vertex v
@@ -90,7 +90,7 @@ void prt__spectral_basis_free(prt__spectral_basis *b);
 bool prt__spectral_basis_index(prt__spectral_basis *b, size_t vertex_count);
 
 /* Partitions m with METIS into pieces of about partition_size vertices and gives each the
- * lowest-frequency eigenvectors of its Laplacian, about `functions` in all (bake/spectral_basis.c). */
+ * lowest-frequency eigenvectors of its Laplacian, about `functions` in all (basis.c). */
 prt_status prt__spectral_basis_build(prt_context *ctx, const prt__mesh *m, int partition_size, int functions, prt__progress *p,
                                      prt__spectral_basis *out);
 /* The untruncated basis: vertex v alone is partition v with the one function 1 (it spans what all
@@ -101,7 +101,7 @@ void prt__spectral_project(const prt__spectral_basis *b, const float *signal, fl
 /* The signal back from its coefficients (3 floats per vertex). */
 void prt__spectral_reconstruct(const prt__spectral_basis *b, size_t vertex_count, const float *coeffs, float *signal, int threads);
 
-/* The bake (bake/spectral.c) as stages of work units. */
+/* The bake (bake.c) as stages of work units. */
 typedef struct prt__spectral_bake_desc {
     int partition_size, functions, samples, env_order;
     bool full;   /* every vertex its own function: no truncation */
@@ -117,7 +117,7 @@ bool prt__spectral_glossy_index(const prt_transfer *t, prt__spectral_set *s);
  * bounce from the outgoing radiance `out` (3 per vertex) of every surface. */
 prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, float *exit_sh);
 
-/* Run time (relight/spectral.c). Per-vertex irradiance from the lighting's direct light; when
+/* Run time (relight.c). Per-vertex irradiance from the lighting's direct light; when
  * pixel is not NULL it also gets the part from the lighting's first pixel_count local lights. */
 prt_status prt__spectral_direct(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, float *irradiance, float *pixel, int pixel_count);
 /* Per light and vertex ([light][vertex]): whether the vertex sees the light, 0..1. */

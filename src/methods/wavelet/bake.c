@@ -257,7 +257,7 @@ static void add_pass(const wjob *j, size_t v, const prt__sparse_store *a, const 
     encode_terms(out, j->vec_start[v], planes, K, false, w);
 }
 
-/* The bake as stages (method/method.h): the direct pass, then per bounce a gathering pass and
+/* The bake as stages (transfer/method.h): the direct pass, then per bounce a gathering pass and
  * a truncated running sum, each over blocks of vertices. */
 #define BLOCK 16
 

@@ -1,7 +1,6 @@
 /* The wavelet method's table entry (all-frequency glossy PRT, Wang, Tran & Luebke 2005): bake
  * options, its chunks (WAVP, WBRF, WAVT), description, controls, relighting and the CPU view
- * factor. The bake lives in bake/wavelet.c, the kernels in relight/wavelet.c, the lighting in
- * light/wavelet_light.c. */
+ * factor. The bake lives in bake.c, the kernels in relight.c, the lighting in lighting.c. */
 #include "methods/wavelet/wavelet.h"
 
 #include <strings.h>

@@ -1,5 +1,5 @@
-/* The wavelet method's state (bake/wavelet.c, relight/wavelet.c and its table entry
- * method/wavelet.c look inside): per vertex term_count[v] sparse transport vectors, vertex v's
+/* The wavelet method's state (bake.c, relight.c and its table entry
+ * method.c look inside): per vertex term_count[v] sparse transport vectors, vertex v's
  * first at vec_start[v]. */
 #ifndef PRT_METHODS_WAVELET_H
 #define PRT_METHODS_WAVELET_H
@@ -29,7 +29,7 @@ void prt__wavelet_set_free(void *w);
 bool prt__wavelet_index(prt__wavelet_set *w, size_t vertex_count, size_t *vectors);
 /* Packs the factored materials' view maps for the renderer (prt_wavelet_view_maps). */
 prt_status prt__wavelet_build_view_maps(const prt_transfer *t, prt__wavelet_set *w);
-/* The wavelet bake (bake/wavelet.c) as stages of work units, for t holding the scene. */
+/* The wavelet bake (bake.c) as stages of work units, for t holding the scene. */
 prt_status prt__wavelet_bake_begin(prt_context *ctx, const prt_wavelet_bake_desc *d, prt_transfer *t, prt__bake_job **job);
 
 #endif
