@@ -112,4 +112,8 @@ prt_status prt__lightcloud_weights(prt_context *ctx, const prt_transfer *t, cons
  * glossy part's SH (3 x 16 per vertex, added to; may be NULL). */
 prt_status prt__lightcloud_eval(prt_context *ctx, const prt_transfer *t, const float *w, float *rgb, float *exit_sh);
 
+/* Its chunks (file.c). */
+prt_status prt__lightcloud_save(const prt_transfer *t, prt__chunk_list *out);
+prt_status prt__lightcloud_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count);
+
 #endif

@@ -14,6 +14,7 @@
 #define PRT__OFFSET_RADIOSITY_BIT 1
 #define PRT__OFFSET_SUBSURFACE_BIT 2
 #define PRT__OFFSET_ENV_COEFFS 9    /* first-order light from the environment: SH order 3 */
+#define PRT__OFFSET_TEXEL_FLOATS (3 + 3 + 3 + 1 + PRT__OFFSET_ENV_COEFFS)   /* a texel patch in files: pos, nrm, albedo, area, env */
 #define PRT__OFFSET_SHADOW_SAMPLES 4 /* shadow-ray points per texel: a rotated grid */
 #define PRT__OFFSET_MAX_ENTRIES ((uint64_t)1 << 28)   /* texels x offsets, each 3 floats: 3 GiB */
 
@@ -92,5 +93,9 @@ prt_status prt__offset_gpu_passes(prt_context *ctx, const prt_transfer *t, const
 
 /* prt export (export.c): --maps DIR. */
 prt_status prt__offset_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);
+
+/* Its chunks (file.c). */
+prt_status prt__offset_save(const prt_transfer *t, prt__chunk_list *out);
+prt_status prt__offset_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count);
 
 #endif

@@ -1,4 +1,4 @@
-/* The spherical-harmonic method's table entry: bake options, its chunks (SHTR, CPCA, TXAL, TXLS),
+/* The spherical-harmonic method's table entry: bake options, its chunks in file.c (SHTR, CPCA, TXAL, TXLS),
  * its description, variants (the transfer kinds), controls and relighting. The bake itself lives
  * in bake*.c, relighting kernels in relight*.c, compression in compress.c, exports in
  * export.c. */
@@ -7,11 +7,6 @@
 
 #include <strings.h>
 
-#define CHUNK_SHTR PRT__FOURCC('S', 'H', 'T', 'R')
-#define CHUNK_CPCA PRT__FOURCC('C', 'P', 'C', 'A')
-#define CHUNK_TXAL PRT__FOURCC('T', 'X', 'A', 'L')
-#define CHUNK_TXLS PRT__FOURCC('T', 'X', 'L', 'S')
-#define CPCA_HEADER 64
 
 /* ---- state and kinds ---- */
 prt__sh_state *prt__sh_state_new(void) { return prt__calloc(1, sizeof(prt__sh_state)); }
@@ -294,246 +289,6 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
     return st;
 }
 
-/* ---- files ---- */
-static void sh_save_meta(const prt_transfer *t, cJSON *meta)
-{
-    const prt__sh_state *s = t->state;
-    cJSON_AddNumberToObject(meta, "order", s->order);
-    cJSON_AddNumberToObject(meta, "samples", s->samples);
-    cJSON_AddNumberToObject(meta, "bounces", s->bounces);
-    cJSON_AddNumberToObject(meta, "seed", s->seed);
-    if (s->glossy_exit) cJSON_AddBoolToObject(meta, "glossy_exit", 1);
-}
-
-static prt_status sh_save(const prt_transfer *t, prt__chunk_list *l)
-{
-    const prt__sh_state *sh = t->state;
-    const prt__mesh *m = &t->mesh;
-    for (int k = 0; k < PRT__KIND_COUNT; ++k) {
-        const prt__sh_set *s = &sh->sets[k];
-        if (!s->channels) continue;
-        unsigned char *h = prt__chunks_alloc(l, CPCA_HEADER);
-        if (!h) break;
-        prt__put32(h, (uint32_t)prt__kind_from_index(k));
-        prt__put32(h + 4, (uint32_t)s->channels);
-        prt__put32(h + 8, (uint32_t)sh->order);
-        if (!s->cpca) {
-            const size_t dim = prt__set_dim(sh, k), n = m->vertex_count * dim;
-            prt__put64(h + 16, m->vertex_count);
-            if (!s->quant_bits) {
-                prt__chunks_add(l, CHUNK_SHTR, h, (size_t)24, s->coeffs, n * sizeof(float), NULL);
-                continue;
-            }
-            /* Quantized: scale[dim], bias[dim], then the integers, padded to 4 bytes. */
-            prt__put32(h + 12, (uint32_t)s->quant_bits);
-            const size_t qbytes = n * (size_t)(s->quant_bits / 8), padded = (qbytes + 3) & ~(size_t)3;
-            float *grid = prt__chunks_alloc(l, 2 * dim * sizeof(float));
-            unsigned char *q = prt__chunks_alloc(l, padded);
-            if (!grid || !q) break;
-            prt__quant_grid(s->coeffs, m->vertex_count, (int)dim, s->quant_bits, grid, grid + dim);
-            for (size_t i = 0; i < n; ++i) {
-                size_t j = i % dim;
-                float lv = grid[j] > 0 ? roundf((s->coeffs[i] - grid[dim + j]) / grid[j]) : 0.0f;
-                uint32_t u = (uint32_t)fminf(fmaxf(lv, 0.0f), (float)((1u << s->quant_bits) - 1));
-                if (s->quant_bits == 8) q[i] = (unsigned char)u;
-                else { uint16_t w = (uint16_t)u; memcpy(q + 2 * i, &w, 2); }
-            }
-            prt__chunks_add(l, CHUNK_SHTR, h, (size_t)24, grid, 2 * dim * sizeof(float), q, padded, NULL);
-            continue;
-        }
-        const prt__cpca *c = s->cpca;
-        prt__put32(h + 12, (uint32_t)c->method);
-        prt__put32(h + 16, (uint32_t)c->clusters);
-        prt__put32(h + 20, (uint32_t)c->dim);
-        prt__put64(h + 24, m->vertex_count);
-        prt__put64(h + 32, c->vectors_total);
-        prt__put64(h + 40, c->weights_total);
-        memcpy(h + 48, &c->rms_error, 8);
-        memcpy(h + 56, &c->relative_error, 8);
-        const size_t dim = (size_t)c->dim;
-        prt__chunks_add(l, CHUNK_CPCA, h, (size_t)CPCA_HEADER, c->counts, (size_t)c->clusters * 4, c->means, (size_t)c->clusters * dim * 4,
-                        c->basis, c->vectors_total * dim * 4, c->cluster_of, m->vertex_count * 4, c->weights, c->weights_total * 4, NULL);
-    }
-    const prt__texel_sets *tx = &sh->texels;
-    if (tx->width) {
-        static const unsigned char pad4[4] = {0};
-        const size_t ntex = (size_t)tx->width * tx->height;
-        unsigned char *head = prt__chunks_alloc(l, 8);
-        if (head) {
-            prt__put32(head, (uint32_t)tx->width);
-            prt__put32(head + 4, (uint32_t)tx->height);
-        }
-        const size_t pad = ((ntex + 3) & ~(size_t)3) - ntex;
-        if (pad) prt__chunks_add(l, CHUNK_TXAL, head, (size_t)8, tx->albedo, ntex * 12, tx->covered, ntex, pad4, pad, NULL);
-        else prt__chunks_add(l, CHUNK_TXAL, head, (size_t)8, tx->albedo, ntex * 12, tx->covered, ntex, NULL);
-        for (int k = 0; k < 3; ++k) {
-            if (!tx->coeffs[k]) continue;
-            unsigned char *h = prt__chunks_alloc(l, 24);
-            if (!h) break;
-            prt__put32(h, (uint32_t)prt__kind_from_index(k));
-            prt__put32(h + 4, (uint32_t)tx->channels[k]);
-            prt__put32(h + 8, (uint32_t)sh->order);
-            prt__put32(h + 12, (uint32_t)tx->width);
-            prt__put32(h + 16, (uint32_t)tx->height);
-            prt__chunks_add(l, CHUNK_TXLS, h, (size_t)24, tx->coeffs[k], ntex * (size_t)tx->channels[k] * sh->order * sh->order * 4, NULL);
-        }
-    }
-    return PRT_OK;   /* allocation failures are recorded in the list and reported when writing */
-}
-
-static prt_status bad(prt_context *ctx, const char *msg) { return prt__fail(ctx, PRT_ERR_FORMAT, "%s", msg); }
-
-static prt_status load_cpca(prt_context *ctx, prt__sh_state *sh, const prt__chunk_in *in, uint64_t vertex_count)
-{
-    const unsigned char *p = in->data;
-    const uint64_t len = in->size;
-    if (len < CPCA_HEADER) return bad(ctx, "corrupt .prt file: bad compressed transfer chunk");
-    uint32_t kind = prt__get32(p), channels = prt__get32(p + 4), order = prt__get32(p + 8), method = prt__get32(p + 12);
-    uint32_t clusters = prt__get32(p + 16), dim = prt__get32(p + 20);
-    uint64_t nv = prt__get64(p + 24), nvec = prt__get64(p + 32), nw = prt__get64(p + 40);
-    int k = prt__kind_index((prt_transfer_kind)kind);
-    /* Every count is bounded by the chunk's own length before it sizes anything. */
-    if (k < 0 || (channels != 1 && channels != 3) || order < 1 || order > PRT_SH_MAX_ORDER || method > PRT_COMPRESS_VQ ||
-        dim != channels * order * order * (prt__kind_glossy(k) ? order * order : 1) || nv != vertex_count || (sh->order && (int)order != sh->order) ||
-        sh->sets[k].channels || clusters == 0 || clusters > len / 4 || nvec > len / 4 || nw > len / 4 || (uint64_t)clusters * dim > len / 4 ||
-        nvec * dim > len / 4 || CPCA_HEADER + 4 * ((uint64_t)clusters + (uint64_t)clusters * dim + nvec * dim + nv + nw) != len)
-        return bad(ctx, "corrupt .prt file: invalid compressed transfer chunk");
-    prt__cpca *c = prt__calloc(1, sizeof *c);
-    if (c) {
-        c->method = (prt_compress_method)method;
-        c->clusters = (int)clusters;
-        c->dim = (int)dim;
-        c->vectors_total = nvec;
-        c->weights_total = nw;
-        memcpy(&c->rms_error, p + 48, 8);
-        memcpy(&c->relative_error, p + 56, 8);
-        c->counts = malloc(clusters * 4ull);
-        c->means = malloc((size_t)clusters * dim * 4);
-        c->basis = malloc(nvec * dim * 4 + 4);
-        c->cluster_of = malloc(nv * 4);
-        c->weights = malloc(nw * 4 + 4);
-    }
-    if (!c || !c->counts || !c->means || !c->basis || !c->cluster_of || !c->weights) {
-        prt__cpca_free(c);
-        return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    }
-    const unsigned char *q = p + CPCA_HEADER;
-    memcpy(c->counts, q, clusters * 4ull); q += clusters * 4ull;
-    memcpy(c->means, q, (size_t)clusters * dim * 4); q += (size_t)clusters * dim * 4;
-    memcpy(c->basis, q, nvec * dim * 4); q += nvec * dim * 4;
-    memcpy(c->cluster_of, q, nv * 4); q += nv * 4;
-    memcpy(c->weights, q, nw * 4);
-    if (!prt__cpca_index(c, nv)) {
-        prt__cpca_free(c);
-        return bad(ctx, "corrupt .prt file: compressed transfer indices are inconsistent");
-    }
-    if (!prt__all_finite(c->means, (size_t)clusters * dim) || !prt__all_finite(c->basis, nvec * dim) || !prt__all_finite(c->weights, nw)) {
-        prt__cpca_free(c);
-        return bad(ctx, "corrupt .prt file: non-finite compressed transfer");
-    }
-    sh->order = (int)order;
-    sh->sets[k].channels = (int)channels;
-    sh->sets[k].cpca = c;
-    return PRT_OK;
-}
-
-static prt_status load_set(prt_context *ctx, prt__sh_state *sh, const prt__chunk_in *in, uint64_t vertex_count)
-{
-    const unsigned char *p = in->data;
-    const uint64_t len = in->size;
-    if (len < 24) return bad(ctx, "corrupt .prt file: short transfer chunk");
-    uint32_t kind = prt__get32(p), channels = prt__get32(p + 4), order = prt__get32(p + 8), bits = prt__get32(p + 12);
-    uint64_t nv = prt__get64(p + 16);
-    int k = prt__kind_index((prt_transfer_kind)kind);
-    if (k < 0 || (channels != 1 && channels != 3) || order < 1 || order > PRT_SH_MAX_ORDER || nv != vertex_count ||
-        (sh->order && (int)order != sh->order) || sh->sets[k].channels)
-        return bad(ctx, "corrupt .prt file: invalid transfer chunk header");
-    uint64_t dim = (uint64_t)channels * order * order * (prt__kind_glossy(k) ? order * order : 1), n = nv * dim;
-    uint64_t need = bits == 0 ? 24 + n * 4 : 24 + 8 * dim + ((n * (bits / 8) + 3) & ~3ull);
-    if ((bits != 0 && bits != 8 && bits != 16) || n > len || need != len) return bad(ctx, "corrupt .prt file: transfer chunk size mismatch");
-    float *c = malloc(n * 4);
-    if (!c) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    if (bits == 0) {
-        memcpy(c, p + 24, n * 4);
-    } else {
-        const unsigned char *grid = p + 24, *q = p + 24 + 8 * dim;
-        for (uint64_t i = 0; i < n; ++i) {
-            uint64_t j = i % dim;
-            float scale, bias;
-            memcpy(&scale, grid + 4 * j, 4);
-            memcpy(&bias, grid + 4 * (dim + j), 4);
-            uint32_t u = q[i];
-            if (bits == 16) { uint16_t w; memcpy(&w, q + 2 * i, 2); u = w; }
-            c[i] = bias + (float)u * scale;
-        }
-    }
-    if (!prt__all_finite(c, n)) { free(c); return bad(ctx, "corrupt .prt file: non-finite transfer coefficients"); }
-    sh->sets[k].quant_bits = (int)bits;
-    sh->order = (int)order;
-    sh->sets[k].channels = (int)channels;
-    sh->sets[k].coeffs = c;
-    return PRT_OK;
-}
-
-static prt_status load_texels(prt_context *ctx, prt__sh_state *sh, prt__chunk_in *chunks, int count)
-{
-    prt__chunk_in *in = prt__chunk_take(chunks, count, CHUNK_TXAL);
-    prt__texel_sets *tx = &sh->texels;
-    if (!in) {
-        if (prt__chunk_take(chunks, count, CHUNK_TXLS)) return bad(ctx, "corrupt .prt file: texel transfer without its albedo chunk");
-        return PRT_OK;
-    }
-    const unsigned char *p = in->data;
-    uint64_t len = in->size;
-    uint32_t w = len >= 8 ? prt__get32(p) : 0, h = len >= 8 ? prt__get32(p + 4) : 0;
-    uint64_t ntex = (uint64_t)w * h;
-    if (w == 0 || h == 0 || w > 8192 || h > 8192 || 8 + ntex * 12 + ((ntex + 3) & ~3ull) != len) return bad(ctx, "corrupt .prt file: invalid texel albedo chunk");
-    tx->albedo = malloc(ntex * 12);
-    tx->covered = malloc(ntex);
-    if (!tx->albedo || !tx->covered) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    memcpy(tx->albedo, p + 8, ntex * 12);
-    memcpy(tx->covered, p + 8 + ntex * 12, ntex);
-    tx->width = (int)w;
-    tx->height = (int)h;
-    if (!prt__all_finite(tx->albedo, ntex * 3)) return bad(ctx, "corrupt .prt file: non-finite texel albedo");
-    while ((in = prt__chunk_take(chunks, count, CHUNK_TXLS))) {
-        p = in->data;
-        len = in->size;
-        uint32_t kind = len >= 24 ? prt__get32(p) : 0, channels = len >= 24 ? prt__get32(p + 4) : 0, order = len >= 24 ? prt__get32(p + 8) : 0;
-        uint32_t tw = len >= 24 ? prt__get32(p + 12) : 0, th = len >= 24 ? prt__get32(p + 16) : 0;
-        int k = prt__kind_index((prt_transfer_kind)kind);
-        uint64_t n = (uint64_t)tw * th * channels * order * order;
-        if (k < 0 || k > 2 || (channels != 1 && channels != 3) || (int)order != sh->order || (int)tw != tx->width || (int)th != tx->height ||
-            tx->coeffs[k] || 24 + n * 4 != len)
-            return bad(ctx, "corrupt .prt file: invalid texel transfer chunk");
-        if (!(tx->coeffs[k] = malloc(n * 4))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        memcpy(tx->coeffs[k], p + 24, n * 4);
-        tx->channels[k] = (int)channels;
-        if (!prt__all_finite(tx->coeffs[k], n)) return bad(ctx, "corrupt .prt file: non-finite texel transfer");
-    }
-    return PRT_OK;
-}
-
-static prt_status sh_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count)
-{
-    prt__sh_state *sh = prt__sh_state_new();
-    if (!sh) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    t->state = sh;
-    const cJSON *x;
-    if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "samples"))) sh->samples = x->valueint;
-    if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "bounces"))) sh->bounces = x->valueint;
-    if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "seed"))) sh->seed = (uint32_t)x->valuedouble;
-    sh->glossy_exit = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(meta, "glossy_exit"));
-    prt_status st = PRT_OK;
-    const prt__chunk_in *in;
-    while (!st && (in = prt__chunk_take(chunks, count, CHUNK_SHTR))) st = load_set(ctx, sh, in, t->mesh.vertex_count);
-    while (!st && (in = prt__chunk_take(chunks, count, CHUNK_CPCA))) st = load_cpca(ctx, sh, in, t->mesh.vertex_count);
-    if (!st && !sh->order) st = bad(ctx, ".prt file holds no transfer");
-    if (!st) st = load_texels(ctx, sh, chunks, count);
-    if (!st && prt__chunk_take(chunks, count, CHUNK_TXAL)) st = bad(ctx, "corrupt .prt file: two texel albedo chunks");
-    return st;
-}
-
 /* ---- description ---- */
 static size_t sh_bytes(const prt_transfer *t)
 {
@@ -780,9 +535,9 @@ const prt__method prt__method_sh = {
     .export_files = prt__sh_export,
     .bake_begin = sh_bake_begin,
     .free_state = prt__sh_state_free,
-    .save_meta = sh_save_meta,
-    .save = sh_save,
-    .load = sh_load,
+    .save_meta = prt__sh_save_meta,
+    .save = prt__sh_save,
+    .load = prt__sh_load,
     .describe = sh_describe,
     .transfer_bytes = sh_bytes,
     .variant_count = sh_variant_count,

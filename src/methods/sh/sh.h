@@ -79,4 +79,9 @@ prt_status prt__sh_quantize(prt_context *ctx, prt__sh_state *s, size_t vertex_co
 /* prt export (export.c): --sh and --glsl. */
 prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);
 
+/* Its chunks (file.c). */
+void prt__sh_save_meta(const prt_transfer *t, cJSON *meta);
+prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *out);
+prt_status prt__sh_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count);
+
 #endif

@@ -82,6 +82,9 @@ extern const prt__method prt__method_spectral;
 
 static inline prt__spectral_set *prt__spectral(const prt_transfer *t) { return prt__state_of(t, &prt__method_spectral); }
 void prt__spectral_set_free(void *state);
+/* The run-time cache of a new state (shadow rays and glossy frames, built on first use); NULL
+ * when out of memory. */
+prt__spectral_cache *prt__spectral_cache_new(void);
 void prt__spectral_basis_free(prt__spectral_basis *b);
 /* Derives first, offset, members and member_start from part_of and count; false (nothing
  * allocated that b does not own) when they are inconsistent: a partition id out of range, a
@@ -128,5 +131,9 @@ prt_status prt__spectral_lights(prt_context *ctx, const prt_transfer *t, const p
  * indirect_out (3 per vertex) with the radiance that bounced at least once. */
 prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct_out, int bounces,
                                  float *indirect_out);
+
+/* Its chunks (file.c). */
+prt_status prt__spectral_save(const prt_transfer *t, prt__chunk_list *out);
+prt_status prt__spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count);
 
 #endif

@@ -32,4 +32,8 @@ prt_status prt__wavelet_build_view_maps(const prt_transfer *t, prt__wavelet_set 
 /* The wavelet bake (bake.c) as stages of work units, for t holding the scene. */
 prt_status prt__wavelet_bake_begin(prt_context *ctx, const prt_wavelet_bake_desc *d, prt_transfer *t, prt__bake_job **job);
 
+/* Its chunks (file.c). */
+prt_status prt__wavelet_save(const prt_transfer *t, prt__chunk_list *out);
+prt_status prt__wavelet_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count);
+
 #endif
