@@ -40,7 +40,7 @@ int main(void)
     if (prt_context_create(NULL, &ctx)) return fail("context");
     prt_scene *scene;
     if (prt_scene_create_copy(ctx, pos, nrm, NULL, nv, idx, nt, NULL, &scene)) return fail("scene");
-    prt_bake_desc bake = {0};       /* zero = defaults: order 5, 1024 samples, all kinds */
+    prt_sh_bake_desc bake = {0};    /* zero = defaults: order 5, 1024 samples, all kinds */
     bake.samples = 256;
     prt_transfer *t;
     if (prt_bake_sh(ctx, scene, &bake, &t)) return fail("bake");
