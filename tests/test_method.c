@@ -92,7 +92,7 @@ static void test_bake_through_table(void **state)
     prt_transfer *a = NULL, *b = NULL, *c = NULL;
     assert_int_equal(prt_bake(one, scene, sh, o, NULL, &a), PRT_OK);
     assert_int_equal(prt_bake(two, scene, sh, o, NULL, &b), PRT_OK);
-    prt_bake_desc d = {0};
+    prt_bake_desc d = {0};   /* the SH bake desc's prt 0.1 name (prt_sh_bake_desc now): old programs still build */
     d.order = 4;
     d.samples = 256;
     d.kinds = 7 | PRT_TRANSFER_GLOSSY_SHADOWED;
@@ -382,6 +382,84 @@ static void test_glossy_sphere_vs_reference(void **state)
     prt_context_release(ctx);
 }
 
+/* prt export through the table: a method's export options are checked against the file's method,
+ * bake options are not export options, a refused export writes nothing, and one that succeeds
+ * lists its files and hands back the attributes and colours the mesh must carry. */
+static void test_export_through_table(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    prt_scene *scene = plate_and_box(ctx);
+    const prt_method *sh = prt_method_find("sh");
+    prt_options *o = NULL, *eo = NULL;
+    assert_int_equal(prt_options_create(sh, &o), PRT_OK);
+    assert_int_equal(prt_options_set(o, "order", "4"), PRT_OK);
+    assert_int_equal(prt_options_set(o, "samples", "64"), PRT_OK);
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake(ctx, scene, sh, o, NULL, &t), PRT_OK);
+    prt_lighting *l = NULL;
+    assert_int_equal(prt_transfer_lighting(ctx, t, &l), PRT_OK);
+    assert_int_equal(prt_export_options_create(sh, &eo), PRT_OK);
+    assert_int_equal(prt_options_set(eo, "maps", "x"), PRT_ERR_INVALID_ARG);   /* another method's */
+    assert_non_null(strstr(prt_last_error(), "export option of method offset"));
+    assert_int_equal(prt_options_set(eo, "order", "3"), PRT_ERR_INVALID_ARG);   /* a bake option */
+    prt_export_result r;
+    prt_export_desc d = {.options = o, .lighting = l, .variant = -1, .mesh = PRT_EXPORT_MESH_GLTF};
+    assert_int_equal(prt_transfer_export(ctx, t, &d, &r), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "export options"));
+    char glsl[512];
+    snprintf(glsl, sizeof glsl, "%s/x.glsl", test_dir);
+    assert_int_equal(prt_options_set(eo, "glsl", glsl), PRT_OK);
+    d.options = eo;
+    d.mesh = PRT_EXPORT_MESH_OTHER;   /* PLY and OBJ have no custom attributes */
+    assert_int_equal(prt_transfer_export(ctx, t, &d, &r), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "glTF"));
+    assert_int_equal(access(glsl, F_OK), -1);
+    d.mesh = PRT_EXPORT_MESH_GLTF;
+    assert_int_equal(prt_transfer_export(ctx, t, &d, &r), PRT_OK);
+    assert_int_equal(r.attribute_count, 7);   /* interreflected: 3 channels x 9 coefficients, in VEC4s */
+    assert_non_null(r.attributes);
+    assert_non_null(r.radiance);
+    assert_int_equal(r.file_count, 1);
+    assert_string_equal(r.files[0], glsl);
+    assert_int_equal(access(glsl, F_OK), 0);
+    assert_non_null(strstr(r.report, glsl));
+    /* The colours are relit at the attributes' order 3: what the shader gives under the lighting. */
+    const int three = 3;
+    prt_relight_desc rd = {.variant = prt_transfer_default_variant(t, 0), .per_vertex = 1, .controls = &three};
+    prt_relit rl;
+    assert_int_equal(prt_relight(ctx, t, l, &rd, &rl), PRT_OK);
+    assert_memory_equal(rl.radiance, r.radiance, prt_transfer_vertex_count(t) * 3 * sizeof(float));
+    prt_relit_free(&rl);
+    prt_export_result_free(&r);
+    /* Unwritable: nothing is left, and the error says where. */
+    snprintf(glsl, sizeof glsl, "%s/no/such/dir/x.glsl", test_dir);
+    assert_int_equal(prt_options_set(eo, "glsl", glsl), PRT_OK);
+    assert_int_equal(prt_transfer_export(ctx, t, &d, &r), PRT_ERR_IO);
+    assert_non_null(strstr(prt_last_error(), "x.glsl"));
+    assert_null(r.files);
+    /* A file whose method exports nothing of its own takes no options, and exports nothing. */
+    prt_options_release(o);
+    assert_int_equal(prt_options_create(prt_method_find("spectral"), &o), PRT_OK);
+    assert_int_equal(prt_options_set(o, "samples", "64"), PRT_OK);
+    assert_int_equal(prt_options_set(o, "basis", "16"), PRT_OK);
+    prt_transfer *u = NULL;
+    assert_int_equal(prt_bake(ctx, scene, prt_method_find("spectral"), o, NULL, &u), PRT_OK);
+    assert_int_equal(prt_method_export_options(prt_transfer_method(u), NULL), 0);
+    d.options = NULL;
+    assert_int_equal(prt_transfer_export(ctx, u, &d, &r), PRT_OK);
+    assert_int_equal(r.attribute_count + r.file_count, 0);
+    assert_null(r.radiance);
+    prt_export_result_free(&r);
+    prt_transfer_release(u);
+    prt_options_release(eo);
+    prt_options_release(o);
+    prt_lighting_release(l);
+    prt_transfer_release(t);
+    prt_scene_release(scene);
+    prt_context_release(ctx);
+}
+
 /* Every method, through the table: the file is the same, byte for byte outside META, whatever
  * the thread count (compression included). */
 static void test_files_independent_of_threads(void **state)
@@ -433,6 +511,7 @@ int main(void)
         cmocka_unit_test(test_file_keeps_lighting),
         cmocka_unit_test(test_glossy_sphere_vs_reference),
         cmocka_unit_test(test_files_independent_of_threads),
+        cmocka_unit_test(test_export_through_table),
     };
     return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

@@ -46,6 +46,8 @@ prt_status prt_transfer_export(prt_context *ctx, const prt_transfer *t, const pr
     if (!t || !desc || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_export: transfer, desc and out are required");
     memset(out, 0, sizeof *out);
     prt_export_desc d = *desc;
+    if (d.options && !prt__options_exporting(d.options))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_export takes export options (prt_export_options_create), not bake options");
     if (d.options && prt_options_method(d.options) != t->method)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "export options made for method %s, and this is a %s file", prt_method_name(prt_options_method(d.options)),
                          t->method->name);

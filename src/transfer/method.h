@@ -69,6 +69,8 @@ float prt__opt_float(const prt_options *o, const char *name, float fallback);
 bool prt__opt_flag(const prt_options *o, const char *name);
 /* Index of the given item of a CHOICE option's choices, or fallback. */
 int prt__opt_choice(const prt_options *o, const char *name, int fallback);
+/* True for options made by prt_export_options_create. */
+bool prt__options_exporting(const prt_options *o);
 /* Adds the options as given (sorted by name, so the order on a command line does not matter). */
 void prt__options_fingerprint(const prt_options *o, prt__fingerprint *fp);
 

@@ -29,6 +29,8 @@ prt_status prt_export_options_create(const prt_method *m, prt_options **out)
     return st;
 }
 
+bool prt__options_exporting(const prt_options *o) { return o && o->exporting; }
+
 static const prt_option_desc *declared(const prt_method *m, bool exporting, const char *name)
 {
     return exporting ? prt_method_export_option(m, name) : prt_method_option(m, name);
