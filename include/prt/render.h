@@ -77,22 +77,22 @@ typedef struct prt_render_mesh {
     const uint32_t *indices;     /* 3 per triangle */
     size_t triangle_count;
     /* Optional view-dependent part (glossy PRT): per vertex 3 x exit_order^2 SH coefficients
-     * (prt_relight_sh_glossy's output), interpolated and evaluated per pixel at the view
+     * (prt_relit.exit_sh), interpolated and evaluated per pixel at the view
      * direction, or at its mirror about the interpolated normal when exit_mirror is set; the
      * result (clamped at zero) is added to radiance. normals are required with it. */
     const float *normals;
     const float *exit_sh;
     int exit_order;              /* 0 = none; 1..10 */
     int exit_mirror;
-    /* Optional per-texel radiance (prt_relight_sh_texels' output): a texel_width x
+    /* Optional per-texel radiance (prt_relit.texels): a texel_width x
      * texel_height RGB map, row 0 at v near 0, sampled bilinearly per pixel at the vertices'
      * interpolated uv (2 per vertex) in place of `radiance`. */
     const float *uv;
     const float *texel_radiance;
     int texel_width, texel_height;
-    /* Optional separable view factor (wavelet PRT): per vertex kvec_terms RGB light-dependent
-     * terms g_k (prt_relight_wavelet's output) and its view-map set (0: none), the view maps
-     * ([set][term][channel][res][res], prt_wavelet_view_maps). Per pixel each corner's
+    /* Optional separable view factor (Wang, Tran & Luebke 2005): per vertex kvec_terms RGB
+     * light-dependent terms g_k (prt_relit.kvec) and its view-map set (0: none), the view maps
+     * ([set][term][channel][res][res], prt_relit.view_maps). Per pixel each corner's
      * sum_k h_k(wo) g_k is evaluated at the pixel's view direction in the frame of the
      * interpolated normal, blended by barycentrics and added to radiance. Needs normals. */
     const float *kvec;
