@@ -278,7 +278,7 @@ says "option of method sh"
 expect 2 "wavelet option without wavelet" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --terms 3
 says "method wavelet"
 expect 2 "bad method" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method fourier
-says "sh, wavelet, spectral, lightcloud or offset"
+says "--method must be"
 expect 2 "bad bits" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --bits 12
 says "8 or 16"
 expect 2 "too many wavelet bounces" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method wavelet --bounces 9

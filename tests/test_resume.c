@@ -92,9 +92,12 @@ static void test_killed_bakes_resume(void **state)
 {
     (void)state;
     uint64_t rng = 0x2545f4914f6cdd1dULL;   /* fixed: the same kill points every run */
-    char resumed_path[8][512];
-    int kills[8] = {0};
-    for (int mi = 0; mi < prt_method_count() && mi < 8; ++mi) {
+    const int methods = prt_method_count();
+    char (*resumed_path)[512] = calloc((size_t)methods, sizeof *resumed_path);
+    int *kills = calloc((size_t)methods, sizeof *kills);
+    assert_non_null(resumed_path);
+    assert_non_null(kills);
+    for (int mi = 0; mi < methods; ++mi) {
         const prt_method *method = prt_method_at(mi);
         char cp[512];
         snprintf(cp, sizeof cp, "%s/%s.checkpoint", test_dir, prt_method_name(method));
@@ -121,7 +124,7 @@ static void test_killed_bakes_resume(void **state)
     prt_context *ctx = test_context(2);
     test_mesh m = {0};
     prt_scene *scene = make_scene(ctx, &m);
-    for (int mi = 0; mi < prt_method_count() && mi < 8; ++mi) {
+    for (int mi = 0; mi < methods; ++mi) {
         const prt_method *method = prt_method_at(mi);
         prt_options *o = make_options(method, "256");
         prt_transfer *plain = NULL;
@@ -134,6 +137,8 @@ static void test_killed_bakes_resume(void **state)
         prt_transfer_release(plain);
         prt_options_release(o);
     }
+    free(resumed_path);
+    free(kills);
     prt_scene_release(scene);
     tm_free(&m);
     prt_context_release(ctx);

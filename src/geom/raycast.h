@@ -63,8 +63,9 @@ prt_status prt__unbury_origins(const prt_context *ctx, const prt__raycaster *rc,
 double prt__origin_back_share(const prt__raycaster *rc, const float o[3], const float n[3]);
 
 /* Gives every vertex of status 2 (see above) the mean of its neighbours that have values, ring by
- * ring outwards; data holds stride floats per vertex. Returns how many found no such neighbour. */
-size_t prt__fill_buried(const prt__mesh *m, const uint8_t *status, float *data, size_t stride);
+ * ring outwards; data holds stride floats per vertex. unfilled (may be NULL): how many found no
+ * such neighbour. Fails only out of memory. */
+prt_status prt__fill_buried(const prt__mesh *m, const uint8_t *status, float *data, size_t stride, size_t *unfilled);
 
 /* Default origin offset for a mesh: small against its size, large against float precision. */
 float prt__ray_offset(const prt__mesh *m);

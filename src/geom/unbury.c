@@ -105,14 +105,15 @@ prt_status prt__unbury_origins(const prt_context *ctx, const prt__raycaster *rc,
     return PRT_OK;
 }
 
-size_t prt__fill_buried(const prt__mesh *m, const uint8_t *status, float *data, size_t stride)
+prt_status prt__fill_buried(const prt__mesh *m, const uint8_t *status, float *data, size_t stride, size_t *unfilled)
 {
     const size_t nv = m->vertex_count, nt = m->triangle_count;
     uint8_t *state = malloc(nv);   /* 0 has a value, 1 waiting, 2 filled this round */
     float *sum = NULL;
     uint32_t *count = NULL;
     size_t waiting = 0;
-    if (!state) return nv;
+    if (unfilled) *unfilled = 0;
+    if (!state) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory filling buried vertices");
     for (size_t v = 0; v < nv; ++v) { state[v] = status[v] == 2; waiting += state[v]; }
     if (waiting) {
         sum = malloc(nv * stride * sizeof *sum);
@@ -145,8 +146,11 @@ size_t prt__fill_buried(const prt__mesh *m, const uint8_t *status, float *data, 
         for (size_t v = 0; v < nv; ++v) if (state[v] == 2) state[v] = 0;
         waiting -= done;
     }
+    const bool short_of_memory = waiting && (!sum || !count);
     free(sum);
     free(count);
     free(state);
-    return waiting;
+    if (short_of_memory) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory filling buried vertices");
+    if (unfilled) *unfilled = waiting;
+    return PRT_OK;
 }

@@ -389,8 +389,9 @@ static prt_status run_glossy_bounces(prt__bake_job *b, prt_context *ctx, prt__pr
     if (st) return st;
     if (sb->job.buried_count) {
         const size_t nc = (size_t)sb->d.order * sb->d.order;
-        prt__fill_buried(&t->mesh, sb->job.buried, dtot, 3 * nc);
-        if (gtot) prt__fill_buried(&t->mesh, sb->job.buried, gtot, 3 * nc * nc);
+        st = prt__fill_buried(&t->mesh, sb->job.buried, dtot, 3 * nc, NULL);
+        if (!st && gtot) st = prt__fill_buried(&t->mesh, sb->job.buried, gtot, 3 * nc * nc, NULL);
+        if (st) { free(dtot); free(gtot); return st; }
     }
     if (sb->d.kinds & PRT_TRANSFER_INTERREFLECTED) { sb->s->sets[2].channels = 3; sb->s->sets[2].coeffs = dtot; }
     else free(dtot);
@@ -472,9 +473,11 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
          * bounces from them. */
         prt__sh_state *s = sb->s;
         if (sb->job.buried_count) {
-            if (sb->unsh) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->unsh, (size_t)nc);
-            if (sb->shad) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->shad, (size_t)nc);
-            if (sb->gshad) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->gshad, (size_t)nc * nc);
+            prt_status st = PRT_OK;
+            if (sb->unsh) st = prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->unsh, (size_t)nc, NULL);
+            if (!st && sb->shad) st = prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->shad, (size_t)nc, NULL);
+            if (!st && sb->gshad) st = prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->gshad, (size_t)nc * nc, NULL);
+            if (st) return st;
         }
         if (sb->d.kinds & PRT_TRANSFER_UNSHADOWED) { s->sets[0].channels = 1; s->sets[0].coeffs = sb->unsh; sb->unsh = NULL; }
         if (!sb->coupled && (sb->d.kinds & PRT_TRANSFER_INTERREFLECTED)) {
@@ -493,7 +496,10 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
         float *tmp = sb->prev; sb->prev = sb->next; sb->next = tmp;
     }
     if (index > 0 && (index == sb->stages || sb->plan[index] != ST_BOUNCE) && sb->plan[index - 1] == ST_BOUNCE) {
-        if (sb->job.buried_count) prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->total, (size_t)nc3);
+        if (sb->job.buried_count) {
+            const prt_status st = prt__fill_buried(&sb->t->mesh, sb->job.buried, sb->total, (size_t)nc3, NULL);
+            if (st) return st;
+        }
         sb->s->sets[2].channels = 3;
         sb->s->sets[2].coeffs = sb->total;
         sb->total = NULL;
