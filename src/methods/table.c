@@ -5,6 +5,7 @@
 #include "methods/lightcloud/lightcloud.h"
 #include "methods/offset/offset.h"
 #include "methods/wavelet/wavelet.h"
+#include "methods/ao/ao.h"
 
 static const prt__method *const table[] = {
     &prt__method_sh,
@@ -12,6 +13,7 @@ static const prt__method *const table[] = {
     &prt__method_spectral,
     &prt__method_lightcloud,
     &prt__method_offset,
+    &prt__method_ao,
 };
 
 #define COUNT ((int)(sizeof table / sizeof table[0]))
