@@ -15,8 +15,8 @@
 #     one header through which the rest reaches it); no file of src/ includes the umbrella
 #     prt/prt.h; tools/prt includes public headers only.
 #
-# Comments do not count (gcc -fpreprocessed drops them); strings do. Exit 0 when everything
-# holds, 1 with one line per finding. `make test` runs it (ctest: architecture), and
+# Comments do not count (the C compiler's preprocessor drops them: $CC, default cc); strings do.
+# Exit 0 when everything holds, 1 with one line per finding, 2 when it cannot check. `make test` runs it (ctest: architecture), and
 # tests/architecture_test.sh plants each kind of finding in a copy of the tree to see it caught.
 #
 # The SH method is known by what its headers declare and by prt__method_sh, not by the prefix
@@ -30,8 +30,11 @@ LAYERS="core geom io light brdf compress render transfer methods"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT INT TERM
 : >"$tmp/findings"
-report() { echo "$*" >>"$tmp/findings"; }
-strip() { gcc -fpreprocessed -dD -E -P -x c "$1" 2>/dev/null || cat "$1"; }
+report() { printf '%s\n' "$*" >>"$tmp/findings"; }
+CC=${CC:-cc}
+strip() {
+    "$CC" -fpreprocessed -dD -E -P -x c "$1" 2>"$tmp/cc" || { printf 'check-architecture: %s cannot read %s: %s\n' "$CC" "$1" "$(head -n 1 "$tmp/cc")" >&2; exit 2; }
+}
 
 methods=$(for d in src/methods/*/; do [ -d "$d" ] && basename "$d"; done)
 
@@ -53,11 +56,13 @@ for f in $(find src tools/prt -name '*.c' -o -name '*.h' | sort); do
     echo "$n $f" >>"$tmp/list"
     strip "$f" >"$tmp/c/$n"
     sed -E 's/"([^"\\]|\\.)*"/""/g' "$tmp/c/$n" | grep -oE '[A-Za-z_][A-Za-z0-9_]*' | sort -u >"$tmp/t/$n" || true
-    # getopt tables list a command's own flags, whatever they are called
+    # Strings, less getopt tables' flag names (a command's own flags, whatever they are called:
+    # `prt env --order` is the SH maths' order, `prt sweep --param` no method's); and the strings
+    # on lines about options or controls, where one would be looked up by name.
     grep -vE '\{ *"[^"]*", *(no|required|optional)_argument' "$tmp/c/$n" >"$tmp/noopt" || true
     grep -oE '"([^"\\]|\\.)*"' "$tmp/noopt" | sort -u >"$tmp/s/$n" || true
     grep -iE 'option|control' "$tmp/noopt" | grep -oE '"([^"\\]|\\.)*"' | sort -u >"$tmp/l/$n" || true
-    grep -oE '#include [<"][^>"]+' "$f" | sed -E 's/#include [<"]//' >"$tmp/i/$n" || true
+    grep -E '^[[:space:]]*#[[:space:]]*include[[:space:]]*[<"]' "$tmp/c/$n" | sed -E 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*[<"]([^>"]*).*/\1/' >"$tmp/i/$n" || true
 done
 path_of() { sed -n "s/^$1 //p" "$tmp/list"; }
 number_of() { echo "${1##*/}"; }
@@ -65,7 +70,7 @@ number_of() { echo "${1##*/}"; }
 # Each method's public headers and identifiers, and the option and control names only it declares.
 : >"$tmp/names"
 for m in $methods; do
-    grep -l "prt-method: $m\( \|\$\)" include/prt/*.h 2>/dev/null | sed 's#^include/##' >"$tmp/pub.$m" || true
+    grep -lE "prt-method: $m( |\$)" include/prt/*.h 2>/dev/null | sed 's#^include/##' >"$tmp/pub.$m" || true
     for h in src/methods/"$m"/*.h $(sed 's#^#include/#' "$tmp/pub.$m"); do
         [ -f "$h" ] && strip "$h" | awk -f scripts/declared.awk
     done | sort -u >"$tmp/ids.$m"
@@ -115,7 +120,7 @@ done
 grep -nE '(prt_options_(get|set)|prt_method_(export_)?option|prt__opt[a-z_]*) *\([^,()]*, *"' "$tmp"/c/* 2>/dev/null |
     while IFS=: read -r file line text; do
         f=$(path_of "$(number_of "$file")")
-        case "$f" in src/methods/*/*) ;; *) echo "$f:$line: reads a method's option by name:$(echo "$text" | sed 's/^ */ /')" ;; esac
+        case "$f" in src/methods/*/*) ;; *) printf '%s:%s: reads a method'"'"'s option by name: %s\n' "$f" "$line" "$(printf '%s' "$text" | sed 's/^ *//')" ;; esac
     done >>"$tmp/findings"
 
 # 2. Layers.
@@ -127,13 +132,14 @@ while read -r k f; do
         grep -qx "$layer [0-9]*" "$tmp/ranks" || report "$f: src/$layer is not in the layer order (LAYERS in scripts/check-architecture.sh)"
         awk -v f="$f" -v layer="$layer" 'NR == FNR { rank[$1] = $2; next }
             $0 == "prt/prt.h" { print f ": includes the umbrella prt/prt.h (include the public headers it implements)"; next }
+            /^\.\.\// || /\/\.\.\// { print f ": includes " $0 " by a relative path (name the layer: LAYER/file.h)"; next }
             /^embree3\// { if (layer != "geom") print f ": includes Embree (" $0 "): only geom/ does (geom/raycast.h)"; next }
             { top = $0; sub(/\/.*/, "", top) }
             (top in rank) && (layer in rank) && rank[top] > rank[layer] { print f ": includes " $0 ", of a layer above " layer }' \
             "$tmp/ranks" "$tmp/i/$k" >>"$tmp/findings"
         ;;
     tools/*)
-        grep -E "^($(echo $LAYERS | tr ' ' '|'))/" "$tmp/i/$k" | sed "s#^#$f: the command line includes library internals: #" >>"$tmp/findings" || true
+        grep -E "^($(echo $LAYERS | tr ' ' '|'))/|\.\./" "$tmp/i/$k" | sed "s#^#$f: the command line includes library internals: #" >>"$tmp/findings" || true
         ;;
     esac
 done <"$tmp/list"

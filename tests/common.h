@@ -185,7 +185,6 @@ static inline int test_dir_teardown(void **state)
     return system(cmd) == 0 ? 0 : -1;
 }
 
-/* Writes text into the scratch directory as name; path gets the full path. */
 /* A whole file's bytes (malloc'd), and back. */
 static inline void *test_slurp(const char *path, size_t *size)
 {
@@ -233,6 +232,7 @@ static inline void test_patch_chunk(unsigned char *file, const char *id, size_t 
     fail_msg("no chunk %s", id);
 }
 
+/* Writes text into the scratch directory as name; path gets the full path. */
 static inline void write_text(const char *name, const char *text, char *path, size_t n)
 {
     snprintf(path, n, "%s/%s", test_dir, name);

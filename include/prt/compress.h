@@ -49,4 +49,9 @@ typedef struct prt_compress_info {
 #ifdef __cplusplus
 }
 #endif
+
+/* prt 0.1 declared the compression of SH sets (prt_transfer_compress, prt_transfer_quantize, ...)
+ * in this header: programs that include it alone still find it, in the SH method's own header. */
+#include "prt/sh_transfer.h"
+
 #endif

@@ -139,6 +139,8 @@ enum {
 unsigned prt_light_type_bit(prt_light_type type);
 /* "environment", "point lights", ... for one bit. */
 const char *prt_lights_bit_name(unsigned bit);
+/* The names of every bit of `bits`, separated by sep (", "), into buf ("" for none). */
+void prt_lights_names(unsigned bits, const char *sep, char *buf, size_t size);
 
 /* ---- The lighting object ----
  * An environment (probe or procedural sky, rotated and scaled; or none), any number of local

@@ -189,7 +189,9 @@ typedef struct prt_export_desc {
     const prt_options *options;     /* made by prt_export_options_create for t's method; NULL = none given */
     const prt_lighting *lighting;   /* what the mesh is relit under (required with a mesh) */
     int variant;                    /* what it is relit as; -1 = prt_transfer_default_variant(t, 0) */
-    const int *controls;            /* run-time controls the user gave (prt_relight_desc.controls); NULL = none */
+    /* Run-time controls the user chose (laid out as prt_relight_desc.controls); NULL = none. A
+     * method's export may refuse values its files cannot carry (SH attributes hold order 3). */
+    const int *controls;
     prt_export_mesh mesh;
     const char *source;             /* the file's name, for what exported files say of their origin */
 } prt_export_desc;
@@ -225,7 +227,8 @@ typedef struct prt_relight_desc {
     /* Values of the method's controls (prt_transfer_controls); NULL = their defaults. */
     const int *controls;
     /* A BRDF for view-dependent evaluation where the method lets the renderer choose it (SH sets
-     * holding incident radiance); NULL = each vertex's material. Other methods refuse it. */
+     * holding incident radiance); NULL = each vertex's material. Files with nothing it could
+     * shape refuse it (other methods, SH files without glossy sets or with a BRDF baked in). */
     const prt_brdf *brdf;
     /* Diffuse albedo per vertex (3 floats each, linear RGB in [0, 1]) replacing the baked one, for
      * methods that let surface colours change without a rebake (prt_method_runtime_albedo); NULL

@@ -2,9 +2,9 @@
  * method "offset" holds. A light map of width x height texels over the mesh's UVs; for each of
  * `count` offsets dt and each transfer kind, a map whose texel t holds TR(t, t + dt) TVA(t, dt):
  * at run time the first-order light map, shifted by dt, is multiplied by it and summed over the
- * offsets (eq. 9). The maps are what prt_render bins into atlases and blends (prt_render_mesh's
- * gpu_* fields), and what prt export --maps writes as OpenEXR files with an index. Everything else goes through
- * prt/method.h.
+ * offsets (eq. 9). The maps are what relighting for the GPU hands the renderer, sliced into atlases
+ * (prt_relit.gpu_passes), and what prt export --maps writes as OpenEXR files with an index.
+ * Everything else goes through prt/method.h.
  * prt-method: offset */
 #ifndef PRT_OFFSET_H
 #define PRT_OFFSET_H

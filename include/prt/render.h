@@ -116,7 +116,7 @@ typedef struct prt_render_mesh {
      * passes of offset radiance transfer maps). The renderer uploads the description's maps once
      * per id, then on each upload runs its passes from gpu_input (width x height RGB irradiance /
      * pi, zero off the surface) - the scatter set, the first-order light, gpu_bounces passes of
-     * the bounce set, the final combination for gpu_component (PRT_COMPONENT_* of prt/method.h)
+     * the bounce set, the final combination for gpu_component (PRT_COMPONENT_* above)
      * with gpu_emission times the emission - and draws the result per texel (needs uv;
      * texel_width x texel_height as the description's). prt_relit_render_mesh fills these from
      * what relighting with prt_relight_desc.gpu_finish gave. */

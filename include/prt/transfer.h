@@ -69,4 +69,10 @@ void prt_glossy_eval(int order, const float *exit_coeffs, int mirror, const floa
 #ifdef __cplusplus
 }
 #endif
+
+/* prt 0.1 declared the SH method's API (prt_bake_desc, prt_bake_sh, prt_transfer_kind,
+ * prt_relight_sh, ...) in this header: programs that include it alone still find it, in the SH
+ * method's own header. */
+#include "prt/sh_transfer.h"
+
 #endif

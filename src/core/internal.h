@@ -66,6 +66,8 @@ prt_status prt__atomic_open(prt__atomic_file *f, const char *path);
 prt_status prt__atomic_write(prt__atomic_file *f, const void *data, size_t size);
 prt_status prt__atomic_commit(prt__atomic_file *f);   /* closes; renames on success */
 void prt__atomic_abort(prt__atomic_file *f);          /* closes and deletes the temporary */
+/* A text file and a line end, written atomically: the whole of it or nothing. */
+prt_status prt__atomic_write_text(const char *path, const char *text);
 
 /* Reads a whole file; *data must be freed. */
 prt_status prt__read_file(const char *path, void **data, size_t *size);

@@ -158,6 +158,17 @@ prt_status prt__atomic_commit(prt__atomic_file *f)
     return PRT_OK;
 }
 
+prt_status prt__atomic_write_text(const char *path, const char *text)
+{
+    prt__atomic_file f;
+    prt_status st = prt__atomic_open(&f, path);
+    if (st) return st;
+    st = prt__atomic_write(&f, text, strlen(text));
+    if (!st) st = prt__atomic_write(&f, "\n", 1);
+    if (st) { prt__atomic_abort(&f); return st; }
+    return prt__atomic_commit(&f);
+}
+
 void prt__atomic_abort(prt__atomic_file *f)
 {
     if (f->fp) fclose((FILE *)f->fp);

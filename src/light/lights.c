@@ -46,6 +46,14 @@ const char *prt_lights_bit_name(unsigned bit)
     return "unknown";
 }
 
+void prt_lights_names(unsigned bits, const char *sep, char *buf, size_t size)
+{
+    size_t at = 0;
+    if (size) buf[0] = 0;
+    for (unsigned bit = 1; bit <= PRT_LIGHTS_EMISSIVE && at < size; bit <<= 1)
+        if (bits & bit) at += (size_t)snprintf(buf + at, size - at, "%s%s", at ? sep : "", prt_lights_bit_name(bit));
+}
+
 static bool finite3(const float *v) { return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
 /* Finite, >= 0 and at most PRT__MAX_RADIANCE, so that sums over lights and samples cannot overflow. */
 static bool colour_ok(const float *v)

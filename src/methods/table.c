@@ -77,10 +77,8 @@ prt_status prt_method_check_lighting(const prt_method *m, unsigned what)
     if (!m) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "no method given");
     const unsigned missing = what & ~m->lighting;
     if (!missing) return PRT_OK;
-    char names[512] = "";
-    size_t at = 0;
-    for (unsigned bit = 1; bit <= PRT_LIGHTS_EMISSIVE; bit <<= 1)
-        if ((missing & bit) && at < sizeof names) at += (size_t)snprintf(names + at, sizeof names - at, "%s%s", at ? " and " : "", prt_lights_bit_name(bit));
+    char names[512];
+    prt_lights_names(missing, " and ", names, sizeof names);
     char others[256];
     prt_methods_relighting(missing, others, sizeof others);
     if (others[0])

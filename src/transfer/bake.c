@@ -195,5 +195,7 @@ prt_status prt_bake(prt_context *ctx, const prt_scene *scene, const prt_method *
     if (!m) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake: a method is required");
     if (o && prt_options_method(o) != m)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake: options made for method %s, not %s", prt_method_name(prt_options_method(o)), m->name);
+    if (prt__options_exporting(o))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake takes bake options (prt_options_create), not export options");
     return prt__bake_with(ctx, scene, m, begin_from_options, o, run, out);
 }

@@ -108,7 +108,7 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
         free(sizes);
         cJSON *relights = cJSON_AddArrayToObject(j, "relights");
         for (unsigned bit = 1; bit <= PRT_LIGHTS_EMISSIVE; bit <<= 1)
-            if (t->method->lighting & bit) cJSON_AddItemToArray(relights, cJSON_CreateString(prt_lights_bit_name(bit)));
+            if (t->method->lighting & bit) cJSON_AddItemToArray(relights, cJSON_CreateString(prt_lights_bit_name(bit)));   /* as listed below */
         cJSON_AddBoolToObject(j, "runtime_albedo", t->method->runtime_albedo);
         cJSON_AddBoolToObject(j, "gpu_passes", t->method->gpu_passes);
         cJSON *exports = cJSON_AddArrayToObject(j, "export_options");
@@ -151,9 +151,7 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
     free(sizes);
     /* What the file can be relit under and with, so that help texts can point here. */
     char relights[256] = "";
-    size_t at = 0;
-    for (unsigned bit = 1; bit <= PRT_LIGHTS_EMISSIVE && at < sizeof relights; bit <<= 1)
-        if (t->method->lighting & bit) at += (size_t)snprintf(relights + at, sizeof relights - at, "%s%s", at ? ", " : "", prt_lights_bit_name(bit));
+    prt_lights_names(t->method->lighting, ", ", relights, sizeof relights);
     prt__describe_line(&d, "relights:", "%s%s%s", relights, t->method->runtime_albedo ? "; surface colours live (--albedo-of)" : "",
                        t->method->gpu_passes ? "; GPU passes (--accumulate gpu)" : "");
     for (int i = 0; i < t->method->export_option_count; ++i)

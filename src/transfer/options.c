@@ -178,7 +178,7 @@ bool prt__opt_flag(const prt_options *o, const char *name) { return prt_options_
 int prt__opt_choice(const prt_options *o, const char *name, int fallback)
 {
     const char *v = prt_options_get(o, name);
-    const prt_option_desc *d = o ? prt_method_option(o->method, name) : NULL;
+    const prt_option_desc *d = o ? declared(o->method, o->exporting, name) : NULL;
     if (!v || !d) return fallback;
     int index = 0;
     for (const char *c = d->choices; c && *c; ++index) {

@@ -712,11 +712,11 @@ void cli_print_method_options(FILE *f, const prt_method *m, cli_option_list_fn l
     const prt_option_desc *o;
     int n = list(m, &o);
     if (!n) return;
-    char head[128];
-    snprintf(head, sizeof head, heading, prt_method_name(m));
+    char title[128];
+    snprintf(title, sizeof title, heading, prt_method_name(m));
     /* Option texts are reflowed: their authors' line breaks cannot know where they start. */
-    if (summary) cli_print_wrapped(f, fprintf(f, "%s ", head), 6, prt_method_summary(m));
-    else fprintf(f, "%s\n", head);
+    if (summary) cli_print_wrapped(f, fprintf(f, "%s ", title), 6, prt_method_summary(m));
+    else fprintf(f, "%s\n", title);
     for (int i = 0; i < n; ++i) {
         char head[64];
         snprintf(head, sizeof head, "--%s%s%s", o[i].name, o[i].arg ? " " : "", o[i].arg ? o[i].arg : "");
@@ -737,8 +737,8 @@ int cli_collect_method_options(const prt_method *chosen, cli_option_list_fn list
         const prt_option_desc *o;
         const int count = list(method, &o);
         for (int i = 0; i < count && n < max - 1 && extra < max_names; ++i) {
-            bool seen = false;
-            for (int k = 0; k < extra && !seen; ++k) seen = !strcmp(names[k], o[i].name);
+            bool seen = false;   /* a command's own flag, or another method's option of that name */
+            for (int k = 0; k < n && !seen; ++k) seen = !strcmp(opts[k].name, o[i].name);
             if (seen) continue;
             names[extra] = o[i].name;
             opts[n++] = (struct option){o[i].name, o[i].type == PRT_OPTION_FLAG ? no_argument : required_argument, 0, first_code + extra};

@@ -79,14 +79,13 @@ static prt_status export_options(cli *c, const prt_transfer *t, int count, const
     return st;
 }
 
-/* Runs the method's export; the error is printed (one line) and mapped to an exit code. */
+/* Runs the method's export; the error is printed (one line) and mapped to an exit code. What it
+ * wrote is said once the mesh (if any) is written too. */
 static int run_export(cli *c, const prt_transfer *t, const prt_export_desc *d, prt_export_result *r)
 {
     prt_status st = prt_transfer_export(c->ctx, t, d, r);
     if (st == PRT_ERR_INVALID_ARG) return cli_usage(c, "%s", prt_last_error());
-    if (st) return cli_fail(c, st);
-    if (!c->quiet) cli_print_lines(stderr, "prt export: ", r->report);
-    return EXIT_OK;
+    return st ? cli_fail(c, st) : EXIT_OK;
 }
 
 static prt_status write_texels(const cli *c, const prt_relit *r, const char *output)
@@ -173,6 +172,7 @@ static int relight_main(int argc, char **argv, bool exporting)
         else {
             const prt_export_desc d = {.options = eo, .variant = -1, .mesh = PRT_EXPORT_NO_MESH, .source = argv[optind]};
             rc = run_export(&c, t, &d, &er);
+            if (!rc && !c.quiet) cli_print_lines(stderr, "prt export: ", er.report);
         }
         prt_export_result_free(&er);
         prt_options_release(eo);
@@ -213,7 +213,9 @@ static int relight_main(int argc, char **argv, bool exporting)
     if (!st && !rc) st = cli_check_interrupt(&c);
     if (!st && !rc && texels) {
         if (!r.texels) {
-            cli_error(&c, "'%s' has no per-texel %s transfer (bake with --texels N)", argv[optind], prt_transfer_variant_name(t, variant));
+            const char *map = prt_method_light_map_option(prt_transfer_method(t));
+            cli_error(&c, "'%s' has no per-texel %s transfer%s%s%s", argv[optind], prt_transfer_variant_name(t, variant), map ? " (bake with --" : "",
+                      map ? map : "", map ? " N)" : "");
             rc = EXIT_FAILURE_INPUT;
         } else {
             st = write_texels(&c, &r, output);
@@ -282,9 +284,11 @@ static int relight_main(int argc, char **argv, bool exporting)
                 }
             }
             if (st) { cli_error(&c, "cannot write '%s'", output); rc = EXIT_FAILURE_INPUT; st = PRT_OK; }
-            else if (!rc && !c.quiet)
+            else if (!rc && !c.quiet) {
                 fprintf(stderr, "prt %s: wrote %s (%s, %zu vertices%s)\n", c.cmd, output, prt_transfer_variant_name(t, variant), nv,
                         er.attribute_count ? ", with the method's attributes" : "");
+                cli_print_lines(stderr, "prt export: ", er.report);
+            }
             if (rc)
                 for (int i = 0; i < er.file_count; ++i) remove(er.files[i]);
         }

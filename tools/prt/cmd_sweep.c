@@ -28,11 +28,10 @@ static const char *HELP =
     "      --indirect         compare only the indirect light (where the method separates it)\n"
     "      any bake option of the method (prt bake --method M --help) fixes what is not swept\n"
     "      (except --brdf, which is the run-time lobe here, as in prt relight), for example\n"
-    "      --order 6 --samples 512 --kinds shadowed,interreflected\n"
+    "      --samples 512\n"
     CLI_LIGHT_HEADER_HELP CLI_LIGHT_SOURCES_HELP
     "  --brdf SPEC           run-time reflection lobe for glossy sets, as in prt relight:\n"
-    "                        phong:N[:KS] or blinn:N[:KS] (default: the scene's materials; not\n"
-    "                        with a BRDF baked in)\n"
+    "                        phong:N[:KS] or blinn:N[:KS] (default: the scene's materials)\n"
     CLI_LIGHT_PAINT_HELP CLI_LIGHT_CONTROL_HELP
     "Scene:\n" CLI_SCENE_FILE_HELP
     "Other:\n"

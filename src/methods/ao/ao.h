@@ -1,5 +1,5 @@
-/* The ambient-occlusion method's state (bake.c, file.c, relight.c and its table entry method.c
- * look inside): one number per vertex, its accessibility
+/* The ambient-occlusion method's state (the files of this folder look inside; nothing else
+ * does): one number per vertex, its accessibility
  *   A = 1/pi * integral over the hemisphere of V(w) max(n.w, 0) dw,
  * the share of cosine-weighted directions that escape the scene (1 for an unoccluded vertex).
  * Relit, a vertex reflects albedo / pi * A * E(n): the environment's unshadowed irradiance at its

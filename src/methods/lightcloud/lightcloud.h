@@ -1,6 +1,6 @@
 /* The light-cloud method's state (Kristensen, Akenine-Moller & Jensen 2005: precomputed local
- * radiance transfer). bake.c, cluster.c, relight.c and the
- * table entry method.c look inside.
+ * radiance transfer): the files of this folder look inside, and the spectral method's files do
+ * not (the light cloud depends on the spectral method, not the other way round).
  *
  * A cloud of unit point lights (1 W/sr, white) was placed over a region; for each, the exit
  * radiance of every vertex was computed (the indirect part, or all of it with store_direct).

@@ -1,6 +1,7 @@
 /* prt export of offset files (--maps DIR): each transfer map as an OpenEXR file cropped to its
  * non-zero box, the surface and medium masks, and an index naming each file's kind, offset and
  * box - what the paper's pipeline hands its binning and rendering programs. */
+#include "methods/offset/bins.h"
 #include "methods/offset/offset.h"
 
 #include <cjson/cJSON.h>
@@ -31,8 +32,16 @@ static prt_status clear_maps(prt_context *ctx, const char *dir)
     return st;
 }
 
+/* Records a written file, so that an export whose mesh then fails takes it back. */
+static prt_status keep(prt_context *ctx, prt_export_result *out, const char *path)
+{
+    if (prt__export_file(out, path)) return PRT_OK;
+    remove(path);
+    return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory writing the maps");
+}
+
 /* A width x height mask (0 or 1, or a medium index) as an image, texel row 0 at the bottom. */
-static prt_status save_mask(prt_context *ctx, const char *dir, const char *name, const float *values, int W, int H)
+static prt_status save_mask(prt_context *ctx, prt_export_result *out, const char *dir, const char *name, const float *values, int W, int H)
 {
     prt_image img = {W, H, malloc((size_t)W * H * 3 * sizeof(float))};
     if (!img.rgb) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory writing the maps");
@@ -43,7 +52,7 @@ static prt_status save_mask(prt_context *ctx, const char *dir, const char *name,
     snprintf(path, sizeof path, "%s/%s", dir, name);
     prt_status st = prt_image_save(path, &img, NULL);
     prt_image_free(&img);
-    return st ? prt__fail(ctx, st, "cannot write '%s': %s", path, prt_last_error()) : PRT_OK;
+    return st ? prt__fail(ctx, st, "cannot write '%s': %s", path, prt_last_error()) : keep(ctx, out, path);
 }
 
 static prt_status write_maps(prt_context *ctx, const prt_transfer *t, const char *dir, prt_export_result *out)
@@ -77,20 +86,14 @@ static prt_status write_maps(prt_context *ctx, const prt_transfer *t, const char
         for (int k = 0; k < info.count && !st; ++k) {
             int off[2];
             if ((st = prt_transfer_offset_map(t, (prt_offset_kind)kind, k, off, map))) break;
-            int x0 = W, y0 = H, x1 = -1, y1 = -1;
-            for (int y = 0; y < H; ++y)
-                for (int x = 0; x < W; ++x) {
-                    const float *v = map + ((size_t)y * W + x) * 3;
-                    if (v[0] == 0 && v[1] == 0 && v[2] == 0) continue;
-                    x0 = x < x0 ? x : x0; x1 = x > x1 ? x : x1; y0 = y < y0 ? y : y0; y1 = y > y1 ? y : y1;
-                }
+            int x0, y0, w, h;
+            const bool carries = prt__map_crop(map, W, H, &x0, &y0, &w, &h);
             cJSON *e = cJSON_CreateObject();
             cJSON *o = cJSON_AddArrayToObject(e, "offset");
             cJSON_AddItemToArray(o, cJSON_CreateNumber(off[0]));
             cJSON_AddItemToArray(o, cJSON_CreateNumber(off[1]));
             cJSON_AddItemToArray(list, e);
-            if (x1 < 0) { cJSON_AddNullToObject(e, "file"); continue; }   /* carries nothing */
-            const int w = x1 - x0 + 1, h = y1 - y0 + 1;
+            if (!carries) { cJSON_AddNullToObject(e, "file"); continue; }
             prt_image img = {w, h, malloc((size_t)w * h * 3 * sizeof(float))};
             if (!img.rgb) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory writing the maps"); break; }
             for (int y = 0; y < h; ++y)   /* texel row 0 is v near 0: the image's bottom */
@@ -101,6 +104,7 @@ static prt_status write_maps(prt_context *ctx, const prt_transfer *t, const char
             st = prt_image_save(path, &img, NULL);
             prt_image_free(&img);
             if (st) { st = prt__fail(ctx, st, "cannot write '%s': %s", path, prt_last_error()); break; }
+            if ((st = keep(ctx, out, path))) break;
             files++;
             cJSON_AddStringToObject(e, "file", name);
             cJSON *crop = cJSON_AddArrayToObject(e, "crop");
@@ -113,7 +117,7 @@ static prt_status write_maps(prt_context *ctx, const prt_transfer *t, const char
         float *surface = malloc((size_t)W * H * sizeof *surface);
         st = src && surface ? prt_transfer_offset_sources(t, src) : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory writing the maps");
         for (size_t i = 0; !st && i < (size_t)W * H; ++i) surface[i] = src[i] == (int32_t)i ? 1.0f : 0.0f;
-        if (!st) st = save_mask(ctx, dir, "surface.exr", surface, W, H);
+        if (!st) st = save_mask(ctx, out, dir, "surface.exr", surface, W, H);
         if (!st) cJSON_AddStringToObject(index, "surface", "surface.exr");
         free(src);
         free(surface);
@@ -121,7 +125,7 @@ static prt_status write_maps(prt_context *ctx, const prt_transfer *t, const char
     if (!st && info.has[PRT_OFFSET_SUBSURFACE]) {   /* which texels the subsurface pass replaces */
         float *med = malloc((size_t)W * H * sizeof *med);
         st = med ? prt_transfer_offset_medium(t, med) : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory writing the maps");
-        if (!st) st = save_mask(ctx, dir, "medium.exr", med, W, H);
+        if (!st) st = save_mask(ctx, out, dir, "medium.exr", med, W, H);
         if (!st) cJSON_AddStringToObject(index, "medium", "medium.exr");
         free(med);
     }
@@ -131,15 +135,10 @@ static prt_status write_maps(prt_context *ctx, const prt_transfer *t, const char
     if (!st) {
         char path[4200];
         snprintf(path, sizeof path, "%s/index.json", dir);
-        prt__atomic_file f;
-        if (!(st = prt__atomic_open(&f, path))) {
-            st = prt__atomic_write(&f, text, strlen(text));
-            if (!st) st = prt__atomic_write(&f, "\n", 1);
-            if (!st) st = prt__atomic_commit(&f);
-            else prt__atomic_abort(&f);
-        }
-        if (st) st = prt__fail(ctx, st, "cannot write '%s': %s", path, prt_last_error());
-        else prt__export_report(out, "wrote %zu maps and %s", files, path);
+        st = prt__atomic_write_text(path, text);
+        if (st) st = prt__fail(ctx, st, "%s", prt_last_error());
+        else st = keep(ctx, out, path);
+        if (!st) prt__export_report(out, "wrote %zu maps and %s", files, path);
     }
     cJSON_free(text);
     cJSON_Delete(index);

@@ -1,7 +1,7 @@
 /* The offset method's state (offset radiance transfer mapping, Sunshine-Hill & Faloutsos 2006):
  * the texel patches of a light map over the mesh's UVs, the chosen offsets and, per transfer kind,
- * one map per offset of TR(t, t + dt) TVA(t, dt) over the covered texels. Shared by
- * bake.c, relight.c and method.c only. */
+ * one map per offset of TR(t, t + dt) TVA(t, dt) over the covered texels. Shared by the files
+ * of this folder only. */
 #ifndef PRT_METHODS_OFFSET_H
 #define PRT_METHODS_OFFSET_H
 

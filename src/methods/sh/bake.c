@@ -4,7 +4,7 @@
  *   bounce b     T^b_i = rho/pi integral T^{b-1}_i(q(s)) (1 - V(s)) max(n.s, 0) ds
  * estimated with one shared low-discrepancy direction set of N directions (weight 4 pi / N).
  * The glossy shadowed matrix M_ji = integral V(s) H(n.s) y_j(s) y_i(s) ds shares the rays; glossy
- * bounces live in sh_glossy.c.
+ * bounces live in bake_glossy.c.
  * Every vertex's result depends only on its own inputs and the fixed direction set, so the
  * result is bit-identical for any thread count and schedule. */
 #include "methods/sh/bake.h"

@@ -70,16 +70,9 @@ static prt_status write_glsl(prt_context *ctx, const char *path, const char *sou
         PUT("    for (int i = 0; i < %d; ++i) sum += vec3(t[i], t[%d + i], t[%d + i]) * light[i];\n    return sum;\n}\n", coeffs, coeffs, 2 * coeffs);
     }
 #undef PUT
-    prt_status st = at < SIZE ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "the shader outgrew its buffer");
-    prt__atomic_file f;
-    if (!st && !(st = prt__atomic_open(&f, path))) {
-        st = prt__atomic_write(&f, text, at);
-        if (!st) st = prt__atomic_write(&f, "\n", 1);
-        if (!st) st = prt__atomic_commit(&f);
-        else prt__atomic_abort(&f);
-    }
+    prt_status st = at < SIZE ? prt__atomic_write_text(path, text) : prt__fail(ctx, PRT_ERR_NO_MEMORY, "the shader outgrew its buffer");
     free(text);
-    return st ? prt__fail(ctx, st, "cannot write '%s': %s", path, prt_last_error()) : PRT_OK;
+    return st ? prt__fail(ctx, st, "%s", prt_last_error()) : PRT_OK;
 }
 
 prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out)

@@ -1,5 +1,5 @@
-/* The spherical-harmonic method's state (bake*.c, relight*.c, compress.c and
- * its table entry method.c look inside; nothing else does). */
+/* The spherical-harmonic method's state (the files of this folder look inside; nothing else
+ * does). */
 #ifndef PRT_METHODS_SH_H
 #define PRT_METHODS_SH_H
 

@@ -1,6 +1,6 @@
 /* The spectral method's state (Wang, Zhu & Humphreys 2007: direct-to-indirect transfer in a
- * spectral mesh basis). basis.c, bake.c, relight.c and the table
- * entry method.c look inside.
+ * spectral mesh basis): the files of this folder look inside, and - a declared dependency,
+ * docs/ARCHITECTURE.md - the light cloud's bake, which runs the spectral stages and run time.
  *
  * The mesh is cut into partitions; partition p carries count[p] basis functions, the lowest
  * frequencies of its own topological Laplacian, numbered first[p] .. first[p + 1] - 1. Vertex v

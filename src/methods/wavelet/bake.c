@@ -205,7 +205,7 @@ static bool bounce_vertex(const wjob *j, size_t x, const prt__sparse_store *prev
         for (int l = 0; l < lanes; ++l) {
             if (rh.hit.geomID[l] == RTC_INVALID_GEOMETRY_ID) continue;
             const float *d = t->dir + (size_t)lane_entry[l] * 3;
-            /* Only front faces emit (see sh_diffuse.c). */
+            /* Only front faces emit (as in the SH bake, methods/sh/bake.c). */
             if (rh.hit.Ng_x[l] * d[0] + rh.hit.Ng_y[l] * d[1] + rh.hit.Ng_z[l] * d[2] >= 0.0f) continue;
             const float wgt = lane_cos[l] * t->dw[lane_entry[l]];
             float rw[3 * PRT_BRDF_MAX_TERMS];   /* receiver: g_k(w) cos dw, [k][c] */

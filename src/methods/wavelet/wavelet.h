@@ -1,6 +1,5 @@
-/* The wavelet method's state (bake.c, relight.c and its table entry
- * method.c look inside): per vertex term_count[v] sparse transport vectors, vertex v's
- * first at vec_start[v]. */
+/* The wavelet method's state (the files of this folder look inside; nothing else does): per
+ * vertex term_count[v] sparse transport vectors, vertex v's first at vec_start[v]. */
 #ifndef PRT_METHODS_WAVELET_H
 #define PRT_METHODS_WAVELET_H
 
