@@ -83,6 +83,9 @@ void prt__sobol2(uint32_t i, uint32_t seed, double *u, double *v);
 void prt__sh_norms(float out[PRT_SH_MAX_ORDER * PRT_SH_MAX_ORDER]);
 /* Uniform direction on the sphere from (u,v). */
 void prt__sphere_dir(double u, double v, double dir[3]);
+/* A cosine-distributed direction about n from (u1, u2) in [0,1)^2 (Malley's method: a uniform
+ * point of the unit disc lifted onto the hemisphere), in the frame (tx, ty, n). */
+void prt__cosine_dir(double u1, double u2, const float n[3], const float tx[3], const float ty[3], float out[3]);
 
 /* Small vector helpers. */
 static inline void prt__v3_sub(const float *a, const float *b, float *o) { o[0]=a[0]-b[0]; o[1]=a[1]-b[1]; o[2]=a[2]-b[2]; }

@@ -35,6 +35,13 @@ void prt__sobol2(uint32_t i, uint32_t seed, double *u, double *v)
     *v = (double)(sobol_dim2(i) ^ s1) * (1.0 / 4294967296.0);
 }
 
+void prt__cosine_dir(double u1, double u2, const float n[3], const float tx[3], const float ty[3], float out[3])
+{
+    const double r = sqrt(u1), phi = 2.0 * PRT_PI * u2, z = sqrt(1.0 - u1 > 0.0 ? 1.0 - u1 : 0.0);
+    const double lx = r * cos(phi), ly = r * sin(phi);
+    for (int a = 0; a < 3; ++a) out[a] = (float)(lx * tx[a] + ly * ty[a] + z * n[a]);
+}
+
 void prt__sphere_dir(double u, double v, double dir[3])
 {
     double z = 1.0 - 2.0 * u;

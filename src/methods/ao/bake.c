@@ -50,11 +50,7 @@ static float vertex_access(const ao_bake *b, size_t v)
         for (int k = 0; k < lanes; ++k) {
             double u1, u2;
             prt__sobol2((uint32_t)(i0 + k), seed, &u1, &u2);
-            /* Malley's method: a uniform point of the unit disc lifted onto the hemisphere. */
-            const double r = sqrt(u1), phi = 2.0 * PRT_PI * u2, z = sqrt(1.0 - u1 > 0.0 ? 1.0 - u1 : 0.0);
-            const double lx = r * cos(phi), ly = r * sin(phi);
-            float *d = dirs + k * 3;
-            for (int a = 0; a < 3; ++a) d[a] = (float)(lx * tx[a] + ly * ty[a] + z * n[a]);
+            prt__cosine_dir(u1, u2, n, tx, ty, dirs + k * 3);
         }
         _Alignas(64) int valid[PACKET];
         _Alignas(64) struct RTCRay16 r;

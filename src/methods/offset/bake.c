@@ -291,8 +291,7 @@ static void cosine_direction(const float n[3], double u1, double u2, float d[3])
     prt__v3_cross(n, h, t1);
     prt__v3_normalize(t1);
     prt__v3_cross(n, t1, t2);
-    const double r = sqrt(u1), phi = 2 * PRT_PI * u2, z = sqrt(fmax(0.0, 1 - u1));
-    for (int c = 0; c < 3; ++c) d[c] = (float)(r * cos(phi) * t1[c] + r * sin(phi) * t2[c] + z * n[c]);
+    prt__cosine_dir(u1, u2, n, t1, t2, d);
 }
 
 /* Bounces past the first, added to the single-bounce radiosity maps (the paper's maps hold every

@@ -131,10 +131,7 @@ static void gather_vertex(const sbake *sb, size_t v, thread_scratch *sc, float *
         for (int k = 0; k < lanes; ++k) {
             double u1, u2;
             prt__sobol2((uint32_t)(i0 + k), seed, &u1, &u2);
-            const double r = sqrt(u1), phi = 2.0 * PRT_PI * u2, z = sqrt(1.0 - u1 > 0 ? 1.0 - u1 : 0.0);
-            const double lx = r * cos(phi), ly = r * sin(phi);
-            float *d = dirs + k * 3;
-            for (int a = 0; a < 3; ++a) d[a] = (float)(lx * tx[a] + ly * ty[a] + z * n[a]);
+            prt__cosine_dir(u1, u2, n, tx, ty, dirs + k * 3);
         }
         struct RTCRayHit16 rh;
         int valid[16] __attribute__((aligned(64)));
