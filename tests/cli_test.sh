@@ -47,6 +47,12 @@ done
 expect 0 "prt --help" -- "$PRT" --help
 expect 2 "no command" -- "$PRT"
 expect 2 "unknown command" -- "$PRT" frobnicate
+expect 2 "misspelt command" -- "$PRT" rendr
+says "did you mean 'prt render'"
+[ "$(wc -l <"$T/err")" -eq 1 ] && ok || bad "a misspelt command takes one line, not $(wc -l <"$T/err")"
+# Two letters swapped are one edit: --ligth is --light, not --width.
+expect 2 "swapped letters" -- "$PRT" render x.prt --ligth point:0,1,0:1
+says "did you mean --light"
 expect 2 "unknown option" -- "$PRT" bake --frobnicate x.obj -o y.prt
 expect 2 "bake without output" -- "$PRT" bake x.obj
 expect 2 "bad order" -- "$PRT" bake x.obj -o y.prt --order 11

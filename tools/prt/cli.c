@@ -40,23 +40,29 @@ int cli_exit_code(prt_status st)
     }
 }
 
-/* Edit distance between a and the first n bytes of b, capped at 9. */
-static int edit_distance(const char *a, const char *b, size_t n)
+/* Edit distance between a and the first n bytes of b, capped at 9, counting a swap of two
+ * neighbouring letters as one edit (optimal string alignment): "--ligth" is one edit from
+ * "--light", two from "--width". */
+int cli_edit_distance(const char *a, const char *b, size_t n)
 {
     const size_t la = strlen(a);
     if (la > 63 || n > 63) return 9;
-    int row[64];
-    for (size_t j = 0; j <= n; ++j) row[j] = (int)j;
+    int rows[3][64], *prev2 = rows[0], *prev = rows[1], *row = rows[2];
+    for (size_t j = 0; j <= n; ++j) prev[j] = (int)j;
     for (size_t i = 1; i <= la; ++i) {
-        int diag = row[0];
         row[0] = (int)i;
         for (size_t j = 1; j <= n; ++j) {
-            const int sub = diag + (a[i - 1] != b[j - 1]), del = row[j] + 1, ins = row[j - 1] + 1;
-            diag = row[j];
-            row[j] = sub < del ? (sub < ins ? sub : ins) : (del < ins ? del : ins);
+            const int sub = prev[j - 1] + (a[i - 1] != b[j - 1]), del = prev[j] + 1, ins = row[j - 1] + 1;
+            int d = sub < del ? (sub < ins ? sub : ins) : (del < ins ? del : ins);
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] && prev2[j - 2] + 1 < d) d = prev2[j - 2] + 1;
+            row[j] = d;
         }
+        int *t = prev2;
+        prev2 = prev;
+        prev = row;
+        row = t;
     }
-    return row[n] < 9 ? row[n] : 9;
+    return prev[n] < 9 ? prev[n] : 9;
 }
 
 int cli_bad_option(const cli *c, int opt, char **argv, const struct option *opts)
@@ -71,7 +77,7 @@ int cli_bad_option(const cli *c, int opt, char **argv, const struct option *opts
         const char *best = NULL;
         int best_d = 9;
         for (const struct option *o = opts; o->name; ++o) {
-            const int d = edit_distance(o->name, name, n);
+            const int d = cli_edit_distance(o->name, name, n);
             if (d < best_d) { best_d = d; best = o->name; }
         }
         if (best && best_d <= 1 + (int)strlen(best) / 3) return cli_usage(c, "unknown option '%.*s': did you mean --%s?", (int)n + 2, arg, best);

@@ -38,6 +38,8 @@ void cli_error(const cli *c, const char *fmt, ...) __attribute__((format(printf,
 int cli_fail(const cli *c, prt_status st);
 int cli_usage(const cli *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 int cli_make_context(cli *c);
+/* Edit distance between a and the first n bytes of b (a swap of neighbours is one edit), capped at 9. */
+int cli_edit_distance(const char *a, const char *b, size_t n);
 /* The usage error for what getopt_long returned as opt ('?' unknown, ':' missing value; opterr 0
  * and an optstring starting with ':'), naming the argument. */
 int cli_bad_option(const cli *c, int opt, char **argv, const struct option *opts);

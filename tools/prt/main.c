@@ -32,6 +32,17 @@ int main(int argc, char **argv)
     if (!strcmp(argv[1], "--version")) { printf("prt %s\n", prt_version_string()); return EXIT_OK; }
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i)
         if (!strcmp(argv[1], commands[i].name)) return commands[i].fn(argc - 1, argv + 1);
+    /* A misspelt command: name the closest one (within a third of its length), on one line. */
+    const char *best = NULL;
+    int best_d = 9;
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i) {
+        const int d = cli_edit_distance(commands[i].name, argv[1], strlen(argv[1]));
+        if (d < best_d) { best_d = d; best = commands[i].name; }
+    }
+    if (best && best_d <= 1 + (int)strlen(best) / 3) {
+        fprintf(stderr, "prt: unknown command '%s': did you mean 'prt %s'? (prt --help lists the commands)\n", argv[1], best);
+        return EXIT_USAGE;
+    }
     fprintf(stderr, "prt: unknown command '%s'\n", argv[1]);
     usage(stderr);
     return EXIT_USAGE;
