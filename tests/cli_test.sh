@@ -239,6 +239,23 @@ expect 0 "glossy info" -- "$PRT" info "$T/glossy.prt"
 grep -q "glossy-interreflected" "$T/out" && grep -q "phong:30:0.6:0.2" "$T/out" && ok || bad "info does not list the glossy set and material"
 expect 0 "glossy render" -- $NOLEAK "$PRT" render -q "$T/glossy.prt" -o "$T/glossy.png" --width 64 --height 48 -k interreflected,glossy-interreflected
 expect 0 "glossy render, run-time lobe" -- $NOLEAK "$PRT" render -q "$T/glossy.prt" -o "$T/glossy2.png" --width 32 --height 32 --brdf blinn:80:0.3
+# --brdf reshapes the glossy materials only, --brdf-all every surface: alike where every
+# surface is glossy, different where some are diffuse; a file of diffuse materials refuses --brdf.
+printf '%s\n' '{ "materials": { "gloss": { "brdf": "phong:30:0.6:0.2" } },' \
+    '  "meshes": [ { "file": "demo.obj", "material": "gloss" } ] }' >"$T/allgloss.json"
+expect 0 "all-glossy bake" -- "$PRT" bake -q "$T/allgloss.json" -o "$T/allgloss.prt" --order 3 --samples 32 --bounces 1 --kinds shadowed,glossy-shadowed
+for f in glossy allgloss; do
+    for o in brdf brdf-all; do
+        expect 0 "$f --$o" -- "$PRT" relight -q "$T/$f.prt" -k glossy-shadowed --eye 2,2,2 -o "$T/$f-$o.json" --$o blinn:80:0.3
+    done
+done
+same "$T/allgloss-brdf.json" "$T/allgloss-brdf-all.json" 0 "--brdf and --brdf-all where every surface is glossy"
+"$PRT" compare "$T/glossy-brdf.json" "$T/glossy-brdf-all.json" --json - -q | grep -q '"max_abs":[[:space:]]*0[,}]' \
+    && bad "--brdf gave the diffuse surfaces the lobe too" || ok
+expect 0 "glossy kinds over diffuse materials" -- "$PRT" bake -q "$T/demo.obj" -o "$T/plain_glossy.prt" --order 3 --samples 32 --bounces 1 --kinds shadowed,glossy-shadowed
+expect 2 "--brdf without glossy materials" -- "$PRT" render "$T/plain_glossy.prt" -o "$T/x.png" --brdf phong:10
+says "brdf-all"
+expect 0 "--brdf-all without glossy materials" -- $NOLEAK "$PRT" render -q "$T/plain_glossy.prt" -o "$T/x.png" --width 32 --height 32 --brdf-all phong:10
 expect 2 "glossy relight without eye" -- "$PRT" relight "$T/glossy.prt" -k glossy-shadowed -o "$T/g.json"
 says "eye"
 expect 0 "glossy relight" -- "$PRT" relight -q "$T/glossy.prt" -k glossy-shadowed --eye 2,2,2 -o "$T/g.json"

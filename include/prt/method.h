@@ -227,9 +227,13 @@ typedef struct prt_relight_desc {
     /* Values of the method's controls (prt_transfer_controls); NULL = their defaults. */
     const int *controls;
     /* A BRDF for view-dependent evaluation where the method lets the renderer choose it (SH sets
-     * holding incident radiance); NULL = each vertex's material. Files with nothing it could
-     * shape refuse it (other methods, SH files without glossy sets or with a BRDF baked in). */
+     * holding incident radiance); NULL = each vertex's material. It replaces the lobe of the
+     * vertices whose material is glossy, and diffuse surfaces stay diffuse (a scene without
+     * glossy materials refuses it) unless brdf_everywhere is set, which gives every vertex the
+     * lobe. Files with nothing it could shape refuse it (other methods, SH files without glossy
+     * sets or with a BRDF baked in). */
     const prt_brdf *brdf;
+    int brdf_everywhere;
     /* Diffuse albedo per vertex (3 floats each, linear RGB in [0, 1]) replacing the baked one, for
      * methods that let surface colours change without a rebake (prt_method_runtime_albedo); NULL
      * = as baked. Other methods refuse it. */

@@ -414,8 +414,11 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
         return 1;
     }
     case OPT_BRDF:
-        if (prt_brdf_parse(arg, &l->brdf)) { cli_usage(c, "--brdf: %s", prt_last_error()); return -1; }
+    case OPT_BRDF_ALL:
+        if (l->have_brdf && l->brdf_everywhere != (opt == OPT_BRDF_ALL)) { cli_usage(c, "give --brdf or --brdf-all, not both"); return -1; }
+        if (prt_brdf_parse(arg, &l->brdf)) { cli_usage(c, "--%s: %s", opt == OPT_BRDF ? "brdf" : "brdf-all", prt_last_error()); return -1; }
         l->have_brdf = true;
+        l->brdf_everywhere = opt == OPT_BRDF_ALL;
         return 1;
     case OPT_SUN:
         if (!cli_parse_vec3(arg, false, l->sun_dir)) { cli_usage(c, "--sun takes X,Y,Z"); return -1; }
@@ -642,6 +645,7 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     d.per_vertex = per_vertex;
     d.with_indirect = with_indirect;
     d.brdf = l && l->have_brdf ? &l->brdf : NULL;
+    d.brdf_everywhere = l && l->brdf_everywhere;
     d.gpu_finish = l && l->gpu_finish;
     int controls[PRT_MAX_CONTROLS];
     const int nc = cli_controls(c, l, t, controls);

@@ -79,7 +79,8 @@ typedef struct cli_light {
     bool set_lights;          /* --light given: replaces the scene's lights (--light none: no lights) */
     float emission;           /* scale of emissive surfaces */
     bool set_emission;
-    bool have_brdf;           /* --brdf: the reflection lobe for glossy sets */
+    bool have_brdf;           /* --brdf or --brdf-all: the reflection lobe for glossy sets */
+    bool brdf_everywhere;     /* --brdf-all: on every surface, not only the glossy materials */
     prt_brdf brdf;
     /* --albedo-of NAME=R,G,B: surface colours at run time (methods that allow it). */
     struct { char name[64]; float rgb[3]; } paint[CLI_MAX_LIGHTS];
@@ -110,8 +111,10 @@ typedef struct cli_light {
     "                        sphere:X,Y,Z:RADIUS:R,G,B (radiance)\n" \
     "  --emission S          scale the scene's emissive surfaces (0 turns them off; default 1)\n"
 #define CLI_LIGHT_BRDF_HELP \
-    "  --brdf SPEC           reflection lobe for glossy sets baked without a BRDF: phong:N[:KS]\n" \
-    "                        or blinn:N[:KS] (default: the scene's materials)\n"
+    "  --brdf SPEC           reflection lobe of the glossy materials, for glossy sets baked\n" \
+    "                        without a BRDF: phong:N[:KS] or blinn:N[:KS] (default: the\n" \
+    "                        scene's own lobes); diffuse surfaces stay diffuse\n" \
+    "  --brdf-all SPEC       the same lobe on every surface, diffuse ones included\n"
 #define CLI_LIGHT_PAINT_HELP \
     "  --albedo-of NAME=R,G,B  recolour the surface NAME (prt info lists them), repeatable;\n" \
     "                        for methods that change colours without a rebake (prt info says)\n"
@@ -123,13 +126,14 @@ typedef struct cli_light {
 
 /* Returns 1 if the option was a lighting option (consumed), 0 if not, -1 on a bad value. */
 int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg);
-enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN, OPT_BRDF, OPT_LIGHT, OPT_EMISSION, OPT_ALBEDO_OF, OPT_CONTROL };
+enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN, OPT_BRDF, OPT_LIGHT, OPT_EMISSION, OPT_ALBEDO_OF, OPT_CONTROL, OPT_BRDF_ALL };
 #define CLI_LIGHT_LONG_OPTIONS \
     {"env", required_argument, 0, OPT_ENV}, {"layout", required_argument, 0, OPT_LAYOUT}, \
     {"rotate", required_argument, 0, OPT_ROTATE}, {"intensity", required_argument, 0, OPT_INTENSITY}, \
     {"sun", required_argument, 0, OPT_SUN}, {"brdf", required_argument, 0, OPT_BRDF}, \
     {"light", required_argument, 0, OPT_LIGHT}, {"emission", required_argument, 0, OPT_EMISSION}, \
-    {"albedo-of", required_argument, 0, OPT_ALBEDO_OF}, {"control", required_argument, 0, OPT_CONTROL}
+    {"albedo-of", required_argument, 0, OPT_ALBEDO_OF}, {"control", required_argument, 0, OPT_CONTROL}, \
+    {"brdf-all", required_argument, 0, OPT_BRDF_ALL}
 /* The lighting to use: what t (or, without t, the scene s; with neither, nothing) names, with the
  * command line's overrides. */
 prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t, const prt_scene *s, prt_lighting **out);

@@ -68,7 +68,7 @@ int cmd_env(int argc, char **argv)
     if (irradiance && !image) return cli_usage(&c, "--irradiance needs --image FILE");
     if (light.set_lights || light.set_emission || light.have_brdf || light.paint_count ||
         light.control_count)
-        return cli_usage(&c, "--light, --emission, --brdf, --albedo-of and --control do not apply: "
+        return cli_usage(&c, "--light, --emission, --brdf(-all), --albedo-of and --control do not apply: "
                              "prt env projects an environment");
     if (sun && light.env_path)
         return cli_usage(&c, "--sun places the procedural sky's sun: not with a PROBE");

@@ -91,7 +91,7 @@ int cmd_reference(int argc, char **argv)
      * follows every bounce. */
     if (light.have_brdf || light.control_count)
         return cli_usage(&c, "--%s does not apply: prt reference traces the scene's materials, "
-                             "it relights no .prt", light.have_brdf ? "brdf" : "control");
+                             "it relights no .prt", light.have_brdf ? (light.brdf_everywhere ? "brdf-all" : "brdf") : "control");
     int rc = cli_make_context(&c);
     if (rc) return rc;
 

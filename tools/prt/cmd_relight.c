@@ -256,6 +256,7 @@ static int relight_main(int argc, char **argv, bool exporting)
                     const int nc = cli_controls(&c, &light, t, controls);
                     dd.controls = nc > 0 ? controls : NULL;
                     dd.brdf = light.have_brdf ? &light.brdf : NULL;
+                    dd.brdf_everywhere = light.brdf_everywhere;
                     float *albedo = NULL;
                     prt_relit rd;
                     if (nc >= 0 && !cli_painted_albedo(&c, &light, t, &albedo) && (dd.albedo = albedo, !prt_relight(c.ctx, t, lighting, &dd, &rd))) {

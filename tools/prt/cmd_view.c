@@ -181,6 +181,7 @@ static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
     d.component = job->component;
     d.controls = job->controls;
     d.brdf = v->light.have_brdf ? &v->light.brdf : NULL;
+    d.brdf_everywhere = v->light.brdf_everywhere;
     d.albedo = v->albedo;
     d.gpu_finish = job->gpu;
     if (!st) st = prt_relight(v->worker_ctx, v->t, v->lighting, &d, out);

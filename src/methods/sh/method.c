@@ -457,7 +457,7 @@ static prt_status relight_kind(prt_context *ctx, const prt_transfer *t, int k, c
     prt_status st = PRT_OK;
     if (prt_transfer_channels(t, diffuse)) st = prt_relight_sh(ctx, t, diffuse, sh, rgb);
     else memset(rgb, 0, t->mesh.vertex_count * 3 * sizeof(float));
-    if (!st) st = prt_relight_sh_glossy(ctx, t, kind, sh, d->brdf, exit);
+    if (!st) st = prt__relight_sh_glossy(ctx, t, kind, sh, d->brdf, d->brdf_everywhere, exit);
     return st;
 }
 

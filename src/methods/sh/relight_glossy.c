@@ -73,6 +73,12 @@ static prt_status lobe_factors(const prt_transfer *t, int order, const prt_brdf 
 prt_status prt_relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light,
                                  const prt_brdf *brdf, float *out_exit)
 {
+    return prt__relight_sh_glossy(ctx, t, kind, light, brdf, true, out_exit);
+}
+
+prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light,
+                                  const prt_brdf *brdf, bool brdf_everywhere, float *out_exit)
+{
     if (!t || !light || !out_exit) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_sh_glossy: transfer, light and output are required");
     const prt__sh_state *sh = prt__sh_need(ctx, t);
     if (!sh) return PRT_ERR_INVALID_ARG;
@@ -86,6 +92,16 @@ prt_status prt_relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_tr
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this transfer has its BRDF baked in; a run-time BRDF cannot replace it (re-bake without --brdf)");
     float table[PRT__MAX_BRDFS][3 * PRT_SH_MAX_ORDER];   /* 30 KB; shared by the worker threads */
     bool has[PRT__MAX_BRDFS] = {false};
+    /* A run-time lobe given for the glossy materials only replaces their lobes: the diffuse
+     * surfaces beside them stay diffuse. */
+    bool scene_glossy[PRT__MAX_BRDFS] = {false};
+    if (brdf && !brdf_everywhere && !sh->glossy_exit) {
+        bool any = false;
+        for (int i = 0; i < t->brdf_count && i < PRT__MAX_BRDFS; ++i) any |= scene_glossy[i] = prt_brdf_is_glossy(&t->brdfs[i]);
+        if (!any)
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf shapes the glossy materials and this scene has none (they are named in a "
+                             "JSON scene, docs/SCENE.md): --brdf-all gives every surface the lobe");
+    }
     if (!sh->glossy_exit) {
         if (brdf && prt_brdf_validate(brdf)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "BRDF: %s", prt_last_error());
         prt_status st = lobe_factors(t, sh->order, brdf, table, has);
@@ -112,7 +128,8 @@ prt_status prt_relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_tr
 #pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
     for (size_t v = 0; v < nv; ++v) {
         float *e = out_exit + v * 3 * n;
-        int mat = brdf ? 1 : (t->mesh.material ? t->mesh.material[v] : 0);
+        const int own = t->mesh.material ? t->mesh.material[v] : 0;
+        const int mat = !brdf ? own : brdf_everywhere || (own && scene_glossy[own - 1]) ? 1 : 0;
         if (!sh->glossy_exit && (!mat || !has[mat - 1])) { memset(e, 0, (size_t)3 * n * sizeof(float)); continue; }
         if (cp) {
             const uint32_t cl = cp->cluster_of[v], cnt = cp->counts[cl];

@@ -75,6 +75,10 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *d, prt__
 prt_status prt__compress_desc_check(prt_context *ctx, prt_compress_desc *d);
 prt_status prt__sh_compress_set(prt_context *ctx, prt__sh_state *s, size_t vertex_count, int k, const prt_compress_desc *d, prt__progress *prog);
 prt_status prt__sh_quantize(prt_context *ctx, prt__sh_state *s, size_t vertex_count, int bits);
+/* prt_relight_sh_glossy with a choice of where a run-time lobe applies: every vertex, or only
+ * the vertices whose scene material is glossy (what prt_relight_desc.brdf_everywhere chooses). */
+prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light,
+                                  const prt_brdf *brdf, bool brdf_everywhere, float *out_exit);
 
 /* prt export (export.c): --sh and --glsl. */
 prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);
