@@ -33,6 +33,18 @@ static void test_obj_with_materials(void **state)
     assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
     for (size_t v = 0; v < prt_scene_vertex_count(s) * 3; ++v) assert_true(prt_scene_albedo(s)[v] == 0.25f);
     prt_scene_release(s);
+    /* It overrides a JSON scene's colours too: a mesh's own albedo, a material's albedo, a
+     * material named like the file's, and a BRDF's kd (whose glossy lobe stays). */
+    write_text("two.json",
+               "{ \"materials\": { \"red\": { \"albedo\": 0.9 }, \"shiny\": { \"brdf\": \"phong:20:0.5:0.4\" } },\n"
+               "  \"meshes\": [ { \"file\": \"two.obj\" }, { \"file\": \"two.obj\", \"albedo\": [0.1, 0.2, 0.3], \"translate\": [0, 2, 0] },\n"
+               "              { \"file\": \"two.obj\", \"material\": \"shiny\", \"translate\": [0, 4, 0] } ] }\n",
+               path, sizeof path);
+    assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
+    assert_int_equal(prt_scene_vertex_count(s), 21);
+    for (size_t v = 0; v < prt_scene_vertex_count(s) * 3; ++v) assert_true(prt_scene_albedo(s)[v] == 0.25f);
+    assert_int_equal(prt_scene_brdf_count(s), 1);
+    prt_scene_release(s);
     prt_context_release(ctx);
 }
 

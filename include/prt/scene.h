@@ -35,7 +35,9 @@ typedef struct prt_scene_desc {
     float max_edge;          /* subdivide until no edge is longer (scene units); 0 = no subdivision */
     float default_albedo[3]; /* for meshes without a material colour; all zero = 0.7 grey unless
                               * default_albedo_given */
-    int override_albedo;     /* non-zero: use default_albedo for every material */
+    int override_albedo;     /* non-zero: default_albedo for every surface: mesh files' materials
+                              * and a JSON scene's albedos and BRDF kd alike (BRDFs keep their
+                              * glossy lobes) */
     float crease_angle_deg;  /* when normals are computed: split at dihedral angles above this; 0 = 45 */
     prt_winding winding;     /* triangle orientation of imported files; 0 = PRT_WINDING_AUTO */
     /* Mesh files are parsed by assimp in a child process, so that a file that makes it loop or

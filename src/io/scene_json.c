@@ -281,6 +281,10 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
                 }
             }
         if (st) break;
+        /* prt_scene_desc.override_albedo (--albedo) sets every surface's diffuse albedo, a
+         * JSON albedo or a BRDF's kd included (the BRDF keeps its glossy lobe). */
+        if (desc->override_albedo)
+            for (size_t k = first_vertex; k < m->vertex_count; ++k) memcpy(m->albedo + k * 3, desc->default_albedo, 3 * sizeof(float));
         /* The JSON material names the surface (what --albedo-of recolours), else the file's own. */
         if (material_name) {
             const int id = prt__mesh_surface_id(m, material_name);

@@ -166,7 +166,8 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
 /* Scene options shared by bake, reference and sweep. */
 #define CLI_SCENE_FILE_HELP \
     "      --max-edge L       subdivide until no edge is longer than L scene units\n" \
-    "      --albedo R,G,B     albedo for every material (or one value for grey)\n" \
+    "      --albedo R,G,B     albedo of every surface, a JSON scene's own colours included\n" \
+    "                         (or one value for grey)\n" \
     "      --default-albedo R,G,B  albedo where the file has no material (default 0.7)\n" \
     "      --crease-angle D   split computed normals above D degrees (default 45)\n" \
     "      --winding W        auto | keep | flip: which side of imported triangles faces out\n" \
@@ -296,5 +297,13 @@ int cmd_reference(int argc, char **argv);
 int cmd_compare(int argc, char **argv);
 int cmd_sweep(int argc, char **argv);
 int cmd_view(int argc, char **argv);
+/* prt sweep --method all, and prt pick (its short name): every method of the table on one scene
+ * (sweep_all.c). cmd is the name errors carry ("sweep" or "pick"). */
+int cmd_sweep_all(const char *cmd, int argc, char **argv);
+int cmd_pick(int argc, char **argv);
+/* Whether a sweep command line asks for --method all. */
+bool cli_sweep_all_asked(int argc, char **argv);
+/* The help of --method all, without the exit codes. */
+extern const char *const cli_sweep_all_help;
 
 #endif
