@@ -504,6 +504,14 @@ says "needs a rebake"
 
 # The light cloud: point lights anywhere in a region with full global illumination.
 expect 0 "lightcloud bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/lc.prt" --method lightcloud --cloud-grid 3,2,3 --samples 64 --basis 64 --zone-vertices 3000
+# A bad cloud is refused before any work: no stage ran, so no checkpoint of finished work is left.
+printf '[[0, 1, 0], [1, "a", 2]]\n' >"$T/badcloud.json"
+expect 1 "bad --cloud list" -- "$PRT" bake -q "$T/demo.obj" -o "$T/badlc.prt" --method lightcloud --cloud "$T/badcloud.json"
+says "light 1 is not a position"
+[ ! -e "$T/badlc.prt.checkpoint" ] && ok || bad "a bad --cloud list was read after work had begun"
+expect 2 "absurd --cloud-grid" -- "$PRT" bake -q "$T/demo.obj" -o "$T/badlc.prt" --method lightcloud --cloud-grid 4000,4000,4000
+says "at most 4096"
+[ ! -e "$T/badlc.prt.checkpoint" ] && ok || bad "an absurd --cloud-grid was refused after work had begun"
 expect 0 "lightcloud info" -- "$PRT" info "$T/lc.prt"
 grep -q "cloud:" "$T/out" && grep -q "zones:" "$T/out" && grep -q "neighbours" "$T/out" && ok || bad "info lacks the cloud, zones or control"
 expect 0 "lightcloud relight" -- "$PRT" relight -q "$T/lc.prt" -o "$T/lc.json" --light point:0.2,0.8,0.1:2 --control neighbours=4

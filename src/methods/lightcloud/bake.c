@@ -34,6 +34,8 @@ typedef struct lcbake {
     uint8_t *visible;                /* [light * n + light] mutual visibility (1 = visible) */
     uint8_t *dark;                   /* [light] 1 when the light reaches no vertex at all */
     float merge_distance, merge_error;
+    float *list;                     /* --cloud positions, read when the bake begins */
+    uint32_t list_count;
 } lcbake;
 
 /* ---- the spectral stages, passed through ---- */
@@ -134,6 +136,15 @@ static int inside(const prt__raycaster *rc, const float p[3], float near)
     return back > 7 ? 1 : touching ? 2 : 0;
 }
 
+/* The grid's cells (into g), or 0 when a list replaces the grid. */
+static uint64_t grid_size(const prt__lightcloud_bake_desc *d, int g[3])
+{
+    g[0] = g[1] = g[2] = 6;
+    if (d->grid[0]) memcpy(g, d->grid, 3 * sizeof(int));
+    else if (d->list_path) return 0;
+    return (uint64_t)g[0] * g[1] * g[2];
+}
+
 static prt_status place_cloud(lcbake *b, const prt__raycaster *rc)
 {
     prt_context *ctx = b->base.ctx;
@@ -142,24 +153,16 @@ static prt_status place_cloud(lcbake *b, const prt__raycaster *rc)
     if (b->d.has_box) memcpy(box, b->d.box, sizeof box);
     else mesh_bounds(m, box);
     const float diag = sqrtf((box[3] - box[0]) * (box[3] - box[0]) + (box[4] - box[1]) * (box[4] - box[1]) + (box[5] - box[2]) * (box[5] - box[2]));
-    float *list = NULL;
-    uint32_t nlist = 0;
+    const float *list = b->list;
+    const uint32_t nlist = b->list_count;
     prt_status st = PRT_OK;
-    if (b->d.list_path && (st = read_list(ctx, b->d.list_path, &list, &nlist))) return st;
-    const bool grid = !b->d.list_path || b->d.grid[0];
-    int g[3] = {6, 6, 6};
-    if (grid && b->d.grid[0]) memcpy(g, b->d.grid, sizeof g);
-    const uint64_t ngrid = grid ? (uint64_t)g[0] * g[1] * g[2] : 0;
-    const uint64_t total = ngrid + nlist + (uint64_t)b->d.surface_lights;
-    if (total > PRT__LIGHTCLOUD_MAX_LIGHTS) {
-        free(list);
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%llu cloud lights asked for, at most %d (the clustering holds every pair)", (unsigned long long)total,
-                         PRT__LIGHTCLOUD_MAX_LIGHTS);
-    }
+    int g[3];
+    const uint64_t ngrid = grid_size(&b->d, g);
+    const uint64_t total = ngrid + nlist + (uint64_t)b->d.surface_lights;   /* checked when the bake began */
     float *p = malloc((size_t)(total ? total : 1) * 3 * sizeof(float));
-    if (!p) { free(list); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    if (!p) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     uint64_t n = 0;
-    for (int z = 0; z < (grid ? g[2] : 0); ++z)
+    for (int z = 0; z < (ngrid ? g[2] : 0); ++z)
         for (int y = 0; y < g[1]; ++y)
             for (int x = 0; x < g[0]; ++x, ++n) {
                 p[n * 3 + 0] = box[0] + (box[3] - box[0]) * (x + 0.5f) / g[0];
@@ -168,7 +171,6 @@ static prt_status place_cloud(lcbake *b, const prt__raycaster *rc)
             }
     if (nlist) memcpy(p + n * 3, list, (size_t)nlist * 3 * sizeof(float));
     n += nlist;
-    free(list);
     if (b->d.surface_lights) {
         /* Area-weighted points on the triangles, moved off the front face by half a grid cell
          * (or 5% of the box): dense lighting where a designer puts lamps, against the walls. */
@@ -632,6 +634,7 @@ static void lc_release(prt__bake_job *job)
     free(b->pos_of);
     free(b->visible);
     free(b->dark);
+    free(b->list);
     free(b);
 }
 
@@ -647,9 +650,26 @@ prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, 
         for (int k = 0; k < 3; ++k)
             if (!(d.box[k] < d.box[3 + k])) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--cloud-box: each minimum must be below its maximum");
     }
+    /* The cloud's size and list are checked before any work: a bad --cloud file or an absurd
+     * grid must not wait for the spectral stages. */
+    float *list = NULL;
+    uint32_t nlist = 0;
+    if (d.list_path) {
+        const prt_status st = read_list(ctx, d.list_path, &list, &nlist);
+        if (st) return st;
+    }
+    int g[3];
+    const uint64_t total = grid_size(&d, g) + nlist + (uint64_t)d.surface_lights;
+    if (total > PRT__LIGHTCLOUD_MAX_LIGHTS) {
+        free(list);
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%llu cloud lights asked for, at most %d (the clustering holds every pair)", (unsigned long long)total,
+                         PRT__LIGHTCLOUD_MAX_LIGHTS);
+    }
     lcbake *b = prt__calloc(1, sizeof *b);
     prt__lightcloud_set *s = prt__calloc(1, sizeof *s);
-    if (!b || !s) { free(b); free(s); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    if (!b || !s) { free(b); free(s); free(list); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    b->list = list;
+    b->list_count = nlist;
     b->base.stage = lc_stage;
     b->base.finish = lc_finish;
     b->base.release = lc_release;
