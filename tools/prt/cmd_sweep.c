@@ -10,6 +10,8 @@
 
 static const char *HELP =
     "usage: prt sweep SCENE --reference REF.json -o OUT.csv [--plot OUT.png] [options]\n"
+    "       prt sweep --method all SCENE [--json FILE] [--plot PREFIX] [options]   (every method:\n"
+    "       see below; prt pick SCENE is the same)\n"
     "Bakes SCENE once per value of one bake option of a method, relights every kind each file\n"
     "holds under the lighting, and measures the per-vertex error against a reference computed\n"
     "on the same scene (prt reference SCENE -o REF.json with the same scene and lighting\n"
@@ -38,7 +40,7 @@ static const char *HELP =
     "  -j, --threads N        worker threads\n"
     CLI_PROGRESS_HELP
     "  -q, --quiet            no progress or messages\n"
-    "  -h, --help             this text\n\n" EXIT_CODES_HELP;
+    "  -h, --help             this text\n\n";
 
 enum { OPT_REFERENCE = 2400, OPT_PLOT, OPT_PARAM, OPT_VALUES, OPT_INDIRECT_ONLY, OPT_METHOD, OPT_METHOD_OPTION = 3000 };
 
@@ -100,6 +102,7 @@ int cmd_sweep(int argc, char **argv)
     prt_scene_desc sd = {0};
     const char *output = NULL, *reference = NULL, *plot_path = NULL, *param = NULL, *values = NULL;
     bool indirect = false;
+    if (cli_sweep_all_asked(argc, argv)) return cmd_sweep_all("sweep", argc, argv);
     const prt_method *method = cli_method_from_argv(&c, argc, argv);
     if (!method) return EXIT_USAGE;
     const prt_option_desc *mo;
@@ -142,7 +145,12 @@ int cmd_sweep(int argc, char **argv)
             break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) rc = cli_usage(&c, "--threads must be 1..1024"); break;
         case 'q': c.quiet = true; break;
-        case 'h': fputs(HELP, stdout); prt_options_release(fixed_opts); return EXIT_OK;
+        case 'h':
+            fputs(HELP, stdout);
+            fputs(cli_sweep_all_help, stdout);
+            fputs("\n" EXIT_CODES_HELP, stdout);
+            prt_options_release(fixed_opts);
+            return EXIT_OK;
         default: rc = cli_bad_option(&c, opt, argv, opts); break;
         }
     }

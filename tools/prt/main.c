@@ -15,6 +15,7 @@ static const struct { const char *name; int (*fn)(int, char **); const char *sum
     {"reference", cmd_reference, "ground truth by path tracing: per-vertex (direct/indirect) or an image"},
     {"compare", cmd_compare, "error between two results (vertices or images): RMSE, relative L2, PSNR"},
     {"sweep", cmd_sweep, "bake and relight over a parameter range against a reference: CSV and plot"},
+    {"pick", cmd_pick, "which method for a scene: each baked and measured side by side (sweep --method all)"},
     {"demo-scene", cmd_demo_scene, "write the procedural demo scene as OBJ+MTL"},
 };
 
