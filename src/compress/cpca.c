@@ -93,7 +93,7 @@ static void orthonormalize(double *Q, int p, int dim)
 /* Leading p-dimensional subspace of the n centred members' scatter (rows of Q) and the
  * projected scatter C = (R Q^T)^T (R Q^T), p x p, by three rounds of subspace iteration. */
 static bool subspace(const float *X, const size_t *members, size_t n, const double *mean, int dim, int p, uint64_t seed,
-                     double *Q, double *C)
+                     double *Q, double *C, prt__progress *prog)
 {
     double *Y = malloc(n * (size_t)p * sizeof(double)), *Z = malloc((size_t)p * dim * sizeof(double)), *r = malloc((size_t)dim * sizeof(double));
     if (!Y || !Z || !r) { free(Y); free(Z); free(r); return false; }
@@ -101,6 +101,7 @@ static bool subspace(const float *X, const size_t *members, size_t n, const doub
     orthonormalize(Q, p, dim);
     for (int round = 0; round <= 3; ++round) {
         for (size_t m = 0; m < n; ++m) {   /* Y = R Q^T */
+            if (prt__progress_poll(prog, m, 255)) break;   /* the caller sees it and fails */
             const float *x = X + members[m] * dim;
             for (int i = 0; i < dim; ++i) r[i] = x[i] - mean[i];
             for (int a = 0; a < p; ++a) {
@@ -113,6 +114,7 @@ static bool subspace(const float *X, const size_t *members, size_t n, const doub
         if (round == 3) break;
         memset(Z, 0, (size_t)p * dim * sizeof(double));   /* Z = (R^T Y)^T */
         for (size_t m = 0; m < n; ++m) {
+            if (prt__progress_poll(prog, m, 255)) break;
             const float *x = X + members[m] * dim;
             for (int i = 0; i < dim; ++i) r[i] = x[i] - mean[i];
             for (int a = 0; a < p; ++a) {
@@ -180,9 +182,12 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
         for (int i = 0; i < dim; ++i) M[0].mean[i] = X[c0 * dim + i];
         for (size_t v = 0; v < nv; ++v) best[v] = INFINITY;
         for (int k = 1; k <= K; ++k) {
+            /* K passes over every vector: long ones (glossy matrices) take a second or more. */
+            if (prog && prt__progress_cancelled(prog)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); goto done; }
             const int prev = k - 1;
 #pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
             for (size_t v = 0; v < nv; ++v) {
+                if (prt__progress_poll(prog, v, 1023)) continue;
                 double e = 0;
                 for (int i = 0; i < dim; ++i) { double t = X[v * dim + i] - M[prev].mean[i]; e += t * t; }
                 if (e < best[v]) { best[v] = e; assign[v] = (uint32_t)prev; }
@@ -191,6 +196,7 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
             double total = 0;
             for (size_t v = 0; v < nv; ++v) total += best[v];
             if (k == K) break;
+            if (prog && prt__progress_cancelled(prog)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); goto done; }
             double u = (double)(mix(d->seed * 0x9e3779b97f4a7c15ULL + (uint64_t)k * 7919 + 2) >> 11) / 9007199254740992.0 * total, acc = 0;
             size_t pick = nv - 1;
             for (size_t v = 0; v < nv; ++v) { acc += best[v]; if (acc >= u && best[v] > 0) { pick = v; break; } }
@@ -224,28 +230,35 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
             if (n == 0) { memset(M[k].vals, 0, (size_t)sub * sizeof(double)); continue; }   /* keeps its old mean */
             double *mean = M[k].mean, *cov = M[k].vecs;
             memset(mean, 0, (size_t)dim * sizeof(double));
-            for (size_t j = first[k]; j < first[k + 1]; ++j)
+            for (size_t j = first[k]; j < first[k + 1]; ++j) {
+                if (prt__progress_poll(prog, j, 1023)) break;   /* one cluster may hold most vertices */
                 for (int i = 0; i < dim; ++i) mean[i] += X[order[j] * dim + i];
+            }
             for (int i = 0; i < dim; ++i) mean[i] /= (double)n;
             if (large) {
                 if (!subspace(X, order + first[k], n, mean, dim, sub, d->seed + (uint64_t)k * 131 + (uint64_t)it * 7919, M[k].vecs,
-                              small + (size_t)k * sub * sub))
+                              small + (size_t)k * sub * sub, prog))
                     __atomic_store_n(&lapack_failed, 1, __ATOMIC_RELAXED);
                 continue;
             }
             memset(cov, 0, (size_t)dim * dim * sizeof(double));
             double r[512];
             for (size_t j = first[k]; j < first[k + 1]; ++j) {
+                if (prt__progress_poll(prog, j, 255)) break;
                 for (int i = 0; i < dim; ++i) r[i] = X[order[j] * dim + i] - mean[i];
                 for (int a = 0; a < dim; ++a)
                     for (int b = a; b < dim; ++b) cov[(size_t)a * dim + b] += r[a] * r[b];
             }
         }
+        /* Cancelled while summing: the sums are partial, and subspace() may have given up. */
+        if (prog && prt__progress_cancelled(prog)) { free(small); st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); break; }
         /* Eigen decompositions one after another: OpenBLAS is not meant to be entered from several
-         * OpenMP threads at once. */
+         * OpenMP threads at once. Hundreds of them take seconds: look between them. */
         double *tmp = malloc((size_t)sub * dim * sizeof(double));
-        for (int k = 0; k < K && tmp && !lapack_failed && large; ++k) {
+        bool stopped = false;
+        for (int k = 0; k < K && tmp && !lapack_failed && large && !stopped; ++k) {
             if (M[k].members == 0) continue;
+            if ((k & 7) == 7 && prog && prt__progress_cancelled(prog)) { stopped = true; break; }
             double *C = small + (size_t)k * sub * sub, w[FULL_EIGEN_MAX_DIM];
             if (LAPACKE_dsyev(LAPACK_ROW_MAJOR, 'V', 'U', sub, C, sub, w) != 0) { lapack_failed = 1; break; }
             for (int j = 0; j < sub; ++j) {   /* descending; eigenvector j of the scatter = sum_a V[a][src] Q_a */
@@ -261,8 +274,9 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
             memcpy(M[k].vecs, tmp, (size_t)sub * dim * sizeof(double));
         }
         free(small);
-        for (int k = 0; k < K && tmp && !lapack_failed && !large; ++k) {
+        for (int k = 0; k < K && tmp && !lapack_failed && !large && !stopped; ++k) {
             if (M[k].members == 0) continue;
+            if ((k & 7) == 7 && prog && prt__progress_cancelled(prog)) { stopped = true; break; }
             double *cov = M[k].vecs, w[FULL_EIGEN_MAX_DIM];
             /* Row-major upper triangle; eigenvalues come back ascending, vectors in columns. */
             if (LAPACKE_dsyev(LAPACK_ROW_MAJOR, 'V', 'U', dim, cov, dim, w) != 0) { lapack_failed = 1; break; }
@@ -275,6 +289,7 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
         }
         if (!tmp) lapack_failed = 1;
         free(tmp);
+        if (stopped) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); break; }
         if (lapack_failed) { st = prt__fail(ctx, PRT_ERR_BACKEND, "LAPACK eigen decomposition failed"); break; }
         /* Half an iteration can take a second on large meshes: look before reassigning too. */
         if (prog && prt__progress_cancelled(prog)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); break; }
@@ -301,6 +316,7 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
         size_t moved = 0;
 #pragma omp parallel for schedule(static) num_threads(prt__threads(ctx)) reduction(+ : moved)
         for (size_t v = 0; v < nv; ++v) {
+            if (prt__progress_poll(prog, v, 255)) continue;   /* assign[v] stays: the pass is thrown away */
             double be = INFINITY;
             uint32_t bk = assign[v];
             /* Long vectors try their own cluster and the four with the nearest means only: testing
@@ -332,7 +348,7 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
             assign[v] = bk;
         }
         if (prog) prt__progress_add(prog, 1);
-        if (prt__progress_cancelled(prog)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); break; }
+        if (prog && prt__progress_cancelled(prog)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); break; }
         if (moved == 0 && total_vectors == budget) it = iterations - 1;   /* converged: go to the final refit */
     }
     openblas_set_num_threads(blas_threads);
@@ -376,6 +392,7 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
     if (!verr) { prt__cpca_free(c); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
 #pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
     for (size_t v = 0; v < nv; ++v) {
+        if (prt__progress_poll(prog, v, 1023)) continue;
         uint32_t k = c->cluster_of[v];
         const float *x = X + v * dim, *m = c->means + (size_t)k * dim;
         float rec[dim];   /* a few KB at most: 3 x 625 floats for order-5 RGB matrices */
@@ -392,6 +409,7 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
         for (int i = 0; i < dim; ++i) n2 += (double)x[i] * x[i];
         verr[nv + v] = n2;
     }
+    if (prog && prt__progress_cancelled(prog)) { free(verr); prt__cpca_free(c); st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); goto done; }
     double err = 0, norm = 0;
     for (size_t v = 0; v < nv; ++v) { err += verr[v]; norm += verr[nv + v]; }
     free(verr);

@@ -31,6 +31,17 @@ struct prt_context {
 
 /* True when the context's cancel hook asks to stop (ctx may be NULL). */
 bool prt__cancelled(const prt_context *ctx);
+/* Cheap polling from the iterations of a (parallel) loop: true once *stop is set, which happens
+ * when the hook, asked on iterations i with (i & mask) == 0, says stop. Every thread then skips
+ * the rest (`if (prt__cancel_poll(ctx, &stop, i, 255)) continue;`); the caller fails with
+ * PRT_ERR_CANCELLED when stop is set after the loop. */
+static inline bool prt__cancel_poll(const prt_context *ctx, int *stop, size_t i, size_t mask)
+{
+    if (__atomic_load_n(stop, __ATOMIC_RELAXED)) return true;
+    if ((i & mask) || !prt__cancelled(ctx)) return false;
+    __atomic_store_n(stop, 1, __ATOMIC_RELAXED);
+    return true;
+}
 
 /* Records the failure message for prt_last_error(), sends it to the log hook (ctx may be NULL)
  * and returns status, so that callers can write `return prt__fail(ctx, PRT_ERR_IO, "...")`. */

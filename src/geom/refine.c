@@ -851,13 +851,17 @@ prt_status prt__mesh_refine_estimate(const prt_context *ctx, const prt__mesh *m,
     /* Evenly spread triangles (a fixed stride, so the answer is the same every run). */
     const size_t nt = m->triangle_count, samples = nt < ESTIMATE_SAMPLES ? nt : ESTIMATE_SAMPLES;
     size_t needs = 0;
+    int stop = 0;   /* a sample sends up to 19 probes of many rays each (more with many lights) */
 #pragma omp parallel for schedule(dynamic, 8) reduction(+ : needs) num_threads(prt__threads(ctx))
-    for (size_t i = 0; i < samples; ++i) needs += triangle_needs_refinement(&r, (size_t)((double)i * nt / samples), diag / 50);
+    for (size_t i = 0; i < samples; ++i) {
+        if (prt__cancel_poll(ctx, &stop, i, 0)) continue;
+        needs += triangle_needs_refinement(&r, (size_t)((double)i * nt / samples), diag / 50);
+    }
     prt__raycaster_release(&rc);
     prt_refine_stats s = {0};
     s.marked_triangles = samples ? (size_t)llround((double)needs * nt / samples) : 0;
     s.triangles = nt;
     s.probes = samples;
     if (stats) *stats = s;
-    return prt__cancelled(ctx) ? prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled") : PRT_OK;
+    return stop || prt__cancelled(ctx) ? prt__fail(ctx, PRT_ERR_CANCELLED, "refinement estimate cancelled") : PRT_OK;
 }

@@ -156,7 +156,8 @@ prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__m
     if (!ctx || !scene || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bake: context, scene and out are required");
     *out = NULL;
     prt_transfer *t = NULL;
-    prt_status st = prt__transfer_from_scene(ctx, m, scene, &t);
+    /* Copying a mesh of tens of millions of triangles takes a second: not when already stopped. */
+    prt_status st = prt__cancelled(ctx) ? prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled") : prt__transfer_from_scene(ctx, m, scene, &t);
     prt__bake_job *job = NULL;
     prt__checkpoint *cp = NULL;
     /* Setting up a bake of tens of millions of triangles takes seconds a step: look between steps. */
