@@ -63,13 +63,19 @@ says "glossy"
 # Happy path on the demo scene.
 expect 0 "demo-scene" -- "$PRT" demo-scene -o "$T/demo.obj"
 [ -s "$T/demo.mtl" ] && ok || bad "demo.mtl missing"
-expect 0 "bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/demo.prt" --order 4 --samples 128 --bounces 2
+# --no-refine: the file keeps the scene's vertices, which the sweeps below compare against.
+expect 0 "bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/demo.prt" --order 4 --samples 128 --bounces 2 --no-refine
 # Progress for scripts: one JSON object per line; a summary with each stage's time.
 expect 0 "bake with JSON progress and a summary" -- "$PRT" bake "$T/demo.obj" -o "$T/p.prt" --order 2 --samples 32 --bounces 1 --progress json --summary "$T/sum.json" --compress pca
 grep '^{"stage"' "$T/err" | tail -n 1 | grep -q '"percent": 100.0' && ok || bad "JSON progress did not reach 100%"
 [ "$(grep -c '^{"stage"' "$T/err")" -ge 4 ] && ok || bad "JSON progress: too few lines"
 grep -q '"name":[[:space:]]*"compress interreflected"' "$T/sum.json" && grep -q '"bake_seconds"' "$T/sum.json" && ok || bad "the summary lacks stage times"
-says "--refine"   # the contact ring of the torus and sphere: the bake suggests refining there
+says "refining them"   # the contact ring of the torus and sphere: refined by default
+expect 0 "info of a default bake" -- "$PRT" info --json "$T/p.prt"
+nv=$(sed -n 's/.*"vertices":[[:space:]]*\([0-9]*\).*/\1/p' "$T/out" | head -n 1)
+[ -n "$nv" ] && [ "$nv" -gt 10195 ] && [ "$nv" -le 20390 ] && ok || bad "a default bake has $nv vertices, expected 10196..20390 (refined within its budget)"
+expect 2 "--no-refine with --refine" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --no-refine --refine
+says "contradicts"
 expect 2 "bad --progress" -- "$PRT" bake "$T/demo.obj" -o "$T/p.prt" --progress loud
 # Adaptive refinement: more vertices, within the budget, in the file the bake writes.
 expect 0 "bake --refine" -- "$PRT" bake "$T/demo.obj" -o "$T/refined.prt" --order 2 --samples 32 --bounces 1 --refine --refine-vertices 3000
@@ -159,6 +165,24 @@ expect 0 "render png" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -k all -o "$T/im
 [ -s "$T/img.png" ] && ok || bad "render wrote no PNG"
 expect 0 "render exr" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -o "$T/img.exr" --width 32 --height 32 --view 0,1,1
 [ -s "$T/img.exr" ] && ok || bad "render wrote no EXR"
+# Several inputs side by side: files under the same camera and light, images pasted as they are.
+expect 0 "render one panel" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -o "$T/one.pfm" --width 32 --height 24
+expect 0 "render files and an image side by side" -- $NOLEAK "$PRT" render -q "$T/demo.prt" "$T/one.pfm" "$T/demo.prt" -o "$T/three.pfm" --width 32 --height 24
+[ "$(sed -n 2p "$T/three.pfm")" = "96 24" ] && ok || bad "three panels of 32x24 are not one 96x24 image: $(sed -n 2p "$T/three.pfm")"
+expect 2 "an image of another size" -- "$PRT" render -q "$T/demo.prt" "$T/one.pfm" -o "$T/x.pfm" --width 40 --height 24
+says "32x24"
+expect 2 "--kind with several files" -- "$PRT" render -q "$T/demo.prt" "$T/demo.prt" -k shadowed -o "$T/x.png"
+# Animations: an animated PNG whose lighting turns, or whose lights move to --light-to.
+expect 0 "render --frames" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -o "$T/anim.png" --width 32 --height 24 --frames 3
+grep -a -q acTL "$T/anim.png" && grep -a -q fdAT "$T/anim.png" && ok || bad "--frames wrote no animated PNG"
+expect 0 "render --light-to" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -o "$T/anim2.png" --width 32 --height 24 --frames 2 --env none \
+    --light directional:0,1,0:2 --light-to directional:1,1,0:2
+expect 2 "--frames to an EXR" -- "$PRT" render -q "$T/demo.prt" -o "$T/x.exr" --frames 3
+says "animated PNG"
+expect 2 "--light-to without --frames" -- "$PRT" render -q "$T/demo.prt" -o "$T/x.png" --light directional:0,1,0:2 --light-to directional:1,1,0:2
+expect 2 "--light-to of another type" -- "$PRT" render -q "$T/demo.prt" -o "$T/x.png" --frames 2 --light directional:0,1,0:2 --light-to point:1,1,0:2
+says "same type"
+expect 2 "an image cannot move" -- "$PRT" render -q "$T/demo.prt" "$T/one.pfm" -o "$T/x.png" --frames 2 --width 32 --height 24
 expect 0 "env sky" -- "$PRT" env --order 3 --image "$T/irr.pfm" --irradiance -q
 grep -q '"coefficients"' "$T/out" && ok || bad "env printed no coefficients"
 
@@ -503,7 +527,7 @@ expect 2 "colours of a method that bakes them" -- "$PRT" relight "$T/lamp.prt" -
 says "needs a rebake"
 
 # The light cloud: point lights anywhere in a region with full global illumination.
-expect 0 "lightcloud bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/lc.prt" --method lightcloud --cloud-grid 3,2,3 --samples 64 --basis 64 --zone-vertices 3000
+expect 0 "lightcloud bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/lc.prt" --method lightcloud --cloud-grid 3,2,3 --samples 64 --basis 64 --zone-vertices 3000 --no-refine
 # A bad cloud is refused before any work: no stage ran, so no checkpoint of finished work is left.
 printf '[[0, 1, 0], [1, "a", 2]]\n' >"$T/badcloud.json"
 expect 1 "bad --cloud list" -- "$PRT" bake -q "$T/demo.obj" -o "$T/badlc.prt" --method lightcloud --cloud "$T/badcloud.json"

@@ -213,6 +213,62 @@ static void test_image_round_trips(void **state)
     prt_image_free(&img);
 }
 
+/* An animated PNG: a valid PNG whose first frame is what viewers without APNG show, then one
+ * fcTL per frame and the rest of the frames in fdAT chunks, numbered in one sequence; every
+ * chunk's CRC holds. */
+static void test_animation(void **state)
+{
+    (void)state;
+    prt_image frames[3];
+    for (int f = 0; f < 3; ++f) {
+        frames[f] = (prt_image){6, 4, malloc(6 * 4 * 3 * sizeof(float))};
+        for (int i = 0; i < 72; ++i) frames[f].rgb[i] = 0.1f + 0.25f * (float)f + 0.001f * (float)i;
+    }
+    char path[512];
+    snprintf(path, sizeof path, "%s/anim.png", test_dir);
+    prt_image_save_desc sd = {.tonemap = 2};
+    assert_int_equal(prt_image_save_animation(path, frames, 3, 10, &sd), PRT_OK);
+    prt_image back;
+    assert_int_equal(prt_image_load(path, &back), PRT_OK);
+    assert_int_equal(back.width, 6);
+    assert_int_equal(back.height, 4);
+    for (int i = 0; i < 72; ++i) assert_true(fabsf(back.rgb[i] - frames[0].rgb[i]) < 0.02f * frames[0].rgb[i] + 1e-3f);
+    prt_image_free(&back);
+    size_t n = 0;
+    unsigned char *d = test_slurp(path, &n);
+    uint32_t expect_seq = 0;
+    int fctl = 0, fdat = 0, actl_frames = -1;
+    size_t at = 8;
+    while (at + 12 <= n) {
+        const uint32_t len = (uint32_t)d[at] << 24 | (uint32_t)d[at + 1] << 16 | (uint32_t)d[at + 2] << 8 | d[at + 3];
+        assert_true(len <= n - at - 12);
+        const unsigned char *type = d + at + 4, *data = d + at + 8;
+        const uint32_t crc = (uint32_t)d[at + 8 + len] << 24 | (uint32_t)d[at + 9 + len] << 16 | (uint32_t)d[at + 10 + len] << 8 | d[at + 11 + len];
+        assert_int_equal(crc, (uint32_t)crc32(0L, type, len + 4));
+        if (!memcmp(type, "acTL", 4)) actl_frames = data[3];
+        if (!memcmp(type, "fcTL", 4) || !memcmp(type, "fdAT", 4)) {
+            const uint32_t seq = (uint32_t)data[0] << 24 | (uint32_t)data[1] << 16 | (uint32_t)data[2] << 8 | data[3];
+            assert_int_equal(seq, expect_seq++);
+            fctl += !memcmp(type, "fcTL", 4);
+            fdat += !memcmp(type, "fdAT", 4);
+        }
+        at += 12 + len;
+    }
+    assert_int_equal(at, n);
+    assert_int_equal(actl_frames, 3);
+    assert_int_equal(fctl, 3);
+    assert_true(fdat >= 2);
+    free(d);
+    /* Frames of another size, no frames, another format: refused. */
+    frames[2].width = 4;
+    frames[2].height = 6;
+    assert_int_equal(prt_image_save_animation(path, frames, 3, 10, NULL), PRT_ERR_INVALID_ARG);
+    assert_int_equal(prt_image_save_animation(path, frames, 0, 10, NULL), PRT_ERR_INVALID_ARG);
+    snprintf(path, sizeof path, "%s/anim.exr", test_dir);
+    assert_int_equal(prt_image_save_animation(path, frames, 2, 10, NULL), PRT_ERR_INVALID_ARG);
+    for (int f = 0; f < 3; ++f) free(frames[f].rgb);
+}
+
 static void test_sky(void **state)
 {
     (void)state;
@@ -408,6 +464,7 @@ int main(void)
         cmocka_unit_test(test_constant_env_and_irradiance_map),
         cmocka_unit_test(test_bad_pixels_rejected),
         cmocka_unit_test(test_image_round_trips),
+        cmocka_unit_test(test_animation),
         cmocka_unit_test(test_sky),
         cmocka_unit_test(test_hdr_reader_and_signatures),
         cmocka_unit_test(test_mesh_export_attributes),

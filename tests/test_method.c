@@ -89,7 +89,11 @@ static void test_bake_through_table(void **state)
     assert_int_equal(prt_options_set(o, "samples", "256"), PRT_OK);
     assert_int_equal(prt_options_set(o, "kinds", "all,glossy-shadowed"), PRT_OK);
     assert_int_equal(prt_options_set(o, "bounces", "2"), PRT_OK);
-    prt_transfer *a = NULL, *b = NULL, *c = NULL;
+    prt_transfer *a = NULL, *b = NULL, *c = NULL, *q = NULL;
+    /* By default the table stores 16-bit sets; within 1/65535 of each coefficient's range of
+     * the floats that --quantize 32 keeps (and prt_bake_sh gives). */
+    assert_int_equal(prt_bake(one, scene, sh, o, NULL, &q), PRT_OK);
+    assert_int_equal(prt_options_set(o, "quantize", "32"), PRT_OK);
     assert_int_equal(prt_bake(one, scene, sh, o, NULL, &a), PRT_OK);
     assert_int_equal(prt_bake(two, scene, sh, o, NULL, &b), PRT_OK);
     prt_bake_desc d = {0};   /* the SH bake desc's prt 0.1 name (prt_sh_bake_desc now): old programs still build */
@@ -106,7 +110,15 @@ static void test_bake_through_table(void **state)
         /* The work units' results do not depend on the threads or on the way into the bake. */
         assert_memory_equal(coeffs_of(a, kinds[k]), coeffs_of(b, kinds[k]), bytes);
         assert_memory_equal(coeffs_of(a, kinds[k]), coeffs_of(c, kinds[k]), bytes);
+        const size_t dim = prt_transfer_set_floats(a, kinds[k]);
+        const float *x = coeffs_of(a, kinds[k]), *y = coeffs_of(q, kinds[k]);
+        for (size_t j = 0; j < dim; ++j) {
+            float lo = x[j], hi = x[j];
+            for (size_t v = 0; v < nv; ++v) { lo = fminf(lo, x[v * dim + j]); hi = fmaxf(hi, x[v * dim + j]); }
+            for (size_t v = 0; v < nv; ++v) assert_true(fabsf(x[v * dim + j] - y[v * dim + j]) <= (hi - lo) / 65535.0f * 0.51f + 1e-7f);
+        }
     }
+    prt_transfer_release(q);
     assert_ptr_equal(prt_transfer_method(a), sh);
     assert_int_equal(prt_transfer_variant_count(a), 4);
     assert_string_equal(prt_transfer_variant_name(a, prt_transfer_default_variant(a, 0)), "interreflected");

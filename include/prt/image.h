@@ -27,6 +27,10 @@ typedef struct prt_image_save_desc {
 /* Saves by extension: .png (tone-mapped, sRGB 8-bit), .exr (linear half), .hdr, .pfm.
  * Written atomically: a temporary file is renamed over the target only when complete. */
 prt_status prt_image_save(const char *path, const prt_image *img, const prt_image_save_desc *desc);
+/* Saves count frames of one size as an animated PNG (APNG, .png only), looping, fps frames per
+ * second (1..100), each tone-mapped as prt_image_save does; viewers without APNG show the first
+ * frame. Written atomically. */
+prt_status prt_image_save_animation(const char *path, const prt_image *frames, int count, int fps, const prt_image_save_desc *desc);
 void prt_image_free(prt_image *img);
 
 /* A mesh with per-vertex colours for other tools: glTF 2.0 (.glb, .gltf + .bin), PLY (.ply,

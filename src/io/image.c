@@ -301,6 +301,31 @@ static prt_status save_exr(const char *path, const prt_image *img)
     return st;
 }
 
+/* Tone-mapped sRGB 8-bit PNG bytes of img, appended to out. */
+static prt_status encode_png(const prt_image *img, const prt_image_save_desc *d, buf *out)
+{
+    const size_t n = (size_t)img->width * img->height;
+    unsigned char *px = malloc(n * 3);
+    if (!px) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    float scale = exp2f(d->exposure_stops);
+    for (size_t i = 0; i < n; ++i) {
+        float c[3] = {img->rgb[i * 3] * scale, img->rgb[i * 3 + 1] * scale, img->rgb[i * 3 + 2] * scale};
+        if (d->tonemap != 2) {   /* Reinhard on luminance keeps hue while compressing highlights */
+            float lum = 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+            float k = lum > 0 ? 1.0f / (1.0f + lum) : 1.0f;
+            for (int j = 0; j < 3; ++j) c[j] *= k;
+        }
+        for (int j = 0; j < 3; ++j) {
+            float v = linear_to_srgb(fminf(fmaxf(c[j], 0.0f), 1.0f));
+            px[i * 3 + j] = (unsigned char)lrintf(v * 255.0f);
+        }
+    }
+    int ok = stbi_write_png_to_func(buf_put, out, img->width, img->height, 3, px, img->width * 3);
+    free(px);
+    if (!ok || out->failed) { free(out->p); out->p = NULL; return prt__fail(NULL, PRT_ERR_NO_MEMORY, "PNG encoding failed"); }
+    return PRT_OK;
+}
+
 prt_status prt_image_save(const char *path, const prt_image *img, const prt_image_save_desc *desc)
 {
     if (!path || !img || !img->rgb || img->width <= 0 || img->height <= 0)
@@ -308,28 +333,11 @@ prt_status prt_image_save(const char *path, const prt_image *img, const prt_imag
     prt_image_save_desc d = desc ? *desc : (prt_image_save_desc){0};
     const char *ext = strrchr(path, '.');
     ext = ext ? ext + 1 : "";
-    size_t n = (size_t)img->width * img->height;
     if (!strcasecmp(ext, "exr")) return save_exr(path, img);
     buf out = {0};
     if (!strcasecmp(ext, "png")) {
-        unsigned char *px = malloc(n * 3);
-        if (!px) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
-        float scale = exp2f(d.exposure_stops);
-        for (size_t i = 0; i < n; ++i) {
-            float c[3] = {img->rgb[i * 3] * scale, img->rgb[i * 3 + 1] * scale, img->rgb[i * 3 + 2] * scale};
-            if (d.tonemap != 2) {   /* Reinhard on luminance keeps hue while compressing highlights */
-                float lum = 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
-                float k = lum > 0 ? 1.0f / (1.0f + lum) : 1.0f;
-                for (int j = 0; j < 3; ++j) c[j] *= k;
-            }
-            for (int j = 0; j < 3; ++j) {
-                float v = linear_to_srgb(fminf(fmaxf(c[j], 0.0f), 1.0f));
-                px[i * 3 + j] = (unsigned char)lrintf(v * 255.0f);
-            }
-        }
-        int ok = stbi_write_png_to_func(buf_put, &out, img->width, img->height, 3, px, img->width * 3);
-        free(px);
-        if (!ok || out.failed) { free(out.p); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "PNG encoding failed"); }
+        prt_status st = encode_png(img, &d, &out);
+        if (st) return st;
     } else if (!strcasecmp(ext, "hdr")) {
         if (!stbi_write_hdr_to_func(buf_put, &out, img->width, img->height, 3, img->rgb) || out.failed) {
             free(out.p);
@@ -345,6 +353,102 @@ prt_status prt_image_save(const char *path, const prt_image *img, const prt_imag
         return prt__fail(NULL, PRT_ERR_INVALID_ARG, "'%s': unknown image type (use .png, .exr, .hdr or .pfm)", path);
     }
     prt_status st = write_bytes(path, out.p, out.n);
+    free(out.p);
+    return st;
+}
+
+/* Offset of the first IDAT chunk of an encoded PNG (0 when it has none). */
+static size_t png_first_data(const buf *png)
+{
+    for (size_t at = 8; at + 12 <= png->n;) {
+        const unsigned char *c = png->p + at;
+        const uint32_t len = (uint32_t)c[0] << 24 | (uint32_t)c[1] << 16 | (uint32_t)c[2] << 8 | c[3];
+        if (!memcmp(c + 4, "IDAT", 4)) return at;
+        if (len > png->n - at - 12) break;
+        at += 12 + (size_t)len;
+    }
+    return 0;
+}
+
+/* One PNG chunk: length, type, data, CRC over type and data. */
+static void put_chunk(buf *out, const char type[4], const unsigned char *data, uint32_t size)
+{
+    unsigned char be[4] = {(unsigned char)(size >> 24), (unsigned char)(size >> 16), (unsigned char)(size >> 8), (unsigned char)size};
+    buf_put(out, be, 4);
+    unsigned char *tmp = malloc((size_t)size + 4);
+    if (!tmp) { out->failed = true; return; }
+    memcpy(tmp, type, 4);
+    if (size) memcpy(tmp + 4, data, size);
+    buf_put(out, tmp, (int)size + 4);
+    const uint32_t crc = prt__crc32(tmp, (size_t)size + 4);
+    free(tmp);
+    unsigned char c[4] = {(unsigned char)(crc >> 24), (unsigned char)(crc >> 16), (unsigned char)(crc >> 8), (unsigned char)crc};
+    buf_put(out, c, 4);
+}
+
+static void put_be32(unsigned char *p, uint32_t v) { p[0] = (unsigned char)(v >> 24); p[1] = (unsigned char)(v >> 16); p[2] = (unsigned char)(v >> 8); p[3] = (unsigned char)v; }
+
+/* An animated PNG (APNG): each frame encoded as a PNG by stb, its image data moved into the
+ * frame chunks (fcTL + IDAT for the first frame, which viewers without APNG show, fdAT for the
+ * rest). */
+prt_status prt_image_save_animation(const char *path, const prt_image *frames, int count, int fps, const prt_image_save_desc *desc)
+{
+    if (!path || !frames || count < 1 || fps < 1 || fps > 100)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_image_save_animation: a path, 1 or more frames and 1..100 frames per second are required");
+    for (int i = 0; i < count; ++i)
+        if (!frames[i].rgb || frames[i].width != frames[0].width || frames[i].height != frames[0].height || frames[i].width <= 0 || frames[i].height <= 0)
+            return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_image_save_animation: frame %d has no pixels or another size than the first", i);
+    const char *ext = strrchr(path, '.');
+    if (!ext || strcasecmp(ext, ".png")) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "'%s': an animation is written as an animated PNG (.png)", path);
+    const prt_image_save_desc d = desc ? *desc : (prt_image_save_desc){0};
+    buf out = {0};
+    static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    buf_put(&out, (void *)sig, 8);
+    uint32_t seq = 0;
+    prt_status st = PRT_OK;
+    for (int i = 0; i < count && !st && !out.failed; ++i) {
+        buf png = {0};
+        if ((st = encode_png(&frames[i], &d, &png))) break;
+        /* Walk stb's chunks: IHDR once (then acTL), image data into this frame's chunks. */
+        size_t at = 8;
+        while (at + 12 <= png.n && !out.failed) {
+            const unsigned char *c = png.p + at;
+            const uint32_t len = (uint32_t)c[0] << 24 | (uint32_t)c[1] << 16 | (uint32_t)c[2] << 8 | c[3];
+            if (len > png.n - at - 12) break;
+            if (!memcmp(c + 4, "IHDR", 4) && i == 0) {
+                put_chunk(&out, "IHDR", c + 8, len);
+                unsigned char actl[8];
+                put_be32(actl, (uint32_t)count);
+                put_be32(actl + 4, 0);   /* loop forever */
+                put_chunk(&out, "acTL", actl, 8);
+            } else if (!memcmp(c + 4, "IDAT", 4)) {
+                if (at == png_first_data(&png)) {
+                    unsigned char fctl[26] = {0};
+                    put_be32(fctl, seq++);
+                    put_be32(fctl + 4, (uint32_t)frames[i].width);
+                    put_be32(fctl + 8, (uint32_t)frames[i].height);
+                    fctl[20] = 0; fctl[21] = 1;                    /* delay 1/fps s */
+                    fctl[22] = (unsigned char)(fps >> 8); fctl[23] = (unsigned char)fps;
+                    put_chunk(&out, "fcTL", fctl, 26);
+                }
+                if (i == 0) {
+                    put_chunk(&out, "IDAT", c + 8, len);
+                } else {
+                    unsigned char *fd = malloc((size_t)len + 4);
+                    if (!fd) { out.failed = true; break; }
+                    put_be32(fd, seq++);
+                    memcpy(fd + 4, c + 8, len);
+                    put_chunk(&out, "fdAT", fd, len + 4);
+                    free(fd);
+                }
+            }
+            at += 12 + (size_t)len;
+        }
+        free(png.p);
+    }
+    if (!st) put_chunk(&out, "IEND", NULL, 0);
+    if (!st && out.failed) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!st) st = write_bytes(path, out.p, out.n);
     free(out.p);
     return st;
 }

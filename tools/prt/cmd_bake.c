@@ -24,8 +24,12 @@ static const char *HELP_HEAD =
     "                         each stage's seconds (compression among them) and the total\n"
     "      --refine           split triangles where transfer changes faster than the vertices\n"
     "                         sample it (contact shadows, shadow edges of the scene's lights),\n"
-    "                         level by level, before baking; the bake suggests it when it sees\n"
-    "                         such triangles\n"
+    "                         level by level, before baking. Per-vertex bakes do it by default\n"
+    "                         when a quick sample finds 1%% of the triangles or more (at least\n"
+    "                         20) that need it, within a budget of as many new vertices as the\n"
+    "                         mesh has (10,000 to 100,000); --refine refines whatever it finds\n"
+    "      --no-refine        keep the mesh as it is (what the bake's vertices are is then\n"
+    "                         exactly the scene's)\n"
     "      --refine-vertices N\n"
     "                         at most N new vertices (default: as many as the mesh has, at\n"
     "                         least 100,000; implies --refine)\n"
@@ -44,7 +48,7 @@ static const char *HELP_TAIL =
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
 enum { OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE, OPT_REFINE_VERTICES, OPT_REFINE_THRESHOLD,
-       OPT_METHOD_OPTION = 3000 };
+       OPT_NO_REFINE, OPT_METHOD_OPTION = 3000 };
 
 /* "NAME  summary" at the description column, the summary wrapped at 100 columns. */
 static void print_method_line(const prt_method *m)
@@ -68,7 +72,7 @@ static int collect_options(const prt_method *chosen, struct option *opts, int ma
     static const struct option fixed[] = {
         {"output", required_argument, 0, 'o'}, {"method", required_argument, 0, OPT_METHOD}, {"resume", no_argument, 0, OPT_RESUME},
         {"no-checkpoint", no_argument, 0, OPT_NO_CHECKPOINT}, {"summary", required_argument, 0, OPT_SUMMARY},
-        {"refine", no_argument, 0, OPT_REFINE}, {"refine-vertices", required_argument, 0, OPT_REFINE_VERTICES},
+        {"refine", no_argument, 0, OPT_REFINE}, {"no-refine", no_argument, 0, OPT_NO_REFINE}, {"refine-vertices", required_argument, 0, OPT_REFINE_VERTICES},
         {"refine-threshold", required_argument, 0, OPT_REFINE_THRESHOLD}, CLI_SCENE_LONG_OPTIONS,
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}};
     int n = 0;
@@ -145,18 +149,26 @@ static prt_status refine_scene(cli *c, prt_scene *scene, const prt_refine_desc *
     return PRT_OK;
 }
 
-/* Per-vertex transfer cannot show a shadow that falls between vertices: say so, with the option
- * that fixes it, when a quick sample finds such triangles (per-texel bakes sample texels). */
-static void suggest_refinement(cli *c, const prt_method *m, const prt_scene *scene, const prt_options *o, bool coarse_check)
+/* Per-vertex transfer cannot show a shadow that falls between vertices (sawtooth contact
+ * shadows): when a quick sample finds enough such triangles, split just those, within a budget
+ * that at most doubles a small mesh and adds 100,000 vertices to a big one (per-texel bakes
+ * sample texels, not vertices). */
+static prt_status auto_refine(cli *c, const prt_method *m, prt_scene *scene, const prt_options *o, bool coarse_check)
 {
-    if (prt_options_light_map(o)) return;   /* its light map is the resolution, not the mesh */
-    if (coarse_check) coarse_mesh_warning(m, scene);
+    if (prt_options_light_map(o)) return PRT_OK;   /* its light map is the resolution, not the mesh */
+    if (coarse_check && !c->quiet) coarse_mesh_warning(m, scene);
     prt_refine_stats rs;
-    if (prt_scene_refine_estimate(c->ctx, scene, NULL, &rs)) return;   /* a hint only */
-    const size_t nt = prt_scene_triangle_count(scene);
-    if (rs.marked_triangles * 100 >= nt && rs.marked_triangles >= 20)
-        fprintf(stderr, "prt bake: note: about %zu triangles (%.0f%%) span contact or shadow edges that their vertices cannot resolve "
-                "(sawtooth or missing shadows); --refine splits just those\n", rs.marked_triangles, 100.0 * (double)rs.marked_triangles / (double)nt);
+    prt_status st = prt_scene_refine_estimate(c->ctx, scene, NULL, &rs);
+    if (st == PRT_ERR_CANCELLED) return st;
+    if (st) return PRT_OK;   /* only an estimate: the bake goes on with the mesh as it is */
+    const size_t nt = prt_scene_triangle_count(scene), nv = prt_scene_vertex_count(scene);
+    if (rs.marked_triangles * 100 < nt || rs.marked_triangles < 20) return PRT_OK;
+    if (!c->quiet)
+        fprintf(stderr, "prt bake: about %zu triangles (%.0f%%) span contact or shadow edges that their vertices cannot resolve: refining them "
+                "(--no-refine keeps the mesh)\n", rs.marked_triangles, 100.0 * (double)rs.marked_triangles / (double)nt);
+    prt_refine_desc rd = {0};
+    rd.max_new_vertices = nv < 10000 ? 10000 : nv > 100000 ? 100000 : nv;
+    return refine_scene(c, scene, &rd);
 }
 
 /* The bake as JSON for scripts and CI: what went in, what came out, where the time went. */
@@ -195,7 +207,7 @@ int cmd_bake(int argc, char **argv)
     prt_scene_desc sd = {0};
     const char *output = NULL;
     const char *summary = NULL;
-    bool resume = false, checkpoint = true, refine = false;
+    bool resume = false, checkpoint = true, refine = false, no_refine = false;
     prt_refine_desc rd = {0};
     const prt_method *method = cli_method_from_argv(&c, argc, argv);
     if (!method) return EXIT_USAGE;
@@ -223,6 +235,7 @@ int cmd_bake(int argc, char **argv)
         case OPT_NO_CHECKPOINT: checkpoint = false; break;
         case OPT_SUMMARY: summary = optarg; break;
         case OPT_REFINE: refine = true; break;
+        case OPT_NO_REFINE: no_refine = true; break;
         case OPT_REFINE_VERTICES: {
             int n;
             if (!cli_parse_int(optarg, 1, 50000000, &n)) rc = cli_usage(&c, "--refine-vertices must be 1..50000000");
@@ -248,6 +261,7 @@ int cmd_bake(int argc, char **argv)
     if (!rc && optind != argc - 1) rc = cli_usage(&c, "expected exactly one SCENE argument");
     if (!rc && !output) rc = cli_usage(&c, "an output file is required (-o OUT.prt)");
     if (!rc && resume && !checkpoint) rc = cli_usage(&c, "--resume needs the checkpoint that --no-checkpoint turns off");
+    if (!rc && refine && no_refine) rc = cli_usage(&c, "--no-refine contradicts --refine, --refine-vertices and --refine-threshold");
     char checkpoint_path[4096] = "";
     if (!rc && checkpoint && snprintf(checkpoint_path, sizeof checkpoint_path, "%s.checkpoint", output) >= (int)sizeof checkpoint_path)
         rc = cli_usage(&c, "the output path is too long");
@@ -266,7 +280,7 @@ int cmd_bake(int argc, char **argv)
     if (!st && !c.quiet)
         fprintf(stderr, "prt bake: %s: %zu vertices, %zu triangles\n", argv[optind], prt_scene_vertex_count(scene), prt_scene_triangle_count(scene));
     if (!st && refine) st = refine_scene(&c, scene, &rd);
-    else if (!st && !c.quiet) suggest_refinement(&c, method, scene, o, sd.max_edge == 0);
+    else if (!st && !no_refine) st = auto_refine(&c, method, scene, o, sd.max_edge == 0);
     if (!st) {
         uint64_t recovered = 0, total = 0;
         prt_bake_run_desc run = {.progress = cli_progress, .progress_user = &c, .checkpoint = checkpoint ? checkpoint_path : NULL,
@@ -293,6 +307,10 @@ int cmd_bake(int argc, char **argv)
     if (!st) st = cli_check_interrupt(&c);
     /* The summary first: if it cannot be written, the bake fails before its file appears. */
     if (!st && summary) st = write_summary(&c, summary, argv[optind], output, t);
+    /* A big file should not come as a surprise: say its size before writing it. */
+    if (!st && !c.quiet && prt_transfer_bytes(t) >= (size_t)64 << 20)
+        fprintf(stderr, "prt bake: writing %.0f MB to %s (prt bake --method %s --help lists what stores less)\n", (double)prt_transfer_bytes(t) / 1e6,
+                output, prt_method_name(method));
     if (!st) {
         st = prt_transfer_save(t, output);
         if (st && summary) remove(summary);

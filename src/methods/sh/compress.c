@@ -84,9 +84,10 @@ prt_status prt_transfer_compress(prt_context *ctx, const prt_transfer *in, const
     prt_compress_desc d = desc ? *desc : (prt_compress_desc){0};
     prt_status st = prt__compress_desc_check(ctx, &d);
     if (st) return st;
+    /* Quantized sets (16-bit by default) hold their values on a grid: those values are what is
+     * compressed, and the compressed sets keep float weights. */
     for (int k = 0; k < PRT__KIND_COUNT; ++k)
         if (s->sets[k].cpca) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the transfer is already compressed");
-        else if (s->sets[k].quant_bits) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "compress before quantizing, not after");
     prt_transfer *t = NULL;
     prt__sh_state *n = NULL;
     if ((st = copy_without_sets(ctx, in, s, &t, &n))) return st;

@@ -209,7 +209,9 @@ static const prt_option_desc options[] = {
      "relighting reads them directly"},
     {"clusters", "K", PRT_OPTION_INT, 1, 65536, NULL, "clusters for cpca (default 64) and vq (default 256); alone: cpca"},
     {"vectors", "N", PRT_OPTION_INT, 1, 300, NULL, "average PCA vectors per cluster for cpca and pca (default 8); alone: cpca"},
-    {"quantize", "B", PRT_OPTION_CHOICE, 0, 0, "8|16", "store uncompressed sets as 8- or 16-bit integers (scale and bias per coefficient)"},
+    {"quantize", "B", PRT_OPTION_CHOICE, 0, 0, "8|16|32",
+     "store uncompressed per-vertex sets as 8- or 16-bit integers (scale and bias per coefficient) or 32-bit floats (default 16: half the "
+     "floats' size, its error some 1e-5 of each coefficient's range, far under a bake's own noise)"},
 };
 
 /* prt export's options for SH files (export.c). */
@@ -280,8 +282,10 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
     extra.compress.clusters = prt__opt_int(o, "clusters", 0);
     extra.compress.vectors = prt__opt_int(o, "vectors", 0);
     extra.compress.seed = d.seed;
-    extra.quantize = prt__opt_int(o, "quantize", 0);
-    if (!st && extra.compressing && extra.quantize)
+    /* 16-bit by default where nothing compresses the sets; 32 keeps the floats. */
+    const int bits = prt__opt_int(o, "quantize", extra.compressing ? 32 : 16);
+    extra.quantize = bits == 32 ? 0 : bits;
+    if (!st && extra.compressing && prt__opt(o, "quantize") && bits != 32)
         st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--quantize applies to uncompressed sets; drop --compress or --quantize");
     if (!st && extra.compressing) st = prt__compress_desc_check(ctx, &extra.compress);
     if (!st) st = prt__sh_bake_begin(ctx, &d, &extra, t, out);
