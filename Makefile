@@ -11,7 +11,7 @@ ASAN_TESTS ?=
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build clang-build demo test test-asan test-valgrind fuzz fuzz-regress bench accuracy install clean
+.PHONY: all deps build clang-build demo tour check test test-asan test-valgrind fuzz fuzz-regress bench accuracy install clean
 
 all: build
 
@@ -24,8 +24,18 @@ $(BUILD)/CMakeCache.txt: | deps
 build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS)
 
-demo: build
+# The demo needs the prt program only: the tests and benches are left for `make` and `make test`.
+demo: deps $(BUILD)/CMakeCache.txt
+	cmake --build $(BUILD) -j $(JOBS) --target prt
 	@sh scripts/demo.sh $(BUILD)/prt out/demo
+
+# The README's tour, run as written (scripts/tour.sh), in the time its title states.
+tour: build
+	@TOUR_STRICT_TIME=1 sh scripts/tour.sh
+
+# Quick feedback while working (under a minute once built): the tests labelled quick, gcc only.
+check: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) -L quick
 
 # Every test, then the quick ones (label "quick") again under valgrind, and those and a few more
 # (label "asan": resumed bakes, bakes through the table) under ASan+UBSan.
