@@ -356,6 +356,11 @@ void prt__pixel_lights_draw(const prt__pixel_lights *p, GLuint vao, size_t index
     glBlendFunc(GL_ONE, GL_ONE);
     glDepthFunc(GL_LEQUAL);
     glDepthMask(GL_FALSE);
+    /* The surfaces were drawn by other programs (glossy ones through a geometry shader), whose
+     * depths may differ from this pass's in the last bit: without a nudge towards the eye, the
+     * light would miss pixels at random (dark speckles over glossy scenes). */
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(-1.0f, -4.0f);
     glEnable(GL_TEXTURE_CUBE_MAP_SEAMLESS);
     glUseProgram(p->program_add);
     glUniformMatrix4fv(p->ua_mvp, 1, GL_FALSE, mvp);
@@ -397,6 +402,7 @@ void prt__pixel_lights_draw(const prt__pixel_lights *p, GLuint vao, size_t index
     }
     glBindVertexArray(0);
     glDisable(GL_STENCIL_TEST);
+    glDisable(GL_POLYGON_OFFSET_FILL);
     glActiveTexture(GL_TEXTURE0);
     glDisable(GL_BLEND);
     glDepthMask(GL_TRUE);
