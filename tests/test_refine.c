@@ -111,6 +111,20 @@ static void test_point_light_shadow(void **state)
     assert_true(floor_new > 100);
     assert_true(at_outline >= 0.9 * floor_new);
     prt__mesh_free(&m);
+    /* Lights the scene does not name (the sky's sun a file is relit under) are probed when given
+     * as extra lights: the square's shadow on the floor then needs refining. */
+    prt_scene *scene = NULL;
+    assert_int_equal(prt_scene_create_copy(ctx, t.pos, t.nrm, NULL, t.nv, t.idx, t.nt, NULL, &scene), PRT_OK);
+    prt_refine_stats plain, lit;
+    assert_int_equal(prt_scene_refine_estimate(ctx, scene, NULL, &plain), PRT_OK);
+    prt_light sun = {.type = PRT_LIGHT_DIRECTIONAL, .direction = {0.1f, 1, 0.05f}, .irradiance = {1, 1, 1}};
+    assert_int_equal(prt_scene_refine_estimate(ctx, scene, &(prt_refine_desc){.extra_lights = &sun, .extra_light_count = 1}, &lit), PRT_OK);
+    print_message("extra light: %zu triangles marked, %zu without it\n", lit.marked_triangles, plain.marked_triangles);
+    assert_true(lit.marked_triangles > plain.marked_triangles);
+    prt_light bad = {.type = PRT_LIGHT_DIRECTIONAL};   /* no direction */
+    assert_int_equal(prt_scene_refine_estimate(ctx, scene, &(prt_refine_desc){.extra_lights = &bad, .extra_light_count = 1}, &lit), PRT_ERR_INVALID_ARG);
+    assert_int_equal(prt_scene_refine(ctx, scene, &(prt_refine_desc){.extra_lights = &sun, .extra_light_count = -1}, &lit), PRT_ERR_INVALID_ARG);
+    prt_scene_release(scene);
     tm_free(&t);
     prt_context_release(ctx);
 }

@@ -112,6 +112,10 @@ typedef struct prt_refine_desc {
     int max_levels;           /* 0 = 10 (each halves the edges it splits) */
     prt_progress_fn progress; /* a stage per level; return non-zero to cancel (PRT_ERR_CANCELLED) */
     void *progress_user;
+    /* Lights probed besides the scene's own (for example the sun of the sky the file will be
+     * relit under), within the 15 probed in all; NULL / 0 = none. */
+    const prt_light *extra_lights;
+    int extra_light_count;
 } prt_refine_desc;
 
 typedef struct prt_refine_stats {

@@ -221,14 +221,45 @@ void prt_scene_bounds(const prt_scene *s, float lo[3], float hi[3])
     }
 }
 
+/* The scene's lights and desc's extra ones in one array (the caller frees it). */
+static prt_status refine_lights(prt_context *ctx, const prt_scene *s, const prt_refine_desc *desc, prt_light **out, int *count)
+{
+    *out = NULL;
+    const int extra = desc && desc->extra_lights ? desc->extra_light_count : 0;
+    if (extra < 0 || extra > 64) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "refinement: extra_light_count must be 0..64 (got %d)", extra);
+    prt_light *all = malloc(((size_t)s->light_count + (size_t)extra + 1) * sizeof *all);
+    if (!all) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (s->light_count) memcpy(all, s->lights, (size_t)s->light_count * sizeof *all);
+    for (int i = 0; i < extra; ++i) {
+        all[s->light_count + i] = desc->extra_lights[i];
+        if (prt_light_validate(&all[s->light_count + i])) {
+            free(all);
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "refinement: extra light %d: %s", i, prt_last_error());
+        }
+    }
+    *out = all;
+    *count = s->light_count + extra;
+    return PRT_OK;
+}
+
 prt_status prt_scene_refine(prt_context *ctx, prt_scene *s, const prt_refine_desc *desc, prt_refine_stats *stats)
 {
     if (!s) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_scene_refine: scene is required");
-    return prt__mesh_refine(ctx, &s->mesh, s->lights, s->light_count, desc, stats);
+    int count = 0;
+    prt_light *lights = NULL;
+    prt_status st = refine_lights(ctx, s, desc, &lights, &count);
+    if (!st) st = prt__mesh_refine(ctx, &s->mesh, lights, count, desc, stats);
+    free(lights);
+    return st;
 }
 
 prt_status prt_scene_refine_estimate(prt_context *ctx, const prt_scene *s, const prt_refine_desc *desc, prt_refine_stats *stats)
 {
     if (!s) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_scene_refine_estimate: scene is required");
-    return prt__mesh_refine_estimate(ctx, &s->mesh, s->lights, s->light_count, desc, stats);
+    int count = 0;
+    prt_light *lights = NULL;
+    prt_status st = refine_lights(ctx, s, desc, &lights, &count);
+    if (!st) st = prt__mesh_refine_estimate(ctx, &s->mesh, lights, count, desc, stats);
+    free(lights);
+    return st;
 }

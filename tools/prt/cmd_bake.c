@@ -23,7 +23,8 @@ static const char *HELP_HEAD =
     "      --summary FILE     also write a JSON summary: input, output, method, mesh, storage,\n"
     "                         each stage's seconds (compression among them) and the total\n"
     "      --refine           split triangles where transfer changes faster than the vertices\n"
-    "                         sample it (contact shadows, shadow edges of the scene's lights),\n"
+    "                         sample it (contact shadows, shadow edges of the scene's lights and\n"
+    "                         of the default sky's sun),\n"
     "                         level by level, before baking. Per-vertex bakes do it by default\n"
     "                         when a quick sample finds 1%% of the triangles or more (at least\n"
     "                         20) that need it, within a budget of as many new vertices as the\n"
@@ -149,6 +150,24 @@ static prt_status refine_scene(cli *c, prt_scene *scene, const prt_refine_desc *
     return PRT_OK;
 }
 
+/* The procedural sky's sun, which the file will be relit under by default (the scene names no
+ * probe and no lights; methods that relight environments): its shadow edges are refined like a
+ * light's. 0 when there is no such sun. */
+static int sky_sun(const prt_method *m, const prt_scene *scene, prt_light *sun)
+{
+    if (!(prt_method_lighting(m) & PRT_LIGHTS_ENVIRONMENT) || prt_scene_light_count(scene)) return 0;
+    prt_environment_desc env;
+    const int named = prt_scene_environment(scene, &env);
+    if (named && (env.none || env.path[0] || env.rotate_deg[0] || env.rotate_deg[1] || env.rotate_deg[2])) return 0;
+    float d[3] = {0.4f, 0.8f, 0.3f};   /* prt_sky_desc's default */
+    if (named && (env.sun_dir[0] || env.sun_dir[1] || env.sun_dir[2])) memcpy(d, env.sun_dir, sizeof d);
+    memset(sun, 0, sizeof *sun);
+    sun->type = PRT_LIGHT_DIRECTIONAL;
+    memcpy(sun->direction, d, sizeof d);
+    sun->irradiance[0] = sun->irradiance[1] = sun->irradiance[2] = 1;
+    return prt_light_validate(sun) ? 0 : 1;
+}
+
 /* Per-vertex transfer cannot show a shadow that falls between vertices (sawtooth contact
  * shadows): when a quick sample finds enough such triangles, split just those, within a budget
  * that at most doubles a small mesh and adds 100,000 vertices to a big one (per-texel bakes
@@ -157,8 +176,12 @@ static prt_status auto_refine(cli *c, const prt_method *m, prt_scene *scene, con
 {
     if (prt_options_light_map(o)) return PRT_OK;   /* its light map is the resolution, not the mesh */
     if (coarse_check && !c->quiet) coarse_mesh_warning(m, scene);
+    prt_refine_desc rd = {0};
+    prt_light sun;
+    rd.extra_light_count = sky_sun(m, scene, &sun);
+    rd.extra_lights = rd.extra_light_count ? &sun : NULL;
     prt_refine_stats rs;
-    prt_status st = prt_scene_refine_estimate(c->ctx, scene, NULL, &rs);
+    prt_status st = prt_scene_refine_estimate(c->ctx, scene, &rd, &rs);
     if (st == PRT_ERR_CANCELLED) return st;
     if (st) return PRT_OK;   /* only an estimate: the bake goes on with the mesh as it is */
     const size_t nt = prt_scene_triangle_count(scene), nv = prt_scene_vertex_count(scene);
@@ -166,7 +189,6 @@ static prt_status auto_refine(cli *c, const prt_method *m, prt_scene *scene, con
     if (!c->quiet)
         fprintf(stderr, "prt bake: about %zu triangles (%.0f%%) span contact or shadow edges that their vertices cannot resolve: refining them "
                 "(--no-refine keeps the mesh)\n", rs.marked_triangles, 100.0 * (double)rs.marked_triangles / (double)nt);
-    prt_refine_desc rd = {0};
     rd.max_new_vertices = nv < 10000 ? 10000 : nv > 100000 ? 100000 : nv;
     return refine_scene(c, scene, &rd);
 }
@@ -279,6 +301,8 @@ int cmd_bake(int argc, char **argv)
     prt_status st = prt_scene_load(c.ctx, argv[optind], &sd, &scene);
     if (!st && !c.quiet)
         fprintf(stderr, "prt bake: %s: %zu vertices, %zu triangles\n", argv[optind], prt_scene_vertex_count(scene), prt_scene_triangle_count(scene));
+    prt_light sun;
+    if (!st && refine && (rd.extra_light_count = sky_sun(method, scene, &sun))) rd.extra_lights = &sun;
     if (!st && refine) st = refine_scene(&c, scene, &rd);
     else if (!st && !no_refine) st = auto_refine(&c, method, scene, o, sd.max_edge == 0);
     if (!st) {
