@@ -50,6 +50,9 @@ const char *prt_method_light_map_option(const prt_method *m);
 /* 1 when m's relighting can leave its last passes to the renderer (prt_relight_desc.gpu_finish),
  * as offset transfer maps do. */
 int prt_method_gpu_passes(const prt_method *m);
+/* 1 when m relights environments at all frequencies (the sharp shadow of a sky's sun), so that
+ * refining a scene for it should probe the sun's shadow edges (prt_refine_desc.extra_lights). */
+int prt_method_sharp_environment(const prt_method *m);
 /* Checks that m relights everything `what` (PRT_LIGHTS_* bits) holds. On failure the error names
  * what is missing and the methods of the table that relight it, or says that none does. */
 prt_status prt_method_check_lighting(const prt_method *m, unsigned what);

@@ -99,6 +99,8 @@ struct prt_method {
     const char *light_map_option;   /* its INT option that bakes a light map of that size instead of
                                      * per-vertex transfer (0 = off), or NULL (prt_method_light_map_option) */
     bool gpu_passes;        /* relight honours prt_relight_desc.gpu_finish (prt_method_gpu_passes) */
+    bool sharp_environment; /* relights environments at all frequencies: sharp shadows of a sky's
+                             * sun, which refinement probes (prt_method_sharp_environment) */
     const prt_option_desc *options;
     int option_count;
     const prt_control_desc *controls;

@@ -23,8 +23,8 @@ static const char *HELP_HEAD =
     "      --summary FILE     also write a JSON summary: input, output, method, mesh, storage,\n"
     "                         each stage's seconds (compression among them) and the total\n"
     "      --refine           split triangles where transfer changes faster than the vertices\n"
-    "                         sample it (contact shadows, shadow edges of the scene's lights and\n"
-    "                         of the default sky's sun),\n"
+    "                         sample it (contact shadows, shadow edges of the scene's lights and,\n"
+    "                         for all-frequency methods, of the default sky's sun),\n"
     "                         level by level, before baking. Per-vertex bakes do it by default\n"
     "                         when a quick sample finds 1%% of the triangles or more (at least\n"
     "                         20) that need it, within a budget of as many new vertices as the\n"
@@ -151,11 +151,11 @@ static prt_status refine_scene(cli *c, prt_scene *scene, const prt_refine_desc *
 }
 
 /* The procedural sky's sun, which the file will be relit under by default (the scene names no
- * probe and no lights; methods that relight environments): its shadow edges are refined like a
- * light's. 0 when there is no such sun. */
+ * probe and no lights), for methods that draw its sharp shadow (low-order SH blurs it away):
+ * its shadow edges are refined like a light's. 0 when there is no such sun. */
 static int sky_sun(const prt_method *m, const prt_scene *scene, prt_light *sun)
 {
-    if (!(prt_method_lighting(m) & PRT_LIGHTS_ENVIRONMENT) || prt_scene_light_count(scene)) return 0;
+    if (!prt_method_sharp_environment(m) || prt_scene_light_count(scene)) return 0;
     prt_environment_desc env;
     const int named = prt_scene_environment(scene, &env);
     if (named && (env.none || env.path[0] || env.rotate_deg[0] || env.rotate_deg[1] || env.rotate_deg[2])) return 0;

@@ -297,6 +297,7 @@ const prt__method prt__method_wavelet = {
     .title = "all-frequency wavelet PRT",
     .summary = "all-frequency glossy PRT (Wang, Tran & Luebke): Haar cube maps, separable BRDFs, sharp shadows",
     .lighting = PRT_LIGHTS_ENVIRONMENT | PRT_LIGHTS_DIRECTIONAL,
+    .sharp_environment = true,
     .options = options,
     .option_count = (int)(sizeof options / sizeof options[0]),
     .controls = controls,
