@@ -18,6 +18,6 @@ done
 for m in spectral lightcloud offset; do
     "$PRT" render -q "$DEMO/$m.prt" -o "$IMAGES/gallery_$m.png" $SIZE --env none --light "$POINT"
 done
-"$PRT" reference -q "$DEMO/scene.obj" --image "$IMAGES/gallery_reference_sky.png" $SIZE --samples 256 --rotate 60
-"$PRT" reference -q "$DEMO/scene.obj" --image "$IMAGES/gallery_reference_point.png" $SIZE --samples 256 --env none --light "$POINT"
+"$PRT" reference -q "$DEMO/glossy.json" --image "$IMAGES/gallery_reference_sky.png" $SIZE --samples 256 --rotate 60
+"$PRT" reference -q "$DEMO/glossy.json" --image "$IMAGES/gallery_reference_point.png" $SIZE --samples 256 --env none --light "$POINT"
 echo "gallery: wrote $IMAGES/gallery_*.png"
