@@ -13,11 +13,11 @@ mkdir -p "$IMAGES"
 SIZE="--width 480 --height 360"
 POINT=point:0.05,0.9,0.05:3
 for m in sh wavelet ao; do
-    "$PRT" render -q "$DEMO/$m.prt" -o "$IMAGES/gallery_$m.png" $SIZE --rotate 60
+    "$PRT" render -q "$DEMO/$m.prt" -o "$IMAGES/gallery_$m.png" $SIZE
 done
 for m in spectral lightcloud offset; do
     "$PRT" render -q "$DEMO/$m.prt" -o "$IMAGES/gallery_$m.png" $SIZE --env none --light "$POINT"
 done
-"$PRT" reference -q "$DEMO/glossy.json" --image "$IMAGES/gallery_reference_sky.png" $SIZE --samples 256 --rotate 60
+"$PRT" reference -q "$DEMO/glossy.json" --image "$IMAGES/gallery_reference_sky.png" $SIZE --samples 256
 "$PRT" reference -q "$DEMO/glossy.json" --image "$IMAGES/gallery_reference_point.png" $SIZE --samples 256 --env none --light "$POINT"
 echo "gallery: wrote $IMAGES/gallery_*.png"
