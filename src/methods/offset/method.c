@@ -13,6 +13,7 @@ void prt__offset_set_free(void *state)
     free(s->offsets); free(s->texel); free(s->pos); free(s->nrm); free(s->albedo); free(s->area); free(s->emit); free(s->emit_in); free(s->env);
     free(s->radiosity); free(s->subsurface); free(s->index); free(s->source); free(s->xy); free(s->media); free(s->medium);
     if (s->lights) { prt__vertex_lights_free(s->lights); free(s->lights); }
+    if (s->vertex_lights) { prt__vertex_lights_free(s->vertex_lights); free(s->vertex_lights); }
     free(s->sample_pos);
     free(s->sample_nrm);
     free(s->passes);
@@ -25,12 +26,14 @@ void prt__offset_set_free(void *state)
 bool prt__offset_cache_new(prt__offset_set *s)
 {
     pthread_mutex_t *lock = malloc(sizeof *lock);
-    prt__vertex_lights *lights = prt__calloc(1, sizeof *lights);
-    if (!lock || !lights) { free(lock); free(lights); return false; }   /* free_state then finds neither */
+    prt__vertex_lights *lights = prt__calloc(1, sizeof *lights), *vertex_lights = prt__calloc(1, sizeof *vertex_lights);
+    if (!lock || !lights || !vertex_lights) { free(lock); free(lights); free(vertex_lights); return false; }   /* free_state then finds none */
     pthread_mutex_init(lock, NULL);
     prt__vertex_lights_init(lights);
+    prt__vertex_lights_init(vertex_lights);
     s->lock = lock;
     s->lights = lights;
+    s->vertex_lights = vertex_lights;
     return true;
 }
 
@@ -253,6 +256,7 @@ const prt__method prt__method_offset = {
     .default_variant = offset_default_variant,
     .control_range = offset_control_range,
     .relight = offset_relight,
+    .shade = prt__offset_shade,
 };
 
 /* ---- the offset public accessors ---- */

@@ -48,6 +48,9 @@ typedef struct prt__offset_set {
      * points per texel on its own triangle (sample_pos, sample_nrm). */
     pthread_mutex_t *lock;
     prt__vertex_lights *lights;
+    /* Run-time: shadow rays from the mesh's vertices, for the lights drawn per pixel (their
+     * visibility per vertex, and their direct light where a result is shaded per vertex). */
+    prt__vertex_lights *vertex_lights;
     float *sample_pos, *sample_nrm;
     /* Run-time: the passes the renderer runs (gpu.c), built on first use under lock and published
      * atomically; its slices are owned here. */
@@ -86,6 +89,8 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
 /* Run time: the light map after `bounces` (texels, width x height x 3, gutters filled) and its
  * first-order part; per vertex radiance and indirect light sampled from them. */
 prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *r);
+/* prt_relit_shade's part: the lights drawn per pixel, per vertex with shadow rays. */
+prt_status prt__offset_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb);
 
 /* The GPU passes for t (gpu.c): the maps cropped to their non-zero boxes and sliced into atlases
  * (bins.c, section 5.2), described for the renderer; built once, then borrowed from t. */

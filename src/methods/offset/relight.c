@@ -157,6 +157,47 @@ static prt_status lights_ready(prt_context *ctx, const prt_transfer *t, prt__off
     return st;
 }
 
+/* The lights the renderer draws per pixel: copies of the first count local lights, the albedo
+ * they shade per vertex (zero on translucent surfaces, whose direct light the dipole replaces),
+ * and each vertex's visibility of each (shadow rays from the vertices). */
+static prt_status pixel_lights(prt_context *ctx, const prt_transfer *t, const prt__offset_set *s, const prt_light *local, int count, prt_relit *r)
+{
+    const size_t nv = t->mesh.vertex_count;
+    prt_status st = prt__vertex_lights_ready(ctx, &t->mesh, s->ray_offset, s->vertex_lights);
+    if (st) return st;
+    r->pixel_lights = malloc((size_t)count * sizeof(prt_light));
+    r->pixel_albedo = malloc(nv * 3 * sizeof(float));
+    r->pixel_visibility = malloc((size_t)count * nv * sizeof(float));
+    if (!r->pixel_lights || !r->pixel_albedo || !r->pixel_visibility) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(r->pixel_lights, local, (size_t)count * sizeof(prt_light));
+    r->pixel_light_count = count;
+    memcpy(r->pixel_albedo, t->mesh.albedo, nv * 3 * sizeof(float));
+    if (s->subsurface && s->medium)
+        for (size_t v = 0; v < nv; ++v) {
+            const int x = (int)fminf(fmaxf(t->mesh.uv[v * 2] * (float)s->width, 0.0f), (float)(s->width - 1));
+            const int y = (int)fminf(fmaxf(t->mesh.uv[v * 2 + 1] * (float)s->height, 0.0f), (float)(s->height - 1));
+            const int32_t c = s->source[(size_t)y * s->width + x];
+            if (c >= 0 && s->medium[c]) memset(r->pixel_albedo + v * 3, 0, 3 * sizeof(float));
+        }
+    prt__vertex_lights_visibility(ctx, s->vertex_lights, &t->mesh, r->pixel_lights, count, r->pixel_visibility);
+    return PRT_OK;
+}
+
+prt_status prt__offset_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb)
+{
+    (void)eye;
+    if (!r->pixel_lights) return PRT_OK;
+    const prt__offset_set *s = t->state;
+    const size_t nv = t->mesh.vertex_count;
+    float *E = prt__calloc(nv * 3, sizeof(float));
+    if (!E) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    prt_status st = prt__vertex_lights_ready(ctx, &t->mesh, s->ray_offset, s->vertex_lights);
+    if (!st) prt__vertex_lights_add(ctx, s->vertex_lights, &t->mesh, r->pixel_lights, r->pixel_light_count, E);
+    for (size_t i = 0; i < nv * 3 && !st; ++i) rgb[i] += r->pixel_albedo[i] / (float)PRT_PI * E[i];
+    free(E);
+    return st;
+}
+
 /* Bilinear lookup of a texel map at (u, v), clamped at the border. */
 static void sample_map(const float *map, int W, int H, float u, float v, float out[3])
 {
@@ -229,6 +270,17 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
             a[i * 3 + c] = e > 0 ? e : 0;
             first[i * 3 + c] = s->albedo[i * 3 + c] * a[i * 3 + c];
         }
+    /* Drawn on the CPU path, the local lights' direct light on opaque surfaces is the renderer's,
+     * per pixel with shadow maps: a shadow edge is then as sharp as the screen, not a staircase
+     * of texels. The light map keeps it for the bounces and the subsurface scattering, and shows
+     * the rest (hide: what it leaves out). The GPU passes draw it per texel, as the paper. */
+    const int pixel = !d->gpu_finish && !d->per_vertex && d->component != PRT_COMPONENT_INDIRECT && nlocal <= PRT_MAX_PIXEL_LIGHTS ? nlocal : 0;
+    float *hide = pixel ? prt__calloc(nc * 3, sizeof(float)) : NULL;
+    if (pixel && !hide) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+    for (size_t i = 0; pixel && i < nc; ++i)
+        if (!(s->subsurface && s->medium && s->medium[i]))
+            for (int c = 0; c < 3; ++c) hide[i * 3 + c] = s->albedo[i * 3 + c] * E[i * 3 + c] / (float)PRT_PI;
+    if (pixel && (st = pixel_lights(ctx, t, s, local, pixel, r))) { free(hide); goto done; }
     if (d->gpu_finish) {   /* the renderer runs the passes below (gpu.c describes them) */
         if ((st = prt__offset_gpu_passes(ctx, t, &r->gpu_passes))) goto done;
         r->gpu_input = prt__calloc(n * 3, sizeof(float));
@@ -265,9 +317,10 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     /* The shown map (b): gutters as the GPU path fills them, each texel its source's value. */
     for (size_t i = 0; i < nc; ++i)
         for (int c = 0; c < 3; ++c) {
-            const float f = first[i * 3 + c], g = indirect[i * 3 + c];
+            const float f = first[i * 3 + c] - (hide ? hide[i * 3 + c] : 0.0f), g = indirect[i * 3 + c];
             b[i * 3 + c] = d->component == PRT_COMPONENT_DIRECT ? f : d->component == PRT_COMPONENT_INDIRECT ? g : f + g;
         }
+    free(hide);
     spread(s, b, map);
     if (imap) spread(s, indirect, imap);
     /* Per vertex: the light map at the vertex's texture coordinates. */

@@ -603,6 +603,34 @@ static void test_offset_method(void **state)
     assert_true(e[0] < 0.2);
     assert_true(e[2] < 0.5);
     assert_true(ind / ind_ref > 0.7 && ind / ind_ref < 1.3);
+    /* Relit for drawing, the point light's direct light on these opaque surfaces is the
+     * renderer's, per pixel: the light map leaves it out, the result names the light with each
+     * vertex's albedo and visibility, and shaded per vertex it is the whole light again, with
+     * direct light from the vertices' own shadow rays rather than the texels' (as close to the
+     * path tracer as the per-vertex result, or closer). */
+    prt_relit drawn;
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1}, &drawn), PRT_OK);
+    assert_int_equal(drawn.pixel_light_count, 1);
+    assert_non_null(drawn.pixel_albedo);
+    assert_non_null(drawn.pixel_visibility);
+    assert_memory_equal(drawn.pixel_albedo, prt_transfer_albedo(t), nv * 3 * sizeof(float));
+    float *shaded = malloc(nv * 3 * sizeof(float));
+    assert_int_equal(prt_relit_shade(ctx, t, &drawn, NULL, shaded), PRT_OK);
+    double es = 0, ev = 0, eb = 0, less = 0, all = 0;
+    for (size_t i = 0; i < nv * 3; ++i) {
+        es += ((double)shaded[i] - ref.radiance[i]) * ((double)shaded[i] - ref.radiance[i]);
+        ev += ((double)r.radiance[i] - ref.radiance[i]) * ((double)r.radiance[i] - ref.radiance[i]);
+        eb += (double)ref.radiance[i] * ref.radiance[i];
+        less += drawn.radiance[i];
+        all += r.radiance[i];
+    }
+    print_message("drawn: the map keeps %.2f of the light; shaded per vertex %.3f from the path tracer (the per-vertex result %.3f)\n", less / all,
+                  sqrt(es / eb), sqrt(ev / eb));
+    assert_true(less < 0.8 * all);
+    assert_true(sqrt(es / eb) < sqrt(ev / eb) + 0.01);
+    free(shaded);
+    prt_relit_free(&drawn);
+
     prt_reference_vertices_free(&ref);
     prt_scene_release(ts);
 
