@@ -66,6 +66,9 @@ bool prt__bytes_put(prt__bytes *b, const void *p, size_t n);
 void prt__bytes_free(prt__bytes *b);
 
 uint32_t prt__crc32(const void *data, size_t size);
+/* IEEE binary16 conversions (core/half.c), round to nearest even. */
+uint16_t prt__half_from_float(float f);
+float prt__half_to_float(uint16_t h);
 
 /* Atomic file output: write to "<path>.tmp.<pid>", then fsync and rename. */
 typedef struct prt__atomic_file {

@@ -8,6 +8,9 @@
 #define CHUNK_OFSR PRT__FOURCC('O', 'F', 'S', 'R')
 #define CHUNK_OFSS PRT__FOURCC('O', 'F', 'S', 'S')
 #define CHUNK_OFSD PRT__FOURCC('O', 'F', 'S', 'D')
+/* The maps as halves (files before them hold floats in OFSR and OFSS, still read). */
+#define CHUNK_OFHR PRT__FOURCC('O', 'F', 'H', 'R')
+#define CHUNK_OFHS PRT__FOURCC('O', 'F', 'H', 'S')
 #define OFSP_HEADER 72
 
 prt_status prt__offset_save(const prt_transfer *t, prt__chunk_list *l)
@@ -34,15 +37,22 @@ prt_status prt__offset_save(const prt_transfer *t, prt__chunk_list *l)
     }
     prt__chunks_add(l, CHUNK_OFST, s->texel, nc * sizeof(uint32_t), texels, nc * PRT__OFFSET_TEXEL_FLOATS * sizeof(float), s->emit, s->emit ? nc * 3 * sizeof(float) : 0,
                     s->emit_in, s->emit ? nc * 3 * sizeof(float) : 0, NULL);
-    const size_t maps = (size_t)s->count * nc * 3 * sizeof(float);
-    if (s->radiosity) prt__chunks_add(l, CHUNK_OFSR, s->radiosity, maps, NULL);
+    const size_t values = (size_t)s->count * nc * 3;
+    for (int k = 0; k < 2; ++k) {
+        const float *maps = k ? s->subsurface : s->radiosity;
+        uint16_t *h = maps ? prt__chunks_alloc(l, values * sizeof(uint16_t) + 2) : NULL;   /* + 2: 4-byte chunks */
+        if (!maps) continue;
+        if (!h) return PRT_OK;
+        for (size_t i = 0; i < values; ++i) h[i] = prt__half_from_float(maps[i]);
+        h[values] = 0;
+        prt__chunks_add(l, k ? CHUNK_OFHS : CHUNK_OFHR, h, values * sizeof(uint16_t) + (values & 1 ? 2 : 0), NULL);
+    }
     if (s->subsurface) {
         /* The media: count, 7 floats each, then each texel's (padded to 4 bytes). */
         static const unsigned char zero4[4] = {0};
         unsigned char *head = prt__chunks_alloc(l, 4);
         if (!head) return PRT_OK;
         prt__put32(head, (uint32_t)s->medium_count);
-        prt__chunks_add(l, CHUNK_OFSS, s->subsurface, maps, NULL);
         prt__chunks_add(l, CHUNK_OFSD, head, (size_t)4, s->media, (size_t)s->medium_count * sizeof(prt_medium), s->medium, nc, zero4,
                         ((nc + 3) & ~(size_t)3) - nc, NULL);
     }
@@ -53,12 +63,21 @@ static prt_status bad(prt_context *ctx, const char *msg) { return prt__fail(ctx,
 
 /* A texel gathers at most all it sees (radiosity: its albedo) or all it scatters (subsurface:
  * under 1), as the bake caps them; a file with more would make light grow bounce by bounce. */
-static prt_status load_maps(prt_context *ctx, const prt__offset_set *s, const prt__chunk_in *c, bool radiosity, float **out)
+static prt_status load_maps(prt_context *ctx, const prt__offset_set *s, const prt__chunk_in *c, bool halves, bool radiosity, float **out)
 {
     const uint64_t n = (uint64_t)s->count * s->covered * 3;
-    if (c->size != n * sizeof(float)) return bad(ctx, "offset transfer map chunk size mismatch");
+    if (halves ? c->size != ((n * 2 + 3) & ~(uint64_t)3) : c->size != n * sizeof(float)) return bad(ctx, "offset transfer map chunk size mismatch");
     if (!(*out = malloc(n * sizeof(float) + 1))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    memcpy(*out, c->data, n * sizeof(float));
+    if (halves) {
+        const unsigned char *d = c->data;
+        for (uint64_t i = 0; i < n; ++i) {
+            uint16_t h;
+            memcpy(&h, d + i * 2, 2);
+            (*out)[i] = prt__half_to_float(h);
+        }
+    } else {
+        memcpy(*out, c->data, n * sizeof(float));
+    }
     for (uint64_t i = 0; i < n; ++i)
         if (!((*out)[i] >= 0 && (*out)[i] <= 1e30f)) return bad(ctx, "offset transfer map values out of range");
     /* Multi-bounce maps: bounce k adds at most the texel's albedo times the brightest albedo to the
@@ -176,12 +195,14 @@ prt_status prt__offset_load(prt_context *ctx, prt_transfer *t, const cJSON *meta
     }
     if (!prt__offset_set_index(s)) return bad(ctx, "offset texels out of order or beyond the light map");
     prt_status st = PRT_OK;
-    c = prt__chunk_take(chunks, count, CHUNK_OFSR);
-    if (!c != !(s->kinds & PRT__OFFSET_RADIOSITY_BIT)) return bad(ctx, "the radiosity map chunk does not match the transfer kinds");
-    if (c && (st = load_maps(ctx, s, c, true, &s->radiosity))) return st;
-    c = prt__chunk_take(chunks, count, CHUNK_OFSS);
-    if (!c != !(s->kinds & PRT__OFFSET_SUBSURFACE_BIT)) return bad(ctx, "the subsurface map chunk does not match the transfer kinds");
-    if (c && (st = load_maps(ctx, s, c, false, &s->subsurface))) return st;
+    for (int k = 0; k < 2; ++k) {   /* radiosity, then subsurface: halves, or floats (older files) */
+        prt__chunk_in *f = prt__chunk_take(chunks, count, k ? CHUNK_OFSS : CHUNK_OFSR), *h = prt__chunk_take(chunks, count, k ? CHUNK_OFHS : CHUNK_OFHR);
+        if (f && h) return bad(ctx, "an offset map chunk appears as floats and as halves");
+        c = h ? h : f;
+        if (!c != !(s->kinds & (k ? PRT__OFFSET_SUBSURFACE_BIT : PRT__OFFSET_RADIOSITY_BIT)))
+            return bad(ctx, k ? "the subsurface map chunk does not match the transfer kinds" : "the radiosity map chunk does not match the transfer kinds");
+        if (c && (st = load_maps(ctx, s, c, h != NULL, k == 0, k ? &s->subsurface : &s->radiosity))) return st;
+    }
     c = prt__chunk_take(chunks, count, CHUNK_OFSD);
     if (!c != !s->subsurface) return bad(ctx, "the subsurface media chunk does not match the transfer kinds");
     if (c) {
@@ -200,8 +221,8 @@ prt_status prt__offset_load(prt_context *ctx, prt_transfer *t, const cJSON *meta
         for (size_t i = 0; i < nc; ++i)
             if (s->medium[i] > s->medium_count) return bad(ctx, "a texel's medium is out of range");
     }
-    static const uint32_t ids[5] = {CHUNK_OFSP, CHUNK_OFST, CHUNK_OFSR, CHUNK_OFSS, CHUNK_OFSD};
-    for (int i = 0; i < 5; ++i)
+    static const uint32_t ids[7] = {CHUNK_OFSP, CHUNK_OFST, CHUNK_OFSR, CHUNK_OFSS, CHUNK_OFHR, CHUNK_OFHS, CHUNK_OFSD};
+    for (int i = 0; i < 7; ++i)
         if (prt__chunk_take(chunks, count, ids[i])) return bad(ctx, "an offset chunk appears twice");
     return PRT_OK;
 }

@@ -158,7 +158,7 @@ static prt_status offset_bake_begin(prt_context *ctx, const prt_scene *scene, co
 static size_t offset_bytes(const prt_transfer *t)
 {
     const prt__offset_set *s = t->state;
-    const size_t maps = (size_t)s->count * s->covered * 3 * sizeof(float);
+    const size_t maps = (size_t)s->count * s->covered * 3 * sizeof(uint16_t);   /* stored as halves */
     return (s->radiosity ? maps : 0) + (s->subsurface ? maps : 0) + (size_t)s->covered * (4 + PRT__OFFSET_TEXEL_FLOATS * 4);
 }
 
