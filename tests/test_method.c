@@ -513,6 +513,53 @@ static void test_files_independent_of_threads(void **state)
     prt_context_release(two);
 }
 
+/* Per-texel SH sets of a table bake (16-bit by default) are stored as halves: the file is half
+ * the floats' size, loads to exactly what the bake holds, and stays within 2^-11 of the floats
+ * that --quantize 32 keeps. */
+static void test_texel_halves(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    prt_scene *scene = plate_and_box(ctx);
+    const prt_method *sh = prt_method_find("sh");
+    prt_transfer *t[2] = {NULL, NULL};
+    for (int k = 0; k < 2; ++k) {
+        prt_options *o = NULL;
+        assert_int_equal(prt_options_create(sh, &o), PRT_OK);
+        assert_int_equal(prt_options_set(o, "order", "3"), PRT_OK);
+        assert_int_equal(prt_options_set(o, "samples", "64"), PRT_OK);
+        assert_int_equal(prt_options_set(o, "texels", "32"), PRT_OK);
+        assert_int_equal(prt_options_set(o, "kinds", "shadowed"), PRT_OK);
+        if (k) assert_int_equal(prt_options_set(o, "quantize", "32"), PRT_OK);
+        assert_int_equal(prt_bake(ctx, scene, sh, o, NULL, &t[k]), PRT_OK);
+        prt_options_release(o);
+    }
+    int w, h, ch, ch32;
+    assert_int_equal(prt_transfer_texel_size(t[0], &w, &h), 1);
+    const float *half = prt_transfer_texel_coeffs(t[0], PRT_TRANSFER_SHADOWED, &ch), *full = prt_transfer_texel_coeffs(t[1], PRT_TRANSFER_SHADOWED, &ch32);
+    assert_non_null(half);
+    assert_non_null(full);
+    const size_t n = (size_t)w * h * ch * 9;
+    for (size_t i = 0; i < n; ++i) assert_true(fabsf(half[i] - full[i]) <= fabsf(full[i]) * (1.0f / 2048) + 6e-8f);
+    char path[2][600];
+    size_t bytes[2];
+    for (int k = 0; k < 2; ++k) {
+        snprintf(path[k], sizeof path[k], "%s/texels%d.prt", test_dir, k);
+        assert_int_equal(prt_transfer_save(t[k], path[k]), PRT_OK);
+        free(test_slurp(path[k], &bytes[k]));
+    }
+    print_message("32 x 32 texels, order 3: %zu bytes with halves, %zu with floats\n", bytes[0], bytes[1]);
+    assert_true(bytes[0] + (size_t)w * h * ch * 9 * 2 <= bytes[1] + 64);
+    prt_transfer *back = NULL;
+    assert_int_equal(prt_transfer_load(ctx, path[0], &back), PRT_OK);
+    assert_memory_equal(prt_transfer_texel_coeffs(back, PRT_TRANSFER_SHADOWED, &ch), half, n * sizeof(float));
+    prt_transfer_release(back);
+    prt_transfer_release(t[0]);
+    prt_transfer_release(t[1]);
+    prt_scene_release(scene);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -524,6 +571,7 @@ int main(void)
         cmocka_unit_test(test_glossy_sphere_vs_reference),
         cmocka_unit_test(test_files_independent_of_threads),
         cmocka_unit_test(test_export_through_table),
+        cmocka_unit_test(test_texel_halves),
     };
     return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

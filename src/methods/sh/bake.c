@@ -555,9 +555,18 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
 
 static prt_status sh_finish(prt__bake_job *b, prt_transfer *t)
 {
-    (void)b;
-    (void)t;
-    return PRT_OK;   /* every stage wrote into the state already */
+    /* Every stage wrote into the state already. Quantized bakes (16-bit, the table's default)
+     * store their texel sets as halves (0.05% relative): the transfer holds what the file will. */
+    const sh_bake *sb = (const sh_bake *)b;
+    prt__sh_state *s = t->state;
+    prt__texel_sets *tx = &s->texels;
+    if (!sb->extra.quantize || !tx->width) return PRT_OK;
+    const size_t ntex = (size_t)tx->width * tx->height;
+    for (int k = 0; k < 3; ++k)
+        for (size_t i = 0; tx->coeffs[k] && i < ntex * (size_t)tx->channels[k] * s->order * s->order; ++i)
+            tx->coeffs[k][i] = prt__half_to_float(prt__half_from_float(tx->coeffs[k][i]));
+    tx->halves = true;
+    return PRT_OK;
 }
 
 static void sh_release(prt__bake_job *b)

@@ -7,6 +7,7 @@
 #define CHUNK_CPCA PRT__FOURCC('C', 'P', 'C', 'A')
 #define CHUNK_TXAL PRT__FOURCC('T', 'X', 'A', 'L')
 #define CHUNK_TXLS PRT__FOURCC('T', 'X', 'L', 'S')
+#define CHUNK_TXLH PRT__FOURCC('T', 'X', 'L', 'H')   /* the same as halves */
 #define CPCA_HEADER 64
 
 void prt__sh_save_meta(const prt_transfer *t, cJSON *meta)
@@ -89,7 +90,16 @@ prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
             prt__put32(h + 8, (uint32_t)sh->order);
             prt__put32(h + 12, (uint32_t)tx->width);
             prt__put32(h + 16, (uint32_t)tx->height);
-            prt__chunks_add(l, CHUNK_TXLS, h, (size_t)24, tx->coeffs[k], ntex * (size_t)tx->channels[k] * sh->order * sh->order * 4, NULL);
+            const size_t n = ntex * (size_t)tx->channels[k] * sh->order * sh->order;
+            if (!tx->halves) {
+                prt__chunks_add(l, CHUNK_TXLS, h, (size_t)24, tx->coeffs[k], n * 4, NULL);
+                continue;
+            }
+            uint16_t *v = prt__chunks_alloc(l, n * 2 + 2);   /* + 2: 4-byte chunks */
+            if (!v) break;
+            for (size_t i = 0; i < n; ++i) v[i] = prt__half_from_float(tx->coeffs[k][i]);
+            v[n] = 0;
+            prt__chunks_add(l, CHUNK_TXLH, h, (size_t)24, v, n * 2 + (n & 1 ? 2 : 0), NULL);
         }
     }
     return PRT_OK;   /* allocation failures are recorded in the list and reported when writing */
@@ -194,7 +204,8 @@ static prt_status load_texels(prt_context *ctx, prt__sh_state *sh, prt__chunk_in
     prt__chunk_in *in = prt__chunk_take(chunks, count, CHUNK_TXAL);
     prt__texel_sets *tx = &sh->texels;
     if (!in) {
-        if (prt__chunk_take(chunks, count, CHUNK_TXLS)) return bad(ctx, "corrupt .prt file: texel transfer without its albedo chunk");
+        if (prt__chunk_take(chunks, count, CHUNK_TXLS) || prt__chunk_take(chunks, count, CHUNK_TXLH))
+            return bad(ctx, "corrupt .prt file: texel transfer without its albedo chunk");
         return PRT_OK;
     }
     const unsigned char *p = in->data;
@@ -210,7 +221,12 @@ static prt_status load_texels(prt_context *ctx, prt__sh_state *sh, prt__chunk_in
     tx->width = (int)w;
     tx->height = (int)h;
     if (!prt__all_finite(tx->albedo, ntex * 3)) return bad(ctx, "corrupt .prt file: non-finite texel albedo");
-    while ((in = prt__chunk_take(chunks, count, CHUNK_TXLS))) {
+    bool floats = false;
+    while ((in = prt__chunk_take(chunks, count, CHUNK_TXLS)) || (in = prt__chunk_take(chunks, count, CHUNK_TXLH))) {
+        const bool halves = in->id == CHUNK_TXLH;
+        if ((halves && floats) || (!halves && tx->halves)) return bad(ctx, "corrupt .prt file: texel transfer both as floats and as halves");
+        floats |= !halves;
+        tx->halves = halves;
         p = in->data;
         len = in->size;
         uint32_t kind = len >= 24 ? prt__get32(p) : 0, channels = len >= 24 ? prt__get32(p + 4) : 0, order = len >= 24 ? prt__get32(p + 8) : 0;
@@ -218,10 +234,17 @@ static prt_status load_texels(prt_context *ctx, prt__sh_state *sh, prt__chunk_in
         int k = prt__kind_index((prt_transfer_kind)kind);
         uint64_t n = (uint64_t)tw * th * channels * order * order;
         if (k < 0 || k > 2 || (channels != 1 && channels != 3) || (int)order != sh->order || (int)tw != tx->width || (int)th != tx->height ||
-            tx->coeffs[k] || 24 + n * 4 != len)
+            tx->coeffs[k] || 24 + (halves ? (n * 2 + 3) & ~3ull : n * 4) != len)
             return bad(ctx, "corrupt .prt file: invalid texel transfer chunk");
         if (!(tx->coeffs[k] = malloc(n * 4))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        memcpy(tx->coeffs[k], p + 24, n * 4);
+        if (halves)
+            for (uint64_t i = 0; i < n; ++i) {
+                uint16_t hv;
+                memcpy(&hv, p + 24 + i * 2, 2);
+                tx->coeffs[k][i] = prt__half_to_float(hv);
+            }
+        else
+            memcpy(tx->coeffs[k], p + 24, n * 4);
         tx->channels[k] = (int)channels;
         if (!prt__all_finite(tx->coeffs[k], n)) return bad(ctx, "corrupt .prt file: non-finite texel transfer");
     }

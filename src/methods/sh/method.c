@@ -76,7 +76,7 @@ static size_t texel_bytes(const prt__sh_state *s)
     if (!tx->width) return 0;
     const size_t ntex = (size_t)tx->width * tx->height;
     size_t bytes = ntex * (3 * sizeof(float) + 1);
-    for (int k = 0; k < 3; ++k) bytes += ntex * (size_t)tx->channels[k] * s->order * s->order * sizeof(float);
+    for (int k = 0; k < 3; ++k) bytes += ntex * (size_t)tx->channels[k] * s->order * s->order * (tx->halves ? 2 : sizeof(float));
     return bytes;
 }
 
@@ -162,6 +162,7 @@ prt_status prt__texel_sets_copy(prt__texel_sets *dst, const prt__texel_sets *src
     const size_t ntex = (size_t)src->width * src->height, nc = (size_t)order * order;
     dst->width = src->width;
     dst->height = src->height;
+    dst->halves = src->halves;
     dst->albedo = malloc(ntex * 3 * sizeof(float));
     dst->covered = malloc(ntex);
     bool ok = dst->albedo && dst->covered;

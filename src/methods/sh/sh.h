@@ -24,6 +24,7 @@ typedef struct prt__texel_sets {
     uint8_t *covered;     /* [texel]: 1 baked, 2 filled from neighbours, 0 outside every chart */
     int channels[3];
     float *coeffs[3];     /* [texel][channel][order^2] */
+    bool halves;          /* coeffs hold IEEE halves' values, as the file stores them */
 } prt__texel_sets;
 
 typedef struct prt__sh_state {
