@@ -37,12 +37,9 @@ bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float 
         for (int k = 0; k < 3; ++k) outside += u[k] < -1e-3f * W || u[k] > W * 1.001f || v[k] < -1e-3f * H || v[k] > H * 1.001f;
         float area = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
         if (area == 0.0f) continue;
-        int x0 = (int)floorf(fminf(u[0], fminf(u[1], u[2]))), x1 = (int)ceilf(fmaxf(u[0], fmaxf(u[1], u[2])));
-        int y0 = (int)floorf(fminf(v[0], fminf(v[1], v[2]))), y1 = (int)ceilf(fmaxf(v[0], fmaxf(v[1], v[2])));
-        if (x0 < 0) x0 = 0;
-        if (y0 < 0) y0 = 0;
-        if (x1 > W) x1 = W;
-        if (y1 > H) y1 = H;
+        /* Clamped before converting: a file's UVs may lie far outside the map. */
+        const int x0 = (int)fmaxf(floorf(fminf(u[0], fminf(u[1], u[2]))), 0.0f), x1 = (int)fminf(ceilf(fmaxf(u[0], fmaxf(u[1], u[2]))), (float)W);
+        const int y0 = (int)fmaxf(floorf(fminf(v[0], fminf(v[1], v[2]))), 0.0f), y1 = (int)fminf(ceilf(fmaxf(v[0], fmaxf(v[1], v[2]))), (float)H);
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
                 float px = x + 0.5f, py = y + 0.5f;
