@@ -75,10 +75,12 @@ bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float 
             float u[3], v[3];
             for (int k = 0; k < 3; ++k) { u[k] = m->uv[ix[k] * 2] * W; v[k] = m->uv[ix[k] * 2 + 1] * H; }
             if ((u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]) == 0.0f) continue;
-            int x0 = (int)floorf(fminf(u[0], fminf(u[1], u[2])) - 0.5f), x1 = (int)ceilf(fmaxf(u[0], fmaxf(u[1], u[2])) + 0.5f);
-            int y0 = (int)floorf(fminf(v[0], fminf(v[1], v[2])) - 0.5f), y1 = (int)ceilf(fmaxf(v[0], fmaxf(v[1], v[2])) + 0.5f);
-            for (int y = y0 < 0 ? 0 : y0; y < y1 && y < H; ++y)
-                for (int x = x0 < 0 ? 0 : x0; x < x1 && x < W; ++x) {
+            const int x0 = (int)fmaxf(floorf(fminf(u[0], fminf(u[1], u[2])) - 0.5f), 0.0f);
+            const int x1 = (int)fminf(ceilf(fmaxf(u[0], fmaxf(u[1], u[2])) + 0.5f), (float)W);
+            const int y0 = (int)fmaxf(floorf(fminf(v[0], fminf(v[1], v[2])) - 0.5f), 0.0f);
+            const int y1 = (int)fminf(ceilf(fmaxf(v[0], fmaxf(v[1], v[2])) + 0.5f), (float)H);
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
                     size_t i = (size_t)y * W + x;
                     if (owner[i] && near[i] == INFINITY) continue;   /* its centre is inside a triangle */
                     float b1 = 0, b2 = 0, d2 = nearest_on_triangle(u, v, x + 0.5f, y + 0.5f, &b1, &b2);
@@ -135,9 +137,8 @@ bool prt__texel_areas(const prt__mesh *m, int W, int H, float *area)
         if (!(uv_area > 0)) continue;   /* no texels to give it to */
         /* World area per texel-space area: the triangle's footprint in each texel scaled by it. */
         const double scale = world / uv_area;
-        int x0 = (int)floorf(fminf(u[0], fminf(u[1], u[2]))), x1 = (int)ceilf(fmaxf(u[0], fmaxf(u[1], u[2])));
-        int y0 = (int)floorf(fminf(v[0], fminf(v[1], v[2]))), y1 = (int)ceilf(fmaxf(v[0], fmaxf(v[1], v[2])));
-        x0 = x0 < 0 ? 0 : x0; y0 = y0 < 0 ? 0 : y0; x1 = x1 > W ? W : x1; y1 = y1 > H ? H : y1;
+        const int x0 = (int)fmaxf(floorf(fminf(u[0], fminf(u[1], u[2]))), 0.0f), x1 = (int)fminf(ceilf(fmaxf(u[0], fmaxf(u[1], u[2]))), (float)W);
+        const int y0 = (int)fmaxf(floorf(fminf(v[0], fminf(v[1], v[2]))), 0.0f), y1 = (int)fminf(ceilf(fmaxf(v[0], fmaxf(v[1], v[2]))), (float)H);
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
                 float poly[16][2] = {{u[0], v[0]}, {u[1], v[1]}, {u[2], v[2]}};
