@@ -44,6 +44,14 @@ static void test_obj_with_materials(void **state)
     assert_int_equal(prt_scene_vertex_count(s), 21);
     for (size_t v = 0; v < prt_scene_vertex_count(s) * 3; ++v) assert_true(prt_scene_albedo(s)[v] == 0.25f);
     assert_int_equal(prt_scene_brdf_count(s), 1);
+    /* The BRDF record itself, which the path tracer and the wavelet bake read (through a file's
+     * copy of the scene's materials). */
+    prt_transfer *ao = NULL;
+    assert_int_equal(prt_bake(ctx, s, prt_method_find("ao"), NULL, NULL, &ao), PRT_OK);
+    const prt_brdf *shiny = prt_transfer_brdf(ao, 1);
+    assert_non_null(shiny);
+    assert_true(shiny->diffuse[0] == 0.25f && shiny->diffuse[2] == 0.25f && shiny->specular[0] == 0.5f);
+    prt_transfer_release(ao);
     prt_scene_release(s);
     prt_context_release(ctx);
 }

@@ -9,7 +9,7 @@
 #error "the .prt reader and writer assume a little-endian host"
 #endif
 
-#define FILE_VERSION 1
+#define FILE_VERSION 2   /* the newest this prt reads; files are written at the lowest they need */
 #define HEADER_SIZE 24
 #define ENTRY_SIZE 24
 #define MAX_CHUNKS 4096
@@ -105,13 +105,14 @@ static uint32_t chunk_crc(const prt__chunk_out *c)
 
 prt_status prt__container_write(const char *path, const prt__chunk_list *l)
 {
+    if (l->version > FILE_VERSION) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "format version %u is newer than this prt writes", l->version);
     if (l->failed) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory preparing '%s'", path);
     if (l->count < 1 || l->count > MAX_CHUNKS) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "a .prt file holds 1..%d chunks", MAX_CHUNKS);
     const size_t table_end = HEADER_SIZE + (size_t)ENTRY_SIZE * l->count;
     unsigned char *head = calloc(table_end, 1);
     if (!head) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
     memcpy(head, MAGIC, 8);
-    prt__put32(head + 8, FILE_VERSION);
+    prt__put32(head + 8, l->version > 1 ? l->version : 1);
     prt__put32(head + 12, (uint32_t)l->count);
     size_t offset = (table_end + 7) & ~(size_t)7;
     for (int i = 0; i < l->count; ++i) {

@@ -22,6 +22,10 @@ typedef struct prt__chunk_list {
     void **owned;             /* buffers freed with the list */
     int owned_count, owned_capacity;
     bool failed;              /* an allocation failed: writing reports it */
+    /* The format version the file needs (0 = 1): raised by writers of chunks that older readers
+     * would misread by skipping them (version 2: half-float maps and texel sets), so that those
+     * readers refuse the file as newer instead. */
+    uint32_t version;
 } prt__chunk_list;
 
 /* Appends a chunk of up to PRT__CHUNK_PARTS parts (pairs of pointer and size, NULL-terminated). */

@@ -237,6 +237,7 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         if (b) {
             if (!cJSON_IsString(b)) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d]: \"brdf\" must be a string such as \"phong:32:0.5:0.3\"", path, index); break; }
             if ((st = prt_brdf_parse(b->valuestring, &brdf))) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d]: %s", path, index, prt_last_error()); break; }
+            if (desc->override_albedo) memcpy(brdf.diffuse, desc->default_albedo, sizeof brdf.diffuse);   /* --albedo: its kd too */
             prt_brdf_lambert_albedo(&brdf, rgb);
             albedo = rgb;
             has_brdf = true;
@@ -268,6 +269,8 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
                     prt_brdf mbrdf;
                     if (!cJSON_IsString(mb) || prt_brdf_parse(mb->valuestring, &mbrdf))
                         st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"brdf\" must be a BRDF such as \"phong:32:0.5:0.3\"", path, m->surface_names[sid - 1]);
+                    else if (desc->override_albedo && (memcpy(mbrdf.diffuse, desc->default_albedo, sizeof mbrdf.diffuse), false))
+                        ;
                     else if (!(brdf_id = prt__scene_brdf_id(scene, &mbrdf))) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDF materials", path, PRT__MAX_BRDFS);
                     else prt_brdf_lambert_albedo(&mbrdf, mrgb);
                 }

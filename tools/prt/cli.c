@@ -646,6 +646,7 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     d.with_indirect = with_indirect;
     d.brdf = l && l->have_brdf ? &l->brdf : NULL;
     d.brdf_everywhere = l && l->brdf_everywhere;
+    d.no_pixel_lights = l && l->whole_texels;
     d.gpu_finish = l && l->gpu_finish;
     int controls[PRT_MAX_CONTROLS];
     const int nc = cli_controls(c, l, t, controls);

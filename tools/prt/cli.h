@@ -89,6 +89,7 @@ typedef struct cli_light {
     struct { char name[64]; int value; } control[PRT_MAX_CONTROLS];
     int control_count;
     bool gpu_finish;          /* --accumulate gpu: the method's last passes in the renderer */
+    bool whole_texels;        /* a light map for a file: every light in it, none left to draw per pixel */
     char path_buf[1024];
 } cli_light;
 

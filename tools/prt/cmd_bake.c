@@ -190,7 +190,12 @@ static prt_status auto_refine(cli *c, const prt_method *m, prt_scene *scene, con
         fprintf(stderr, "prt bake: about %zu triangles (%.0f%%) span contact or shadow edges that their vertices cannot resolve: refining them "
                 "(--no-refine keeps the mesh)\n", rs.marked_triangles, 100.0 * (double)rs.marked_triangles / (double)nt);
     rd.max_new_vertices = nv < 10000 ? 10000 : nv > 100000 ? 100000 : nv;
-    return refine_scene(c, scene, &rd);
+    st = refine_scene(c, scene, &rd);
+    if (st && st != PRT_ERR_CANCELLED) {   /* a convenience: the bake goes on with the mesh as it is */
+        if (!c->quiet) fprintf(stderr, "prt bake: warning: refinement failed (%s): baking the mesh as it is\n", prt_last_error());
+        return PRT_OK;
+    }
+    return st;
 }
 
 /* The bake as JSON for scripts and CI: what went in, what came out, where the time went. */

@@ -209,6 +209,7 @@ static int relight_main(int argc, char **argv, bool exporting)
         if (variant < 0) rc = cli_usage(&c, "%s", prt_last_error());
     }
     if (!st && !rc) st = cli_lighting(&c, &light, t, NULL, &lighting);
+    light.whole_texels = texels;   /* the map is the picture: no renderer adds lights to it */
     if (!st && !rc) st = cli_relight(&c, t, lighting, &light, variant, !texels, json && !texels, &r);
     if (!st && !rc) st = cli_check_interrupt(&c);
     if (!st && !rc && texels) {

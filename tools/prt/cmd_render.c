@@ -13,8 +13,8 @@ static const char *HELP =
     "Relights a baked .prt and draws it with OpenGL 3.3 (headless EGL; Mesa llvmpipe without a\n"
     "GPU). Several kinds are drawn side by side, left to right, in the order given; so are\n"
     "several files (each as its kinds, all under the same lighting options and the first\n"
-    "file's camera: one scene baked by several methods) and images given among them (a\n"
-    "prt reference --image of the same view and size, pasted as it is).\n\n"
+    "file's camera: one scene baked by several methods) and linear images given among them\n"
+    "(.exr .hdr .pfm: a prt reference --image of the same view and size, pasted as it is).\n\n"
     "  -o, --output FILE      the image (required): .png (tone-mapped sRGB), .exr (linear half),\n"
     "                         .hdr or .pfm\n"
     "  -k, --kind LIST        comma list of what to draw the file as (prt info lists what it\n"
@@ -55,7 +55,7 @@ typedef struct source {
 
 static bool is_image(const char *path)
 {
-    static const char *const ext[] = {".png", ".exr", ".hdr", ".pfm", ".jpg", ".jpeg"};
+    static const char *const ext[] = {".png", ".exr", ".hdr", ".pfm", ".jpg", ".jpeg"};   /* panels take the linear ones */
     const char *e = strrchr(path, '.');
     for (size_t i = 0; e && i < sizeof ext / sizeof ext[0]; ++i)
         if (!strcasecmp(e, ext[i])) return true;
@@ -166,8 +166,14 @@ int cmd_render(int argc, char **argv)
     if (view.have_eye != view.have_target) return cli_usage(&c, "--eye and --target go together");
     if (to_count && frames < 2) return cli_usage(&c, "--light-to moves lights over --frames N");
     if (to_count && to_count != light.light_count) return cli_usage(&c, "give one --light-to for each --light (%d --light, %d --light-to)", light.light_count, to_count);
-    for (int i = 0; i < to_count; ++i)
+    for (int i = 0; i < to_count; ++i) {
         if (to[i].type != light.lights[i].type) return cli_usage(&c, "--light-to %d is not the same type of light as --light %d", i + 1, i + 1);
+        /* Directions are interpolated in a straight line: opposite ones would pass through zero. */
+        const float *a = light.lights[i].direction, *b = to[i].direction;
+        const float dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2], la = sqrtf(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]), lb = sqrtf(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+        if ((to[i].type == PRT_LIGHT_DIRECTIONAL || to[i].type == PRT_LIGHT_SPOT) && !(dot > -0.99f * la * lb))
+            return cli_usage(&c, "--light-to %d points the opposite way from --light %d: move it in two animations", i + 1, i + 1);
+    }
     if (frames > 1) {
         const char *ext = strrchr(output, '.');
         if (!ext || strcasecmp(ext, ".png")) return cli_usage(&c, "--frames writes an animated PNG: -o must end in .png");
@@ -190,6 +196,11 @@ int cmd_render(int argc, char **argv)
         const char *path = argv[optind + i];
         if (is_image(path)) {
             if (frames > 1) { rc = cli_usage(&c, "'%s': an image cannot follow the moving lights of --frames", path); break; }
+            const char *e = strrchr(path, '.');
+            if (!strcasecmp(e, ".png") || !strcasecmp(e, ".jpg") || !strcasecmp(e, ".jpeg")) {
+                rc = cli_usage(&c, "'%s' is already tone-mapped: paste a linear image (.exr, .hdr, .pfm; prt reference --image X.exr)", path);
+                break;
+            }
             if ((st = prt_image_load(path, &src[i].image))) { cli_error(&c, "'%s': %s", path, prt_last_error()); c.reported = true; break; }
             if (src[i].image.width != width || src[i].image.height != height) {
                 cli_error(&c, "'%s' is %dx%d, the panels %dx%d (give the same --width and --height)", path, src[i].image.width, src[i].image.height, width,
@@ -203,6 +214,7 @@ int cmd_render(int argc, char **argv)
             if ((src[i].count = cli_relight_resolve(&c, &kinds, src[i].t, 1, src[i].variants, MAX_PANELS)) < 0) { rc = EXIT_USAGE; break; }
             if (light.gpu_finish && !cli_check_accumulate(&c, src[i].t, per_vertex)) { rc = EXIT_USAGE; break; }
             if ((st = cli_lighting(&c, &light, src[i].t, NULL, &src[i].lighting))) break;
+            if ((st = cli_check_interrupt(&c))) break;   /* between steps: each can take a second on big inputs */
             if (first < 0) first = i;
             if (prt_transfer_vertex_count(src[i].t) > max_nv) max_nv = prt_transfer_vertex_count(src[i].t);
         }
@@ -210,7 +222,12 @@ int cmd_render(int argc, char **argv)
         if (count > MAX_PANELS) { rc = cli_usage(&c, "at most %d panels", MAX_PANELS); break; }
     }
     if (!st && !rc && first < 0) rc = cli_usage(&c, "expected a FILE.prt among the inputs (images are only pasted beside it)");
+    /* Every frame is kept until the animation is written: say so before running out of memory. */
+    const double held = (double)frames * width * height * count * 3 * sizeof(float);
+    if (!st && !rc && frames > 1 && held > 4e9)
+        rc = cli_usage(&c, "%d frames of %d panels of %dx%d would hold %.1f GB: fewer --frames or a smaller --width", frames, count, width, height, held / 1e9);
     if (!st && !rc) st = prt_renderer_create(c.ctx, &(prt_renderer_desc){width, height, 0}, &r);
+    if (!st && !rc) st = cli_check_interrupt(&c);
     if (!st && !rc) {
         rgb = malloc(max_nv * 3 * sizeof(float));
         for (int f = 0; f < frames && !st; ++f) {
@@ -250,6 +267,7 @@ int cmd_render(int argc, char **argv)
                 const prt_transfer *t = src[i].t;
                 prt_relit relit;
                 if ((st = cli_relight(&c, t, lighting, &light, src[i].variants[k], per_vertex, false, &relit))) break;
+                if ((st = cli_check_interrupt(&c))) { prt_relit_free(&relit); break; }
                 prt_render_mesh mesh;
                 prt_relit_render_mesh(t, &relit, &mesh);
                 if (per_vertex && prt_relit_view_dependent(&relit)) {
@@ -275,6 +293,8 @@ int cmd_render(int argc, char **argv)
     if (frames > 1 && !c.quiet && tty) fputc('\n', stderr);
     if (!st && !rc) st = cli_check_interrupt(&c);
     if (!st && !rc) st = frames > 1 ? prt_image_save_animation(output, sheets, frames, fps, &view.save) : prt_image_save(output, &sheets[0], &view.save);
+    /* Encoding a big image takes a second: Ctrl-C during it still means nothing written. */
+    if (!st && !rc && (st = cli_check_interrupt(&c))) remove(output);
     if (!st && !rc && !c.quiet) {
         fprintf(stderr, "prt render: wrote %s (", output);
         int k = 0;

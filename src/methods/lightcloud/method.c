@@ -300,7 +300,7 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
     prt_status st = prt__relit_alloc(ctx, t, r, !s->store_direct && (d->with_indirect || d->component == PRT_COMPONENT_INDIRECT));
     if (st) return st;
     const int count = prt_lighting_count(l);
-    const int pixel = s->store_direct || d->per_vertex || d->component == PRT_COMPONENT_INDIRECT ? 0 : count < PRT_MAX_PIXEL_LIGHTS ? count : PRT_MAX_PIXEL_LIGHTS;
+    const int pixel = s->store_direct || d->per_vertex || d->no_pixel_lights || d->component == PRT_COMPONENT_INDIRECT ? 0 : count < PRT_MAX_PIXEL_LIGHTS ? count : PRT_MAX_PIXEL_LIGHTS;
     float *w = malloc(((size_t)s->cloud_count * 3 + 3) * sizeof(float));
     float *cloud = prt__calloc(nv * 3, sizeof(float)), *E = prt__calloc(nv * 3, sizeof(float));
     float *exit_sh = s->glossy_count ? prt__calloc(nv * 48, sizeof(float)) : NULL;

@@ -44,6 +44,7 @@ prt_status prt__offset_save(const prt_transfer *t, prt__chunk_list *l)
         if (!maps) continue;
         if (!h) return PRT_OK;
         for (size_t i = 0; i < values; ++i) h[i] = prt__half_from_float(maps[i]);
+        if (l->version < 2) l->version = 2;   /* readers of version 1 would miss the maps */
         h[values] = 0;
         prt__chunks_add(l, k ? CHUNK_OFHS : CHUNK_OFHR, h, values * sizeof(uint16_t) + (values & 1 ? 2 : 0), NULL);
     }

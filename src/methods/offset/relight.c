@@ -274,7 +274,7 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
      * per pixel with shadow maps: a shadow edge is then as sharp as the screen, not a staircase
      * of texels. The light map keeps it for the bounces and the subsurface scattering, and shows
      * the rest (hide: what it leaves out). The GPU passes draw it per texel, as the paper. */
-    const int pixel = !d->gpu_finish && !d->per_vertex && d->component != PRT_COMPONENT_INDIRECT && nlocal <= PRT_MAX_PIXEL_LIGHTS ? nlocal : 0;
+    const int pixel = !d->gpu_finish && !d->per_vertex && !d->no_pixel_lights && d->component != PRT_COMPONENT_INDIRECT && nlocal <= PRT_MAX_PIXEL_LIGHTS ? nlocal : 0;
     float *hide = pixel ? prt__calloc(nc * 3, sizeof(float)) : NULL;
     if (pixel && !hide) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
     for (size_t i = 0; pixel && i < nc; ++i)
@@ -317,7 +317,7 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     /* The shown map (b): gutters as the GPU path fills them, each texel its source's value. */
     for (size_t i = 0; i < nc; ++i)
         for (int c = 0; c < 3; ++c) {
-            const float f = first[i * 3 + c] - (hide ? hide[i * 3 + c] : 0.0f), g = indirect[i * 3 + c];
+            const float f = fmaxf(first[i * 3 + c] - (hide ? hide[i * 3 + c] : 0.0f), 0.0f), g = indirect[i * 3 + c];
             b[i * 3 + c] = d->component == PRT_COMPONENT_DIRECT ? f : d->component == PRT_COMPONENT_INDIRECT ? g : f + g;
         }
     free(hide);

@@ -98,6 +98,7 @@ prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
             uint16_t *v = prt__chunks_alloc(l, n * 2 + 2);   /* + 2: 4-byte chunks */
             if (!v) break;
             for (size_t i = 0; i < n; ++i) v[i] = prt__half_from_float(tx->coeffs[k][i]);
+            if (l->version < 2) l->version = 2;   /* readers of version 1 would skip the texel sets */
             v[n] = 0;
             prt__chunks_add(l, CHUNK_TXLH, h, (size_t)24, v, n * 2 + (n & 1 ? 2 : 0), NULL);
         }

@@ -188,7 +188,7 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
     const float *albedo = d->albedo ? d->albedo : t->mesh.albedo;
     /* Drawn, the local lights' direct light is the renderer's, per pixel with shadow maps (as the
      * paper draws it); its per-vertex value still feeds the bounces. */
-    const int pixel = d->per_vertex || d->component == PRT_COMPONENT_INDIRECT ? 0 : prt_lighting_count(l) < PRT_MAX_PIXEL_LIGHTS ? prt_lighting_count(l) : PRT_MAX_PIXEL_LIGHTS;
+    const int pixel = d->per_vertex || d->no_pixel_lights || d->component == PRT_COMPONENT_INDIRECT ? 0 : prt_lighting_count(l) < PRT_MAX_PIXEL_LIGHTS ? prt_lighting_count(l) : PRT_MAX_PIXEL_LIGHTS;
     float *E = prt__calloc(nv * 3, sizeof(float)), *direct = prt__calloc(nv * 3, sizeof(float));
     float *Ep = pixel ? prt__calloc(nv * 3, sizeof(float)) : NULL;
     float *indirect = r->indirect ? r->indirect : prt__calloc(nv * 3, sizeof(float));
