@@ -237,6 +237,9 @@ typedef struct prt_relight_desc {
      * sets or with a BRDF baked in). */
     const prt_brdf *brdf;
     int brdf_everywhere;
+    /* Keep every light in radiance and texels even when relit for drawing: nothing will draw
+     * lights per pixel (a light map written to a file). */
+    int no_pixel_lights;
     /* Diffuse albedo per vertex (3 floats each, linear RGB in [0, 1]) replacing the baked one, for
      * methods that let surface colours change without a rebake (prt_method_runtime_albedo); NULL
      * = as baked. Other methods refuse it. */
