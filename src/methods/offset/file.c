@@ -98,7 +98,8 @@ static prt_status load_maps(prt_context *ctx, const prt__offset_set *s, const pr
             double sum = 0;
             for (int k = 0; k < s->count; ++k) sum += (*out)[((size_t)k * s->covered + i) * 3 + ch];
             const double bound = radiosity ? s->albedo[i * 3 + ch] * series[ch] : 1.0;
-            if (!(sum <= bound * 1.001 + 1e-6)) return bad(ctx, "an offset texel gathers more light than it can");
+            /* 0.1% for halves' relative rounding, 6e-8 each for their absolute one near zero. */
+            if (!(sum <= bound * 1.001 + 6e-8 * s->count + 1e-6)) return bad(ctx, "an offset texel gathers more light than it can");
         }
     return PRT_OK;
 }
