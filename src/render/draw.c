@@ -582,12 +582,35 @@ void prt__target_free(prt__target *t)
 
 void prt__target_draw(prt__target *t, prt__draw *d, const prt_camera *cam, const float background[3])
 {
+    prt__target_draw_cancellable(t, d, cam, background, NULL);
+}
+
+bool prt__target_draw_cancellable(prt__target *t, prt__draw *d, const prt_camera *cam, const float background[3], const prt_context *ctx)
+{
     glBindFramebuffer(GL_FRAMEBUFFER, t->fbo_ms);
-    prt__draw_mesh(d, cam, t->width, t->height, background);
+    /* A big image is drawn in bands of rows, finished one by one, so that a cancel is heard
+     * between them (one draw of 12 million pixels takes seconds on a CPU rasterizer). The
+     * shadow maps come first: the bands' scissor would clip them. */
+    const int band = ctx && (size_t)t->width * t->height > ((size_t)2 << 20) ? (int)(((size_t)1 << 20) / (size_t)t->width) + 1 : t->height;
+    if (band < t->height) {
+        prt__pixel_lights_shadows(&d->lights, d->vao, d->index_count);
+        glBindFramebuffer(GL_FRAMEBUFFER, t->fbo_ms);
+        glEnable(GL_SCISSOR_TEST);
+        for (int y = 0; y < t->height; y += band) {
+            glScissor(0, y, t->width, band);
+            prt__draw_mesh(d, cam, t->width, t->height, background);
+            glFinish();
+            if (prt__cancelled(ctx)) { glDisable(GL_SCISSOR_TEST); glBindFramebuffer(GL_FRAMEBUFFER, 0); return false; }
+        }
+        glDisable(GL_SCISSOR_TEST);
+    } else {
+        prt__draw_mesh(d, cam, t->width, t->height, background);
+    }
     glBindFramebuffer(GL_READ_FRAMEBUFFER, t->fbo_ms);
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, t->fbo);
     glBlitFramebuffer(0, 0, t->width, t->height, 0, 0, t->width, t->height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    return true;
 }
 
 prt_status prt__target_read(const prt__target *t, prt_image *out)

@@ -76,6 +76,9 @@ prt_status prt__target_init(prt__target *t, int width, int height, int samples);
 void prt__target_free(prt__target *t);
 /* Draws the mesh into the target and resolves it. */
 void prt__target_draw(prt__target *t, prt__draw *d, const prt_camera *cam, const float background[3]);
+/* The same, in bands of rows for big images, asking ctx's cancel hook between them; false when
+ * it said stop (ctx NULL: one pass, never stopped). */
+bool prt__target_draw_cancellable(prt__target *t, prt__draw *d, const prt_camera *cam, const float background[3], const prt_context *ctx);
 /* Reads the resolved linear radiance, top row first. */
 prt_status prt__target_read(const prt__target *t, prt_image *out);
 

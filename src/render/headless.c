@@ -7,6 +7,7 @@
 #include <string.h>
 
 struct prt_renderer {
+    const prt_context *ctx;   /* its cancel hook stops a big image between bands */
     EGLDisplay dpy;
     EGLContext egl;
     prt__target target;
@@ -37,6 +38,7 @@ prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, 
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "image size %dx%d or samples %d out of range", d.width, d.height, d.samples);
     prt_renderer *r = prt__calloc(1, sizeof *r);
     if (!r) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    r->ctx = ctx;
     r->dpy = open_display();
     if (r->dpy == EGL_NO_DISPLAY) { free(r); return prt__fail(ctx, PRT_ERR_BACKEND, "no EGL display (is Mesa's libegl-mesa0 installed?)"); }
     /* Surface type 0: the context renders only into framebuffer objects, never a window. */
@@ -111,6 +113,6 @@ prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_ca
     eglMakeCurrent(r->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, r->egl);
     prt_status st = prt__draw_upload(&r->draw, mesh);
     if (st) return st;
-    prt__target_draw(&r->target, &r->draw, cam, background);
+    if (!prt__target_draw_cancellable(&r->target, &r->draw, cam, background, r->ctx)) return prt__fail(r->ctx, PRT_ERR_CANCELLED, "drawing cancelled");
     return prt__target_read(&r->target, out);
 }

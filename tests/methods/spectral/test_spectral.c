@@ -535,6 +535,23 @@ static void test_pixel_lights_over_glossy(void **state)
     assert_true(dark <= lit_pixels / 1000);
     prt_image_free(&img);
     prt_renderer_release(ren);
+    /* A big image is drawn in bands (a cancel is heard between them): the same picture as one
+     * pass draws (a renderer without a context draws in one). */
+    prt_renderer *banded = NULL, *whole = NULL;
+    assert_int_equal(prt_renderer_create(ctx, &(prt_renderer_desc){1600, 1400, 0}, &banded), PRT_OK);
+    assert_int_equal(prt_renderer_create(NULL, &(prt_renderer_desc){1600, 1400, 0}, &whole), PRT_OK);
+    prt_image a, b;
+    prt_camera_frame((float[3]){-1.5f, 0, -1.5f}, (float[3]){1.5f, 1.5f, 1.5f}, NULL, 40, 1600.0f / 1400, &cam);
+    assert_int_equal(prt_render(banded, &rm, &cam, NULL, &a), PRT_OK);
+    assert_int_equal(prt_render(whole, &rm, &cam, NULL, &b), PRT_OK);
+    double worst = 0;
+    for (size_t i = 0; i < (size_t)1600 * 1400 * 3; ++i) worst = fmax(worst, fabs((double)a.rgb[i] - b.rgb[i]));
+    print_message("1600 x 1400 in bands: %.3g from one pass at most\n", worst);
+    assert_true(worst < 1e-6);
+    prt_image_free(&a);
+    prt_image_free(&b);
+    prt_renderer_release(banded);
+    prt_renderer_release(whole);
     prt_relit_free(&lit);
     prt_lighting_release(l);
     prt_transfer_release(t);
