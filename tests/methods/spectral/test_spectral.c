@@ -712,8 +712,9 @@ int main(int argc, char **argv)
     /* The renderer's test runs on its own (ctest: spectral-render), without leak checking:
      * Mesa's driver leaks where LeakSanitizer cannot name it (see tests/cli_test.sh). */
     if (argc > 1 && !strcmp(argv[1], "render")) {
-        const struct CMUnitTest render[] = {cmocka_unit_test(test_pixel_lights), cmocka_unit_test(test_no_seam_leaks)};
-        return cmocka_run_group_tests(render, NULL, NULL);
+        const struct CMUnitTest render[] = {cmocka_unit_test(test_pixel_lights), cmocka_unit_test(test_no_seam_leaks),
+                                            cmocka_unit_test(test_pixel_lights_over_glossy)};
+        return cmocka_run_group_tests(render, test_dir_setup, test_dir_teardown);
     }
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_basis),
@@ -721,7 +722,6 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_white_furnace),
         cmocka_unit_test(test_albedo_at_run_time),
         cmocka_unit_test(test_glossy_final_bounce),
-        cmocka_unit_test(test_pixel_lights_over_glossy),
         cmocka_unit_test_setup_teardown(test_file_round_trip, test_dir_setup, test_dir_teardown),
         cmocka_unit_test(test_cornell_vs_reference),
     };
