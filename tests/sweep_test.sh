@@ -7,24 +7,7 @@ set -u
 PRT=$1
 T=$(mktemp -d /tmp/prt_sweep_XXXXXX)
 trap 'rm -rf "$T"' EXIT
-pass=0
-fail=0
-# llvmpipe leaks inside its driver where LeakSanitizer cannot name it (see cli_test.sh): the
-# sweep draws frames, so it runs without leak checking.
-NOLEAK="env ASAN_OPTIONS=${ASAN_OPTIONS:-}:detect_leaks=0"
-
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
-# expect CODE DESCRIPTION -- COMMAND...: runs it, checks the exit code; stdout in $T/out, stderr in $T/err.
-expect() {
-    code=$1; what=$2; shift 3
-    "$@" >"$T/out" 2>"$T/err"
-    rc=$?
-    if [ "$rc" -eq "$code" ]; then ok; else bad "$what: exit $rc, expected $code"; sed 's/^/    /' "$T/err"; fi
-}
-says() {
-    if grep -qi -- "$1" "$T/err"; then ok; else bad "stderr does not mention '$1':"; sed 's/^/    /' "$T/err"; fi
-}
+. "$(dirname "$0")/shell_checks.sh"   # the sweep draws frames: its renders take $NOLEAK
 one_line() {
     [ "$(wc -l <"$T/err")" -eq 1 ] && ok || { bad "$1: a usage error takes one line, not $(wc -l <"$T/err")"; sed 's/^/    /' "$T/err"; }
 }

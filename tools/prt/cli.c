@@ -85,6 +85,20 @@ int cli_bad_option(const cli *c, int opt, char **argv, const struct option *opts
     return cli_usage(c, "unknown option '%s'", arg);
 }
 
+bool cli_run_gnuplot(const cli *c, const char *script)
+{
+    char cmd[4200];
+    snprintf(cmd, sizeof cmd, "gnuplot '%s' 2>&1", script);
+    FILE *p = popen(cmd, "r");
+    char line[512];
+    bool said = false;
+    while (p && fgets(line, sizeof line, p))
+        if (!c->quiet || !said) { fprintf(stderr, "gnuplot: %s", line); said = true; }
+    const int rc = p ? pclose(p) : -1;
+    remove(script);
+    return rc == 0;
+}
+
 int cli_usage(const cli *c, const char *fmt, ...)
 {
     va_list ap;

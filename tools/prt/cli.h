@@ -40,6 +40,9 @@ int cli_usage(const cli *c, const char *fmt, ...) __attribute__((format(printf, 
 int cli_make_context(cli *c);
 /* Edit distance between a and the first n bytes of b (a swap of neighbours is one edit), capped at 9. */
 int cli_edit_distance(const char *a, const char *b, size_t n);
+/* Runs gnuplot on the script at path (then removes it), passing its messages on (the first one
+ * only when quiet); false when it fails. */
+bool cli_run_gnuplot(const cli *c, const char *script);
 /* The usage error for what getopt_long returned as opt ('?' unknown, ':' missing value; opterr 0
  * and an optstring starting with ':'), naming the argument. */
 int cli_bad_option(const cli *c, int opt, char **argv, const struct option *opts);

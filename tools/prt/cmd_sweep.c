@@ -64,16 +64,7 @@ static prt_status plot(const cli *c, const char *csv, const char *png, const cha
     }
     fprintf(f, "\n");
     fclose(f);
-    char cmd[2400];
-    snprintf(cmd, sizeof cmd, "gnuplot '%s' 2>&1", script);
-    FILE *p = popen(cmd, "r");
-    char line[512];
-    bool said = false;
-    while (p && fgets(line, sizeof line, p))
-        if (!c->quiet || !said) { fprintf(stderr, "gnuplot: %s", line); said = true; }
-    int rc = p ? pclose(p) : -1;
-    remove(script);
-    if (rc != 0) {
+    if (!cli_run_gnuplot(c, script)) {
         cli_error(c, "gnuplot failed (is gnuplot-nox installed? scripts/setup-deps.sh installs it); the CSV is written");
         return PRT_ERR_BACKEND;
     }

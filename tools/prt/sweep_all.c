@@ -248,18 +248,9 @@ static prt_status plots(cli *c, const char *prefix, const row *rows, int n, doub
         else
             fprintf(f, "unset logscale\nset label 'no method measured' at graph 0.4, graph 0.5\nplot [0:1][0:1] NaN notitle\n");
         fclose(f);
-        char cmd[2800];
-        snprintf(cmd, sizeof cmd, "gnuplot '%s' 2>&1", script);
-        FILE *p = popen(cmd, "r");
-        char line[512];
-        bool said = false;
-        while (p && fgets(line, sizeof line, p))
-            if (!c->quiet || !said) { fprintf(stderr, "gnuplot: %s", line); said = true; }
-        const int rc = p ? pclose(p) : -1;
-        remove(script);
-        if (rc != 0 || rename(tmp, png) != 0) {
+        if (!cli_run_gnuplot(c, script) || rename(tmp, png) != 0) {
             remove(tmp);
-            cli_error(c, "gnuplot failed (is gnuplot-nox installed? scripts/setup-deps.sh installs it); the table%s is written", "");
+            cli_error(c, "gnuplot failed (is gnuplot-nox installed? scripts/setup-deps.sh installs it); the table is written");
             c->reported = true;
             return PRT_ERR_BACKEND;
         }
