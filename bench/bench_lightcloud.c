@@ -162,13 +162,13 @@ int main(int argc, char **argv)
            mesh, nv, t->mesh.triangle_count, threads, set->cloud_count, set->zone_count, merged);
     printf(" \"bake_seconds\": %.2f, \"spectral_seconds\": %.2f, \"cloud_light_seconds\": %.2f, \"zone_seconds\": %.2f, \"peak_memory_mb\": %.1f,\n", bake,
            stage_seconds(&k, "spectral"), stage_seconds(&k, "cloud lights"), stage_seconds(&k, "zones"), peak_mb);
-    printf(" \"transfer_bytes\": %zu, \"update_ms\": %.3f, \"fps\": %.1f, \"weights_ms\": %.3f, \"eval_ms\": %.3f,\n", bytes, update * 1e3, 1 / update,
+    printf(" \"transfer_bytes\": %zu, \"update_ms\": %.3f, \"updates_per_second\": %.1f, \"weights_ms\": %.3f, \"eval_ms\": %.3f,\n", bytes, update * 1e3, 1 / update,
            weights * 1e3, eval * 1e3);
     printf(" \"eval_bytes_per_second\": %.4g, \"read_bytes_per_second\": %.4g, \"eval_read_ratio\": %.3f}\n", eval_bw, read_bw, eval_bw / read_bw);
     fprintf(stderr,
             "bench: %s, %zu vertices, %u cloud lights -> %.1f per zone over %u zones, %d threads\n"
             "  bake %.1f s: spectral transfer %.1f s, cloud lights %.1f s, clustering + CPCA %.1f s; peak memory %.0f MB\n"
-            "  drag: update %.2f ms per frame (%.0f fps): weights %.2f ms, CPCA evaluation %.2f ms = %.3g bytes/s, %.0f%% of a plain read\n",
+            "  drag: CPU update %.2f ms per light move (%.0f updates/s, no drawing): weights %.2f ms, CPCA evaluation %.2f ms = %.3g bytes/s, %.0f%% of a plain read\n",
             mesh, nv, set->cloud_count, merged, set->zone_count, threads, bake, stage_seconds(&k, "spectral"), stage_seconds(&k, "cloud lights"),
             stage_seconds(&k, "zones"), peak_mb, update * 1e3, 1 / update, weights * 1e3, eval * 1e3, eval_bw, 100 * eval_bw / read_bw);
     if (resimulate) {

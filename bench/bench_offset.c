@@ -10,8 +10,8 @@
  *            (first-order light on the CPU, the passes on the GPU: one for maps of every bounce). On a machine without
  *            a GPU this is Mesa's llvmpipe on the CPU; the renderer's name is printed.
  * Usage: prt_bench_offset [MESH] [--threads N] [--sizes 256,512] [--offsets 50,100,200,400]
- * Without MESH it uses ../shared/data's bunny_lowres.obj (3.7k vertices, as the paper's face) if
- * present, else the procedural demo scene. JSON on stdout, a table on stderr. */
+ * Without MESH it uses ../shared/data's bunny_lowres.obj (1.8k vertices: a smaller, different mesh
+ * from the paper's face) if present, else the procedural demo scene. JSON on stdout, a table on stderr. */
 #include "bench_common.h"
 #include "methods/offset/offset.h"
 

@@ -112,6 +112,13 @@ typedef struct prt_render_mesh {
      * (shadow rays); a triangle none of whose vertices sees a light gets none of it, whatever its
      * shadow map says. NULL = the shadow maps alone. */
     const float *light_visibility;
+    /* Optional, with lights: per vertex 0 = Lambertian, k = light_brdfs[k - 1], whose glossy part
+     * (prt_brdf_eval_glossy) is added per pixel at the view direction, in the frame of the
+     * interpolated normal (prt_brdf_frame; a sphere light's at the direction of its centre); a
+     * triangle takes one of its vertices' material (they differ only where surfaces meet). */
+    const uint8_t *light_material;
+    const struct prt_brdf *light_brdfs;
+    int light_brdf_count;
     /* Optional: a light map the GPU finishes (prt_render_passes: the modulate-shift-accumulate
      * passes of offset radiance transfer maps). The renderer uploads the description's maps once
      * per id, then on each upload runs its passes from gpu_input (width x height RGB irradiance /

@@ -128,3 +128,42 @@ void prt__vertex_lights_visibility(prt_context *ctx, const prt__vertex_lights *c
     for (size_t v = 0; v < nv; ++v)
         for (int i = 0; i < count; ++i) vis[(size_t)i * nv + v] = prt__vertex_light_visibility(c, m, v, &lights[i]);
 }
+
+void prt__vertex_lights_shade(prt_context *ctx, const prt__vertex_lights *c, const prt__mesh *m, const prt_light *lights, int count,
+                              const prt__vertex_materials *mat, const float eye[3], float *rgb)
+{
+    const size_t nv = m->vertex_count;
+#pragma omp parallel for schedule(dynamic, 256) num_threads(prt__threads(ctx))
+    for (size_t v = 0; v < nv; ++v) {
+        const float *p = m->positions + v * 3, *n = m->normals + v * 3, *a = mat->albedo + v * 3;
+        const int id = mat->material && eye ? mat->material[v] : 0;
+        const prt_brdf *b = id > 0 && id <= mat->brdf_count ? &mat->brdfs[id - 1] : NULL;
+        float s[3], t[3], wo[3] = {0, 0, 1};
+        if (b) {   /* the view direction in the BRDF's frame, as the renderer's per-pixel pass */
+            float to_eye[3] = {eye[0] - p[0], eye[1] - p[1], eye[2] - p[2]};
+            prt__v3_normalize(to_eye);
+            prt_brdf_frame(n, s, t);
+            wo[0] = prt__v3_dot(to_eye, s);
+            wo[1] = prt__v3_dot(to_eye, t);
+            wo[2] = prt__v3_dot(to_eye, n);
+        }
+        for (int i = 0; i < count; ++i) {
+            const prt_light *l = &lights[i];
+            float e[3], f[3] = {a[0] / (float)PRT_PI, a[1] / (float)PRT_PI, a[2] / (float)PRT_PI};
+            prt__vertex_light_at(c, m, v, l, e);
+            if (e[0] <= 0.0f && e[1] <= 0.0f && e[2] <= 0.0f) continue;
+            if (b) {
+                float w[3], wi[3], g[3];
+                if (l->type == PRT_LIGHT_DIRECTIONAL) memcpy(w, l->direction, sizeof w);
+                else prt__v3_sub(l->position, p, w);
+                prt__v3_normalize(w);
+                wi[0] = prt__v3_dot(w, s);
+                wi[1] = prt__v3_dot(w, t);
+                wi[2] = prt__v3_dot(w, n);
+                prt_brdf_eval_glossy(b, wi, wo, g);
+                for (int k = 0; k < 3; ++k) f[k] += g[k];
+            }
+            for (int k = 0; k < 3; ++k) rgb[v * 3 + k] += f[k] * e[k];
+        }
+    }
+}

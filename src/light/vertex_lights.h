@@ -30,6 +30,19 @@ float prt__vertex_light_visibility(const prt__vertex_lights *c, const prt__mesh 
 
 /* Adds count lights' shadowed irradiance at every vertex to E (3 per vertex); c must be ready. */
 void prt__vertex_lights_add(prt_context *ctx, const prt__vertex_lights *c, const prt__mesh *m, const prt_light *lights, int count, float *E);
+/* What a vertex reflects of local light: its albedo (3 per vertex) and, where material[v] = k > 0,
+ * the glossy part of brdfs[k - 1] (material NULL: Lambertian everywhere). */
+typedef struct prt__vertex_materials {
+    const float *albedo;
+    const uint8_t *material;
+    const prt_brdf *brdfs;
+    int brdf_count;
+} prt__vertex_materials;
+/* Adds count lights' shadowed direct light as the renderer's per-pixel pass draws it: albedo / pi
+ * times irradiance, plus each glossy material's lobe seen from eye (NULL: Lambertian only);
+ * c must be ready. */
+void prt__vertex_lights_shade(prt_context *ctx, const prt__vertex_lights *c, const prt__mesh *m, const prt_light *lights, int count,
+                              const prt__vertex_materials *mat, const float eye[3], float *rgb);
 /* vis[light][vertex] = prt__vertex_light_visibility; c must be ready. */
 void prt__vertex_lights_visibility(prt_context *ctx, const prt__vertex_lights *c, const prt__mesh *m, const prt_light *lights, int count,
                                    float *vis);

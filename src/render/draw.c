@@ -261,7 +261,6 @@ prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     d->exit_mirror = m->exit_mirror;
     d->kvec_terms = m->kvec && m->normals && m->view_set && m->view_maps && m->kvec_terms >= 1 && m->view_map_sets >= 1 &&
                             m->view_map_resolution >= 1 ? m->kvec_terms : 0;
-    const bool lights = m->lights && m->light_count > 0 && m->albedo && m->normals;
     if (m->normals) {   /* also for lights set later (prt_window_set_lights) */
         glBindBuffer(GL_ARRAY_BUFFER, d->vbo_nrm);
         glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(m->vertex_count * 3 * sizeof(float)), m->normals, GL_STATIC_DRAW);
@@ -282,7 +281,7 @@ prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     }
     glBindVertexArray(0);
     d->index_count = m->triangle_count * 3;
-    prt__draw_set_lights(d, m->positions, m->albedo, m->vertex_count, lights ? m->lights : NULL, lights ? m->light_count : 0, m->light_visibility);
+    prt__draw_set_lights(d, m);
     d->lights.dirty = true;   /* new geometry casts new shadows */
     if (d->exit_order) prt__draw_upload_exit(d, m->exit_sh, m->vertex_count);
     if (d->kvec_terms) {
@@ -352,10 +351,9 @@ prt_status prt__draw_upload_gpu(prt__draw *d, const prt_render_mesh *m)
     return PRT_OK;
 }
 
-void prt__draw_set_lights(prt__draw *d, const float *positions, const float *albedo, size_t nv, const prt_light *lights, int count,
-                          const float *visibility)
+void prt__draw_set_lights(prt__draw *d, const prt_render_mesh *m)
 {
-    prt__pixel_lights_set(&d->lights, d->vao, positions, albedo, nv, lights, count, visibility);
+    prt__pixel_lights_set(&d->lights, d->vao, m);
 }
 
 void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int height)
@@ -514,7 +512,7 @@ void prt__draw_mesh(prt__draw *d, const prt_camera *cam, int w, int h, const flo
     glBindVertexArray(d->vao);
     glDrawElements(GL_TRIANGLES, (GLsizei)d->index_count, GL_UNSIGNED_INT, NULL);
     glBindVertexArray(0);
-    prt__pixel_lights_draw(&d->lights, d->vao, d->index_count, mvp);
+    prt__pixel_lights_draw(&d->lights, d->vao, d->index_count, mvp, cam->eye);
 }
 
 void prt_camera_frame(const float lo[3], const float hi[3], const float *from, float fov_y_deg, float aspect, prt_camera *out)

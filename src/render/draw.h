@@ -54,9 +54,9 @@ prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *mesh);
 /* Runs the GPU passes of mesh's gpu_* fields into the per-texel map (the description's atlases
  * uploaded when new); nothing when mesh has no gpu_passes. */
 prt_status prt__draw_upload_gpu(prt__draw *d, const prt_render_mesh *mesh);
-/* Replaces the lights drawn per pixel and the albedo they shade (count 0: none). */
-void prt__draw_set_lights(prt__draw *d, const float *positions, const float *albedo, size_t vertex_count, const prt_light *lights, int count,
-                          const float *visibility);
+/* Replaces the lights drawn per pixel, the albedo and glossy materials they shade (mesh's lights,
+ * albedo, light_visibility, light_material; none when it has no lights, albedo or normals). */
+void prt__draw_set_lights(prt__draw *d, const prt_render_mesh *mesh);
 /* Replaces the per-texel radiance map; NULL turns the per-texel path off (vertex radiance). */
 void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int height);
 /* Replaces the glossy exit coefficients (mesh layout: vertex, channel, coefficient). */

@@ -1,13 +1,16 @@
 /* Shadow-mapped local lights drawn per pixel (render/pixel_lights.h). The shading follows
  * light/lights.c to the letter (inverse square, the spot's smoothstep, the sphere's exact
- * horizon-clipped cap), so a pixel at a vertex matches what prt_relit_shade computes there with
- * shadow rays, up to the shadow map's resolution at shadow edges. */
+ * horizon-clipped cap), and glossy materials follow brdf/brdf.c's prt_brdf_eval_glossy in the
+ * frame of prt_brdf_frame, so a pixel at a vertex matches what prt_relit_shade computes there
+ * with shadow rays, up to the shadow map's resolution at shadow edges. */
 #include "render/draw.h"
+#include "prt/brdf.h"
 
 #include <string.h>
 
 #define CUBE_RES 1024
 #define PLANE_RES 4096
+#define BRDF_TEXELS 12   /* RGBA texels per BRDF in the table the glossy shading reads */
 
 static const char *VS_DEPTH =
     "#version 330 core\n"
@@ -45,22 +48,67 @@ static const char *VS_ADD =
     "layout(location = 2) in vec3 normal;\n"
     "layout(location = 4) in vec3 albedo;\n"
     "layout(location = 5) in float visibility;\n"
+    "layout(location = 6) in uint material;\n"
     "uniform mat4 mvp;\n"
     "// centroid: with multisampling an edge pixel's centre may lie off the triangle, and a point\n"
     "// extrapolated past a room's seam would be lit from outside.\n"
-    "centroid out vec3 f_pos; centroid out vec3 f_nrm; centroid out vec3 f_alb; centroid out float f_vis;\n"
-    "void main() { f_pos = pos; f_nrm = normal; f_alb = albedo; f_vis = visibility; gl_Position = mvp * vec4(pos, 1.0); }\n";
+    "centroid out vec3 f_pos; centroid out vec3 f_nrm; centroid out vec3 f_alb; centroid out float f_vis; flat out uint f_mat;\n"
+    "void main() {\n"
+    "  f_pos = pos; f_nrm = normal; f_alb = albedo; f_vis = visibility; f_mat = material;\n"
+    "  gl_Position = mvp * vec4(pos, 1.0);\n"
+    "}\n";
 static const char *FS_ADD =
     "#version 330 core\n"
-    "centroid in vec3 f_pos; centroid in vec3 f_nrm; centroid in vec3 f_alb; centroid in float f_vis;\n"
+    "centroid in vec3 f_pos; centroid in vec3 f_nrm; centroid in vec3 f_alb; centroid in float f_vis; flat in uint f_mat;\n"
     "uniform int gate;          // 1: f_vis (the vertices' shadow rays) is meaningful\n"
     "uniform int type;          // 1 point, 2 spot, 3 directional, 4 sphere (prt_light_type)\n"
     "uniform vec3 lpos, ldir, colour; uniform vec2 cosang; uniform float radius;\n"
     "uniform samplerCube cube; uniform sampler2D plane; uniform mat4 light_vp;\n"
     "uniform float texel;       // shadow-map texel: radians (cube) or world units (plane)\n"
     "uniform float bias;        // world units, on top of the texel-sized part\n"
+    "uniform int brdf_count;    // materials 1..brdf_count have a glossy part in the table\n"
+    "uniform samplerBuffer brdfs; uniform vec3 eye;\n"
     "out vec4 color;\n"
     "const float PI = 3.14159265358979;\n"
+    "// The glossy part of BRDF `id` (brdf/brdf.c, prt_brdf_eval_glossy) for world directions wi\n"
+    "// (to the light) and wo (to the eye), in the frame of prt_brdf_frame about n.\n"
+    "vec3 glossy(int id, vec3 n, vec3 wi_w, vec3 wo_w) {\n"
+    "  float ny1 = n.y + 1.0;\n"
+    "  vec3 s = vec3(ny1 * ny1 + n.z * n.z - n.x * n.x, -2.0 * ny1 * n.x, -2.0 * n.x * n.z);\n"
+    "  s = length(s) < 1e-6 ? vec3(1.0, 0.0, 0.0) : normalize(s);\n"
+    "  vec3 t = normalize(cross(n, s));\n"
+    "  vec3 wi = vec3(dot(wi_w, s), dot(wi_w, t), dot(wi_w, n)), wo = vec3(dot(wo_w, s), dot(wo_w, t), dot(wo_w, n));\n"
+    "  if (wi.z <= 0.0 || wo.z <= 0.0) return vec3(0.0);\n"
+    "  int b = (id - 1) * 12;\n"
+    "  vec4 head = texelFetch(brdfs, b);   // model, exponent, exponent_v, lobes\n"
+    "  vec3 ks = texelFetch(brdfs, b + 1).rgb;\n"
+    "  int model = int(head.x + 0.5);\n"
+    "  if (model == 1) {\n"
+    "    float r = -wi.x * wo.x - wi.y * wo.y + wi.z * wo.z;\n"
+    "    return r > 0.0 ? ks * ((head.y + 2.0) / (2.0 * PI) * pow(r, head.y)) : vec3(0.0);\n"
+    "  }\n"
+    "  if (model == 2) {\n"
+    "    vec3 h = wi + wo;\n"
+    "    return ks * ((head.y + 8.0) / (8.0 * PI) * pow(h.z / length(h), head.y));\n"
+    "  }\n"
+    "  if (model == 3) {\n"
+    "    vec3 h = normalize(wi + wo);\n"
+    "    float hk = dot(h, wi), sin2 = 1.0 - h.z * h.z;\n"
+    "    float e = sin2 > 1e-12 ? (head.y * h.x * h.x + head.z * h.y * h.y) / sin2 : 0.0;\n"
+    "    float spec = sqrt((head.y + 1.0) * (head.z + 1.0)) / (8.0 * PI) * pow(h.z, e) / (hk * max(wi.z, wo.z));\n"
+    "    float di = 1.0 - pow(1.0 - wi.z / 2.0, 5.0), dd = 1.0 - pow(1.0 - wo.z / 2.0, 5.0);\n"
+    "    vec3 kd = texelFetch(brdfs, b + 2).rgb;\n"
+    "    vec3 fresnel = ks + (vec3(1.0) - ks) * pow(1.0 - hk, 5.0);\n"
+    "    return spec * fresnel + 28.0 * kd / (23.0 * PI) * (vec3(1.0) - ks) * di * dd;\n"
+    "  }\n"
+    "  vec3 sum = vec3(0.0);\n"
+    "  for (int k = 0; k < int(head.w + 0.5); ++k) {\n"
+    "    vec3 cxy = texelFetch(brdfs, b + 3 + 3 * k).rgb, cz = texelFetch(brdfs, b + 4 + 3 * k).rgb, e = texelFetch(brdfs, b + 5 + 3 * k).rgb;\n"
+    "    vec3 base = cxy * (wi.x * wo.x + wi.y * wo.y) + cz * (wi.z * wo.z);\n"
+    "    sum += mix(vec3(0.0), pow(max(base, vec3(1e-30)), e), greaterThan(base, vec3(0.0)));\n"
+    "  }\n"
+    "  return sum;\n"
+    "}\n"
     "float cap(float cos_t, float sin2_s) {\n"
     "  if (sin2_s >= 1.0) return PI;\n"
     "  if (cos_t * cos_t >= sin2_s) return cos_t > 0.0 ? PI * sin2_s * cos_t : 0.0;\n"
@@ -87,7 +135,7 @@ static const char *FS_ADD =
     "  // A triangle none of whose vertices sees the light stays dark: shadow-map texels cannot\n"
     "  // leak light in along the seams of closed rooms.\n"
     "  if (gate != 0 && f_vis <= 0.0) discard;\n"
-    "  vec3 n = normalize(f_nrm), E = vec3(0.0);\n"
+    "  vec3 n = normalize(f_nrm), E = vec3(0.0), wi = ldir;\n"
     "  float lit = 1.0;\n"
     "  if (type == 3) {\n"
     "    float c = dot(n, ldir);\n"
@@ -109,7 +157,7 @@ static const char *FS_ADD =
     "    vec3 d0 = lpos - f_pos;\n"
     "    float r2 = dot(d0, d0), r = sqrt(r2);\n"
     "    if (r <= 0.0) discard;\n"
-    "    vec3 wi = d0 / r;\n"
+    "    wi = d0 / r;\n"
     "    float c = dot(n, wi);\n"
     "    if (type == 4) {\n"
     "      E = colour * cap(c, r > radius ? radius * radius / r2 : 1.0);\n"
@@ -143,7 +191,10 @@ static const char *FS_ADD =
     "      lit = cube_lit(d, dist, step, 3);\n"
     "    }\n"
     "  }\n"
-    "  color = vec4(f_alb / PI * E * lit, 1.0);\n"
+    "  vec3 f = f_alb / PI;\n"
+    "  int id = int(f_mat);\n"
+    "  if (id > 0 && id <= brdf_count) f += glossy(id, n, wi, normalize(eye - f_pos));\n"
+    "  color = vec4(f * E * lit, 1.0);\n"
     "}\n";
 
 prt_status prt__pixel_lights_init(prt__pixel_lights *p)
@@ -173,6 +224,9 @@ prt_status prt__pixel_lights_init(prt__pixel_lights *p)
     p->ua_texel = glGetUniformLocation(a, "texel");
     p->ua_bias = glGetUniformLocation(a, "bias");
     p->ua_gate = glGetUniformLocation(a, "gate");
+    p->ua_brdf_count = glGetUniformLocation(a, "brdf_count");
+    p->ua_brdfs = glGetUniformLocation(a, "brdfs");
+    p->ua_eye = glGetUniformLocation(a, "eye");
     glGenFramebuffers(1, &p->fbo);
     glGenRenderbuffers(1, &p->depth_rb);
     glBindRenderbuffer(GL_RENDERBUFFER, p->depth_rb);
@@ -183,6 +237,9 @@ prt_status prt__pixel_lights_init(prt__pixel_lights *p)
     glBindRenderbuffer(GL_RENDERBUFFER, 0);
     glGenBuffers(1, &p->vbo_albedo);
     glGenBuffers(1, &p->vbo_visibility);
+    glGenBuffers(1, &p->vbo_material);
+    glGenBuffers(1, &p->tbo_brdf);
+    glGenTextures(1, &p->tex_brdf);
     return PRT_OK;
 }
 
@@ -196,6 +253,9 @@ void prt__pixel_lights_free(prt__pixel_lights *p)
     if (p->plane_depth_rb) glDeleteRenderbuffers(1, &p->plane_depth_rb);
     if (p->vbo_albedo) glDeleteBuffers(1, &p->vbo_albedo);
     if (p->vbo_visibility) glDeleteBuffers(1, &p->vbo_visibility);
+    if (p->vbo_material) glDeleteBuffers(1, &p->vbo_material);
+    if (p->tbo_brdf) glDeleteBuffers(1, &p->tbo_brdf);
+    if (p->tex_brdf) glDeleteTextures(1, &p->tex_brdf);
     for (int i = 0; i < PRT__PIXEL_LIGHTS; ++i) {
         if (p->cube[i]) glDeleteTextures(1, &p->cube[i]);
         if (p->plane[i]) glDeleteTextures(1, &p->plane[i]);
@@ -203,9 +263,46 @@ void prt__pixel_lights_free(prt__pixel_lights *p)
     memset(p, 0, sizeof *p);
 }
 
-void prt__pixel_lights_set(prt__pixel_lights *p, GLuint vao, const float *positions, const float *albedo, size_t nv, const prt_light *lights,
-                           int count, const float *visibility)
+/* BRDF_TEXELS RGBA texels per BRDF: (model, exponent, exponent_v, lobes), specular, diffuse, then
+ * each Lafortune lobe's cxy, cz and n. */
+static void upload_brdfs(prt__pixel_lights *p, const prt_brdf *brdfs, int count)
 {
+    float *t = calloc((size_t)count * BRDF_TEXELS * 4, sizeof(float));
+    if (!t) { p->brdf_count = 0; return; }
+    for (int i = 0; i < count; ++i) {
+        const prt_brdf *b = &brdfs[i];
+        float *q = t + (size_t)i * BRDF_TEXELS * 4;
+        q[0] = (float)b->model;
+        q[1] = b->exponent;
+        q[2] = b->exponent_v;
+        q[3] = (float)(b->lobes < PRT_BRDF_MAX_LOBES ? b->lobes : PRT_BRDF_MAX_LOBES);
+        for (int c = 0; c < 3; ++c) {
+            q[4 + c] = b->specular[c];
+            q[8 + c] = b->diffuse[c];
+            for (int k = 0; k < PRT_BRDF_MAX_LOBES; ++k) {
+                q[(3 + 3 * k) * 4 + c] = b->cxy[k][c];
+                q[(4 + 3 * k) * 4 + c] = b->cz[k][c];
+                q[(5 + 3 * k) * 4 + c] = b->n[k][c];
+            }
+        }
+    }
+    glBindBuffer(GL_TEXTURE_BUFFER, p->tbo_brdf);
+    glBufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)((size_t)count * BRDF_TEXELS * 4 * sizeof(float)), t, GL_DYNAMIC_DRAW);
+    glBindTexture(GL_TEXTURE_BUFFER, p->tex_brdf);
+    glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, p->tbo_brdf);
+    glBindTexture(GL_TEXTURE_BUFFER, 0);
+    glBindBuffer(GL_TEXTURE_BUFFER, 0);
+    free(t);
+    p->brdf_count = count;
+}
+
+void prt__pixel_lights_set(prt__pixel_lights *p, GLuint vao, const prt_render_mesh *m)
+{
+    const bool ok = m->lights && m->light_count > 0 && m->albedo && m->normals;
+    const prt_light *lights = ok ? m->lights : NULL;
+    const float *positions = m->positions, *albedo = m->albedo, *visibility = m->light_visibility;
+    const size_t nv = m->vertex_count;
+    const int count = ok ? m->light_count : 0;
     const int n = lights && albedo && count > 0 ? (count < PRT__PIXEL_LIGHTS ? count : PRT__PIXEL_LIGHTS) : 0;
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t v = 0; n && v < nv; ++v)
@@ -236,6 +333,19 @@ void prt__pixel_lights_set(prt__pixel_lights *p, GLuint vao, const float *positi
         glDisableVertexAttribArray(5);
         glVertexAttrib1f(5, 1.0f);
     }
+    const int brdf_count = m->light_material && m->light_brdfs ? m->light_brdf_count : 0;
+    if (brdf_count > 0) {
+        glBindBuffer(GL_ARRAY_BUFFER, p->vbo_material);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)nv, m->light_material, GL_DYNAMIC_DRAW);
+        glEnableVertexAttribArray(6);
+        glVertexAttribIPointer(6, 1, GL_UNSIGNED_BYTE, 0, NULL);
+        upload_brdfs(p, m->light_brdfs, brdf_count);
+    } else {
+        glDisableVertexAttribArray(6);
+        glVertexAttribI4ui(6, 0, 0, 0, 0);
+        p->brdf_count = 0;
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
     glBindVertexArray(0);
     if (!same) p->dirty = true;
 }
@@ -346,7 +456,7 @@ void prt__pixel_lights_shadows(prt__pixel_lights *p, GLuint vao, size_t index_co
     p->dirty = false;
 }
 
-void prt__pixel_lights_draw(const prt__pixel_lights *p, GLuint vao, size_t index_count, const float mvp[16])
+void prt__pixel_lights_draw(const prt__pixel_lights *p, GLuint vao, size_t index_count, const float mvp[16], const float eye[3])
 {
     if (!p->count) return;
     float ext[3];
@@ -367,6 +477,11 @@ void prt__pixel_lights_draw(const prt__pixel_lights *p, GLuint vao, size_t index
     glUniform1i(p->ua_cube, 0);
     glUniform1i(p->ua_plane, 1);
     glUniform1f(p->ua_bias, diag * 2e-5f);
+    glUniform1i(p->ua_brdf_count, p->brdf_count);
+    glUniform3fv(p->ua_eye, 1, eye);
+    glUniform1i(p->ua_brdfs, 2);
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_BUFFER, p->brdf_count ? p->tex_brdf : 0);
     glBindVertexArray(vao);
     /* Each sample takes a light once: coincident duplicate faces pass the depth test together. */
     glEnable(GL_STENCIL_TEST);

@@ -2,7 +2,8 @@
  * of their per-vertex radiance (direct light per pixel, indirect light per vertex, as Wang, Zhu &
  * Humphreys 2007 draw it). Point, spot and sphere lights get a cube map of distances from the
  * light, directional lights an orthographic map; an additive pass shades each pixel as a
- * Lambertian surface of the interpolated albedo, with percentage-closer filtering (and a blocker
+ * Lambertian surface of the interpolated albedo plus its material's glossy lobe at the view
+ * direction, with percentage-closer filtering (and a blocker
  * search that widens the penumbra for sphere lights). Requires a current OpenGL 3.3 context. */
 #ifndef PRT_RENDER_PIXEL_LIGHTS_H
 #define PRT_RENDER_PIXEL_LIGHTS_H
@@ -22,7 +23,9 @@ typedef struct prt__pixel_lights {
     GLuint fbo, depth_rb, plane_depth_rb, vbo_albedo, vbo_visibility;
     bool has_visibility;
     size_t vertex_count;
-    GLint ua_gate;
+    GLint ua_gate, ua_brdf_count, ua_brdfs, ua_eye;
+    GLuint vbo_material, tbo_brdf, tex_brdf;
+    int brdf_count;            /* glossy materials uploaded (0: Lambertian everywhere) */
     GLuint cube[PRT__PIXEL_LIGHTS], plane[PRT__PIXEL_LIGHTS];
     int count;
     prt_light lights[PRT__PIXEL_LIGHTS];
@@ -33,15 +36,15 @@ typedef struct prt__pixel_lights {
 
 prt_status prt__pixel_lights_init(prt__pixel_lights *p);
 void prt__pixel_lights_free(prt__pixel_lights *p);
-/* Takes the lights (the first PRT__PIXEL_LIGHTS) and the per-vertex albedo into vao's attribute 4;
- * count 0 turns the pass off. positions give the bounds. */
-void prt__pixel_lights_set(prt__pixel_lights *p, GLuint vao, const float *positions, const float *albedo, size_t vertex_count,
-                           const prt_light *lights, int count, const float *visibility);
+/* Takes mesh's lights (the first PRT__PIXEL_LIGHTS), per-vertex albedo (vao's attribute 4),
+ * visibility (5) and glossy materials (6, and a table of their BRDFs); no lights, albedo or
+ * normals turn the pass off. The positions give the bounds. */
+void prt__pixel_lights_set(prt__pixel_lights *p, GLuint vao, const prt_render_mesh *mesh);
 /* Draws the shadow maps if the lights or geometry changed (binds its own framebuffer and restores
  * the caller's framebuffer and viewport). */
 void prt__pixel_lights_shadows(prt__pixel_lights *p, GLuint vao, size_t index_count);
 /* Adds every light's shaded, shadowed direct light to what is drawn (depth test LEQUAL against
  * the main pass, additive blending). mvp as the main pass. */
-void prt__pixel_lights_draw(const prt__pixel_lights *p, GLuint vao, size_t index_count, const float mvp[16]);
+void prt__pixel_lights_draw(const prt__pixel_lights *p, GLuint vao, size_t index_count, const float mvp[16], const float eye[3]);
 
 #endif

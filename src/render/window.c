@@ -207,9 +207,7 @@ void prt_window_set_gpu_input(prt_window *w, const prt_render_mesh *mesh)
 void prt_window_set_lights(prt_window *w, const prt_render_mesh *mesh)
 {
     glfwMakeContextCurrent(w->win);
-    const bool ok = mesh->lights && mesh->light_count > 0 && mesh->albedo && mesh->normals;
-    prt__draw_set_lights(&w->draw, mesh->positions, mesh->albedo, mesh->vertex_count, ok ? mesh->lights : NULL, ok ? mesh->light_count : 0,
-                         mesh->light_visibility);
+    prt__draw_set_lights(&w->draw, mesh);
 }
 
 void prt_window_set_radiance(prt_window *w, const float *rgb, size_t nv)

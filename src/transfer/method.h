@@ -150,5 +150,8 @@ bool prt__export_file(prt_export_result *r, const char *path);
 
 /* Allocates the relit arrays of a result for t (radiance always; the rest as flags say). */
 prt_status prt__relit_alloc(prt_context *ctx, const prt_transfer *t, prt_relit *r, bool indirect);
+/* Points r's pixel_material and pixel_brdfs at t's materials when any of them is glossy (the
+ * renderer then draws the pixel lights' highlights); leaves them NULL otherwise. */
+void prt__relit_pixel_materials(const prt_transfer *t, prt_relit *r);
 
 #endif

@@ -199,6 +199,21 @@ void prt_transfer_control_range(const prt_transfer *t, int i, int *lo, int *hi, 
 }
 
 /* ---- relighting ---- */
+void prt__relit_pixel_materials(const prt_transfer *t, prt_relit *r)
+{
+    r->pixel_material = NULL;
+    r->pixel_brdfs = NULL;
+    r->pixel_brdf_count = 0;
+    if (!t->mesh.material) return;
+    for (int i = 0; i < t->brdf_count; ++i)
+        if (prt_brdf_is_glossy(&t->brdfs[i])) {
+            r->pixel_material = t->mesh.material;
+            r->pixel_brdfs = t->brdfs;
+            r->pixel_brdf_count = t->brdf_count;
+            return;
+        }
+}
+
 prt_status prt__relit_alloc(prt_context *ctx, const prt_transfer *t, prt_relit *r, bool indirect)
 {
     const size_t nv = t->mesh.vertex_count;
@@ -259,7 +274,7 @@ unsigned prt_relight_needs(const prt_transfer *t, const prt_lighting *l)
     return what;
 }
 
-int prt_relit_view_dependent(const prt_relit *r) { return r && (r->exit_sh || r->kvec); }
+int prt_relit_view_dependent(const prt_relit *r) { return r && (r->exit_sh || r->kvec || (r->pixel_lights && r->pixel_material)); }
 
 void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render_mesh *m)
 {
@@ -288,6 +303,9 @@ void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render
     m->light_count = r->pixel_lights ? r->pixel_light_count : 0;
     m->albedo = r->pixel_albedo;
     m->light_visibility = r->pixel_lights ? r->pixel_visibility : NULL;
+    m->light_material = r->pixel_lights ? r->pixel_material : NULL;
+    m->light_brdfs = r->pixel_lights ? r->pixel_brdfs : NULL;
+    m->light_brdf_count = r->pixel_lights && r->pixel_material ? r->pixel_brdf_count : 0;
     if (r->gpu_input) {
         m->gpu_passes = r->gpu_passes;
         m->gpu_input = r->gpu_input;

@@ -91,7 +91,7 @@ typedef struct prt__lightcloud_bake_desc {
     float merge_distance;        /* < 0: default (3 x spacing); 0: no merging */
     float merge_error;           /* < 0: default 0.1; 0: the response term is left out */
     bool store_direct;
-    int bounces;                 /* 0 = 4 */
+    int bounces;                 /* 0 = 16 (closed rooms need many) */
     bool raw;                    /* no CPCA */
     int clusters, vectors;       /* per zone; 0 = 8, 8 */
 } prt__lightcloud_bake_desc;

@@ -325,6 +325,7 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
                     memcpy(r->pixel_lights, lights, (size_t)pixel * sizeof(prt_light));
                     r->pixel_light_count = pixel;
                     memcpy(r->pixel_albedo, t->mesh.albedo, nv * 3 * sizeof(float));
+                    prt__relit_pixel_materials(t, r);
                     prt__vertex_lights_visibility(ctx, &s->cache->lights, &t->mesh, lights, pixel, r->pixel_visibility);
                 }
             }
@@ -366,16 +367,11 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
 
 static prt_status lightcloud_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb)
 {
-    (void)eye;
     if (!r->pixel_lights) return PRT_OK;
     const prt__lightcloud_set *s = t->state;
-    const size_t nv = t->mesh.vertex_count;
-    float *E = prt__calloc(nv * 3, sizeof(float));
-    if (!E) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     prt_status st = prt__vertex_lights_ready(ctx, &t->mesh, s->ray_offset, &s->cache->lights);
-    if (!st) prt__vertex_lights_add(ctx, &s->cache->lights, &t->mesh, r->pixel_lights, r->pixel_light_count, E);
-    for (size_t i = 0; i < nv * 3 && !st; ++i) rgb[i] += r->pixel_albedo[i] / (float)PRT_PI * E[i];
-    free(E);
+    const prt__vertex_materials mat = {r->pixel_albedo, r->pixel_material, r->pixel_brdfs, r->pixel_brdf_count};
+    if (!st) prt__vertex_lights_shade(ctx, &s->cache->lights, &t->mesh, r->pixel_lights, r->pixel_light_count, &mat, eye, rgb);
     return st;
 }
 

@@ -33,6 +33,12 @@ static prt_status slice_maps(prt_context *ctx, const prt__offset_set *s, const f
         out[p] = (prt_render_slice){pc->map, box[pc->map * 4] + pc->sx, box[pc->map * 4 + 1] + pc->sy, pc->w, pc->h, pc->bin, pc->dx, pc->dy};
     }
     if (!st) {
+        /* What the GPU will hold against what the maps hold: cropped boxes are mostly empty on
+         * scanned meshes' atlases (issue "offset maps that look right" asks for tighter slices). */
+        const double atlas_mib = (double)nbins * bin_size * bin_size * 3 * sizeof(float) / 1048576.0;   /* RGB32F layers */
+        const double maps_mib = (double)K * nc * 3 * sizeof(uint16_t) / 1048576.0;
+        prt__log(ctx, PRT_LOG_INFO, "GPU atlases: %d maps in %d atlases of %d x %d texels, %.1f MiB (the maps as halves: %.1f MiB, %.1fx)", K, nbins,
+                 bin_size, bin_size, atlas_mib, maps_mib, maps_mib > 0 ? atlas_mib / maps_mib : 0.0);
         *set = (prt_render_map_set){K, maps, s->offsets, npieces, out, bin_size, nbins};
         *slices = out;
     } else {

@@ -180,21 +180,17 @@ static prt_status pixel_lights(prt_context *ctx, const prt_transfer *t, const pr
             if (c >= 0 && s->medium[c]) memset(r->pixel_albedo + v * 3, 0, 3 * sizeof(float));
         }
     prt__vertex_lights_visibility(ctx, s->vertex_lights, &t->mesh, r->pixel_lights, count, r->pixel_visibility);
+    prt__relit_pixel_materials(t, r);
     return PRT_OK;
 }
 
 prt_status prt__offset_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb)
 {
-    (void)eye;
     if (!r->pixel_lights) return PRT_OK;
     const prt__offset_set *s = t->state;
-    const size_t nv = t->mesh.vertex_count;
-    float *E = prt__calloc(nv * 3, sizeof(float));
-    if (!E) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     prt_status st = prt__vertex_lights_ready(ctx, &t->mesh, s->ray_offset, s->vertex_lights);
-    if (!st) prt__vertex_lights_add(ctx, s->vertex_lights, &t->mesh, r->pixel_lights, r->pixel_light_count, E);
-    for (size_t i = 0; i < nv * 3 && !st; ++i) rgb[i] += r->pixel_albedo[i] / (float)PRT_PI * E[i];
-    free(E);
+    const prt__vertex_materials mat = {r->pixel_albedo, r->pixel_material, r->pixel_brdfs, r->pixel_brdf_count};
+    if (!st) prt__vertex_lights_shade(ctx, s->vertex_lights, &t->mesh, r->pixel_lights, r->pixel_light_count, &mat, eye, rgb);
     return st;
 }
 

@@ -4,7 +4,9 @@
  * cosine-weighted low-discrepancy rays per vertex serves every l at once: each closest front-face
  * hit adds pi/N times its barycentric weights to the three vertices it lands between, and those
  * weights times the vertices' basis values give the row. Rays that escape build the vertex's
- * shadowed SH irradiance transfer for the environment instead.
+ * shadowed SH irradiance transfer for the environment instead, and at glossy vertices the
+ * shadowed transfer from the environment's SH to the incident radiance's (the BRDF then reflects
+ * the environment view-dependently, as it does the surfaces' light).
  *
  * Stage 0 ("spectral basis", one step) partitions the mesh and solves the eigen problems; stage 1
  * gathers in blocks of vertices. Each vertex's rays depend only on its index, so every result is
@@ -104,9 +106,9 @@ static void emitter_samples(const sbake *sb, size_t v, int n_b, int n_l, double 
     }
 }
 
-/* Gathers vertex v into sc->row (functions entries), env (order^2 entries) and, when the scene
- * emits, emit (3 entries). */
-static void gather_vertex(const sbake *sb, size_t v, thread_scratch *sc, float *env, float *emit)
+/* Gathers vertex v into sc->row (functions entries), env (order^2 entries), at glossy vertices
+ * genv (16 x order^2) and, when the scene emits, emit (3 entries). */
+static void gather_vertex(const sbake *sb, size_t v, thread_scratch *sc, float *env, float *genv, float *emit)
 {
     const prt__mesh *m = &sb->t->mesh;
     const prt__spectral_basis *b = &sb->s->basis;
@@ -123,6 +125,7 @@ static void gather_vertex(const sbake *sb, size_t v, thread_scratch *sc, float *
     int idx[PACKET];
     for (int k = 0; k < PACKET; ++k) idx[k] = k;
     memset(env, 0, (size_t)nc * sizeof(float));
+    if (genv) memset(genv, 0, (size_t)PRT__SPECTRAL_GLOSSY_N * nc * sizeof(float));
     const int n_l = sb->emitters.count ? EMITTER_RAYS : 0;
     const bool glossy = sb->s->glossy_of && sb->s->glossy_of[v] != UINT32_MAX;
     double e[3] = {0, 0, 0};
@@ -143,6 +146,13 @@ static void gather_vertex(const sbake *sb, size_t v, thread_scratch *sc, float *
                 float y[PRT_SH_MAX_COEFFS];
                 prt_sh_eval_f(order, d, y);
                 for (int i = 0; i < nc; ++i) env[i] += c * y[i];
+                if (genv) {   /* y_k(d) y_i(d) over the cosine-weighted pdf, as the glossy rows */
+                    float yk[PRT__SPECTRAL_GLOSSY_N];
+                    prt_sh_eval_f(PRT__SPECTRAL_GLOSSY_ORDER, d, yk);
+                    const float f = c / fmaxf(prt__v3_dot(d, n), 1e-3f);
+                    for (int k = 0; k < PRT__SPECTRAL_GLOSSY_N; ++k)
+                        for (int i = 0; i < nc; ++i) genv[k * nc + i] += f * yk[k] * y[i];
+                }
                 continue;
             }
             const float ng[3] = {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]};
@@ -211,7 +221,9 @@ static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
     size_t at = 0;
     memset(u->count, 0, sizeof u->count);
     for (size_t v = v0; v < v1; ++v) {
-        gather_vertex(sb, v, sc, sb->s->env + v * (size_t)nc, sb->s->emit ? sb->s->emit + v * 3 : NULL);
+        const uint32_t g = sb->s->glossy_of ? sb->s->glossy_of[v] : UINT32_MAX;
+        float *genv = g != UINT32_MAX ? sb->s->genv + (size_t)g * PRT__SPECTRAL_GLOSSY_N * nc : NULL;
+        gather_vertex(sb, v, sc, sb->s->env + v * (size_t)nc, genv, sb->s->emit ? sb->s->emit + v * 3 : NULL);
         const int rows = sb->s->glossy_of && sb->s->glossy_of[v] != UINT32_MAX ? ROWS : 1;
         for (int r = 0; r < rows; ++r) {
             const float *row = sc->row + (size_t)r * F;
@@ -234,7 +246,18 @@ static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
     return PRT_OK;
 }
 
-/* Checkpoint record of a unit: counts, indices, values, then the block's environment rows. */
+/* The block's glossy vertices: the first one's number and how many (they are numbered in order). */
+static size_t block_glossy(const prt__spectral_set *s, size_t v0, size_t v1, uint32_t *first)
+{
+    size_t n = 0;
+    *first = 0;
+    for (size_t v = v0; s->glossy_of && v < v1; ++v)
+        if (s->glossy_of[v] != UINT32_MAX && !n++) *first = s->glossy_of[v];
+    return n;
+}
+
+/* Checkpoint record of a unit: counts, indices, values, then the block's environment rows,
+ * emitters' light and glossy vertices' environment transfer. */
 static void save_unit(prt__bake_job *base, uint64_t unit, prt__bytes *out)
 {
     sbake *sb = (sbake *)base;
@@ -248,6 +271,9 @@ static void save_unit(prt__bake_job *base, uint64_t unit, prt__bytes *out)
     prt__bytes_put(out, u->value, total * sizeof(float));
     prt__bytes_put(out, sb->s->env + v0 * nc, (v1 - v0) * nc * sizeof(float));
     if (sb->s->emit) prt__bytes_put(out, sb->s->emit + v0 * 3, (v1 - v0) * 3 * sizeof(float));
+    uint32_t g0;
+    const size_t ng = block_glossy(sb->s, v0, v1, &g0), gn = (size_t)PRT__SPECTRAL_GLOSSY_N * nc;
+    if (ng) prt__bytes_put(out, sb->s->genv + g0 * gn, ng * gn * sizeof(float));
 }
 
 static bool load_unit(prt__bake_job *base, uint64_t unit, const unsigned char *data, size_t size)
@@ -266,7 +292,9 @@ static bool load_unit(prt__bake_job *base, uint64_t unit, const unsigned char *d
         total += count[i];
     }
     const size_t ne = sb->s->emit ? n * 3 : 0;
-    if (size != n * ROWS * sizeof(uint32_t) + total * (sizeof(uint16_t) + sizeof(float)) + (n * nc + ne) * sizeof(float)) return false;
+    uint32_t g0;
+    const size_t gn = block_glossy(sb->s, v0, v1, &g0) * PRT__SPECTRAL_GLOSSY_N * nc;
+    if (size != n * ROWS * sizeof(uint32_t) + total * (sizeof(uint16_t) + sizeof(float)) + (n * nc + ne + gn) * sizeof(float)) return false;
     const unsigned char *pi = data + n * ROWS * sizeof(uint32_t), *pv = pi + total * sizeof(uint16_t), *pe = pv + total * sizeof(float);
     uint16_t *index = malloc(total ? total * sizeof(uint16_t) : 1);
     float *value = malloc(total ? total * sizeof(float) : 1);
@@ -284,6 +312,12 @@ static bool load_unit(prt__bake_job *base, uint64_t unit, const unsigned char *d
     memcpy(emit, pe + n * nc * sizeof(float), ne * sizeof(float));
     if (ok) ok = prt__all_finite(env, n * nc) && prt__all_finite(emit, ne);
     for (size_t i = 0; i < ne && ok; ++i) ok = emit[i] >= 0.0f;
+    const unsigned char *pg = pe + (n * nc + ne) * sizeof(float);
+    float *genv = gn ? sb->s->genv + (size_t)g0 * PRT__SPECTRAL_GLOSSY_N * nc : NULL;
+    if (ok && gn) {
+        memcpy(genv, pg, gn * sizeof(float));
+        ok = prt__all_finite(genv, gn);
+    }
     if (!ok) { free(index); free(value); return false; }
     unit_rows *u = &sb->units[unit];
     free(u->index);
@@ -388,6 +422,9 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
             s->brdf_matrix[k] = B[0];
         }
     }
+    /* The environment's glossy transfer is kept as halves: the bake relights as its file will. */
+    const size_t genv_n = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N * s->env_order * s->env_order;
+    for (size_t i = 0; s->genv && i < genv_n; ++i) s->genv[i] = prt__half_to_float(prt__half_from_float(s->genv[i]));
     const float inv[2] = {1.0f / s->scale, 1.0f / s->gscale};
     const long keep = sb->d.drop_below > 0 ? lroundf(sb->d.drop_below * 32767.0f) : 1;
     size_t at[2] = {0, 0};
@@ -468,6 +505,8 @@ prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_d
     prt_status st = !sb->units || !s->env ? prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory") : PRT_OK;
     if (!st && t->mesh.emission) st = prt__emitters_init(&sb->emitters, &t->mesh, 1.0f);
     if (!st && !prt__spectral_glossy_index(t, s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    const size_t genv_n = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N * d.env_order * d.env_order;
+    if (!st && genv_n && !(s->genv = prt__calloc(genv_n, sizeof(float)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st && sb->emitters.count && !(s->emit = prt__calloc(nv * 3, sizeof(float)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) st = prt__raycaster_create(ctx, &t->mesh, &sb->rc);
     if (!st) st = prt__vertex_origins(&t->mesh, s->ray_offset, &sb->origins);

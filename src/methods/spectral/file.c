@@ -9,6 +9,7 @@
 #define CHUNK_SPCE PRT__FOURCC('S', 'P', 'C', 'E')
 #define CHUNK_SPCM PRT__FOURCC('S', 'P', 'C', 'M')
 #define CHUNK_SPCG PRT__FOURCC('S', 'P', 'C', 'G')
+#define CHUNK_SPGE PRT__FOURCC('S', 'P', 'G', 'E')
 #define SPCP_HEADER 48
 #define MATRIX_BYTES (3 * PRT__SPECTRAL_GLOSSY_N * PRT__SPECTRAL_GLOSSY_N * sizeof(float))
 
@@ -58,6 +59,17 @@ prt_status prt__spectral_save(const prt_transfer *t, prt__chunk_list *l)
             }
         for (size_t r = 0; r < rows; ++r) gcounts[r] = (uint32_t)(s->grow_start[r + 1] - s->grow_start[r]);
         prt__chunks_add(l, CHUNK_SPCG, gh, 16 + mbytes, gcounts, rows * sizeof(uint32_t), s->gindex, gb, zero4, gpad, s->gvalue, gb, zero4, gpad, NULL);
+        if (s->genv) {   /* glossy vertex count, environment coefficients, then the matrices as halves */
+            const size_t n = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N * s->env_order * s->env_order;
+            unsigned char *eh = prt__chunks_alloc(l, 8 + n * 2 + 2);
+            if (!eh) return PRT_OK;
+            prt__put32(eh, s->glossy_count);
+            prt__put32(eh + 4, (uint32_t)(s->env_order * s->env_order));
+            uint16_t *h = (uint16_t *)(eh + 8);
+            for (size_t i = 0; i < n; ++i) h[i] = prt__half_from_float(s->genv[i]);
+            h[n] = 0;
+            prt__chunks_add(l, CHUNK_SPGE, eh, 8 + n * 2 + (n & 1 ? 2 : 0), NULL);
+        }
     }
     return PRT_OK;
 }
@@ -218,8 +230,25 @@ prt_status prt__spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *me
     c = st ? NULL : prt__chunk_take(chunks, count, CHUNK_SPCG);
     if (!st && !c != !s->glossy_count) st = bad(ctx, "the spectral glossy chunk does not match the glossy materials");
     if (!st && c) st = load_glossy(ctx, t, s, c);
-    static const uint32_t ids[6] = {CHUNK_SPCP, CHUNK_SPCB, CHUNK_SPCT, CHUNK_SPCE, CHUNK_SPCM, CHUNK_SPCG};
-    for (int i = 0; i < 6 && !st; ++i)
+    /* The environment on glossy vertices: optional (files written before it reflect the
+     * environment diffusely), and only beside the glossy rows. */
+    c = st ? NULL : prt__chunk_take(chunks, count, CHUNK_SPGE);
+    if (!st && c) {
+        const uint64_t nc = (uint64_t)s->env_order * s->env_order, n = (uint64_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N * nc;
+        if (!s->glossy_count || c->size < 8 || prt__get32(c->data) != s->glossy_count || prt__get32(c->data + 4) != nc ||
+            c->size != 8 + (n + (n & 1)) * 2)
+            st = bad(ctx, "the spectral glossy environment chunk does not match the glossy vertices");
+        else if (!(s->genv = malloc(n * sizeof(float)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        else
+            for (uint64_t i = 0; i < n && !st; ++i) {
+                uint16_t h;
+                memcpy(&h, c->data + 8 + i * 2, 2);
+                s->genv[i] = prt__half_to_float(h);
+                if (!isfinite(s->genv[i])) st = bad(ctx, "non-finite spectral glossy environment transfer");
+            }
+    }
+    static const uint32_t ids[7] = {CHUNK_SPCP, CHUNK_SPCB, CHUNK_SPCT, CHUNK_SPCE, CHUNK_SPCM, CHUNK_SPCG, CHUNK_SPGE};
+    for (int i = 0; i < 7 && !st; ++i)
         if (prt__chunk_take(chunks, count, ids[i])) st = bad(ctx, "a spectral chunk appears twice");
     return st;
 }

@@ -25,6 +25,7 @@ void prt__spectral_set_free(void *state)
     free(s->index);
     free(s->value);
     free(s->env);
+    free(s->genv);
     free(s->emit);
     free(s->glossy_of);
     free(s->grow_start);
@@ -107,7 +108,8 @@ static size_t spectral_bytes(const prt_transfer *t)
 {
     const prt__spectral_set *s = t->state;
     const size_t nv = t->mesh.vertex_count, rows = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N;
-    return s->row_start[nv] * 4 + nv * 4 + (s->glossy_count ? s->grow_start[rows] * 4 + rows * 4 : 0);
+    const size_t genv = s->genv ? rows * (size_t)s->env_order * s->env_order * sizeof(uint16_t) : 0;   /* halves */
+    return s->row_start[nv] * 4 + nv * 4 + (s->glossy_count ? s->grow_start[rows] * 4 + rows * 4 : 0) + genv;
 }
 
 static size_t basis_bytes(const prt_transfer *t)
@@ -152,6 +154,7 @@ static void spectral_describe(const prt_transfer *t, prt__describe *d)
         cJSON_AddNumberToObject(j, "env_order", s->env_order);
         cJSON_AddNumberToObject(j, "glossy_vertices", s->glossy_count);
         cJSON_AddNumberToObject(j, "glossy_coefficients", s->glossy_count ? (double)s->grow_start[(size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N] : 0.0);
+        cJSON_AddBoolToObject(j, "glossy_environment", s->genv != NULL);
         return;
     }
     prt__describe_line(d, "basis:", "%u functions over %u partitions (%u..%u vertices, %u..%u functions each), %.2f MiB", b->functions, b->partitions,
@@ -160,8 +163,13 @@ static void spectral_describe(const prt_transfer *t, prt__describe *d)
                        (unsigned long long)rmax, spectral_bytes(t) / 1048576.0);
     prt__describe_line(d, "bake:", "%d rays per vertex; environment through SH order %d (%d coefficients per vertex)", s->samples, s->env_order,
                        s->env_order * s->env_order);
-    if (s->glossy_count)
-        prt__describe_line(d, "glossy:", "%u vertices with a glossy final bounce (16 SH BRDF bases), %llu coefficients", s->glossy_count,
+    if (s->glossy_count && s->genv)
+        prt__describe_line(d, "glossy:", "%u vertices with a glossy final bounce (16 SH BRDF bases), %llu coefficients; the environment through a "
+                           "16 x %d shadowed transfer per vertex", s->glossy_count,
+                           (unsigned long long)s->grow_start[(size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N], s->env_order * s->env_order);
+    else if (s->glossy_count)
+        prt__describe_line(d, "glossy:", "%u vertices with a glossy final bounce (16 SH BRDF bases), %llu coefficients; the environment reflected "
+                           "diffusely only (a file from before glossy environment transfer)", s->glossy_count,
                            (unsigned long long)s->grow_start[(size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N]);
 }
 
@@ -208,6 +216,7 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
             r->pixel_light_count = pixel;
             st = prt__spectral_visibility(ctx, t, r->pixel_lights, pixel, r->pixel_visibility);
             memcpy(r->pixel_albedo, albedo, nv * 3 * sizeof(float));
+            prt__relit_pixel_materials(t, r);
             for (size_t i = 0; i < nv * 3; ++i) direct[i] -= albedo[i] / (float)PRT_PI * Ep[i];
         }
     }
@@ -240,7 +249,11 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
                 const float bounced = direct[i] + (Ep ? albedo[i] / (float)PRT_PI * Ep[i] : 0.0f) + indirect[i];
                 out[i] = own + (d->component == PRT_COMPONENT_DIRECT ? 0.0f : bounced);
             }
-            st = prt__spectral_glossy(ctx, t, out, r->exit_sh);
+            /* The environment's own glossy reflection is direct light. */
+            prt_sh_light env;
+            memset(&env, 0, sizeof env);
+            if (d->component != PRT_COMPONENT_INDIRECT) st = prt__spectral_env_sh(ctx, t, l, &env);
+            if (!st) st = prt__spectral_glossy(ctx, t, out, &env, r->exit_sh);
             r->exit_order = PRT__SPECTRAL_GLOSSY_ORDER;
             r->exit_mirror = 0;
         }
@@ -256,14 +269,11 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
 /* The per-vertex value of what the renderer draws per pixel: the pixel lights' direct light. */
 static prt_status spectral_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb)
 {
-    (void)eye;
     if (!r->pixel_lights) return PRT_OK;
-    const size_t nv = t->mesh.vertex_count;
-    float *E = prt__calloc(nv * 3, sizeof(float));
-    if (!E) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    prt_status st = prt__spectral_lights(ctx, t, r->pixel_lights, r->pixel_light_count, E);
-    for (size_t i = 0; i < nv * 3 && !st; ++i) rgb[i] += r->pixel_albedo[i] / (float)PRT_PI * E[i];
-    free(E);
+    const prt__spectral_set *s = t->state;
+    prt_status st = prt__vertex_lights_ready(ctx, &t->mesh, s->ray_offset, &s->cache->lights);
+    const prt__vertex_materials mat = {r->pixel_albedo, r->pixel_material, r->pixel_brdfs, r->pixel_brdf_count};
+    if (!st) prt__vertex_lights_shade(ctx, &s->cache->lights, &t->mesh, r->pixel_lights, r->pixel_light_count, &mat, eye, rgb);
     return st;
 }
 

@@ -21,12 +21,19 @@ prt_status prt__spectral_visibility(prt_context *ctx, const prt_transfer *t, con
     return st;
 }
 
-prt_status prt__spectral_lights(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *E)
+prt_status prt__spectral_env_sh(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, prt_sh_light *sh)
 {
     const prt__spectral_set *s = t->state;
-    prt_status st = prt__vertex_lights_ready(ctx, &t->mesh, s->ray_offset, &s->cache->lights);
-    if (!st) prt__vertex_lights_add(ctx, &s->cache->lights, &t->mesh, lights, count, E);
-    return st;
+    memset(sh, 0, sizeof *sh);
+    const prt_envmap *env = prt_lighting_envmap(l);
+    if (!env || !(prt_lighting_intensity(l) > 0)) return PRT_OK;
+    prt_status st = prt__envmap_project_sh_cached(env, s->env_order, sh);
+    if (st) return prt__fail(ctx, st, "%s", prt_last_error());
+    double rot[9];
+    prt_lighting_rotation(l, rot);
+    if (!(rot[0] == 1 && rot[4] == 1 && rot[8] == 1) && (st = prt_sh_light_rotate(sh, rot))) return st;
+    prt_sh_light_scale(sh, prt_lighting_intensity(l));
+    return PRT_OK;
 }
 
 prt_status prt__spectral_direct(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, float *E, float *pixel, int pixel_count)
@@ -38,14 +45,9 @@ prt_status prt__spectral_direct(prt_context *ctx, const prt_transfer *t, const p
     const prt__vertex_lights *c = &s->cache->lights;
     memset(E, 0, nv * 3 * sizeof(float));
     /* The environment through the baked visibility. */
-    const prt_envmap *env = prt_lighting_envmap(l);
-    if (env && prt_lighting_intensity(l) > 0) {
-        prt_sh_light sh;
-        if ((st = prt__envmap_project_sh_cached(env, s->env_order, &sh))) return prt__fail(ctx, st, "%s", prt_last_error());
-        double rot[9];
-        prt_lighting_rotation(l, rot);
-        if (!(rot[0] == 1 && rot[4] == 1 && rot[8] == 1) && (st = prt_sh_light_rotate(&sh, rot))) return st;
-        prt_sh_light_scale(&sh, prt_lighting_intensity(l));
+    prt_sh_light sh;
+    if ((st = prt__spectral_env_sh(ctx, t, l, &sh))) return st;
+    if (sh.order) {
         const int nc = s->env_order * s->env_order;
 #pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
         for (size_t v = 0; v < nv; ++v) {
@@ -138,7 +140,7 @@ static prt_status glossy_ready(prt_context *ctx, const prt_transfer *t, prt__spe
     return st;
 }
 
-prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, float *exit_sh)
+prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, const prt_sh_light *env, float *exit_sh)
 {
     const prt__spectral_set *s = t->state;
     const size_t nv = t->mesh.vertex_count, n = PRT__SPECTRAL_GLOSSY_N;
@@ -166,6 +168,16 @@ prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const f
             in[0][k] = a * s->gscale;
             in[1][k] = b * s->gscale;
             in[2][k] = d * s->gscale;
+        }
+        if (env && env->order == s->env_order && s->genv) {   /* the environment, shadowed */
+            const int nc = s->env_order * s->env_order;
+            const float *G = s->genv + (size_t)g * n * nc;
+            for (size_t k = 0; k < n; ++k)
+                for (int c = 0; c < 3; ++c) {
+                    float sum = 0.0f;
+                    for (int i = 0; i < nc; ++i) sum += G[k * nc + i] * env->coeffs[c][i];
+                    in[c][k] += sum;
+                }
         }
         const float *B = s->brdf_matrix[t->mesh.material[v] - 1];
         for (int c = 0; c < 3; ++c) prt__apply_brdf(&frames[g], B, c, PRT__SPECTRAL_GLOSSY_ORDER, in[c], exit_sh + (v * 3 + (size_t)c) * n, 1);

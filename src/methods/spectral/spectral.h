@@ -72,6 +72,13 @@ typedef struct prt__spectral_set {
     uint16_t *gindex;
     int16_t *gvalue;
     float gscale;
+    /* The environment's direct light on glossy vertices: per glossy vertex g, the shadowed
+     * transfer from the environment's SH (env_order) to the incident radiance's SH (order 4,
+     * world frame) over the rays that escaped, in = genv[g] L ([16][env_order^2], row-major);
+     * the BRDF matrix turns it into exit radiance as for the surfaces' light. Stored as halves
+     * (the bake rounds its own copy). NULL in files written before it (the environment then
+     * reflects diffusely only). */
+    float *genv;
     /* Per material (k - 1) with a glossy part: its local-frame SH matrix (3 x 16 x 16, the
      * glossy part only; prt_brdf_sh_matrix), computed at bake time and kept in the file. */
     float *brdf_matrix[PRT__MAX_BRDFS];
@@ -117,16 +124,18 @@ prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_d
  * false when out of memory. */
 bool prt__spectral_glossy_index(const prt_transfer *t, prt__spectral_set *s);
 /* Exit radiance SH (3 x 16 per vertex, world frame; zero where not glossy) of the glossy final
- * bounce from the outgoing radiance `out` (3 per vertex) of every surface. */
-prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, float *exit_sh);
+ * bounce from the outgoing radiance `out` (3 per vertex) of every surface, plus the environment's
+ * direct light (env in SH of env_order, NULL or order 0: none) where the file has genv. */
+prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, const prt_sh_light *env, float *exit_sh);
+/* The lighting's environment in SH of the transfer's env_order, rotated and scaled; order 0 when
+ * there is none. */
+prt_status prt__spectral_env_sh(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, prt_sh_light *sh);
 
 /* Run time (relight.c). Per-vertex irradiance from the lighting's direct light; when
  * pixel is not NULL it also gets the part from the lighting's first pixel_count local lights. */
 prt_status prt__spectral_direct(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, float *irradiance, float *pixel, int pixel_count);
 /* Per light and vertex ([light][vertex]): whether the vertex sees the light, 0..1. */
 prt_status prt__spectral_visibility(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *vis);
-/* Per-vertex irradiance from count local lights, shadowed (adds to irradiance). */
-prt_status prt__spectral_lights(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *irradiance);
 /* N bounces from outgoing radiance `direct_out` (3 per vertex) with per-vertex albedo: fills
  * indirect_out (3 per vertex) with the radiance that bounced at least once. */
 prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct_out, int bounces,
