@@ -24,12 +24,20 @@ void prt__spectral_set_free(void *state)
     free(s->row_start);
     free(s->index);
     free(s->value);
+    free(s->row_scale);
+    free(s->raw_start);
+    free(s->raw_index);
+    free(s->raw_value);
+    free(s->raw_gstart);
+    free(s->raw_gindex);
+    free(s->raw_gvalue);
     free(s->env);
     free(s->emit);
     free(s->glossy_of);
     free(s->grow_start);
     free(s->gindex);
     free(s->gvalue);
+    free(s->grow_scale);
     for (int k = 0; k < PRT__MAX_BRDFS; ++k) free(s->brdf_matrix[k]);
     if (s->cache) {
         prt__vertex_lights_free(&s->cache->lights);
@@ -91,7 +99,7 @@ static prt_status spectral_bake_begin(prt_context *ctx, const prt_scene *scene, 
     d.partition_size = prt__opt_int(o, "partition", 0);
     d.samples = prt__opt_int(o, "samples", 0);
     d.env_order = prt__opt_int(o, "env-order", 0);
-    d.drop_below = prt__opt_float(o, "drop-below", 0.0f);
+    d.drop_below = prt__opt_float(o, "drop-below", PRT__SPECTRAL_DROP_DEFAULT);
     d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
     prt_status st = prt__spectral_bake_begin(ctx, &d, t, job);
     if (!st && !(((prt__spectral_set *)t->state)->cache = prt__spectral_cache_new())) {
@@ -107,7 +115,9 @@ static size_t spectral_bytes(const prt_transfer *t)
 {
     const prt__spectral_set *s = t->state;
     const size_t nv = t->mesh.vertex_count, rows = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N;
-    return s->row_start[nv] * 4 + nv * 4 + (s->glossy_count ? s->grow_start[rows] * 4 + rows * 4 : 0);
+    /* 2 + 2 bytes an entry, a count (and, unless one scale serves all, a scale) per row */
+    const size_t per_row = s->one_scale ? 4 : 8;
+    return s->row_start[nv] * 4 + nv * per_row + (s->glossy_count ? s->grow_start[rows] * 4 + rows * per_row : 0);
 }
 
 static size_t basis_bytes(const prt_transfer *t)
@@ -147,6 +157,8 @@ static void spectral_describe(const prt_transfer *t, prt__describe *d)
         cJSON_AddNumberToObject(j, "coefficients", (double)nnz);
         cJSON_AddNumberToObject(j, "coefficients_per_vertex", per_vertex);
         cJSON_AddNumberToObject(j, "coefficients_per_vertex_max", (double)rmax);
+        cJSON_AddStringToObject(j, "scales", s->one_scale ? "one" : "row");
+        cJSON_AddNumberToObject(j, "drop_below", s->drop);
         cJSON_AddNumberToObject(j, "samples", s->samples);
         cJSON_AddNumberToObject(j, "partition_size", s->partition_size);
         cJSON_AddNumberToObject(j, "env_order", s->env_order);
@@ -156,8 +168,12 @@ static void spectral_describe(const prt_transfer *t, prt__describe *d)
     }
     prt__describe_line(d, "basis:", "%u functions over %u partitions (%u..%u vertices, %u..%u functions each), %.2f MiB", b->functions, b->partitions,
                        vmin, vmax, kmin, kmax, basis_bytes(t) / 1048576.0);
-    prt__describe_line(d, "transfer:", "%llu coefficients, %.1f per vertex (at most %llu), 16-bit, %.2f MiB", (unsigned long long)nnz, per_vertex,
-                       (unsigned long long)rmax, spectral_bytes(t) / 1048576.0);
+    char storage[96];
+    if (s->one_scale) snprintf(storage, sizeof storage, "16-bit, one scale");
+    else if (s->drop > 0) snprintf(storage, sizeof storage, "16-bit, a scale per row, entries under %g of their row's largest dropped", s->drop);
+    else snprintf(storage, sizeof storage, "16-bit, a scale per row");
+    prt__describe_line(d, "transfer:", "%llu coefficients, %.1f per vertex (at most %llu), %s, %.2f MiB", (unsigned long long)nnz, per_vertex,
+                       (unsigned long long)rmax, storage, spectral_bytes(t) / 1048576.0);
     prt__describe_line(d, "bake:", "%d rays per vertex; environment through SH order %d (%d coefficients per vertex)", s->samples, s->env_order,
                        s->env_order * s->env_order);
     if (s->glossy_count)
