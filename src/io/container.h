@@ -23,8 +23,8 @@ typedef struct prt__chunk_list {
     int owned_count, owned_capacity;
     bool failed;              /* an allocation failed: writing reports it */
     /* The format version the file needs (0 = 1): raised by writers of chunks that older readers
-     * would misread by skipping them (version 2: half-float maps and texel sets), so that those
-     * readers refuse the file as newer instead. */
+     * would misread by skipping them (version 2: half-float maps and texel sets; 3: spectral rows
+     * with a scale each), so that those readers refuse the file as newer instead. */
     uint32_t version;
 } prt__chunk_list;
 

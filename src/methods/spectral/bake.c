@@ -10,8 +10,9 @@
  *
  * Stage 0 ("spectral basis", one step) partitions the mesh and solves the eigen problems; stage 1
  * gathers in blocks of vertices. Each vertex's rays depend only on its index, so every result is
- * the same for any thread count. Rows are kept as floats until the end, then quantized to 16 bits
- * against the largest entry of the whole matrix (as the paper: one scale, zeros dropped). */
+ * the same for any thread count. Rows are kept as floats until the end, then each is quantized to
+ * 16 bits against its own largest entry (the paper uses one scale for the matrix: a dim row then
+ * keeps few bits), entries below --drop-below x that largest dropped. */
 #include "methods/spectral/spectral.h"
 #include "brdf/sh_matrix.h"
 #include "core/progress.h"
@@ -377,36 +378,61 @@ static prt_status spectral_stage(prt__bake_job *base, int index, prt__stage *out
     return PRT_OK;
 }
 
-/* One scale for the whole diffuse matrix and one for the glossy rows; entries that round to zero
- * (or fall below --drop-below) are dropped. */
+uint32_t prt__spectral_quantize_row(const float *x, uint32_t n, float drop, uint32_t *keep, int16_t *q, float *scale)
+{
+    float m = 0.0f;
+    for (uint32_t i = 0; i < n; ++i) m = fmaxf(m, fabsf(x[i]));
+    *scale = m > 0.0f ? m / 32767.0f : 0.0f;
+    if (!(m > 0.0f)) return 0;
+    const float inv = 32767.0f / m, floor_ = drop * m;
+    uint32_t k = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (fabsf(x[i]) < floor_) continue;
+        const long v = lroundf(x[i] * inv);
+        if (!v) continue;
+        keep[k] = i;
+        q[k++] = (int16_t)(v > 32767 ? 32767 : v < -32767 ? -32767 : v);
+    }
+    return k;
+}
+
+/* Every row (the diffuse one and each glossy one) quantized against its own largest entry, so
+ * that a dim row (a vertex far out on a ground plane) keeps the relative precision of a bright
+ * one; entries that round to zero or fall below --drop-below x the row's largest are dropped. */
 static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
 {
     sbake *sb = (sbake *)base;
     prt__spectral_set *s = sb->s;
     const size_t nv = t->mesh.vertex_count;
-    float big[2] = {0.0f, 0.0f};   /* diffuse, glossy */
-    size_t total[2] = {0, 0};
-    for (uint64_t u = 0; u < sb->unit_count; ++u) {
-        const unit_rows *r = &sb->units[u];
-        size_t e = 0;
-        for (size_t i = 0; i < BLOCK * ROWS; ++i)
-            for (uint32_t k = 0; k < r->count[i]; ++k, ++e) {
-                const int g = i % ROWS != 0;
-                big[g] = fmaxf(big[g], fabsf(r->value[e]));
-                total[g]++;
-            }
-    }
-    s->scale = big[0] > 0 ? big[0] / 32767.0f : 1.0f;
-    s->gscale = big[1] > 0 ? big[1] / 32767.0f : 1.0f;
-    const size_t ng = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N;
+    size_t total[2] = {0, 0};   /* diffuse, glossy: at most what the units hold */
+    for (uint64_t u = 0; u < sb->unit_count; ++u)
+        for (size_t i = 0; i < BLOCK * ROWS; ++i) total[i % ROWS != 0] += sb->units[u].count[i];
+    s->drop = sb->d.drop_below;
+    const size_t ng = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N, F = s->basis.functions;
     s->row_start = prt__calloc(nv + 1, sizeof(uint64_t));
+    s->row_scale = prt__calloc(nv ? nv : 1, sizeof(float));
     s->index = malloc(total[0] ? total[0] * sizeof(uint16_t) : 1);
     s->value = malloc(total[0] ? total[0] * sizeof(int16_t) : 1);
     s->grow_start = prt__calloc(ng + 1, sizeof(uint64_t));
+    s->grow_scale = prt__calloc(ng ? ng : 1, sizeof(float));
     s->gindex = malloc(total[1] ? total[1] * sizeof(uint16_t) : 1);
     s->gvalue = malloc(total[1] ? total[1] * sizeof(int16_t) : 1);
-    if (!s->row_start || !s->index || !s->value || !s->grow_start || !s->gindex || !s->gvalue)
+    uint32_t *keep = malloc(F * sizeof(uint32_t));
+    int16_t *q = malloc(F * sizeof(int16_t));
+    if (sb->d.keep_rows) {
+        s->raw_start = prt__calloc(nv + 1, sizeof(uint64_t));
+        s->raw_index = malloc(total[0] ? total[0] * sizeof(uint16_t) : 1);
+        s->raw_value = malloc(total[0] ? total[0] * sizeof(float) : 1);
+        s->raw_gstart = prt__calloc(ng + 1, sizeof(uint64_t));
+        s->raw_gindex = malloc(total[1] ? total[1] * sizeof(uint16_t) : 1);
+        s->raw_gvalue = malloc(total[1] ? total[1] * sizeof(float) : 1);
+    }
+    if (!s->row_start || !s->row_scale || !s->index || !s->value || !s->grow_start || !s->grow_scale || !s->gindex || !s->gvalue || !keep || !q ||
+        (sb->d.keep_rows && (!s->raw_start || !s->raw_index || !s->raw_value || !s->raw_gstart || !s->raw_gindex || !s->raw_gvalue))) {
+        free(keep);
+        free(q);
         return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    }
     /* The glossy materials' SH matrices, once per bake (a numerical double integral). */
     if (s->glossy_count) {
         bool used[PRT__MAX_BRDFS] = {false};
@@ -418,15 +444,13 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
             only[0] = t->brdfs[k];
             float *B[1] = {NULL};
             prt_status st = prt__brdf_matrices(base->ctx, only, 1, PRT__SPECTRAL_GLOSSY_ORDER, B);
-            if (st) { free(B[0]); return st; }
+            if (st) { free(B[0]); free(keep); free(q); return st; }
             s->brdf_matrix[k] = B[0];
         }
     }
     /* The environment's glossy transfer is kept as halves: the bake relights as its file will. */
     const size_t genv_n = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N * s->env_order * s->env_order;
     for (size_t i = 0; s->genv && i < genv_n; ++i) s->genv[i] = prt__half_to_float(prt__half_from_float(s->genv[i]));
-    const float inv[2] = {1.0f / s->scale, 1.0f / s->gscale};
-    const long keep = sb->d.drop_below > 0 ? lroundf(sb->d.drop_below * 32767.0f) : 1;
     size_t at[2] = {0, 0};
     for (uint64_t u = 0; u < sb->unit_count; ++u) {
         const unit_rows *r = &sb->units[u];
@@ -435,19 +459,37 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
             const uint32_t gv = s->glossy_of ? s->glossy_of[v] : UINT32_MAX;
             for (int row = 0; row < ROWS; ++row) {
                 const int g = row != 0;
-                uint16_t *index = g ? s->gindex : s->index;
-                int16_t *value = g ? s->gvalue : s->value;
-                for (uint32_t i = 0; i < r->count[(v - u * BLOCK) * ROWS + (size_t)row]; ++i, ++e) {
-                    const long q = lroundf(r->value[e] * inv[g]);
-                    if (labs(q) < keep || !q) continue;
-                    index[at[g]] = r->index[e];
-                    value[at[g]++] = (int16_t)(q > 32767 ? 32767 : q < -32767 ? -32767 : q);
+                const uint32_t n = r->count[(v - u * BLOCK) * ROWS + (size_t)row];
+                if (g && gv == UINT32_MAX) continue;   /* no glossy rows: n is 0 */
+                const size_t gr = g ? (size_t)gv * PRT__SPECTRAL_GLOSSY_N + (size_t)(row - 1) : 0;
+                if (sb->d.keep_rows) {
+                    uint64_t *start = g ? s->raw_gstart + gr : s->raw_start + v;
+                    memcpy((g ? s->raw_gindex : s->raw_index) + start[0], r->index + e, n * sizeof(uint16_t));
+                    memcpy((g ? s->raw_gvalue : s->raw_value) + start[0], r->value + e, n * sizeof(float));
+                    start[1] = start[0] + n;
                 }
-                if (!g) s->row_start[v + 1] = at[0];
-                else if (gv != UINT32_MAX) s->grow_start[(size_t)gv * PRT__SPECTRAL_GLOSSY_N + (size_t)row] = at[1];
+                float scale;
+                const uint32_t k = prt__spectral_quantize_row(r->value + e, n, sb->d.drop_below, keep, q, &scale);
+                uint16_t *index = (g ? s->gindex : s->index) + at[g];
+                int16_t *value = (g ? s->gvalue : s->value) + at[g];
+                for (uint32_t i = 0; i < k; ++i) {
+                    index[i] = r->index[e + keep[i]];
+                    value[i] = q[i];
+                }
+                at[g] += k;
+                e += n;
+                if (!g) {
+                    s->row_start[v + 1] = at[0];
+                    s->row_scale[v] = scale;
+                } else {
+                    s->grow_start[gr + 1] = at[1];
+                    s->grow_scale[gr] = scale;
+                }
             }
         }
     }
+    free(keep);
+    free(q);
     return PRT_OK;
 }
 

@@ -3,6 +3,8 @@
  * chunk's size, the mesh and every other count before it sizes an allocation. */
 #include "methods/spectral/spectral.h"
 
+#include <float.h>
+
 #define CHUNK_SPCP PRT__FOURCC('S', 'P', 'C', 'P')
 #define CHUNK_SPCB PRT__FOURCC('S', 'P', 'C', 'B')
 #define CHUNK_SPCT PRT__FOURCC('S', 'P', 'C', 'T')
@@ -10,6 +12,13 @@
 #define CHUNK_SPCM PRT__FOURCC('S', 'P', 'C', 'M')
 #define CHUNK_SPCG PRT__FOURCC('S', 'P', 'C', 'G')
 #define CHUNK_SPGE PRT__FOURCC('S', 'P', 'G', 'E')
+/* Rows with a scale each (format version 3); files before them hold SPCT and SPCG, one scale for
+ * the diffuse matrix and one for the glossy rows, still read. */
+#define CHUNK_SPCR PRT__FOURCC('S', 'P', 'C', 'R')
+#define CHUNK_SPCH PRT__FOURCC('S', 'P', 'C', 'H')
+/* |T(v, l)| <= pi max |s_l| <= pi x 1.0001 (the gathering's weights sum to at most pi): a row's
+ * scale is its largest over 32767. */
+#define MAX_ROW_SCALE (3.1419f * 1.0001f / 32767.0f)
 #define SPCP_HEADER 48
 #define MATRIX_BYTES (3 * PRT__SPECTRAL_GLOSSY_N * PRT__SPECTRAL_GLOSSY_N * sizeof(float))
 
@@ -25,7 +34,7 @@ prt_status prt__spectral_save(const prt_transfer *t, prt__chunk_list *l)
     if (!head || !counts) return PRT_OK;   /* the list records the failure */
     const uint32_t p32[6] = {b->functions, b->partitions, (uint32_t)s->samples, (uint32_t)s->partition_size, (uint32_t)s->env_order, 0};
     for (int i = 0; i < 6; ++i) prt__put32(head + 4 * i, p32[i]);
-    memcpy(head + 24, &s->scale, 4);
+    /* head + 24: the one scale of files before per-row scales, 0 now */
     memcpy(head + 28, &s->ray_offset, 4);
     prt__put64(head + 32, nnz);
     prt__put64(head + 40, nv);
@@ -33,11 +42,18 @@ prt_status prt__spectral_save(const prt_transfer *t, prt__chunk_list *l)
     prt__chunks_add(l, CHUNK_SPCB, b->values, b->offset[nv] * sizeof(float), NULL);
     for (size_t v = 0; v < nv; ++v) counts[v] = (uint32_t)(s->row_start[v + 1] - s->row_start[v]);
     const size_t bytes = nnz * 2, pad = ((bytes + 3) & ~(size_t)3) - bytes;
-    prt__chunks_add(l, CHUNK_SPCT, counts, nv * sizeof(uint32_t), s->index, bytes, zero4, pad, s->value, bytes, zero4, pad, NULL);
+    unsigned char *rh = prt__chunks_alloc(l, 8);
+    if (!rh) return PRT_OK;
+    memcpy(rh, &s->drop, 4);
+    prt__put32(rh + 4, 0);
+    if (l->version < 3) l->version = 3;   /* readers of version 2 would find no transfer */
+    prt__chunks_add(l, CHUNK_SPCR, rh, (size_t)8, counts, nv * sizeof(uint32_t), s->row_scale, nv * sizeof(float), s->index, bytes, zero4, pad, s->value,
+                    bytes, zero4, pad, NULL);
     prt__chunks_add(l, CHUNK_SPCE, s->env, nv * (size_t)s->env_order * s->env_order * sizeof(float), NULL);
     if (s->emit) prt__chunks_add(l, CHUNK_SPCM, s->emit, nv * 3 * sizeof(float), NULL);
     if (s->glossy_count) {
-        /* glossy vertex count, SH order, scale, 0, entries per row, indices, values */
+        /* glossy vertex count, SH order, drop, material count, matrices, entries per row, scales,
+         * indices, values */
         const size_t rows = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N, gnnz = s->grow_start[rows], gb = gnnz * 2,
                      gpad = ((gb + 3) & ~(size_t)3) - gb;
         int nmat = 0;
@@ -48,7 +64,7 @@ prt_status prt__spectral_save(const prt_transfer *t, prt__chunk_list *l)
         if (!gh || !gcounts) return PRT_OK;
         prt__put32(gh, s->glossy_count);
         prt__put32(gh + 4, PRT__SPECTRAL_GLOSSY_ORDER);
-        memcpy(gh + 8, &s->gscale, 4);
+        memcpy(gh + 8, &s->drop, 4);
         prt__put32(gh + 12, (uint32_t)nmat);
         unsigned char *at = gh + 16;
         for (int k = 0; k < PRT__MAX_BRDFS; ++k)
@@ -58,7 +74,8 @@ prt_status prt__spectral_save(const prt_transfer *t, prt__chunk_list *l)
                 at += 4 + MATRIX_BYTES;
             }
         for (size_t r = 0; r < rows; ++r) gcounts[r] = (uint32_t)(s->grow_start[r + 1] - s->grow_start[r]);
-        prt__chunks_add(l, CHUNK_SPCG, gh, 16 + mbytes, gcounts, rows * sizeof(uint32_t), s->gindex, gb, zero4, gpad, s->gvalue, gb, zero4, gpad, NULL);
+        prt__chunks_add(l, CHUNK_SPCH, gh, 16 + mbytes, gcounts, rows * sizeof(uint32_t), s->grow_scale, rows * sizeof(float), s->gindex, gb, zero4,
+                        gpad, s->gvalue, gb, zero4, gpad, NULL);
         if (s->genv) {   /* glossy vertex count, environment coefficients, then the matrices as halves */
             const size_t n = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N * s->env_order * s->env_order;
             unsigned char *eh = prt__chunks_alloc(l, 8 + n * 2 + 2);
@@ -76,7 +93,7 @@ prt_status prt__spectral_save(const prt_transfer *t, prt__chunk_list *l)
 
 static prt_status bad(prt_context *ctx, const char *msg) { return prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: %s", msg); }
 
-static prt_status load_params(prt_context *ctx, prt_transfer *t, prt__spectral_set *s, const prt__chunk_in *c, uint64_t *nnz)
+static prt_status load_params(prt_context *ctx, prt_transfer *t, prt__spectral_set *s, const prt__chunk_in *c, uint64_t *nnz, float *one_scale)
 {
     const unsigned char *p = c->data;
     const uint64_t nv = t->mesh.vertex_count, len = c->size;
@@ -87,11 +104,11 @@ static prt_status load_params(prt_context *ctx, prt_transfer *t, prt__spectral_s
     s->samples = (int)prt__get32(p + 8);
     s->partition_size = (int)prt__get32(p + 12);
     s->env_order = (int)prt__get32(p + 16);
-    memcpy(&s->scale, p + 24, 4);
+    memcpy(one_scale, p + 24, 4);
     memcpy(&s->ray_offset, p + 28, 4);
     *nnz = prt__get64(p + 32);
     if (b->functions < 1 || b->functions > PRT__SPECTRAL_MAX_FUNCTIONS || b->partitions < 1 || b->partitions > nv || s->env_order < 1 ||
-        s->env_order > PRT_SH_MAX_ORDER || !(s->scale > 0) || !isfinite(s->scale) || !(s->ray_offset > 0) || !isfinite(s->ray_offset) ||
+        s->env_order > PRT_SH_MAX_ORDER || !(*one_scale >= 0) || !isfinite(*one_scale) || !(s->ray_offset > 0) || !isfinite(s->ray_offset) ||
         *nnz > nv * (uint64_t)b->functions)
         return bad(ctx, "spectral parameters out of range");
     if (len != SPCP_HEADER + nv * 4 + (uint64_t)b->partitions * 4) return bad(ctx, "spectral parameter chunk size mismatch");
@@ -117,23 +134,46 @@ static prt_status load_basis(prt_context *ctx, size_t nv, prt__spectral_basis *b
     return PRT_OK;
 }
 
-static prt_status load_transfer(prt_context *ctx, size_t nv, prt__spectral_set *s, uint64_t nnz, const prt__chunk_in *c)
+/* Per-row scales: finite, zero exactly for the rows without entries, at most `most`. */
+static bool row_scales_ok(const float *scale, const uint64_t *start, uint64_t rows, float most)
 {
-    const uint64_t bytes = nnz * 2, padded = (bytes + 3) & ~3ull;
-    if (c->size != nv * 4 + 2 * padded) return bad(ctx, "spectral transfer chunk size mismatch");
+    for (uint64_t r = 0; r < rows; ++r)
+        if (!(scale[r] >= 0 && scale[r] <= most) || (scale[r] > 0) != (start[r + 1] > start[r])) return false;
+    return true;
+}
+
+/* SPCT (one_scale > 0: the scale of every row) or SPCR (one_scale 0: a drop threshold, then a
+ * scale per row after the counts). */
+static prt_status load_transfer(prt_context *ctx, size_t nv, prt__spectral_set *s, uint64_t nnz, const prt__chunk_in *c, float one_scale)
+{
+    const bool per_row = one_scale == 0;
+    const uint64_t bytes = nnz * 2, padded = (bytes + 3) & ~3ull, head = per_row ? 8 : 0, counts = head + nv * (per_row ? 8 : 4);
+    if (c->size != counts + 2 * padded) return bad(ctx, "spectral transfer chunk size mismatch");
+    if (per_row) {
+        memcpy(&s->drop, c->data, 4);
+        if (!(s->drop >= 0 && s->drop <= 0.1f) || prt__get32(c->data + 4)) return bad(ctx, "spectral drop threshold out of range");
+    }
     s->row_start = malloc((nv + 1) * sizeof(uint64_t));
+    s->row_scale = malloc(nv ? nv * sizeof(float) : 1);
     s->index = malloc(bytes ? bytes : 1);
     s->value = malloc(bytes ? bytes : 1);
-    if (!s->row_start || !s->index || !s->value) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!s->row_start || !s->row_scale || !s->index || !s->value) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     s->row_start[0] = 0;
     for (size_t v = 0; v < nv; ++v) {
-        const uint32_t n = prt__get32(c->data + v * 4);
+        const uint32_t n = prt__get32(c->data + head + v * 4);
         if (n > s->basis.functions || s->row_start[v] + n > nnz) return bad(ctx, "spectral transfer counts are inconsistent");
         s->row_start[v + 1] = s->row_start[v] + n;
     }
     if (s->row_start[nv] != nnz) return bad(ctx, "spectral transfer counts are inconsistent");
-    memcpy(s->index, c->data + nv * 4, bytes);
-    memcpy(s->value, c->data + nv * 4 + padded, bytes);
+    if (per_row) {
+        memcpy(s->row_scale, c->data + head + nv * 4, nv * sizeof(float));
+        if (!row_scales_ok(s->row_scale, s->row_start, nv, MAX_ROW_SCALE)) return bad(ctx, "a spectral transfer row scale is out of range");
+    } else {
+        for (size_t v = 0; v < nv; ++v) s->row_scale[v] = s->row_start[v + 1] > s->row_start[v] ? one_scale : 0.0f;   /* as SPCR has them */
+        s->one_scale = true;
+    }
+    memcpy(s->index, c->data + counts, bytes);
+    memcpy(s->value, c->data + counts + padded, bytes);
     for (size_t v = 0; v < nv; ++v)
         for (uint64_t i = s->row_start[v]; i < s->row_start[v + 1]; ++i)
             if (s->index[i] >= s->basis.functions || (i > s->row_start[v] && s->index[i] <= s->index[i - 1]))
@@ -141,15 +181,18 @@ static prt_status load_transfer(prt_context *ctx, size_t nv, prt__spectral_set *
     return PRT_OK;
 }
 
-static prt_status load_glossy(prt_context *ctx, const prt_transfer *t, prt__spectral_set *s, const prt__chunk_in *c)
+/* SPCG (one scale for the glossy rows) or SPCH (per_row: the drop threshold in its place, a scale
+ * per row after the counts). */
+static prt_status load_glossy(prt_context *ctx, const prt_transfer *t, prt__spectral_set *s, const prt__chunk_in *c, bool per_row)
 {
     const unsigned char *head = c->data;
     const uint64_t rows = (uint64_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N;
     uint64_t len = c->size;
     if (len < 16 || prt__get32(head) != s->glossy_count || prt__get32(head + 4) != PRT__SPECTRAL_GLOSSY_ORDER)
         return bad(ctx, "invalid spectral glossy chunk");
-    memcpy(&s->gscale, head + 8, 4);
-    if (!(s->gscale > 0) || !isfinite(s->gscale)) return bad(ctx, "spectral glossy scale out of range");
+    float gscale;
+    memcpy(&gscale, head + 8, 4);
+    if (per_row ? gscale != s->drop : !(gscale > 0) || !isfinite(gscale)) return bad(ctx, "spectral glossy scale out of range");
     /* The glossy materials' SH matrices: one for each material a glossy vertex uses, no other. */
     const uint32_t nmat = prt__get32(head + 12);
     if (nmat > (uint32_t)t->brdf_count || len < 16 + (uint64_t)nmat * (4 + MATRIX_BYTES)) return bad(ctx, "invalid spectral glossy chunk");
@@ -166,8 +209,11 @@ static prt_status load_glossy(prt_context *ctx, const prt_transfer *t, prt__spec
         if (s->glossy_of[v] != UINT32_MAX && !s->brdf_matrix[t->mesh.material[v] - 1]) return bad(ctx, "a glossy material's BRDF matrix is missing");
     const unsigned char *p = head + (size_t)nmat * (4 + MATRIX_BYTES);   /* the rest as if the matrices were not there */
     len -= (uint64_t)nmat * (4 + MATRIX_BYTES);
-    if (len < 16 + rows * 4) return bad(ctx, "invalid spectral glossy chunk");
-    if (!(s->grow_start = malloc((rows + 1) * sizeof(uint64_t)))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    const uint64_t counts = 16 + rows * (per_row ? 8 : 4);   /* where the indices start */
+    if (len < counts) return bad(ctx, "invalid spectral glossy chunk");
+    s->grow_start = malloc((rows + 1) * sizeof(uint64_t));
+    s->grow_scale = malloc(rows ? rows * sizeof(float) : 1);
+    if (!s->grow_start || !s->grow_scale) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     s->grow_start[0] = 0;
     for (uint64_t r = 0; r < rows; ++r) {
         const uint32_t n = prt__get32(p + 16 + r * 4);
@@ -175,12 +221,18 @@ static prt_status load_glossy(prt_context *ctx, const prt_transfer *t, prt__spec
         s->grow_start[r + 1] = s->grow_start[r] + n;
     }
     const uint64_t gnnz = s->grow_start[rows], gb = gnnz * 2, padded = (gb + 3) & ~3ull;
-    if (len != 16 + rows * 4 + 2 * padded) return bad(ctx, "spectral glossy chunk size mismatch");
+    if (len != counts + 2 * padded) return bad(ctx, "spectral glossy chunk size mismatch");
+    if (per_row) {
+        memcpy(s->grow_scale, p + 16 + rows * 4, rows * sizeof(float));
+        if (!row_scales_ok(s->grow_scale, s->grow_start, rows, FLT_MAX)) return bad(ctx, "a spectral glossy row scale is out of range");
+    } else {
+        for (uint64_t r = 0; r < rows; ++r) s->grow_scale[r] = s->grow_start[r + 1] > s->grow_start[r] ? gscale : 0.0f;
+    }
     s->gindex = malloc(gb ? gb : 1);
     s->gvalue = malloc(gb ? gb : 1);
     if (!s->gindex || !s->gvalue) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    memcpy(s->gindex, p + 16 + rows * 4, gb);
-    memcpy(s->gvalue, p + 16 + rows * 4 + padded, gb);
+    memcpy(s->gindex, p + counts, gb);
+    memcpy(s->gvalue, p + counts + padded, gb);
     for (uint64_t r = 0; r < rows; ++r)
         for (uint64_t i = s->grow_start[r]; i < s->grow_start[r + 1]; ++i)
             if (s->gindex[i] >= s->basis.functions || (i > s->grow_start[r] && s->gindex[i] <= s->gindex[i - 1]))
@@ -197,10 +249,18 @@ prt_status prt__spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *me
     if (!(s->cache = prt__spectral_cache_new())) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     const size_t nv = t->mesh.vertex_count;
     uint64_t nnz = 0;
+    float one_scale = 0;
     prt__chunk_in *c = prt__chunk_take(chunks, count, CHUNK_SPCP);
-    prt_status st = c ? load_params(ctx, t, s, c, &nnz) : bad(ctx, "spectral parameter chunk missing");
+    prt_status st = c ? load_params(ctx, t, s, c, &nnz, &one_scale) : bad(ctx, "spectral parameter chunk missing");
     if (!st) st = (c = prt__chunk_take(chunks, count, CHUNK_SPCB)) ? load_basis(ctx, nv, &s->basis, c) : bad(ctx, "spectral basis chunk missing");
-    if (!st) st = (c = prt__chunk_take(chunks, count, CHUNK_SPCT)) ? load_transfer(ctx, nv, s, nnz, c) : bad(ctx, "spectral transfer chunk missing");
+    /* Rows with a scale each (SPCR: SPCP's one scale is 0), or one scale for all (SPCT, older). */
+    if (!st) {
+        prt__chunk_in *one = prt__chunk_take(chunks, count, CHUNK_SPCT), *rows = prt__chunk_take(chunks, count, CHUNK_SPCR);
+        if (one && rows) st = bad(ctx, "spectral transfer appears with one scale and with per-row scales");
+        else if (!one && !rows) st = bad(ctx, "spectral transfer chunk missing");
+        else if (!rows != (one_scale > 0)) st = bad(ctx, "the spectral scale does not match the transfer chunk");
+        else st = load_transfer(ctx, nv, s, nnz, one ? one : rows, one_scale);
+    }
     if (!st) {
         const uint64_t n = nv * (uint64_t)s->env_order * s->env_order;
         if (!(c = prt__chunk_take(chunks, count, CHUNK_SPCE))) st = bad(ctx, "spectral environment chunk missing");
@@ -227,9 +287,10 @@ prt_status prt__spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *me
     }
     /* The glossy final bounce: there exactly when some vertex's material has a glossy part. */
     if (!st && !prt__spectral_glossy_index(t, s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    c = st ? NULL : prt__chunk_take(chunks, count, CHUNK_SPCG);
+    /* Its rows scaled as the diffuse ones: SPCG beside SPCT, SPCH beside SPCR. */
+    c = st ? NULL : prt__chunk_take(chunks, count, s->one_scale ? CHUNK_SPCG : CHUNK_SPCH);
     if (!st && !c != !s->glossy_count) st = bad(ctx, "the spectral glossy chunk does not match the glossy materials");
-    if (!st && c) st = load_glossy(ctx, t, s, c);
+    if (!st && c) st = load_glossy(ctx, t, s, c, !s->one_scale);
     /* The environment on glossy vertices: optional (files written before it reflect the
      * environment diffusely), and only beside the glossy rows. */
     c = st ? NULL : prt__chunk_take(chunks, count, CHUNK_SPGE);
@@ -247,8 +308,8 @@ prt_status prt__spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *me
                 if (!isfinite(s->genv[i])) st = bad(ctx, "non-finite spectral glossy environment transfer");
             }
     }
-    static const uint32_t ids[7] = {CHUNK_SPCP, CHUNK_SPCB, CHUNK_SPCT, CHUNK_SPCE, CHUNK_SPCM, CHUNK_SPCG, CHUNK_SPGE};
-    for (int i = 0; i < 7 && !st; ++i)
-        if (prt__chunk_take(chunks, count, ids[i])) st = bad(ctx, "a spectral chunk appears twice");
+    static const uint32_t ids[9] = {CHUNK_SPCP, CHUNK_SPCB, CHUNK_SPCT, CHUNK_SPCR, CHUNK_SPCE, CHUNK_SPCM, CHUNK_SPCG, CHUNK_SPCH, CHUNK_SPGE};
+    for (int i = 0; i < 9 && !st; ++i)
+        if (prt__chunk_take(chunks, count, ids[i])) st = bad(ctx, "a spectral chunk appears twice or beside the other storage");
     return st;
 }

@@ -1,7 +1,7 @@
 /* The spectral method's table entry (direct-to-indirect transfer in a spectral mesh basis, Wang,
- * Zhu & Humphreys 2007): bake options, its chunks in file.c (SPCP, SPCB, SPCT, SPCE), description, the
- * bounce control and relighting with run-time albedo. The basis is built in
- * basis.c, the transfer in bake.c, the run time in relight.c. */
+ * Zhu & Humphreys 2007): bake options, its chunks in file.c (SPCP, SPCB, SPCR, SPCE, SPCM, SPCH;
+ * SPCT and SPCG in older files), description, the bounce control and relighting with run-time
+ * albedo. The basis is built in basis.c, the transfer in bake.c, the run time in relight.c. */
 #include "methods/spectral/spectral.h"
 #include "brdf/sh_matrix.h"
 
@@ -24,6 +24,13 @@ void prt__spectral_set_free(void *state)
     free(s->row_start);
     free(s->index);
     free(s->value);
+    free(s->row_scale);
+    free(s->raw_start);
+    free(s->raw_index);
+    free(s->raw_value);
+    free(s->raw_gstart);
+    free(s->raw_gindex);
+    free(s->raw_gvalue);
     free(s->env);
     free(s->genv);
     free(s->emit);
@@ -31,6 +38,7 @@ void prt__spectral_set_free(void *state)
     free(s->grow_start);
     free(s->gindex);
     free(s->gvalue);
+    free(s->grow_scale);
     for (int k = 0; k < PRT__MAX_BRDFS; ++k) free(s->brdf_matrix[k]);
     if (s->cache) {
         prt__vertex_lights_free(&s->cache->lights);
@@ -70,9 +78,10 @@ static const prt_option_desc options[] = {
     {"samples", "N", PRT_OPTION_INT, 16, 1 << 20, NULL,
      "gathering rays per vertex (default 4096; the paper uses 128x128)"},
     {"drop-below", "E", PRT_OPTION_FLOAT, 0, 0.1, NULL,
-     "also drop transfer entries below E x the largest (default 0: only what rounds to zero at "
-     "16 bits, as the paper); in the demo room 5e-4 keeps a third of the entries for a 2% "
-     "change, 1e-3 a fifth for 5%"},
+     "drop transfer entries below E x the largest of their row (each row is stored in 16 bits "
+     "against its own largest; default 1e-3; 0: only what rounds to zero). In the README's window "
+     "room 1e-3 keeps 83% of the bytes for 0.05% more error against the path tracer, 3e-3 60% for "
+     "0.4% more, 1e-2 a third for 2.5% more (README, \"Spectral storage\")"},
     {"env-order", "N", PRT_OPTION_INT, 1, PRT_SH_MAX_ORDER, NULL,
      "SH order of the environment's shadowed direct light, 1..10 (default 4)"},
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "ray origin offset (default 1e-4 x scene diagonal)"},
@@ -92,7 +101,7 @@ static prt_status spectral_bake_begin(prt_context *ctx, const prt_scene *scene, 
     d.partition_size = prt__opt_int(o, "partition", 0);
     d.samples = prt__opt_int(o, "samples", 0);
     d.env_order = prt__opt_int(o, "env-order", 0);
-    d.drop_below = prt__opt_float(o, "drop-below", 0.0f);
+    d.drop_below = prt__opt_float(o, "drop-below", PRT__SPECTRAL_DROP_DEFAULT);
     d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
     prt_status st = prt__spectral_bake_begin(ctx, &d, t, job);
     if (!st && !(((prt__spectral_set *)t->state)->cache = prt__spectral_cache_new())) {
@@ -108,8 +117,11 @@ static size_t spectral_bytes(const prt_transfer *t)
 {
     const prt__spectral_set *s = t->state;
     const size_t nv = t->mesh.vertex_count, rows = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N;
-    const size_t genv = s->genv ? rows * (size_t)s->env_order * s->env_order * sizeof(uint16_t) : 0;   /* halves */
-    return s->row_start[nv] * 4 + nv * 4 + (s->glossy_count ? s->grow_start[rows] * 4 + rows * 4 : 0) + genv;
+    /* 2 + 2 bytes an entry, a count (and, unless one scale serves all, a scale) per row; the
+     * environment's glossy transfer as halves */
+    const size_t per_row = s->one_scale ? 4 : 8;
+    const size_t genv = s->genv ? rows * (size_t)s->env_order * s->env_order * sizeof(uint16_t) : 0;
+    return s->row_start[nv] * 4 + nv * per_row + (s->glossy_count ? s->grow_start[rows] * 4 + rows * per_row : 0) + genv;
 }
 
 static size_t basis_bytes(const prt_transfer *t)
@@ -149,6 +161,8 @@ static void spectral_describe(const prt_transfer *t, prt__describe *d)
         cJSON_AddNumberToObject(j, "coefficients", (double)nnz);
         cJSON_AddNumberToObject(j, "coefficients_per_vertex", per_vertex);
         cJSON_AddNumberToObject(j, "coefficients_per_vertex_max", (double)rmax);
+        cJSON_AddStringToObject(j, "scales", s->one_scale ? "one" : "row");
+        cJSON_AddNumberToObject(j, "drop_below", s->drop);
         cJSON_AddNumberToObject(j, "samples", s->samples);
         cJSON_AddNumberToObject(j, "partition_size", s->partition_size);
         cJSON_AddNumberToObject(j, "env_order", s->env_order);
@@ -159,8 +173,12 @@ static void spectral_describe(const prt_transfer *t, prt__describe *d)
     }
     prt__describe_line(d, "basis:", "%u functions over %u partitions (%u..%u vertices, %u..%u functions each), %.2f MiB", b->functions, b->partitions,
                        vmin, vmax, kmin, kmax, basis_bytes(t) / 1048576.0);
-    prt__describe_line(d, "transfer:", "%llu coefficients, %.1f per vertex (at most %llu), 16-bit, %.2f MiB", (unsigned long long)nnz, per_vertex,
-                       (unsigned long long)rmax, spectral_bytes(t) / 1048576.0);
+    char storage[96];
+    if (s->one_scale) snprintf(storage, sizeof storage, "16-bit, one scale");
+    else if (s->drop > 0) snprintf(storage, sizeof storage, "16-bit, a scale per row, entries under %g of their row's largest dropped", s->drop);
+    else snprintf(storage, sizeof storage, "16-bit, a scale per row");
+    prt__describe_line(d, "transfer:", "%llu coefficients, %.1f per vertex (at most %llu), %s, %.2f MiB", (unsigned long long)nnz, per_vertex,
+                       (unsigned long long)rmax, storage, spectral_bytes(t) / 1048576.0);
     prt__describe_line(d, "bake:", "%d rays per vertex; environment through SH order %d (%d coefficients per vertex)", s->samples, s->env_order,
                        s->env_order * s->env_order);
     if (s->glossy_count && s->genv)

@@ -1,7 +1,7 @@
 /* Run time of the spectral method: direct light per vertex from every kind of light, then
  * bounces through the spectral basis (Wang, Zhu & Humphreys 2007, eq. 4 and the multi-bounce
  * gathering after it): project the outgoing radiance onto the basis, multiply by the sparse
- * T^s, apply each vertex's albedo / pi, repeat.
+ * T^s (each row's 16-bit entries times its scale), apply each vertex's albedo / pi, repeat.
  *
  * Direct light: point, spot and directional lights with one shadow ray per vertex; sphere lights
  * exactly unoccluded times the visible fraction of their cone (16 rays); emissive surfaces and the
@@ -89,7 +89,6 @@ prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const 
     float *cur = prt__calloc(nv * 3, sizeof(float));
     if (!coeffs || !cur) { free(coeffs); free(cur); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
     const float *from = direct_out;
-    const float k = s->scale / (float)PRT_PI;
     for (int bounce = 0; bounce < bounces; ++bounce) {
         prt__spectral_project(b, from, coeffs, prt__threads(ctx));
         /* Each vertex gathers its row of T^s; the next bounce starts from what it reflects. */
@@ -103,7 +102,7 @@ prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const 
                 e1 += q * c[1];
                 e2 += q * c[2];
             }
-            const float *rho = albedo + v * 3;
+            const float *rho = albedo + v * 3, k = s->row_scale[v] / (float)PRT_PI;
             cur[v * 3 + 0] = rho[0] * k * (e0 > 0 ? e0 : 0);
             cur[v * 3 + 1] = rho[1] * k * (e1 > 0 ? e1 : 0);
             cur[v * 3 + 2] = rho[2] * k * (e2 > 0 ? e2 : 0);
@@ -165,9 +164,10 @@ prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const f
                 const float q = s->gvalue[i], *x = coeffs + (size_t)s->gindex[i] * 3;
                 a += q * x[0]; b += q * x[1]; d += q * x[2];
             }
-            in[0][k] = a * s->gscale;
-            in[1][k] = b * s->gscale;
-            in[2][k] = d * s->gscale;
+            const float scale = s->grow_scale[row];
+            in[0][k] = a * scale;
+            in[1][k] = b * scale;
+            in[2][k] = d * scale;
         }
         if (env && env->order == s->env_order && s->genv) {   /* the environment, shadowed */
             const int nc = s->env_order * s->env_order;

@@ -6,7 +6,10 @@
  * frequencies of its own topological Laplacian, numbered first[p] .. first[p + 1] - 1. Vertex v
  * stores the values of its partition's functions at v. The transfer row of vertex v holds, for
  * basis function l, the irradiance at v when the surfaces emit radiance s_l (eq. 7), quantized to
- * 16 bits against one scale for the whole matrix; entries that round to zero are not stored. */
+ * 16 bits against a scale of its own (its largest entry is 32767); entries that round to zero or
+ * lie below the bake's drop threshold times the row's largest are not stored. (Files written
+ * before per-row scales hold one scale for the whole matrix, as the paper: loaded as that scale
+ * on every row.) */
 #ifndef PRT_METHODS_SPECTRAL_H
 #define PRT_METHODS_SPECTRAL_H
 
@@ -51,8 +54,10 @@ typedef struct prt__spectral_set {
     /* Sparse transfer rows: vertex v's entries are [row_start[v], row_start[v + 1]). */
     uint64_t *row_start;     /* [vertex + 1] */
     uint16_t *index;         /* basis function */
-    int16_t *value;          /* times scale */
-    float scale;
+    int16_t *value;          /* times row_scale[v] */
+    float *row_scale;        /* [vertex] 0 for an empty row */
+    float drop;              /* entries below drop x their row's largest were dropped */
+    bool one_scale;          /* loaded from a file with one scale for the matrix (SPCT, SPCG) */
     /* Direct light from the environment: shadowed irradiance transfer per vertex in SH of
      * env_order (the gathering rays that escaped), E = sum_i L_i env[v][i]. */
     int env_order;
@@ -70,8 +75,8 @@ typedef struct prt__spectral_set {
     uint32_t *glossy_of;     /* [vertex] g, or UINT32_MAX for vertices without a glossy material */
     uint64_t *grow_start;    /* [glossy_count * 16 + 1] */
     uint16_t *gindex;
-    int16_t *gvalue;
-    float gscale;
+    int16_t *gvalue;         /* times grow_scale[row] */
+    float *grow_scale;       /* [glossy_count * 16] */
     /* The environment's direct light on glossy vertices: per glossy vertex g, the shadowed
      * transfer from the environment's SH (env_order) to the incident radiance's SH (order 4,
      * world frame) over the rays that escaped, in = genv[g] L ([16][env_order^2], row-major);
@@ -83,6 +88,14 @@ typedef struct prt__spectral_set {
      * glossy part only; prt_brdf_sh_matrix), computed at bake time and kept in the file. */
     float *brdf_matrix[PRT__MAX_BRDFS];
     prt__spectral_cache *cache;
+    /* Only when the bake desc asks (keep_rows: measurements and tests): the rows before
+     * quantization, every entry that is not zero, as floats; diffuse and glossy. */
+    uint64_t *raw_start;     /* [vertex + 1] */
+    uint16_t *raw_index;
+    float *raw_value;
+    uint64_t *raw_gstart;    /* [glossy_count * 16 + 1] */
+    uint16_t *raw_gindex;
+    float *raw_gvalue;
 } prt__spectral_set;
 
 extern const prt__method prt__method_spectral;
@@ -115,9 +128,19 @@ void prt__spectral_reconstruct(const prt__spectral_basis *b, size_t vertex_count
 typedef struct prt__spectral_bake_desc {
     int partition_size, functions, samples, env_order;
     bool full;   /* every vertex its own function: no truncation */
-    float drop_below;   /* entries below this times the largest are dropped too */
+    float drop_below;   /* entries below this times their row's largest are dropped too (the option's default: PRT__SPECTRAL_DROP_DEFAULT) */
     float ray_offset;
+    bool keep_rows;     /* also keep the unquantized rows in the state (raw_*) */
 } prt__spectral_bake_desc;
+/* The default relative drop threshold: the largest that keeps the storage's error under 1% in L2
+ * and 5% at the 99th-percentile vertex on the README's scenes (bench/bench_spectral_storage.c;
+ * README, "Spectral storage"). */
+#define PRT__SPECTRAL_DROP_DEFAULT 1e-3f
+
+/* Quantizes a row of n values to 16 bits against its largest magnitude m: keeps the entries with
+ * |x| >= drop * m whose quantized value is not zero, writing their positions in x to keep and
+ * their values to q; returns how many. *scale = m / 32767 (0 for a row of zeros). */
+uint32_t prt__spectral_quantize_row(const float *x, uint32_t n, float drop, uint32_t *keep, int16_t *q, float *scale);
 prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_desc *d, prt_transfer *t, prt__bake_job **job);
 
 /* Numbers the glossy vertices of t (a material whose BRDF has a glossy part) into s->glossy_of;
