@@ -73,6 +73,8 @@ struct prt_scene {
     prt_environment_desc env;
     int light_count;
     prt_light *lights;
+    bool has_camera;                  /* a JSON scene's "camera" */
+    float camera_eye[3], camera_target[3], camera_fov;
     int medium_count;                 /* translucent surfaces, by name */
     struct prt__named_medium { char name[PRT__SURFACE_NAME]; prt_medium m; } *media;
 };
@@ -82,8 +84,8 @@ int prt__scene_brdf_id(prt_scene *scene, const prt_brdf *brdf);
 
 /* Adds the mesh file at path (anything assimp reads), with optional transform (row-major 4x4,
  * NULL = identity) and albedo override (NULL = from materials, else desc default). `inside`
- * holds inside_count world points (the scene's lights) that a room around them must keep facing:
- * a closed piece around one is never flipped. */
+ * holds inside_count world points (the scene's lights, its camera's eye, desc->inside_points) that
+ * a room around them must keep facing: a closed piece around one is never flipped. */
 prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform, const float *albedo_override,
                             const float *inside, size_t inside_count, const prt_scene_desc *desc, prt__mesh *m);
 /* Adds every mesh a .json scene names. */

@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <sys/stat.h>
 #include <string.h>
 #include <strings.h>
@@ -48,7 +49,7 @@ prt_status prt_scene_load(prt_context *ctx, const char *path, const prt_scene_de
     prt_scene *s = prt__calloc(1, sizeof *s);
     if (!s) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     prt_status st = ends_with(path, ".json") ? prt__import_scene_json(ctx, path, &d, s)
-                                             : prt__import_mesh(ctx, path, NULL, NULL, NULL, 0, &d, &s->mesh);
+                                             : prt__import_mesh(ctx, path, NULL, NULL, d.inside_points, d.inside_points ? d.inside_point_count : 0, &d, &s->mesh);
     if (st != PRT_OK) { prt_scene_release(s); return st; }
     return finish(ctx, s, &d, path, out);
 }
@@ -184,6 +185,32 @@ int prt_scene_light_count(const prt_scene *s) { return s ? s->light_count : 0; }
 const prt_light *prt_scene_light(const prt_scene *s, int index)
 {
     return s && index >= 0 && index < s->light_count ? &s->lights[index] : NULL;
+}
+
+prt_status prt_scene_set_lights(prt_scene *s, const prt_light *lights, int count)
+{
+    if (!s || count < 0 || (count && !lights)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_lights: scene and lights (count >= 0) are required");
+    prt_light *copy = count ? malloc((size_t)count * sizeof *copy) : NULL;
+    if (count && !copy) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    if (count) memcpy(copy, lights, (size_t)count * sizeof *copy);
+    for (int i = 0; i < count; ++i)
+        if (prt_light_validate(&copy[i])) {
+            free(copy);
+            return prt__fail(NULL, PRT_ERR_INVALID_ARG, "light %d: %s", i + 1, prt_last_error());
+        }
+    free(s->lights);
+    s->lights = copy;
+    s->light_count = count;
+    return PRT_OK;
+}
+
+int prt_scene_camera(const prt_scene *s, float eye[3], float target[3], float *fov_deg)
+{
+    if (!s || !s->has_camera) return 0;
+    if (eye) memcpy(eye, s->camera_eye, sizeof s->camera_eye);
+    if (target) memcpy(target, s->camera_target, sizeof s->camera_target);
+    if (fov_deg) *fov_deg = s->camera_fov;
+    return 1;
 }
 
 const float *prt_scene_emission(const prt_scene *s) { return s ? s->mesh.emission : NULL; }

@@ -3,6 +3,7 @@
 #include "geom/mesh.h"
 
 #include <cjson/cJSON.h>
+#include <stdlib.h>
 #include <string.h>
 
 static prt_status read_vec3(const prt_context *ctx, const cJSON *item, const char *what, float out[3])
@@ -155,6 +156,30 @@ static prt_status read_lights(const prt_context *ctx, const char *path, const cJ
     return PRT_OK;
 }
 
+/* "camera": {"eye": [x, y, z], "target": [x, y, z], "fov": degrees}; eye and target required. */
+static prt_status read_camera(const prt_context *ctx, const char *path, const cJSON *o, prt_scene *scene)
+{
+    const cJSON *eye = cJSON_GetObjectItemCaseSensitive(o, "eye"), *target = cJSON_GetObjectItemCaseSensitive(o, "target"),
+                *fov = cJSON_GetObjectItemCaseSensitive(o, "fov"), *v;
+    if (!cJSON_IsObject(o) || !cJSON_IsArray(eye) || !cJSON_IsArray(target))
+        return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': \"camera\" must be an object with \"eye\" and \"target\" ([x, y, z]) and an optional \"fov\"", path);
+    cJSON_ArrayForEach(v, o)
+        if (strcmp(v->string, "eye") && strcmp(v->string, "target") && strcmp(v->string, "fov"))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': \"camera\" has no \"%s\" (eye, target, fov)", path, v->string);
+    prt_status st;
+    if ((st = read_vec3(ctx, eye, "camera eye", scene->camera_eye)) || (st = read_vec3(ctx, target, "camera target", scene->camera_target))) return st;
+    scene->camera_fov = 0;
+    if (fov) {
+        if (!cJSON_IsNumber(fov) || !(fov->valuedouble > 0 && fov->valuedouble < 180))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': camera \"fov\" must be a vertical angle in (0, 180) degrees", path);
+        scene->camera_fov = (float)fov->valuedouble;
+    }
+    const float *e = scene->camera_eye, *t = scene->camera_target;
+    if (e[0] == t[0] && e[1] == t[1] && e[2] == t[2]) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': camera \"eye\" and \"target\" are the same point", path);
+    scene->has_camera = true;
+    return PRT_OK;
+}
+
 prt_status prt__import_scene_json(const prt_context *ctx, const char *path, const prt_scene_desc *desc, prt_scene *scene)
 {
     prt__mesh *m = &scene->mesh;
@@ -183,11 +208,19 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
     }
     const cJSON *lights = cJSON_GetObjectItemCaseSensitive(root, "lights");
     if (lights && (st = read_lights(ctx, path, lights, scene))) { cJSON_Delete(root); return st; }
-    /* Lights with a position sit inside whatever room they light: its walls face them. */
-    float light_points[64 * 3];
+    const cJSON *camera = cJSON_GetObjectItemCaseSensitive(root, "camera");
+    if (camera && (st = read_camera(ctx, path, camera, scene))) { cJSON_Delete(root); return st; }
+    /* Lights with a position sit inside whatever room they light, and the camera inside the room
+     * it looks around: its walls face them. So do the points the caller names (its own lights). */
+    const size_t extra = desc->inside_points ? desc->inside_point_count : 0;
+    float *light_points = malloc(((size_t)scene->light_count + 1 + extra) * 3 * sizeof *light_points);
+    if (!light_points) { cJSON_Delete(root); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
     size_t light_point_count = 0;
-    for (int i = 0; i < scene->light_count && light_point_count < 64; ++i)
+    for (int i = 0; i < scene->light_count; ++i)
         if (scene->lights[i].type != PRT_LIGHT_DIRECTIONAL) memcpy(light_points + light_point_count++ * 3, scene->lights[i].position, 3 * sizeof(float));
+    if (scene->has_camera) memcpy(light_points + light_point_count++ * 3, scene->camera_eye, 3 * sizeof(float));
+    if (extra) memcpy(light_points + light_point_count * 3, desc->inside_points, extra * 3 * sizeof(float));
+    light_point_count += extra;
     const cJSON *item;
     int index = 0;
     cJSON_ArrayForEach(item, meshes) {
@@ -333,6 +366,7 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         if (!st && worn && prt_scene_set_medium(scene, mat->string, &med)) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': %s", path, prt_last_error());
         if (st) break;
     }
+    free(light_points);
     cJSON_Delete(root);
     return st;
 }

@@ -321,6 +321,15 @@ void cli_view_camera(const cli *c, const cli_view *v, const float *p, size_t nv,
 }
 
 /* ---- scene ---- */
+size_t cli_inside_points(const cli_light *l, const cli_view *v, float out[CLI_MAX_INSIDE_POINTS * 3])
+{
+    size_t n = 0;
+    for (int i = 0; l && l->set_lights && i < l->light_count; ++i)
+        if (l->lights[i].type != PRT_LIGHT_DIRECTIONAL) memcpy(out + n++ * 3, l->lights[i].position, 3 * sizeof(float));
+    if (v && v->have_eye) memcpy(out + n++ * 3, v->eye, 3 * sizeof(float));
+    return n;
+}
+
 int cli_scene_option(cli *c, prt_scene_desc *sd, int opt, const char *arg)
 {
     switch (opt) {

@@ -264,6 +264,11 @@ int cli_view_option(const cli *c, cli_view *v, int opt, const char *arg);
  * unless --eye/--target were given. */
 void cli_view_camera(const cli *c, const cli_view *v, const float *positions, size_t nv, const uint32_t *indices, size_t nt, float aspect,
                      prt_camera *cam);
+/* The points a room must keep facing as the scene is loaded (prt_scene_desc.inside_points): the
+ * positions of l's --light lights (directional ones have none) and v's --eye; either may be NULL.
+ * out holds 3 floats per point; returns the count. */
+#define CLI_MAX_INSIDE_POINTS (CLI_MAX_LIGHTS + 1)
+size_t cli_inside_points(const cli_light *l, const cli_view *v, float out[CLI_MAX_INSIDE_POINTS * 3]);
 
 /* The method a command line names with --method NAME (or --method=NAME) before parsing it,
  * the default method when it names none; NULL after reporting an unknown name. */
