@@ -64,6 +64,13 @@ bool prt__mesh_reserve(prt__mesh *m, size_t max_v);
  * arrays must have room (prt__mesh_reserve). */
 uint32_t prt__mesh_midpoint(prt__mesh *m, uint32_t a, uint32_t b);
 
+/* One candidate BRDF of a named surface, for methods that switch BRDFs at run time. */
+#define PRT__MAX_BRDF_SET 64
+typedef struct prt__brdf_choice {
+    uint16_t surface;                 /* 1-based surface id */
+    prt_brdf brdf;
+} prt__brdf_choice;
+
 struct prt_scene {
     prt__mesh mesh;
     int brdf_count;
@@ -75,6 +82,8 @@ struct prt_scene {
     prt_light *lights;
     bool has_camera;                  /* a JSON scene's "camera" */
     float camera_eye[3], camera_target[3], camera_fov;
+    int brdf_set_count;               /* candidate BRDFs of named surfaces (a material's "brdfs") */
+    prt__brdf_choice *brdf_set;
     int medium_count;                 /* translucent surfaces, by name */
     struct prt__named_medium { char name[PRT__SURFACE_NAME]; prt_medium m; } *media;
 };

@@ -133,6 +133,7 @@ void prt_scene_release(prt_scene *s)
     if (!s) return;
     prt__mesh_free(&s->mesh);
     free(s->lights);
+    free(s->brdf_set);
     free(s->media);
     free(s);
 }

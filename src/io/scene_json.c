@@ -156,6 +156,51 @@ static prt_status read_lights(const prt_context *ctx, const char *path, const cJ
     return PRT_OK;
 }
 
+/* The BRDF a material wears: its "brdf", else the first of its "brdfs" (the set it can switch
+ * among at run time); NULL when it names none. */
+static const cJSON *material_brdf(const cJSON *mat)
+{
+    const cJSON *b = cJSON_GetObjectItemCaseSensitive(mat, "brdf");
+    if (b) return b;
+    const cJSON *set = cJSON_GetObjectItemCaseSensitive(mat, "brdfs");
+    return cJSON_IsArray(set) ? cJSON_GetArrayItem(set, 0) : NULL;
+}
+
+/* A material's "brdfs": the BRDFs its surface can switch among at run time, the one it wears
+ * (its "brdf", else the first) among them, each once. A material no surface wears has none. */
+static prt_status read_brdf_set(const prt_context *ctx, const char *path, const cJSON *mat, const prt_scene_desc *desc, prt_scene *scene)
+{
+    const cJSON *set = cJSON_GetObjectItemCaseSensitive(mat, "brdfs"), *e;
+    if (!set) return PRT_OK;
+    if (!cJSON_IsArray(set) || cJSON_GetArraySize(set) == 0)
+        return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"brdfs\" must be a non-empty array of BRDF strings", path, mat->string);
+    int surface = 0;
+    for (int k = 1; k <= scene->mesh.surface_count && !surface; ++k)
+        if (!strcmp(scene->mesh.surface_names[k - 1], mat->string)) surface = k;
+    const cJSON *worn = cJSON_GetObjectItemCaseSensitive(mat, "brdf");
+    for (int i = -1; i < cJSON_GetArraySize(set); ++i) {
+        e = i < 0 ? worn : cJSON_GetArrayItem(set, i);
+        if (!e) continue;
+        prt_brdf b;
+        if (!cJSON_IsString(e) || prt_brdf_parse(e->valuestring, &b))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"brdfs\"[%d]: %s", path, mat->string, i < 0 ? 0 : i,
+                             cJSON_IsString(e) ? prt_last_error() : "not a string such as \"phong:32:0.5:0.3\"");
+        if (!surface) continue;
+        if (desc->override_albedo) memcpy(b.diffuse, desc->default_albedo, sizeof b.diffuse);   /* --albedo: its kd too */
+        bool seen = false;
+        for (int k = 0; k < scene->brdf_set_count && !seen; ++k)
+            seen = scene->brdf_set[k].surface == surface && !memcmp(&scene->brdf_set[k].brdf, &b, sizeof b);
+        if (seen) continue;
+        if (scene->brdf_set_count == PRT__MAX_BRDF_SET)
+            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDFs in the materials' \"brdfs\"", path, PRT__MAX_BRDF_SET);
+        prt__brdf_choice *grown = realloc(scene->brdf_set, (size_t)(scene->brdf_set_count + 1) * sizeof *grown);
+        if (!grown) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        scene->brdf_set = grown;
+        scene->brdf_set[scene->brdf_set_count++] = (prt__brdf_choice){(uint16_t)surface, b};
+    }
+    return PRT_OK;
+}
+
 /* "camera": {"eye": [x, y, z], "target": [x, y, z], "fov": degrees}; eye and target required. */
 static prt_status read_camera(const prt_context *ctx, const char *path, const cJSON *o, prt_scene *scene)
 {
@@ -243,7 +288,7 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
             const cJSON *mat = cJSON_IsString(v) ? cJSON_GetObjectItemCaseSensitive(materials, v->valuestring) : NULL;
             if (!mat) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d] names a material that \"materials\" does not define", path, index); break; }
             a = cJSON_GetObjectItemCaseSensitive(mat, "albedo");
-            b = cJSON_GetObjectItemCaseSensitive(mat, "brdf");
+            b = material_brdf(mat);
             e = cJSON_GetObjectItemCaseSensitive(mat, "emission");
             if (!a && !b && !e && !cJSON_GetObjectItemCaseSensitive(mat, "subsurface")) {
                 st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s' needs an \"albedo\", a \"brdf\", an \"emission\" or a \"subsurface\"", path,
@@ -290,7 +335,7 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
             for (int sid = 1; sid <= m->surface_count && !st; ++sid) {
                 const cJSON *mat = cJSON_GetObjectItemCaseSensitive(materials, m->surface_names[sid - 1]);
                 if (!mat) continue;
-                const cJSON *ma = cJSON_GetObjectItemCaseSensitive(mat, "albedo"), *mb = cJSON_GetObjectItemCaseSensitive(mat, "brdf"),
+                const cJSON *ma = cJSON_GetObjectItemCaseSensitive(mat, "albedo"), *mb = material_brdf(mat),
                             *me = cJSON_GetObjectItemCaseSensitive(mat, "emission");
                 float mrgb[3] = {0, 0, 0}, mle[3] = {0, 0, 0};
                 int brdf_id = 0;
@@ -336,6 +381,9 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         index++;
     }
     if (!st) prt__mesh_compact_surfaces(m);   /* the files' names a JSON material replaced */
+    const cJSON *setmat, *sets = st ? NULL : materials;
+    cJSON_ArrayForEach(setmat, sets)
+        if ((st = read_brdf_set(ctx, path, setmat, desc, scene))) break;
     /* Translucent materials: "subsurface" is a measured medium's name or its coefficients. A
      * material no surface wears has nothing to make translucent. */
     const cJSON *mat, *translucent = st ? NULL : materials;

@@ -89,6 +89,9 @@ int cmd_reference(int argc, char **argv)
     if (light.set_intensity && light.intensity == 0) return cli_usage(&c, "--intensity 0 leaves nothing to trace");
     /* Both set how a .prt is relit; the path tracer reflects with the materials' own BRDFs and
      * follows every bounce. */
+    if (light.brdf_of_count)
+        return cli_usage(&c, "--brdf-of does not apply: prt reference traces the BRDFs the scene's materials wear "
+                             "(trace a scene whose material wears it: its \"brdf\")");
     if (light.have_brdf || light.control_count)
         return cli_usage(&c, "--%s does not apply: prt reference traces the scene's materials, "
                              "it relights no .prt", light.have_brdf ? (light.brdf_everywhere ? "brdf-all" : "brdf") : "control");

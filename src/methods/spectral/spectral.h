@@ -21,6 +21,7 @@
 #define PRT__SPECTRAL_MAX_FUNCTIONS 65535   /* indices are stored in 16 bits */
 #define PRT__SPECTRAL_GLOSSY_ORDER 4        /* the glossy final bounce's SH: 16 BRDF bases, as the paper */
 #define PRT__SPECTRAL_GLOSSY_N 16
+#define PRT__SPECTRAL_MATRIX_FLOATS (3 * PRT__SPECTRAL_GLOSSY_N * PRT__SPECTRAL_GLOSSY_N)   /* one BRDF's SH matrix */
 #define PRT__SPECTRAL_MAX_PARTITION 4096    /* vertices per partition: its eigen problem is dense */
 
 typedef struct prt__spectral_basis {
@@ -75,6 +76,14 @@ typedef struct prt__spectral_set {
     /* Per material (k - 1) with a glossy part: its local-frame SH matrix (3 x 16 x 16, the
      * glossy part only; prt_brdf_sh_matrix), computed at bake time and kept in the file. */
     float *brdf_matrix[PRT__MAX_BRDFS];
+    /* BRDF sets (the paper's Fig. 7: "we precompute and store the projections of several glossy
+     * BRDFs, and switch between them on the fly"): candidate BRDFs of named surfaces and the SH
+     * matrix of each glossy one (NULL for diffuse ones). The glossy rows hold incident radiance,
+     * whatever the BRDF, so a surface with a glossy candidate has them and switching is a matrix
+     * swap; projecting a BRDF takes seconds, so it is done at bake time. */
+    int set_count;
+    prt__brdf_choice *set;   /* [set_count] */
+    float **set_matrix;      /* [set_count] */
     prt__spectral_cache *cache;
 } prt__spectral_set;
 
@@ -110,15 +119,19 @@ typedef struct prt__spectral_bake_desc {
     bool full;   /* every vertex its own function: no truncation */
     float drop_below;   /* entries below this times the largest are dropped too */
     float ray_offset;
+    const prt_scene *scene;   /* its BRDF sets are kept (NULL: none) */
 } prt__spectral_bake_desc;
 prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_desc *d, prt_transfer *t, prt__bake_job **job);
 
-/* Numbers the glossy vertices of t (a material whose BRDF has a glossy part) into s->glossy_of;
- * false when out of memory. */
+/* Numbers the glossy vertices of t (a material whose BRDF has a glossy part, or a surface with a
+ * glossy candidate in s->set) into s->glossy_of; false when out of memory. */
 bool prt__spectral_glossy_index(const prt_transfer *t, prt__spectral_set *s);
 /* Exit radiance SH (3 x 16 per vertex, world frame; zero where not glossy) of the glossy final
- * bounce from the outgoing radiance `out` (3 per vertex) of every surface. */
-prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, float *exit_sh);
+ * bounce from the outgoing radiance `out` (3 per vertex) of every surface. brdf_of: as
+ * prt_relight_desc.brdf_of (NULL = the baked materials). */
+prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, const int *brdf_of, float *exit_sh);
+/* The SH matrix vertex v reflects with (NULL: diffuse), given brdf_of as above. */
+const float *prt__spectral_matrix_of(const prt_transfer *t, const int *brdf_of, size_t v);
 
 /* Run time (relight.c). Per-vertex irradiance from the lighting's direct light; when
  * pixel is not NULL it also gets the part from the lighting's first pixel_count local lights. */

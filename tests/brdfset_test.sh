@@ -1,0 +1,69 @@
+#!/bin/sh
+# BRDFs switched at run time among a set baked per material (the spectral paper's Fig. 7, issue
+# 26): switching gives what a bake wearing that BRDF gives, to the bit; what was not baked is
+# refused with the set listed.
+# Usage: brdfset_test.sh PATH/TO/prt
+set -u
+PRT=$1
+T=$(mktemp -d /tmp/prt_brdfset_XXXXXX)
+trap 'rm -rf "$T"' EXIT
+. "$(dirname "$0")/shell_checks.sh"
+
+# A 4 x 4 floor and a 1 x 1 x 1 box on it, each a material of the JSON scene.
+printf 'v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 3 2\nf 1 4 3\n' >"$T/floor.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n' >"$T/box.obj"
+printf 'f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 7 3\nf 4 8 7\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n' >>"$T/box.obj"
+scene() {   # scene NAME MATERIAL-JSON
+    printf '{"environment": "none", "materials": {"floor": {"albedo": 0.5}, "shiny": %s},\n' "$2" >"$T/$1.json"
+    printf ' "meshes": [{"file": "floor.obj", "material": "floor"}, {"file": "box.obj", "material": "shiny", "translate": [-0.5, 0, -0.5]}]}\n' >>"$T/$1.json"
+}
+scene set '{"brdfs": ["phong:20:0.5:0.3", "blinn:40:0.5:0.3", "lambert:0.6"]}'
+scene blinn '{"brdf": "blinn:40:0.5:0.3"}'
+scene lambert '{"brdf": "lambert:0.6"}'
+BAKE="--method spectral --basis 48 --samples 64 --max-edge 0.3 --no-refine"
+for s in set blinn lambert; do expect 0 "bake $s" -- "$PRT" bake -q "$T/$s.json" -o "$T/$s.prt" $BAKE; done
+expect 0 "info lists the set" -- "$PRT" info "$T/set.prt"
+grep -q "brdf sets: *shiny: phong:20:0.5:0.3, blinn:40:0.5:0.3, lambert:0.6" "$T/out" && ok || bad "prt info does not list the BRDF set: $(grep -i brdf "$T/out")"
+expect 0 "info --json lists the set" -- "$PRT" info --json "$T/set.prt"
+grep -q '"brdfs"' "$T/out" && ok || bad "prt info --json has no \"brdfs\""
+
+LIGHT0="--env none --light point:0.8,1.5,0.8:4"
+LIGHT="$LIGHT0 --eye 3,2,3"
+# Switched at run time = baked wearing it (the glossy rows hold incident radiance whatever the
+# BRDF; the set's SH projections were made at bake time). Spelt differently, the same BRDF.
+expect 0 "relight switched to blinn" -- "$PRT" relight -q "$T/set.prt" $LIGHT --brdf-of shiny=blinn:40:0.50:0.30 -o "$T/sw.json"
+expect 0 "relight the blinn bake" -- "$PRT" relight -q "$T/blinn.prt" $LIGHT -o "$T/b.json"
+same "$T/sw.json" "$T/b.json" 0 "switched to blinn vs baked with blinn"
+expect 0 "relight switched to lambert" -- "$PRT" relight -q "$T/set.prt" $LIGHT --brdf-of shiny=lambert:0.6 -o "$T/swl.json"
+expect 0 "relight the lambert bake" -- "$PRT" relight -q "$T/lambert.prt" $LIGHT0 -o "$T/l.json"
+same "$T/swl.json" "$T/l.json" 0 "switched to lambert vs baked with lambert"
+# The baked default and the switch differ (the glossy reflection changed).
+expect 0 "relight as baked" -- "$PRT" relight -q "$T/set.prt" $LIGHT -o "$T/def.json"
+"$PRT" compare "$T/def.json" "$T/sw.json" --json - -q >"$T/cmp" 2>/dev/null
+m=$(sed -n 's/.*"max_abs":[[:space:]]*\([0-9.eE+-]*\).*/\1/p' "$T/cmp")
+awk -v m="$m" 'BEGIN { exit !(m != "" && m + 0 > 1e-4) }' && ok || bad "switching the BRDF changed nothing (max |A-B| '$m')"
+# --albedo-of wins over the switched BRDF's diffuse part.
+expect 0 "switched and recoloured" -- "$PRT" relight -q "$T/set.prt" $LIGHT --brdf-of shiny=lambert:0.6 --albedo-of shiny=0.6 -o "$T/swp.json"
+same "$T/swp.json" "$T/l.json" 0 "--albedo-of with the same colour"
+expect 0 "render switched" -- $NOLEAK "$PRT" render "$T/set.prt" $LIGHT --target 0,0.5,0 --brdf-of shiny=blinn:40:0.5:0.3 --width 64 --height 48 -o "$T/sw.png"
+
+# Refusals, one line each, naming what there is.
+expect 2 "a BRDF not baked" -- "$PRT" relight "$T/set.prt" $LIGHT --brdf-of shiny=phong:80 -o "$T/x.json"
+says "not in the set baked for 'shiny' (phong:20:0.5:0.3, blinn:40:0.5:0.3, lambert:0.6)"
+expect 2 "a surface without a set" -- "$PRT" relight "$T/set.prt" $LIGHT --brdf-of floor=lambert:0.5 -o "$T/x.json"
+says "no BRDF set"
+expect 2 "an unknown surface" -- "$PRT" relight "$T/set.prt" $LIGHT --brdf-of flor=lambert:0.5 -o "$T/x.json"
+says "it has floor, shiny"
+expect 2 "a bad BRDF" -- "$PRT" relight "$T/set.prt" $LIGHT --brdf-of shiny=glass -o "$T/x.json"
+expect 2 "a file without sets" -- "$PRT" relight "$T/blinn.prt" $LIGHT --brdf-of shiny=blinn:40:0.5:0.3 -o "$T/x.json"
+says "no BRDF set"
+expect 2 "reference takes none" -- "$PRT" reference "$T/set.json" --brdf-of shiny=lambert:0.6 -o "$T/x.json"
+scene aniso '{"brdfs": ["phong:20:0.5:0.3", "ashikhmin:100:10:0.5:0.3"]}'
+expect 1 "an anisotropic candidate" -- "$PRT" bake -q "$T/aniso.json" -o "$T/x.prt" $BAKE
+says "anisotropic"
+scene badset '{"brdfs": []}'
+expect 1 "an empty set" -- "$PRT" bake -q "$T/badset.json" -o "$T/x.prt" $BAKE
+says "brdfs"
+
+echo "brdfset: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
