@@ -65,5 +65,22 @@ scene badset '{"brdfs": []}'
 expect 1 "an empty set" -- "$PRT" bake -q "$T/badset.json" -o "$T/x.prt" $BAKE
 says "brdfs"
 
+# The viewer: m selects a surface, r gives it the next BRDF of its set; the frame is what prt
+# render draws with --brdf-of, and three presses come back to the baked one.
+if command -v xvfb-run >/dev/null 2>&1; then
+    CAM="--width 160 --height 120 --eye 3,2,3 --target 0,0.5,0 --fov 50"
+    printf '%s\n' "0 screenshot v0.exr" "0 key m" "0 key m" "0 key r" "0.1 screenshot v1.exr" "0.1 key r" "0.1 key r" "0.2 screenshot v2.exr" "0.2 quit" >"$T/script.txt"
+    expect 0 "view cycles the set" -- $NOLEAK xvfb-run -a -s "-screen 0 1024x768x24" "$PRT" view "$T/set.prt" $LIGHT0 $CAM --script "$T/script.txt"
+    expect 0 "render as baked" -- $NOLEAK "$PRT" render -q "$T/set.prt" $LIGHT0 $CAM -o "$T/r0.exr"
+    expect 0 "render switched" -- $NOLEAK "$PRT" render -q "$T/set.prt" $LIGHT0 $CAM --brdf-of shiny=blinn:40:0.5:0.3 -o "$T/r1.exr"
+    same "$T/v0.exr" "$T/r0.exr" 0.002 "the viewer's first frame vs prt render"
+    same "$T/v1.exr" "$T/r1.exr" 0.002 "the viewer after r vs prt render --brdf-of"
+    same "$T/v2.exr" "$T/r0.exr" 0.002 "the viewer after r r r vs as baked"
+    expect 0 "view help" -- $NOLEAK xvfb-run -a -s "-screen 0 1024x768x24" "$PRT" view "$T/set.prt" $LIGHT0 --help
+    grep -q "BRDF" "$T/out" && ok || bad "prt view --help does not mention switching BRDFs"
+else
+    echo "skipping the viewer checks: xvfb-run is not installed"
+fi
+
 echo "brdfset: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
