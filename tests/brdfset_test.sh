@@ -65,6 +65,15 @@ scene badset '{"brdfs": []}'
 expect 1 "an empty set" -- "$PRT" bake -q "$T/badset.json" -o "$T/x.prt" $BAKE
 says "brdfs"
 
+# Light clouds bake colours into every stored response: --albedo-of is refused saying why, and
+# --brdf-of finds no set.
+LC="$(dirname "$0")/../fuzz/regress/prt/lightcloud/seed.prt"
+expect 2 "light cloud colours" -- "$PRT" relight "$LC" --light point:0,1,0:1 --albedo-of floor=0.5 -o "$T/x.json"
+says "every bounce of each stored cloud-light response was multiplied by the baked colours"
+[ "$(wc -l <"$T/err")" -eq 1 ] && ok || bad "the light cloud's refusal takes one line, not $(wc -l <"$T/err")"
+expect 2 "light cloud BRDFs" -- "$PRT" relight "$LC" --light point:0,1,0:1 --brdf-of floor=lambert:0.5 -o "$T/x.json"
+says "no BRDF set"
+
 # The viewer: m selects a surface, r gives it the next BRDF of its set; the frame is what prt
 # render draws with --brdf-of, and three presses come back to the baked one.
 if command -v xvfb-run >/dev/null 2>&1; then

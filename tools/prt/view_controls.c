@@ -365,8 +365,9 @@ void view_register_lights(viewer *v)
 static bool surfaces_editable(viewer *v)
 {
     if (prt_method_runtime_albedo(prt_transfer_method(v->t)) && prt_transfer_surface_count(v->t)) return true;
-    snprintf(v->message, sizeof v->message, "%s", prt_transfer_surface_count(v->t) ? "this method bakes colours in: changing them needs a rebake"
-                                                                                 : "the file names no surfaces");
+    const char *why = prt_method_baked_albedo_why(prt_transfer_method(v->t));
+    if (!prt_transfer_surface_count(v->t)) snprintf(v->message, sizeof v->message, "the file names no surfaces");
+    else snprintf(v->message, sizeof v->message, "this method bakes colours in%s%s: changing them needs a rebake", why ? ": " : "", why ? why : "");
     return false;
 }
 
