@@ -1,6 +1,7 @@
 /* The spectral method's table entry (direct-to-indirect transfer in a spectral mesh basis, Wang,
- * Zhu & Humphreys 2007): bake options, its chunks in file.c (SPCP, SPCB, SPCT, SPCE), description, the
- * bounce control and relighting with run-time albedo. The basis is built in
+ * Zhu & Humphreys 2007): bake options, its chunks in file.c (SPCP, SPCB, SPCT, SPCE, SPCM, SPCG,
+ * SPCS), description, the bounce control and relighting with run-time albedo and BRDFs switched
+ * among the baked sets (the paper's Fig. 7). The basis is built in
  * basis.c, the transfer in bake.c, the run time in relight.c. */
 #include "methods/spectral/spectral.h"
 #include "brdf/sh_matrix.h"
