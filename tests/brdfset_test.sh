@@ -100,6 +100,8 @@ expect 2 "a bad BRDF" -- "$PRT" relight "$T/set.prt" $LIGHT --brdf-of shiny=glas
 expect 2 "a file without sets" -- "$PRT" relight "$T/blinn.prt" $LIGHT --brdf-of shiny=blinn:40:0.5:0.3 -o "$T/x.json"
 says "no BRDF set"
 expect 2 "reference takes none" -- "$PRT" reference "$T/set.json" --brdf-of shiny=lambert:0.6 -o "$T/x.json"
+expect 0 "a method that keeps no sets" -- "$PRT" bake "$T/set.json" -o "$T/sh.prt" --method ao --samples 16 --max-edge 0.3 --no-refine
+says "spectral files do"
 scene aniso '{"brdfs": ["phong:20:0.5:0.3", "ashikhmin:100:10:0.5:0.3"]}'
 expect 1 "an anisotropic candidate" -- "$PRT" bake -q "$T/aniso.json" -o "$T/x.prt" $BAKE
 says "anisotropic"

@@ -125,7 +125,7 @@ static prt_status spectral_bake_begin(prt_context *ctx, const prt_scene *scene, 
     d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
     /* The BRDF sets are for switching at this method's run time; a bake that runs these stages
      * for another method (the light cloud's) does not need them. */
-    d.scene = prt_options_method(o) == &prt__method_spectral ? scene : NULL;
+    d.scene = !o || prt_options_method(o) == &prt__method_spectral ? scene : NULL;
     prt_status st = prt__spectral_bake_begin(ctx, &d, t, job);
     if (!st && !(((prt__spectral_set *)t->state)->cache = prt__spectral_cache_new())) {
         (*job)->release(*job);   /* the driver releases only jobs that began */
