@@ -47,6 +47,15 @@ expect 0 "switched and recoloured" -- "$PRT" relight -q "$T/set.prt" $LIGHT --br
 same "$T/swp.json" "$T/l.json" 0 "--albedo-of with the same colour"
 expect 0 "render switched" -- $NOLEAK "$PRT" render "$T/set.prt" $LIGHT --target 0,0.5,0 --brdf-of shiny=blinn:40:0.5:0.3 --width 64 --height 48 -o "$T/sw.png"
 
+# The same set from the bake's command line, beside what the surface wears (listed first).
+expect 0 "bake with --brdf-set" -- "$PRT" bake -q "$T/blinn.json" -o "$T/flag.prt" $BAKE --brdf-set shiny=phong:20:0.5:0.3,lambert:0.6
+expect 0 "info of the --brdf-set bake" -- "$PRT" info "$T/flag.prt"
+grep -q "brdf sets: *shiny: blinn:40:0.5:0.3, phong:20:0.5:0.3, lambert:0.6" "$T/out" && ok || bad "--brdf-set: $(grep -i "brdf sets" "$T/out")"
+expect 0 "switch the --brdf-set bake" -- "$PRT" relight -q "$T/flag.prt" $LIGHT --brdf-of shiny=phong:20:0.5:0.3 -o "$T/flag.json"
+same "$T/flag.json" "$T/def.json" 0 "--brdf-set bake switched to phong vs the JSON set's bake as baked"
+expect 2 "--brdf-set on an unknown surface" -- "$PRT" bake -q "$T/blinn.json" -o "$T/x.prt" $BAKE --brdf-set shine=phong:20
+says "no surface 'shine' (the scene has floor, shiny)"
+
 # Against the path tracer tracing each BRDF worn (the spectral test's glossy floor before a
 # glowing wall, seen from one eye: the floor shows the wall only through the glossy final bounce).
 # Switched to each BRDF of the set, the floor is closest to the reference of that BRDF, and within

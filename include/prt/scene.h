@@ -75,6 +75,11 @@ int prt_scene_brdf_count(const prt_scene *scene);
 /* Sets the albedo of every vertex of the surface called name (a material of the mesh files or
  * of the JSON scene) to rgb in [0, 1]; an unknown name is an error listing the names. */
 prt_status prt_scene_paint_albedo(prt_scene *scene, const char *name, const float rgb[3]);
+/* Adds brdf to the BRDFs the surface called name can switch among at run time (as a JSON
+ * material's "brdfs" does; spectral bakes keep them, prt_transfer_brdf_set): the first call for a
+ * surface lists the BRDF it wears first (its material's, or a Lambertian one of its albedo). At
+ * most 64 in all; an unknown name is an error listing the names. */
+prt_status prt_scene_add_brdf_choice(prt_scene *scene, const char *name, const prt_brdf *brdf);
 /* Makes vertices [first, first + count) emit radiance rgb (W / (m^2 sr), from the front of their
  * triangles; 0 turns emission off), as an emissive material of a mesh file does. */
 prt_status prt_scene_set_emission(prt_scene *scene, size_t first, size_t count, const float rgb[3]);

@@ -88,6 +88,9 @@ struct prt_scene {
     struct prt__named_medium { char name[PRT__SURFACE_NAME]; prt_medium m; } *media;
 };
 
+/* Adds brdf to the candidates of surface (1-based) unless it is there; PRT_ERR_INVALID_ARG when
+ * PRT__MAX_BRDF_SET are taken (no message: callers say where). */
+prt_status prt__scene_brdf_choice(prt_scene *scene, int surface, const prt_brdf *brdf);
 /* The material id (1-based) of brdf in the scene's table, adding it if new; 0 when the table is full. */
 int prt__scene_brdf_id(prt_scene *scene, const prt_brdf *brdf);
 

@@ -104,6 +104,49 @@ prt_status prt_scene_paint_albedo(prt_scene *s, const char *name, const float rg
     return prt__mesh_paint(&s->mesh, name, rgb, s->mesh.albedo);
 }
 
+prt_status prt__scene_brdf_choice(prt_scene *s, int surface, const prt_brdf *b)
+{
+    for (int k = 0; k < s->brdf_set_count; ++k)
+        if (s->brdf_set[k].surface == surface && !memcmp(&s->brdf_set[k].brdf, b, sizeof *b)) return PRT_OK;
+    if (s->brdf_set_count == PRT__MAX_BRDF_SET) return PRT_ERR_INVALID_ARG;
+    prt__brdf_choice *grown = realloc(s->brdf_set, (size_t)(s->brdf_set_count + 1) * sizeof *grown);
+    if (!grown) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    s->brdf_set = grown;
+    s->brdf_set[s->brdf_set_count++] = (prt__brdf_choice){(uint16_t)surface, *b};
+    return PRT_OK;
+}
+
+prt_status prt_scene_add_brdf_choice(prt_scene *s, const char *name, const prt_brdf *brdf)
+{
+    if (!s || !name || !brdf) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_add_brdf_choice: scene, name and BRDF are required");
+    int k = 1;
+    while (k <= s->mesh.surface_count && strcmp(s->mesh.surface_names[k - 1], name)) ++k;
+    if (k > s->mesh.surface_count) {
+        char names[512] = "";
+        for (int j = 1, at = 0; j <= s->mesh.surface_count && at < (int)sizeof names; ++j)
+            at += snprintf(names + at, sizeof names - (size_t)at, "%s%s", j > 1 ? ", " : "", s->mesh.surface_names[j - 1]);
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "no surface '%s' (%s%s)", name, s->mesh.surface_count ? "the scene has " : "the scene names none",
+                         names);
+    }
+    prt_brdf b = *brdf;
+    if (prt_brdf_validate(&b)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "%s", prt_last_error());
+    /* The surface's own BRDF comes first (what "as baked" is): its first vertex's material, or
+     * a Lambertian one of its colour. */
+    bool listed = false;
+    for (int e = 0; e < s->brdf_set_count && !listed; ++e) listed = s->brdf_set[e].surface == k;
+    for (size_t v = 0; !listed && s->mesh.surface && v < s->mesh.vertex_count; ++v) {
+        if (s->mesh.surface[v] != k) continue;
+        prt_brdf worn = {PRT_BRDF_LAMBERT};
+        if (s->mesh.material[v]) worn = s->brdfs[s->mesh.material[v] - 1];
+        else memcpy(worn.diffuse, s->mesh.albedo + v * 3, sizeof worn.diffuse);
+        prt_status st = prt__scene_brdf_choice(s, k, &worn);
+        if (st) return st == PRT_ERR_INVALID_ARG ? prt__fail(NULL, st, "more than %d BRDFs in the sets", PRT__MAX_BRDF_SET) : st;
+        break;
+    }
+    prt_status st = prt__scene_brdf_choice(s, k, &b);
+    return st == PRT_ERR_INVALID_ARG ? prt__fail(NULL, st, "more than %d BRDFs in the sets", PRT__MAX_BRDF_SET) : st;
+}
+
 prt_status prt_scene_set_emission(prt_scene *s, size_t first, size_t count, const float rgb[3])
 {
     if (!s || !rgb) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_emission: scene and rgb are required");

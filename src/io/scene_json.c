@@ -187,16 +187,9 @@ static prt_status read_brdf_set(const prt_context *ctx, const char *path, const 
                              cJSON_IsString(e) ? prt_last_error() : "not a string such as \"phong:32:0.5:0.3\"");
         if (!surface) continue;
         if (desc->override_albedo) memcpy(b.diffuse, desc->default_albedo, sizeof b.diffuse);   /* --albedo: its kd too */
-        bool seen = false;
-        for (int k = 0; k < scene->brdf_set_count && !seen; ++k)
-            seen = scene->brdf_set[k].surface == surface && !memcmp(&scene->brdf_set[k].brdf, &b, sizeof b);
-        if (seen) continue;
-        if (scene->brdf_set_count == PRT__MAX_BRDF_SET)
-            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDFs in the materials' \"brdfs\"", path, PRT__MAX_BRDF_SET);
-        prt__brdf_choice *grown = realloc(scene->brdf_set, (size_t)(scene->brdf_set_count + 1) * sizeof *grown);
-        if (!grown) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        scene->brdf_set = grown;
-        scene->brdf_set[scene->brdf_set_count++] = (prt__brdf_choice){(uint16_t)surface, b};
+        prt_status st = prt__scene_brdf_choice(scene, surface, &b);
+        if (st == PRT_ERR_INVALID_ARG) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDFs in the materials' \"brdfs\"", path, PRT__MAX_BRDF_SET);
+        if (st) return st;
     }
     return PRT_OK;
 }
