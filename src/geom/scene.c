@@ -136,7 +136,7 @@ prt_status prt_scene_add_brdf_choice(prt_scene *s, const char *name, const prt_b
     for (int e = 0; e < s->brdf_set_count && !listed; ++e) listed = s->brdf_set[e].surface == k;
     for (size_t v = 0; !listed && s->mesh.surface && v < s->mesh.vertex_count; ++v) {
         if (s->mesh.surface[v] != k) continue;
-        prt_brdf worn = {PRT_BRDF_LAMBERT};
+        prt_brdf worn = {.model = PRT_BRDF_LAMBERT};
         if (s->mesh.material[v]) worn = s->brdfs[s->mesh.material[v] - 1];
         else memcpy(worn.diffuse, s->mesh.albedo + v * 3, sizeof worn.diffuse);
         prt_status st = prt__scene_brdf_choice(s, k, &worn);
