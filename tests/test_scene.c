@@ -184,6 +184,65 @@ static void test_winding(void **state)
         }
         prt_scene_release(s);
     }
+    /* Whatever marks the inside: a spot or sphere light, the JSON scene's camera, or a point the
+     * caller names (the command line's --light and --eye) for a JSON scene or a bare mesh file. A
+     * directional light has no position and a camera outside looks at an object: both flipped. */
+    const char *more[] = {
+        "{\"meshes\": [{\"file\": \"lone_room.obj\"}], \"lights\": [{\"type\": \"spot\", \"position\": [0, 1.5, 0], \"direction\": [0, -1, 0], \"intensity\": 1}]}",
+        "{\"meshes\": [{\"file\": \"lone_room.obj\"}], \"lights\": [{\"type\": \"sphere\", \"position\": [0.5, 1, 0], \"radius\": 0.2, \"radiance\": 1}]}",
+        "{\"meshes\": [{\"file\": \"lone_room.obj\"}], \"camera\": {\"eye\": [0, 0.5, 1.5], \"target\": [0, 0, 0], \"fov\": 60}}",
+        "{\"meshes\": [{\"file\": \"lone_room.obj\"}]}",   /* with desc.inside_points */
+        "lone_room.obj",                                        /* the mesh file, with desc.inside_points */
+        "{\"meshes\": [{\"file\": \"lone_room.obj\"}], \"lights\": [{\"type\": \"directional\", \"direction\": [0, 1, 0], \"irradiance\": 1}]}",
+        "{\"meshes\": [{\"file\": \"lone_room.obj\"}], \"camera\": {\"eye\": [0, 0.5, 8], \"target\": [0, 0, 0]}}"};
+    const float light_at[3] = {0.3f, -1.0f, 0.2f};
+    for (int k = 0; k < 7; ++k) {
+        if (k == 4) snprintf(path, sizeof path, "%s/lone_room.obj", test_dir);
+        else write_text("lit_room.json", more[k], path, sizeof path);
+        d.inside_points = k == 3 || k == 4 ? light_at : NULL;
+        d.inside_point_count = d.inside_points ? 1 : 0;
+        assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
+        pos = prt_scene_positions(s);
+        n = prt_scene_normals(s);
+        for (size_t v = 0; v < prt_scene_vertex_count(s); ++v) {
+            const float *p = pos + v * 3, *q = n + v * 3;
+            const float out = p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
+            if (k < 5) assert_true(out < 0);   /* kept facing in */
+            else assert_true(out > 0);         /* flipped to face out */
+        }
+        float eye[3], target[3], fov;
+        assert_int_equal(prt_scene_camera(s, eye, target, &fov), k == 2 || k == 6);
+        if (k == 2) assert_true(eye[2] == 1.5f && target[1] == 0 && fov == 60);
+        prt_scene_release(s);
+    }
+    d.inside_points = NULL;
+    d.inside_point_count = 0;
+    /* A camera needs an eye and a target, nothing else, and they must differ. */
+    const char *bad[] = {"{\"meshes\": [{\"file\": \"lone_room.obj\"}], \"camera\": {\"eye\": [0, 0, 1]}}",
+                         "{\"meshes\": [{\"file\": \"lone_room.obj\"}], \"camera\": {\"eye\": [0, 0, 1], \"target\": [0, 0, 0], \"up\": [0, 1, 0]}}",
+                         "{\"meshes\": [{\"file\": \"lone_room.obj\"}], \"camera\": {\"eye\": [0, 0, 1], \"target\": [0, 0, 1]}}",
+                         "{\"meshes\": [{\"file\": \"lone_room.obj\"}], \"camera\": {\"eye\": [0, 0, 1], \"target\": [0, 0, 0], \"fov\": 200}}"};
+    for (int k = 0; k < 4; ++k) {
+        write_text("lit_room.json", bad[k], path, sizeof path);
+        assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_ERR_FORMAT);
+        assert_non_null(strstr(prt_last_error(), "camera"));
+    }
+    /* prt_scene_set_lights replaces the scene's lights (validated copies). */
+    write_text("lit_room.json", scenes[1], path, sizeof path);
+    assert_int_equal(prt_scene_load(ctx, path, &d, &s), PRT_OK);
+    assert_int_equal(prt_scene_light_count(s), 1);
+    prt_light two[2] = {{.type = PRT_LIGHT_POINT, .position = {1, 2, 3}, .intensity = {1, 1, 1}},
+                        {.type = PRT_LIGHT_DIRECTIONAL, .direction = {0, 2, 0}, .irradiance = {1, 1, 1}}};
+    assert_int_equal(prt_scene_set_lights(s, two, 2), PRT_OK);
+    assert_int_equal(prt_scene_light_count(s), 2);
+    assert_true(prt_scene_light(s, 1)->direction[1] == 1.0f);   /* normalised in the copy */
+    assert_true(two[1].direction[1] == 2.0f);
+    two[0].intensity[0] = -1;
+    assert_int_not_equal(prt_scene_set_lights(s, two, 2), PRT_OK);
+    assert_int_equal(prt_scene_light_count(s), 2);
+    assert_int_equal(prt_scene_set_lights(s, NULL, 0), PRT_OK);
+    assert_int_equal(prt_scene_light_count(s), 0);
+    prt_scene_release(s);
     prt_context_release(ctx);
 }
 

@@ -41,6 +41,8 @@ unsigned prt_method_lighting(const prt_method *m);
 /* 1 when m's files can be relit with other surface albedos than they were baked with
  * (prt_relight_desc.albedo). */
 int prt_method_runtime_albedo(const prt_method *m);
+/* Without runtime albedo: why the method's surface colours need a rebake (one clause), or NULL. */
+const char *prt_method_baked_albedo_why(const prt_method *m);
 /* 1 when the method always bakes into a light map over the UVs (its resolution is the map's, not
  * the mesh's: subdividing the mesh does not sharpen it). */
 int prt_method_light_map(const prt_method *m);
@@ -249,6 +251,13 @@ typedef struct prt_relight_desc {
      * instead of texels, and a renderer given the result (prt_relit_render_mesh) finishes it.
      * Other methods ignore it. */
     int gpu_finish;
+    /* BRDF switching (the spectral paper's Fig. 7): per named surface k (1..
+     * prt_transfer_surface_count; entry 0 unused), the index of the BRDF of its baked set
+     * (prt_transfer_brdf_set) to reflect with, or -1 for the one it was baked wearing. Only the
+     * glossy reflection changes here; the BRDF's Lambertian part is the surface's albedo, which
+     * `albedo` (NULL: each chosen BRDF's Lambertian part, elsewhere as baked) says. NULL = every
+     * surface as baked. Methods that keep no sets refuse a choice. */
+    const int *brdf_of;
 } prt_relight_desc;
 
 /* What relighting produced: everything the renderer draws. Arrays are owned by the result

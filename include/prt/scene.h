@@ -22,9 +22,10 @@ typedef struct prt_scene prt_scene;
 /* Which side of an imported triangle is its front. Files that carry normals are trusted in AUTO
  * mode; for files without normals, AUTO looks at each connected piece: one that is nearly closed
  * and whose counter-clockwise normals would point inwards (negative signed volume), as scanned
- * meshes such as Stanford's bun_zipper.ply are wound, is flipped - unless another piece or a
- * light of the JSON scene lies inside its bounds, which makes it an enclosure (a room, walls
- * facing in on purpose) that is kept. Both decisions are said through the log hook. */
+ * meshes such as Stanford's bun_zipper.ply are wound, is flipped - unless another piece, a light
+ * (point, spot or sphere) or camera eye of the JSON scene, or one of prt_scene_desc.inside_points
+ * lies inside its bounds, which makes it an enclosure (a room, walls facing in on purpose) that
+ * is kept. Both decisions are said through the log hook. */
 typedef enum prt_winding {
     PRT_WINDING_AUTO = 0,
     PRT_WINDING_KEEP,     /* counter-clockwise is the front, as the file says */
@@ -48,6 +49,13 @@ typedef struct prt_scene_desc {
     int import_in_process;   /* non-zero: call assimp in this process (no time limit, no containment) */
     /* Last, so that older zero-initialisers keep meaning "0.7 grey". */
     int default_albedo_given; /* non-zero: default_albedo as given, black included */
+    /* World points that count as inside the scene's rooms for PRT_WINDING_AUTO, beside the lights
+     * and the camera a JSON scene names: the positions of lights given elsewhere (the command
+     * line's --light) and the camera's eye. A closed piece wound inwards around one of them is a
+     * room seen from inside and keeps its winding. 3 floats per point, borrowed for the call;
+     * NULL / 0 = none. */
+    const float *inside_points;
+    size_t inside_point_count;
 } prt_scene_desc;
 
 /* path: a mesh file, or a .json scene file (see docs/SCENE.md). */
@@ -67,6 +75,11 @@ int prt_scene_brdf_count(const prt_scene *scene);
 /* Sets the albedo of every vertex of the surface called name (a material of the mesh files or
  * of the JSON scene) to rgb in [0, 1]; an unknown name is an error listing the names. */
 prt_status prt_scene_paint_albedo(prt_scene *scene, const char *name, const float rgb[3]);
+/* Adds brdf to the BRDFs the surface called name can switch among at run time (as a JSON
+ * material's "brdfs" does; spectral bakes keep them, prt_transfer_brdf_set): the first call for a
+ * surface lists the BRDF it wears first (its material's, or a Lambertian one of its albedo). At
+ * most 64 in all; an unknown name is an error listing the names. */
+prt_status prt_scene_add_brdf_choice(prt_scene *scene, const char *name, const prt_brdf *brdf);
 /* Makes vertices [first, first + count) emit radiance rgb (W / (m^2 sr), from the front of their
  * triangles; 0 turns emission off), as an emissive material of a mesh file does. */
 prt_status prt_scene_set_emission(prt_scene *scene, size_t first, size_t count, const float rgb[3]);
@@ -86,6 +99,12 @@ int prt_scene_environment(const prt_scene *scene, prt_environment_desc *out);
 /* The local lights a JSON scene names ("lights"), in file order. */
 int prt_scene_light_count(const prt_scene *scene);
 const prt_light *prt_scene_light(const prt_scene *scene, int index);
+/* Replaces the scene's local lights by a copy of lights[0, count) (count 0: none), as if its JSON
+ * had named them: a bake stores them in its file and refinement probes them. Each is validated. */
+prt_status prt_scene_set_lights(prt_scene *scene, const prt_light *lights, int count);
+/* The camera a JSON scene names ("camera": eye, target, vertical field of view in degrees, 0 when
+ * not given); returns 0 when it names none. */
+int prt_scene_camera(const prt_scene *scene, float eye[3], float target[3], float *fov_deg);
 /* Emitted radiance per vertex (3 floats, W/(m^2 sr), leaving the front side), from emissive
  * materials (Ke in MTL, emissiveFactor in glTF, "emission" in scene JSON); NULL when nothing emits. */
 const float *prt_scene_emission(const prt_scene *scene);

@@ -62,6 +62,11 @@ const uint16_t *prt_transfer_surfaces(const prt_transfer *t);
  * vertex of the surface called name to rgb, in [0, 1]: what prt_relight_desc.albedo takes for
  * methods that change colours at run time. An unknown name is an error that lists the names. */
 prt_status prt_transfer_paint_albedo(const prt_transfer *t, const char *name, const float rgb[3], float *albedo);
+/* BRDF sets: the candidate BRDFs the bake kept for named surface k (1..surface count), that
+ * relighting switches among at run time (prt_relight_desc.brdf_of; a scene material's "brdfs",
+ * docs/SCENE.md). Returns their count (0: none, or a method that keeps none); when i is in range,
+ * *out gets entry i. The surface's baked BRDF is among them. */
+int prt_transfer_brdf_set(const prt_transfer *t, int k, int i, prt_brdf *out);
 /* CPU evaluation of glossy exit coefficients (prt_relit.exit_sh) for one vertex:
  * to_eye points from the surface to the viewer; normal is the shading normal. */
 void prt_glossy_eval(int order, const float *exit_coeffs, int mirror, const float normal[3], const float to_eye[3], float rgb[3]);

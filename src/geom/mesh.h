@@ -64,6 +64,13 @@ bool prt__mesh_reserve(prt__mesh *m, size_t max_v);
  * arrays must have room (prt__mesh_reserve). */
 uint32_t prt__mesh_midpoint(prt__mesh *m, uint32_t a, uint32_t b);
 
+/* One candidate BRDF of a named surface, for methods that switch BRDFs at run time. */
+#define PRT__MAX_BRDF_SET 64
+typedef struct prt__brdf_choice {
+    uint16_t surface;                 /* 1-based surface id */
+    prt_brdf brdf;
+} prt__brdf_choice;
+
 struct prt_scene {
     prt__mesh mesh;
     int brdf_count;
@@ -73,17 +80,24 @@ struct prt_scene {
     prt_environment_desc env;
     int light_count;
     prt_light *lights;
+    bool has_camera;                  /* a JSON scene's "camera" */
+    float camera_eye[3], camera_target[3], camera_fov;
+    int brdf_set_count;               /* candidate BRDFs of named surfaces (a material's "brdfs") */
+    prt__brdf_choice *brdf_set;
     int medium_count;                 /* translucent surfaces, by name */
     struct prt__named_medium { char name[PRT__SURFACE_NAME]; prt_medium m; } *media;
 };
 
+/* Adds brdf to the candidates of surface (1-based) unless it is there; PRT_ERR_INVALID_ARG when
+ * PRT__MAX_BRDF_SET are taken (no message: callers say where). */
+prt_status prt__scene_brdf_choice(prt_scene *scene, int surface, const prt_brdf *brdf);
 /* The material id (1-based) of brdf in the scene's table, adding it if new; 0 when the table is full. */
 int prt__scene_brdf_id(prt_scene *scene, const prt_brdf *brdf);
 
 /* Adds the mesh file at path (anything assimp reads), with optional transform (row-major 4x4,
  * NULL = identity) and albedo override (NULL = from materials, else desc default). `inside`
- * holds inside_count world points (the scene's lights) that a room around them must keep facing:
- * a closed piece around one is never flipped. */
+ * holds inside_count world points (the scene's lights, its camera's eye, desc->inside_points) that
+ * a room around them must keep facing: a closed piece around one is never flipped. */
 prt_status prt__import_mesh(const prt_context *ctx, const char *path, const float *xform, const float *albedo_override,
                             const float *inside, size_t inside_count, const prt_scene_desc *desc, prt__mesh *m);
 /* Adds every mesh a .json scene names. */

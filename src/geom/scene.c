@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <sys/stat.h>
 #include <string.h>
 #include <strings.h>
@@ -48,7 +49,7 @@ prt_status prt_scene_load(prt_context *ctx, const char *path, const prt_scene_de
     prt_scene *s = prt__calloc(1, sizeof *s);
     if (!s) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     prt_status st = ends_with(path, ".json") ? prt__import_scene_json(ctx, path, &d, s)
-                                             : prt__import_mesh(ctx, path, NULL, NULL, NULL, 0, &d, &s->mesh);
+                                             : prt__import_mesh(ctx, path, NULL, NULL, d.inside_points, d.inside_points ? d.inside_point_count : 0, &d, &s->mesh);
     if (st != PRT_OK) { prt_scene_release(s); return st; }
     return finish(ctx, s, &d, path, out);
 }
@@ -103,6 +104,49 @@ prt_status prt_scene_paint_albedo(prt_scene *s, const char *name, const float rg
     return prt__mesh_paint(&s->mesh, name, rgb, s->mesh.albedo);
 }
 
+prt_status prt__scene_brdf_choice(prt_scene *s, int surface, const prt_brdf *b)
+{
+    for (int k = 0; k < s->brdf_set_count; ++k)
+        if (s->brdf_set[k].surface == surface && !memcmp(&s->brdf_set[k].brdf, b, sizeof *b)) return PRT_OK;
+    if (s->brdf_set_count == PRT__MAX_BRDF_SET) return PRT_ERR_INVALID_ARG;
+    prt__brdf_choice *grown = realloc(s->brdf_set, (size_t)(s->brdf_set_count + 1) * sizeof *grown);
+    if (!grown) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    s->brdf_set = grown;
+    s->brdf_set[s->brdf_set_count++] = (prt__brdf_choice){(uint16_t)surface, *b};
+    return PRT_OK;
+}
+
+prt_status prt_scene_add_brdf_choice(prt_scene *s, const char *name, const prt_brdf *brdf)
+{
+    if (!s || !name || !brdf) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_add_brdf_choice: scene, name and BRDF are required");
+    int k = 1;
+    while (k <= s->mesh.surface_count && strcmp(s->mesh.surface_names[k - 1], name)) ++k;
+    if (k > s->mesh.surface_count) {
+        char names[512] = "";
+        for (int j = 1, at = 0; j <= s->mesh.surface_count && at < (int)sizeof names; ++j)
+            at += snprintf(names + at, sizeof names - (size_t)at, "%s%s", j > 1 ? ", " : "", s->mesh.surface_names[j - 1]);
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "no surface '%s' (%s%s)", name, s->mesh.surface_count ? "the scene has " : "the scene names none",
+                         names);
+    }
+    prt_brdf b = *brdf;
+    if (prt_brdf_validate(&b)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "%s", prt_last_error());
+    /* The surface's own BRDF comes first (what "as baked" is): its first vertex's material, or
+     * a Lambertian one of its colour. */
+    bool listed = false;
+    for (int e = 0; e < s->brdf_set_count && !listed; ++e) listed = s->brdf_set[e].surface == k;
+    for (size_t v = 0; !listed && s->mesh.surface && v < s->mesh.vertex_count; ++v) {
+        if (s->mesh.surface[v] != k) continue;
+        prt_brdf worn = {.model = PRT_BRDF_LAMBERT};
+        if (s->mesh.material[v]) worn = s->brdfs[s->mesh.material[v] - 1];
+        else memcpy(worn.diffuse, s->mesh.albedo + v * 3, sizeof worn.diffuse);
+        prt_status st = prt__scene_brdf_choice(s, k, &worn);
+        if (st) return st == PRT_ERR_INVALID_ARG ? prt__fail(NULL, st, "more than %d BRDFs in the sets", PRT__MAX_BRDF_SET) : st;
+        break;
+    }
+    prt_status st = prt__scene_brdf_choice(s, k, &b);
+    return st == PRT_ERR_INVALID_ARG ? prt__fail(NULL, st, "more than %d BRDFs in the sets", PRT__MAX_BRDF_SET) : st;
+}
+
 prt_status prt_scene_set_emission(prt_scene *s, size_t first, size_t count, const float rgb[3])
 {
     if (!s || !rgb) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_emission: scene and rgb are required");
@@ -132,6 +176,7 @@ void prt_scene_release(prt_scene *s)
     if (!s) return;
     prt__mesh_free(&s->mesh);
     free(s->lights);
+    free(s->brdf_set);
     free(s->media);
     free(s);
 }
@@ -184,6 +229,32 @@ int prt_scene_light_count(const prt_scene *s) { return s ? s->light_count : 0; }
 const prt_light *prt_scene_light(const prt_scene *s, int index)
 {
     return s && index >= 0 && index < s->light_count ? &s->lights[index] : NULL;
+}
+
+prt_status prt_scene_set_lights(prt_scene *s, const prt_light *lights, int count)
+{
+    if (!s || count < 0 || (count && !lights)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_lights: scene and lights (count >= 0) are required");
+    prt_light *copy = count ? malloc((size_t)count * sizeof *copy) : NULL;
+    if (count && !copy) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    if (count) memcpy(copy, lights, (size_t)count * sizeof *copy);
+    for (int i = 0; i < count; ++i)
+        if (prt_light_validate(&copy[i])) {
+            free(copy);
+            return prt__fail(NULL, PRT_ERR_INVALID_ARG, "light %d: %s", i + 1, prt_last_error());
+        }
+    free(s->lights);
+    s->lights = copy;
+    s->light_count = count;
+    return PRT_OK;
+}
+
+int prt_scene_camera(const prt_scene *s, float eye[3], float target[3], float *fov_deg)
+{
+    if (!s || !s->has_camera) return 0;
+    if (eye) memcpy(eye, s->camera_eye, sizeof s->camera_eye);
+    if (target) memcpy(target, s->camera_target, sizeof s->camera_target);
+    if (fov_deg) *fov_deg = s->camera_fov;
+    return 1;
 }
 
 const float *prt_scene_emission(const prt_scene *s) { return s ? s->mesh.emission : NULL; }

@@ -433,7 +433,7 @@ prt_status prt__import_mesh(const prt_context *ctx, const char *path, const floa
         prt__log(ctx, PRT_LOG_WARN, "%s: %u closed piece%s wound clockwise with nothing inside (an object seen from outside, normals pointing in): "
                  "flipped (--winding keep to prevent)", path, nflip, nflip == 1 ? "" : "s");
     if (!st && (flags & PRT__IMPORT_KEPT_ENCLOSURE))
-        prt__log(ctx, PRT_LOG_INFO, "%s: %u closed piece%s wound clockwise around other geometry or a light (a room seen from inside): kept as %s "
+        prt__log(ctx, PRT_LOG_INFO, "%s: %u closed piece%s wound clockwise around other geometry, a light or the camera (a room seen from inside): kept as %s "
                  "(--winding flip to flip)", path, nkept, nkept == 1 ? "" : "s", nkept == 1 ? "it is" : "they are");
     return st;
 }

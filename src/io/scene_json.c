@@ -3,6 +3,7 @@
 #include "geom/mesh.h"
 
 #include <cjson/cJSON.h>
+#include <stdlib.h>
 #include <string.h>
 
 static prt_status read_vec3(const prt_context *ctx, const cJSON *item, const char *what, float out[3])
@@ -155,6 +156,68 @@ static prt_status read_lights(const prt_context *ctx, const char *path, const cJ
     return PRT_OK;
 }
 
+/* The BRDF a material wears: its "brdf", else the first of its "brdfs" (the set it can switch
+ * among at run time); NULL when it names none. */
+static const cJSON *material_brdf(const cJSON *mat)
+{
+    const cJSON *b = cJSON_GetObjectItemCaseSensitive(mat, "brdf");
+    if (b) return b;
+    const cJSON *set = cJSON_GetObjectItemCaseSensitive(mat, "brdfs");
+    return cJSON_IsArray(set) ? cJSON_GetArrayItem(set, 0) : NULL;
+}
+
+/* A material's "brdfs": the BRDFs its surface can switch among at run time, the one it wears
+ * (its "brdf", else the first) among them, each once. A material no surface wears has none. */
+static prt_status read_brdf_set(const prt_context *ctx, const char *path, const cJSON *mat, const prt_scene_desc *desc, prt_scene *scene)
+{
+    const cJSON *set = cJSON_GetObjectItemCaseSensitive(mat, "brdfs"), *e;
+    if (!set) return PRT_OK;
+    if (!cJSON_IsArray(set) || cJSON_GetArraySize(set) == 0)
+        return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"brdfs\" must be a non-empty array of BRDF strings", path, mat->string);
+    int surface = 0;
+    for (int k = 1; k <= scene->mesh.surface_count && !surface; ++k)
+        if (!strcmp(scene->mesh.surface_names[k - 1], mat->string)) surface = k;
+    const cJSON *worn = cJSON_GetObjectItemCaseSensitive(mat, "brdf");
+    for (int i = -1; i < cJSON_GetArraySize(set); ++i) {
+        e = i < 0 ? worn : cJSON_GetArrayItem(set, i);
+        if (!e) continue;
+        prt_brdf b;
+        if (!cJSON_IsString(e) || prt_brdf_parse(e->valuestring, &b))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"brdfs\"[%d]: %s", path, mat->string, i < 0 ? 0 : i,
+                             cJSON_IsString(e) ? prt_last_error() : "not a string such as \"phong:32:0.5:0.3\"");
+        if (!surface) continue;
+        if (desc->override_albedo) memcpy(b.diffuse, desc->default_albedo, sizeof b.diffuse);   /* --albedo: its kd too */
+        prt_status st = prt__scene_brdf_choice(scene, surface, &b);
+        if (st == PRT_ERR_INVALID_ARG) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': more than %d BRDFs in the materials' \"brdfs\"", path, PRT__MAX_BRDF_SET);
+        if (st) return st;
+    }
+    return PRT_OK;
+}
+
+/* "camera": {"eye": [x, y, z], "target": [x, y, z], "fov": degrees}; eye and target required. */
+static prt_status read_camera(const prt_context *ctx, const char *path, const cJSON *o, prt_scene *scene)
+{
+    const cJSON *eye = cJSON_GetObjectItemCaseSensitive(o, "eye"), *target = cJSON_GetObjectItemCaseSensitive(o, "target"),
+                *fov = cJSON_GetObjectItemCaseSensitive(o, "fov"), *v;
+    if (!cJSON_IsObject(o) || !cJSON_IsArray(eye) || !cJSON_IsArray(target))
+        return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': \"camera\" must be an object with \"eye\" and \"target\" ([x, y, z]) and an optional \"fov\"", path);
+    cJSON_ArrayForEach(v, o)
+        if (strcmp(v->string, "eye") && strcmp(v->string, "target") && strcmp(v->string, "fov"))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': \"camera\" has no \"%s\" (eye, target, fov)", path, v->string);
+    prt_status st;
+    if ((st = read_vec3(ctx, eye, "camera eye", scene->camera_eye)) || (st = read_vec3(ctx, target, "camera target", scene->camera_target))) return st;
+    scene->camera_fov = 0;
+    if (fov) {
+        if (!cJSON_IsNumber(fov) || !(fov->valuedouble > 0 && fov->valuedouble < 180))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': camera \"fov\" must be a vertical angle in (0, 180) degrees", path);
+        scene->camera_fov = (float)fov->valuedouble;
+    }
+    const float *e = scene->camera_eye, *t = scene->camera_target;
+    if (e[0] == t[0] && e[1] == t[1] && e[2] == t[2]) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': camera \"eye\" and \"target\" are the same point", path);
+    scene->has_camera = true;
+    return PRT_OK;
+}
+
 prt_status prt__import_scene_json(const prt_context *ctx, const char *path, const prt_scene_desc *desc, prt_scene *scene)
 {
     prt__mesh *m = &scene->mesh;
@@ -183,11 +246,19 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
     }
     const cJSON *lights = cJSON_GetObjectItemCaseSensitive(root, "lights");
     if (lights && (st = read_lights(ctx, path, lights, scene))) { cJSON_Delete(root); return st; }
-    /* Lights with a position sit inside whatever room they light: its walls face them. */
-    float light_points[64 * 3];
+    const cJSON *camera = cJSON_GetObjectItemCaseSensitive(root, "camera");
+    if (camera && (st = read_camera(ctx, path, camera, scene))) { cJSON_Delete(root); return st; }
+    /* Lights with a position sit inside whatever room they light, and the camera inside the room
+     * it looks around: its walls face them. So do the points the caller names (its own lights). */
+    const size_t extra = desc->inside_points ? desc->inside_point_count : 0;
+    float *light_points = malloc(((size_t)scene->light_count + 1 + extra) * 3 * sizeof *light_points);
+    if (!light_points) { cJSON_Delete(root); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
     size_t light_point_count = 0;
-    for (int i = 0; i < scene->light_count && light_point_count < 64; ++i)
+    for (int i = 0; i < scene->light_count; ++i)
         if (scene->lights[i].type != PRT_LIGHT_DIRECTIONAL) memcpy(light_points + light_point_count++ * 3, scene->lights[i].position, 3 * sizeof(float));
+    if (scene->has_camera) memcpy(light_points + light_point_count++ * 3, scene->camera_eye, 3 * sizeof(float));
+    if (extra) memcpy(light_points + light_point_count * 3, desc->inside_points, extra * 3 * sizeof(float));
+    light_point_count += extra;
     const cJSON *item;
     int index = 0;
     cJSON_ArrayForEach(item, meshes) {
@@ -210,7 +281,7 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
             const cJSON *mat = cJSON_IsString(v) ? cJSON_GetObjectItemCaseSensitive(materials, v->valuestring) : NULL;
             if (!mat) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': meshes[%d] names a material that \"materials\" does not define", path, index); break; }
             a = cJSON_GetObjectItemCaseSensitive(mat, "albedo");
-            b = cJSON_GetObjectItemCaseSensitive(mat, "brdf");
+            b = material_brdf(mat);
             e = cJSON_GetObjectItemCaseSensitive(mat, "emission");
             if (!a && !b && !e && !cJSON_GetObjectItemCaseSensitive(mat, "subsurface")) {
                 st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s' needs an \"albedo\", a \"brdf\", an \"emission\" or a \"subsurface\"", path,
@@ -257,7 +328,7 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
             for (int sid = 1; sid <= m->surface_count && !st; ++sid) {
                 const cJSON *mat = cJSON_GetObjectItemCaseSensitive(materials, m->surface_names[sid - 1]);
                 if (!mat) continue;
-                const cJSON *ma = cJSON_GetObjectItemCaseSensitive(mat, "albedo"), *mb = cJSON_GetObjectItemCaseSensitive(mat, "brdf"),
+                const cJSON *ma = cJSON_GetObjectItemCaseSensitive(mat, "albedo"), *mb = material_brdf(mat),
                             *me = cJSON_GetObjectItemCaseSensitive(mat, "emission");
                 float mrgb[3] = {0, 0, 0}, mle[3] = {0, 0, 0};
                 int brdf_id = 0;
@@ -303,6 +374,9 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         index++;
     }
     if (!st) prt__mesh_compact_surfaces(m);   /* the files' names a JSON material replaced */
+    const cJSON *setmat, *sets = st ? NULL : materials;
+    cJSON_ArrayForEach(setmat, sets)
+        if ((st = read_brdf_set(ctx, path, setmat, desc, scene))) break;
     /* Translucent materials: "subsurface" is a measured medium's name or its coefficients. A
      * material no surface wears has nothing to make translucent. */
     const cJSON *mat, *translucent = st ? NULL : materials;
@@ -333,6 +407,7 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         if (!st && worn && prt_scene_set_medium(scene, mat->string, &med)) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': %s", path, prt_last_error());
         if (st) break;
     }
+    free(light_points);
     cJSON_Delete(root);
     return st;
 }

@@ -34,6 +34,7 @@ const char *prt_method_title(const prt_method *m) { return m ? m->title : ""; }
 const char *prt_method_summary(const prt_method *m) { return m ? m->summary : ""; }
 unsigned prt_method_lighting(const prt_method *m) { return m ? m->lighting : 0; }
 int prt_method_runtime_albedo(const prt_method *m) { return m && m->runtime_albedo; }
+const char *prt_method_baked_albedo_why(const prt_method *m) { return m && !m->runtime_albedo ? m->baked_albedo_why : NULL; }
 int prt_method_sharp_environment(const prt_method *m) { return m && m->sharp_environment; }
 int prt_method_light_map(const prt_method *m) { return m && m->light_map; }
 int prt_method_gpu_passes(const prt_method *m) { return m && m->gpu_passes; }

@@ -198,5 +198,8 @@ prt_status prt_bake(prt_context *ctx, const prt_scene *scene, const prt_method *
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake: options made for method %s, not %s", prt_method_name(prt_options_method(o)), m->name);
     if (prt__options_exporting(o))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake takes bake options (prt_options_create), not export options");
+    if (scene && scene->brdf_set_count && !m->brdf_set)
+        prt__log(ctx, PRT_LOG_WARN, "the scene's materials list \"brdfs\" to switch among at run time, which %s files do not keep "
+                 "(spectral files do): each surface keeps the BRDF it wears", m->name);
     return prt__bake_with(ctx, scene, m, begin_from_options, o, run, out);
 }

@@ -103,6 +103,14 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
             cJSON *o = cJSON_CreateObject();
             cJSON_AddStringToObject(o, "name", t->mesh.surface_names[k]);
             cJSON_AddNumberToObject(o, "vertices", (double)sizes[k + 1]);
+            const int nb = prt_transfer_brdf_set(t, k + 1, -1, NULL);
+            cJSON *set = nb ? cJSON_AddArrayToObject(o, "brdfs") : NULL;   /* what --brdf-of switches among */
+            for (int i = 0; i < nb; ++i) {
+                prt_brdf b;
+                prt_transfer_brdf_set(t, k + 1, i, &b);
+                prt_brdf_format(&b, spec, sizeof spec);
+                cJSON_AddItemToArray(set, cJSON_CreateString(spec));
+            }
             cJSON_AddItemToArray(surfaces, o);
         }
         free(sizes);
@@ -149,10 +157,28 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
     for (int k = 0; sizes && k < t->mesh.surface_count; ++k)
         prt__describe_line(&d, k ? "" : "surfaces:", "%s (%zu vertices)", t->mesh.surface_names[k], sizes[k + 1]);
     free(sizes);
+    /* The BRDF sets, each surface's on one line: what --brdf-of and the viewer's m switch among. */
+    for (int k = 1, first = 1; k <= t->mesh.surface_count; ++k) {
+        const int nb = prt_transfer_brdf_set(t, k, -1, NULL);
+        if (!nb) continue;
+        char line[1024];
+        size_t at = (size_t)snprintf(line, sizeof line, "%s:", t->mesh.surface_names[k - 1]);
+        for (int i = 0; i < nb && at < sizeof line; ++i) {
+            prt_brdf b;
+            prt_transfer_brdf_set(t, k, i, &b);
+            prt_brdf_format(&b, spec, sizeof spec);
+            at += (size_t)snprintf(line + at, sizeof line - at, "%s %s", i ? "," : "", spec);
+        }
+        prt__describe_line(&d, first ? "brdf sets:" : "", "%s", line);
+        first = 0;
+    }
     /* What the file can be relit under and with, so that help texts can point here. */
     char relights[256] = "";
     prt_lights_names(t->method->lighting, ", ", relights, sizeof relights);
-    prt__describe_line(&d, "relights:", "%s%s%s", relights, t->method->runtime_albedo ? "; surface colours live (--albedo-of)" : "",
+    bool sets = false;
+    for (int k = 1; k <= t->mesh.surface_count && !sets; ++k) sets = prt_transfer_brdf_set(t, k, -1, NULL) > 0;
+    prt__describe_line(&d, "relights:", "%s%s%s%s", relights, t->method->runtime_albedo ? "; surface colours live (--albedo-of)" : "",
+                       sets ? "; BRDFs of the baked sets (--brdf-of)" : "",
                        t->method->gpu_passes ? "; GPU passes (--accumulate gpu)" : "");
     for (int i = 0; i < t->method->export_option_count; ++i)
         prt__describe_line(&d, i ? "" : "exports:", "--%s%s%s", t->method->export_options[i].name, t->method->export_options[i].arg ? " " : "",

@@ -8,9 +8,8 @@
 #define CHUNK_UVS PRT__FOURCC('U', 'V', 'S', '0')
 #define CHUNK_EMIS PRT__FOURCC('E', 'M', 'I', 'S')
 #define CHUNK_SURF PRT__FOURCC('S', 'U', 'R', 'F')
-#define BRDF_RECORD 160   /* model, lobes, then 38 floats: see put_brdf */
 
-static void put_brdf(unsigned char *p, const prt_brdf *b)
+void prt__brdf_put(unsigned char *p, const prt_brdf *b)
 {
     float f[38];
     memcpy(f, b->diffuse, 12);
@@ -26,7 +25,7 @@ static void put_brdf(unsigned char *p, const prt_brdf *b)
     memcpy(p + 8, f, sizeof f);
 }
 
-static void get_brdf(const unsigned char *p, prt_brdf *b)
+void prt__brdf_get(const unsigned char *p, prt_brdf *b)
 {
     float f[38];
     memset(b, 0, sizeof *b);
@@ -91,12 +90,12 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path)
                     m->triangle_count * 3 * sizeof(uint32_t), NULL);
     if (t->brdf_count) {
         /* count, pad, the BRDF records, then one material id per vertex padded to 8 bytes. */
-        size_t bytes = 8 + (size_t)t->brdf_count * BRDF_RECORD + ((m->vertex_count + 7) & ~(size_t)7);
+        size_t bytes = 8 + (size_t)t->brdf_count * PRT__BRDF_RECORD + ((m->vertex_count + 7) & ~(size_t)7);
         unsigned char *matl = prt__chunks_alloc(&l, bytes);
         if (matl) {
             prt__put32(matl, (uint32_t)t->brdf_count);
-            for (int k = 0; k < t->brdf_count; ++k) put_brdf(matl + 8 + (size_t)k * BRDF_RECORD, &t->brdfs[k]);
-            if (m->material) memcpy(matl + 8 + (size_t)t->brdf_count * BRDF_RECORD, m->material, m->vertex_count);
+            for (int k = 0; k < t->brdf_count; ++k) prt__brdf_put(matl + 8 + (size_t)k * PRT__BRDF_RECORD, &t->brdfs[k]);
+            if (m->material) memcpy(matl + 8 + (size_t)t->brdf_count * PRT__BRDF_RECORD, m->material, m->vertex_count);
         }
         prt__chunks_add(&l, CHUNK_MATL, matl, bytes, NULL);
     }
@@ -229,14 +228,14 @@ static prt_status read_materials(prt_context *ctx, const prt__chunk_in *c, prt_t
     const unsigned char *p = c->data;
     const uint64_t nv = t->mesh.vertex_count, len = c->size;
     uint32_t nb = len >= 8 ? prt__get32(p) : 0;
-    if (nb == 0 || nb > PRT__MAX_BRDFS || 8 + (uint64_t)nb * BRDF_RECORD + ((nv + 7) & ~7ull) != len)
+    if (nb == 0 || nb > PRT__MAX_BRDFS || 8 + (uint64_t)nb * PRT__BRDF_RECORD + ((nv + 7) & ~7ull) != len)
         return bad(ctx, "corrupt .prt file: invalid material chunk");
     for (uint32_t k = 0; k < nb; ++k) {
-        get_brdf(p + 8 + (size_t)k * BRDF_RECORD, &t->brdfs[k]);
+        prt__brdf_get(p + 8 + (size_t)k * PRT__BRDF_RECORD, &t->brdfs[k]);
         if (prt_brdf_validate(&t->brdfs[k])) return bad(ctx, "corrupt .prt file: invalid BRDF in the material chunk");
     }
     t->brdf_count = (int)nb;
-    memcpy(t->mesh.material, p + 8 + (size_t)nb * BRDF_RECORD, nv);
+    memcpy(t->mesh.material, p + 8 + (size_t)nb * PRT__BRDF_RECORD, nv);
     for (uint64_t v = 0; v < nv; ++v)
         if (t->mesh.material[v] > nb) return bad(ctx, "corrupt .prt file: a material id is out of range");
     return PRT_OK;

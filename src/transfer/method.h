@@ -95,6 +95,7 @@ struct prt_method {
     const char *summary;    /* one line */
     unsigned lighting;      /* PRT_LIGHTS_* it relights */
     bool runtime_albedo;    /* relight honours prt_relight_desc.albedo */
+    const char *baked_albedo_why;   /* without runtime_albedo: why colours need a rebake (one clause), or NULL */
     bool light_map;         /* always bakes a light map (prt_method_light_map) */
     const char *light_map_option;   /* its INT option that bakes a light map of that size instead of
                                      * per-vertex transfer (0 = off), or NULL (prt_method_light_map_option) */
@@ -134,6 +135,10 @@ struct prt_method {
     int (*default_variant)(const prt_transfer *t, int drawing);
     int (*find_variant)(const prt_transfer *t, const char *name);
     void (*control_range)(const prt_transfer *t, int index, int *lo, int *hi, int *def);
+    /* The candidate BRDFs the bake kept for named surface `surface` (1-based), which relighting
+     * switches among (prt_relight_desc.brdf_of): returns their count, *out = entry i when in range.
+     * NULL: the method keeps none. */
+    int (*brdf_set)(const prt_transfer *t, int surface, int i, prt_brdf *out);
 
     /* Relight: lighting (already checked against `lighting`) + desc (defaults filled) -> out.
      * shade (may be NULL) adds the view-dependent part of r that only the method can evaluate on
@@ -142,6 +147,12 @@ struct prt_method {
     prt_status (*relight)(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *out);
     prt_status (*shade)(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb);
 };
+
+/* A BRDF as PRT__BRDF_RECORD bytes of a .prt (model, lobes, 38 floats), and back (unchecked:
+ * validate what is read). */
+#define PRT__BRDF_RECORD 160
+void prt__brdf_put(unsigned char *p, const prt_brdf *b);
+void prt__brdf_get(const unsigned char *p, prt_brdf *b);
 
 /* Adds a line to an export's report. */
 void prt__export_report(prt_export_result *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));

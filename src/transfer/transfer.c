@@ -249,7 +249,15 @@ prt_status prt_relight(prt_context *ctx, const prt_transfer *t, const prt_lighti
     if (d.variant >= variants(t)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "variant %d out of range (the file has %d)", d.variant, variants(t));
     if (d.component < PRT_COMPONENT_ALL || d.component > PRT_COMPONENT_INDIRECT) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown light component %d", d.component);
     if (d.albedo && !t->method->runtime_albedo)
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the %s method bakes surface colours in: changing them needs a rebake", t->method->name);
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the %s method bakes surface colours in%s%s: changing them needs a rebake", t->method->name,
+                         t->method->baked_albedo_why ? " - " : "", t->method->baked_albedo_why ? t->method->baked_albedo_why : "");
+    for (int k = 1; d.brdf_of && k <= t->mesh.surface_count; ++k) {
+        if (d.brdf_of[k] < 0) continue;
+        const int n = prt_transfer_brdf_set(t, k, -1, NULL);
+        if (!n) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "surface '%s' has no BRDF set to switch among%s", t->mesh.surface_names[k - 1],
+                                 t->method->brdf_set ? " (a material's \"brdfs\" in the scene)" : " (spectral bakes keep one: a material's \"brdfs\")");
+        if (d.brdf_of[k] >= n) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "surface '%s': BRDF %d out of range (its set has %d)", t->mesh.surface_names[k - 1], d.brdf_of[k], n);
+    }
     if (d.albedo)
         for (size_t i = 0; i < t->mesh.vertex_count * 3; ++i)
             if (!(d.albedo[i] >= 0.0f && d.albedo[i] <= 1.0f)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "albedo must lie in [0, 1]");
@@ -265,6 +273,12 @@ prt_status prt_relight(prt_context *ctx, const prt_transfer *t, const prt_lighti
         st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "relighting overflowed (the result is not finite): the lighting is too bright");
     if (st) prt_relit_free(out);
     return st;
+}
+
+int prt_transfer_brdf_set(const prt_transfer *t, int k, int i, prt_brdf *out)
+{
+    if (!t || !t->method->brdf_set || k < 1 || k > t->mesh.surface_count) return 0;
+    return t->method->brdf_set(t, k, i, out);
 }
 
 unsigned prt_relight_needs(const prt_transfer *t, const prt_lighting *l)

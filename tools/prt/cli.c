@@ -321,6 +321,15 @@ void cli_view_camera(const cli *c, const cli_view *v, const float *p, size_t nv,
 }
 
 /* ---- scene ---- */
+size_t cli_inside_points(const cli_light *l, const cli_view *v, float out[CLI_MAX_INSIDE_POINTS * 3])
+{
+    size_t n = 0;
+    for (int i = 0; l && l->set_lights && i < l->light_count; ++i)
+        if (l->lights[i].type != PRT_LIGHT_DIRECTIONAL) memcpy(out + n++ * 3, l->lights[i].position, 3 * sizeof(float));
+    if (v && v->have_eye) memcpy(out + n++ * 3, v->eye, 3 * sizeof(float));
+    return n;
+}
+
 int cli_scene_option(cli *c, prt_scene_desc *sd, int opt, const char *arg)
 {
     switch (opt) {
@@ -410,6 +419,19 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
             if (!(rgb[k] >= 0.0f && rgb[k] <= 1.0f)) { cli_usage(c, "--albedo-of %s: albedo must lie in [0, 1]", arg); return -1; }
         memcpy(l->paint[l->paint_count].name, arg, (size_t)(eq - arg));
         l->paint[l->paint_count++].name[eq - arg] = 0;
+        return 1;
+    }
+    case OPT_BRDF_OF: {
+        const char *eq = strchr(arg, '=');
+        prt_brdf b;
+        if (!eq || eq == arg || eq - arg >= 64 || strlen(eq + 1) >= 128 || l->brdf_of_count == CLI_MAX_LIGHTS) {
+            cli_usage(c, "--brdf-of takes NAME=SPEC (phong:32:0.5:0.3, ...), at most %d times", CLI_MAX_LIGHTS);
+            return -1;
+        }
+        if (prt_brdf_parse(eq + 1, &b)) { cli_usage(c, "--brdf-of %s: %s", arg, prt_last_error()); return -1; }
+        memcpy(l->brdf_of[l->brdf_of_count].name, arg, (size_t)(eq - arg));
+        l->brdf_of[l->brdf_of_count].name[eq - arg] = 0;
+        snprintf(l->brdf_of[l->brdf_of_count++].spec, 128, "%s", eq + 1);
         return 1;
     }
     case OPT_CONTROL: {
@@ -586,20 +608,90 @@ int cli_relight_resolve(const cli *c, const cli_kinds *r, const prt_transfer *t,
     return n;
 }
 
-prt_status cli_painted_albedo(const cli *c, const cli_light *l, const prt_transfer *t, float **out)
+prt_status cli_brdf_choice(const cli *c, const cli_light *l, const prt_transfer *t, int **out)
 {
     *out = NULL;
-    if (!l || !l->paint_count) return PRT_OK;
+    if (!l || !l->brdf_of_count) return PRT_OK;
+    const int ns = prt_transfer_surface_count(t);
+    int *choice = malloc(((size_t)ns + 1) * sizeof *choice);
+    if (!choice) { cli_error(c, "out of memory"); return PRT_ERR_NO_MEMORY; }
+    for (int k = 0; k <= ns; ++k) choice[k] = -1;
+    bool ok = false;   /* until every --brdf-of is resolved */
+    for (int i = 0; i < l->brdf_of_count; ++i) {
+        ok = false;
+        int k = 1;
+        while (k <= ns && strcmp(prt_transfer_surface_name(t, k), l->brdf_of[i].name)) ++k;
+        char list[1024] = "";
+        size_t at = 0;
+        if (k > ns) {
+            for (int j = 1; j <= ns && at < sizeof list; ++j) at += (size_t)snprintf(list + at, sizeof list - at, "%s%s", j > 1 ? ", " : "", prt_transfer_surface_name(t, j));
+            cli_error(c, "--brdf-of: the file has no surface '%s' (%s%s)", l->brdf_of[i].name, ns ? "it has " : "it names none", list);
+            break;
+        }
+        const int n = prt_transfer_brdf_set(t, k, -1, NULL);
+        if (!n) {
+            cli_error(c, "--brdf-of: surface '%s' has no BRDF set in this file (bake it with the spectral method from a scene whose material '%s' "
+                         "lists \"brdfs\")", l->brdf_of[i].name, l->brdf_of[i].name);
+            break;
+        }
+        /* Compared as prt_brdf_format writes them: the spelling on the command line need not match. */
+        prt_brdf want, b;
+        char w[128], e[128];
+        prt_brdf_parse(l->brdf_of[i].spec, &want);
+        prt_brdf_format(&want, w, sizeof w);
+        for (int j = 0; j < n; ++j) {
+            prt_transfer_brdf_set(t, k, j, &b);
+            prt_brdf_format(&b, e, sizeof e);
+            if (!strcmp(e, w)) choice[k] = j;
+            if (at < sizeof list) at += (size_t)snprintf(list + at, sizeof list - at, "%s%s", j ? ", " : "", e);
+        }
+        if (choice[k] < 0) {
+            cli_error(c, "--brdf-of %s=%s: not in the set baked for '%s' (%s); switching needs a BRDF's SH projection, made at bake time",
+                      l->brdf_of[i].name, l->brdf_of[i].spec, l->brdf_of[i].name, list);
+            break;
+        }
+        ok = true;
+    }
+    if (!ok) { free(choice); ((cli *)c)->reported = true; return PRT_ERR_INVALID_ARG; }
+    *out = choice;
+    return PRT_OK;
+}
+
+prt_status cli_painted_albedo_for(const cli *c, const cli_light *l, const prt_transfer *t, const int *brdf_of, float **out)
+{
+    *out = NULL;
+    const int ns = prt_transfer_surface_count(t);
+    bool any = false;
+    for (int k = 1; brdf_of && k <= ns; ++k) any |= brdf_of[k] >= 0;
+    if (!any && (!l || !l->paint_count)) return PRT_OK;
     const size_t nv = prt_transfer_vertex_count(t);
     float *a = malloc(nv * 3 * sizeof(float));
     if (!a) { cli_error(c, "out of memory"); return PRT_ERR_NO_MEMORY; }
     memcpy(a, prt_transfer_albedo(t), nv * 3 * sizeof(float));
-    for (int i = 0; i < l->paint_count; ++i) {
+    /* A chosen BRDF's diffuse part first, so that --albedo-of recolours over it. */
+    for (int k = 1; any && k <= ns; ++k) {
+        prt_brdf b;
+        if (brdf_of[k] < 0 || prt_transfer_brdf_set(t, k, brdf_of[k], &b) <= brdf_of[k]) continue;
+        float rgb[3];
+        prt_brdf_lambert_albedo(&b, rgb);
+        prt_transfer_paint_albedo(t, prt_transfer_surface_name(t, k), rgb, a);
+    }
+    for (int i = 0; l && i < l->paint_count; ++i) {
         prt_status st = prt_transfer_paint_albedo(t, l->paint[i].name, l->paint[i].rgb, a);
         if (st) { cli_error(c, "--albedo-of: %s", prt_last_error()); ((cli *)c)->reported = true; free(a); return st; }
     }
     *out = a;
     return PRT_OK;
+}
+
+prt_status cli_painted_albedo(const cli *c, const cli_light *l, const prt_transfer *t, float **out)
+{
+    *out = NULL;
+    int *choice = NULL;
+    prt_status st = cli_brdf_choice(c, l, t, &choice);
+    if (!st) st = cli_painted_albedo_for(c, l, t, choice, out);
+    free(choice);
+    return st;
 }
 
 int cli_controls(const cli *c, const cli_light *l, const prt_transfer *t, int values[PRT_MAX_CONTROLS])
@@ -667,11 +759,15 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     if (nc < 0) { ((cli *)c)->reported = true; return PRT_ERR_INVALID_ARG; }
     d.controls = nc ? controls : NULL;
     float *albedo = NULL;
-    prt_status st = cli_painted_albedo(c, l, t, &albedo);
-    if (st) return st;
+    int *brdf_of = NULL;
+    prt_status st = cli_brdf_choice(c, l, t, &brdf_of);
+    if (!st) st = cli_painted_albedo_for(c, l, t, brdf_of, &albedo);
+    if (st) { free(brdf_of); return st; }
     d.albedo = albedo;
+    d.brdf_of = brdf_of;
     st = prt_relight(c->ctx, t, lighting, &d, out);
     free(albedo);
+    free(brdf_of);
     if (st == PRT_ERR_INVALID_ARG) {
         /* Lighting the method refuses: say how to leave it out. */
         const unsigned refused = prt_relight_needs(t, lighting) & ~prt_method_lighting(prt_transfer_method(t));

@@ -88,6 +88,9 @@ typedef struct cli_light {
     /* --albedo-of NAME=R,G,B: surface colours at run time (methods that allow it). */
     struct { char name[64]; float rgb[3]; } paint[CLI_MAX_LIGHTS];
     int paint_count;
+    /* --brdf-of NAME=SPEC: a BRDF of the surface's baked set at run time (methods that keep sets). */
+    struct { char name[64]; char spec[128]; } brdf_of[CLI_MAX_LIGHTS];
+    int brdf_of_count;
     /* --control NAME=V: the method's run-time settings (prt_transfer_controls). */
     struct { char name[64]; int value; } control[PRT_MAX_CONTROLS];
     int control_count;
@@ -121,7 +124,10 @@ typedef struct cli_light {
     "  --brdf-all SPEC       the same lobe on every surface, diffuse ones included\n"
 #define CLI_LIGHT_PAINT_HELP \
     "  --albedo-of NAME=R,G,B  recolour the surface NAME (prt info lists them), repeatable;\n" \
-    "                        for methods that change colours without a rebake (prt info says)\n"
+    "                        for methods that change colours without a rebake (prt info says)\n" \
+    "  --brdf-of NAME=SPEC   reflect with BRDF SPEC on surface NAME, repeatable: one of the set\n" \
+    "                        baked for it (prt info lists the sets; a scene material's \"brdfs\",\n" \
+    "                        spectral files); its diffuse part becomes the colour (--albedo-of wins)\n"
 #define CLI_LIGHT_CONTROL_HELP \
     "  --control NAME=V      a run-time setting of the file's method (prt info lists them)\n"
 #define CLI_LIGHT_RELIGHT_HELP CLI_LIGHT_BRDF_HELP CLI_LIGHT_PAINT_HELP CLI_LIGHT_CONTROL_HELP
@@ -130,14 +136,15 @@ typedef struct cli_light {
 
 /* Returns 1 if the option was a lighting option (consumed), 0 if not, -1 on a bad value. */
 int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg);
-enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN, OPT_BRDF, OPT_LIGHT, OPT_EMISSION, OPT_ALBEDO_OF, OPT_CONTROL, OPT_BRDF_ALL };
+enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN, OPT_BRDF, OPT_LIGHT, OPT_EMISSION, OPT_ALBEDO_OF, OPT_CONTROL, OPT_BRDF_ALL,
+       OPT_BRDF_OF };
 #define CLI_LIGHT_LONG_OPTIONS \
     {"env", required_argument, 0, OPT_ENV}, {"layout", required_argument, 0, OPT_LAYOUT}, \
     {"rotate", required_argument, 0, OPT_ROTATE}, {"intensity", required_argument, 0, OPT_INTENSITY}, \
     {"sun", required_argument, 0, OPT_SUN}, {"brdf", required_argument, 0, OPT_BRDF}, \
     {"light", required_argument, 0, OPT_LIGHT}, {"emission", required_argument, 0, OPT_EMISSION}, \
     {"albedo-of", required_argument, 0, OPT_ALBEDO_OF}, {"control", required_argument, 0, OPT_CONTROL}, \
-    {"brdf-all", required_argument, 0, OPT_BRDF_ALL}
+    {"brdf-all", required_argument, 0, OPT_BRDF_ALL}, {"brdf-of", required_argument, 0, OPT_BRDF_OF}
 /* The lighting to use: what t (or, without t, the scene s; with neither, nothing) names, with the
  * command line's overrides. */
 prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t, const prt_scene *s, prt_lighting **out);
@@ -155,8 +162,15 @@ bool cli_relight_kinds(cli_kinds *r, char *list);
 /* Resolves r's names against t into indices (all variants for 'all', the default when empty);
  * returns the count or -1 after reporting. */
 int cli_relight_resolve(const cli *c, const cli_kinds *r, const prt_transfer *t, int drawing, int *indices, int max);
-/* The albedo array --albedo-of asks for (malloc'd; NULL and PRT_OK when it asks nothing). */
+/* The albedo array --albedo-of and --brdf-of ask for (malloc'd; NULL and PRT_OK when they ask
+ * nothing). */
 prt_status cli_painted_albedo(const cli *c, const cli_light *l, const prt_transfer *t, float **out);
+/* The same for a choice of BRDFs made elsewhere (the viewer's): each chosen BRDF's diffuse part,
+ * then --albedo-of. brdf_of as prt_relight_desc.brdf_of, or NULL. */
+prt_status cli_painted_albedo_for(const cli *c, const cli_light *l, const prt_transfer *t, const int *brdf_of, float **out);
+/* prt_relight_desc.brdf_of for --brdf-of (malloc'd, surface count + 1 entries; NULL and PRT_OK
+ * when it asks nothing); reports an unknown surface or a BRDF not baked for it, listing them. */
+prt_status cli_brdf_choice(const cli *c, const cli_light *l, const prt_transfer *t, int **out);
 /* The method's control values with --control applied (defaults elsewhere); count is returned. */
 int cli_controls(const cli *c, const cli_light *l, const prt_transfer *t, int values[PRT_MAX_CONTROLS]);
 /* --accumulate cpu|gpu; false when it is neither. */
@@ -264,6 +278,11 @@ int cli_view_option(const cli *c, cli_view *v, int opt, const char *arg);
  * unless --eye/--target were given. */
 void cli_view_camera(const cli *c, const cli_view *v, const float *positions, size_t nv, const uint32_t *indices, size_t nt, float aspect,
                      prt_camera *cam);
+/* The points a room must keep facing as the scene is loaded (prt_scene_desc.inside_points): the
+ * positions of l's --light lights (directional ones have none) and v's --eye; either may be NULL.
+ * out holds 3 floats per point; returns the count. */
+#define CLI_MAX_INSIDE_POINTS (CLI_MAX_LIGHTS + 1)
+size_t cli_inside_points(const cli_light *l, const cli_view *v, float out[CLI_MAX_INSIDE_POINTS * 3]);
 
 /* The method a command line names with --method NAME (or --method=NAME) before parsing it,
  * the default method when it names none; NULL after reporting an unknown name. */

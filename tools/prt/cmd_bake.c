@@ -37,6 +37,16 @@ static const char *HELP_HEAD =
     "      --refine-threshold T\n"
     "                         probe difference (occlusion, shadowed share of a light) that\n"
     "                         splits, in (0, 1) (default 0.1; lower refines more; implies --refine)\n"
+    "      --light SPEC       a light of the scene, repeatable; replaces the lights a JSON scene\n"
+    "                         names ('none': no lights). Stored in OUT.prt (what relight, render\n"
+    "                         and view light it with by default), probed by refinement, and a\n"
+    "                         closed room around it keeps facing inwards (--winding auto):\n"
+    "                         point:X,Y,Z:R,G,B  spot:X,Y,Z:DX,DY,DZ:ANGLE[,FALLOFF]:R,G,B\n"
+    "                         directional:DX,DY,DZ:R,G,B  sphere:X,Y,Z:RADIUS:R,G,B\n"
+    "      --brdf-set NAME=SPEC[,SPEC...]\n"
+    "                         BRDFs the surface NAME can switch among at run time (--brdf-of,\n"
+    "                         the viewer's r), beside what it wears, as a scene material's\n"
+    "                         \"brdfs\" (spectral files keep them); repeatable\n"
     "      --method M         the PRT method (default: the first listed); each has the options\n"
     "                         listed below\n"
     "                         (prt bake --method M --help shows one method's)\n";
@@ -48,7 +58,7 @@ static const char *HELP_TAIL =
     "  -q, --quiet            no progress or messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
-enum { OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE, OPT_REFINE_VERTICES, OPT_REFINE_THRESHOLD,
+enum { OPT_BRDF_SET = 1498, OPT_BAKE_LIGHT = 1499, OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE, OPT_REFINE_VERTICES, OPT_REFINE_THRESHOLD,
        OPT_NO_REFINE, OPT_METHOD_OPTION = 3000 };
 
 /* "NAME  summary" at the description column, the summary wrapped at 100 columns. */
@@ -74,7 +84,8 @@ static int collect_options(const prt_method *chosen, struct option *opts, int ma
         {"output", required_argument, 0, 'o'}, {"method", required_argument, 0, OPT_METHOD}, {"resume", no_argument, 0, OPT_RESUME},
         {"no-checkpoint", no_argument, 0, OPT_NO_CHECKPOINT}, {"summary", required_argument, 0, OPT_SUMMARY},
         {"refine", no_argument, 0, OPT_REFINE}, {"no-refine", no_argument, 0, OPT_NO_REFINE}, {"refine-vertices", required_argument, 0, OPT_REFINE_VERTICES},
-        {"refine-threshold", required_argument, 0, OPT_REFINE_THRESHOLD}, CLI_SCENE_LONG_OPTIONS,
+        {"refine-threshold", required_argument, 0, OPT_REFINE_THRESHOLD}, {"light", required_argument, 0, OPT_BAKE_LIGHT},
+        {"brdf-set", required_argument, 0, OPT_BRDF_SET}, CLI_SCENE_LONG_OPTIONS,
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}};
     int n = 0;
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; ++i) opts[n++] = fixed[i];
@@ -236,6 +247,9 @@ int cmd_bake(int argc, char **argv)
     const char *summary = NULL;
     bool resume = false, checkpoint = true, refine = false, no_refine = false;
     prt_refine_desc rd = {0};
+    cli_light lights = {.intensity = 1.0f};   /* --light only */
+    const char *sets[16];   /* --brdf-set */
+    int nsets = 0;
     const prt_method *method = cli_method_from_argv(&c, argc, argv);
     if (!method) return EXIT_USAGE;
     bool method_named = false;
@@ -261,6 +275,11 @@ int cmd_bake(int argc, char **argv)
         case OPT_RESUME: resume = true; break;
         case OPT_NO_CHECKPOINT: checkpoint = false; break;
         case OPT_SUMMARY: summary = optarg; break;
+        case OPT_BRDF_SET:
+            if (nsets == 16 || !strchr(optarg, '=') || strchr(optarg, '=') == optarg) rc = cli_usage(&c, "--brdf-set takes NAME=SPEC[,SPEC...], at most 16 times");
+            else sets[nsets++] = optarg;
+            break;
+        case OPT_BAKE_LIGHT: if (cli_light_option(&c, &lights, OPT_LIGHT, optarg) < 0) rc = EXIT_USAGE; break;
         case OPT_REFINE: refine = true; break;
         case OPT_NO_REFINE: no_refine = true; break;
         case OPT_REFINE_VERTICES: {
@@ -303,7 +322,28 @@ int cmd_bake(int argc, char **argv)
     if (rc) { prt_options_release(o); return rc; }
     prt_scene *scene = NULL;
     prt_transfer *t = NULL;
+    float inside[CLI_MAX_INSIDE_POINTS * 3];
+    sd.inside_point_count = cli_inside_points(&lights, NULL, inside);
+    sd.inside_points = inside;
     prt_status st = prt_scene_load(c.ctx, argv[optind], &sd, &scene);
+    if (!st && lights.set_lights && (st = prt_scene_set_lights(scene, lights.lights, lights.light_count))) {
+        cli_error(&c, "--light: %s", prt_last_error());
+        c.reported = true;
+    }
+    for (int i = 0; !st && i < nsets; ++i) {
+        /* NAME=SPEC,SPEC: a BRDF spec holds no comma. */
+        char name[128], list[1024];
+        const char *eq = strchr(sets[i], '=');
+        snprintf(name, sizeof name, "%.*s", (int)(eq - sets[i]), sets[i]);
+        snprintf(list, sizeof list, "%s", eq + 1);
+        for (char *save = NULL, *spec = strtok_r(list, ",", &save); spec && !st; spec = strtok_r(NULL, ",", &save)) {
+            prt_brdf b;
+            if ((st = prt_brdf_parse(spec, &b)) || (st = prt_scene_add_brdf_choice(scene, name, &b))) {
+                cli_error(&c, "--brdf-set %s: %s", sets[i], prt_last_error());
+                c.reported = true;
+            }
+        }
+    }
     if (!st && !c.quiet)
         fprintf(stderr, "prt bake: %s: %zu vertices, %zu triangles\n", argv[optind], prt_scene_vertex_count(scene), prt_scene_triangle_count(scene));
     prt_light sun;

@@ -66,9 +66,9 @@ int cmd_env(int argc, char **argv)
     if (optind < argc - 1) return cli_usage(&c, "expected at most one PROBE argument");
     if (optind == argc - 1) { light.env_path = argv[optind]; light.set_source = true; }
     if (irradiance && !image) return cli_usage(&c, "--irradiance needs --image FILE");
-    if (light.set_lights || light.set_emission || light.have_brdf || light.paint_count ||
+    if (light.set_lights || light.set_emission || light.have_brdf || light.paint_count || light.brdf_of_count ||
         light.control_count)
-        return cli_usage(&c, "--light, --emission, --brdf(-all), --albedo-of and --control do not apply: "
+        return cli_usage(&c, "--light, --emission, --brdf(-all), --albedo-of, --brdf-of and --control do not apply: "
                              "prt env projects an environment");
     if (sun && light.env_path)
         return cli_usage(&c, "--sun places the procedural sky's sun: not with a PROBE");

@@ -89,6 +89,9 @@ int cmd_reference(int argc, char **argv)
     if (light.set_intensity && light.intensity == 0) return cli_usage(&c, "--intensity 0 leaves nothing to trace");
     /* Both set how a .prt is relit; the path tracer reflects with the materials' own BRDFs and
      * follows every bounce. */
+    if (light.brdf_of_count)
+        return cli_usage(&c, "--brdf-of does not apply: prt reference traces the BRDFs the scene's materials wear "
+                             "(trace a scene whose material wears it: its \"brdf\")");
     if (light.have_brdf || light.control_count)
         return cli_usage(&c, "--%s does not apply: prt reference traces the scene's materials, "
                              "it relights no .prt", light.have_brdf ? (light.brdf_everywhere ? "brdf-all" : "brdf") : "control");
@@ -108,7 +111,17 @@ int cmd_reference(int argc, char **argv)
         st = prt_transfer_load(c.ctx, input, &t);
         if (!st) st = prt_transfer_scene(c.ctx, t, &scene);
     } else {
+        /* A room around a --light or the --eye keeps facing inwards. */
+        float inside[CLI_MAX_INSIDE_POINTS * 3];
+        sd.inside_point_count = cli_inside_points(&light, &view, inside);
+        sd.inside_points = inside;
         st = prt_scene_load(c.ctx, input, &sd, &scene);
+        /* The scene's camera, unless the command line frames its own. */
+        float fov;
+        if (!st && !view.have_eye && !view.have_view && prt_scene_camera(scene, view.eye, view.target, &fov)) {
+            view.have_eye = view.have_target = true;
+            if (!view.have_fov && fov > 0) view.fov = fov, view.have_fov = true;
+        }
     }
     for (int i = 0; !st && i < light.paint_count; ++i)
         if ((st = prt_scene_paint_albedo(scene, light.paint[i].name, light.paint[i].rgb))) {

@@ -259,12 +259,15 @@ static int relight_main(int argc, char **argv, bool exporting)
                     dd.brdf = light.have_brdf ? &light.brdf : NULL;
                     dd.brdf_everywhere = light.brdf_everywhere;
                     float *albedo = NULL;
+                    int *brdf_of = NULL;
                     prt_relit rd;
-                    if (nc >= 0 && !cli_painted_albedo(&c, &light, t, &albedo) && (dd.albedo = albedo, !prt_relight(c.ctx, t, lighting, &dd, &rd))) {
+                    if (nc >= 0 && !cli_brdf_choice(&c, &light, t, &brdf_of) && !cli_painted_albedo_for(&c, &light, t, brdf_of, &albedo) &&
+                        (dd.albedo = albedo, dd.brdf_of = brdf_of, !prt_relight(c.ctx, t, lighting, &dd, &rd))) {
                         if ((direct = malloc(nv * 3 * sizeof(float))) && prt_relit_shade(c.ctx, t, &rd, eye, direct)) { free(direct); direct = NULL; }
                         prt_relit_free(&rd);
                     }
                     free(albedo);
+                    free(brdf_of);
                 }
                 cli_vertex_field f[3] = {{"radiance", rgb}, {"indirect", r.indirect}, {"direct", direct}};
                 st = cli_write_vertex_json(output, prt_transfer_variant_name(t, variant), nv, f, r.indirect ? (direct ? 3 : 2) : 1);

@@ -192,6 +192,9 @@ int cmd_sweep(int argc, char **argv)
     }
     prt_scene *scene = NULL;
     prt_lighting *lighting = NULL;
+    float inside[CLI_MAX_INSIDE_POINTS * 3];   /* a room around a --light keeps facing in, as prt reference sees it */
+    sd.inside_point_count = cli_inside_points(&light, NULL, inside);
+    sd.inside_points = inside;
     st = prt_scene_load(c.ctx, argv[optind], &sd, &scene);
     if (!st && prt_scene_vertex_count(scene) != ref.nv) {
         cli_error(&c, "the scene has %zu vertices, the reference %zu: compute it from the same scene with the same options", prt_scene_vertex_count(scene), ref.nv);

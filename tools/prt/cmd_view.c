@@ -28,6 +28,9 @@ static const char *HELP =
     "       tab select the next, x remove it, , . dim/brighten, c recolour,\n"
     "       + - exposure, t tone mapping, l reload probe, p screenshot, 0 reset, q quit;\n"
     "       f fly mode: w a s d move, e z rise and sink (walk into a room or Sponza).\n"
+    "       Surfaces (files whose colours change live): m select the next, a recolour,\n"
+    "       ; ' darken/lighten, r its next BRDF of the set baked for it (a scene material's\n"
+    "       \"brdfs\"; prt info lists the sets; its diffuse part becomes the colour).\n"
     "       Lighting changes relight; camera moves only redraw (view-dependent parts are\n"
     "       evaluated per pixel).\n\n"
     "      --width N --height N   window size (default 1024 x 768)\n"
@@ -183,6 +186,7 @@ static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
     d.brdf = v->light.have_brdf ? &v->light.brdf : NULL;
     d.brdf_everywhere = v->light.brdf_everywhere;
     d.albedo = v->albedo;
+    d.brdf_of = v->brdf_of;
     d.gpu_finish = job->gpu;
     if (!st) st = prt_relight(v->worker_ctx, v->t, v->lighting, &d, out);
     return st;
@@ -471,7 +475,8 @@ int cmd_view(int argc, char **argv)
         else if (v.light.gpu_finish && !cli_check_accumulate(&c, v.t, false)) { c.reported = true; st = PRT_ERR_INVALID_ARG; }
         v.want.gpu = v.light.gpu_finish;
         if (cli_controls(&c, &v.light, v.t, v.want.controls) < 0) { c.reported = true; st = PRT_ERR_INVALID_ARG; }
-        if (!st) st = cli_painted_albedo(&c, &v.light, v.t, &v.albedo);
+        if (!st) st = cli_brdf_choice(&c, &v.light, v.t, &v.brdf_of);
+        if (!st) st = cli_painted_albedo_for(&c, &v.light, v.t, v.brdf_of, &v.albedo);
     }
     if (!st) {
         /* The first frame is lit before the window opens, so a bad lighting fails at once. */
@@ -488,6 +493,7 @@ int cmd_view(int argc, char **argv)
         prt_relit_free(&v.shown);
         prt_lighting_release(v.lighting);
         free(v.albedo);
+        free(v.brdf_of);
     prt_transfer_release(v.t);
         prt_context_release(v.worker_ctx);
         prt_context_release(c.ctx);
@@ -558,6 +564,7 @@ int cmd_view(int argc, char **argv)
     prt_relit_free(&v.shown);
     prt_lighting_release(v.lighting);
     free(v.albedo);
+    free(v.brdf_of);
     prt_transfer_release(v.t);
     prt_context_release(v.worker_ctx);
     prt_context_release(c.ctx);

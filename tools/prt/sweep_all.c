@@ -390,7 +390,7 @@ int cmd_sweep_all(const char *cmd, int argc, char **argv)
     opterr = 0;   /* one line of our own instead of getopt's */
     while (!rc && (idx = -1, opt = getopt_long(argc, argv, ":o:j:qh", opts, &idx)) != -1) {
         const char *oname = idx >= 0 ? opts[idx].name : "";
-        if (opt == OPT_BRDF || opt == OPT_BRDF_ALL || opt == OPT_ALBEDO_OF || opt == OPT_CONTROL) {
+        if (opt == OPT_BRDF || opt == OPT_BRDF_ALL || opt == OPT_ALBEDO_OF || opt == OPT_BRDF_OF || opt == OPT_CONTROL) {
             rc = cli_usage(&c, "--%s sets how one method's file is relit: it does not apply with --method all (give --method M)", oname);
             break;
         }
@@ -495,6 +495,9 @@ int cmd_sweep_all(const char *cmd, int argc, char **argv)
     char ref_what[1200] = "", frame_what[256] = "", pick[1024] = "";
     double ref_noise = NAN;
 
+    float inside[CLI_MAX_INSIDE_POINTS * 3];   /* a room around a --light keeps facing in, as prt reference sees it */
+    sd.inside_point_count = cli_inside_points(&light, NULL, inside);
+    sd.inside_points = inside;
     st = prt_scene_load(c.ctx, scene_path, &sd, &scene);
     if (!st && !c.quiet)
         fprintf(stderr, "prt %s: %s: %zu vertices, %zu triangles; cache %s/\n", c.cmd, scene_path, prt_scene_vertex_count(scene),

@@ -40,6 +40,7 @@ struct viewer {
     cli_light light;
     float *albedo;              /* --albedo-of and surface edits applied to the file's albedo; NULL = as baked */
     int surface;                /* the named surface the surface controls act on, 0 = none */
+    int *brdf_of;               /* per surface, its BRDF in the file's set (prt_relight_desc.brdf_of); NULL = as baked */
     /* camera: the auto-framed start until the user moves it, then an orbit */
     prt_camera start_cam;
     bool moved;
@@ -119,6 +120,9 @@ bool view_light_colour(viewer *v, const float rgb[3]);
 bool view_surface_next(viewer *v);
 bool view_surface_albedo(viewer *v, const float rgb[3]);
 bool view_surface_scale(viewer *v, float factor);
+/* The selected surface reflects with the next BRDF of the set baked for it (its diffuse part
+ * becomes the surface's colour). */
+bool view_surface_next_brdf(viewer *v);
 void view_register_surfaces(viewer *v);
 /* Takes the lighting's rotation and lights as the viewer's starting point. */
 void view_take_lights(viewer *v);

@@ -365,8 +365,9 @@ void view_register_lights(viewer *v)
 static bool surfaces_editable(viewer *v)
 {
     if (prt_method_runtime_albedo(prt_transfer_method(v->t)) && prt_transfer_surface_count(v->t)) return true;
-    snprintf(v->message, sizeof v->message, "%s", prt_transfer_surface_count(v->t) ? "this method bakes colours in: changing them needs a rebake"
-                                                                                 : "the file names no surfaces");
+    const char *why = prt_method_baked_albedo_why(prt_transfer_method(v->t));
+    if (!prt_transfer_surface_count(v->t)) snprintf(v->message, sizeof v->message, "the file names no surfaces");
+    else snprintf(v->message, sizeof v->message, "this method bakes colours in%s%s: changing them needs a rebake", why ? ": " : "", why ? why : "");
     return false;
 }
 
@@ -422,7 +423,38 @@ bool view_surface_scale(viewer *v, float factor)
     return paint(v, rgb);
 }
 
+bool view_surface_next_brdf(viewer *v)
+{
+    if (!surfaces_editable(v)) return false;
+    if (!v->surface) { snprintf(v->message, sizeof v->message, "no surface selected (m selects one)"); return false; }
+    const char *name = prt_transfer_surface_name(v->t, v->surface);
+    const int n = prt_transfer_brdf_set(v->t, v->surface, -1, NULL);
+    if (n < 2) {
+        snprintf(v->message, sizeof v->message, "%s has no BRDF set to switch among (a material's \"brdfs\" in the scene it was baked from)", name);
+        return false;
+    }
+    const int ns = prt_transfer_surface_count(v->t);
+    if (!v->brdf_of) {
+        if (!(v->brdf_of = malloc(((size_t)ns + 1) * sizeof *v->brdf_of))) { snprintf(v->message, sizeof v->message, "out of memory"); return false; }
+        for (int k = 0; k <= ns; ++k) v->brdf_of[k] = -1;
+    }
+    /* The surface's baked BRDF is the first of its set. */
+    const int next = ((v->brdf_of[v->surface] < 0 ? 0 : v->brdf_of[v->surface]) + 1) % n;
+    prt_brdf b;
+    prt_transfer_brdf_set(v->t, v->surface, next, &b);
+    float rgb[3];
+    prt_brdf_lambert_albedo(&b, rgb);
+    view_sync(v);   /* the worker reads brdf_of */
+    v->brdf_of[v->surface] = next;
+    if (!paint(v, rgb)) return false;   /* its diffuse part is the colour; relights */
+    char spec[128];
+    prt_brdf_format(&b, spec, sizeof spec);
+    snprintf(v->message, sizeof v->message, "%s: %s (%d of %d)", name, spec, next + 1, n);
+    return true;
+}
+
 static void next_surface(viewer *v, int arg) { (void)arg; view_surface_next(v); }
+static void next_brdf(viewer *v, int arg) { (void)arg; view_surface_next_brdf(v); }
 static void recolour_surface(viewer *v, int arg)
 {
     (void)arg;
@@ -437,6 +469,7 @@ static const view_control surfaces[] = {
     {'A', "a", "recolour the selected surface (albedo, no rebake)", recolour_surface, 0},
     {';', ";", "darken the selected surface", scale_surface, -1},
     {'\'', "'", "lighten the selected surface", scale_surface, 1},
+    {'R', "r", "the selected surface's next BRDF of the set baked for it", next_brdf, 0},
 };
 
 void view_register_surfaces(viewer *v)

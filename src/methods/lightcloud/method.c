@@ -380,6 +380,10 @@ const prt__method prt__method_lightcloud = {
     .title = "precomputed local radiance transfer through a light cloud",
     .summary = "light cloud (Kristensen, Akenine-Moller & Jensen): drag point lights anywhere in a region, full global illumination",
     .lighting = PRT_LIGHTS_POINT | PRT_LIGHTS_SPHERE | PRT_LIGHTS_EMISSIVE,
+    /* The run time could recolour the direct light it adds, but not the bounced light it reads:
+     * a half-recoloured scene would bleed the old colours, so colours are refused outright. */
+    .baked_albedo_why = "every bounce of each stored cloud-light response was multiplied by the baked colours, so a new "
+                        "colour changes every response (spectral relights the same lights with colours live)",
     .options = options,
     .option_count = (int)(sizeof options / sizeof options[0]),
     .controls = controls,

@@ -437,7 +437,7 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
     if (s->glossy_count) {
         bool used[PRT__MAX_BRDFS] = {false};
         for (size_t v = 0; v < nv; ++v)
-            if (s->glossy_of[v] != UINT32_MAX) used[t->mesh.material[v] - 1] = true;
+            if (s->glossy_of[v] != UINT32_MAX && t->mesh.material[v]) used[t->mesh.material[v] - 1] = true;
         prt_brdf only[PRT__MAX_BRDFS];
         for (int k = 0; k < t->brdf_count; ++k) {
             if (!used[k]) continue;
@@ -446,6 +446,18 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
             prt_status st = prt__brdf_matrices(base->ctx, only, 1, PRT__SPECTRAL_GLOSSY_ORDER, B);
             if (st) { free(B[0]); free(keep); free(q); return st; }
             s->brdf_matrix[k] = B[0];
+        }
+        /* The glossy candidates of the BRDF sets: the same projection, each once. */
+        for (int i = 0; i < s->set_count; ++i) {
+            if (!prt_brdf_is_glossy(&s->set[i].brdf)) continue;
+            for (int k = 0; k < t->brdf_count && !s->set_matrix[i]; ++k)
+                if (s->brdf_matrix[k] && !memcmp(&t->brdfs[k], &s->set[i].brdf, sizeof(prt_brdf)) && (s->set_matrix[i] = malloc(PRT__SPECTRAL_MATRIX_FLOATS * sizeof(float))))
+                    memcpy(s->set_matrix[i], s->brdf_matrix[k], PRT__SPECTRAL_MATRIX_FLOATS * sizeof(float));
+            if (s->set_matrix[i]) continue;
+            float *B[1] = {NULL};
+            prt_status st = prt__brdf_matrices(base->ctx, &s->set[i].brdf, 1, PRT__SPECTRAL_GLOSSY_ORDER, B);
+            if (st) { free(B[0]); return st; }
+            s->set_matrix[i] = B[0];
         }
     }
     /* The environment's glossy transfer is kept as halves: the bake relights as its file will. */
@@ -546,6 +558,25 @@ prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_d
     s->env = prt__calloc(nv * (size_t)d.env_order * d.env_order, sizeof(float));
     prt_status st = !sb->units || !s->env ? prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory") : PRT_OK;
     if (!st && t->mesh.emission) st = prt__emitters_init(&sb->emitters, &t->mesh, 1.0f);
+    /* The scene's BRDF sets; glossy candidates need an SH projection, which only isotropic
+     * BRDFs have. */
+    const prt_scene *scene = d.scene;
+    if (!st && scene && scene->brdf_set_count) {
+        s->set = malloc((size_t)scene->brdf_set_count * sizeof *s->set);
+        s->set_matrix = prt__calloc((size_t)scene->brdf_set_count, sizeof *s->set_matrix);
+        if (!s->set || !s->set_matrix) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        else {
+            memcpy(s->set, scene->brdf_set, (size_t)scene->brdf_set_count * sizeof *s->set);
+            s->set_count = scene->brdf_set_count;
+        }
+        for (int i = 0; !st && i < s->set_count; ++i)
+            if (prt_brdf_is_glossy(&s->set[i].brdf) && !prt_brdf_is_isotropic(&s->set[i].brdf)) {
+                char spec[128];
+                prt_brdf_format(&s->set[i].brdf, spec, sizeof spec);
+                st = prt__fail(ctx, PRT_ERR_FORMAT, "surface '%s': the BRDF set's %s is anisotropic: the spectral glossy bounce projects "
+                               "isotropic BRDFs only (the wavelet method factors anisotropic ones)", t->mesh.surface_names[s->set[i].surface - 1], spec);
+            }
+    }
     if (!st && !prt__spectral_glossy_index(t, s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     const size_t genv_n = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N * d.env_order * d.env_order;
     if (!st && genv_n && !(s->genv = prt__calloc(genv_n, sizeof(float)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");

@@ -19,6 +19,8 @@
 /* |T(v, l)| <= pi max |s_l| <= pi x 1.0001 (the gathering's weights sum to at most pi): a row's
  * scale is its largest over 32767. */
 #define MAX_ROW_SCALE (3.1419f * 1.0001f / 32767.0f)
+#define CHUNK_SPCS PRT__FOURCC('S', 'P', 'C', 'S')
+#define SET_ENTRY (8 + PRT__BRDF_RECORD)   /* surface, glossy flag, the BRDF; then its matrix if glossy */
 #define SPCP_HEADER 48
 #define MATRIX_BYTES (3 * PRT__SPECTRAL_GLOSSY_N * PRT__SPECTRAL_GLOSSY_N * sizeof(float))
 
@@ -51,6 +53,24 @@ prt_status prt__spectral_save(const prt_transfer *t, prt__chunk_list *l)
                     bytes, zero4, pad, NULL);
     prt__chunks_add(l, CHUNK_SPCE, s->env, nv * (size_t)s->env_order * s->env_order * sizeof(float), NULL);
     if (s->emit) prt__chunks_add(l, CHUNK_SPCM, s->emit, nv * 3 * sizeof(float), NULL);
+    if (s->set_count) {
+        /* count, 0, then per entry: surface, glossy (1: its SH matrix follows), the BRDF. */
+        size_t bytes = 8;
+        for (int i = 0; i < s->set_count; ++i) bytes += SET_ENTRY + (s->set_matrix[i] ? MATRIX_BYTES : 0);
+        unsigned char *p = prt__chunks_alloc(l, bytes);
+        if (!p) return PRT_OK;
+        prt__put32(p, (uint32_t)s->set_count);
+        prt__put32(p + 4, 0);
+        unsigned char *at = p + 8;
+        for (int i = 0; i < s->set_count; ++i) {
+            prt__put32(at, s->set[i].surface);
+            prt__put32(at + 4, s->set_matrix[i] != NULL);
+            prt__brdf_put(at + 8, &s->set[i].brdf);
+            at += SET_ENTRY;
+            if (s->set_matrix[i]) { memcpy(at, s->set_matrix[i], MATRIX_BYTES); at += MATRIX_BYTES; }
+        }
+        prt__chunks_add(l, CHUNK_SPCS, p, bytes, NULL);
+    }
     if (s->glossy_count) {
         /* glossy vertex count, SH order, drop, material count, matrices, entries per row, scales,
          * indices, values */
@@ -205,8 +225,11 @@ static prt_status load_glossy(prt_context *ctx, const prt_transfer *t, prt__spec
         memcpy(s->brdf_matrix[k - 1], e + 4, MATRIX_BYTES);
         if (!prt__all_finite(s->brdf_matrix[k - 1], MATRIX_BYTES / sizeof(float))) return bad(ctx, "non-finite spectral glossy BRDF matrix");
     }
-    for (size_t v = 0; v < t->mesh.vertex_count; ++v)
-        if (s->glossy_of[v] != UINT32_MAX && !s->brdf_matrix[t->mesh.material[v] - 1]) return bad(ctx, "a glossy material's BRDF matrix is missing");
+    for (size_t v = 0; v < t->mesh.vertex_count; ++v) {
+        const uint8_t k = t->mesh.material[v];
+        if (s->glossy_of[v] != UINT32_MAX && k && prt_brdf_is_glossy(&t->brdfs[k - 1]) && !s->brdf_matrix[k - 1])
+            return bad(ctx, "a glossy material's BRDF matrix is missing");
+    }
     const unsigned char *p = head + (size_t)nmat * (4 + MATRIX_BYTES);   /* the rest as if the matrices were not there */
     len -= (uint64_t)nmat * (4 + MATRIX_BYTES);
     const uint64_t counts = 16 + rows * (per_row ? 8 : 4);   /* where the indices start */
@@ -238,6 +261,40 @@ static prt_status load_glossy(prt_context *ctx, const prt_transfer *t, prt__spec
             if (s->gindex[i] >= s->basis.functions || (i > s->grow_start[r] && s->gindex[i] <= s->gindex[i - 1]))
                 return bad(ctx, "a spectral glossy index is out of range or out of order");
     return PRT_OK;
+}
+
+/* The BRDF sets (SPCS; files before them have none): every count checked against the chunk. */
+static prt_status load_sets(prt_context *ctx, const prt_transfer *t, prt__spectral_set *s, const prt__chunk_in *c)
+{
+    const unsigned char *p = c->data;
+    const uint64_t len = c->size;
+    if (len < 8) return bad(ctx, "invalid spectral BRDF set chunk");
+    const uint32_t n = prt__get32(p);
+    if (n < 1 || n > PRT__MAX_BRDF_SET || len < 8 + (uint64_t)n * SET_ENTRY) return bad(ctx, "spectral BRDF set count out of range");
+    s->set = prt__calloc(n, sizeof *s->set);
+    s->set_matrix = prt__calloc(n, sizeof *s->set_matrix);
+    if (!s->set || !s->set_matrix) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    s->set_count = (int)n;
+    uint64_t at = 8;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (len - at < SET_ENTRY) return bad(ctx, "spectral BRDF set chunk size mismatch");
+        const uint32_t surface = prt__get32(p + at), glossy = prt__get32(p + at + 4);
+        prt__brdf_choice *e = &s->set[i];
+        prt__brdf_get(p + at + 8, &e->brdf);
+        at += SET_ENTRY;
+        if (surface < 1 || surface > (uint32_t)t->mesh.surface_count || glossy > 1) return bad(ctx, "a spectral BRDF set names no surface of the mesh");
+        e->surface = (uint16_t)surface;
+        if (prt_brdf_validate(&e->brdf) || (int)glossy != prt_brdf_is_glossy(&e->brdf)) return bad(ctx, "invalid BRDF in a spectral BRDF set");
+        for (uint32_t j = 0; j < i; ++j)
+            if (s->set[j].surface == e->surface && !memcmp(&s->set[j].brdf, &e->brdf, sizeof e->brdf)) return bad(ctx, "a spectral BRDF set repeats a BRDF");
+        if (!glossy) continue;
+        if (len - at < MATRIX_BYTES) return bad(ctx, "spectral BRDF set chunk size mismatch");
+        if (!(s->set_matrix[i] = malloc(MATRIX_BYTES))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        memcpy(s->set_matrix[i], p + at, MATRIX_BYTES);
+        at += MATRIX_BYTES;
+        if (!prt__all_finite(s->set_matrix[i], PRT__SPECTRAL_MATRIX_FLOATS)) return bad(ctx, "non-finite spectral BRDF set matrix");
+    }
+    return at == len ? PRT_OK : bad(ctx, "spectral BRDF set chunk size mismatch");
 }
 
 prt_status prt__spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count)
@@ -285,7 +342,10 @@ prt_status prt__spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *me
                 if (!(s->emit[i] >= 0.0f && s->emit[i] <= PRT__MAX_RADIANCE)) st = bad(ctx, "spectral emitter irradiance out of range");
         }
     }
-    /* The glossy final bounce: there exactly when some vertex's material has a glossy part. */
+    /* The BRDF sets come first: their glossy candidates decide which vertices have glossy rows. */
+    c = st ? NULL : prt__chunk_take(chunks, count, CHUNK_SPCS);
+    if (c) st = load_sets(ctx, t, s, c);
+    /* The glossy final bounce: there exactly when some vertex's material (or candidate) has a glossy part. */
     if (!st && !prt__spectral_glossy_index(t, s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     /* Its rows scaled as the diffuse ones: SPCG beside SPCT, SPCH beside SPCR. */
     c = st ? NULL : prt__chunk_take(chunks, count, s->one_scale ? CHUNK_SPCG : CHUNK_SPCH);
@@ -308,8 +368,8 @@ prt_status prt__spectral_load(prt_context *ctx, prt_transfer *t, const cJSON *me
                 if (!isfinite(s->genv[i])) st = bad(ctx, "non-finite spectral glossy environment transfer");
             }
     }
-    static const uint32_t ids[9] = {CHUNK_SPCP, CHUNK_SPCB, CHUNK_SPCT, CHUNK_SPCR, CHUNK_SPCE, CHUNK_SPCM, CHUNK_SPCG, CHUNK_SPCH, CHUNK_SPGE};
-    for (int i = 0; i < 9 && !st; ++i)
+    static const uint32_t ids[10] = {CHUNK_SPCP, CHUNK_SPCB, CHUNK_SPCT, CHUNK_SPCR, CHUNK_SPCE, CHUNK_SPCM, CHUNK_SPCG, CHUNK_SPCH, CHUNK_SPGE, CHUNK_SPCS};
+    for (int i = 0; i < 10 && !st; ++i)
         if (prt__chunk_take(chunks, count, ids[i])) st = bad(ctx, "a spectral chunk appears twice or beside the other storage");
     return st;
 }

@@ -1,7 +1,8 @@
 /* The spectral method's table entry (direct-to-indirect transfer in a spectral mesh basis, Wang,
- * Zhu & Humphreys 2007): bake options, its chunks in file.c (SPCP, SPCB, SPCR, SPCE, SPCM, SPCH;
- * SPCT and SPCG in older files), description, the bounce control and relighting with run-time
- * albedo. The basis is built in basis.c, the transfer in bake.c, the run time in relight.c. */
+ * Zhu & Humphreys 2007): bake options, its chunks in file.c (SPCP, SPCB, SPCR, SPCE, SPCM, SPCH,
+ * SPGE, SPCS; SPCT and SPCG in older files), description, the bounce control and relighting with
+ * run-time albedo and BRDFs switched among the baked sets (the paper's Fig. 7). The basis is built
+ * in basis.c, the transfer in bake.c, the run time in relight.c. */
 #include "methods/spectral/spectral.h"
 #include "brdf/sh_matrix.h"
 
@@ -40,6 +41,9 @@ void prt__spectral_set_free(void *state)
     free(s->gvalue);
     free(s->grow_scale);
     for (int k = 0; k < PRT__MAX_BRDFS; ++k) free(s->brdf_matrix[k]);
+    for (int i = 0; s->set_matrix && i < s->set_count; ++i) free(s->set_matrix[i]);
+    free(s->set_matrix);
+    free(s->set);
     if (s->cache) {
         prt__vertex_lights_free(&s->cache->lights);
         prt__frame_rot *fr = s->cache->frames;
@@ -57,12 +61,39 @@ bool prt__spectral_glossy_index(const prt_transfer *t, prt__spectral_set *s)
     free(s->glossy_of);
     s->glossy_count = 0;
     if (!(s->glossy_of = malloc(nv * sizeof(uint32_t)))) return false;
+    /* Surfaces with a glossy candidate keep glossy rows whatever they wear. */
+    bool *set_glossy = s->set_count ? prt__calloc((size_t)t->mesh.surface_count + 1, 1) : NULL;
+    if (s->set_count && !set_glossy) return false;
+    for (int i = 0; i < s->set_count; ++i)
+        if (prt_brdf_is_glossy(&s->set[i].brdf) && s->set[i].surface <= t->mesh.surface_count) set_glossy[s->set[i].surface] = true;
     for (size_t v = 0; v < nv; ++v) {
         const uint8_t k = t->mesh.material[v];
-        const bool glossy = k && k <= t->brdf_count && prt_brdf_is_glossy(&t->brdfs[k - 1]);
+        const bool glossy = (k && k <= t->brdf_count && prt_brdf_is_glossy(&t->brdfs[k - 1])) ||
+                            (set_glossy && t->mesh.surface && set_glossy[t->mesh.surface[v]]);
         s->glossy_of[v] = glossy ? s->glossy_count++ : UINT32_MAX;
     }
+    free(set_glossy);
     return true;
+}
+
+static int spectral_brdf_set(const prt_transfer *t, int surface, int i, prt_brdf *out)
+{
+    const prt__spectral_set *s = t->state;
+    int n = 0;
+    for (int e = 0; e < s->set_count; ++e)
+        if (s->set[e].surface == surface && n++ == i && out) *out = s->set[e].brdf;
+    return n;
+}
+
+const float *prt__spectral_matrix_of(const prt_transfer *t, const int *brdf_of, size_t v)
+{
+    const prt__spectral_set *s = t->state;
+    const uint16_t k = t->mesh.surface ? t->mesh.surface[v] : 0;
+    if (brdf_of && k && brdf_of[k] >= 0)
+        for (int e = 0, n = 0; e < s->set_count; ++e)
+            if (s->set[e].surface == k && n++ == brdf_of[k]) return s->set_matrix[e];
+    const uint8_t m = t->mesh.material[v];
+    return m ? s->brdf_matrix[m - 1] : NULL;
 }
 
 /* ---- bake options ---- */
@@ -93,7 +124,6 @@ static const prt_control_desc controls[] = {
 
 static prt_status spectral_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job)
 {
-    (void)scene;
     prt__spectral_bake_desc d = {0};
     d.functions = prt__opt_int(o, "basis", 0);
     d.full = prt__opt_flag(o, "full-basis");
@@ -103,6 +133,9 @@ static prt_status spectral_bake_begin(prt_context *ctx, const prt_scene *scene, 
     d.env_order = prt__opt_int(o, "env-order", 0);
     d.drop_below = prt__opt_float(o, "drop-below", PRT__SPECTRAL_DROP_DEFAULT);
     d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
+    /* The BRDF sets are for switching at this method's run time; a bake that runs these stages
+     * for another method (the light cloud's) does not need them. */
+    d.scene = !o || prt_options_method(o) == &prt__method_spectral ? scene : NULL;
     prt_status st = prt__spectral_bake_begin(ctx, &d, t, job);
     if (!st && !(((prt__spectral_set *)t->state)->cache = prt__spectral_cache_new())) {
         (*job)->release(*job);   /* the driver releases only jobs that began */
@@ -211,7 +244,21 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
     if (bounces < 0 || bounces > 64) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range 0..64", bounces);
     prt_status st = prt__relit_alloc(ctx, t, r, d->with_indirect || d->component == PRT_COMPONENT_INDIRECT);
     if (st) return st;
-    const float *albedo = d->albedo ? d->albedo : t->mesh.albedo;
+    /* A switched BRDF brings its Lambertian part as the surface's albedo unless the caller
+     * gives the albedo. */
+    float *switched = NULL;
+    bool any = false;
+    for (int k = 1; d->brdf_of && !d->albedo && t->mesh.surface && k <= t->mesh.surface_count; ++k) any |= d->brdf_of[k] >= 0;
+    if (any) {
+        if (!(switched = malloc(nv * 3 * sizeof(float)))) { prt_relit_free(r); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+        memcpy(switched, t->mesh.albedo, nv * 3 * sizeof(float));
+        for (size_t v = 0; v < nv; ++v) {
+            const uint16_t k = t->mesh.surface[v];
+            prt_brdf b;
+            if (k && d->brdf_of[k] >= 0 && spectral_brdf_set(t, k, d->brdf_of[k], &b) > d->brdf_of[k]) prt_brdf_lambert_albedo(&b, switched + v * 3);
+        }
+    }
+    const float *albedo = d->albedo ? d->albedo : switched ? switched : t->mesh.albedo;
     /* Drawn, the local lights' direct light is the renderer's, per pixel with shadow maps (as the
      * paper draws it); its per-vertex value still feeds the bounces. */
     const int pixel = d->per_vertex || d->no_pixel_lights || d->component == PRT_COMPONENT_INDIRECT ? 0 : prt_lighting_count(l) < PRT_MAX_PIXEL_LIGHTS ? prt_lighting_count(l) : PRT_MAX_PIXEL_LIGHTS;
@@ -271,7 +318,7 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
             prt_sh_light env;
             memset(&env, 0, sizeof env);
             if (d->component != PRT_COMPONENT_INDIRECT) st = prt__spectral_env_sh(ctx, t, l, &env);
-            if (!st) st = prt__spectral_glossy(ctx, t, out, &env, r->exit_sh);
+            if (!st) st = prt__spectral_glossy(ctx, t, out, &env, d->brdf_of, r->exit_sh);
             r->exit_order = PRT__SPECTRAL_GLOSSY_ORDER;
             r->exit_mirror = 0;
         }
@@ -280,6 +327,7 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
     free(E);
     free(Ep);
     free(direct);
+    free(switched);
     if (indirect != r->indirect) free(indirect);
     return st;
 }
@@ -312,6 +360,7 @@ const prt__method prt__method_spectral = {
     .describe = spectral_describe,
     .transfer_bytes = spectral_bytes,
     .control_range = spectral_control_range,
+    .brdf_set = spectral_brdf_set,
     .relight = spectral_relight,
     .shade = spectral_shade,
 };

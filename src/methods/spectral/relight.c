@@ -139,7 +139,8 @@ static prt_status glossy_ready(prt_context *ctx, const prt_transfer *t, prt__spe
     return st;
 }
 
-prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, const prt_sh_light *env, float *exit_sh)
+prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, const prt_sh_light *env, const int *brdf_of,
+                                 float *exit_sh)
 {
     const prt__spectral_set *s = t->state;
     const size_t nv = t->mesh.vertex_count, n = PRT__SPECTRAL_GLOSSY_N;
@@ -154,7 +155,8 @@ prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const f
 #pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ctx))
     for (size_t v = 0; v < nv; ++v) {
         const uint32_t g = s->glossy_of[v];
-        if (g == UINT32_MAX) continue;
+        const float *B = g == UINT32_MAX ? NULL : prt__spectral_matrix_of(t, brdf_of, v);
+        if (!B) continue;   /* diffuse, or a surface switched to a diffuse candidate */
         /* Incident radiance in SH (world frame), per channel, then the BRDF's exit radiance. */
         float in[3][PRT__SPECTRAL_GLOSSY_N];
         for (size_t k = 0; k < n; ++k) {
@@ -179,7 +181,6 @@ prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const f
                     in[c][k] += sum;
                 }
         }
-        const float *B = s->brdf_matrix[t->mesh.material[v] - 1];
         for (int c = 0; c < 3; ++c) prt__apply_brdf(&frames[g], B, c, PRT__SPECTRAL_GLOSSY_ORDER, in[c], exit_sh + (v * 3 + (size_t)c) * n, 1);
     }
     free(coeffs);

@@ -24,6 +24,7 @@
 #define PRT__SPECTRAL_MAX_FUNCTIONS 65535   /* indices are stored in 16 bits */
 #define PRT__SPECTRAL_GLOSSY_ORDER 4        /* the glossy final bounce's SH: 16 BRDF bases, as the paper */
 #define PRT__SPECTRAL_GLOSSY_N 16
+#define PRT__SPECTRAL_MATRIX_FLOATS (3 * PRT__SPECTRAL_GLOSSY_N * PRT__SPECTRAL_GLOSSY_N)   /* one BRDF's SH matrix */
 #define PRT__SPECTRAL_MAX_PARTITION 4096    /* vertices per partition: its eigen problem is dense */
 
 typedef struct prt__spectral_basis {
@@ -87,6 +88,14 @@ typedef struct prt__spectral_set {
     /* Per material (k - 1) with a glossy part: its local-frame SH matrix (3 x 16 x 16, the
      * glossy part only; prt_brdf_sh_matrix), computed at bake time and kept in the file. */
     float *brdf_matrix[PRT__MAX_BRDFS];
+    /* BRDF sets (the paper's Fig. 7: "we precompute and store the projections of several glossy
+     * BRDFs, and switch between them on the fly"): candidate BRDFs of named surfaces and the SH
+     * matrix of each glossy one (NULL for diffuse ones). The glossy rows hold incident radiance,
+     * whatever the BRDF, so a surface with a glossy candidate has them and switching is a matrix
+     * swap; projecting a BRDF takes seconds, so it is done at bake time. */
+    int set_count;
+    prt__brdf_choice *set;   /* [set_count] */
+    float **set_matrix;      /* [set_count] */
     prt__spectral_cache *cache;
     /* Only when the bake desc asks (keep_rows: measurements and tests): the rows before
      * quantization, every entry that is not zero, as floats; diffuse and glossy. */
@@ -131,6 +140,7 @@ typedef struct prt__spectral_bake_desc {
     float drop_below;   /* entries below this times their row's largest are dropped too (the option's default: PRT__SPECTRAL_DROP_DEFAULT) */
     float ray_offset;
     bool keep_rows;     /* also keep the unquantized rows in the state (raw_*) */
+    const prt_scene *scene;   /* its BRDF sets are kept (NULL: none) */
 } prt__spectral_bake_desc;
 /* The default relative drop threshold: the largest that keeps the storage's error under 1% in L2
  * and 5% at the 99th-percentile vertex on the README's scenes (bench/bench_spectral_storage.c;
@@ -143,13 +153,17 @@ typedef struct prt__spectral_bake_desc {
 uint32_t prt__spectral_quantize_row(const float *x, uint32_t n, float drop, uint32_t *keep, int16_t *q, float *scale);
 prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_desc *d, prt_transfer *t, prt__bake_job **job);
 
-/* Numbers the glossy vertices of t (a material whose BRDF has a glossy part) into s->glossy_of;
- * false when out of memory. */
+/* Numbers the glossy vertices of t (a material whose BRDF has a glossy part, or a surface with a
+ * glossy candidate in s->set) into s->glossy_of; false when out of memory. */
 bool prt__spectral_glossy_index(const prt_transfer *t, prt__spectral_set *s);
 /* Exit radiance SH (3 x 16 per vertex, world frame; zero where not glossy) of the glossy final
  * bounce from the outgoing radiance `out` (3 per vertex) of every surface, plus the environment's
- * direct light (env in SH of env_order, NULL or order 0: none) where the file has genv. */
-prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, const prt_sh_light *env, float *exit_sh);
+ * direct light (env in SH of env_order, NULL or order 0: none) where the file has genv. brdf_of:
+ * as prt_relight_desc.brdf_of (NULL = the baked materials). */
+prt_status prt__spectral_glossy(prt_context *ctx, const prt_transfer *t, const float *out, const prt_sh_light *env, const int *brdf_of,
+                                float *exit_sh);
+/* The SH matrix vertex v reflects with (NULL: diffuse), given brdf_of as above. */
+const float *prt__spectral_matrix_of(const prt_transfer *t, const int *brdf_of, size_t v);
 /* The lighting's environment in SH of the transfer's env_order, rotated and scaled; order 0 when
  * there is none. */
 prt_status prt__spectral_env_sh(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, prt_sh_light *sh);
