@@ -208,8 +208,8 @@ static void test_white_furnace(void **state)
     prt_lighting_set_environment(l, &(prt_environment_desc){.none = 1});
     const int bounce_counts[4] = {0, 1, 3, 8};
     for (int i = 0; i < 4; ++i) {
-        const int n = bounce_counts[i];
-        prt_relight_desc d = {.variant = -1, .controls = &n};
+        const int n = bounce_counts[i], controls[2] = {n, 0};   /* exactly n bounces: no tail */
+        prt_relight_desc d = {.variant = -1, .controls = controls};
         prt_relit r;
         assert_int_equal(prt_relight(ctx, t, l, &d, &r), PRT_OK);
         double expect = 0, term = 1, mean = 0, worst = 0;
@@ -224,6 +224,20 @@ static void test_white_furnace(void **state)
         assert_true(worst < 0.01);
         prt_relit_free(&r);
     }
+    /* The defaults (3 bounces and the tail): every wall keeps rho of the power bounce after bounce,
+     * so the tail's ratio is rho and the whole series L_e / (1 - rho) comes out. */
+    prt_relit r;
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1}, &r), PRT_OK);
+    double mean = 0, worst = 0;
+    const double expect = le / (1 - rho);
+    for (size_t v = 0; v < nv; ++v) {
+        mean += r.radiance[v * 3 + 1] / nv;
+        worst = fmax(worst, fabs(r.radiance[v * 3 + 1] - expect) / expect);
+    }
+    print_message("furnace, defaults: mean %.5f, expected %.5f, worst vertex %.2f%% off\n", mean, expect, 100 * worst);
+    assert_float_equal(mean, expect, 0.003 * expect);
+    assert_true(worst < 0.01);
+    prt_relit_free(&r);
     prt_lighting_release(l);
     prt_transfer_release(t);
     prt_scene_release(s);
@@ -564,10 +578,10 @@ static void test_pixel_lights_over_glossy(void **state)
  * maps leak nothing along the room's seams. Returns the number of leaking pixels. */
 static int seam_leaks(prt_context *ctx, prt_renderer *ren, const prt_transfer *t, const prt_lighting *l, bool gate)
 {
-    const int zero = 0, W = 320, H = 240;
+    const int zero[2] = {0, 0}, W = 320, H = 240;
     prt_relit drawn, flat;
-    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .controls = &zero}, &drawn), PRT_OK);
-    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .controls = &zero, .per_vertex = 1}, &flat), PRT_OK);
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .controls = zero}, &drawn), PRT_OK);
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .controls = zero, .per_vertex = 1}, &flat), PRT_OK);
     const prt_camera cam = {{2.5f, 1.5f, -1.8f}, {-1, 1.2f, 2}, {0, 1, 0}, 70};
     prt_render_mesh rm;
     prt_image a, b;
@@ -657,8 +671,8 @@ static void test_cornell_vs_reference(void **state)
             assert_int_equal(prt_light_parse(lights[i], &li), PRT_OK);
             assert_int_equal(prt_lighting_add(l, &li, NULL), PRT_OK);
         }
-        const int bounces = 16;
-        prt_relight_desc d = {.variant = -1, .controls = &bounces, .with_indirect = 1, .per_vertex = 1};
+        const int bounces[2] = {16, 0};
+        prt_relight_desc d = {.variant = -1, .controls = bounces, .with_indirect = 1, .per_vertex = 1};
         prt_relit r;
         assert_int_equal(prt_relight(ctx, t, l, &d, &r), PRT_OK);
         prt_reference_desc rd = {0};
