@@ -79,7 +79,7 @@ static const prt_option_desc options[] = {
 
 static const prt_control_desc controls[] = {
     {"bounces", "light bounces through the basis (0 = direct light only)", '[', ']', 0},
-    {"tail", "1: the bounces past the last estimated from the last two (a geometric series); 0: exactly `bounces`", 'U', 'O', 0},
+    {"tail", "the bounces past the last estimated as a geometric series (1) or left out (0)", 'U', 'O', 0},
 };
 
 static prt_status spectral_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job)

@@ -1,7 +1,8 @@
 /* Run time of the spectral method: direct light per vertex from every kind of light, then
  * bounces through the spectral basis (Wang, Zhu & Humphreys 2007, eq. 4 and the multi-bounce
  * gathering after it): project the outgoing radiance onto the basis, multiply by the sparse
- * T^s, apply each vertex's albedo / pi, repeat.
+ * T^s, apply each vertex's albedo / pi, repeat; then, by default, the rest of the series as a
+ * geometric tail (add_tail).
  *
  * Direct light: point, spot and directional lights with one shadow ray per vertex; sphere lights
  * exactly unoccluded times the visible fraction of their cone (16 rays); emissive surfaces and the
