@@ -82,13 +82,13 @@ static inline double bench_read_bandwidth(size_t bytes, int threads)
 /* The mesh a benchmark runs on: the one given, else ../shared/data's bunny when present, else the
  * procedural demo scene; loaded with a context of `threads` threads (0 = all). Returns false
  * after saying why. */
-/* Best wall time of a relight of t under l with `bounces` (the method's first control) over five
- * runs. */
-static inline double bench_relight_time(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, int bounces)
+/* Best wall time of a relight of t under l with the method's controls (all of them,
+ * prt_transfer_controls) over five runs. */
+static inline double bench_relight_time_controls(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const int *controls)
 {
     double best = 1e30;
     for (int run = 0; run < 5; ++run) {
-        prt_relight_desc d = {.variant = -1, .controls = &bounces};
+        prt_relight_desc d = {.variant = -1, .controls = controls};
         prt_relit r;
         const double t0 = prt__now();
         if (prt_relight(ctx, t, l, &d, &r)) { fprintf(stderr, "bench: %s\n", prt_last_error()); exit(1); }
@@ -97,6 +97,16 @@ static inline double bench_relight_time(prt_context *ctx, const prt_transfer *t,
         if (dt < best) best = dt;
     }
     return best;
+}
+
+/* The same with `bounces` as the method's first control and the others at their defaults. */
+static inline double bench_relight_time(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, int bounces)
+{
+    int controls[PRT_MAX_CONTROLS];
+    const int n = prt_transfer_controls(t, NULL);
+    for (int i = 1; i < n && i < PRT_MAX_CONTROLS; ++i) prt_transfer_control_range(t, i, NULL, NULL, &controls[i]);
+    controls[0] = bounces;
+    return bench_relight_time_controls(ctx, t, l, controls);
 }
 
 /* Adds a diffuse ground plane (albedo 0.7) of cells x cells squares under the mesh's first

@@ -189,7 +189,7 @@ int main(int argc, char **argv)
         const prt__lightcloud_set *rs = raw->state;
         double sum = 0, worst = 0;
         int merged_lights = 0;
-        const int bounces = 16;
+        const int bounces[2] = {16, 1};   /* as the bake solves each cloud light: 16 bounces and the tail */
         for (uint32_t z = 0; z < rs->zone_count; ++z) {
             const prt__lightcloud_zone *zone = &rs->zones[z];
             uint32_t *members = prt__calloc(zone->lights, sizeof(uint32_t));
@@ -205,7 +205,7 @@ int main(int argc, char **argv)
                 prt_lighting_add(li, &p, NULL);
                 prt_lighting_set_emission(li, 0);
                 prt_relit r;
-                if (prt_relight(ctx, sp, li, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .component = PRT_COMPONENT_INDIRECT, .controls = &bounces}, &r)) {
+                if (prt_relight(ctx, sp, li, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .component = PRT_COMPONENT_INDIRECT, .controls = bounces}, &r)) {
                     fprintf(stderr, "bench: %s\n", prt_last_error());
                     return 1;
                 }

@@ -285,7 +285,7 @@ int main(int argc, char **argv)
     rows_f q = quantize(b, raw.start, raw.index, raw.value, nv, ROW, PRT__SPECTRAL_DROP_DEFAULT, &(double){0});
     bounces(b, &q, t->mesh.albedo, direct, nv, threads, ind);
     float *lib = malloc(nv * 3 * sizeof(float));
-    prt__spectral_bounces(ctx, t, t->mesh.albedo, direct, 3, lib);
+    prt__spectral_bounces(ctx, t, t->mesh.albedo, direct, 3, 0, lib);   /* no tail: the rows above bounce 3 times */
     printf("\nlibrary relight vs the row storage at drop %g: rel. L2 %.1e; stored %.1f coefficients per vertex, %zu bytes\n", PRT__SPECTRAL_DROP_DEFAULT,
            rel_l2(lib, ind, nv * 3), (double)set->row_start[nv] / (double)nv, t->method->transfer_bytes(t));
     rows_free(&q);

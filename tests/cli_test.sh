@@ -493,11 +493,16 @@ expect 0 "reference under the scene's lights" -- "$PRT" reference "$T/lamp.prt" 
 # The spectral method: local lights with bounces, colours changed without a rebake, controls.
 expect 0 "spectral bake" -- "$PRT" bake -q "$T/lamp.json" -o "$T/spec.prt" --method spectral --basis 64 --samples 64
 expect 0 "spectral info" -- "$PRT" info "$T/spec.prt"
-grep -q "partitions" "$T/out" && grep -q "red_wall" "$T/out" && grep -q "bounces 0..64" "$T/out" && ok || bad "info lacks partitions, surfaces or controls"
+grep -q "partitions" "$T/out" && grep -q "red_wall" "$T/out" && grep -q "bounces 0..64" "$T/out" && grep -q "tail 0..1 (default 1)" "$T/out" && ok || bad "info lacks partitions, surfaces or controls"
 expect 0 "spectral relight with the scene's lights" -- "$PRT" relight -q "$T/spec.prt" -o "$T/spec.json"
 grep -q '"direct"' "$T/spec.json" && grep -q '"indirect"' "$T/spec.json" && ok || bad "spectral relight JSON lacks direct and indirect"
 expect 0 "spectral relight, recoloured" -- "$PRT" relight -q "$T/spec.prt" -o "$T/spec_red.json" --albedo-of floor=0.9,0.1,0.1 --control bounces=1
 cmp -s "$T/spec.json" "$T/spec_red.json" && bad "--albedo-of changed nothing" || ok
+# The tail (default on) adds the bounces past the last; tail=0 stops at them.
+expect 0 "spectral relight without the tail" -- "$PRT" relight -q "$T/spec.prt" -o "$T/spec_cut.json" --control tail=0
+cmp -s "$T/spec.json" "$T/spec_cut.json" && bad "--control tail=0 changed nothing" || ok
+expect 2 "a tail out of range" -- "$PRT" relight "$T/spec.prt" -o "$T/x.json" --control tail=2
+says "out of range 0..1"
 expect 0 "spectral render, lights per pixel" -- $NOLEAK "$PRT" render -q "$T/spec.prt" -o "$T/spec.png" --width 64 --height 48 --light sphere:0,2,0:0.2:30
 expect 2 "an unknown surface" -- "$PRT" relight "$T/spec.prt" -o "$T/x.json" --albedo-of carpet=0.5
 says "no surface is called 'carpet'"

@@ -229,7 +229,9 @@ typedef struct prt_relight_desc {
     int component;          /* PRT_COMPONENT_*: all light, only direct, only the bounced part */
     int per_vertex;         /* no per-texel maps: shade from the vertex sets */
     int with_indirect;      /* also fill prt_relit.indirect when the method can separate it */
-    /* Values of the method's controls (prt_transfer_controls); NULL = their defaults. */
+    /* Values of the method's controls (prt_transfer_controls), one for each of them - a method
+     * may gain controls (spectral: bounces, then tail), so fill them from
+     * prt_transfer_control_range's defaults and set those you mean; NULL = their defaults. */
     const int *controls;
     /* A BRDF for view-dependent evaluation where the method lets the renderer choose it (SH sets
      * holding incident radiance); NULL = each vertex's material. It replaces the lobe of the

@@ -290,7 +290,7 @@ static prt_status solve(lcbake *b, prt_context *ctx, const float *pos, float *di
         st = prt_lighting_add(l, &pl, NULL);
         prt_lighting_set_emission(l, 0.0f);
     }
-    const int controls[1] = {s->bounces};
+    const int controls[2] = {s->bounces, 1};   /* and the spectral tail: the rest of the series */
     prt_relight_desc d = {.variant = 0, .per_vertex = 1, .with_indirect = 1, .controls = controls};
     prt_relit r = {0};
     if (!st) st = prt__method_spectral.relight(ctx, b->inner, l, &d, &r);

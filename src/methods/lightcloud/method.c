@@ -131,7 +131,8 @@ static const prt_option_desc options[] = {
      "indirect (default): the run time adds direct light with shadows, per pixel when drawn; "
      "all: direct light baked too (soft, compresses worse)"},
     {"bounces", "N", PRT_OPTION_INT, 1, 64, NULL,
-     "light bounces of each cloud light's solution (default 16: closed rooms need many)"},
+     "light bounces of each cloud light's solution (default 16: closed rooms need many), the rest of the series estimated "
+     "after them (the spectral run time's tail)"},
     {"compress", "M", PRT_OPTION_CHOICE, 0, 0, "cpca|none",
      "cpca (default): clustered PCA per zone; none: keep every response"},
     {"clusters", "K", PRT_OPTION_INT, 1, 4096, NULL, "CPCA clusters per zone (default 8)"},

@@ -1,7 +1,8 @@
 /* Run time of the spectral method: direct light per vertex from every kind of light, then
  * bounces through the spectral basis (Wang, Zhu & Humphreys 2007, eq. 4 and the multi-bounce
  * gathering after it): project the outgoing radiance onto the basis, multiply by the sparse
- * T^s (each row's 16-bit entries times its scale), apply each vertex's albedo / pi, repeat.
+ * T^s (each row's 16-bit entries times its scale), apply each vertex's albedo / pi, repeat; then, by default, the rest of the series as a
+ * geometric tail (add_tail).
  *
  * Direct light: point, spot and directional lights with one shadow ray per vertex; sphere lights
  * exactly unoccluded times the visible fraction of their cone (16 rays); emissive surfaces and the
@@ -77,7 +78,79 @@ prt_status prt__spectral_direct(prt_context *ctx, const prt_transfer *t, const p
     return prt__cancelled(ctx) ? prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled") : PRT_OK;
 }
 
-prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct_out, int bounces,
+/* Area-weighted sums of one bounce's radiance per channel: per partition in parallel, each
+ * partition in a fixed order, then the partitions in order - the same for any thread count. */
+static void bounce_power(const prt__spectral_basis *b, const float *area, const float *x, double *part, double out[3], int threads)
+{
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
+    for (uint32_t q = 0; q < b->partitions; ++q) {
+        double a[3] = {0, 0, 0};
+        for (uint32_t i = b->member_start[q]; i < b->member_start[q + 1]; ++i) {
+            const uint32_t v = b->members[i];
+            for (int c = 0; c < 3; ++c) a[c] += (double)area[v] * x[(size_t)v * 3 + c];
+        }
+        for (int c = 0; c < 3; ++c) part[(size_t)q * 3 + c] = a[c];
+    }
+    out[0] = out[1] = out[2] = 0;
+    for (uint32_t q = 0; q < b->partitions; ++q)
+        for (int c = 0; c < 3; ++c) out[c] += part[(size_t)q * 3 + c];
+}
+
+/* The rest of the series past the last bounce b_k, as a geometric one: power q / (1 - q) times
+ * b_k's, with q the ratio of the last two bounces' power (area-weighted sums, per channel). In a
+ * closed room of uniform albedo every bounce keeps that albedo of the power, so q is exact there;
+ * ratios per vertex or per partition mislead where light is still spreading (a closed room of
+ * albedo 0.7: 18% and 4% off 64 bounces, against 2.6% for one ratio for the whole mesh). q is
+ * capped at 0.95 (a tail of 19 times the last bounce); a dark last-but-one bounce gives none. */
+static prt_status add_tail(prt_context *ctx, const prt_transfer *t, const float *before, const float *last, float *indirect_out)
+{
+    const prt__spectral_basis *b = &((const prt__spectral_set *)t->state)->basis;
+    const prt__mesh *m = &t->mesh;
+    const size_t nv = m->vertex_count;
+    float *area = prt__calloc(nv, sizeof(float));   /* a third of each triangle's area to each corner */
+    double *part = prt__calloc((size_t)b->partitions * 3, sizeof(double));
+    if (!area || !part) { free(area); free(part); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    for (size_t i = 0; i < m->triangle_count; ++i) {
+        const uint32_t *ix = m->indices + i * 3;
+        const float *p0 = m->positions + (size_t)ix[0] * 3, *p1 = m->positions + (size_t)ix[1] * 3, *p2 = m->positions + (size_t)ix[2] * 3;
+        const float u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, w[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+        const float cx = u[1] * w[2] - u[2] * w[1], cy = u[2] * w[0] - u[0] * w[2], cz = u[0] * w[1] - u[1] * w[0];
+        const float third = sqrtf(cx * cx + cy * cy + cz * cz) / 6.0f;
+        for (int k = 0; k < 3; ++k) area[ix[k]] += third;
+    }
+    double p_before[3], p_last[3];
+    bounce_power(b, area, before, part, p_before, prt__threads(ctx));
+    bounce_power(b, area, last, part, p_last, prt__threads(ctx));
+    float f[3];
+    for (int c = 0; c < 3; ++c) {
+        double q = p_before[c] > 0 ? p_last[c] / p_before[c] : 0.0;
+        q = q > PRT__SPECTRAL_TAIL_MAX_RATIO ? PRT__SPECTRAL_TAIL_MAX_RATIO : q > 0 ? q : 0.0;
+        f[c] = (float)(q / (1.0 - q));
+    }
+    /* Shaped per vertex by the square root of its own ratio of the last two bounces, then scaled
+     * to the power above: where light still arrives (its ratio above q) the tail grows, where it
+     * drains (near the lights) it shrinks - half a step towards the next bounce's shape. Against
+     * 64 bounces in closed rooms of albedo 0.5 / 0.7 / 0.8: 0.3% / 1.2% / 2.1% instead of 0.8% /
+     * 2.6% / 4.2% with the last bounce's own shape. The weights are at most the last bounce. */
+    float *w = prt__calloc(nv * 3, sizeof(float));
+    if (!w) { free(area); free(part); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    for (size_t i = 0; i < nv * 3; ++i) {
+        const float r = before[i] > 0 ? fminf(last[i] / before[i], (float)PRT__SPECTRAL_TAIL_MAX_RATIO) : 0.0f;
+        w[i] = last[i] * sqrtf(r);
+    }
+    double p_w[3];
+    bounce_power(b, area, w, part, p_w, prt__threads(ctx));
+    const float cap = (float)(PRT__SPECTRAL_TAIL_MAX_RATIO / (1.0 - PRT__SPECTRAL_TAIL_MAX_RATIO));
+    for (int c = 0; c < 3; ++c) f[c] = p_w[c] > 0 ? fminf((float)(f[c] * p_last[c] / p_w[c]), cap) : 0.0f;
+    for (size_t v = 0; v < nv; ++v)
+        for (int c = 0; c < 3; ++c) indirect_out[v * 3 + c] += f[c] * w[v * 3 + c];
+    free(w);
+    free(area);
+    free(part);
+    return PRT_OK;
+}
+
+prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct_out, int bounces, int tail,
                                  float *indirect_out)
 {
     const prt__spectral_set *s = t->state;
@@ -86,11 +159,13 @@ prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const 
     memset(indirect_out, 0, nv * 3 * sizeof(float));
     if (bounces <= 0) return PRT_OK;
     float *coeffs = prt__calloc((size_t)b->functions * 3, sizeof(float));
-    float *cur = prt__calloc(nv * 3, sizeof(float));
-    if (!coeffs || !cur) { free(coeffs); free(cur); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    float *cur = prt__calloc(nv * 3, sizeof(float)), *prev = tail ? prt__calloc(nv * 3, sizeof(float)) : NULL;
+    if (!coeffs || !cur || (tail && !prev)) { free(coeffs); free(cur); free(prev); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
     const float *from = direct_out;
     for (int bounce = 0; bounce < bounces; ++bounce) {
         prt__spectral_project(b, from, coeffs, prt__threads(ctx));
+        /* The tail compares the last two bounces: keep the one this bounce starts from. */
+        if (tail && bounce == bounces - 1) memcpy(prev, from, nv * 3 * sizeof(float));
         /* Each vertex gathers its row of T^s; the next bounce starts from what it reflects. */
 #pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
         for (size_t v = 0; v < nv; ++v) {
@@ -111,9 +186,12 @@ prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const 
         from = cur;
         if (prt__cancelled(ctx)) break;
     }
+    prt_status st = prt__cancelled(ctx) ? prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled") : PRT_OK;
+    if (!st && tail) st = add_tail(ctx, t, prev, cur, indirect_out);
     free(coeffs);
     free(cur);
-    return prt__cancelled(ctx) ? prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled") : PRT_OK;
+    free(prev);
+    return st;
 }
 
 /* The glossy vertices' frame rotations, built once. */

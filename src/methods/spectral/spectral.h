@@ -174,8 +174,11 @@ prt_status prt__spectral_direct(prt_context *ctx, const prt_transfer *t, const p
 /* Per light and vertex ([light][vertex]): whether the vertex sees the light, 0..1. */
 prt_status prt__spectral_visibility(prt_context *ctx, const prt_transfer *t, const prt_light *lights, int count, float *vis);
 /* N bounces from outgoing radiance `direct_out` (3 per vertex) with per-vertex albedo: fills
- * indirect_out (3 per vertex) with the radiance that bounced at least once. */
-prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct_out, int bounces,
+ * indirect_out (3 per vertex) with the radiance that bounced at least once. With `tail`, the
+ * bounces past the N-th are added as a geometric series from the ratio of the last two bounces'
+ * power (relight.c); N = 0 stays direct light only. */
+#define PRT__SPECTRAL_TAIL_MAX_RATIO 0.95
+prt_status prt__spectral_bounces(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct_out, int bounces, int tail,
                                  float *indirect_out);
 
 /* Its chunks (file.c). */

@@ -75,10 +75,10 @@ static void test_light_at_cloud_light(void **state)
     prt_options_release(so);
     const size_t nv = prt_transfer_vertex_count(raw);
     prt_lighting *l = one_light("point:0.25,0.7,-0.25:2,1,0.5");
-    const int sixteen = 16;
+    const int sixteen[2] = {16, 1};   /* the bake's bounces and the spectral tail */
     prt_relit a, b;
     assert_int_equal(prt_relight(ctx, raw, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1}, &a), PRT_OK);
-    assert_int_equal(prt_relight(ctx, sp, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .controls = &sixteen}, &b), PRT_OK);
+    assert_int_equal(prt_relight(ctx, sp, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .controls = sixteen}, &b), PRT_OK);
     for (size_t i = 0; i < nv * 3; ++i) assert_float_equal(a.radiance[i], b.radiance[i], 1e-6f + 1e-5f * b.radiance[i]);
     /* The indirect part alone, and the direct part alone, add up. */
     prt_relit ind, dir;

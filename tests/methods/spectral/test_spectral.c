@@ -208,8 +208,8 @@ static void test_white_furnace(void **state)
     prt_lighting_set_environment(l, &(prt_environment_desc){.none = 1});
     const int bounce_counts[4] = {0, 1, 3, 8};
     for (int i = 0; i < 4; ++i) {
-        const int n = bounce_counts[i];
-        prt_relight_desc d = {.variant = -1, .controls = &n};
+        const int n = bounce_counts[i], controls[2] = {n, 0};   /* exactly n bounces: no tail */
+        prt_relight_desc d = {.variant = -1, .controls = controls};
         prt_relit r;
         assert_int_equal(prt_relight(ctx, t, l, &d, &r), PRT_OK);
         double expect = 0, term = 1, mean = 0, worst = 0;
@@ -224,10 +224,125 @@ static void test_white_furnace(void **state)
         assert_true(worst < 0.01);
         prt_relit_free(&r);
     }
+    /* The defaults (3 bounces and the tail): every wall keeps rho of the power bounce after bounce,
+     * so the tail's ratio is rho and the whole series L_e / (1 - rho) comes out. */
+    prt_relit r;
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1}, &r), PRT_OK);
+    double mean = 0, worst = 0;
+    const double expect = le / (1 - rho);
+    for (size_t v = 0; v < nv; ++v) {
+        mean += r.radiance[v * 3 + 1] / nv;
+        worst = fmax(worst, fabs(r.radiance[v * 3 + 1] - expect) / expect);
+    }
+    print_message("furnace, defaults: mean %.5f, expected %.5f, worst vertex %.2f%% off\n", mean, expect, 100 * worst);
+    assert_float_equal(mean, expect, 0.003 * expect);
+    assert_true(worst < 0.01);
+    prt_relit_free(&r);
     prt_lighting_release(l);
     prt_transfer_release(t);
     prt_scene_release(s);
     tm_free(&m);
+    prt_context_release(ctx);
+}
+
+/* Relative L2 of a's indirect part against b's, and the ratio of their sums; worst: the largest
+ * excess of a over b, relative, where b holds a fair share of light (over a tenth of its mean). */
+static void indirect_vs(const prt_relit *a, const prt_relit *b, double *l2, double *ratio, double *worst)
+{
+    const size_t n = a->vertex_count * 3;
+    double se = 0, sb = 0, sa = 0, s = 0;
+    for (size_t i = 0; i < n; ++i) s += b->indirect[i];
+    *worst = -1;
+    for (size_t i = 0; i < n; ++i) {
+        const double x = a->indirect[i], y = b->indirect[i];
+        se += (x - y) * (x - y);
+        sb += y * y;
+        sa += x;
+        if (y > 0.1 * s / (double)n) *worst = fmax(*worst, (x - y) / y);
+    }
+    *l2 = sqrt(se / sb);
+    *ratio = sa / s;
+}
+
+/* Defaults that converge: a closed room of albedo 0.7 under a point light keeps 1 - 0.7^3 of its
+ * indirect light in three bounces; the default tail brings back the rest. Against 64 bounces
+ * (tight: deterministic) and the path tracer (looser: its noise); in an open scene the tail adds no
+ * light the bounces past the third would not. */
+static void test_defaults_converge(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    for (int open = 0; open < 2; ++open) {
+        test_mesh m = {0};
+        if (open) {   /* a floor and one wall: most light leaves at every bounce */
+            tm_quad(&m, (float[3]){-0.5f, 0, 0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 0, -1}, 12);
+            tm_quad(&m, (float[3]){-0.5f, 0, -0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 1, 0}, 12);
+        } else {
+            closed_box(&m, 10);
+        }
+        tm_sphere(&m, (float[3]){0.1f, 0.25f, 0.05f}, 0.2f, 10, 14);
+        prt_scene *s = tm_scene(ctx, &m, open ? 0.8f : 0.7f);
+        prt_transfer *t = bake(ctx, s, NULL, NULL, NULL);   /* the bake's defaults too */
+        prt_lighting *l = NULL;
+        prt_light bulb;
+        assert_int_equal(prt_lighting_create(&l), PRT_OK);
+        assert_int_equal(prt_light_parse("point:-0.2,0.8,0.25:1", &bulb), PRT_OK);
+        assert_int_equal(prt_lighting_add(l, &bulb, NULL), PRT_OK);
+        const int all[2] = {64, 0}, three[2] = {3, 0};
+        prt_relit def, full, cut;
+        assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .with_indirect = 1}, &def), PRT_OK);
+        assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .with_indirect = 1, .controls = all}, &full), PRT_OK);
+        assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .with_indirect = 1, .controls = three}, &cut), PRT_OK);
+        double l2, ratio, worst, l2_cut, ratio_cut, worst_cut;
+        indirect_vs(&def, &full, &l2, &ratio, &worst);
+        indirect_vs(&cut, &full, &l2_cut, &ratio_cut, &worst_cut);
+        print_message("%s: defaults against 64 bounces: indirect %.4f, sum %.4f, worst excess %+.4f (3 bounces without the tail: %.4f, sum %.4f)\n",
+                      open ? "floor and wall, albedo 0.8" : "closed room, albedo 0.7", l2, ratio, worst, l2_cut, ratio_cut);
+        if (!open) {
+            assert_true(ratio_cut < 0.8);   /* what the tail mends */
+            assert_true(l2 < 0.035);
+            assert_float_equal(ratio, 1.0, 0.01);
+            assert_true(worst < 0.1);
+            /* The same to the bit on one thread. */
+            prt_context *one = test_context(1);
+            prt_relit solo;
+            assert_int_equal(prt_relight(one, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .with_indirect = 1}, &solo), PRT_OK);
+            assert_memory_equal(solo.indirect, def.indirect, def.vertex_count * 3 * sizeof(float));
+            prt_relit_free(&solo);
+            prt_context_release(one);
+            /* Direct light only stays direct light only. */
+            prt_relit direct;
+            assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .component = PRT_COMPONENT_DIRECT}, &direct), PRT_OK);
+            for (size_t i = 0; i < def.vertex_count * 3; ++i) assert_float_equal(direct.radiance[i], def.radiance[i] - def.indirect[i], 1e-6f + 1e-5f * def.radiance[i]);
+            prt_relit_free(&direct);
+            /* And the path tracer. */
+            prt_scene *traced = NULL;
+            assert_int_equal(prt_transfer_scene(ctx, t, &traced), PRT_OK);
+            prt_reference_desc rd = {0};
+            rd.samples = 256;
+            rd.lighting = l;
+            prt_reference_vertices ref;
+            assert_int_equal(prt_reference_trace_vertices(ctx, traced, NULL, &rd, &ref), PRT_OK);
+            double e[4], e_cut[4];
+            vs_reference(def.radiance, def.indirect, &ref, def.vertex_count, NULL, e);
+            vs_reference(cut.radiance, cut.indirect, &ref, def.vertex_count, NULL, e_cut);
+            print_message("closed room against the path tracer: indirect %.4f (reference noise %.4f; 3 bounces without the tail %.4f)\n", e[2], e[3], e_cut[2]);
+            assert_true(e[2] < e[3] + 0.03);
+            prt_reference_vertices_free(&ref);
+            prt_scene_release(traced);
+        } else {
+            assert_true(l2 < 0.6 * l2_cut);   /* half the error of stopping at three */
+            assert_true(ratio < 1.005);
+            assert_true(worst < 0.08);
+        }
+        prt_relit_free(&def);
+        prt_relit_free(&full);
+        prt_relit_free(&cut);
+        prt_lighting_release(l);
+        prt_transfer_release(t);
+        prt_scene_release(s);
+        tm_free(&m);
+    }
     prt_context_release(ctx);
 }
 
@@ -564,10 +679,10 @@ static void test_pixel_lights_over_glossy(void **state)
  * maps leak nothing along the room's seams. Returns the number of leaking pixels. */
 static int seam_leaks(prt_context *ctx, prt_renderer *ren, const prt_transfer *t, const prt_lighting *l, bool gate)
 {
-    const int zero = 0, W = 320, H = 240;
+    const int zero[2] = {0, 0}, W = 320, H = 240;
     prt_relit drawn, flat;
-    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .controls = &zero}, &drawn), PRT_OK);
-    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .controls = &zero, .per_vertex = 1}, &flat), PRT_OK);
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .controls = zero}, &drawn), PRT_OK);
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .controls = zero, .per_vertex = 1}, &flat), PRT_OK);
     const prt_camera cam = {{2.5f, 1.5f, -1.8f}, {-1, 1.2f, 2}, {0, 1, 0}, 70};
     prt_render_mesh rm;
     prt_image a, b;
@@ -657,8 +772,8 @@ static void test_cornell_vs_reference(void **state)
             assert_int_equal(prt_light_parse(lights[i], &li), PRT_OK);
             assert_int_equal(prt_lighting_add(l, &li, NULL), PRT_OK);
         }
-        const int bounces = 16;
-        prt_relight_desc d = {.variant = -1, .controls = &bounces, .with_indirect = 1, .per_vertex = 1};
+        const int bounces[2] = {16, 0};
+        prt_relight_desc d = {.variant = -1, .controls = bounces, .with_indirect = 1, .per_vertex = 1};
         prt_relit r;
         assert_int_equal(prt_relight(ctx, t, l, &d, &r), PRT_OK);
         prt_reference_desc rd = {0};
@@ -720,6 +835,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_basis),
         cmocka_unit_test(test_direct_closed_forms),
         cmocka_unit_test(test_white_furnace),
+        cmocka_unit_test(test_defaults_converge),
         cmocka_unit_test(test_albedo_at_run_time),
         cmocka_unit_test(test_glossy_final_bounce),
         cmocka_unit_test_setup_teardown(test_file_round_trip, test_dir_setup, test_dir_teardown),

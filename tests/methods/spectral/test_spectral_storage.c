@@ -162,7 +162,7 @@ static void test_round_trip_within_bound(void **state)
     float *coeffs = calloc((size_t)a->basis.functions * 3, sizeof(float));
     assert_int_equal(prt__spectral_direct(ctx, t, l, E, NULL, 0), PRT_OK);
     for (size_t i = 0; i < nv * 3; ++i) direct[i] = t->mesh.albedo[i] / (float)PRT_PI * E[i];
-    assert_int_equal(prt__spectral_bounces(ctx, u, t->mesh.albedo, direct, 1, stored), PRT_OK);
+    assert_int_equal(prt__spectral_bounces(ctx, u, t->mesh.albedo, direct, 1, 0, stored), PRT_OK);   /* one bounce, no tail */
     prt__spectral_project(&a->basis, direct, coeffs, 1);
     int tight = 0;
     for (size_t v = 0; v < nv; ++v) {
