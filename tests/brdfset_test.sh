@@ -59,8 +59,9 @@ says "no surface 'shine' (the scene has floor, shiny)"
 # Against the path tracer tracing each BRDF worn (the spectral test's glossy floor before a
 # glowing wall, seen from one eye: the floor shows the wall only through the glossy final bounce).
 # Switched to each BRDF of the set, the floor is closest to the reference of that BRDF, and within
-# its noise plus what the 16 SH bases cost (measured: lambert 3.1%, phong:2 3.2%, phong:8 5.5%
-# against 3.0% noise; across BRDFs 7% to 160%).
+# its noise plus what the 16 SH bases cost (measured: lambert 4.3%, phong:2 4.7%, phong:8 6.7%
+# against 4.2% noise; across BRDFs 8% to 160%. With 2048 rays and 1024 paths: 3.1%, 3.2%, 5.5%
+# against 3.0%).
 printf 'v -1 0 1\nv 1 0 1\nv 1 0 -1\nv -1 0 -1\nf 1 2 3\nf 1 3 4\n' >"$T/gfloor.obj"
 printf 'v -1 0 -1\nv 1 0 -1\nv 1 1 -1\nv -1 1 -1\nf 1 2 3\nf 1 3 4\n' >"$T/gwall.obj"
 glowing() {   # glowing NAME FLOOR-MATERIAL-JSON
@@ -69,12 +70,12 @@ glowing() {   # glowing NAME FLOOR-MATERIAL-JSON
 }
 SET3="lambert:0.3 phong:2:0.3:0.5 phong:8:0.3:0.5"
 glowing gset '{"brdfs": ["lambert:0.3", "phong:2:0.3:0.5", "phong:8:0.3:0.5"]}'
-expect 0 "bake the glossy floor's set" -- "$PRT" bake -q "$T/gset.json" -o "$T/gset.prt" --method spectral --basis 256 --samples 2048 --max-edge 0.125 --no-refine
+expect 0 "bake the glossy floor's set" -- "$PRT" bake -q "$T/gset.json" -o "$T/gset.prt" --method spectral --basis 128 --samples 1024 --max-edge 0.125 --no-refine
 i=0
 for b in $SET3; do
     i=$((i + 1))
     glowing "g$i" "{\"brdf\": \"$b\"}"
-    expect 0 "trace the floor wearing $b" -- "$PRT" reference -q "$T/g$i.json" --eye 0,0.6,2.5 --target 0,0,0 --samples 1024 --max-edge 0.125 -o "$T/gr$i.json"
+    expect 0 "trace the floor wearing $b" -- "$PRT" reference -q "$T/g$i.json" --eye 0,0.6,2.5 --target 0,0,0 --samples 512 --max-edge 0.125 -o "$T/gr$i.json"
     expect 0 "switch the floor to $b" -- "$PRT" relight -q "$T/gset.prt" --eye 0,0.6,2.5 --brdf-of "floor=$b" -o "$T/gs$i.json"
 done
 # Relative L2 over the floor (the wall glows 1 in both), the reference's noise left in.
@@ -95,7 +96,7 @@ for a in 1 2 3; do
     eval "own=\$$a"
     best=$(printf '%s\n' "$@" | sort -g | head -n 1)
     [ "$own" = "$best" ] && ok || bad "switched to BRDF $a, the floor is nearer another BRDF's reference ($row)"
-    awk -v e="$own" 'BEGIN { exit !(e != "" && e + 0 < 0.09) }' && ok || bad "switched to BRDF $a: $own from its reference (noise 0.03)"
+    awk -v e="$own" 'BEGIN { exit !(e != "" && e + 0 < 0.09) }' && ok || bad "switched to BRDF $a: $own from its reference (noise 0.04)"
 done
 
 # Refusals, one line each, naming what there is.

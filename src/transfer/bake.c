@@ -113,7 +113,7 @@ prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_
 
 /* Everything a bake's results depend on, so that a checkpoint is only ever resumed by the same
  * bake: the library version, the method and its options, and the scene as the transfer holds it. */
-static void fingerprint(const prt__method *m, const prt_options *o, const prt_transfer *t, prt__fingerprint *fp)
+static void fingerprint(const prt__method *m, const prt_options *o, const prt_transfer *t, const prt_scene *scene, prt__fingerprint *fp)
 {
     memset(fp, 0, sizeof *fp);
     const char *v = prt_version_string();
@@ -148,6 +148,11 @@ static void fingerprint(const prt__method *m, const prt_options *o, const prt_tr
             prt__fingerprint_add(fp, b->n[l], sizeof b->n[l]);
         }
     }
+    /* BRDF sets decide which vertices have glossy rows (only where kept: older checkpoints stay valid). */
+    for (int i = 0; m->brdf_set && i < scene->brdf_set_count; ++i) {
+        prt__fingerprint_add(fp, &scene->brdf_set[i].surface, sizeof scene->brdf_set[i].surface);
+        prt__fingerprint_add(fp, &scene->brdf_set[i].brdf, sizeof scene->brdf_set[i].brdf);
+    }
 }
 
 prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__method *m, prt__bake_begin_fn begin, const void *desc,
@@ -165,7 +170,7 @@ prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__m
     if (!st && run && run->checkpoint) {
         /* Only prt_bake passes options as desc (checkpoints need them for the fingerprint). */
         prt__fingerprint fp;
-        fingerprint(m, desc, t, &fp);
+        fingerprint(m, desc, t, scene, &fp);
         st = prt__checkpoint_open(ctx, run->checkpoint, &fp, run->resume != 0, &cp);
     }
     if (!st) st = begin(ctx, scene, desc, t, &job);
