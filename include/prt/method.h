@@ -295,13 +295,13 @@ typedef struct prt_relit {
      * triangles none of whose vertices see it, so that a shadow map's texels cannot leak light
      * along a room's seams. */
     float *pixel_visibility;
-    /* The glossy part of each vertex's material under the pixel lights (both borrowed from the
-     * transfer, or from what relighting chose): per vertex 0 = Lambert (pixel_albedo alone),
-     * k = pixel_brdfs[k - 1], whose glossy lobe the renderer evaluates per pixel at the view
-     * direction. NULL when no vertex under the pixel lights is glossy; then the result stays
+    /* The glossy part of each vertex's material under the pixel lights (as baked, or as
+     * relighting switched it: prt_relight_desc.brdf_of): per vertex 0 = Lambert (pixel_albedo
+     * alone), k = pixel_brdfs[k - 1], whose glossy lobe the renderer evaluates per pixel at the
+     * view direction. NULL when no vertex under the pixel lights is glossy; then the result stays
      * view-independent. */
-    const uint8_t *pixel_material;
-    const prt_brdf *pixel_brdfs;
+    uint8_t *pixel_material;
+    prt_brdf *pixel_brdfs;
     int pixel_brdf_count;
     /* With desc.gpu_finish, for methods with GPU passes: the passes (borrowed from the transfer),
      * the first-order input they start from, per texel over the texel map (texel_width x

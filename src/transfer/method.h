@@ -161,8 +161,9 @@ bool prt__export_file(prt_export_result *r, const char *path);
 
 /* Allocates the relit arrays of a result for t (radiance always; the rest as flags say). */
 prt_status prt__relit_alloc(prt_context *ctx, const prt_transfer *t, prt_relit *r, bool indirect);
-/* Points r's pixel_material and pixel_brdfs at t's materials when any of them is glossy (the
- * renderer then draws the pixel lights' highlights); leaves them NULL otherwise. */
-void prt__relit_pixel_materials(const prt_transfer *t, prt_relit *r);
+/* Fills r's pixel_material and pixel_brdfs with t's materials, where surface_brdf[k] (NULL, or
+ * NULL entries: as baked) replaces named surface k's, when any vertex then is glossy (the
+ * renderer draws the pixel lights' highlights); leaves them NULL otherwise. */
+prt_status prt__relit_pixel_materials(prt_context *ctx, const prt_transfer *t, const prt_brdf *const *surface_brdf, prt_relit *r);
 
 #endif

@@ -199,19 +199,32 @@ void prt_transfer_control_range(const prt_transfer *t, int i, int *lo, int *hi, 
 }
 
 /* ---- relighting ---- */
-void prt__relit_pixel_materials(const prt_transfer *t, prt_relit *r)
+prt_status prt__relit_pixel_materials(prt_context *ctx, const prt_transfer *t, const prt_brdf *const *surface_brdf, prt_relit *r)
 {
-    r->pixel_material = NULL;
-    r->pixel_brdfs = NULL;
-    r->pixel_brdf_count = 0;
-    if (!t->mesh.material) return;
-    for (int i = 0; i < t->brdf_count; ++i)
-        if (prt_brdf_is_glossy(&t->brdfs[i])) {
-            r->pixel_material = t->mesh.material;
-            r->pixel_brdfs = t->brdfs;
-            r->pixel_brdf_count = t->brdf_count;
-            return;
-        }
+    const size_t nv = t->mesh.vertex_count;
+    uint8_t *material = prt__calloc(nv ? nv : 1, 1);
+    prt_brdf *table = prt__calloc(PRT__MAX_BRDFS, sizeof(prt_brdf));
+    if (!material || !table) { free(material); free(table); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    int count = t->brdf_count;
+    memcpy(table, t->brdfs, (size_t)count * sizeof(prt_brdf));
+    if (t->mesh.material) memcpy(material, t->mesh.material, nv);
+    /* Switched surfaces: their BRDF's row of the table, appended once. */
+    for (size_t v = 0; surface_brdf && t->mesh.surface && v < nv; ++v) {
+        const prt_brdf *b = surface_brdf[t->mesh.surface[v]];
+        if (!b) continue;
+        int id = 0;
+        for (int k = 0; k < count && !id; ++k)
+            if (!memcmp(&table[k], b, sizeof *b)) id = k + 1;
+        if (!id && count < PRT__MAX_BRDFS) { table[count++] = *b; id = count; }
+        material[v] = (uint8_t)id;
+    }
+    bool glossy = false;
+    for (size_t v = 0; v < nv && !glossy; ++v) glossy = material[v] && prt_brdf_is_glossy(&table[material[v] - 1]);
+    if (!glossy) { free(material); free(table); return PRT_OK; }
+    r->pixel_material = material;
+    r->pixel_brdfs = table;
+    r->pixel_brdf_count = count;
+    return PRT_OK;
 }
 
 prt_status prt__relit_alloc(prt_context *ctx, const prt_transfer *t, prt_relit *r, bool indirect)
@@ -235,6 +248,8 @@ void prt_relit_free(prt_relit *r)
     free(r->pixel_lights);
     free(r->pixel_albedo);
     free(r->pixel_visibility);
+    free(r->pixel_material);
+    free(r->pixel_brdfs);
     free(r->gpu_input);
     memset(r, 0, sizeof *r);
 }

@@ -326,7 +326,7 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
                     memcpy(r->pixel_lights, lights, (size_t)pixel * sizeof(prt_light));
                     r->pixel_light_count = pixel;
                     memcpy(r->pixel_albedo, t->mesh.albedo, nv * 3 * sizeof(float));
-                    prt__relit_pixel_materials(t, r);
+                    st = prt__relit_pixel_materials(ctx, t, NULL, r);
                     prt__vertex_lights_visibility(ctx, &s->cache->lights, &t->mesh, lights, pixel, r->pixel_visibility);
                 }
             }

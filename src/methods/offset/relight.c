@@ -180,8 +180,7 @@ static prt_status pixel_lights(prt_context *ctx, const prt_transfer *t, const pr
             if (c >= 0 && s->medium[c]) memset(r->pixel_albedo + v * 3, 0, 3 * sizeof(float));
         }
     prt__vertex_lights_visibility(ctx, s->vertex_lights, &t->mesh, r->pixel_lights, count, r->pixel_visibility);
-    prt__relit_pixel_materials(t, r);
-    return PRT_OK;
+    return prt__relit_pixel_materials(ctx, t, NULL, r);
 }
 
 prt_status prt__offset_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb)

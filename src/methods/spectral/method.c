@@ -239,6 +239,22 @@ static void spectral_control_range(const prt_transfer *t, int i, int *lo, int *h
 }
 
 /* ---- relighting ---- */
+
+/* The pixel lights' materials: each surface's BRDF as brdf_of switched it (its highlight changes
+ * with it, as its glossy final bounce does). */
+static prt_status spectral_pixel_materials(prt_context *ctx, const prt_transfer *t, const int *brdf_of, prt_relit *r)
+{
+    const prt__spectral_set *s = t->state;
+    if (!brdf_of || !s->set_count) return prt__relit_pixel_materials(ctx, t, NULL, r);
+    const prt_brdf **chosen = prt__calloc((size_t)t->mesh.surface_count + 1, sizeof *chosen);
+    if (!chosen) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (int k = 1; k <= t->mesh.surface_count; ++k)
+        for (int e = 0, n = 0; brdf_of[k] >= 0 && e < s->set_count; ++e)
+            if (s->set[e].surface == k && n++ == brdf_of[k]) chosen[k] = &s->set[e].brdf;
+    const prt_status st = prt__relit_pixel_materials(ctx, t, chosen, r);
+    free(chosen);
+    return st;
+}
 static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *r)
 {
     if (d->brdf) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf does not apply to spectral transfer (it reflects diffusely; see --albedo-of)");
@@ -285,7 +301,7 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
             r->pixel_light_count = pixel;
             st = prt__spectral_visibility(ctx, t, r->pixel_lights, pixel, r->pixel_visibility);
             memcpy(r->pixel_albedo, albedo, nv * 3 * sizeof(float));
-            prt__relit_pixel_materials(t, r);
+            if (!st) st = spectral_pixel_materials(ctx, t, d->brdf_of, r);
             for (size_t i = 0; i < nv * 3; ++i) direct[i] -= albedo[i] / (float)PRT_PI * Ep[i];
         }
     }
