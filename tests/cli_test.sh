@@ -428,6 +428,15 @@ if [ -n "$child" ]; then
     case "$state" in ""|Z) ok ;; *) bad "the importer outlived a killed prt (state $state)"; kill -KILL "$child" ;; esac
 else bad "no importer process seen"; fi
 
+# Spectral files of one scale (format version 2) relight to the numbers that version wrote
+# (tests/data/spectral_v2/README.md).
+SV=$(dirname "$0")/data/spectral_v2
+SEEDS=$(dirname "$0")/../fuzz/regress/prt/spectral
+expect 0 "one-scale spectral file" -- "$PRT" relight "$SEEDS/seed.prt" -o "$T/fx.json"
+same "$T/fx.json" "$SV/seed.json" 1e-6 "one-scale spectral seed.prt"
+expect 0 "one-scale glossy spectral file" -- "$PRT" relight "$SEEDS/seed_glossy.prt" --eye 3,2,4 -o "$T/fx.json"
+same "$T/fx.json" "$SV/seed_glossy.json" 1e-6 "one-scale spectral seed_glossy.prt"
+
 # Files written by prt 0.1 (before the method table) load and relight to the numbers that
 # version wrote (tests/data/v0.1/README.md).
 FX=$(dirname "$0")/data/v0.1

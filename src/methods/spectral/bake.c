@@ -502,6 +502,13 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
     }
     free(keep);
     free(q);
+    /* Room was made for every entry: give back what the drop threshold left over. */
+    uint16_t *i16;
+    int16_t *v16;
+    if (at[0] && (i16 = realloc(s->index, at[0] * sizeof(uint16_t)))) s->index = i16;
+    if (at[0] && (v16 = realloc(s->value, at[0] * sizeof(int16_t)))) s->value = v16;
+    if (at[1] && (i16 = realloc(s->gindex, at[1] * sizeof(uint16_t)))) s->gindex = i16;
+    if (at[1] && (v16 = realloc(s->gvalue, at[1] * sizeof(int16_t)))) s->gvalue = v16;
     return PRT_OK;
 }
 
