@@ -220,6 +220,22 @@ prt_status prt_ies_load_memory(const void *data, size_t size, prt_ies **out)
     return PRT_OK;
 }
 
+prt_status prt__ies_from_table(int nv, int nh, float *v, float *h, float *cd, prt_ies **out)
+{
+    *out = NULL;
+    prt_ies *p = prt__calloc(1, sizeof *p);
+    if (!p) { free(v); free(h); free(cd); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory"); }
+    p->refs = 1;
+    p->nv = nv;
+    p->nh = nh;
+    p->v = v;
+    p->h = h;
+    p->cd = cd;
+    for (size_t i = 0; i < (size_t)nv * nh; ++i) p->max_cd = cd[i] > p->max_cd ? cd[i] : p->max_cd;
+    *out = p;
+    return PRT_OK;
+}
+
 typedef struct load_ctx { prt_ies *p; } load_ctx;
 static prt_status load_bytes(void *user, const void *data, size_t size)
 {

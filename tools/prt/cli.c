@@ -522,7 +522,7 @@ prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t,
     if (dropped && !c->quiet) {
         char names[256] = "", others[128];
         size_t at = 0;
-        for (unsigned bit = 1; bit <= PRT_LIGHTS_EMISSIVE; bit <<= 1)
+        for (unsigned bit = 1; bit <= PRT_LIGHTS_IES; bit <<= 1)
             if ((dropped & bit) && at < sizeof names) at += (size_t)snprintf(names + at, sizeof names - at, "%s%s", at ? " and " : "", prt_lights_bit_name(bit));
         prt_methods_relighting(dropped, others, sizeof others);
         fprintf(stderr, "prt %s: warning: method %s cannot relight the scene's %s: left out (%s%sprt reference path-traces them)\n", c->cmd,
@@ -676,7 +676,7 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
         /* Lighting the method refuses: say how to leave it out. */
         const unsigned refused = prt_relight_needs(t, lighting) & ~prt_method_lighting(prt_transfer_method(t));
         if (refused) {
-            const bool lights = refused & (PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_SPHERE | PRT_LIGHTS_DIRECTIONAL), emit = refused & PRT_LIGHTS_EMISSIVE,
+            const bool lights = refused & (PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_SPHERE | PRT_LIGHTS_DIRECTIONAL | PRT_LIGHTS_IES), emit = refused & PRT_LIGHTS_EMISSIVE,
                        env = refused & PRT_LIGHTS_ENVIRONMENT;
             char how[96] = "";
             snprintf(how, sizeof how, "%s%s%s%s%s", lights ? "--light none" : "", lights && (emit || env) ? ", " : "", emit ? "--emission 0" : "",
