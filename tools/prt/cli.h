@@ -113,6 +113,8 @@ typedef struct cli_light {
     "                        point:X,Y,Z:R,G,B (W/sr)  spot:X,Y,Z:DX,DY,DZ:ANGLE[,FALLOFF]:R,G,B\n" \
     "                        directional:DX,DY,DZ:R,G,B (towards the light, W/m^2)\n" \
     "                        sphere:X,Y,Z:RADIUS:R,G,B (radiance)\n" \
+    "                        ies:FILE:X,Y,Z[:DX,DY,DZ[,UX,UY,UZ][:R,G,B]] (IES profile, nadir\n" \
+    "                        along D (default 0,-1,0), C0 towards U; W/sr per candela)\n" \
     "  --emission S          scale the scene's emissive surfaces (0 turns them off; default 1)\n"
 #define CLI_LIGHT_BRDF_HELP \
     "  --brdf SPEC           reflection lobe of the glossy materials, for glossy sets baked\n" \
