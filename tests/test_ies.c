@@ -152,6 +152,12 @@ static void test_light_spec(void **state)
     assert_true(prt_lighting_content(copy) & PRT_LIGHTS_IES);
     near(prt_ies_candela(prt_lighting_light(copy, 0)->profile, 0, 0), 1000);
     prt_lighting_release(copy);
+    /* Methods that cannot take it refuse it by name, pointing at the one that can. */
+    assert_int_equal(prt_method_check_lighting(prt_method_find("spectral"), PRT_LIGHTS_IES), PRT_ERR_INVALID_ARG);
+    print_message("spectral and an ies light: %s\n", prt_last_error());
+    assert_non_null(strstr(prt_last_error(), "IES"));
+    assert_non_null(strstr(prt_last_error(), "lightcloud"));
+    assert_int_equal(prt_method_check_lighting(prt_method_find("lightcloud"), PRT_LIGHTS_IES | PRT_LIGHTS_SPOT), PRT_OK);
     /* One-line errors. */
     static const char *bad[] = {"ies:", "ies:x.ies", "ies::0,1,0", "ies:/nonexistent/x.ies:0,1,0", "ies:%s:0,1", "ies:%s:0,1,0:0,0,0",
                                 "ies:%s:0,1,0:0,-1,0:-1", "ies:%s:0,1,0:0,-1,0,1:1", "ies:%s:nan,1,0"};
