@@ -531,8 +531,8 @@ expect 0 "lightcloud sweep (no sky for a method without one)" -- "$PRT" sweep -q
 [ "$(wc -l <"$T/lcsweep.csv")" -eq 3 ] && ok || bad "lightcloud sweep wrote $(wc -l <"$T/lcsweep.csv") lines"
 expect 2 "a ray offset beyond the scene" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --ray-offset 1e30 --samples 16
 says "scene's size"
-expect 2 "a spot light on a light cloud" -- "$PRT" relight "$T/lc.prt" -o "$T/x.json" --light spot:0,1,0:0,-1,0:30:1
-says "cannot relight spot lights"
+expect 2 "a spot light on an isotropic light cloud" -- "$PRT" relight "$T/lc.prt" -o "$T/x.json" --light spot:0,1,0:0,-1,0:30:1
+says "need --emission-order 2 or 3"
 expect 2 "a bad cloud grid" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method lightcloud --cloud-grid 3,0,3
 says "--cloud-grid"
 printf '{"lights": [[0, 1, 0], [0.5, "high", 0]]}' >"$T/cloud.json"

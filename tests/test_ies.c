@@ -82,7 +82,7 @@ static void test_bad_files(void **state)
 #define BAD(body, words) do { snprintf(buf, sizeof buf, "%s%s", head, body); expect_bad(buf, words); } while (0)
     expect_bad("", "no TILT= line");
     expect_bad("IESNA:LM-63-2002\n[TEST] x\n", "no TILT= line");
-    expect_bad("IESNA:LM-63-2002\nTILT=lamp.tlt\n1 -1 1 2 1 1 2 0 0 0\n1 1 1\n0 90\n0\n1 1\n", "TILT must be NONE or INCLUDE");
+    expect_bad("IESNA:LM-63-2002\nTILT=lamp.tlt\n1 -1 1 2 1 1 2 0 0 0\n1 1 1\n0 90\n0\n1 1\n", "line 2: TILT must be NONE or INCLUDE");
     BAD("1 -1 1 3 1 1 2 0 0 0\n1 1 10\n0 45 90\n0\n100 90\n", "file ends before a candela value");
     BAD("1 -1 1 3 4 1 2 0 0 0\n1 1 10\n0 45 90\n0\n100 90\n", "longer than the file");
     BAD("1 -1 1 10000 10000 1 2 0 0 0\n1 1 10\n0 90\n0\n1 2\n", "too large");
@@ -92,7 +92,7 @@ static void test_bad_files(void **state)
     BAD("1 -1 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\nnan 1\n", "candela value is not");
     BAD("1 -1 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\ninf 1\n", "not finite");
     BAD("1 -1 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\n-5 1\n", "negative");
-    BAD("1 -1 1 3 1 1 2 0 0 0\n1 1 10\n0 60 45\n0\n1 2 3\n", "increase strictly");
+    BAD("1 -1 1 3 1 1 2 0 0 0\n1 1 10\n0 60 45\n0\n1 2 3\n", "line 5: a vertical angle must increase strictly");
     BAD("1 -1 1 3 1 1 2 0 0 0\n1 1 10\n0 45 45\n0\n1 2 3\n", "increase strictly");
     BAD("1 -1 1 2 2 1 2 0 0 0\n1 1 10\n0 90\n0 400\n1 2 3 4\n", "out of range");
     BAD("1 -1 1 2 2 1 2 0 0 0\n1 1 10\n0 90\n0 120\n1 2 3 4\n", "must end at 0, 90, 180 or 360");

@@ -141,6 +141,7 @@ static prt_status parse(const char *data, size_t size, prt_ies *p)
     size_t tn = n - 5;
     while (tn && (t[tn - 1] == ' ' || t[tn - 1] == '\t')) tn--;
     prt_status st;
+    r.line++;   /* from here r.line is the line r.p is on */
     if (tn == 7 && !strncmp(t, "INCLUDE", 7)) {
         /* Tilt data describe how output changes as the lamp tilts: read and checked, not applied
          * (prt's luminaires hang at their photometered attitude). */
@@ -154,7 +155,7 @@ static prt_status parse(const char *data, size_t size, prt_ies *p)
             if (i >= count && v < 0) return bad(r.line, "%s", "a tilt factor is negative");
         }
     } else if (!(tn == 4 && !strncmp(t, "NONE", 4))) {
-        return bad(r.line, "%s", "TILT must be NONE or INCLUDE (tilt data in another file are not read)");
+        return bad(r.line - 1, "%s", "TILT must be NONE or INCLUDE (tilt data in another file are not read)");
     }
     int lamps = 0, nv = 0, nh = 0, type = 0, units = 0;
     double lumens = 0, mult = 0, dims[3] = {0, 0, 0}, ballast = 0, blp = 0, watts = 0;
