@@ -444,7 +444,7 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
         l->set_lights = true;
         if (!strcasecmp(arg, "none")) { l->light_count = 0; return 1; }
         if (l->light_count == CLI_MAX_LIGHTS) { cli_usage(c, "at most %d --light options", CLI_MAX_LIGHTS); return -1; }
-        if (prt_light_parse(arg, &l->lights[l->light_count])) { cli_usage(c, "--light: %s", prt_last_error()); return -1; }
+        if (cli_parse_light(arg, &l->lights[l->light_count])) { cli_usage(c, "--light: %s", prt_last_error()); return -1; }
         l->light_count++;
         return 1;
     case OPT_EMISSION:
@@ -472,6 +472,27 @@ static prt_environment_desc environment(const cli_light *l, bool has_env, const 
     if (l->set_rotate) memcpy(e.rotate_deg, l->rotate, sizeof e.rotate_deg);
     if (l->set_intensity) e.intensity = l->intensity;
     return e;
+}
+
+/* The profiles of the ies lights parsed in this run: the command line's lights are plain values
+ * copied between arrays, so the run owns their profiles. */
+static prt_ies *kept_profiles[1024];
+static int kept_count;
+
+prt_status cli_parse_light(const char *spec, prt_light *out)
+{
+    prt_light l;
+    prt_status st = prt_light_parse(spec, &l);
+    if (st) return st;
+    /* (Past 1024 ies lights in one command line the rest are left to the end of the process.) */
+    if (l.type == PRT_LIGHT_IES && kept_count < (int)(sizeof kept_profiles / sizeof *kept_profiles)) kept_profiles[kept_count++] = l.profile;
+    *out = l;
+    return PRT_OK;
+}
+
+void cli_release_lights(void)
+{
+    while (kept_count > 0) prt_ies_release(kept_profiles[--kept_count]);
 }
 
 prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t, const prt_scene *s, prt_lighting **out)
