@@ -308,11 +308,12 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
     prt_status st = prt__relit_alloc(ctx, t, r, !s->store_direct && (d->with_indirect || d->component == PRT_COMPONENT_INDIRECT));
     if (st) return st;
     const int count = prt_lighting_count(l);
-    /* The renderer draws no photometric profile: with an ies light, all direct light is per vertex. */
-    bool profiled = false;
-    for (int i = 0; i < count; ++i) profiled |= prt_lighting_light(l, i)->type == PRT_LIGHT_IES;
-    const int pixel = s->store_direct || d->per_vertex || d->no_pixel_lights || profiled || d->component == PRT_COMPONENT_INDIRECT ? 0
-                      : count < PRT_MAX_PIXEL_LIGHTS ? count : PRT_MAX_PIXEL_LIGHTS;
+    /* The renderer draws no photometric profile: ies lights' direct light is per vertex, and the
+     * other lights go first (below) so that they can still be drawn per pixel. */
+    int plain = 0;
+    for (int i = 0; i < count; ++i) plain += prt_lighting_light(l, i)->type != PRT_LIGHT_IES;
+    const int pixel = s->store_direct || d->per_vertex || d->no_pixel_lights || d->component == PRT_COMPONENT_INDIRECT ? 0
+                      : plain < PRT_MAX_PIXEL_LIGHTS ? plain : PRT_MAX_PIXEL_LIGHTS;
     float *w = malloc(((size_t)s->cloud_count * s->lobes * 3 + 3) * sizeof(float));
     float *cloud = prt__calloc(nv * 3, sizeof(float)), *E = prt__calloc(nv * 3, sizeof(float));
     float *exit_sh = s->glossy_count ? prt__calloc(nv * 48, sizeof(float)) : NULL;
@@ -324,7 +325,10 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
         prt_light *lights = malloc((size_t)count * sizeof(prt_light));
         if (!lights) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         else {
-            for (int i = 0; i < count; ++i) lights[i] = *prt_lighting_light(l, i);
+            int at = 0;
+            for (int pass = 0; pass < 2; ++pass)
+                for (int i = 0; i < count; ++i)
+                    if ((prt_lighting_light(l, i)->type == PRT_LIGHT_IES) == (pass == 1)) lights[at++] = *prt_lighting_light(l, i);
             st = prt__vertex_lights_ready(ctx, &t->mesh, s->ray_offset, &s->cache->lights);
             /* Drawn, the first lights' direct light is the renderer's, per pixel with shadow maps. */
             if (!st) prt__vertex_lights_add(ctx, &s->cache->lights, &t->mesh, lights + pixel, count - pixel, E);
