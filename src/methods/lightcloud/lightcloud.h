@@ -8,7 +8,9 @@
  * are clustered (each cloud light belongs to one merged light of the zone) and the zone's
  * per-vertex response vectors - per channel c and merged light l, [c][l] for the diffuse exit
  * radiance and [c][k][l] for the 16 SH coefficients k of a glossy vertex's glossy part - are
- * compressed with clustered PCA (or kept raw). */
+ * compressed with clustered PCA (or kept raw). With emission lobes (lobes.c: --emission-order 2
+ * or 3) each cloud light was solved once per lobe of its emission, and every merged light has
+ * `lobes` columns, [c][l * lobes + k]. */
 #ifndef PRT_METHODS_LIGHTCLOUD_H
 #define PRT_METHODS_LIGHTCLOUD_H
 

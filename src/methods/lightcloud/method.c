@@ -1,7 +1,8 @@
 /* The light-cloud method's table entry (precomputed local radiance transfer, Kristensen,
  * Akenine-Moller & Jensen 2005): bake options, its chunks in file.c (LCPR, LCZN per zone, LCEM),
- * description, the neighbours control and relighting of point and sphere lights. The bake is
- * bake.c (+ cluster.c), the run time relight.c. */
+ * description, the neighbours control and relighting of point and sphere lights (and of spot and
+ * ies lights with emission lobes, lobes.c). The bake is bake.c (+ cluster.c), the run time
+ * relight.c. */
 #include "methods/lightcloud/lightcloud.h"
 
 
