@@ -71,14 +71,15 @@ static double rel_l2(const float *a, const float *b, size_t n)
     return sqrt(se / sb);
 }
 
-static prt_light spot(double angle)
+static prt_light spot_at(const char *at, double angle)
 {
     char spec[128];
-    snprintf(spec, sizeof spec, "spot:" AT ":0.3,-1,0.2:%g:2,1.5,1", angle);
+    snprintf(spec, sizeof spec, "spot:%s:0.3,-1,0.2:%g:2,1.5,1", at, angle);
     prt_light l;
     assert_int_equal(prt_light_parse(spec, &l), PRT_OK);
     return l;
 }
+static prt_light spot(double angle) { return spot_at(AT, angle); }
 
 /* What an order-1 cloud makes of l: a point light of its mean intensity. */
 static prt_light isotropic(const prt_light *l)
@@ -290,6 +291,22 @@ static void sweep(void **state)
         prt_reference_vertices_free(&ref);
         prt_lighting_release(l);
     }
+    /* Between cloud lights: interpolation's error on top (spectral solver under the spot there). */
+    for (size_t i = 0; i < 3; ++i) {
+        prt_light sp = spot_at("0.1,0.55,-0.1", cones[i]), iso = isotropic(&sp);
+        float *want = indirect(f.ctx, f.spectral, &sp);
+        float *o[4] = {NULL, indirect(f.ctx, f.lc[3], &iso), indirect(f.ctx, f.lc[2], &sp), indirect(f.ctx, f.lc[3], &sp)};
+        print_message("between cloud lights, %g degrees vs the solver: order 1 %.3f, 2 %.3f, 3 %.3f\n", cones[i], rel_l2(o[1], want, nv * 3),
+                      rel_l2(o[2], want, nv * 3), rel_l2(o[3], want, nv * 3));
+        for (int k = 1; k <= 3; ++k) free(o[k]);
+        free(want);
+    }
+    prt_light p;
+    assert_int_equal(prt_light_parse("point:0.1,0.55,-0.1:2,1.5,1", &p), PRT_OK);
+    float *want = indirect(f.ctx, f.spectral, &p), *got = indirect(f.ctx, f.lc[3], &p);
+    print_message("between cloud lights, a point light vs the solver: %.3f\n", rel_l2(got, want, nv * 3));
+    free(want);
+    free(got);
     prt_scene_release(traced);
     teardown(&f);
 }
