@@ -545,8 +545,17 @@ expect 0 "lightcloud sweep (no sky for a method without one)" -- "$PRT" sweep -q
 [ "$(wc -l <"$T/lcsweep.csv")" -eq 3 ] && ok || bad "lightcloud sweep wrote $(wc -l <"$T/lcsweep.csv") lines"
 expect 2 "a ray offset beyond the scene" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --ray-offset 1e30 --samples 16
 says "scene's size"
-expect 2 "a spot light on a light cloud" -- "$PRT" relight "$T/lc.prt" -o "$T/x.json" --light spot:0,1,0:0,-1,0:30:1
-says "cannot relight spot lights"
+expect 2 "a spot light on an isotropic light cloud" -- "$PRT" relight "$T/lc.prt" -o "$T/x.json" --light spot:0,1,0:0,-1,0:30:1
+says "need --emission-order 2 or 3"
+# IES luminaires: the path tracer takes them; an isotropic light cloud refuses them; a bad file
+# is refused with the line and what is wrong.
+IES="$(dirname "$0")/../fuzz/regress/ies/seed_downlight.ies"
+expect 0 "an ies light in the path tracer" -- "$PRT" reference -q "$T/lc.prt" -o "$T/iesref.json" --light "ies:$IES:0.2,0.8,0.1:0,-1,0:0.002" --samples 4
+expect 2 "an ies light on an isotropic light cloud" -- "$PRT" relight "$T/lc.prt" -o "$T/x.json" --light "ies:$IES:0.2,0.8,0.1"
+says "need --emission-order 2 or 3"
+printf 'IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 3 1 1 2 0 0 0\n1 1 10\n0 60 45\n0\n1 2 3\n' >"$T/bad.ies"
+expect 2 "a bad IES file" -- "$PRT" reference -q "$T/lc.prt" -o "$T/x.json" --light "ies:$T/bad.ies:0,1,0"
+says "line 5: a vertical angle must increase strictly"
 expect 2 "a bad cloud grid" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --method lightcloud --cloud-grid 3,0,3
 says "--cloud-grid"
 printf '{"lights": [[0, 1, 0], [0.5, "high", 0]]}' >"$T/cloud.json"

@@ -8,6 +8,10 @@
  *   spot         a point light (same I) restricted to a cone around `direction`: full intensity
  *                within the inner half-angle `falloff`, none beyond the outer half-angle `angle`,
  *                smoothstep in cos between;
+ *   ies          a point light whose intensity varies with direction as a photometric profile
+ *                (an IES LM-63 file, candela) says: I(w) = scale x candela(w), W/sr, with the
+ *                profile's nadir (vertical angle 0) along `direction` and its C0 plane towards
+ *                `up`;
  *   directional  irradiance E, W / m^2, on a surface facing the light (direction = towards it);
  *   sphere       uniform radiance L, W / (m^2 sr), leaving a sphere of radius R (soft shadows): an
  *                unoccluded surface facing its centre at distance d > R receives E = pi L R^2 / d^2;
@@ -88,12 +92,32 @@ void prt_sh_light_eval(const prt_sh_light *light, const float dir[3], float rgb[
  * exit radiance of a white Lambertian surface facing each direction) as a lat-long image. */
 prt_status prt_sh_light_to_image(const prt_sh_light *light, int width, int irradiance, prt_image *out);
 
+/* ---- Photometric profiles (IESNA LM-63) ----
+ * A luminaire's candela distribution read from an IES file (LM-63-1986/1991/1995/2002; photometric
+ * type C; TILT=NONE or INCLUDE, tilt data checked but not applied). Candela values carry the
+ * file's multiplier and ballast factors. Immutable once read; shared by reference count (retain
+ * and release from any thread). Bad files give PRT_ERR_FORMAT and a one-line reason. */
+typedef struct prt_ies prt_ies;
+
+prt_status prt_ies_load_memory(const void *data, size_t size, prt_ies **out);
+prt_status prt_ies_load(const char *path, prt_ies **out);
+prt_ies *prt_ies_retain(prt_ies *p);      /* returns p */
+void prt_ies_release(prt_ies *p);
+/* Candela at vertical angle (0 = nadir .. 180 = zenith) and horizontal angle (the C plane,
+ * degrees, any value: the file's symmetry fills in what it leaves out); bilinear; 0 outside the
+ * vertical range the file covers. */
+float prt_ies_candela(const prt_ies *p, float vertical_deg, float horizontal_deg);
+float prt_ies_max_candela(const prt_ies *p);
+/* The path it was loaded from; "" when read from memory. */
+const char *prt_ies_path(const prt_ies *p);
+
 /* ---- Local lights ---- */
 typedef enum prt_light_type {
     PRT_LIGHT_POINT = 1,
     PRT_LIGHT_SPOT,
     PRT_LIGHT_DIRECTIONAL,
-    PRT_LIGHT_SPHERE
+    PRT_LIGHT_SPHERE,
+    PRT_LIGHT_IES
 } prt_light_type;
 
 /* One light; units as stated at the top of this header. */
@@ -107,6 +131,10 @@ typedef struct prt_light {
     float angle_deg;      /* spot: outer half-angle, (0, 90]; 0 = 30 */
     float falloff_deg;    /* spot: inner half-angle, [0, angle]; 0 = angle (a hard edge) */
     float radius;         /* sphere: > 0 */
+    float up[3];          /* ies: towards the C0 plane (made perpendicular to direction); zero = a fixed choice */
+    float scale[3];       /* ies: W/sr per candela, per channel */
+    prt_ies *profile;     /* ies: the profile; a light returned by prt_light_parse owns one
+                           * reference (prt_light_clear), a lighting holds its own copies' */
 } prt_light;
 
 /* Checks type, finiteness and ranges (non-negative colours, unit-able directions, angles);
@@ -117,8 +145,19 @@ prt_status prt_light_validate(prt_light *l);
  *   spot:X,Y,Z:DX,DY,DZ:ANGLE[,FALLOFF]:R,G,B
  *   directional:DX,DY,DZ:R,G,B              towards the light; irradiance W/m^2
  *   sphere:X,Y,Z:RADIUS:R,G,B               radiance
- * (one number for R,G,B means grey). */
+ *   ies:FILE:X,Y,Z[:DX,DY,DZ[,UX,UY,UZ][:R,G,B]]   profile FILE (read now); nadir along D
+ *                                           (default 0,-1,0: down), C0 plane towards U;
+ *                                           scale W/sr per candela (default 1)
+ * (one number for R,G,B means grey). An ies light owns a reference to its profile: release it
+ * with prt_light_clear. */
 prt_status prt_light_parse(const char *spec, prt_light *out);
+/* Releases what a light owns (an ies light's profile reference) and zeroes it. */
+void prt_light_clear(prt_light *l);
+/* dst = src, taking a reference of its own to src's profile (dst is overwritten, not released). */
+void prt_light_copy(prt_light *dst, const prt_light *src);
+/* The intensity light l (point, spot or ies) sends along unit direction w (from the light), W/sr;
+ * zero for directional and sphere lights. */
+void prt_light_intensity_towards(const prt_light *l, const float w[3], float rgb[3]);
 /* The command-line form of l (prt_light_parse reads it back). */
 void prt_light_format(const prt_light *l, char *buf, size_t size);
 const char *prt_light_type_name(prt_light_type type);
@@ -133,7 +172,8 @@ enum {
     PRT_LIGHTS_SPOT = 4,
     PRT_LIGHTS_DIRECTIONAL = 8,
     PRT_LIGHTS_SPHERE = 16,
-    PRT_LIGHTS_EMISSIVE = 32
+    PRT_LIGHTS_EMISSIVE = 32,
+    PRT_LIGHTS_IES = 64
 };
 /* The PRT_LIGHTS_* bit of a light type. */
 unsigned prt_light_type_bit(prt_light_type type);

@@ -175,6 +175,7 @@ void prt_scene_release(prt_scene *s)
 {
     if (!s) return;
     prt__mesh_free(&s->mesh);
+    for (int i = 0; i < s->light_count; ++i) prt_light_clear(&s->lights[i]);
     free(s->lights);
     free(s->brdf_set);
     free(s->media);

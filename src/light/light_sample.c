@@ -49,10 +49,12 @@ bool prt__light_sample_from(const prt_light *l, const float p[3], double u1, dou
     double w[3] = {d[0] / r, d[1] / r, d[2] / r};
     if (l->type != PRT_LIGHT_SPHERE) {
         for (int k = 0; k < 3; ++k) s->wi[k] = (float)w[k];
-        double f = l->type == PRT_LIGHT_SPOT ? prt__spot_factor(l, s->wi) : 1.0;
+        const bool ies = l->type == PRT_LIGHT_IES;
+        double f = l->type == PRT_LIGHT_SPOT ? prt__spot_factor(l, s->wi) : ies ? prt__ies_factor(l, s->wi) : 1.0;
         if (f <= 0) return false;
         s->dist = (float)r;
-        for (int k = 0; k < 3; ++k) s->value[k] = (float)(l->intensity[k] * f / d2);
+        const float *I = ies ? l->scale : l->intensity;
+        for (int k = 0; k < 3; ++k) s->value[k] = (float)(I[k] * f / d2);
         return s->value[0] > 0 || s->value[1] > 0 || s->value[2] > 0;
     }
     const double R = l->radius;

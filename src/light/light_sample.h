@@ -12,6 +12,14 @@
 double prt__sphere_cap_irradiance(double cos_t, double sin2_s);
 /* A spot light's angular factor towards a point that sees the light in unit direction wi. */
 double prt__spot_factor(const prt_light *l, const float wi[3]);
+/* An ies light's candela towards a point that sees the light in unit direction wi (times scale:
+ * W/sr). */
+double prt__ies_factor(const prt_light *l, const float wi[3]);
+/* An ies light's frame: n its nadir, u towards its C0 plane, v = n x u towards C90. */
+void prt__ies_frame(const prt_light *l, double n[3], double u[3], double v[3]);
+/* A profile from a table made in memory (angles in degrees, candela [h][v]); takes ownership of
+ * the three arrays, also on failure. The table is trusted to be valid (increasing type C angles). */
+prt_status prt__ies_from_table(int nv, int nh, float *v, float *h, float *cd, prt_ies **out);
 
 typedef struct prt__light_sample {
     float wi[3];      /* unit, from the surface point towards the light */

@@ -18,6 +18,7 @@ const char *prt_light_type_name(prt_light_type type)
     case PRT_LIGHT_SPOT: return "spot";
     case PRT_LIGHT_DIRECTIONAL: return "directional";
     case PRT_LIGHT_SPHERE: return "sphere";
+    case PRT_LIGHT_IES: return "ies";
     }
     return "unknown";
 }
@@ -29,6 +30,7 @@ unsigned prt_light_type_bit(prt_light_type type)
     case PRT_LIGHT_SPOT: return PRT_LIGHTS_SPOT;
     case PRT_LIGHT_DIRECTIONAL: return PRT_LIGHTS_DIRECTIONAL;
     case PRT_LIGHT_SPHERE: return PRT_LIGHTS_SPHERE;
+    case PRT_LIGHT_IES: return PRT_LIGHTS_IES;
     }
     return 0;
 }
@@ -42,6 +44,7 @@ const char *prt_lights_bit_name(unsigned bit)
     case PRT_LIGHTS_DIRECTIONAL: return "directional lights";
     case PRT_LIGHTS_SPHERE: return "sphere lights";
     case PRT_LIGHTS_EMISSIVE: return "emissive surfaces";
+    case PRT_LIGHTS_IES: return "IES (profiled) lights";
     }
     return "unknown";
 }
@@ -50,7 +53,7 @@ void prt_lights_names(unsigned bits, const char *sep, char *buf, size_t size)
 {
     size_t at = 0;
     if (size) buf[0] = 0;
-    for (unsigned bit = 1; bit <= PRT_LIGHTS_EMISSIVE && at < size; bit <<= 1)
+    for (unsigned bit = 1; bit <= PRT_LIGHTS_IES && at < size; bit <<= 1)
         if (bits & bit) at += (size_t)snprintf(buf + at, size - at, "%s%s", at ? sep : "", prt_lights_bit_name(bit));
 }
 
@@ -76,12 +79,12 @@ prt_status prt_light_validate(prt_light *l)
 {
     if (!l) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_light_validate: light is required");
     const prt_light_type t = l->type;
-    if (t != PRT_LIGHT_POINT && t != PRT_LIGHT_SPOT && t != PRT_LIGHT_DIRECTIONAL && t != PRT_LIGHT_SPHERE)
-        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "unknown light type %d (point, spot, directional or sphere)", (int)t);
+    if (t != PRT_LIGHT_POINT && t != PRT_LIGHT_SPOT && t != PRT_LIGHT_DIRECTIONAL && t != PRT_LIGHT_SPHERE && t != PRT_LIGHT_IES)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "unknown light type %d (point, spot, directional, sphere or ies)", (int)t);
     const char *name = prt_light_type_name(t);
     if (t != PRT_LIGHT_DIRECTIONAL && !finite3(l->position))
         return prt__fail(NULL, PRT_ERR_INVALID_ARG, "%s light: position must be finite", name);
-    if (t == PRT_LIGHT_SPOT || t == PRT_LIGHT_DIRECTIONAL) {
+    if (t == PRT_LIGHT_SPOT || t == PRT_LIGHT_DIRECTIONAL || t == PRT_LIGHT_IES) {
         if (!finite3(l->direction) || !unit(l->direction))
             return prt__fail(NULL, PRT_ERR_INVALID_ARG, "%s light: direction must be finite and non-zero", name);
     }
@@ -93,6 +96,15 @@ prt_status prt_light_validate(prt_light *l)
         if (!colour_ok(l->radiance)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "sphere light: radiance must be finite, >= 0 and at most 1e30");
         if (!(l->radius > 0) || !isfinite(l->radius))
             return prt__fail(NULL, PRT_ERR_INVALID_ARG, "sphere light: radius must be finite and > 0 (got %g)", l->radius);
+    }
+    if (t == PRT_LIGHT_IES) {
+        if (!l->profile) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "ies light: no profile");
+        if (!colour_ok(l->scale)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "ies light: scale must be finite, >= 0 and at most 1e30");
+        if (!finite3(l->up)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "ies light: up must be finite");
+        /* The brightest direction's W/sr stays within the bound every other light keeps. */
+        for (int k = 0; k < 3; ++k)
+            if (!((double)l->scale[k] * prt_ies_max_candela(l->profile) <= PRT__MAX_RADIANCE))
+                return prt__fail(NULL, PRT_ERR_INVALID_ARG, "ies light: scale x peak candela is above 1e30 W/sr");
     }
     if (t == PRT_LIGHT_SPOT) {
         if (l->angle_deg == 0) l->angle_deg = 30.0f;
@@ -130,9 +142,98 @@ static int parse_list(const char *s, size_t len, double *out, int min, int max)
     return n >= min ? n : -1;
 }
 
+/* ies:FILE:X,Y,Z[:DX,DY,DZ[,UX,UY,UZ][:R,G,B]]: FILE runs to the colon before the position (the
+ * fields after it hold no colon), so paths with colons work. */
+static prt_status parse_ies(const char *spec, prt_light *out)
+{
+    const char *field[4];
+    size_t len[4];
+    int nf = 0;
+    const char *end = spec + strlen(spec), *p = end;
+    /* Up to three numeric fields from the end, as long as they look numeric. */
+    while (nf < 3) {
+        const char *colon = p;
+        while (colon > spec + 4 && colon[-1] != ':') colon--;
+        if (colon <= spec + 4) break;
+        size_t n = (size_t)(p - colon);
+        bool numeric = n > 0;
+        for (size_t i = 0; i < n && numeric; ++i) numeric = strchr("0123456789+-.,eE", colon[i]) != NULL;
+        if (!numeric) break;
+        field[nf] = colon;
+        len[nf] = n;
+        nf++;
+        p = colon - 1;
+    }
+    if (nf == 0 || p <= spec + 4) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "light '%s': expected ies:FILE:X,Y,Z[:DX,DY,DZ[,UX,UY,UZ][:R,G,B]]", spec);
+    char path[1024];
+    const size_t plen = (size_t)(p - (spec + 4));
+    if (plen >= sizeof path) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "light '%s': file name too long", spec);
+    memcpy(path, spec + 4, plen);
+    path[plen] = 0;
+    prt_light l;
+    memset(&l, 0, sizeof l);
+    l.type = PRT_LIGHT_IES;
+    l.direction[1] = -1.0f;
+    l.scale[0] = l.scale[1] = l.scale[2] = 1.0f;
+    double v[6];
+    /* field[nf - 1] is the position, then the direction, then the scale. */
+    if (parse_list(field[nf - 1], len[nf - 1], v, 3, 3) < 0) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "light '%s': position needs X,Y,Z", spec);
+    for (int c = 0; c < 3; ++c) l.position[c] = (float)v[c];
+    if (nf >= 2) {
+        int n = parse_list(field[nf - 2], len[nf - 2], v, 3, 6);
+        if (n != 3 && n != 6) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "light '%s': direction needs DX,DY,DZ or DX,DY,DZ,UX,UY,UZ", spec);
+        for (int c = 0; c < 3; ++c) l.direction[c] = (float)v[c];
+        for (int c = 0; c < 3 && n == 6; ++c) l.up[c] = (float)v[3 + c];
+    }
+    if (nf == 3) {
+        int n = parse_list(field[0], len[0], v, 1, 3);
+        if (n != 1 && n != 3) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "light '%s': scale needs R,G,B or one number", spec);
+        for (int c = 0; c < 3; ++c) l.scale[c] = (float)v[n == 3 ? c : 0];
+    }
+    prt_status st = prt_ies_load(path, &l.profile);
+    if (!st) st = prt_light_validate(&l);
+    if (st) {
+        char msg[256];
+        snprintf(msg, sizeof msg, "%s", prt_last_error());
+        prt_ies_release(l.profile);
+        return prt__fail(NULL, st, "light '%s': %s", spec, msg);
+    }
+    *out = l;
+    return PRT_OK;
+}
+
+void prt_light_clear(prt_light *l)
+{
+    if (!l) return;
+    if (l->type == PRT_LIGHT_IES) prt_ies_release(l->profile);
+    memset(l, 0, sizeof *l);
+}
+
+void prt_light_copy(prt_light *dst, const prt_light *src)
+{
+    if (!dst || !src) return;
+    *dst = *src;
+    if (dst->type == PRT_LIGHT_IES) prt_ies_retain(dst->profile);
+}
+
+void prt_light_intensity_towards(const prt_light *l, const float w[3], float rgb[3])
+{
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    if (!l || (l->type != PRT_LIGHT_POINT && l->type != PRT_LIGHT_SPOT && l->type != PRT_LIGHT_IES)) return;
+    const float wi[3] = {-w[0], -w[1], -w[2]};
+    if (l->type == PRT_LIGHT_IES) {
+        double f = prt__ies_factor(l, wi);
+        for (int k = 0; k < 3; ++k) rgb[k] = (float)(l->scale[k] * f);
+        return;
+    }
+    double f = l->type == PRT_LIGHT_SPOT ? prt__spot_factor(l, wi) : 1.0;
+    for (int k = 0; k < 3; ++k) rgb[k] = (float)(l->intensity[k] * f);
+}
+
 prt_status prt_light_parse(const char *spec, prt_light *out)
 {
     if (!spec || !out) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_light_parse: spec and out are required");
+    if (!strncmp(spec, "ies:", 4)) return parse_ies(spec, out);
     const char *field[6];
     size_t len[6];
     int nf = 0;
@@ -230,6 +331,11 @@ void prt_light_format(const prt_light *l, char *buf, size_t size)
         put3(a, sizeof a, l->position, false); put3(b, sizeof b, l->radiance, true);
         snprintf(buf, size, "sphere:%s:%.9g:%s", a, l->radius, b);
         return;
+    case PRT_LIGHT_IES:
+        put3(a, sizeof a, l->position, false); put3(b, sizeof b, l->scale, true);
+        snprintf(buf, size, "ies:%s:%s:%.9g,%.9g,%.9g,%.9g,%.9g,%.9g:%s", prt_ies_path(l->profile), a, l->direction[0], l->direction[1], l->direction[2],
+                 l->up[0], l->up[1], l->up[2], b);
+        return;
     }
 }
 
@@ -271,6 +377,11 @@ void prt_light_irradiance(const prt_light *l, const float p[3], const float n[3]
     double c = (d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / r;
     if (c <= 0) return;
     float wi[3] = {(float)(d[0] / r), (float)(d[1] / r), (float)(d[2] / r)};
+    if (l->type == PRT_LIGHT_IES) {
+        double f = prt__ies_factor(l, wi);
+        for (int k = 0; k < 3; ++k) rgb[k] = (float)(l->scale[k] * f * c / r2);
+        return;
+    }
     double s = l->type == PRT_LIGHT_SPOT ? prt__spot_factor(l, wi) : 1.0;
     for (int k = 0; k < 3; ++k) rgb[k] = (float)(l->intensity[k] * c / r2 * s);
 }
@@ -305,6 +416,7 @@ void prt_lighting_release(prt_lighting *l)
 {
     if (!l) return;
     prt_envmap_release(l->env);
+    for (int i = 0; i < l->count; ++i) prt_light_clear(&l->lights[i]);
     free(l->lights);
     free(l);
 }
@@ -335,7 +447,10 @@ prt_status prt_lighting_copy(const prt_lighting *src, prt_lighting **out)
     if (!st && src->count) {
         l->lights = malloc((size_t)src->count * sizeof *l->lights);
         if (!l->lights) st = prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory copying lights");
-        else { memcpy(l->lights, src->lights, (size_t)src->count * sizeof *l->lights); l->cap = src->count; }
+        else {
+            for (int i = 0; i < src->count; ++i) prt_light_copy(&l->lights[i], &src->lights[i]);
+            l->cap = src->count;
+        }
     }
     if (st) { l->count = 0; prt_lighting_release(l); return st; }
     *out = l;
@@ -419,7 +534,7 @@ prt_status prt_lighting_add(prt_lighting *l, const prt_light *light, int *index)
         l->cap = cap;
     }
     if (index) *index = l->count;
-    l->lights[l->count++] = copy;
+    prt_light_copy(&l->lights[l->count++], &copy);
     return PRT_OK;
 }
 
@@ -430,7 +545,9 @@ prt_status prt_lighting_set(prt_lighting *l, int index, const prt_light *light)
     prt_light copy = *light;
     prt_status st = prt_light_validate(&copy);
     if (st) return st;
-    l->lights[index] = copy;
+    prt_light old = l->lights[index];
+    prt_light_copy(&l->lights[index], &copy);
+    prt_light_clear(&old);
     return PRT_OK;
 }
 
@@ -438,6 +555,7 @@ prt_status prt_lighting_remove(prt_lighting *l, int index)
 {
     if (!l) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_lighting_remove: lighting is required");
     if (index < 0 || index >= l->count) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "light index %d out of range 0..%d", index, l->count - 1);
+    prt_light_clear(&l->lights[index]);
     memmove(l->lights + index, l->lights + index + 1, (size_t)(l->count - index - 1) * sizeof *l->lights);
     l->count--;
     return PRT_OK;
@@ -445,7 +563,9 @@ prt_status prt_lighting_remove(prt_lighting *l, int index)
 
 void prt_lighting_clear_lights(prt_lighting *l)
 {
-    if (l) l->count = 0;
+    if (!l) return;
+    for (int i = 0; i < l->count; ++i) prt_light_clear(&l->lights[i]);
+    l->count = 0;
 }
 
 int prt_lighting_count(const prt_lighting *l) { return l ? l->count : 0; }

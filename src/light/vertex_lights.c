@@ -95,6 +95,10 @@ float prt__vertex_light_visibility(const prt__vertex_lights *c, const prt__mesh 
     if (l->type == PRT_LIGHT_DIRECTIONAL) return prt__vertex_lights_occluded(c, o, l->direction, INFINITY) ? 0.0f : 1.0f;
     prt_light bare = *l;
     if (l->type == PRT_LIGHT_SPOT) bare.type = PRT_LIGHT_POINT;
+    if (l->type == PRT_LIGHT_IES) {   /* visibility only: any colour that is not black */
+        bare.type = PRT_LIGHT_POINT;
+        bare.intensity[0] = bare.intensity[1] = bare.intensity[2] = 1.0f;
+    }
     const int samples = l->type == PRT_LIGHT_SPHERE ? SPHERE_RAYS : 1;
     int seen = 0, tried = 0;
     for (int i = 0; i < samples; ++i) {

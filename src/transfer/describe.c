@@ -115,7 +115,7 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
         }
         free(sizes);
         cJSON *relights = cJSON_AddArrayToObject(j, "relights");
-        for (unsigned bit = 1; bit <= PRT_LIGHTS_EMISSIVE; bit <<= 1)
+        for (unsigned bit = 1; bit <= PRT_LIGHTS_IES; bit <<= 1)
             if (t->method->lighting & bit) cJSON_AddItemToArray(relights, cJSON_CreateString(prt_lights_bit_name(bit)));   /* as listed below */
         cJSON_AddBoolToObject(j, "runtime_albedo", t->method->runtime_albedo);
         cJSON_AddBoolToObject(j, "gpu_passes", t->method->gpu_passes);

@@ -150,6 +150,9 @@ static prt_status read_meta(prt_context *ctx, const cJSON *meta, prt_transfer *t
         if (n && !t->lights) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         const cJSON *e;
         cJSON_ArrayForEach(e, x) {
+            /* A file's lights come from its scene, which names no IES lights: a file naming one
+             * would read another file while loading. */
+            if (cJSON_IsString(e) && !strncmp(e->valuestring, "ies:", 4)) return bad(ctx, "corrupt .prt file: an IES light among the scene's lights");
             if (!cJSON_IsString(e) || prt_light_parse(e->valuestring, &t->lights[t->light_count]))
                 return bad(ctx, "corrupt .prt file: a light of the scene is unreadable");
             t->light_count++;

@@ -29,7 +29,7 @@ static prt_status copy_lights(prt_transfer *t, const prt_light *lights, int coun
     if (!count) return PRT_OK;
     t->lights = malloc((size_t)count * sizeof *lights);
     if (!t->lights) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
-    memcpy(t->lights, lights, (size_t)count * sizeof *lights);
+    for (int i = 0; i < count; ++i) prt_light_copy(&t->lights[i], &lights[i]);   /* its own profile references */
     t->light_count = count;
     return PRT_OK;
 }
@@ -80,6 +80,7 @@ void prt_transfer_release(prt_transfer *t)
     if (!t) return;
     if (t->state && t->method) t->method->free_state(t->state);
     prt__mesh_free(&t->mesh);
+    for (int i = 0; i < t->light_count; ++i) prt_light_clear(&t->lights[i]);
     free(t->lights);
     free(t);
 }
@@ -143,7 +144,10 @@ prt_status prt_transfer_scene(prt_context *ctx, const prt_transfer *t, prt_scene
     prt_status st = prt__mesh_copy(&s->mesh, &t->mesh);
     if (!st && t->light_count) {
         if (!(s->lights = malloc((size_t)t->light_count * sizeof *s->lights))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        else { memcpy(s->lights, t->lights, (size_t)t->light_count * sizeof *s->lights); s->light_count = t->light_count; }
+        else {
+            for (int i = 0; i < t->light_count; ++i) prt_light_copy(&s->lights[i], &t->lights[i]);
+            s->light_count = t->light_count;
+        }
     }
     if (st) { prt_scene_release(s); return st; }
     s->brdf_count = t->brdf_count;

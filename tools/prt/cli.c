@@ -466,7 +466,7 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
         l->set_lights = true;
         if (!strcasecmp(arg, "none")) { l->light_count = 0; return 1; }
         if (l->light_count == CLI_MAX_LIGHTS) { cli_usage(c, "at most %d --light options", CLI_MAX_LIGHTS); return -1; }
-        if (prt_light_parse(arg, &l->lights[l->light_count])) { cli_usage(c, "--light: %s", prt_last_error()); return -1; }
+        if (cli_parse_light(arg, &l->lights[l->light_count])) { cli_usage(c, "--light: %s", prt_last_error()); return -1; }
         l->light_count++;
         return 1;
     case OPT_EMISSION:
@@ -494,6 +494,27 @@ static prt_environment_desc environment(const cli_light *l, bool has_env, const 
     if (l->set_rotate) memcpy(e.rotate_deg, l->rotate, sizeof e.rotate_deg);
     if (l->set_intensity) e.intensity = l->intensity;
     return e;
+}
+
+/* The profiles of the ies lights parsed in this run: the command line's lights are plain values
+ * copied between arrays, so the run owns their profiles. */
+static prt_ies *kept_profiles[1024];
+static int kept_count;
+
+prt_status cli_parse_light(const char *spec, prt_light *out)
+{
+    prt_light l;
+    prt_status st = prt_light_parse(spec, &l);
+    if (st) return st;
+    /* (Past 1024 ies lights in one command line the rest are left to the end of the process.) */
+    if (l.type == PRT_LIGHT_IES && kept_count < (int)(sizeof kept_profiles / sizeof *kept_profiles)) kept_profiles[kept_count++] = l.profile;
+    *out = l;
+    return PRT_OK;
+}
+
+void cli_release_lights(void)
+{
+    while (kept_count > 0) prt_ies_release(kept_profiles[--kept_count]);
 }
 
 prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t, const prt_scene *s, prt_lighting **out)
@@ -544,7 +565,7 @@ prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t,
     if (dropped && !c->quiet) {
         char names[256] = "", others[128];
         size_t at = 0;
-        for (unsigned bit = 1; bit <= PRT_LIGHTS_EMISSIVE; bit <<= 1)
+        for (unsigned bit = 1; bit <= PRT_LIGHTS_IES; bit <<= 1)
             if ((dropped & bit) && at < sizeof names) at += (size_t)snprintf(names + at, sizeof names - at, "%s%s", at ? " and " : "", prt_lights_bit_name(bit));
         prt_methods_relighting(dropped, others, sizeof others);
         fprintf(stderr, "prt %s: warning: method %s cannot relight the scene's %s: left out (%s%sprt reference path-traces them)\n", c->cmd,
@@ -772,7 +793,7 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
         /* Lighting the method refuses: say how to leave it out. */
         const unsigned refused = prt_relight_needs(t, lighting) & ~prt_method_lighting(prt_transfer_method(t));
         if (refused) {
-            const bool lights = refused & (PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_SPHERE | PRT_LIGHTS_DIRECTIONAL), emit = refused & PRT_LIGHTS_EMISSIVE,
+            const bool lights = refused & (PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_SPHERE | PRT_LIGHTS_DIRECTIONAL | PRT_LIGHTS_IES), emit = refused & PRT_LIGHTS_EMISSIVE,
                        env = refused & PRT_LIGHTS_ENVIRONMENT;
             char how[96] = "";
             snprintf(how, sizeof how, "%s%s%s%s%s", lights ? "--light none" : "", lights && (emit || env) ? ", " : "", emit ? "--emission 0" : "",

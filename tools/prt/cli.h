@@ -40,6 +40,10 @@ int cli_usage(const cli *c, const char *fmt, ...) __attribute__((format(printf, 
 int cli_make_context(cli *c);
 /* Edit distance between a and the first n bytes of b (a swap of neighbours is one edit), capped at 9. */
 int cli_edit_distance(const char *a, const char *b, size_t n);
+/* Parses a --light style spec; an ies light's profile is kept for the whole run (released by
+ * cli_release_lights when the command returns), so lights can be copied freely. */
+prt_status cli_parse_light(const char *spec, prt_light *out);
+void cli_release_lights(void);
 /* Runs gnuplot on the script at path (then removes it), passing its messages on (the first one
  * only when quiet); false when it fails. */
 bool cli_run_gnuplot(const cli *c, const char *script);
@@ -116,6 +120,8 @@ typedef struct cli_light {
     "                        point:X,Y,Z:R,G,B (W/sr)  spot:X,Y,Z:DX,DY,DZ:ANGLE[,FALLOFF]:R,G,B\n" \
     "                        directional:DX,DY,DZ:R,G,B (towards the light, W/m^2)\n" \
     "                        sphere:X,Y,Z:RADIUS:R,G,B (radiance)\n" \
+    "                        ies:FILE:X,Y,Z[:DX,DY,DZ[,UX,UY,UZ][:R,G,B]] (IES profile, nadir\n" \
+    "                        along D (default 0,-1,0), C0 towards U; W/sr per candela)\n" \
     "  --emission S          scale the scene's emissive surfaces (0 turns them off; default 1)\n"
 #define CLI_LIGHT_BRDF_HELP \
     "  --brdf SPEC           reflection lobe of the glossy materials, for glossy sets baked\n" \

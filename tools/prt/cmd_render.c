@@ -150,7 +150,7 @@ int cmd_render(int argc, char **argv)
         case OPT_FPS: if (!cli_parse_int(optarg, 1, 100, &fps)) return cli_usage(&c, "--fps must be 1..100"); break;
         case OPT_LIGHT_TO:
             if (to_count == CLI_MAX_LIGHTS) return cli_usage(&c, "at most %d --light-to", CLI_MAX_LIGHTS);
-            if (prt_light_parse(optarg, &to[to_count])) return cli_usage(&c, "--light-to: %s", prt_last_error());
+            if (cli_parse_light(optarg, &to[to_count])) return cli_usage(&c, "--light-to: %s", prt_last_error());
             to_count++;
             break;
         case 'j': if (!cli_parse_int(optarg, 1, 1024, &c.threads)) return cli_usage(&c, "--threads must be 1..1024"); break;

@@ -32,7 +32,11 @@ int main(int argc, char **argv)
     if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) { usage(stdout); return EXIT_OK; }
     if (!strcmp(argv[1], "--version")) { printf("prt %s\n", prt_version_string()); return EXIT_OK; }
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i)
-        if (!strcmp(argv[1], commands[i].name)) return commands[i].fn(argc - 1, argv + 1);
+        if (!strcmp(argv[1], commands[i].name)) {
+            const int rc = commands[i].fn(argc - 1, argv + 1);
+            cli_release_lights();
+            return rc;
+        }
     /* A misspelt command: name the closest one (within a third of its length), on one line. */
     const char *best = NULL;
     int best_d = 9;

@@ -29,7 +29,8 @@ typedef struct lcbake {
     prt__stage inner_stage;
     int first_own;                   /* index of the "light cloud" stage; -1 until the inner bake ends */
     FILE *spill;                     /* responses [light][zone-ordered diffuse | glossy] */
-    size_t stride;                   /* floats per light */
+    size_t stride;                   /* floats per light: its lobes' responses one after another */
+    size_t one;                      /* floats per lobe's response */
     uint32_t *pos_of;                /* [vertex] position in member order */
     uint8_t *visible;                /* [light * n + light] mutual visibility (1 = visible) */
     uint8_t *dark;                   /* [light] 1 when the light reaches no vertex at all */
@@ -278,16 +279,18 @@ static prt_status split_zones(lcbake *b, uint32_t *idx, uint32_t n, uint32_t *zo
 /* One solve: the spectral run time under one unit point light (pos) or the scene's emitters
  * (pos NULL). direct and indirect get the exit radiance per vertex (3 each; direct may be NULL),
  * glossy the glossy vertices' SH exit radiance (48 each). */
-static prt_status solve(lcbake *b, prt_context *ctx, const float *pos, float *direct, float *indirect, float *glossy)
+static prt_status solve(lcbake *b, prt_context *ctx, const float *pos, int lobe, float *direct, float *indirect, float *glossy)
 {
     prt__lightcloud_set *s = b->s;
     const size_t nv = b->t->mesh.vertex_count;
     prt_lighting *l = NULL;
     prt_status st = prt_lighting_create(&l);
     if (st) return prt__fail(ctx, st, "out of memory");
-    if (pos) {
-        prt_light pl = {.type = PRT_LIGHT_POINT, .position = {pos[0], pos[1], pos[2]}, .intensity = {1, 1, 1}};
-        st = prt_lighting_add(l, &pl, NULL);
+    if (pos) {   /* lobe 0: the unit point light; the others its emission lobes (lobes.c) */
+        prt_light pl;
+        st = prt__lightcloud_lobe_light(lobe, pos, &pl);
+        if (!st) st = prt_lighting_add(l, &pl, NULL);
+        prt_light_clear(&pl);
         prt_lighting_set_emission(l, 0.0f);
     }
     const int controls[2] = {s->bounces, 1};   /* and the spectral tail: the rest of the series */
@@ -360,7 +363,8 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
     if (!st)
         for (size_t i = 0; i < nv; ++i) b->pos_of[s->members[i]] = (uint32_t)i;
     /* The scratch file of responses. */
-    b->stride = nv * 3 + (size_t)s->glossy_count * 48;
+    b->one = nv * 3 + (size_t)s->glossy_count * 48;
+    b->stride = b->one * (size_t)s->lobes;
     if (!st && !(b->spill = tmpfile())) st = prt__fail(ctx, PRT_ERR_IO, "cannot create a scratch file for the light responses (TMPDIR)");
     /* What the scene's emitters light, baked whole (direct and indirect): the renderer cannot
      * draw emitters' direct light. */
@@ -368,7 +372,7 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
         s->emit = prt__calloc(nv * 6, sizeof(float));
         s->emit_sh = prt__calloc((size_t)s->glossy_count * 48 + 1, sizeof(float));
         if (!s->emit || !s->emit_sh) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        else st = solve(b, ctx, NULL, s->emit, s->emit + nv * 3, s->emit_sh);
+        else st = solve(b, ctx, NULL, 0, s->emit, s->emit + nv * 3, s->emit_sh);
     }
     if (!st)
         prt__log(ctx, PRT_LOG_INFO, "light cloud: %u light%s (spacing %.3g), %u zones, responses %.1f MiB on disk", n, n == 1 ? "" : "s", s->spacing, s->zone_count,
@@ -394,23 +398,26 @@ static prt_status light_run(prt__bake_job *job, uint64_t unit, int thread)
     float *diffuse = malloc(nv * 3 * sizeof(float)), *direct = malloc(nv * 3 * sizeof(float));
     float *glossy = malloc(((size_t)s->glossy_count * 48 + 1) * sizeof(float)), *resp = malloc(b->stride * sizeof(float) + 4);
     prt_status st = diffuse && direct && glossy && resp ? PRT_OK : prt__fail(job->ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    if (!st) st = solve(b, job->ctx, s->cloud + unit * 3, direct, diffuse, glossy);
-    if (!st) {
-        bool lit = false;
-        for (size_t i = 0; i < nv * 3 && !lit; ++i) lit = direct[i] != 0 || diffuse[i] != 0;
-        b->dark[unit] = !lit;
-    }
-    if (!st && s->store_direct)
-        for (size_t i = 0; i < nv * 3; ++i) diffuse[i] += direct[i];
-    if (!st) {
-        for (size_t v = 0; v < nv; ++v) memcpy(resp + (size_t)b->pos_of[v] * 3, diffuse + v * 3, 3 * sizeof(float));
-        /* Glossy vertices in member order too. */
-        for (size_t i = 0, g = 0; i < nv; ++i) {
-            const uint32_t gv = s->glossy_of[s->members[i]];
-            if (gv != UINT32_MAX) memcpy(resp + nv * 3 + 48 * g++, glossy + (size_t)gv * 48, 48 * sizeof(float));
+    for (int k = 0; k < s->lobes && !st; ++k) {
+        float *out = resp + b->one * (size_t)k;
+        st = solve(b, job->ctx, s->cloud + unit * 3, k, direct, diffuse, glossy);
+        if (!st && k == 0) {
+            bool lit = false;
+            for (size_t i = 0; i < nv * 3 && !lit; ++i) lit = direct[i] != 0 || diffuse[i] != 0;
+            b->dark[unit] = !lit;
         }
-        st = write_response(b, unit, resp);
+        if (!st && s->store_direct)
+            for (size_t i = 0; i < nv * 3; ++i) diffuse[i] += direct[i];
+        if (!st) {
+            for (size_t v = 0; v < nv; ++v) memcpy(out + (size_t)b->pos_of[v] * 3, diffuse + v * 3, 3 * sizeof(float));
+            /* Glossy vertices in member order too. */
+            for (size_t i = 0, g = 0; i < nv; ++i) {
+                const uint32_t gv = s->glossy_of[s->members[i]];
+                if (gv != UINT32_MAX) memcpy(out + nv * 3 + 48 * g++, glossy + (size_t)gv * 48, 48 * sizeof(float));
+            }
+        }
     }
+    if (!st) st = write_response(b, unit, resp);
     free(diffuse);
     free(direct);
     free(glossy);
@@ -505,30 +512,35 @@ static prt_status zone_run(lcbake *b, prt_context *ctx, uint32_t z)
     const size_t nv = b->t->mesh.vertex_count;
     const uint32_t n = s->cloud_count, first = s->member_start[z], nz = s->member_start[z + 1] - first;
     const uint32_t gfirst = s->glossy_start[z], gz = s->glossy_start[z + 1] - gfirst;
-    float *R = malloc((size_t)n * nz * 3 * sizeof(float)), *G = malloc(((size_t)n * gz * 48 + 1) * sizeof(float));
+    /* R and G: every light's responses, lobe by lobe ([lobe][light][...]); clustering looks at
+     * lobe 0, the isotropic light's. */
+    const int K = s->lobes;
+    float *R = malloc((size_t)K * n * nz * 3 * sizeof(float) + 4), *G = malloc(((size_t)K * n * gz * 48 + 1) * sizeof(float));
     zone->light_of = malloc((size_t)n * sizeof(uint32_t));
     prt_status st = R && G && zone->light_of ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     const int fd = b->spill ? fileno(b->spill) : -1;
     float largest = 0;
-    for (uint32_t j = 0; j < n && !st; ++j) {
-        const off_t base = (off_t)((uint64_t)j * b->stride * sizeof(float));
-        const size_t rb = (size_t)nz * 3 * sizeof(float), gb = (size_t)gz * 48 * sizeof(float);
-        if (pread(fd, R + (size_t)j * nz * 3, rb, base + (off_t)((size_t)first * 3 * sizeof(float))) != (ssize_t)rb ||
-            (gb && pread(fd, G + (size_t)j * gz * 48, gb, base + (off_t)((nv * 3 + (size_t)gfirst * 48) * sizeof(float))) != (ssize_t)gb))
-            st = prt__fail(ctx, PRT_ERR_IO, "cannot read the light responses' scratch file");
-    }
+    for (uint32_t j = 0; j < n && !st; ++j)
+        for (int k = 0; k < K && !st; ++k) {
+            const off_t base = (off_t)(((uint64_t)j * b->stride + (uint64_t)k * b->one) * sizeof(float));
+            const size_t rb = (size_t)nz * 3 * sizeof(float), gb = (size_t)gz * 48 * sizeof(float);
+            if (pread(fd, R + ((size_t)k * n + j) * nz * 3, rb, base + (off_t)((size_t)first * 3 * sizeof(float))) != (ssize_t)rb ||
+                (gb && pread(fd, G + ((size_t)k * n + j) * gz * 48, gb, base + (off_t)((nv * 3 + (size_t)gfirst * 48) * sizeof(float))) != (ssize_t)gb))
+                st = prt__fail(ctx, PRT_ERR_IO, "cannot read the light responses' scratch file");
+        }
     for (size_t i = 0; !st && i < (size_t)n * nz * 3; ++i) largest = fabsf(R[i]) > largest ? fabsf(R[i]) : largest;
     for (size_t i = 0; !st && i < (size_t)n * gz * 48; ++i) largest = fabsf(G[i]) > largest ? fabsf(G[i]) : largest;
     zone_data zd = {b, n, nz, gz, R, G, b->merge_error > 0 && largest > 0 ? 1.0f / (b->merge_error * largest) : 0.0f};
     if (!st) st = prt__lightcloud_cluster(ctx, n, metric, &zd, zone->light_of, &zone->lights);
-    const uint32_t L = zone->lights;
+    /* Columns: merged light l's lobe k at l * K + k. */
+    const uint32_t L = zone->lights * (uint32_t)K;
     float *X = NULL, *Y = NULL;
     uint32_t *members = NULL;
     if (!st) {
         X = prt__calloc((size_t)nz * 3 * L + 1, sizeof(float));
         Y = prt__calloc((size_t)gz * 48 * L + 1, sizeof(float));
-        zone->positions = prt__calloc((size_t)L * 3, sizeof(float));
-        members = prt__calloc(L, sizeof(uint32_t));
+        zone->positions = prt__calloc((size_t)zone->lights * 3, sizeof(float));
+        members = prt__calloc(zone->lights, sizeof(uint32_t));
         if (!X || !Y || !zone->positions || !members) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
     if (!st) {
@@ -537,15 +549,18 @@ static prt_status zone_run(lcbake *b, prt_context *ctx, uint32_t z)
             const uint32_t l = zone->light_of[j];
             members[l]++;
             for (int k = 0; k < 3; ++k) zone->positions[l * 3 + k] += s->cloud[(size_t)j * 3 + k];
-            for (uint32_t v = 0; v < nz; ++v)
-                for (int c = 0; c < 3; ++c) X[((size_t)v * 3 + c) * L + l] += R[((size_t)j * nz + v) * 3 + c];
-            for (uint32_t v = 0; v < gz; ++v)
-                for (int c = 0; c < 48; ++c) Y[((size_t)v * 48 + c) * L + l] += G[((size_t)j * gz + v) * 48 + c];
+            for (int k = 0; k < K; ++k) {
+                const size_t col = (size_t)l * K + k, from = (size_t)k * n + j;
+                for (uint32_t v = 0; v < nz; ++v)
+                    for (int c = 0; c < 3; ++c) X[((size_t)v * 3 + c) * L + col] += R[(from * nz + v) * 3 + c];
+                for (uint32_t v = 0; v < gz; ++v)
+                    for (int c = 0; c < 48; ++c) Y[((size_t)v * 48 + c) * L + col] += G[(from * gz + v) * 48 + c];
+            }
         }
-        for (uint32_t l = 0; l < L; ++l)
+        for (uint32_t l = 0; l < zone->lights; ++l)
             for (int k = 0; k < 3; ++k) zone->positions[l * 3 + k] /= (float)members[l];
-        for (size_t i = 0; i < (size_t)nz * 3 * L; ++i) X[i] /= (float)members[i % L];
-        for (size_t i = 0; i < (size_t)gz * 48 * L; ++i) Y[i] /= (float)members[i % L];
+        for (size_t i = 0; i < (size_t)nz * 3 * L; ++i) X[i] /= (float)members[(i % L) / K];
+        for (size_t i = 0; i < (size_t)gz * 48 * L; ++i) Y[i] /= (float)members[(i % L) / K];
     }
     free(R);
     free(G);
@@ -646,6 +661,8 @@ prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, 
     if (!d.bounces) d.bounces = 16;
     if (!d.clusters) d.clusters = 8;
     if (!d.vectors) d.vectors = 8;
+    if (!d.emission_order) d.emission_order = PRT__LIGHTCLOUD_EMISSION_ORDER;
+    if (d.emission_order < 1 || d.emission_order > 3) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--emission-order must be 1, 2 or 3");
     if (d.has_box) {
         for (int k = 0; k < 3; ++k)
             if (!(d.box[k] < d.box[3 + k])) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--cloud-box: each minimum must be below its maximum");
@@ -680,6 +697,7 @@ prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, 
     b->first_own = -1;
     t->state = s;
     s->store_direct = d.store_direct;
+    s->lobes = d.emission_order * d.emission_order;
     s->bounces = d.bounces;
     s->samples = prt__opt_int(o, "samples", 4096);
     prt_status st = (s->cache = prt__lightcloud_cache_new()) ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");

@@ -49,6 +49,7 @@ prt_status prt__lightcloud_save(const prt_transfer *t, prt__chunk_list *l)
     memcpy(h + 36, &s->merge_error, 4);
     prt__put64(h + 40, nv);
     memcpy(h + 48, s->region, sizeof s->region);
+    prt__put32(h + 72, s->lobes > 1 ? (uint32_t)s->lobes : 0);   /* 0 in files from before lobes: one */
     prt__chunks_add(l, CHUNK_LCPR, h, (size_t)LCPR_HEADER, s->cloud, (size_t)s->cloud_count * 12, s->zone_of, nv * 4, NULL);
     for (uint32_t z = 0; z < s->zone_count; ++z) {
         const prt__lightcloud_zone *zone = &s->zones[z];
@@ -161,8 +162,9 @@ static prt_status load_zone(prt_context *ctx, const prt_transfer *t, prt__lightc
     for (uint32_t j = 0; j < s->cloud_count; ++j)
         if (zone->light_of[j] >= lights) return bad(ctx, "light-cloud merged light index out of range");
     if (!prt__all_finite(zone->positions, (size_t)lights * 3)) return bad(ctx, "non-finite light-cloud positions");
-    prt_status st = load_block(ctx, &c, nz, 3 * lights, dform == 1, &zone->diffuse);
-    if (!st) st = load_block(ctx, &c, gz, 48 * lights, gform == 1, &zone->glossy);
+    const uint32_t cols = lights * (uint32_t)s->lobes;   /* lights <= cloud_count <= 4096: no overflow */
+    prt_status st = load_block(ctx, &c, nz, 3 * cols, dform == 1, &zone->diffuse);
+    if (!st) st = load_block(ctx, &c, gz, 48 * cols, gform == 1, &zone->glossy);
     if (!st && c.left) st = bad(ctx, "light-cloud zone chunk has trailing bytes");
     return st;
 }
@@ -181,6 +183,9 @@ prt_status prt__lightcloud_load(prt_context *ctx, prt_transfer *t, const cJSON *
     if (c->size < LCPR_HEADER || prt__get64(h + 40) != nv) return bad(ctx, "invalid light-cloud parameter chunk");
     s->cloud_count = prt__get32(h);
     s->zone_count = prt__get32(h + 4);
+    const uint32_t lobes = prt__get32(h + 72);
+    if (lobes != 0 && lobes != 4 && lobes != 9) return bad(ctx, "light-cloud emission lobes out of range");
+    s->lobes = lobes ? (int)lobes : 1;
     const uint32_t store = prt__get32(h + 8), bounces = prt__get32(h + 12), samples = prt__get32(h + 16), glossy = prt__get32(h + 20);
     memcpy(&s->spacing, h + 24, 4);
     memcpy(&s->ray_offset, h + 28, 4);

@@ -8,7 +8,9 @@
  * are clustered (each cloud light belongs to one merged light of the zone) and the zone's
  * per-vertex response vectors - per channel c and merged light l, [c][l] for the diffuse exit
  * radiance and [c][k][l] for the 16 SH coefficients k of a glossy vertex's glossy part - are
- * compressed with clustered PCA (or kept raw). */
+ * compressed with clustered PCA (or kept raw). With emission lobes (lobes.c: --emission-order 2
+ * or 3) each cloud light was solved once per lobe of its emission, and every merged light has
+ * `lobes` columns, [c][l * lobes + k]. */
 #ifndef PRT_METHODS_LIGHTCLOUD_H
 #define PRT_METHODS_LIGHTCLOUD_H
 
@@ -19,6 +21,7 @@
 
 #define PRT__LIGHTCLOUD_MAX_LIGHTS 4096
 #define PRT__LIGHTCLOUD_GLOSSY_N 16      /* SH order 4 exit radiance for glossy vertices, as the paper's n_b = 16 */
+#define PRT__LIGHTCLOUD_EMISSION_ORDER 1 /* default --emission-order (lobes.c) */
 
 /* One zone's responses in one form: raw [vertex][dim] or CPCA over the zone's vertices. */
 typedef struct prt__lightcloud_block {
@@ -49,6 +52,7 @@ typedef struct prt__lightcloud_set {
     float spacing;               /* median distance from a cloud light to its nearest neighbour (one light: half the region's largest side) */
     float region[6];             /* min xyz, max xyz: where the cloud covers (the grid's box, the lights' bounds grown by half a spacing) */
     bool store_direct;           /* responses hold direct light too; else the run time adds it */
+    int lobes;                   /* emission lobes per cloud light (lobes.c): 1, 4 or 9 (emission order squared) */
     int bounces, samples;
     float ray_offset;
     float merge_distance, merge_error;   /* as baked (informational) */
@@ -94,6 +98,7 @@ typedef struct prt__lightcloud_bake_desc {
     int bounces;                 /* 0 = 16 (closed rooms need many) */
     bool raw;                    /* no CPCA */
     int clusters, vectors;       /* per zone; 0 = 8, 8 */
+    int emission_order;          /* 0 = PRT__LIGHTCLOUD_EMISSION_ORDER; 1..3 */
 } prt__lightcloud_bake_desc;
 prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, const prt__lightcloud_bake_desc *d,
                                       prt_transfer *t, prt__bake_job **job);
@@ -104,13 +109,22 @@ prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, 
 typedef float (*prt__light_metric_fn)(void *user, uint32_t j, uint32_t k);
 prt_status prt__lightcloud_cluster(prt_context *ctx, uint32_t n, prt__light_metric_fn metric, void *user, uint32_t *cluster_of, uint32_t *clusters);
 
-/* Run time (relight.c): weights over the cloud (3 per light: colour) for the point and
- * sphere lights of l, by interpolation among the `neighbours` nearest cloud lights visible from
+/* Run time (relight.c): weights over the cloud (3 per light and lobe: [light][lobe][colour]) for
+ * the lights of l, by interpolation among the `neighbours` nearest cloud lights visible from
  * each light. */
 prt_status prt__lightcloud_weights(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, int neighbours, float *w);
 /* Exit radiance from cloud weights: rgb (3 per vertex, added to) and, for glossy vertices, the
  * glossy part's SH (3 x 16 per vertex, added to; may be NULL). */
 prt_status prt__lightcloud_eval(prt_context *ctx, const prt_transfer *t, const float *w, float *rgb, float *exit_sh);
+
+/* Emission lobes (lobes.c). Lobe k (< 9) of the emission direction w, >= 0. */
+double prt__lightcloud_lobe(int k, const double w[3]);
+/* The light a cloud light at pos is solved with for lobe k: the unit point light for k = 0, an
+ * ies light with the lobe as its profile otherwise (release with prt_light_clear). */
+prt_status prt__lightcloud_lobe_light(int k, const float pos[3], prt_light *out);
+/* Coefficients c[k][channel] of light l's intensity (point, spot, ies) over the first `lobes`
+ * lobes: I(w) ~ sum_k c_k f_k(w). */
+void prt__lightcloud_project(const prt_light *l, int lobes, float c[][3]);
 
 /* Its chunks (file.c). */
 prt_status prt__lightcloud_save(const prt_transfer *t, prt__chunk_list *out);

@@ -1,7 +1,8 @@
 /* The light-cloud method's table entry (precomputed local radiance transfer, Kristensen,
  * Akenine-Moller & Jensen 2005): bake options, its chunks in file.c (LCPR, LCZN per zone, LCEM),
- * description, the neighbours control and relighting of point and sphere lights. The bake is
- * bake.c (+ cluster.c), the run time relight.c. */
+ * description, the neighbours control and relighting of point and sphere lights (and of spot and
+ * ies lights with emission lobes, lobes.c). The bake is bake.c (+ cluster.c), the run time
+ * relight.c. */
 #include "methods/lightcloud/lightcloud.h"
 
 
@@ -133,6 +134,10 @@ static const prt_option_desc options[] = {
     {"bounces", "N", PRT_OPTION_INT, 1, 64, NULL,
      "light bounces of each cloud light's solution (default 16: closed rooms need many), the rest of the series estimated "
      "after them (the spectral run time's tail)"},
+    {"emission-order", "N", PRT_OPTION_INT, 1, 3, NULL,
+     "SH order of each cloud light's emission: 1 (default) isotropic, point and sphere lights only; "
+     "2 or 3: 4 or 9 solves and responses per cloud light, so that spot and ies lights relight "
+     "through the cloud (narrowest cone held: README)"},
     {"compress", "M", PRT_OPTION_CHOICE, 0, 0, "cpca|none",
      "cpca (default): clustered PCA per zone; none: keep every response"},
     {"clusters", "K", PRT_OPTION_INT, 1, 4096, NULL, "CPCA clusters per zone (default 8)"},
@@ -195,6 +200,7 @@ static prt_status lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene
     d.merge_error = prt__opt(o, "merge-error") ? prt__opt_float(o, "merge-error", 0) : -1.0f;
     d.store_direct = prt__opt_choice(o, "store", 0) == 1;
     d.bounces = prt__opt_int(o, "bounces", 0);
+    d.emission_order = prt__opt_int(o, "emission-order", 0);
     d.raw = prt__opt_choice(o, "compress", 0) == 1;
     if (d.raw && (prt__opt(o, "clusters") || prt__opt(o, "vectors"))) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--clusters and --vectors apply to --compress cpca, not none");
     d.clusters = prt__opt_int(o, "clusters", 0);
@@ -240,7 +246,7 @@ static void lightcloud_describe(const prt_transfer *t, prt__describe *d)
             err2 += zone->diffuse.cpca->relative_error * zone->diffuse.cpca->relative_error * nz;
             errw += nz;
         } else {
-            coeffs += (double)nz * zone->lights;
+            coeffs += (double)nz * zone->lights * s->lobes;
         }
     }
     const double per_vertex = t->mesh.vertex_count ? coeffs / t->mesh.vertex_count : 0;
@@ -262,6 +268,7 @@ static void lightcloud_describe(const prt_transfer *t, prt__describe *d)
         cJSON_AddNumberToObject(j, "coefficients_per_vertex", per_vertex);
         cJSON_AddNumberToObject(j, "cpca_relative_error", rel);
         cJSON_AddNumberToObject(j, "bounces", s->bounces);
+        cJSON_AddNumberToObject(j, "emission_order", s->lobes == 9 ? 3 : s->lobes == 4 ? 2 : 1);
         cJSON_AddNumberToObject(j, "glossy_vertices", s->glossy_count);
         return;
     }
@@ -269,6 +276,8 @@ static void lightcloud_describe(const prt_transfer *t, prt__describe *d)
                        s->cloud_count, s->cloud_count == 1 ? "" : "s", s->spacing, s->region[0], s->region[1], s->region[2], s->region[3], s->region[4],
                        s->region[5], s->store_direct ? "direct and indirect light" : "indirect light", s->bounces);
     prt__describe_line(d, "bake:", "%d gathering rays per vertex for the bounces", s->samples);
+    if (s->lobes > 1)
+        prt__describe_line(d, "emission:", "SH order %d: %d lobes per cloud light (relights spot and ies lights)", s->lobes == 9 ? 3 : 2, s->lobes);
     prt__describe_line(d, "zones:", "%u (%u..%u vertices), merged lights per zone %u..%u (mean %.1f; merge distance %.4g, error %.3g)", s->zone_count,
                        vmin, vmax, lmin, lmax, lsum / s->zone_count, s->merge_distance, s->merge_error);
     if (compressed)
@@ -301,8 +310,13 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
     prt_status st = prt__relit_alloc(ctx, t, r, !s->store_direct && (d->with_indirect || d->component == PRT_COMPONENT_INDIRECT));
     if (st) return st;
     const int count = prt_lighting_count(l);
-    const int pixel = s->store_direct || d->per_vertex || d->no_pixel_lights || d->component == PRT_COMPONENT_INDIRECT ? 0 : count < PRT_MAX_PIXEL_LIGHTS ? count : PRT_MAX_PIXEL_LIGHTS;
-    float *w = malloc(((size_t)s->cloud_count * 3 + 3) * sizeof(float));
+    /* The renderer draws no photometric profile: ies lights' direct light is per vertex, and the
+     * other lights go first (below) so that they can still be drawn per pixel. */
+    int plain = 0;
+    for (int i = 0; i < count; ++i) plain += prt_lighting_light(l, i)->type != PRT_LIGHT_IES;
+    const int pixel = s->store_direct || d->per_vertex || d->no_pixel_lights || d->component == PRT_COMPONENT_INDIRECT ? 0
+                      : plain < PRT_MAX_PIXEL_LIGHTS ? plain : PRT_MAX_PIXEL_LIGHTS;
+    float *w = malloc(((size_t)s->cloud_count * s->lobes * 3 + 3) * sizeof(float));
     float *cloud = prt__calloc(nv * 3, sizeof(float)), *E = prt__calloc(nv * 3, sizeof(float));
     float *exit_sh = s->glossy_count ? prt__calloc(nv * 48, sizeof(float)) : NULL;
     if (!w || !cloud || !E || (s->glossy_count && !exit_sh)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
@@ -313,7 +327,10 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
         prt_light *lights = malloc((size_t)count * sizeof(prt_light));
         if (!lights) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         else {
-            for (int i = 0; i < count; ++i) lights[i] = *prt_lighting_light(l, i);
+            int at = 0;
+            for (int pass = 0; pass < 2; ++pass)
+                for (int i = 0; i < count; ++i)
+                    if ((prt_lighting_light(l, i)->type == PRT_LIGHT_IES) == (pass == 1)) lights[at++] = *prt_lighting_light(l, i);
             st = prt__vertex_lights_ready(ctx, &t->mesh, s->ray_offset, &s->cache->lights);
             /* Drawn, the first lights' direct light is the renderer's, per pixel with shadow maps. */
             if (!st) prt__vertex_lights_add(ctx, &s->cache->lights, &t->mesh, lights + pixel, count - pixel, E);
@@ -380,7 +397,7 @@ const prt__method prt__method_lightcloud = {
     .name = "lightcloud",
     .title = "precomputed local radiance transfer through a light cloud",
     .summary = "light cloud (Kristensen, Akenine-Moller & Jensen): drag point lights anywhere in a region, full global illumination",
-    .lighting = PRT_LIGHTS_POINT | PRT_LIGHTS_SPHERE | PRT_LIGHTS_EMISSIVE,
+    .lighting = PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_IES | PRT_LIGHTS_SPHERE | PRT_LIGHTS_EMISSIVE,
     /* The run time could recolour the direct light it adds, but not the bounced light it reads:
      * a half-recoloured scene would bleed the old colours, so colours are refused outright. */
     .baked_albedo_why = "every bounce of each stored cloud-light response was multiplied by the baked colours, so a new "

@@ -54,7 +54,8 @@ prt_status prt__lightcloud_weights(prt_context *ctx, const prt_transfer *t, cons
 {
     const prt__lightcloud_set *s = prt__lightcloud(t);
     const uint32_t n = s->cloud_count;
-    memset(w, 0, (size_t)n * 3 * sizeof(float));
+    const int K = s->lobes;
+    memset(w, 0, (size_t)n * K * 3 * sizeof(float));
     const int count = prt_lighting_count(l);
     if (!count) return PRT_OK;
     prt_status st = tree_ready(ctx, s);
@@ -66,11 +67,16 @@ prt_status prt__lightcloud_weights(prt_context *ctx, const prt_transfer *t, cons
     bool outside = false;
     for (int li = 0; li < count; ++li) {
         const prt_light *L = prt_lighting_light(l, li);
-        float power[3];
-        if (L->type == PRT_LIGHT_POINT) memcpy(power, L->intensity, sizeof power);
+        /* The light's intensity over the lobes (lobes.c): lobe 0 alone for isotropic lights. */
+        float power[9][3] = {{0}};
+        if (L->type == PRT_LIGHT_POINT) memcpy(power[0], L->intensity, sizeof power[0]);
         else if (L->type == PRT_LIGHT_SPHERE)   /* a uniform sphere seen from outside: I = pi R^2 L in every direction */
-            for (int k = 0; k < 3; ++k) power[k] = (float)PRT_PI * L->radius * L->radius * L->radiance[k];
-        else return prt__fail(ctx, PRT_ERR_INVALID_ARG, "light-cloud transfer relights point and sphere lights, not %s lights", prt_light_type_name(L->type));
+            for (int k = 0; k < 3; ++k) power[0][k] = (float)PRT_PI * L->radius * L->radius * L->radiance[k];
+        else if ((L->type == PRT_LIGHT_SPOT || L->type == PRT_LIGHT_IES) && K > 1) prt__lightcloud_project(L, K, power);
+        else if (L->type == PRT_LIGHT_SPOT || L->type == PRT_LIGHT_IES)
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this light-cloud file has isotropic cloud lights (baked with --emission-order 1): %s lights need "
+                             "--emission-order 2 or 3", prt_light_type_name(L->type));
+        else return prt__fail(ctx, PRT_ERR_INVALID_ARG, "light-cloud transfer relights point, spot, ies and sphere lights, not %s lights", prt_light_type_name(L->type));
         /* m visible neighbours inside radius r; widen the search when all near ones are hidden. */
         uint32_t idx[PRT__KDTREE_MAX_K];
         float dist[PRT__KDTREE_MAX_K], weight[PRT__KDTREE_MAX_K];
@@ -117,7 +123,8 @@ prt_status prt__lightcloud_weights(prt_context *ctx, const prt_transfer *t, cons
             outside = true;
         }
         for (int i = 0; i < found; ++i)
-            for (int k = 0; k < 3; ++k) w[(size_t)idx[i] * 3 + k] += (float)(weight[i] / sum) * power[k];
+            for (int j = 0; j < K; ++j)
+                for (int k = 0; k < 3; ++k) w[((size_t)idx[i] * K + j) * 3 + k] += (float)(weight[i] / sum) * power[j][k];
     }
     if (!outside) __atomic_store_n(&s->cache->warned, 0, __ATOMIC_RELAXED);
     return PRT_OK;
@@ -181,27 +188,32 @@ prt_status prt__lightcloud_eval(prt_context *ctx, const prt_transfer *t, const f
 /* Small scenes evaluate in well under a millisecond: threads would only add their start-up. */
 #pragma omp parallel num_threads(prt__threads(ctx)) reduction(| : failed) if (s->zone_count > 1 && t->mesh.vertex_count > 20000)
     {
-        float *W = malloc(((size_t)s->cloud_count * 3 + 3) * sizeof(float));
+        const int K = s->lobes;
+        float *W = malloc(((size_t)s->cloud_count * K * 3 + 3) * sizeof(float));
         uint32_t *rows = malloc(((size_t)s->glossy_count + 1) * sizeof(uint32_t));
 #pragma omp for schedule(dynamic, 1)
         for (uint32_t z = 0; z < s->zone_count; ++z) {
             if (!W || !rows) { failed = 1; continue; }
             const prt__lightcloud_zone *zone = &s->zones[z];
-            memset(W, 0, (size_t)zone->lights * 3 * sizeof(float));
+            /* Columns: merged light l's lobe k at l * K + k, as the bake stored them. */
+            const uint32_t cols = zone->lights * (uint32_t)K;
+            memset(W, 0, (size_t)cols * 3 * sizeof(float));
             bool any = false;
             for (uint32_t j = 0; j < s->cloud_count; ++j)
-                for (int c = 0; c < 3; ++c) {
-                    W[(size_t)zone->light_of[j] * 3 + c] += w[(size_t)j * 3 + c];
-                    any |= w[(size_t)j * 3 + c] != 0;
-                }
+                for (int k = 0; k < K; ++k)
+                    for (int c = 0; c < 3; ++c) {
+                        const float x = w[((size_t)j * K + k) * 3 + c];
+                        W[((size_t)zone->light_of[j] * K + k) * 3 + c] += x;
+                        any |= x != 0;
+                    }
             if (!any) continue;
             const uint32_t *members = s->members + s->member_start[z];
-            if (!eval_block(&zone->diffuse, zone->lights, 1, W, rgb, members, 3)) failed = 1;
+            if (!eval_block(&zone->diffuse, cols, 1, W, rgb, members, 3)) failed = 1;
             if (exit_sh && zone->glossy.vertices) {
                 uint32_t g = 0;
                 for (uint32_t i = 0; i < s->member_start[z + 1] - s->member_start[z]; ++i)
                     if (s->glossy_of[members[i]] != UINT32_MAX) rows[g++] = members[i];
-                if (!eval_block(&zone->glossy, zone->lights, 16, W, exit_sh, rows, 48)) failed = 1;
+                if (!eval_block(&zone->glossy, cols, 16, W, exit_sh, rows, 48)) failed = 1;
             }
         }
         free(W);
