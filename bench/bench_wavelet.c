@@ -87,27 +87,12 @@ int main(int argc, char **argv)
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t v = 0; v < object_nv; ++v)
         for (int c = 0; c < 3; ++c) { lo[c] = fminf(lo[c], m->positions[v * 3 + c]); hi[c] = fmaxf(hi[c], m->positions[v * 3 + c]); }
-    const int cells = 100;
+    /* The plane's size and centre place the eye below. */
     const float size = 3.0f * fmaxf(hi[0] - lo[0], hi[2] - lo[2]), cx = 0.5f * (lo[0] + hi[0]), cz = 0.5f * (lo[2] + hi[2]);
-    float *pos = malloc((size_t)(cells + 1) * (cells + 1) * 3 * sizeof(float)), *nrm = malloc((size_t)(cells + 1) * (cells + 1) * 3 * sizeof(float));
-    uint32_t *idx = malloc((size_t)cells * cells * 6 * sizeof(uint32_t));
-    for (int j = 0; j <= cells; ++j)
-        for (int i = 0; i <= cells; ++i) {
-            float *p = pos + ((size_t)j * (cells + 1) + i) * 3, *n = nrm + ((size_t)j * (cells + 1) + i) * 3;
-            p[0] = cx + size * ((float)i / cells - 0.5f); p[1] = lo[1]; p[2] = cz + size * ((float)j / cells - 0.5f);
-            n[0] = 0; n[1] = 1; n[2] = 0;
-        }
-    for (int j = 0; j < cells; ++j)
-        for (int i = 0; i < cells; ++i) {
-            uint32_t a = (uint32_t)(j * (cells + 1) + i), b = a + 1, c = a + (uint32_t)(cells + 1), d = c + 1;
-            uint32_t *t = idx + ((size_t)j * cells + i) * 6;
-            t[0] = a; t[1] = c; t[2] = b; t[3] = b; t[4] = c; t[5] = d;   /* counter-clockwise seen from +y */
-        }
-    if (prt__mesh_append(m, pos, nrm, NULL, (float[3]){0.7f, 0.7f, 0.7f}, (size_t)(cells + 1) * (cells + 1), idx, (size_t)cells * cells * 2)) {
+    if (!bench_ground_plane(m, object_nv, 100)) {
         fprintf(stderr, "bench: %s\n", prt_last_error());
         return 1;
     }
-    free(pos); free(nrm); free(idx);
     prt_brdf phong;
     prt_brdf_parse("phong:50:0.4:0.5", &phong);   /* the paper's Phong, exponent 50 */
     if (prt_scene_set_brdf(s, 0, object_nv, &phong)) { fprintf(stderr, "bench: %s\n", prt_last_error()); return 1; }
