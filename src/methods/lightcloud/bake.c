@@ -11,6 +11,7 @@
  * error it costs a few sparse products per light instead of a photon map per light. Every result
  * depends only on its unit's inputs: the file is the same for any thread count. */
 #include "methods/lightcloud/lightcloud.h"
+#include "methods/lightcloud/responses.h"
 #include "methods/spectral/spectral.h"
 
 #include <cjson/cJSON.h>
@@ -34,6 +35,12 @@ typedef struct lcbake {
     uint8_t *visible;                /* [light * n + light] mutual visibility (1 = visible) */
     uint8_t *dark;                   /* [light] 1 when the light reaches no vertex at all */
     float merge_distance, merge_error;
+    int merge_response;              /* PRT__LIGHTCLOUD_MERGE_* */
+    prt__raycaster rc;               /* while the zones solve merged lights: is a mean position in open space */
+    float near;                      /* closer to a surface than this is "on" it (place_cloud's rule) */
+    prt__lightcloud_responses *kept; /* --responses: solutions kept by earlier bakes */
+    prt__fingerprint kept_fp;
+    char *responses_path;            /* its path (owned) */
     float *list;                     /* --cloud positions, read when the bake begins */
     uint32_t list_count;
 } lcbake;
@@ -213,6 +220,7 @@ static prt_status place_cloud(lcbake *b, const prt__raycaster *rc)
     float near = 0.01f * diag;
     if (ngrid)
         for (int k = 0; k < 3; ++k) near = fminf(near, 0.1f * (box[3 + k] - box[k]) / g[k]);
+    b->near = near;
     uint64_t kept = 0, in = 0, on = 0;
     for (uint64_t i = 0; i < n; ++i) {
         const int where = inside(rc, p + i * 3, near);
@@ -325,6 +333,8 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
     const uint32_t n = s->cloud_count;
     b->merge_distance = b->d.merge_distance >= 0 ? b->d.merge_distance : 3.0f * s->spacing;
     b->merge_error = b->d.merge_error >= 0 ? b->d.merge_error : 0.1f;
+    b->merge_response = b->d.merge_response ? b->d.merge_response : PRT__LIGHTCLOUD_MERGE_MEAN;
+    s->merge_response = (uint32_t)b->merge_response;
     s->merge_distance = b->merge_distance;
     s->merge_error = b->merge_error;
     /* Mutual visibility of the pairs that could merge (V_jk of eq. 9). */
@@ -362,6 +372,8 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
     /* The scratch file of responses. */
     b->stride = nv * 3 + (size_t)s->glossy_count * 48;
     if (!st && !(b->spill = tmpfile())) st = prt__fail(ctx, PRT_ERR_IO, "cannot create a scratch file for the light responses (TMPDIR)");
+    if (!st && b->d.responses_path)
+        st = prt__lightcloud_responses_open(ctx, b->d.responses_path, &b->kept_fp, nv, s->glossy_count, s->cloud, n, &b->kept);
     /* What the scene's emitters light, baked whole (direct and indirect): the renderer cannot
      * draw emitters' direct light. */
     if (!st && m->emission) {
@@ -385,24 +397,39 @@ static prt_status write_response(lcbake *b, uint64_t unit, const float *resp)
     return PRT_OK;
 }
 
+/* One cloud light's response as stored: exit radiance per vertex (indirect, or all of it with
+ * store_direct) into diffuse (3 per vertex, vertex order), the glossy vertices' SH into glossy
+ * (48 each), whether it reaches any vertex into *lit. */
+static prt_status light_response(lcbake *b, prt_context *ctx, const float *pos, float *diffuse, float *glossy, bool *lit)
+{
+    const size_t nv = b->t->mesh.vertex_count;
+    float *direct = malloc(nv * 3 * sizeof(float));
+    prt_status st = direct ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!st) st = solve(b, ctx, pos, direct, diffuse, glossy);
+    if (!st) {
+        *lit = false;
+        for (size_t i = 0; i < nv * 3 && !*lit; ++i) *lit = direct[i] != 0 || diffuse[i] != 0;
+    }
+    if (!st && b->s->store_direct)
+        for (size_t i = 0; i < nv * 3; ++i) diffuse[i] += direct[i];
+    free(direct);
+    return st;
+}
+
 static prt_status light_run(prt__bake_job *job, uint64_t unit, int thread)
 {
     (void)thread;
     lcbake *b = (lcbake *)job;
     prt__lightcloud_set *s = b->s;
     const size_t nv = b->t->mesh.vertex_count;
-    float *diffuse = malloc(nv * 3 * sizeof(float)), *direct = malloc(nv * 3 * sizeof(float));
+    float *diffuse = malloc(nv * 3 * sizeof(float));
     float *glossy = malloc(((size_t)s->glossy_count * 48 + 1) * sizeof(float)), *resp = malloc(b->stride * sizeof(float) + 4);
-    prt_status st = diffuse && direct && glossy && resp ? PRT_OK : prt__fail(job->ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    if (!st) st = solve(b, job->ctx, s->cloud + unit * 3, direct, diffuse, glossy);
+    prt_status st = diffuse && glossy && resp ? PRT_OK : prt__fail(job->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    bool lit = false;
+    if (!st && prt__lightcloud_responses_has(b->kept, (uint32_t)unit)) st = prt__lightcloud_responses_read(job->ctx, b->kept, (uint32_t)unit, diffuse, glossy, &lit);
+    else if (!st) st = light_response(b, job->ctx, s->cloud + unit * 3, diffuse, glossy, &lit);
     if (!st) {
-        bool lit = false;
-        for (size_t i = 0; i < nv * 3 && !lit; ++i) lit = direct[i] != 0 || diffuse[i] != 0;
         b->dark[unit] = !lit;
-    }
-    if (!st && s->store_direct)
-        for (size_t i = 0; i < nv * 3; ++i) diffuse[i] += direct[i];
-    if (!st) {
         for (size_t v = 0; v < nv; ++v) memcpy(resp + (size_t)b->pos_of[v] * 3, diffuse + v * 3, 3 * sizeof(float));
         /* Glossy vertices in member order too. */
         for (size_t i = 0, g = 0; i < nv; ++i) {
@@ -412,7 +439,6 @@ static prt_status light_run(prt__bake_job *job, uint64_t unit, int thread)
         st = write_response(b, unit, resp);
     }
     free(diffuse);
-    free(direct);
     free(glossy);
     free(resp);
     return st;
@@ -498,6 +524,37 @@ static prt_status compress_block(prt_context *ctx, const lcbake *b, uint32_t zon
     return st;
 }
 
+/* The paper's alternative: each merged light of several members solved at its mean position, its
+ * response in zone z written over the mean in X and Y ([row][merged light]). A mean position
+ * inside geometry or on a surface (the members surround an obstacle) keeps the mean. */
+static prt_status solve_merged(lcbake *b, prt_context *ctx, uint32_t z, const uint32_t *members, float *X, float *Y)
+{
+    prt__lightcloud_set *s = b->s;
+    const prt__lightcloud_zone *zone = &s->zones[z];
+    const size_t nv = b->t->mesh.vertex_count;
+    const uint32_t L = zone->lights, first = s->member_start[z], nz = s->member_start[z + 1] - first;
+    float *diffuse = malloc(nv * 3 * sizeof(float)), *glossy = malloc(((size_t)s->glossy_count * 48 + 1) * sizeof(float));
+    prt_status st = diffuse && glossy ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (uint32_t l = 0; l < L && !st; ++l) {
+        if (members[l] < 2 || inside(&b->rc, zone->positions + (size_t)l * 3, b->near)) continue;
+        bool lit = false;
+        st = light_response(b, ctx, zone->positions + (size_t)l * 3, diffuse, glossy, &lit);
+        /* The zone's rows: its vertices in member order, its glossy ones counted in the same order. */
+        for (uint32_t i = 0, g = 0; i < nz && !st; ++i) {
+            const uint32_t v = s->members[first + i], gv = s->glossy_of[v];
+            for (int c = 0; c < 3; ++c) X[((size_t)i * 3 + c) * L + l] = diffuse[(size_t)v * 3 + c];
+            if (gv != UINT32_MAX) {
+                for (int c = 0; c < 48; ++c) Y[((size_t)g * 48 + c) * L + l] = glossy[(size_t)gv * 48 + c];
+                g++;
+            }
+        }
+        if (!st && prt__cancelled(ctx)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    }
+    free(diffuse);
+    free(glossy);
+    return st;
+}
+
 static prt_status zone_run(lcbake *b, prt_context *ctx, uint32_t z)
 {
     prt__lightcloud_set *s = b->s;
@@ -532,20 +589,19 @@ static prt_status zone_run(lcbake *b, prt_context *ctx, uint32_t z)
         if (!X || !Y || !zone->positions || !members) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
     if (!st) {
-        /* Merged lights: mean position, mean response. */
+        /* Merged lights: mean position; responses as the bake asks (the solution at the mean
+         * position starts from the mean, for lights where it cannot solve). */
         for (uint32_t j = 0; j < n; ++j) {
             const uint32_t l = zone->light_of[j];
             members[l]++;
             for (int k = 0; k < 3; ++k) zone->positions[l * 3 + k] += s->cloud[(size_t)j * 3 + k];
-            for (uint32_t v = 0; v < nz; ++v)
-                for (int c = 0; c < 3; ++c) X[((size_t)v * 3 + c) * L + l] += R[((size_t)j * nz + v) * 3 + c];
-            for (uint32_t v = 0; v < gz; ++v)
-                for (int c = 0; c < 48; ++c) Y[((size_t)v * 48 + c) * L + l] += G[((size_t)j * gz + v) * 48 + c];
         }
         for (uint32_t l = 0; l < L; ++l)
             for (int k = 0; k < 3; ++k) zone->positions[l * 3 + k] /= (float)members[l];
-        for (size_t i = 0; i < (size_t)nz * 3 * L; ++i) X[i] /= (float)members[i % L];
-        for (size_t i = 0; i < (size_t)gz * 48 * L; ++i) Y[i] /= (float)members[i % L];
+        const int how = b->merge_response == PRT__LIGHTCLOUD_MERGE_HARMONIC ? PRT__LIGHTCLOUD_MERGE_HARMONIC : PRT__LIGHTCLOUD_MERGE_MEAN;
+        st = prt__lightcloud_merge(ctx, how, n, zone->light_of, L, R, (size_t)nz * 3, 1, X);
+        if (!st) st = prt__lightcloud_merge(ctx, how, n, zone->light_of, L, G, (size_t)gz * 48, 16, Y);
+        if (!st && b->merge_response == PRT__LIGHTCLOUD_MERGE_SOLVE) st = solve_merged(b, ctx, z, members, X, Y);
     }
     free(R);
     free(G);
@@ -557,9 +613,38 @@ static prt_status zone_run(lcbake *b, prt_context *ctx, uint32_t z)
     return st;
 }
 
+/* A cloud light's response from the scratch file, back in vertex order (to keep it). */
+static prt_status kept_response(void *user, uint32_t light, float *diffuse, float *glossy, bool *lit)
+{
+    lcbake *b = user;
+    const prt__lightcloud_set *s = b->s;
+    const size_t nv = b->t->mesh.vertex_count, bytes = b->stride * sizeof(float);
+    float *resp = malloc(bytes + 4);
+    if (!resp) return prt__fail(b->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    const bool ok = pread(fileno(b->spill), resp, bytes, (off_t)((uint64_t)light * bytes)) == (ssize_t)bytes;
+    if (ok) {
+        for (size_t v = 0; v < nv; ++v) memcpy(diffuse + v * 3, resp + (size_t)b->pos_of[v] * 3, 3 * sizeof(float));
+        for (size_t i = 0, g = 0; i < nv; ++i) {
+            const uint32_t gv = s->glossy_of[s->members[i]];
+            if (gv != UINT32_MAX) memcpy(glossy + (size_t)gv * 48, resp + nv * 3 + 48 * g++, 48 * sizeof(float));
+        }
+        *lit = !b->dark[light];
+    }
+    free(resp);
+    return ok ? PRT_OK : prt__fail(b->base.ctx, PRT_ERR_IO, "cannot read the light responses' scratch file");
+}
+
 static prt_status zones_step(prt__bake_job *job, prt_context *ctx, prt__progress *p)
 {
     lcbake *b = (lcbake *)job;
+    if (b->kept) {
+        const uint32_t reused = prt__lightcloud_responses_reused(b->kept);
+        prt__log(ctx, PRT_LOG_INFO, "light cloud: %u of %u cloud lights' solutions taken from %s, %u solved", reused, b->s->cloud_count,
+                 b->d.responses_path, b->s->cloud_count - reused);
+        const prt_status st = prt__lightcloud_responses_write(ctx, b->kept, b->d.responses_path, &b->kept_fp, b->s->cloud, b->s->cloud_count,
+                                                               kept_response, b);
+        if (st) return st;
+    }
     uint32_t dark = 0;
     for (uint32_t j = 0; j < b->s->cloud_count; ++j) dark += b->dark[j];
     if (dark == b->s->cloud_count)
@@ -569,12 +654,13 @@ static prt_status zones_step(prt__bake_job *job, prt_context *ctx, prt__progress
         prt__log(ctx, PRT_LOG_WARN, "%u of %u cloud lights reach no surface (outside a closed scene, or shut in): they add nothing", dark,
                  b->s->cloud_count);
     prt__progress_begin(p, "zones", b->s->zone_count);
-    prt_status st = PRT_OK;
+    prt_status st = b->merge_response == PRT__LIGHTCLOUD_MERGE_SOLVE ? prt__raycaster_create(ctx, &b->t->mesh, &b->rc) : PRT_OK;
     for (uint32_t z = 0; z < b->s->zone_count && !st; ++z) {
         st = zone_run(b, ctx, z);
         prt__progress_add(p, 1);
         if (!st && prt__progress_cancelled(p)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     }
+    prt__raycaster_release(&b->rc);
     return st;
 }
 
@@ -631,6 +717,8 @@ static void lc_release(prt__bake_job *job)
     if (b->inner_job) b->inner_job->release(b->inner_job);
     prt_transfer_release(b->inner);
     if (b->spill) fclose(b->spill);
+    prt__lightcloud_responses_close(b->kept);
+    free(b->responses_path);
     free(b->pos_of);
     free(b->visible);
     free(b->dark);
@@ -677,6 +765,10 @@ prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, 
     b->t = t;
     b->s = s;
     b->d = d;
+    if (d.responses_path && !(b->d.responses_path = b->responses_path = strdup(d.responses_path))) {
+        free(b); free(s); free(list);
+        return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    }
     b->first_own = -1;
     t->state = s;
     s->store_direct = d.store_direct;
@@ -689,6 +781,7 @@ prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, 
         st = prt__method_spectral.bake_begin(ctx, scene, o, b->inner, &b->inner_job);
     }
     if (!st) s->ray_offset = prt__spectral(b->inner)->ray_offset;
+    if (!st && d.responses_path) prt__lightcloud_responses_fingerprint(t, o, s, &b->kept_fp);
     if (st) { lc_release(&b->base); return st; }
     *job = &b->base;
     return PRT_OK;
