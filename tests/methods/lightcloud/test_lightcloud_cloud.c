@@ -32,6 +32,16 @@ static prt_transfer *bake_lc(prt_context *ctx, const prt_scene *s, const char *c
     return t;
 }
 
+static prt_lighting *one_light(const char *spec)
+{
+    prt_lighting *l = NULL;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    prt_light li;
+    assert_int_equal(prt_light_parse(spec, &li), PRT_OK);
+    assert_int_equal(prt_lighting_add(l, &li, NULL), PRT_OK);
+    return l;
+}
+
 /* ---- merged responses ---- */
 static void test_merge_values(void **state)
 {
@@ -200,12 +210,119 @@ static void test_add_lights(void **state)
     prt_context_release(ctx);
 }
 
+/* ---- glossy vertices ---- */
+/* Relative L2 over the glossy vertices that face the eye, of a against b (3 per vertex). */
+static double glossy_error(const prt_transfer *t, const float *a, const float *b, const float eye[3])
+{
+    const prt__lightcloud_set *s = t->state;
+    const float *P = prt_transfer_positions(t), *N = prt_transfer_normals(t);
+    double se = 0, sb = 0;
+    for (size_t v = 0; v < prt_transfer_vertex_count(t); ++v) {
+        const float d[3] = {eye[0] - P[v * 3], eye[1] - P[v * 3 + 1], eye[2] - P[v * 3 + 2]};
+        if (s->glossy_of[v] == UINT32_MAX || d[0] * N[v * 3] + d[1] * N[v * 3 + 1] + d[2] * N[v * 3 + 2] <= 0) continue;
+        for (int c = 0; c < 3; ++c) {
+            se += ((double)a[v * 3 + c] - b[v * 3 + c]) * ((double)a[v * 3 + c] - b[v * 3 + c]);
+            sb += (double)b[v * 3 + c] * b[v * 3 + c];
+        }
+    }
+    return sqrt(se / sb);
+}
+
+/* A glossy sphere (Phong exponent 12, the paper's Fig. 9 lobe) in a closed box with a red and a
+ * blue wall, lit by a point light placed on a cloud light (so that neither interpolation nor
+ * merging nor compression stands between the cloud light's solution and what is measured): the
+ * glossy vertices' exit SH (order 4), evaluated towards a fixed eye by prt_relit_shade, against the
+ * path tracer's radiance towards the same eye. The light that bounced at least once is what the
+ * exit SH carries; without it the glossy vertices would show only their diffuse part. Direct
+ * light's glossy highlight is measured and printed, not asserted (see below). */
+static void test_glossy_vs_reference(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    closed_box(&m, 8);
+    const size_t box_nv = m.nv;
+    tm_sphere(&m, (float[3]){0, 0.3f, 0}, 0.22f, 16, 24);
+    prt_scene *s = tm_scene(ctx, &m, 0.7f);
+    /* The walls at x = -0.5 (red) and x = +0.5 (blue): the second and third faces of the pit. */
+    prt_brdf red = {0}, blue = {0}, shiny = {0};
+    assert_int_equal(prt_brdf_parse("lambert:0.7", &red), PRT_OK);
+    blue = red;
+    red.diffuse[1] = red.diffuse[2] = 0.1f;
+    blue.diffuse[0] = blue.diffuse[1] = 0.1f;
+    const size_t face = (size_t)9 * 9;
+    assert_int_equal(prt_scene_set_brdf(s, face, face, &red), PRT_OK);
+    assert_int_equal(prt_scene_set_brdf(s, 2 * face, face, &blue), PRT_OK);
+    assert_int_equal(prt_brdf_parse("phong:12:0.5:0.3", &shiny), PRT_OK);
+    assert_int_equal(prt_scene_set_brdf(s, box_nv, m.nv - box_nv, &shiny), PRT_OK);
+    const char *opts[] = {"cloud-grid", "3,3,3", "samples", "512", "basis", "128", "partition", "200", "compress", "none", "merge-distance", "0", NULL};
+    prt_transfer *t = bake_lc(ctx, s, opts);
+    const prt__lightcloud_set *set = t->state;
+    assert_true(set->glossy_count > 0);
+    const size_t nv = prt_transfer_vertex_count(t);
+    /* A cloud light up and to the side (the grid's (0, 2, 2) cell: x = -1/3, y = 5/6, z = 1/3). */
+    char spec[128];
+    snprintf(spec, sizeof spec, "point:%.9g,%.9g,%.9g:1", -1.0 / 3, 5.0 / 6, 1.0 / 3);
+    prt_lighting *l = one_light(spec);
+    prt_lighting_set_emission(l, 0.0f);
+    const float eye[3] = {0.35f, 0.45f, 0.45f};
+    prt_relit ind, all;
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .component = PRT_COMPONENT_INDIRECT}, &ind), PRT_OK);
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1}, &all), PRT_OK);
+    assert_non_null(ind.exit_sh);
+    float *shade_ind = malloc(nv * 3 * sizeof(float)), *shade_all = malloc(nv * 3 * sizeof(float));
+    assert_int_equal(prt_relit_shade(ctx, t, &ind, eye, shade_ind), PRT_OK);
+    assert_int_equal(prt_relit_shade(ctx, t, &all, eye, shade_all), PRT_OK);
+    prt_scene *traced = NULL;
+    assert_int_equal(prt_transfer_scene(ctx, t, &traced), PRT_OK);
+    prt_reference_desc rd = {0};
+    rd.samples = 1024;
+    rd.lighting = l;
+    rd.eye = eye;
+    prt_reference_vertices ref;
+    assert_int_equal(prt_reference_trace_vertices(ctx, traced, NULL, &rd, &ref), PRT_OK);
+    const double e_ind = glossy_error(t, shade_ind, ref.indirect, eye);
+    double sn = 0, sb = 0;
+    const float *P = prt_transfer_positions(t), *N = prt_transfer_normals(t);
+    for (size_t v = 0; v < nv; ++v) {
+        const float d[3] = {eye[0] - P[v * 3], eye[1] - P[v * 3 + 1], eye[2] - P[v * 3 + 2]};
+        if (set->glossy_of[v] == UINT32_MAX || d[0] * N[v * 3] + d[1] * N[v * 3 + 1] + d[2] * N[v * 3 + 2] <= 0) continue;
+        for (int c = 0; c < 3; ++c) {
+            sn += (double)ref.std_error_indirect[v * 3 + c] * ref.std_error_indirect[v * 3 + c];
+            sb += (double)ref.indirect[v * 3 + c] * ref.indirect[v * 3 + c];
+        }
+    }
+    const double noise = sqrt(sn / sb), beyond = sqrt(fmax(0, e_ind * e_ind - noise * noise));
+    const double e_flat = glossy_error(t, ind.radiance, ref.indirect, eye);   /* the diffuse part alone */
+    const double e_all = glossy_error(t, shade_all, ref.radiance, eye);
+    print_message("glossy vertices towards the eye, indirect light: exit SH %.4f (reference noise %.4f: %.4f beyond it); without the exit SH %.4f; "
+                  "all light %.4f\n", e_ind, noise, beyond, e_flat, e_all);
+    /* Measured: exit SH 0.213 (0.203 beyond the noise; 0.163 with a basis of 512 functions: the
+     * rest is the order-4 SH of a Phong-12 lobe seen at grazing angles), 0.600 without it; all
+     * light 0.411, as the point light's own glossy highlight is in neither the exit SH (it holds
+     * light from surfaces) nor the per-pixel direct light (Lambertian). */
+    assert_true(beyond < 0.25);
+    assert_true(e_flat > 2.5 * e_ind);
+    free(shade_ind);
+    free(shade_all);
+    prt_relit_free(&ind);
+    prt_relit_free(&all);
+    prt_reference_vertices_free(&ref);
+    prt_scene_release(traced);
+    prt_lighting_release(l);
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_merge_values),
         cmocka_unit_test_setup_teardown(test_merge_modes, test_dir_setup, test_dir_teardown),
         cmocka_unit_test_setup_teardown(test_add_lights, test_dir_setup, test_dir_teardown),
+        cmocka_unit_test(test_glossy_vs_reference),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
