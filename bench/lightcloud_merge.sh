@@ -27,7 +27,7 @@ coord() {   # LO SPAN: LO + SPAN x a number in [0, 1) from a fixed LCG, into C
 }
 metric() {   # file, reference, light, extra -> "relative_l2 above_noise"
     # shellcheck disable=SC2086
-    "$PRT" compare "$1" "$2" --light "$3" --emission 0 $4 --json - -q |
+    "$PRT" compare "$1" "$2" --light "$3" --env none --emission 0 $4 --json - -q |
         awk -F'[:,}]' '{ for (i = 1; i <= NF; ++i) { if ($i ~ /"relative_l2"/) r = $(i + 1); if ($i ~ /"relative_l2_above_noise"/) a = $(i + 1) } } END { print r, a }'
 }
 
@@ -52,7 +52,7 @@ for scene in $scenes; do
     case $scene in
     cornell) SRC="$OUT/cornell.obj"; MESH="--max-edge 0.15"; lo="-0.75 1.5 1.25 0.6 -0.8 1.6" ;;
     demo) SRC="$OUT/demo.obj"; MESH=""; lo="-1.3 2.6 0.9 0.55 -1.3 2.6" ;;
-    bunny) SRC="$OUT/bunny_diffuse.json"; MESH="--max-edge 0.2"; lo="-0.9 1.8 1.1 0.7 -0.9 1.8" ;;
+    bunny) SRC="$OUT/bunny_diffuse.json"; MESH="--max-edge 0.2 --winding keep"; lo="-0.9 1.8 1.1 0.7 -0.9 1.8" ;;
     esac
     bake() {   # name, options...
         name=$1; shift
@@ -73,7 +73,7 @@ for scene in $scenes; do
         coord "$1" "$2"; x=$C; coord "$3" "$4"; y=$C; coord "$5" "$6"; z=$C
         L="point:$x,$y,$z:0.6"
         echo "$L" >>"$OUT/$scene-lights.txt"
-        [ -s "$OUT/$scene-ref$i.json" ] || nice "$PRT" reference "$OUT/$scene-raw.prt" --light "$L" --emission 0 --samples "$SAMPLES" -o "$OUT/$scene-ref$i.json" -q
+        [ -s "$OUT/$scene-ref$i.json" ] || nice "$PRT" reference "$OUT/$scene-raw.prt" --light "$L" --env none --emission 0 --samples "$SAMPLES" -o "$OUT/$scene-ref$i.json" -q
     done
 done
 
