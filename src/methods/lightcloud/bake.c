@@ -4,9 +4,11 @@
  *   2. "light cloud": lights on a grid / from a list / just off the surfaces, minus those inside
  *      geometry; their mutual visibility; the zones; the emitters' own response;
  *   3. "cloud lights": one unit per cloud light: its exit radiance at every vertex (the indirect
- *      part, or all of it), written to a scratch file in zone order so that
+ *      part, or all of it; taken from --responses FILE where it holds the light), written to a
+ *      scratch file in zone order (and kept in FILE when the stage ends) so that
  *   4. "zones" holds one zone's responses in memory at a time: lights clustered by the paper's
- *      metric (eq. 9), merged responses averaged, then clustered PCA.
+ *      metric (eq. 9), merged responses formed (--merge-response: the mean, the harmonic mean or a
+ *      solution at the merged position), then clustered PCA.
  * Per-light solves use the path of the spectral run time rather than photon mapping: for equal
  * error it costs a few sparse products per light instead of a photon map per light. Every result
  * depends only on its unit's inputs: the file is the same for any thread count. */
