@@ -48,10 +48,11 @@ static float *indirect(prt_context *ctx, const prt_transfer *t, const prt_light 
 {
     prt_lighting *l = lighting_of(li);
     prt_relit r;
-    /* The spectral run time with the cloud's 16 bounces (its control); the cloud's default neighbours. */
-    const int sixteen = 16;
+    /* The spectral run time with the cloud's 16 bounces and the series' tail, as the cloud's solves
+     * (both of its controls: it reads two); the cloud's default neighbours. */
+    const int sixteen[2] = {16, 1};
     const bool spectral = !strcmp(prt_method_name(prt_transfer_method(t)), "spectral");
-    prt_status st = prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .with_indirect = 1, .controls = spectral ? &sixteen : NULL}, &r);
+    prt_status st = prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .with_indirect = 1, .controls = spectral ? sixteen : NULL}, &r);
     if (st) fail_msg("%s", prt_last_error());
     const size_t n = prt_transfer_vertex_count(t) * 3;
     float *out = malloc(n * sizeof(float));
