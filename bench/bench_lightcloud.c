@@ -19,7 +19,8 @@
  *                             [--samples N] [--threads N] [--resimulate] [--set NAME=VALUE]...
  *                             [--winding-keep] [--glossy-reference PATHS]
  * --glossy-reference: three point lights in the upper half of the scene, per-vertex radiance seen
- * from the eye (prt_relit_shade) against the path tracer's towards the same eye: relative L2 over
+ * from the eye (prt_relit_shade; all light as drawn, the lights' glossy highlights with it)
+ * against the path tracer's towards the same eye: relative L2 over
  * the glossy vertices facing the eye and over the others, all light and indirect light.
  * (--set: any other bake option, e.g. --set merge-distance=0 --set vectors=48; MESH may be a JSON
  * scene: bench/lightcloud_glossy_bunny.sh benches the paper's glossy bunny so.)
@@ -253,7 +254,9 @@ int main(int argc, char **argv)
             rd.lighting = l;
             rd.eye = eye;
             prt_reference_vertices ref;
-            if (prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1}, &a) ||
+            /* All light as drawn (the point light's direct light, its glossy highlight too, added per
+             * vertex by prt_relit_shade as the renderer adds it per pixel); indirect as baked. */
+            if (prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1}, &a) ||
                 prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .component = PRT_COMPONENT_INDIRECT}, &b) ||
                 prt_relit_shade(ctx, t, &a, eye, ra) || prt_relit_shade(ctx, t, &b, eye, ri) || prt_reference_trace_vertices(ctx, traced, NULL, &rd, &ref)) {
                 fprintf(stderr, "bench: %s\n", prt_last_error());
