@@ -132,8 +132,9 @@ static const prt_option_desc options[] = {
      "a merged light's response: mean (default) of its lights', their harmonic mean (the paper's "
      "wording), or solve: a solution at its position (one more solve per merged light and zone)"},
     {"responses", "FILE", PRT_OPTION_TEXT, 0, 0, NULL,
-     "keep each cloud light's solution in FILE, and take those it already holds (same scene and "
-     "settings): adding lights to a cloud (more --cloud positions) solves only the new ones"},
+     "keep each cloud light's solution in FILE (all its emission lobes), and take those it already "
+     "holds (same scene, settings and --emission-order): adding lights to a cloud (more --cloud "
+     "positions) solves only the new ones"},
     {"store", "WHAT", PRT_OPTION_CHOICE, 0, 0, "indirect|all",
      "indirect (default): the run time adds direct light with shadows, per pixel when drawn; "
      "all: direct light baked too (soft, compresses worse)"},
