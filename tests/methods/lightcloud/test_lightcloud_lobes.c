@@ -108,7 +108,7 @@ static void setup(fixture *f, int max_order)
     const char *so[] = {"samples", "256", "basis", "64", "partition", "150", NULL};
     f->spectral = bake(f->ctx, f->s, "spectral", so);
     for (int order = 2; order <= max_order; ++order) {
-        char o[8];
+        char o[16];   /* room for any int: gcc -O0 cannot bound order */
         snprintf(o, sizeof o, "%d", order);
         const char *lo[] = {"cloud", path, "compress", "none", "merge-distance", "0", "emission-order", o, "samples", "256", "basis", "64", "partition", "150", NULL};
         f->lc[order] = bake(f->ctx, f->s, "lightcloud", lo);
