@@ -62,12 +62,12 @@ for scene in box window; do
         fi
         L="point:$x,$y,$z:0.6"
         echo "$L" >>"$OUT/$scene-lights.txt"
-        [ -s "$OUT/$scene-ref$i.json" ] || "$PRT" reference "$OUT/$scene-g6.prt" --light "$L" --emission 0 --samples 512 -o "$OUT/$scene-ref$i.json" -q
+        [ -s "$OUT/$scene-ref$i.json" ] || "$PRT" reference "$OUT/$scene-g6.prt" --light "$L" --env none --emission 0 --samples 512 -o "$OUT/$scene-ref$i.json" -q
     done
 done
 
 metric() {   # file, reference, light, extra -> "relative_l2 above_noise"
-    "$PRT" compare "$1" "$2" --light "$3" --emission 0 $4 --json - -q |
+    "$PRT" compare "$1" "$2" --light "$3" --env none --emission 0 $4 --json - -q |
         awk -F'[:,}]' '{ for (i = 1; i <= NF; ++i) { if ($i ~ /"relative_l2"/) r = $(i + 1); if ($i ~ /"relative_l2_above_noise"/) a = $(i + 1) } } END { print r, a }'
 }
 

@@ -4,13 +4,16 @@
  *   2. "light cloud": lights on a grid / from a list / just off the surfaces, minus those inside
  *      geometry; their mutual visibility; the zones; the emitters' own response;
  *   3. "cloud lights": one unit per cloud light: its exit radiance at every vertex (the indirect
- *      part, or all of it), written to a scratch file in zone order so that
+ *      part, or all of it; taken from --responses FILE where it holds the light), written to a
+ *      scratch file in zone order (and kept in FILE when the stage ends) so that
  *   4. "zones" holds one zone's responses in memory at a time: lights clustered by the paper's
- *      metric (eq. 9), merged responses averaged, then clustered PCA.
+ *      metric (eq. 9), merged responses formed (--merge-response: the mean, the harmonic mean or a
+ *      solution at the merged position), then clustered PCA.
  * Per-light solves use the path of the spectral run time rather than photon mapping: for equal
  * error it costs a few sparse products per light instead of a photon map per light. Every result
  * depends only on its unit's inputs: the file is the same for any thread count. */
 #include "methods/lightcloud/lightcloud.h"
+#include "methods/lightcloud/responses.h"
 #include "methods/spectral/spectral.h"
 
 #include <cjson/cJSON.h>
@@ -35,6 +38,12 @@ typedef struct lcbake {
     uint8_t *visible;                /* [light * n + light] mutual visibility (1 = visible) */
     uint8_t *dark;                   /* [light] 1 when the light reaches no vertex at all */
     float merge_distance, merge_error;
+    int merge_response;              /* PRT__LIGHTCLOUD_MERGE_* */
+    prt__raycaster rc;               /* while the zones solve merged lights: is a mean position in open space */
+    float near;                      /* closer to a surface than this is "on" it (place_cloud's rule) */
+    prt__lightcloud_responses *kept; /* --responses: solutions kept by earlier bakes */
+    prt__fingerprint kept_fp;
+    char *responses_path;            /* its path (owned) */
     float *list;                     /* --cloud positions, read when the bake begins */
     uint32_t list_count;
 } lcbake;
@@ -214,6 +223,7 @@ static prt_status place_cloud(lcbake *b, const prt__raycaster *rc)
     float near = 0.01f * diag;
     if (ngrid)
         for (int k = 0; k < 3; ++k) near = fminf(near, 0.1f * (box[3 + k] - box[k]) / g[k]);
+    b->near = near;
     uint64_t kept = 0, in = 0, on = 0;
     for (uint64_t i = 0; i < n; ++i) {
         const int where = inside(rc, p + i * 3, near);
@@ -328,6 +338,8 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
     const uint32_t n = s->cloud_count;
     b->merge_distance = b->d.merge_distance >= 0 ? b->d.merge_distance : 3.0f * s->spacing;
     b->merge_error = b->d.merge_error >= 0 ? b->d.merge_error : 0.1f;
+    b->merge_response = b->d.merge_response ? b->d.merge_response : PRT__LIGHTCLOUD_MERGE_MEAN;
+    s->merge_response = (uint32_t)b->merge_response;
     s->merge_distance = b->merge_distance;
     s->merge_error = b->merge_error;
     /* Mutual visibility of the pairs that could merge (V_jk of eq. 9). */
@@ -366,6 +378,8 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
     b->one = nv * 3 + (size_t)s->glossy_count * 48;
     b->stride = b->one * (size_t)s->lobes;
     if (!st && !(b->spill = tmpfile())) st = prt__fail(ctx, PRT_ERR_IO, "cannot create a scratch file for the light responses (TMPDIR)");
+    if (!st && b->d.responses_path)
+        st = prt__lightcloud_responses_open(ctx, b->d.responses_path, &b->kept_fp, nv, s->glossy_count, s->lobes, s->cloud, n, &b->kept);
     /* What the scene's emitters light, baked whole (direct and indirect): the renderer cannot
      * draw emitters' direct light. */
     if (!st && m->emission) {
@@ -389,25 +403,43 @@ static prt_status write_response(lcbake *b, uint64_t unit, const float *resp)
     return PRT_OK;
 }
 
+/* One cloud light's response to one emission lobe as stored: exit radiance per vertex (indirect,
+ * or all of it with store_direct) into diffuse (3 per vertex, vertex order), the glossy vertices'
+ * SH into glossy (48 each), whether it reaches any vertex into *lit. */
+static prt_status light_response(lcbake *b, prt_context *ctx, const float *pos, int lobe, float *diffuse, float *glossy, bool *lit)
+{
+    const size_t nv = b->t->mesh.vertex_count;
+    float *direct = malloc(nv * 3 * sizeof(float));
+    prt_status st = direct ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!st) st = solve(b, ctx, pos, lobe, direct, diffuse, glossy);
+    if (!st) {
+        *lit = false;
+        for (size_t i = 0; i < nv * 3 && !*lit; ++i) *lit = direct[i] != 0 || diffuse[i] != 0;
+    }
+    if (!st && b->s->store_direct)
+        for (size_t i = 0; i < nv * 3; ++i) diffuse[i] += direct[i];
+    free(direct);
+    return st;
+}
+
 static prt_status light_run(prt__bake_job *job, uint64_t unit, int thread)
 {
     (void)thread;
     lcbake *b = (lcbake *)job;
     prt__lightcloud_set *s = b->s;
     const size_t nv = b->t->mesh.vertex_count;
-    float *diffuse = malloc(nv * 3 * sizeof(float)), *direct = malloc(nv * 3 * sizeof(float));
+    float *diffuse = malloc(nv * 3 * sizeof(float));
     float *glossy = malloc(((size_t)s->glossy_count * 48 + 1) * sizeof(float)), *resp = malloc(b->stride * sizeof(float) + 4);
-    prt_status st = diffuse && direct && glossy && resp ? PRT_OK : prt__fail(job->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    prt_status st = diffuse && glossy && resp ? PRT_OK : prt__fail(job->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    /* Each lobe solved, or taken from the kept solutions (which hold every lobe); lobe 0, the
+     * isotropic light, says whether the light reaches anything. */
+    const bool kept = prt__lightcloud_responses_has(b->kept, (uint32_t)unit);
     for (int k = 0; k < s->lobes && !st; ++k) {
         float *out = resp + b->one * (size_t)k;
-        st = solve(b, job->ctx, s->cloud + unit * 3, k, direct, diffuse, glossy);
-        if (!st && k == 0) {
-            bool lit = false;
-            for (size_t i = 0; i < nv * 3 && !lit; ++i) lit = direct[i] != 0 || diffuse[i] != 0;
-            b->dark[unit] = !lit;
-        }
-        if (!st && s->store_direct)
-            for (size_t i = 0; i < nv * 3; ++i) diffuse[i] += direct[i];
+        bool lit = false;
+        if (kept) st = prt__lightcloud_responses_read(job->ctx, b->kept, (uint32_t)unit, k, diffuse, glossy, &lit);
+        else st = light_response(b, job->ctx, s->cloud + unit * 3, k, diffuse, glossy, &lit);
+        if (!st && k == 0) b->dark[unit] = !lit;
         if (!st) {
             for (size_t v = 0; v < nv; ++v) memcpy(out + (size_t)b->pos_of[v] * 3, diffuse + v * 3, 3 * sizeof(float));
             /* Glossy vertices in member order too. */
@@ -419,7 +451,6 @@ static prt_status light_run(prt__bake_job *job, uint64_t unit, int thread)
     }
     if (!st) st = write_response(b, unit, resp);
     free(diffuse);
-    free(direct);
     free(glossy);
     free(resp);
     return st;
@@ -505,6 +536,61 @@ static prt_status compress_block(prt_context *ctx, const lcbake *b, uint32_t zon
     return st;
 }
 
+/* The paper's alternative: each merged light of several members solved at its mean position (every
+ * emission lobe), its response in zone z written over the mean in X and Y ([row][merged light l's
+ * lobe k at l * lobes + k]). A mean position inside geometry or on a surface (the members surround
+ * an obstacle) keeps the mean. */
+static prt_status solve_merged(lcbake *b, prt_context *ctx, uint32_t z, const uint32_t *members, float *X, float *Y)
+{
+    prt__lightcloud_set *s = b->s;
+    const prt__lightcloud_zone *zone = &s->zones[z];
+    const size_t nv = b->t->mesh.vertex_count;
+    const int K = s->lobes;
+    const uint32_t L = zone->lights * (uint32_t)K, first = s->member_start[z], nz = s->member_start[z + 1] - first;
+    float *diffuse = malloc(nv * 3 * sizeof(float)), *glossy = malloc(((size_t)s->glossy_count * 48 + 1) * sizeof(float));
+    prt_status st = diffuse && glossy ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (uint32_t l = 0; l < zone->lights && !st; ++l) {
+        if (members[l] < 2 || inside(&b->rc, zone->positions + (size_t)l * 3, b->near)) continue;
+        for (int k = 0; k < K && !st; ++k) {
+            const size_t col = (size_t)l * K + k;
+            bool lit = false;
+            st = light_response(b, ctx, zone->positions + (size_t)l * 3, k, diffuse, glossy, &lit);
+            /* The zone's rows: its vertices in member order, its glossy ones counted in the same order. */
+            for (uint32_t i = 0, g = 0; i < nz && !st; ++i) {
+                const uint32_t v = s->members[first + i], gv = s->glossy_of[v];
+                for (int c = 0; c < 3; ++c) X[((size_t)i * 3 + c) * L + col] = diffuse[(size_t)v * 3 + c];
+                if (gv != UINT32_MAX) {
+                    for (int c = 0; c < 48; ++c) Y[((size_t)g * 48 + c) * L + col] = glossy[(size_t)gv * 48 + c];
+                    g++;
+                }
+            }
+        }
+        if (!st && prt__cancelled(ctx)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    }
+    free(diffuse);
+    free(glossy);
+    return st;
+}
+
+/* prt__lightcloud_merge lobe by lobe: src holds every cloud light's responses lobe after lobe
+ * ([lobe][cloud light][width]), dst takes merged light l's lobe k in column l * lobes + k of its
+ * rows; each lobe merged as a single response would be. */
+static prt_status merge_lobes(prt_context *ctx, int how, uint32_t n, const uint32_t *light_of, uint32_t lights, int lobes, const float *src,
+                              size_t width, int group, float *dst)
+{
+    if (lobes == 1) return prt__lightcloud_merge(ctx, how, n, light_of, lights, src, width, group, dst);
+    const size_t L = (size_t)lights * lobes;
+    float *one = malloc((width * lights + 1) * sizeof(float));
+    prt_status st = one ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (int k = 0; k < lobes && !st; ++k) {
+        st = prt__lightcloud_merge(ctx, how, n, light_of, lights, src + (size_t)k * n * width, width, group, one);
+        for (size_t i = 0; i < width && !st; ++i)
+            for (uint32_t l = 0; l < lights; ++l) dst[i * L + (size_t)l * lobes + k] = one[i * lights + l];
+    }
+    free(one);
+    return st;
+}
+
 static prt_status zone_run(lcbake *b, prt_context *ctx, uint32_t z)
 {
     prt__lightcloud_set *s = b->s;
@@ -544,23 +630,19 @@ static prt_status zone_run(lcbake *b, prt_context *ctx, uint32_t z)
         if (!X || !Y || !zone->positions || !members) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
     if (!st) {
-        /* Merged lights: mean position, mean response. */
+        /* Merged lights: mean position; responses as the bake asks (the solution at the mean
+         * position starts from the mean, for lights where it cannot solve). */
         for (uint32_t j = 0; j < n; ++j) {
             const uint32_t l = zone->light_of[j];
             members[l]++;
             for (int k = 0; k < 3; ++k) zone->positions[l * 3 + k] += s->cloud[(size_t)j * 3 + k];
-            for (int k = 0; k < K; ++k) {
-                const size_t col = (size_t)l * K + k, from = (size_t)k * n + j;
-                for (uint32_t v = 0; v < nz; ++v)
-                    for (int c = 0; c < 3; ++c) X[((size_t)v * 3 + c) * L + col] += R[(from * nz + v) * 3 + c];
-                for (uint32_t v = 0; v < gz; ++v)
-                    for (int c = 0; c < 48; ++c) Y[((size_t)v * 48 + c) * L + col] += G[(from * gz + v) * 48 + c];
-            }
         }
         for (uint32_t l = 0; l < zone->lights; ++l)
             for (int k = 0; k < 3; ++k) zone->positions[l * 3 + k] /= (float)members[l];
-        for (size_t i = 0; i < (size_t)nz * 3 * L; ++i) X[i] /= (float)members[(i % L) / K];
-        for (size_t i = 0; i < (size_t)gz * 48 * L; ++i) Y[i] /= (float)members[(i % L) / K];
+        const int how = b->merge_response == PRT__LIGHTCLOUD_MERGE_HARMONIC ? PRT__LIGHTCLOUD_MERGE_HARMONIC : PRT__LIGHTCLOUD_MERGE_MEAN;
+        st = merge_lobes(ctx, how, n, zone->light_of, zone->lights, K, R, (size_t)nz * 3, 1, X);
+        if (!st) st = merge_lobes(ctx, how, n, zone->light_of, zone->lights, K, G, (size_t)gz * 48, 16, Y);
+        if (!st && b->merge_response == PRT__LIGHTCLOUD_MERGE_SOLVE) st = solve_merged(b, ctx, z, members, X, Y);
     }
     free(R);
     free(G);
@@ -572,9 +654,39 @@ static prt_status zone_run(lcbake *b, prt_context *ctx, uint32_t z)
     return st;
 }
 
+/* A cloud light's response to one lobe from the scratch file, back in vertex order (to keep it). */
+static prt_status kept_response(void *user, uint32_t light, int lobe, float *diffuse, float *glossy, bool *lit)
+{
+    lcbake *b = user;
+    const prt__lightcloud_set *s = b->s;
+    const size_t nv = b->t->mesh.vertex_count, bytes = b->one * sizeof(float);
+    float *resp = malloc(bytes + 4);
+    if (!resp) return prt__fail(b->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    const off_t at = (off_t)(((uint64_t)light * b->stride + (uint64_t)lobe * b->one) * sizeof(float));
+    const bool ok = pread(fileno(b->spill), resp, bytes, at) == (ssize_t)bytes;
+    if (ok) {
+        for (size_t v = 0; v < nv; ++v) memcpy(diffuse + v * 3, resp + (size_t)b->pos_of[v] * 3, 3 * sizeof(float));
+        for (size_t i = 0, g = 0; i < nv; ++i) {
+            const uint32_t gv = s->glossy_of[s->members[i]];
+            if (gv != UINT32_MAX) memcpy(glossy + (size_t)gv * 48, resp + nv * 3 + 48 * g++, 48 * sizeof(float));
+        }
+        *lit = !b->dark[light];
+    }
+    free(resp);
+    return ok ? PRT_OK : prt__fail(b->base.ctx, PRT_ERR_IO, "cannot read the light responses' scratch file");
+}
+
 static prt_status zones_step(prt__bake_job *job, prt_context *ctx, prt__progress *p)
 {
     lcbake *b = (lcbake *)job;
+    if (b->kept) {
+        const uint32_t reused = prt__lightcloud_responses_reused(b->kept);
+        prt__log(ctx, PRT_LOG_INFO, "light cloud: %u of %u cloud lights' solutions taken from %s, %u solved", reused, b->s->cloud_count,
+                 b->d.responses_path, b->s->cloud_count - reused);
+        const prt_status st = prt__lightcloud_responses_write(ctx, b->kept, b->d.responses_path, &b->kept_fp, b->s->cloud, b->s->cloud_count,
+                                                               kept_response, b);
+        if (st) return st;
+    }
     uint32_t dark = 0;
     for (uint32_t j = 0; j < b->s->cloud_count; ++j) dark += b->dark[j];
     if (dark == b->s->cloud_count)
@@ -584,12 +696,13 @@ static prt_status zones_step(prt__bake_job *job, prt_context *ctx, prt__progress
         prt__log(ctx, PRT_LOG_WARN, "%u of %u cloud lights reach no surface (outside a closed scene, or shut in): they add nothing", dark,
                  b->s->cloud_count);
     prt__progress_begin(p, "zones", b->s->zone_count);
-    prt_status st = PRT_OK;
+    prt_status st = b->merge_response == PRT__LIGHTCLOUD_MERGE_SOLVE ? prt__raycaster_create(ctx, &b->t->mesh, &b->rc) : PRT_OK;
     for (uint32_t z = 0; z < b->s->zone_count && !st; ++z) {
         st = zone_run(b, ctx, z);
         prt__progress_add(p, 1);
         if (!st && prt__progress_cancelled(p)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     }
+    prt__raycaster_release(&b->rc);
     return st;
 }
 
@@ -646,6 +759,8 @@ static void lc_release(prt__bake_job *job)
     if (b->inner_job) b->inner_job->release(b->inner_job);
     prt_transfer_release(b->inner);
     if (b->spill) fclose(b->spill);
+    prt__lightcloud_responses_close(b->kept);
+    free(b->responses_path);
     free(b->pos_of);
     free(b->visible);
     free(b->dark);
@@ -694,6 +809,10 @@ prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, 
     b->t = t;
     b->s = s;
     b->d = d;
+    if (d.responses_path && !(b->d.responses_path = b->responses_path = strdup(d.responses_path))) {
+        free(b); free(s); free(list);
+        return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    }
     b->first_own = -1;
     t->state = s;
     s->store_direct = d.store_direct;
@@ -707,6 +826,7 @@ prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, 
         st = prt__method_spectral.bake_begin(ctx, scene, o, b->inner, &b->inner_job);
     }
     if (!st) s->ray_offset = prt__spectral(b->inner)->ray_offset;
+    if (!st && d.responses_path) prt__lightcloud_responses_fingerprint(t, o, s, &b->kept_fp);
     if (st) { lc_release(&b->base); return st; }
     *job = &b->base;
     return PRT_OK;

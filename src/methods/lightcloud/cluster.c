@@ -110,3 +110,50 @@ prt_status prt__lightcloud_cluster(prt_context *ctx, uint32_t n, prt__light_metr
     free(parent);
     return st;
 }
+
+/* Merged lights' responses (section 4.1's last step). The mean is the least-squares stand-in for
+ * the members under equal weights; the harmonic mean is what the paper names: per value, n /
+ * sum(1 / x), 0 when a member's is 0 or below (the limit; a light that does not reach a vertex).
+ * SH groups (group > 1: a glossy vertex's 16 coefficients of one channel, which change sign) keep
+ * the mean's shape, scaled to the harmonic mean of the constant coefficient. A merged light of
+ * one member is that member's response exactly. */
+prt_status prt__lightcloud_merge(prt_context *ctx, int how, uint32_t n, const uint32_t *light_of, uint32_t lights, const float *src, size_t width,
+                                 int group, float *dst)
+{
+    uint32_t *start = prt__calloc((size_t)lights + 1, sizeof(uint32_t)), *member = malloc(((size_t)n + 1) * sizeof(uint32_t));
+    uint32_t *fill = prt__calloc((size_t)lights + 1, sizeof(uint32_t));
+    if (!start || !member || !fill) { free(start); free(member); free(fill); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    for (uint32_t j = 0; j < n; ++j) start[light_of[j] + 1]++;
+    for (uint32_t l = 0; l < lights; ++l) start[l + 1] += start[l];
+    for (uint32_t j = 0; j < n; ++j) member[start[light_of[j]] + fill[light_of[j]]++] = j;   /* ascending within each light */
+    free(fill);
+    for (uint32_t l = 0; l < lights; ++l) {
+        const uint32_t *mj = member + start[l], count = start[l + 1] - start[l];
+        for (size_t i = 0; i < width; i += (size_t)group) {
+            float mean[16];
+            for (int c = 0; c < group; ++c) {
+                /* Summed in member order in float, as before the choice existed: means are unchanged. */
+                float sum = 0;
+                for (uint32_t m = 0; m < count; ++m) sum += src[(size_t)mj[m] * width + i + c];
+                mean[c] = count == 1 ? sum : sum / (float)count;
+            }
+            if (how == PRT__LIGHTCLOUD_MERGE_HARMONIC && count > 1) {
+                double inv = 0;
+                for (uint32_t m = 0; m < count && isfinite(inv); ++m) {
+                    const float x = src[(size_t)mj[m] * width + i];
+                    inv = x > 0 ? inv + 1.0 / x : INFINITY;
+                }
+                const double h = isfinite(inv) && inv > 0 ? count / inv : 0.0;
+                if (group == 1) mean[0] = (float)h;
+                else {
+                    const double scale = mean[0] > 0 ? h / mean[0] : 0.0;
+                    for (int c = 0; c < group; ++c) mean[c] = (float)(mean[c] * scale);
+                }
+            }
+            for (int c = 0; c < group; ++c) dst[(i + c) * lights + l] = mean[c];
+        }
+    }
+    free(start);
+    free(member);
+    return PRT_OK;
+}

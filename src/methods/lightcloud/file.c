@@ -50,6 +50,7 @@ prt_status prt__lightcloud_save(const prt_transfer *t, prt__chunk_list *l)
     prt__put64(h + 40, nv);
     memcpy(h + 48, s->region, sizeof s->region);
     prt__put32(h + 72, s->lobes > 1 ? (uint32_t)s->lobes : 0);   /* 0 in files from before lobes: one */
+    prt__put32(h + 76, s->merge_response);   /* 0 in files from before the choice: the mean */
     prt__chunks_add(l, CHUNK_LCPR, h, (size_t)LCPR_HEADER, s->cloud, (size_t)s->cloud_count * 12, s->zone_of, nv * 4, NULL);
     for (uint32_t z = 0; z < s->zone_count; ++z) {
         const prt__lightcloud_zone *zone = &s->zones[z];
@@ -192,6 +193,8 @@ prt_status prt__lightcloud_load(prt_context *ctx, prt_transfer *t, const cJSON *
     memcpy(&s->merge_distance, h + 32, 4);
     memcpy(&s->merge_error, h + 36, 4);
     memcpy(s->region, h + 48, sizeof s->region);
+    s->merge_response = prt__get32(h + 76);
+    if (s->merge_response > PRT__LIGHTCLOUD_MERGE_SOLVE) return bad(ctx, "light-cloud merge response out of range");
     for (int k = 0; k < 3; ++k)
         if (!isfinite(s->region[k]) || !isfinite(s->region[3 + k]) || !(s->region[k] <= s->region[3 + k]) || fabsf(s->region[k]) > 1e30f ||
             fabsf(s->region[3 + k]) > 1e30f)

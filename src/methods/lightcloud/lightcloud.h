@@ -56,6 +56,7 @@ typedef struct prt__lightcloud_set {
     int bounces, samples;
     float ray_offset;
     float merge_distance, merge_error;   /* as baked (informational) */
+    uint32_t merge_response;     /* how merged lights' responses were formed (PRT__LIGHTCLOUD_MERGE_*; 0: before the choice existed, the mean) */
     uint32_t zone_count;
     uint32_t *zone_of;           /* [vertex] */
     uint32_t *glossy_of;         /* [vertex] glossy index or UINT32_MAX (derived from materials) */
@@ -85,6 +86,10 @@ float prt__lightcloud_spacing(const float *cloud, uint32_t count);
 void prt__lightcloud_block_free(prt__lightcloud_block *b);
 
 /* Bake (bake.c). */
+/* A merged light's response at each vertex: the mean of its members' (1), their harmonic mean
+ * (2, the paper's section 4.1 wording), or a solution computed at its position (3, the paper's
+ * "higher quality" alternative). */
+enum { PRT__LIGHTCLOUD_MERGE_MEAN = 1, PRT__LIGHTCLOUD_MERGE_HARMONIC = 2, PRT__LIGHTCLOUD_MERGE_SOLVE = 3 };
 typedef struct prt__lightcloud_bake_desc {
     int grid[3];                 /* cloud grid cells; 0 = 6 x 6 x 6 */
     bool has_box;
@@ -94,6 +99,8 @@ typedef struct prt__lightcloud_bake_desc {
     int zone_vertices;           /* 0 = 2000 */
     float merge_distance;        /* < 0: default (3 x spacing); 0: no merging */
     float merge_error;           /* < 0: default 0.1; 0: the response term is left out */
+    int merge_response;          /* PRT__LIGHTCLOUD_MERGE_*; 0 = the default */
+    const char *responses_path;  /* kept cloud-light solutions to take and to write (responses.h); NULL: none */
     bool store_direct;
     int bounces;                 /* 0 = 16 (closed rooms need many) */
     bool raw;                    /* no CPCA */
@@ -108,6 +115,10 @@ prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, 
  * their first member. */
 typedef float (*prt__light_metric_fn)(void *user, uint32_t j, uint32_t k);
 prt_status prt__lightcloud_cluster(prt_context *ctx, uint32_t n, prt__light_metric_fn metric, void *user, uint32_t *cluster_of, uint32_t *clusters);
+/* Merged responses (how: PRT__LIGHTCLOUD_MERGE_MEAN or _HARMONIC): src [cloud light][width],
+ * dst [width][merged light]; groups of `group` values (1, or 16 SH coefficients) merge together. */
+prt_status prt__lightcloud_merge(prt_context *ctx, int how, uint32_t n, const uint32_t *light_of, uint32_t lights, const float *src, size_t width,
+                                 int group, float *dst);
 
 /* Run time (relight.c): weights over the cloud (3 per light and lobe: [light][lobe][colour]) for
  * the lights of l, by interpolation among the `neighbours` nearest cloud lights visible from

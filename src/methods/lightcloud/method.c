@@ -128,6 +128,13 @@ static const prt_option_desc options[] = {
     {"merge-error", "E", PRT_OPTION_FLOAT, 0, 1e30, NULL,
      "responses differing by E x the zone's largest never merge: w2 = 1/(E max) (default 0.1; "
      "0: distance and visibility only)"},
+    {"merge-response", "HOW", PRT_OPTION_CHOICE, 0, 0, "mean|harmonic|solve",
+     "a merged light's response: mean (default) of its lights', their harmonic mean (the paper's "
+     "wording), or solve: a solution at its position (one more solve per merged light and zone)"},
+    {"responses", "FILE", PRT_OPTION_TEXT, 0, 0, NULL,
+     "keep each cloud light's solution in FILE (all its emission lobes), and take those it already "
+     "holds (same scene, settings and --emission-order): adding lights to a cloud (more --cloud "
+     "positions) solves only the new ones"},
     {"store", "WHAT", PRT_OPTION_CHOICE, 0, 0, "indirect|all",
      "indirect (default): the run time adds direct light with shadows, per pixel when drawn; "
      "all: direct light baked too (soft, compresses worse)"},
@@ -198,6 +205,8 @@ static prt_status lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene
     d.zone_vertices = prt__opt_int(o, "zone-vertices", 0);
     d.merge_distance = prt__opt(o, "merge-distance") ? prt__opt_float(o, "merge-distance", 0) : -1.0f;
     d.merge_error = prt__opt(o, "merge-error") ? prt__opt_float(o, "merge-error", 0) : -1.0f;
+    d.merge_response = PRT__LIGHTCLOUD_MERGE_MEAN + prt__opt_choice(o, "merge-response", 0);
+    d.responses_path = prt__opt(o, "responses");
     d.store_direct = prt__opt_choice(o, "store", 0) == 1;
     d.bounces = prt__opt_int(o, "bounces", 0);
     d.emission_order = prt__opt_int(o, "emission-order", 0);
@@ -224,6 +233,11 @@ static size_t lightcloud_bytes(const prt_transfer *t)
     for (uint32_t z = 0; z < s->zone_count; ++z)
         n += (size_t)s->cloud_count * 4 + block_bytes(&s->zones[z].diffuse) + block_bytes(&s->zones[z].glossy);
     return n;
+}
+
+static const char *merge_name(uint32_t how)
+{
+    return how == PRT__LIGHTCLOUD_MERGE_HARMONIC ? "harmonic" : how == PRT__LIGHTCLOUD_MERGE_SOLVE ? "solve" : "mean";
 }
 
 static void lightcloud_describe(const prt_transfer *t, prt__describe *d)
@@ -263,6 +277,7 @@ static void lightcloud_describe(const prt_transfer *t, prt__describe *d)
         for (uint32_t z = 0; z < s->zone_count; ++z) cJSON_AddItemToArray(per, cJSON_CreateNumber(s->zones[z].lights));
         cJSON_AddNumberToObject(j, "merge_distance", s->merge_distance);
         cJSON_AddNumberToObject(j, "merge_error", s->merge_error);
+        cJSON_AddStringToObject(j, "merge_response", merge_name(s->merge_response));
         cJSON_AddStringToObject(j, "stored", s->store_direct ? "all" : "indirect");
         cJSON_AddStringToObject(j, "compression", compressed ? "cpca" : "none");
         cJSON_AddNumberToObject(j, "coefficients_per_vertex", per_vertex);
@@ -278,8 +293,8 @@ static void lightcloud_describe(const prt_transfer *t, prt__describe *d)
     prt__describe_line(d, "bake:", "%d gathering rays per vertex for the bounces", s->samples);
     if (s->lobes > 1)
         prt__describe_line(d, "emission:", "SH order %d: %d lobes per cloud light (relights spot and ies lights)", s->lobes == 9 ? 3 : 2, s->lobes);
-    prt__describe_line(d, "zones:", "%u (%u..%u vertices), merged lights per zone %u..%u (mean %.1f; merge distance %.4g, error %.3g)", s->zone_count,
-                       vmin, vmax, lmin, lmax, lsum / s->zone_count, s->merge_distance, s->merge_error);
+    prt__describe_line(d, "zones:", "%u (%u..%u vertices), merged lights per zone %u..%u (mean %.1f; merge distance %.4g, error %.3g; responses: %s)",
+                       s->zone_count, vmin, vmax, lmin, lmax, lsum / s->zone_count, s->merge_distance, s->merge_error, merge_name(s->merge_response));
     if (compressed)
         prt__describe_line(d, "compression:", "clustered PCA per zone, %.1f coefficients per vertex and channel, relative error %.3g", per_vertex, rel);
     else

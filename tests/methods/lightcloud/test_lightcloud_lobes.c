@@ -48,8 +48,9 @@ static float *indirect(prt_context *ctx, const prt_transfer *t, const prt_light 
 {
     prt_lighting *l = lighting_of(li);
     prt_relit r;
-    /* The spectral run time with the cloud's 16 bounces (its control); the cloud's default neighbours. */
-    const int sixteen[2] = {16, 1};   /* bounces and the tail, as the cloud lights were solved */
+    /* The spectral run time with the cloud's 16 bounces and the series' tail, as the cloud's solves
+     * (both of its controls: it reads two); the cloud's default neighbours. */
+    const int sixteen[2] = {16, 1};
     const bool spectral = !strcmp(prt_method_name(prt_transfer_method(t)), "spectral");
     prt_status st = prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .with_indirect = 1, .controls = spectral ? sixteen : NULL}, &r);
     if (st) fail_msg("%s", prt_last_error());
@@ -107,7 +108,7 @@ static void setup(fixture *f, int max_order)
     const char *so[] = {"samples", "256", "basis", "64", "partition", "150", NULL};
     f->spectral = bake(f->ctx, f->s, "spectral", so);
     for (int order = 2; order <= max_order; ++order) {
-        char o[16];
+        char o[16];   /* room for any int: gcc -O0 cannot bound order */
         snprintf(o, sizeof o, "%d", order);
         const char *lo[] = {"cloud", path, "compress", "none", "merge-distance", "0", "emission-order", o, "samples", "256", "basis", "64", "partition", "150", NULL};
         f->lc[order] = bake(f->ctx, f->s, "lightcloud", lo);
