@@ -23,7 +23,7 @@ typedef struct prt_offset_info {
     int count;                /* offsets, one map per offset and kind */
     int covered;              /* texels on the surface */
     int has[2];               /* which kinds the file holds (prt_offset_kind) */
-    int map_bounces;          /* bounces the radiosity maps hold: 1 (a pass per bounce) or 2..16 (one pass) */
+    int map_bounces;          /* bounces the radiosity maps hold: 1 (a pass per bounce) or 2..64 (one pass; 64: the whole series, the default) */
 } prt_offset_info;
 
 /* 1 and info filled when t is an offset file, else 0. */

@@ -128,7 +128,7 @@ prt_status prt__offset_load(prt_context *ctx, prt_transfer *t, const cJSON *meta
     s->ray_offset = f[0]; s->eta = f[1]; s->mm_per_unit = f[2];
     for (int k = 0; k < 3; ++k) { s->sigma_a[k] = f[3 + k]; s->sigma_s[k] = f[6 + k]; }
     /* Files of maps holding one bounce wrote 0 here. */
-    if (!(f[9] == 0 || (f[9] >= 2 && f[9] <= 16 && f[9] == floorf(f[9])))) return bad(ctx, "offset map bounces out of range");
+    if (!(f[9] == 0 || (f[9] >= 2 && f[9] <= PRT__OFFSET_MAX_MAP_BOUNCES && f[9] == floorf(f[9])))) return bad(ctx, "offset map bounces out of range");
     s->map_bounces = f[9] >= 2 ? (int)f[9] : 1;
     if (s->map_bounces > 1 && !(s->kinds & PRT__OFFSET_RADIOSITY_BIT)) return bad(ctx, "offset map bounces without radiosity maps");
     const uint64_t n = (uint64_t)(uint32_t)s->width * (uint32_t)s->height;

@@ -61,10 +61,11 @@ static const prt_option_desc options[] = {
     {"uv", "FROM", PRT_OPTION_CHOICE, 0, 0, "auto|mesh|atlas",
      "UV layout: the mesh's own when unique and inside [0, 1], else a generated atlas (auto, the default); only the "
      "mesh's (mesh); always an atlas (atlas)"},
-    {"map-bounces", "N", PRT_OPTION_INT, 1, 16, NULL,
-     "bounces the radiosity maps hold: 2..16 (default 8) bake them all into the maps, as the paper, and one pass at "
-     "run time gives them (the bounces past the first from paths traced from every texel: --walks); 1 bakes one "
-     "and the run time repeats the pass per bounce (--control bounces)"},
+    {"map-bounces", "N", PRT_OPTION_INT, 1, PRT__OFFSET_MAX_MAP_BOUNCES, NULL,
+     "bounces the radiosity maps hold: 2..64 bake them all into the maps, as the paper, and one pass at run time "
+     "gives them (the bounces past the first from paths traced from every texel, --walks, each ending when the "
+     "albedos it met fall under 1e-4); the default, 64, is the whole series; 1 bakes one and the run time repeats "
+     "the pass per bounce (--control bounces)"},
     {"walks", "N", PRT_OPTION_INT, 16, 65536, NULL, "paths per texel for the bounces past the first of --map-bounces (default 256)"},
     {"seed", "N", PRT_OPTION_INT, 0, 2147483647, NULL, "seed of the offsets drawn and the paths traced (default 0)"},
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
@@ -141,7 +142,9 @@ static prt_status offset_bake_begin(prt_context *ctx, const prt_scene *scene, co
     d.mm_per_unit = prt__opt_float(o, "mm-per-unit", 1000.0f);
     d.uv_layout = (prt_uv_layout)prt__opt_choice(o, "uv", 0);
     d.seed = prt__opt_int(o, "seed", 0);
-    d.map_bounces = prt__opt_int(o, "map-bounces", (kind == 2) ? 1 : 8);
+    /* Every bounce by default: the paths end on their own (weight under 1e-4) long before 64 in
+     * rooms of any albedo below 0.86, so the maps hold the converged series. */
+    d.map_bounces = prt__opt_int(o, "map-bounces", (kind == 2) ? 1 : PRT__OFFSET_MAX_MAP_BOUNCES);
     d.walks = prt__opt_int(o, "walks", 256);
     if ((prt__opt(o, "map-bounces") || prt__opt(o, "walks")) && !(d.kinds & PRT__OFFSET_RADIOSITY_BIT)) {
         free(surface_medium);
@@ -193,7 +196,9 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
     prt__describe_line(d, "transfer:", "%s: %d offset maps (drawn by %s transference, %d refinements), %.2f MiB", kinds, s->count,
                        s->importance ? "mean" : "max", s->iterations, offset_bytes(t) / 1048576.0);
     if (s->kinds & PRT__OFFSET_RADIOSITY_BIT)
-        prt__describe_line(d, "bounces:", s->map_bounces > 1 ? "the radiosity maps hold %d bounces (one pass at run time)" : "the radiosity maps hold one; the run time repeats the pass",
+        prt__describe_line(d, "bounces:", s->map_bounces >= PRT__OFFSET_MAX_MAP_BOUNCES ? "the radiosity maps hold every bounce (paths of up to %d; one pass at run time)"
+                                          : s->map_bounces > 1 ? "the radiosity maps hold %d bounces (one pass at run time)"
+                                                               : "the radiosity maps hold one; the run time repeats the pass",
                            s->map_bounces);
     for (int k = 0; k < s->medium_count; ++k) {
         size_t texels = 0;

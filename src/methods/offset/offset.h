@@ -16,6 +16,7 @@
 #define PRT__OFFSET_ENV_COEFFS 9    /* first-order light from the environment: SH order 3 */
 #define PRT__OFFSET_TEXEL_FLOATS (3 + 3 + 3 + 1 + PRT__OFFSET_ENV_COEFFS)   /* a texel patch in files: pos, nrm, albedo, area, env */
 #define PRT__OFFSET_SHADOW_SAMPLES 4 /* shadow-ray points per texel: a rotated grid */
+#define PRT__OFFSET_MAX_MAP_BOUNCES 64 /* --map-bounces: the default, the whole series (paths end earlier by weight) */
 #define PRT__OFFSET_MAX_ENTRIES ((uint64_t)1 << 28)   /* texels x offsets, each 3 floats: 3 GiB */
 
 typedef struct prt__offset_set {
@@ -23,7 +24,7 @@ typedef struct prt__offset_set {
     unsigned kinds;               /* PRT__OFFSET_*_BIT */
     int iterations, importance;   /* how offsets were chosen: refinements, 0 = max, 1 = mean */
     int map_bounces;              /* bounces the radiosity maps hold: 1 (the run time repeats the
-                                   * pass per bounce) or 2..16 (one pass gives them all) */
+                                   * pass per bounce) or 2..PRT__OFFSET_MAX_MAP_BOUNCES (one pass gives them all) */
     float ray_offset;
     float sigma_a[3], sigma_s[3], eta, mm_per_unit;   /* the medium of subsurface transfer */
     int *offsets;                 /* count x (dx, dy) texels */
