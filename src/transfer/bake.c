@@ -111,15 +111,8 @@ prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_
     return prt__bake_drive_checkpointed(ctx, job, run, NULL, t);
 }
 
-/* Everything a bake's results depend on, so that a checkpoint is only ever resumed by the same
- * bake: the library version, the method and its options, and the scene as the transfer holds it. */
-static void fingerprint(const prt__method *m, const prt_options *o, const prt_transfer *t, const prt_scene *scene, prt__fingerprint *fp)
+void prt__transfer_fingerprint_scene(const prt_transfer *t, prt__fingerprint *fp)
 {
-    memset(fp, 0, sizeof *fp);
-    const char *v = prt_version_string();
-    prt__fingerprint_add(fp, v, strlen(v) + 1);
-    prt__fingerprint_add(fp, m->name, strlen(m->name) + 1);
-    prt__options_fingerprint(o, fp);
     const prt__mesh *mesh = &t->mesh;
     const size_t nv = mesh->vertex_count, nt = mesh->triangle_count;
     prt__fingerprint_add(fp, &nv, sizeof nv);
@@ -148,6 +141,18 @@ static void fingerprint(const prt__method *m, const prt_options *o, const prt_tr
             prt__fingerprint_add(fp, b->n[l], sizeof b->n[l]);
         }
     }
+}
+
+/* Everything a bake's results depend on, so that a checkpoint is only ever resumed by the same
+ * bake: the library version, the method and its options, and the scene as the transfer holds it. */
+static void fingerprint(const prt__method *m, const prt_options *o, const prt_transfer *t, const prt_scene *scene, prt__fingerprint *fp)
+{
+    memset(fp, 0, sizeof *fp);
+    const char *v = prt_version_string();
+    prt__fingerprint_add(fp, v, strlen(v) + 1);
+    prt__fingerprint_add(fp, m->name, strlen(m->name) + 1);
+    prt__options_fingerprint(o, fp);
+    prt__transfer_fingerprint_scene(t, fp);
     /* BRDF sets decide which vertices have glossy rows (only where kept: older checkpoints stay valid). */
     for (int i = 0; m->brdf_set && i < scene->brdf_set_count; ++i) {
         prt__fingerprint_add(fp, &scene->brdf_set[i].surface, sizeof scene->brdf_set[i].surface);

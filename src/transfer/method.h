@@ -73,6 +73,9 @@ int prt__opt_choice(const prt_options *o, const char *name, int fallback);
 bool prt__options_exporting(const prt_options *o);
 /* Adds the options as given (sorted by name, so the order on a command line does not matter). */
 void prt__options_fingerprint(const prt_options *o, prt__fingerprint *fp);
+/* Adds the scene as t holds it - mesh (positions, normals, albedo, materials, UVs, emission,
+ * triangles) and BRDFs at full precision - to fp: what any baked result depends on. */
+void prt__transfer_fingerprint_scene(const prt_transfer *t, prt__fingerprint *fp);
 
 /* ---- Descriptions (transfer/describe.c) ----
  * One code path writes both forms: text lines for people, fields for JSON. */

@@ -38,29 +38,7 @@ void prt__lightcloud_responses_fingerprint(const prt_transfer *t, const prt_opti
     memset(fp, 0, sizeof *fp);
     const char *v = prt_version_string();
     prt__fingerprint_add(fp, v, strlen(v) + 1);
-    const prt__mesh *m = &t->mesh;
-    const uint64_t nv = m->vertex_count, nt = m->triangle_count;
-    prt__fingerprint_add(fp, &nv, sizeof nv);
-    prt__fingerprint_add(fp, &nt, sizeof nt);
-    prt__fingerprint_add(fp, m->positions, nv * 3 * sizeof(float));
-    prt__fingerprint_add(fp, m->normals, nv * 3 * sizeof(float));
-    prt__fingerprint_add(fp, m->albedo, nv * 3 * sizeof(float));
-    prt__fingerprint_add(fp, m->material, nv);
-    prt__fingerprint_add(fp, m->indices, nt * 3 * sizeof(uint32_t));
-    for (int i = 0; i < t->brdf_count; ++i) {
-        const prt_brdf *b = &t->brdfs[i];
-        const int model = (int)b->model, lobes = b->lobes > 0 && b->lobes <= PRT_BRDF_MAX_LOBES ? b->lobes : 0;
-        prt__fingerprint_add(fp, &model, sizeof model);
-        prt__fingerprint_add(fp, b->diffuse, sizeof b->diffuse);
-        prt__fingerprint_add(fp, b->specular, sizeof b->specular);
-        prt__fingerprint_add(fp, &b->exponent, sizeof b->exponent);
-        prt__fingerprint_add(fp, &b->exponent_v, sizeof b->exponent_v);
-        for (int l = 0; l < lobes; ++l) {
-            prt__fingerprint_add(fp, b->cxy[l], sizeof b->cxy[l]);
-            prt__fingerprint_add(fp, b->cz[l], sizeof b->cz[l]);
-            prt__fingerprint_add(fp, b->n[l], sizeof b->n[l]);
-        }
-    }
+    prt__transfer_fingerprint_scene(t, fp);
     /* The settings a solve depends on (the spectral transfer's and the solve's own), not the
      * cloud, the zones, merging or compression. */
     static const char *const names[] = {"samples", "basis", "full-basis", "partition", "ray-offset", "bounces", "store"};
