@@ -5,6 +5,7 @@
 #include "methods/offset/sampling.h"
 #include "methods/offset/transfer.h"
 #include "geom/uv_atlas.h"
+#include "geom/uv_islands.h"
 #include "light/light_sample.h"
 #include "methods/offset/offset.h"
 
@@ -12,6 +13,8 @@
 #define ENV_DIRECTIONS 256       /* rays per texel for its environment visibility */
 #define EMITTER_SAMPLES 256      /* light samples per texel on the emissive surfaces */
 #define CENTRE_RING 8            /* how far the centre offset's exact sum reaches, texels */
+#define NEAR_FIELD 8             /* radiosity: texels of a receiver's own chart this far summed exactly */
+#define FAR_FIELD_RAYS 1024      /* radiosity: rays per texel estimating the rest (stratified) */
 
 typedef struct obake {
     prt__bake_job base;
@@ -22,6 +25,8 @@ typedef struct obake {
     prt__raycaster rc;
     prt__offset_transfer x[2];   /* radiosity, subsurface */
     uint8_t *texel_medium;       /* [width * height] */
+    int32_t *chart;              /* [width * height] each surface texel's UV chart, -1 off the surface */
+    prt__offset_charts charts;   /* what splits the offsets' cells (with s->source, s->texel) */
     prt__dipole (*dipoles)[3];   /* per medium */
     prt__progress *progress;
 } obake;
@@ -95,6 +100,26 @@ static prt_status offsets_step(prt__bake_job *base, prt_context *ctx, prt__progr
 
 /* ---- maps ---- */
 
+static uint64_t walk_random(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+static double walk_uniform(uint64_t *s) { return (double)(walk_random(s) >> 11) * (1.0 / 9007199254740992.0); }
+
+static void cosine_direction(const float n[3], double u1, double u2, float d[3])
+{
+    float t1[3], t2[3], h[3] = {0, 0, 0};
+    h[fabsf(n[0]) < 0.6f ? 0 : fabsf(n[1]) < 0.6f ? 1 : 2] = 1;
+    prt__v3_cross(n, h, t1);
+    prt__v3_normalize(t1);
+    prt__v3_cross(n, t1, t2);
+    prt__cosine_dir(u1, u2, n, t1, t2, d);
+}
+
+
 /* The texel whose transfer stands for offset o's cell from texel (tx, ty): the one whose light the
  * run time multiplies by it - the offset itself on the surface, else its gutter's source
  * (s->source), so that map and light always describe the same patch. False off the map or when
@@ -146,6 +171,136 @@ static int *centre_cell(const int *offsets, int count, int W, int H, int *n_out)
     return list;
 }
 
+/* The landing texel of a ray from a texel's surface point: the covered texel whose light stands
+ * for the hit (its gutter's source where the hit's texel centre is off the chart), -1 none. */
+static int32_t landing(const obake *ob, const float o[3], const float d[3], prt__ray_hit *h)
+{
+    const prt__mesh *m = &ob->t->mesh;
+    const prt__offset_set *s = ob->s;
+    if (!prt__raycaster_hit(&ob->rc, o, d, h) || h->prim >= m->triangle_count) return -1;
+    if (prt__v3_dot(h->ng, d) > 0) return -1;   /* a back face: surfaces reflect on their front only */
+    const uint32_t *ix = m->indices + (size_t)h->prim * 3;
+    const float b0 = 1 - h->u - h->v;
+    const float hu = b0 * m->uv[ix[0] * 2] + h->u * m->uv[ix[1] * 2] + h->v * m->uv[ix[2] * 2];
+    const float hv = b0 * m->uv[ix[0] * 2 + 1] + h->u * m->uv[ix[1] * 2 + 1] + h->v * m->uv[ix[2] * 2 + 1];
+    const int hx = (int)fminf(fmaxf(floorf(hu * s->width), 0.0f), (float)(s->width - 1));   /* clamped before the cast: */
+    const int hy = (int)fminf(fmaxf(floorf(hv * s->height), 0.0f), (float)(s->height - 1));   /* UVs may lie far out */
+    return s->source[(size_t)hy * s->width + hx];
+}
+
+/* A receiver's representatives sorted along x, for nearest_rep's pruned search. */
+typedef struct rep_point { float p[3]; int o; } rep_point;
+typedef struct rep_index { rep_point *pt; int n; } rep_index;
+
+static int rep_point_cmp(const void *a, const void *b)
+{
+    const rep_point *x = a, *y = b;
+    if (x->p[0] != y->p[0]) return x->p[0] < y->p[0] ? -1 : 1;
+    return (x->o > y->o) - (x->o < y->o);
+}
+
+static void rep_index_build(const obake *ob, const int32_t *rep, int K, rep_index *ix)
+{
+    ix->n = 0;
+    for (int o = 0; o < K; ++o) {
+        if (rep[o] < 0) continue;
+        rep_point *q = &ix->pt[ix->n++];
+        memcpy(q->p, ob->patches.pos + (size_t)rep[o] * 3, sizeof q->p);
+        q->o = o;
+    }
+    qsort(ix->pt, (size_t)ix->n, sizeof *ix->pt, rep_point_cmp);
+}
+
+/* The offset whose representative stands for surface texel `land` - the cell it counts in: the
+ * nearest in space. A cell is the surface around its representative in 3-D, not the texels around
+ * it in the map, which far from the receiver span other charts, surfaces lit differently. (Only
+ * representatives facing the same way, as first-order light would suggest, measured worse: the
+ * floor in a torus's contact shadow then takes the lit floor's light, 1.18 of the exact bounce's
+ * energy against 0.97.) Ties to the lower offset; -1 when the receiver has no representative. */
+static int nearest_rep(const obake *ob, const rep_index *ix, uint32_t land)
+{
+    const float *q = ob->patches.pos + (size_t)land * 3;
+    int lo = 0, hi = ix->n;   /* the first point at or past q's x */
+    while (lo < hi) { const int mid = (lo + hi) / 2; if (ix->pt[mid].p[0] < q[0]) lo = mid + 1; else hi = mid; }
+    int best = -1;
+    double near = INFINITY;
+    /* Outwards both ways; once |dx|^2 passes the nearest distance, none further can be nearer. */
+    for (int i = lo, j = lo - 1; i < ix->n || j >= 0;) {
+        const double di = i < ix->n ? (double)ix->pt[i].p[0] - q[0] : INFINITY, dj = j >= 0 ? (double)q[0] - ix->pt[j].p[0] : INFINITY;
+        const rep_point *r = di <= dj ? &ix->pt[i++] : &ix->pt[j--];
+        const double dx = r->p[0] - q[0];
+        if (dx * dx > near) break;
+        const double dy = r->p[1] - q[1], dz = r->p[2] - q[2], d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 < near || (d2 == near && r->o < best)) { near = d2; best = r->o; }
+    }
+    return best;
+}
+
+/* First-bounce radiosity maps, entry (o, t) the transfer to t from the surface its cell o holds
+ * (eq. 8's integral, not one texel's transfer times the cell's area: far from t, a cell spans
+ * surfaces whose transfer to t differs wholly - the floor under a torus and the floor beyond).
+ * The texels of t's own chart within NEAR_FIELD texels, where transfer changes fastest, are summed
+ * exactly (TR times area, visibility by a ray each); the rest of the hemisphere by FAR_FIELD_RAYS
+ * cosine-distributed rays, stratified, each hit landing in its (chart-split) cell with the weight
+ * albedo / rays: what TR times area integrates to. Seeded per texel: the same for any thread count. */
+static bool radiosity_maps(obake *ob, const int32_t *label, float *maps, prt__progress *p)
+{
+    prt__offset_set *s = ob->s;
+    const int W = s->width, H = s->height, K = s->count, gw = 2 * W - 1, strata = (int)sqrt((double)FAR_FIELD_RAYS);
+    const size_t nc = s->covered;
+    int short_of_memory = 0;
+#pragma omp parallel num_threads(prt__threads(ob->base.ctx))
+    {
+        int32_t *rep = malloc((size_t)K * 2 * sizeof *rep), *rep_chart = rep ? rep + K : NULL;
+        rep_index ix = {malloc((size_t)K * sizeof *ix.pt), 0};
+        if (!rep || !ix.pt) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
+#pragma omp for schedule(dynamic, 16)
+        for (size_t i = 0; i < nc; ++i) {
+            if (!rep || !ix.pt || prt__progress_cancelled(p)) continue;
+            const size_t t = s->texel[i];
+            const int tx = (int)(t % (size_t)W), ty = (int)(t / (size_t)W);
+            const int32_t own = ob->chart[t];
+            for (int o = 0; o < K; ++o) memset(maps + ((size_t)o * nc + i) * 3, 0, 3 * sizeof *maps);
+            prt__offset_reps(&ob->charts, W, H, s->offsets, K, tx, ty, rep, rep_chart);
+            rep_index_build(ob, rep, K, &ix);
+            for (int dy = -NEAR_FIELD; dy <= NEAR_FIELD; ++dy)
+                for (int dx = -NEAR_FIELD; dx <= NEAR_FIELD; ++dx) {
+                    const int sx = tx + dx, sy = ty + dy;
+                    if (sx < 0 || sx >= W || sy < 0 || sy >= H) continue;
+                    const size_t src = (size_t)sy * W + sx;
+                    if (ob->chart[src] != own) continue;
+                    float tr[3];
+                    prt__offset_tr(&ob->x[0], t, src, tr);
+                    if (!(tr[0] > 0 || tr[1] > 0 || tr[2] > 0)) continue;
+                    const int o = prt__offset_recell(&ob->charts, W, s->offsets, K, tx, ty, rep, rep_chart,
+                                                     label[(size_t)(dy + H - 1) * gw + dx + W - 1], sx, sy, own);
+                    for (int c = 0; c < 3; ++c) maps[((size_t)o * nc + i) * 3 + c] += tr[c] * ob->patches.area[src];
+                }
+            uint64_t rng = ((uint64_t)ob->d.seed << 32) ^ (i * 0x9E6C63D0676A9A99ull) ^ 0x5851F42D4C957F2Dull;
+            float org[3];
+            for (int c = 0; c < 3; ++c) org[c] = s->pos[i * 3 + c] + s->nrm[i * 3 + c] * s->ray_offset;
+            const float w = 1.0f / (strata * strata);
+            for (int r = 0; r < strata * strata; ++r) {
+                float d[3];
+                cosine_direction(s->nrm + i * 3, (r / strata + walk_uniform(&rng)) / strata, (r % strata + walk_uniform(&rng)) / strata, d);
+                prt__ray_hit h;
+                const int32_t at = landing(ob, org, d, &h);
+                if (at < 0) continue;
+                const uint32_t land = s->texel[at];
+                const int lx = (int)(land % (uint32_t)W), ly = (int)(land / (uint32_t)W);
+                if (ob->chart[land] == own && abs(lx - tx) <= NEAR_FIELD && abs(ly - ty) <= NEAR_FIELD) continue;   /* summed exactly */
+                const int o = nearest_rep(ob, &ix, land);
+                if (o < 0) continue;
+                for (int c = 0; c < 3; ++c) maps[((size_t)o * nc + i) * 3 + c] += s->albedo[i * 3 + c] * w;
+            }
+            prt__progress_add(p, 1);
+        }
+        free(rep);
+        free(ix.pt);
+    }
+    return !short_of_memory;
+}
+
 static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
 {
     obake *ob = (obake *)base;
@@ -154,31 +309,37 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
     const size_t n = (size_t)W * H, nc = s->covered;
     float *tva = malloc(n * (size_t)K * sizeof *tva + 1);
     if (!tva) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the Voronoi areas of %d offsets over %d x %d texels", K, W, H);
-    prt_status st = prt__offset_tva(ctx, ob->patches.area, W, H, s->offsets, K, tva);
+    ob->charts = (prt__offset_charts){ob->chart, s->source, s->texel, ob->patches.pos};
+    prt_status st = prt__offset_tva(ctx, ob->patches.area, &ob->charts, W, H, s->offsets, K, tva);
     /* The cell of (0, 0) holds the texel itself and its nearest neighbours, where transfer
      * changes fastest (subsurface scattering falls off within a texel or two): there the map is
      * the exact sum over the cell, not the transfer at (0, 0) times the cell's area. */
     int ncell = 0, *cell = st ? NULL : centre_cell(s->offsets, K, W, H, &ncell);
     if (!st && !cell) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the transfer maps");
+    int32_t *label = NULL;
+    if (!st) st = prt__offset_labels(ctx, W, H, s->offsets, K, &label);
     if (!st && (s->offsets[0] != 0 || s->offsets[1] != 0)) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "the first offset must be (0, 0)");
     prt__progress_begin(p, p->stage, (uint64_t)nc * (uint64_t)((ob->d.kinds & 1) + ((ob->d.kinds >> 1) & 1)));
     for (int k = 0; k < 2 && !st; ++k) {
         if (!(ob->d.kinds & (1u << k))) continue;
         float *maps = malloc(nc * (size_t)K * 3 * sizeof *maps + 1);
         if (!maps) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %d transfer maps", K); break; }
+        if (k == 0 && !radiosity_maps(ob, label, maps, p)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the transfer maps");
 #pragma omp parallel for schedule(dynamic, 16) num_threads(prt__threads(ctx))
         for (size_t i = 0; i < nc; ++i) {
+            if (k == 0) continue;   /* radiosity_maps */
             if (prt__progress_cancelled(p)) continue;
             const size_t t = s->texel[i];
             const int tx = (int)(t % (size_t)W), ty = (int)(t / (size_t)W);
             for (int o = 0; o < K; ++o) {
                 float *m = maps + ((size_t)o * nc + i) * 3;
                 m[0] = m[1] = m[2] = 0;
-                if (o == 0) {
+                if (o == 0) {   /* its own chart's texels: the others' are counted with offsets on theirs (TVA) */
                     for (int j = 0; j < ncell; ++j) {
                         const int sx = tx + cell[j * 2], sy = ty + cell[j * 2 + 1];
                         if (sx < 0 || sx >= W || sy < 0 || sy >= H) continue;
                         const size_t src = (size_t)sy * W + sx;
+                        if (ob->chart[src] != ob->chart[t]) continue;
                         float tr[3];
                         prt__offset_tr(&ob->x[k], t, src, tr);
                         for (int c = 0; c < 3; ++c) m[c] += tr[c] * ob->patches.area[src];
@@ -219,6 +380,7 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
     }
     free(tva);
     free(cell);
+    free(label);
     return st;
 }
 
@@ -275,32 +437,13 @@ static prt_status env_step(prt__bake_job *base, prt_context *ctx, prt__progress 
 
 /* ---- multi-bounce radiosity maps ---- */
 
-static uint64_t walk_random(uint64_t *s)
-{
-    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-static double walk_uniform(uint64_t *s) { return (double)(walk_random(s) >> 11) * (1.0 / 9007199254740992.0); }
-
-static void cosine_direction(const float n[3], double u1, double u2, float d[3])
-{
-    float t1[3], t2[3], h[3] = {0, 0, 0};
-    h[fabsf(n[0]) < 0.6f ? 0 : fabsf(n[1]) < 0.6f ? 1 : 2] = 1;
-    prt__v3_cross(n, h, t1);
-    prt__v3_normalize(t1);
-    prt__v3_cross(n, t1, t2);
-    prt__cosine_dir(u1, u2, n, t1, t2, d);
-}
-
 /* Bounces past the first, added to the single-bounce radiosity maps (the paper's maps hold every
  * bounce: TR(t, t') is the radiosity solution with unit emission at t'). From each texel, paths
  * of cosine-distributed rays: where the k-th ray (k >= 2) lands, the path's weight - the albedos
- * met so far, the texel's own first - goes to the offset cell that holds the landing texel, as a
- * unit emitter there would send it back. Summed over a cell this is the integral eq. 8's TVA
- * approximates, so no cell's surface goes missing; the first bounce stays the exact one of
- * maps_step. Seeded per texel: the same maps for any thread count. */
+ * met so far, the texel's own first - goes to the offset cell that holds the landing point (the
+ * surface around its representative, nearest_rep), as a unit emitter there would send it back.
+ * Summed over a cell this is the integral of eq. 8, so no cell's surface goes missing; the first
+ * bounce is radiosity_maps'. Seeded per texel: the same maps for any thread count. */
 static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
 {
     obake *ob = (obake *)base;
@@ -308,22 +451,23 @@ static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progr
     const int W = s->width, H = s->height, K = s->count, B = s->map_bounces, N = ob->d.walks > 0 ? ob->d.walks : 256;
     const size_t nc = s->covered;
     const prt__mesh *m = &ob->t->mesh;
-    int32_t *label = NULL;
-    prt_status st = prt__offset_labels(ctx, W, H, s->offsets, K, &label);
-    if (st) return st;
-    const int gw = 2 * W - 1;
     prt__progress_begin(p, p->stage, nc);
     const int strata = (int)sqrt((double)N);
     int short_of_memory = 0;
+    ob->charts = (prt__offset_charts){ob->chart, s->source, s->texel, ob->patches.pos};
 #pragma omp parallel num_threads(prt__threads(ctx))
     {
         double *acc = malloc((size_t)K * 3 * sizeof *acc);
-        if (!acc) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
+        int32_t *rep = malloc((size_t)K * 2 * sizeof *rep), *rep_chart = rep ? rep + K : NULL;
+        rep_index ix = {malloc((size_t)K * sizeof *ix.pt), 0};
+        if (!acc || !rep || !ix.pt) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
 #pragma omp for schedule(dynamic, 16)
         for (size_t i = 0; i < nc; ++i) {
-            if (!acc || prt__progress_cancelled(p)) continue;
+            if (!acc || !rep || !ix.pt || prt__progress_cancelled(p)) continue;
             memset(acc, 0, (size_t)K * 3 * sizeof *acc);
             const int tx = (int)(s->texel[i] % (uint32_t)W), ty = (int)(s->texel[i] / (uint32_t)W);
+            prt__offset_reps(&ob->charts, W, H, s->offsets, K, tx, ty, rep, rep_chart);
+            rep_index_build(ob, rep, K, &ix);
             uint64_t rng = ((uint64_t)ob->d.seed << 32) ^ (i * 0xD1B54A32D192ED03ull);
             for (int w = 0; w < N; ++w) {
                 float o[3], n[3], d[3];
@@ -340,24 +484,18 @@ static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progr
                     if (k > 1) { u1 = walk_uniform(&rng); u2 = walk_uniform(&rng); }
                     cosine_direction(n, u1, u2, d);
                     prt__ray_hit h;
-                    if (!prt__raycaster_hit(&ob->rc, o, d, &h) || h.prim >= m->triangle_count) break;
-                    if (prt__v3_dot(h.ng, d) > 0) break;   /* a back face: surfaces reflect on their front only */
-                    const uint32_t *ix = m->indices + (size_t)h.prim * 3;
-                    const float b0 = 1 - h.u - h.v;
-                    const float hu = b0 * m->uv[ix[0] * 2] + h.u * m->uv[ix[1] * 2] + h.v * m->uv[ix[2] * 2];
-                    const float hv = b0 * m->uv[ix[0] * 2 + 1] + h.u * m->uv[ix[1] * 2 + 1] + h.v * m->uv[ix[2] * 2 + 1];
-                    const int hx = (int)fminf(fmaxf(floorf(hu * W), 0.0f), (float)(W - 1));   /* clamped before the cast: */
-                    const int hy = (int)fminf(fmaxf(floorf(hv * H), 0.0f), (float)(H - 1));   /* UVs may lie far out */
-                    const int32_t at = s->source[(size_t)hy * W + hx];
+                    const int32_t at = landing(ob, o, d, &h);
                     if (at < 0) break;
-                    if (k > 1) {
-                        const int32_t cell = label[(size_t)(hy - ty + H - 1) * gw + (hx - tx + W - 1)];
-                        for (int c = 0; c < 3; ++c) acc[cell * 3 + c] += weight[c];
+                    if (k > 1) {   /* the cell of the surface around the landing point (nearest_rep) */
+                        const int cell = nearest_rep(ob, &ix, s->texel[at]);
+                        for (int c = 0; c < 3 && cell >= 0; ++c) acc[cell * 3 + c] += weight[c];
                     }
                     double most = 0;
                     for (int c = 0; c < 3; ++c) { weight[c] *= s->albedo[(size_t)at * 3 + c]; most = fmax(most, weight[c]); }
                     if (!(most > 1e-4)) break;
                     /* On from the hit, off its surface along its (front-facing) shading normal. */
+                    const uint32_t *ix = m->indices + (size_t)h.prim * 3;
+                    const float b0 = 1 - h.u - h.v;
                     float len = 0;
                     for (int c = 0; c < 3; ++c) {
                         n[c] = b0 * m->normals[ix[0] * 3 + c] + h.u * m->normals[ix[1] * 3 + c] + h.v * m->normals[ix[2] * 3 + c];
@@ -374,8 +512,9 @@ static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progr
             prt__progress_add(p, 1);
         }
         free(acc);
+        free(rep);
+        free(ix.pt);
     }
-    free(label);
     if (short_of_memory) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory tracing the maps' bounces");
     if (prt__progress_cancelled(p)) return prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     return PRT_OK;
@@ -412,11 +551,27 @@ static void offset_release(prt__bake_job *base)
     prt__raycaster_release(&ob->rc);
     prt__texel_patches_free(&ob->patches);
     free(ob->texel_medium);
+    free(ob->chart);
     free(ob->dipoles);
     free(ob);
 }
 
 /* ---- set-up ---- */
+
+/* Each surface texel's UV chart (the island of the triangle that owns it), -1 off the surface. */
+static prt_status texel_charts(prt_context *ctx, const prt__mesh *m, const prt__texel_patches *p, int32_t **out)
+{
+    const size_t n = (size_t)p->width * p->height;
+    uint32_t *island = malloc(m->triangle_count * sizeof *island + 1), count = 0;
+    int32_t *chart = malloc(n * sizeof *chart);
+    if (!island || !chart) { free(island); free(chart); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    prt_status st = prt__uv_islands(ctx, m, island, &count);
+    for (size_t i = 0; !st && i < n; ++i) chart[i] = p->area[i] > 0 && p->owner[i] ? (int32_t)island[p->owner[i] - 1] : -1;
+    free(island);
+    if (st) { free(chart); return st; }
+    *out = chart;
+    return PRT_OK;
+}
 
 /* The mesh's own UVs when they are a unique layout inside [0, 1], else a generated atlas (which
  * copies the vertices on chart seams: before anything is sized by the vertex count). */
@@ -544,6 +699,7 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
         }
     }
     if (!st && !prt__offset_set_index(s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!st) st = texel_charts(ctx, &t->mesh, &ob->patches, &ob->chart);
     if (!st) {
         ob->x[0] = (prt__offset_transfer){.kind = PRT__OFFSET_RADIOSITY, .patches = &ob->patches, .rc = &ob->rc, .ray_offset = s->ray_offset};
         ob->x[1] = (prt__offset_transfer){.kind = PRT__OFFSET_DIPOLE, .patches = &ob->patches, .medium = ob->texel_medium,

@@ -431,7 +431,44 @@ prt_status prt__offset_labels(const prt_context *ctx, int width, int height, con
     return PRT_OK;
 }
 
-prt_status prt__offset_tva(const prt_context *ctx, const float *area, int width, int height, const int *offsets, int count, float *out)
+void prt__offset_reps(const prt__offset_charts *c, int width, int height, const int *offsets, int count, int tx, int ty, int32_t *rep,
+                      int32_t *rep_chart)
+{
+    for (int k = 0; k < count; ++k) {
+        const int x = tx + offsets[k * 2], y = ty + offsets[k * 2 + 1];
+        const int32_t src = x < 0 || x >= width || y < 0 || y >= height ? -1 : c->source[(size_t)y * width + x];
+        rep[k] = src < 0 ? -1 : (int32_t)c->texel[src];
+        rep_chart[k] = src < 0 ? -1 : c->chart[rep[k]];
+    }
+}
+
+int prt__offset_recell(const prt__offset_charts *c, int width, const int *offsets, int count, int tx, int ty, const int32_t *rep,
+                       const int32_t *rep_chart, int k, int sx, int sy, int chart)
+{
+    if (rep_chart[k] == chart) return k;
+    int best = -1;
+    double nearest = INFINITY;
+    for (int o = 0; o < count; ++o) {   /* on its own chart, nearest in the map (ties to the lower index) */
+        if (rep_chart[o] != chart) continue;
+        const double dx = tx + offsets[o * 2] - sx, dy = ty + offsets[o * 2 + 1] - sy, d2 = dx * dx + dy * dy;
+        if (d2 < nearest) { nearest = d2; best = o; }
+    }
+    if (best >= 0) return best;
+    const float *q = c->pos + ((size_t)sy * width + sx) * 3;
+    for (int o = 0; o < count; ++o) {   /* no offset lands on its chart: the nearest in space */
+        if (rep[o] < 0) continue;
+        const float *r = c->pos + (size_t)rep[o] * 3;
+        const double dx = r[0] - q[0], dy = r[1] - q[1], dz = r[2] - q[2], d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 < nearest) { nearest = d2; best = o; }
+    }
+    return best >= 0 ? best : k;
+}
+
+/* A row's texels of one chart (-1: off the surface), left to right. */
+typedef struct segment { int x0, x1, chart; } segment;
+
+prt_status prt__offset_tva(const prt_context *ctx, const float *area, const prt__offset_charts *charts, int width, int height, const int *offsets,
+                           int count, float *out)
 {
     if (width < 1 || height < 1 || width > 16384 || height > 16384 || count < 1 || !area || !offsets || !out)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "TVA needs a map, offsets and an output");
@@ -464,23 +501,56 @@ prt_status prt__offset_tva(const prt_context *ctx, const float *area, int width,
         p[0] = 0;
         for (int x = 0; x < width; ++x) p[x + 1] = p[x] + area[(size_t)y * width + x];
     }
-    memset(out, 0, (size_t)width * height * count * sizeof *out);
-#pragma omp parallel for schedule(dynamic, 16) num_threads(prt__threads(ctx))
-    for (size_t t = 0; t < (size_t)width * height; ++t) {
-        if (!(area[t] > 0)) continue;   /* only texels on the charts gather */
-        const int tx = (int)(t % (size_t)width), ty = (int)(t / (size_t)width);
-        float *o = out + t * count;
-        for (size_t r = 0; r < nruns; ++r) {
-            const run *u = &runs[r];
-            const int y = ty + u->dy;
-            if (y < 0 || y >= height) continue;
-            const int x0 = tx + u->dx0 < 0 ? 0 : tx + u->dx0, x1 = tx + u->dx1 >= width ? width - 1 : tx + u->dx1;
-            if (x0 > x1) continue;
-            const double *p = prefix + (size_t)y * (width + 1);
-            o[u->k] += (float)(p[x1 + 1] - p[x0]);
-        }
+    /* Each row cut where the chart changes; seg_at: the segment holding each texel. */
+    const size_t n = (size_t)width * height;
+    segment *segs = charts ? malloc(n * sizeof *segs) : NULL;
+    int32_t *seg_at = charts ? malloc(n * sizeof *seg_at) : NULL, *row_end = charts ? malloc((size_t)height * sizeof *row_end) : NULL;
+    if (charts && (!segs || !seg_at || !row_end)) {
+        free(segs); free(seg_at); free(row_end); free(prefix); free(runs);
+        return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for TVA");
     }
+    for (int y = 0, g = -1; charts && y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            const int chart = area[(size_t)y * width + x] > 0 ? charts->chart[(size_t)y * width + x] : -1;
+            if (x == 0 || chart != segs[g].chart) segs[++g] = (segment){x, x, chart};
+            segs[g].x1 = x;
+            seg_at[(size_t)y * width + x] = g;
+        }
+        row_end[y] = g + 1;
+    }
+    memset(out, 0, n * count * sizeof *out);
+    bool short_of_memory = false;
+#pragma omp parallel num_threads(prt__threads(ctx))
+    {
+        int32_t *rep = charts ? malloc((size_t)count * 2 * sizeof *rep) : NULL, *rep_chart = rep ? rep + count : NULL;
+        if (charts && !rep) __atomic_store_n(&short_of_memory, true, __ATOMIC_RELAXED);
+#pragma omp for schedule(dynamic, 16)
+        for (size_t t = 0; t < n; ++t) {
+            if (!(area[t] > 0) || (charts && !rep)) continue;   /* only texels on the charts gather */
+            const int tx = (int)(t % (size_t)width), ty = (int)(t / (size_t)width);
+            float *o = out + t * count;
+            if (charts) prt__offset_reps(charts, width, height, offsets, count, tx, ty, rep, rep_chart);
+            for (size_t r = 0; r < nruns; ++r) {
+                const run *u = &runs[r];
+                const int y = ty + u->dy;
+                if (y < 0 || y >= height) continue;
+                const int x0 = tx + u->dx0 < 0 ? 0 : tx + u->dx0, x1 = tx + u->dx1 >= width ? width - 1 : tx + u->dx1;
+                if (x0 > x1) continue;
+                const double *p = prefix + (size_t)y * (width + 1);
+                if (!charts) { o[u->k] += (float)(p[x1 + 1] - p[x0]); continue; }
+                for (int32_t g = seg_at[(size_t)y * width + x0]; g < row_end[y] && segs[g].x0 <= x1; ++g) {
+                    if (segs[g].chart < 0) continue;
+                    const int a = segs[g].x0 > x0 ? segs[g].x0 : x0, b = segs[g].x1 < x1 ? segs[g].x1 : x1;
+                    const int k = prt__offset_recell(charts, width, offsets, count, tx, ty, rep, rep_chart, u->k, (a + b) / 2, y, segs[g].chart);
+                    o[k] += (float)(p[b + 1] - p[a]);
+                }
+            }
+        }
+        free(rep);
+    }
+    free(segs); free(seg_at); free(row_end);
     free(prefix);
     free(runs);
+    if (short_of_memory) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for TVA");
     return PRT_OK;
 }

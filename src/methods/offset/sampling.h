@@ -58,10 +58,34 @@ prt_status prt__choose_offsets(const prt_context *ctx, const prt__offset_desc *d
  * out[(dy + height - 1) * (2 width - 1) + dx + width - 1] (malloc'd). */
 prt_status prt__offset_labels(const prt_context *ctx, int width, int height, const int *offsets, int count, int32_t **out);
 
+/* The charts of a light map, which split offset cells: a cell around t + offset k stands for its
+ * surface by the light of one texel, its representative (the texel itself on the surface, else its
+ * gutter's source). Where the cell also covers other charts - other surfaces, far away in space,
+ * lit differently - their texels are counted with the offset whose representative lies on their
+ * own chart and is nearest to them there (the nearest in space when no offset's does), so that
+ * every texel's transfer goes with light from its own surface (no blotches across seams). */
+typedef struct prt__offset_charts {
+    const int32_t *chart;    /* [width * height] each surface texel's chart, -1 off the surface */
+    const int32_t *source;   /* [width * height] covered index of the texel whose light each reads, -1 none */
+    const uint32_t *texel;   /* [covered] the texel of each covered index */
+    const float *pos;        /* [width * height][3] each surface texel's point */
+} prt__offset_charts;
+
+/* For receiver (tx, ty): each offset's representative texel (-1 none: off the map or no surface
+ * near) and its chart (-1 none). */
+void prt__offset_reps(const prt__offset_charts *c, int width, int height, const int *offsets, int count, int tx, int ty, int32_t *rep,
+                      int32_t *rep_chart);
+/* The offset that counts surface texel (sx, sy) of chart `chart` for receiver (tx, ty), whose
+ * nearest offset is k. */
+int prt__offset_recell(const prt__offset_charts *c, int width, const int *offsets, int count, int tx, int ty, const int32_t *rep,
+                       const int32_t *rep_chart, int k, int sx, int sy, int chart);
+
 /* TVA of eq. 8: for texel t and offset k, the sum of texel areas A(t + v) over the integer offsets
  * v whose nearest chosen offset is k (v within |vx| < width, |vy| < height; ties to the lower
- * index). area: width * height texel areas (0 outside the charts). out: width * height * count,
- * texel-major. With every integer offset chosen, TVA(t, k) = A(t + offset k). */
-prt_status prt__offset_tva(const prt_context *ctx, const float *area, int width, int height, const int *offsets, int count, float *out);
+ * index), split by chart when charts is not NULL (prt__offset_recell). area: width * height texel
+ * areas (0 outside the charts). out: width * height * count, texel-major. With every integer offset
+ * chosen, TVA(t, k) = A(t + offset k). */
+prt_status prt__offset_tva(const prt_context *ctx, const float *area, const prt__offset_charts *charts, int width, int height, const int *offsets,
+                           int count, float *out);
 
 #endif
