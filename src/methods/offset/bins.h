@@ -29,8 +29,9 @@ typedef struct prt__map_box {
     int x0, y0, w, h;
 } prt__map_box;
 
-/* What a piece costs beyond its texels, in texels: its quad, the ragged ends of its power-of-two
- * slices, its file's header in an export (an OpenEXR header is about 350 bytes). */
+/* What a piece costs beyond its texels, in texels: in an export its file's header (about 380
+ * bytes of OpenEXR, as much as 64 texels of RGB halves), on the GPU its quads and the ragged ends
+ * of its power-of-two slices. */
 #define PRT__SLICE_OVERHEAD 64
 
 /* Axial slicing (the paper's section 5.1: maps cropped "to minimal bounding boxes, including
