@@ -74,8 +74,8 @@ static const prt_option_desc options[] = {
 /* prt export's options for offset files (export.c). */
 static const prt_option_desc export_options[] = {
     {"maps", "DIR", PRT_OPTION_TEXT, 0, 0, NULL,
-     "each transfer map as an OpenEXR file cropped to its non-zero box, the surface and medium masks, and DIR/index.json naming "
-     "kind, offset and box (with or without -o); replaces what an earlier export left in DIR"},
+     "each transfer map as OpenEXR files of the boxes its axial slicing crops it to, the surface and medium masks, and "
+     "DIR/index.json naming each map's kind, offset and pieces (with or without -o); replaces what an earlier export left in DIR"},
 };
 static const prt_control_desc controls[] = {
     {"bounces", "inter-reflection passes over the light map (radiosity; 0 = first-order and subsurface only)", '[', ']', 0},
