@@ -80,9 +80,9 @@ static prt_status slice_maps(prt_context *ctx, const prt__offset_set *s, const f
         const double atlas_mib = (double)nbins * bin_size * bin_size * 3 * sizeof(float) / 1048576.0;   /* RGB32F layers */
         const double maps_mib = (double)K * s->covered * 3 * sizeof(uint16_t) / 1048576.0;
         prt__log(ctx, PRT_LOG_INFO,
-                 "GPU atlases: %d maps cut into %d boxes (%.0f%% of their texels hold data, %.0f%% of one box per map) in %d atlases of %d x %d "
-                 "texels, %.1f MiB (the maps as halves: %.1f MiB, %.2fx)",
-                 K, c.count, c.area ? 100.0 * (double)c.data / (double)c.area : 0.0, c.whole ? 100.0 * (double)c.data / (double)c.whole : 0.0, nbins,
+                 "GPU atlases: %d maps cut into %d boxes (%.0f%% of their texels hold data, %.0f%% of one box per map), %d slices in %d atlases of "
+                 "%d x %d texels, %.1f MiB (the maps as halves: %.1f MiB, %.2fx)",
+                 K, c.count, c.area ? 100.0 * (double)c.data / (double)c.area : 0.0, c.whole ? 100.0 * (double)c.data / (double)c.whole : 0.0, npieces, nbins,
                  bin_size, bin_size, atlas_mib, maps_mib, maps_mib > 0 ? atlas_mib / maps_mib : 0.0);
         *set = (prt_render_map_set){K, maps, s->offsets, npieces, out, bin_size, nbins};
         *slices = out;
