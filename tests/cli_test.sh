@@ -90,6 +90,7 @@ grep -a -q '"_ALBEDO"' "$T/shs.glb" && ok || bad "a one-channel export lacks _AL
 expect 0 "bake --method offset" -- "$PRT" bake -q "$T/demo.obj" --method offset --texels 32 --offsets 40 --iterations 60 -o "$T/offset.prt"
 expect 0 "info of an offset bake" -- "$PRT" info "$T/offset.prt"
 grep -q "light map:   32 x 32 texels" "$T/out" && ok || bad "info does not describe the light map"
+grep -q "crops:.*of their texels hold data (.*in one box per map)" "$T/out" && ok || bad "info does not state how tightly the maps are cropped"
 expect 0 "relight offset" -- "$PRT" relight -q "$T/offset.prt" --env none --light point:0.3,1.2,0.4:2 -o "$T/offset.json"
 grep -q '"indirect"' "$T/offset.json" && ok || bad "an offset relight lacks its indirect light"
 expect 0 "render offset" -- $NOLEAK "$PRT" render -q "$T/offset.prt" --env none --light point:0.3,1.2,0.4:2 -o "$T/offset.png" --width 64 --height 48
@@ -114,6 +115,7 @@ expect 2 "--accumulate nonsense" -- "$PRT" render "$T/offset.prt" --accumulate f
 mkdir -p "$T/maps" && : >"$T/maps/radiosity_0999.exr" && : >"$T/maps/mine.txt"
 expect 0 "export offset maps" -- "$PRT" export -q "$T/offset.prt" --maps "$T/maps"
 grep -q '"radiosity"' "$T/maps/index.json" && [ "$(ls "$T/maps" | grep -c '\.exr$')" -gt 10 ] && ok || bad "export --maps wrote no index or too few maps"
+grep -q '"pieces"' "$T/maps/index.json" && grep -q '"version":[[:space:]]*2' "$T/maps/index.json" && [ "$(ls "$T/maps" | grep -c '^radiosity_[0-9]\{4\}_[0-9]\{3\}\.exr$')" -gt 10 ] && ok || bad "export --maps lists no pieces per map"
 [ ! -e "$T/maps/radiosity_0999.exr" ] && [ -e "$T/maps/mine.txt" ] && [ -s "$T/maps/surface.exr" ] && ok || bad "export --maps left an earlier map, removed another file or wrote no surface.exr"
 expect 2 "export --maps of an SH file" -- "$PRT" export "$T/demo.prt" --maps "$T/nomaps"
 says "method offset"

@@ -24,4 +24,25 @@ prt_status prt__bin_maps(const prt_context *ctx, const int *w, const int *h, int
  * false when every texel is zero. */
 bool prt__map_crop(const float *map, int width, int height, int *x0, int *y0, int *w, int *h);
 
+/* A box of a map: columns x0 .. x0 + w - 1, rows y0 .. y0 + h - 1. */
+typedef struct prt__map_box {
+    int x0, y0, w, h;
+} prt__map_box;
+
+/* What a piece costs beyond its texels, in texels: in an export its file's header (about 380
+ * bytes of OpenEXR, as much as 64 texels of RGB halves), on the GPU its quads and the ragged ends
+ * of its power-of-two slices. */
+#define PRT__SLICE_OVERHEAD 64
+
+/* Axial slicing (the paper's section 5.1: maps cropped "to minimal bounding boxes, including
+ * axial slicing"): disjoint minimal boxes that hold every non-zero texel of a map (3 floats
+ * each) between them, appended to *boxes (grown with realloc; *count boxes of *cap). The map's
+ * box is cut in two along its widest band of empty rows or columns (the one that leaves out the
+ * most texels), each side cropped to its own box and cut again, down to boxes without an empty
+ * band; then, bottom up, a cut is kept only where its pieces cost less than the box they came
+ * from, a piece costing its area plus `overhead` texels (ties keep the box whole). An empty map
+ * gives no box, a map without an empty band its one box. */
+prt_status prt__map_slice(const prt_context *ctx, const float *map, int width, int height, int overhead, prt__map_box **boxes, int *count,
+                          int *cap);
+
 #endif

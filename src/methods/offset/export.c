@@ -1,6 +1,6 @@
-/* prt export of offset files (--maps DIR): each transfer map as an OpenEXR file cropped to its
- * non-zero box, the surface and medium masks, and an index naming each file's kind, offset and
- * box - what the paper's pipeline hands its binning and rendering programs. */
+/* prt export of offset files (--maps DIR): each transfer map as OpenEXR files of the boxes of its
+ * axial slicing (bins.c), the surface and medium masks, and an index naming each map's kind,
+ * offset and pieces - what the paper's pipeline hands its binning and rendering programs. */
 #include "methods/offset/bins.h"
 #include "methods/offset/offset.h"
 
@@ -18,11 +18,14 @@ static prt_status clear_maps(prt_context *ctx, const char *dir)
     prt_status st = PRT_OK;
     for (struct dirent *e; !st && (e = readdir(d));) {
         const char *n = e->d_name;
-        /* kind_NNNN.exr, four digits or more (%04d) */
+        /* kind_NNNN_PPP.exr (a map's pieces), or kind_NNNN.exr (one box per map, before axial
+         * slicing): four digits or more (%04d), then three or more (%03d) */
         const char *digits = !strncmp(n, "radiosity_", 10) ? n + 10 : !strncmp(n, "subsurface_", 11) ? n + 11 : NULL;
-        size_t nd = 0;
+        size_t nd = 0, np = 0;
         while (digits && digits[nd] >= '0' && digits[nd] <= '9') nd++;
-        const bool map = digits && nd >= 4 && !strcmp(digits + nd, ".exr");
+        if (digits && nd >= 4 && digits[nd] == '_')
+            while (digits[nd + 1 + np] >= '0' && digits[nd + 1 + np] <= '9') np++;
+        const bool map = digits && nd >= 4 && !strcmp(digits + nd + (np >= 3 ? 1 + np : 0), ".exr");
         if (!map && strcmp(n, "medium.exr") && strcmp(n, "surface.exr") && strcmp(n, "index.json")) continue;
         char path[4200];
         snprintf(path, sizeof path, "%s/%s", dir, n);
@@ -69,7 +72,10 @@ static prt_status write_maps(prt_context *ctx, const prt_transfer *t, const char
     if (!st) {
         cJSON_AddNumberToObject(index, "width", W);
         cJSON_AddNumberToObject(index, "height", H);
-        cJSON_AddStringToObject(index, "layout", "each file holds the box crop = [x0, y0, w, h] of its map (texel rows from v = 0 at the image's bottom). "
+        cJSON_AddNumberToObject(index, "version", 2);
+        cJSON_AddStringToObject(index, "layout", "each map lists its pieces: disjoint boxes crop = [x0, y0, w, h] of its texels (texel rows from v = 0 at the image's bottom), "
+                                                 "each in its file, which between them hold every non-zero texel of the map; the map is zero elsewhere, and no "
+                                                 "pieces: zero everywhere (version 1 had one box per map: its file, or null, and crop). "
                                                  "A pass over a kind's maps: out(t) = sum over its maps of in(s(t + offset)) * map(t), where s(u) = u on the surface (surface.exr "
                                                  "above 0) and otherwise the surface texel that fills u's gutter: rings grow outwards from the "
                                                  "charts, each texel taking the source of its first neighbour (left, right, down, up) in the ring before. subsurface: in = "
@@ -80,38 +86,46 @@ static prt_status write_maps(prt_context *ctx, const prt_transfer *t, const char
     }
     static const char *const names[2] = {"radiosity", "subsurface"};
     size_t files = 0;
+    int maps = 0, cap = 0;
+    prt__map_box *boxes = NULL;
     for (int kind = 0; kind < 2 && !st; ++kind) {
         if (!info.has[kind]) continue;
         cJSON *list = cJSON_AddArrayToObject(kinds, names[kind]);
         for (int k = 0; k < info.count && !st; ++k) {
-            int off[2];
+            int off[2], count = 0;
             if ((st = prt_transfer_offset_map(t, (prt_offset_kind)kind, k, off, map))) break;
-            int x0, y0, w, h;
-            const bool carries = prt__map_crop(map, W, H, &x0, &y0, &w, &h);
+            if ((st = prt__map_slice(ctx, map, W, H, PRT__SLICE_OVERHEAD, &boxes, &count, &cap))) break;
             cJSON *e = cJSON_CreateObject();
             cJSON *o = cJSON_AddArrayToObject(e, "offset");
             cJSON_AddItemToArray(o, cJSON_CreateNumber(off[0]));
             cJSON_AddItemToArray(o, cJSON_CreateNumber(off[1]));
             cJSON_AddItemToArray(list, e);
-            if (!carries) { cJSON_AddNullToObject(e, "file"); continue; }
-            prt_image img = {w, h, malloc((size_t)w * h * 3 * sizeof(float))};
-            if (!img.rgb) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory writing the maps"); break; }
-            for (int y = 0; y < h; ++y)   /* texel row 0 is v near 0: the image's bottom */
-                memcpy(img.rgb + (size_t)(h - 1 - y) * w * 3, map + ((size_t)(y0 + y) * W + x0) * 3, (size_t)w * 3 * sizeof(float));
-            char name[64], path[4200];
-            snprintf(name, sizeof name, "%s_%04d.exr", names[kind], k);
-            snprintf(path, sizeof path, "%s/%s", dir, name);
-            st = prt_image_save(path, &img, NULL);
-            prt_image_free(&img);
-            if (st) { st = prt__fail(ctx, st, "cannot write '%s': %s", path, prt_last_error()); break; }
-            if ((st = keep(ctx, out, path))) break;
-            files++;
-            cJSON_AddStringToObject(e, "file", name);
-            cJSON *crop = cJSON_AddArrayToObject(e, "crop");
-            const int box[4] = {x0, y0, w, h};
-            for (int i = 0; i < 4; ++i) cJSON_AddItemToArray(crop, cJSON_CreateNumber(box[i]));
+            cJSON *pieces = cJSON_AddArrayToObject(e, "pieces");
+            maps += count > 0;
+            for (int b = 0; b < count && !st; ++b) {
+                const prt__map_box *x = &boxes[b];
+                prt_image img = {x->w, x->h, malloc((size_t)x->w * x->h * 3 * sizeof(float))};
+                if (!img.rgb) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory writing the maps"); break; }
+                for (int y = 0; y < x->h; ++y)   /* texel row 0 is v near 0: the image's bottom */
+                    memcpy(img.rgb + (size_t)(x->h - 1 - y) * x->w * 3, map + ((size_t)(x->y0 + y) * W + x->x0) * 3, (size_t)x->w * 3 * sizeof(float));
+                char name[64], path[4200];
+                snprintf(name, sizeof name, "%s_%04d_%03d.exr", names[kind], k, b);
+                snprintf(path, sizeof path, "%s/%s", dir, name);
+                st = prt_image_save(path, &img, NULL);
+                prt_image_free(&img);
+                if (st) { st = prt__fail(ctx, st, "cannot write '%s': %s", path, prt_last_error()); break; }
+                if ((st = keep(ctx, out, path))) break;
+                files++;
+                cJSON *p = cJSON_CreateObject();
+                cJSON_AddItemToArray(pieces, p);
+                cJSON_AddStringToObject(p, "file", name);
+                cJSON *crop = cJSON_AddArrayToObject(p, "crop");
+                const int box[4] = {x->x0, x->y0, x->w, x->h};
+                for (int i = 0; i < 4; ++i) cJSON_AddItemToArray(crop, cJSON_CreateNumber(box[i]));
+            }
         }
     }
+    free(boxes);
     if (!st) {   /* which texels are on the surface */
         int32_t *src = malloc((size_t)W * H * sizeof *src);
         float *surface = malloc((size_t)W * H * sizeof *surface);
@@ -138,7 +152,7 @@ static prt_status write_maps(prt_context *ctx, const prt_transfer *t, const char
         st = prt__atomic_write_text(path, text);
         if (st) st = prt__fail(ctx, st, "%s", prt_last_error());
         else st = keep(ctx, out, path);
-        if (!st) prt__export_report(out, "wrote %zu maps and %s", files, path);
+        if (!st) prt__export_report(out, "wrote %d maps in %zu pieces and %s", maps, files, path);
     }
     cJSON_free(text);
     cJSON_Delete(index);

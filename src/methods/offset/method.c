@@ -74,8 +74,8 @@ static const prt_option_desc options[] = {
 /* prt export's options for offset files (export.c). */
 static const prt_option_desc export_options[] = {
     {"maps", "DIR", PRT_OPTION_TEXT, 0, 0, NULL,
-     "each transfer map as an OpenEXR file cropped to its non-zero box, the surface and medium masks, and DIR/index.json naming "
-     "kind, offset and box (with or without -o); replaces what an earlier export left in DIR"},
+     "each transfer map as OpenEXR files of the boxes its axial slicing crops it to, the surface and medium masks, and "
+     "DIR/index.json naming each map's kind, offset and pieces (with or without -o); replaces what an earlier export left in DIR"},
 };
 static const prt_control_desc controls[] = {
     {"bounces", "inter-reflection passes over the light map (radiosity; 0 = first-order and subsurface only)", '[', ']', 0},
@@ -165,8 +165,23 @@ static size_t offset_bytes(const prt_transfer *t)
     return (s->radiosity ? maps : 0) + (s->subsurface ? maps : 0) + (size_t)s->covered * (4 + PRT__OFFSET_TEXEL_FLOATS * 4);
 }
 
+/* How tightly each kind's maps are cropped (gpu.c): the boxes of their axial slicing, and the
+ * share of the boxes' texels that hold data, sliced and as one box per map; false when out of
+ * memory. */
+static bool describe_crops(const prt__offset_set *s, prt__offset_crops c[2])
+{
+    const float *maps[2] = {s->radiosity, s->subsurface};
+    memset(c, 0, 2 * sizeof *c);
+    for (int k = 0; k < 2; ++k)
+        if (maps[k] && prt__offset_crop_maps(NULL, s, maps[k], &c[k])) { prt__offset_crops_free(&c[0]); return false; }
+    return true;
+}
+
+static double share(int64_t part, int64_t whole) { return whole ? 100.0 * (double)part / (double)whole : 0.0; }
+
 static void offset_describe(const prt_transfer *t, prt__describe *d)
 {
+    static const char *const crop_kinds[2] = {"radiosity", "subsurface"};
     const prt__offset_set *s = t->state;
     const char *kinds = s->kinds == 3 ? "radiosity and subsurface" : s->kinds == 1 ? "radiosity" : "subsurface";
     cJSON *j = prt__describe_json(d);
@@ -189,12 +204,36 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
             cJSON_AddItemToArray(media, m);
         }
         if (s->medium_count) cJSON_AddNumberToObject(j, "mm_per_unit", s->mm_per_unit);
+        prt__offset_crops c[2];
+        const bool cropped = describe_crops(s, c);
+        cJSON *crops = cropped ? cJSON_AddObjectToObject(j, "crops") : NULL;
+        for (int k = 0; crops && k < 2; ++k) {
+            if (!c[k].count && !c[k].data) continue;
+            cJSON *o = cJSON_AddObjectToObject(crops, crop_kinds[k]);
+            cJSON_AddNumberToObject(o, "boxes", c[k].count);
+            cJSON_AddNumberToObject(o, "data_texels", (double)c[k].data);
+            cJSON_AddNumberToObject(o, "box_texels", (double)c[k].area);
+            cJSON_AddNumberToObject(o, "unsliced_box_texels", (double)c[k].whole);
+            cJSON_AddNumberToObject(o, "data_share", c[k].area ? (double)c[k].data / (double)c[k].area : 0.0);
+            cJSON_AddNumberToObject(o, "unsliced_data_share", c[k].whole ? (double)c[k].data / (double)c[k].whole : 0.0);
+        }
+        if (cropped) { prt__offset_crops_free(&c[0]); prt__offset_crops_free(&c[1]); }
         return;
     }
     prt__describe_line(d, "light map:", "%d x %d texels, %u on the surface (%.0f%%)", s->width, s->height, s->covered,
                        100.0 * s->covered / ((double)s->width * s->height));
     prt__describe_line(d, "transfer:", "%s: %d offset maps (drawn by %s transference, %d refinements), %.2f MiB", kinds, s->count,
                        s->importance ? "mean" : "max", s->iterations, offset_bytes(t) / 1048576.0);
+    prt__offset_crops c[2];
+    if (describe_crops(s, c)) {
+        for (int k = 0, line = 0; k < 2; ++k) {
+            if (!(s->kinds & (1u << k))) continue;
+            prt__describe_line(d, line++ ? "" : "crops:", "%s maps in %d boxes: %.1f%% of their texels hold data (%.1f%% in one box per map)",
+                               crop_kinds[k], c[k].count, share(c[k].data, c[k].area), share(c[k].data, c[k].whole));
+        }
+        prt__offset_crops_free(&c[0]);
+        prt__offset_crops_free(&c[1]);
+    }
     if (s->kinds & PRT__OFFSET_RADIOSITY_BIT)
         prt__describe_line(d, "bounces:", s->map_bounces >= PRT__OFFSET_MAX_MAP_BOUNCES ? "the radiosity maps hold every bounce (paths of up to %d; one pass at run time)"
                                           : s->map_bounces > 1 ? "the radiosity maps hold %d bounces (one pass at run time)"

@@ -8,6 +8,7 @@
 #include "transfer/method.h"
 #include "prt/offset.h"
 #include "light/vertex_lights.h"
+#include "methods/offset/bins.h"
 
 #include <pthread.h>
 
@@ -96,6 +97,17 @@ prt_status prt__offset_shade(prt_context *ctx, const prt_transfer *t, const prt_
 /* The GPU passes for t (gpu.c): the maps cropped to their non-zero boxes and sliced into atlases
  * (bins.c, section 5.2), described for the renderer; built once, then borrowed from t. */
 prt_status prt__offset_gpu_passes(prt_context *ctx, const prt_transfer *t, const prt_render_passes **out);
+
+/* A kind's maps ([count][covered][3]) cropped to the boxes of their axial slicing (bins.c), for
+ * the GPU's atlases and prt info (gpu.c): count boxes, box[b] of map map[b], in map order. */
+typedef struct prt__offset_crops {
+    prt__map_box *box;
+    int *map;
+    int count;
+    int64_t data, area, whole;   /* non-zero texels; texels of the boxes; of one box per map */
+} prt__offset_crops;
+prt_status prt__offset_crop_maps(prt_context *ctx, const prt__offset_set *s, const float *maps, prt__offset_crops *out);
+void prt__offset_crops_free(prt__offset_crops *c);
 
 /* prt export (export.c): --maps DIR. */
 prt_status prt__offset_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);

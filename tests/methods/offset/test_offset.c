@@ -12,6 +12,10 @@
 #include "methods/offset/offset.h"
 #include "transfer/transfer.h"
 
+#include <cjson/cJSON.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 static uint64_t rng_state = 12345;
 static double rnd(void)
 {
@@ -542,6 +546,120 @@ static void test_binning(void **state)
     prt_context_release(ctx);
 }
 
+/* A rectangle of non-zero texels (green) in a W-wide map. */
+static void fill_box(float *m, int W, int x0, int y0, int w, int h)
+{
+    for (int y = y0; y < y0 + h; ++y)
+        for (int x = x0; x < x0 + w; ++x) m[((size_t)y * W + x) * 3 + 1] = 1;
+}
+
+static int slice_map(prt_context *ctx, const float *m, int W, int H, prt__map_box **b)
+{
+    int count = 0, cap = 0;
+    *b = NULL;
+    assert_int_equal(prt__map_slice(ctx, m, W, H, PRT__SLICE_OVERHEAD, b, &count, &cap), PRT_OK);
+    assert_true(count <= cap);
+    return count;
+}
+
+/* Every non-zero texel of m in exactly one box, no texel in two, each box minimal (a non-zero
+ * texel on each of its edges) and inside the map; the pieces cost no more than the map's one box
+ * (texels plus PRT__SLICE_OVERHEAD each). */
+static void check_slices(const float *m, int W, int H, const prt__map_box *b, int n)
+{
+    uint8_t *in = calloc((size_t)W * H, 1);
+    int64_t cost = 0;
+    for (int k = 0; k < n; ++k) {
+        assert_true(b[k].x0 >= 0 && b[k].y0 >= 0 && b[k].w >= 1 && b[k].h >= 1 && b[k].x0 + b[k].w <= W && b[k].y0 + b[k].h <= H);
+        int edges[4] = {0};
+        for (int y = b[k].y0; y < b[k].y0 + b[k].h; ++y)
+            for (int x = b[k].x0; x < b[k].x0 + b[k].w; ++x) {
+                assert_int_equal(in[(size_t)y * W + x], 0);
+                in[(size_t)y * W + x] = 1;
+                if (m[((size_t)y * W + x) * 3 + 1] == 0) continue;
+                edges[0] |= y == b[k].y0;
+                edges[1] |= y == b[k].y0 + b[k].h - 1;
+                edges[2] |= x == b[k].x0;
+                edges[3] |= x == b[k].x0 + b[k].w - 1;
+            }
+        assert_true(edges[0] && edges[1] && edges[2] && edges[3]);
+        cost += (int64_t)b[k].w * b[k].h + PRT__SLICE_OVERHEAD;
+    }
+    for (int i = 0; i < W * H; ++i)
+        if (m[i * 3 + 1] != 0) assert_int_equal(in[i], 1);
+    int x0, y0, w, h;
+    if (prt__map_crop(m, W, H, &x0, &y0, &w, &h)) assert_true(cost <= (int64_t)w * h + PRT__SLICE_OVERHEAD);
+    else assert_int_equal(n, 0);
+    free(in);
+}
+
+static int box_order(const void *a, const void *b) { return ((const prt__map_box *)a)->x0 - ((const prt__map_box *)b)->x0; }
+
+/* Axial slicing (bins.c): separated blobs become boxes of exactly their texels, blobs whose gap
+ * saves less than a piece costs stay in one box, a map without an empty band is its one box, an
+ * empty map none; on random maps of charts and specks every non-zero texel lies in one minimal
+ * box. */
+static void test_slicing(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(1);
+    enum { W = 64, H = 48 };
+    float *m = calloc((size_t)W * H * 3, sizeof *m);
+    prt__map_box *b = NULL;
+    assert_int_equal(slice_map(ctx, m, W, H, &b), 0);   /* empty: no box */
+    free(b);
+    fill_box(m, W, 2, 3, 10, 10);
+    fill_box(m, W, 40, 30, 20, 16);
+    int n = slice_map(ctx, m, W, H, &b);
+    assert_int_equal(n, 2);
+    qsort(b, 2, sizeof *b, box_order);
+    assert_memory_equal(&b[0], (&(prt__map_box){2, 3, 10, 10}), sizeof *b);
+    assert_memory_equal(&b[1], (&(prt__map_box){40, 30, 20, 16}), sizeof *b);
+    check_slices(m, W, H, b, n);
+    free(b);
+    /* One empty column between two 10 x 10 blobs leaves out 10 texels, under a piece's 64. */
+    memset(m, 0, (size_t)W * H * 3 * sizeof *m);
+    fill_box(m, W, 2, 3, 10, 10);
+    fill_box(m, W, 13, 3, 10, 10);
+    assert_int_equal(slice_map(ctx, m, W, H, &b), 1);
+    assert_memory_equal(&b[0], (&(prt__map_box){2, 3, 21, 10}), sizeof *b);
+    free(b);
+    /* A cross has no empty band: one box, the whole map. */
+    memset(m, 0, (size_t)W * H * 3 * sizeof *m);
+    fill_box(m, W, 0, 20, W, 1);
+    fill_box(m, W, 5, 0, 1, H);
+    assert_int_equal(slice_map(ctx, m, W, H, &b), 1);
+    assert_memory_equal(&b[0], (&(prt__map_box){0, 0, W, H}), sizeof *b);
+    free(b);
+    /* Random charts (rectangles, some overlapping) and specks. */
+    size_t data = 0, area = 0, whole = 0, boxes = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+        memset(m, 0, (size_t)W * H * 3 * sizeof *m);
+        const int charts = (int)(rnd() * 8), specks = (int)(rnd() * 6);
+        for (int c = 0; c < charts; ++c) {
+            const int w = 1 + (int)(rnd() * 20), h = 1 + (int)(rnd() * 16);
+            fill_box(m, W, (int)(rnd() * (W - w + 1)), (int)(rnd() * (H - h + 1)), w, h);
+        }
+        for (int c = 0; c < specks; ++c) fill_box(m, W, (int)(rnd() * W), (int)(rnd() * H), 1, 1);
+        n = slice_map(ctx, m, W, H, &b);
+        check_slices(m, W, H, b, n);
+        int x0, y0, w, h;
+        if (prt__map_crop(m, W, H, &x0, &y0, &w, &h)) whole += (size_t)w * h;
+        for (int i = 0; i < W * H; ++i) data += m[i * 3 + 1] != 0;
+        for (int k = 0; k < n; ++k) area += (size_t)b[k].w * b[k].h;
+        boxes += (size_t)n;
+        free(b);
+    }
+    print_message("random maps: %zu boxes, %.0f%% of their texels hold data (%.0f%% of one box per map)\n", boxes, 100.0 * data / area,
+                  100.0 * data / whole);
+    assert_true(area < whole);
+    int count = 0, cap = 0;
+    b = NULL;
+    assert_int_equal(prt__map_slice(ctx, m, 0, H, PRT__SLICE_OVERHEAD, &b, &count, &cap), PRT_ERR_INVALID_ARG);
+    free(m);
+    prt_context_release(ctx);
+}
+
 static prt_transfer *bake_offset(prt_context *ctx, const prt_scene *scene, const char *const *kv)
 {
     const prt_method *m = prt_method_find("offset");
@@ -627,6 +745,112 @@ static void test_bounce_across_charts(void **state)
     prt_relit_free(&first);
     prt_relit_free(&bounced);
     prt_lighting_release(l);
+    prt_transfer_release(t);
+    prt_scene_release(scene);
+    prt_context_release(ctx);
+}
+
+/* prt export --maps (export.c): each map's pieces, read back through the index, put together give
+ * the map texel for texel (a loaded file's maps are halves, as the OpenEXR files are), and no
+ * piece overlaps another; what an earlier export left (old one-box names and piece names) goes. */
+static void test_export_maps(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    prt_scene *scene = load_demo_scene(ctx);
+    prt_transfer *baked = bake_offset(ctx, scene, (const char *const[]){"texels", "32", "offsets", "24", "iterations", "24", "transfer", "both", "medium",
+                                                                         "marble", "mm-per-unit", "20", "map-bounces", "2", "walks", "16", NULL});
+    char path[1200], dir[600];
+    snprintf(path, sizeof path, "%s/export.prt", test_dir);
+    snprintf(dir, sizeof dir, "%s/maps", test_dir);
+    assert_int_equal(prt_transfer_save(baked, path), PRT_OK);
+    prt_transfer_release(baked);
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_transfer_load(ctx, path, &t), PRT_OK);
+    assert_int_equal(mkdir(dir, 0777), 0);
+    static const char *const stale[] = {"radiosity_0999.exr", "subsurface_0500_012.exr"};
+    for (int i = 0; i < 2; ++i) {
+        snprintf(path, sizeof path, "%s/%s", dir, stale[i]);
+        FILE *f = fopen(path, "w");
+        assert_non_null(f);
+        fclose(f);
+    }
+    prt_options *o = NULL;
+    assert_int_equal(prt_export_options_create(prt_method_find("offset"), &o), PRT_OK);
+    assert_int_equal(prt_options_set(o, "maps", dir), PRT_OK);
+    prt_export_result res = {0};
+    assert_int_equal(prt_transfer_export(ctx, t, &(prt_export_desc){.options = o, .variant = -1}, &res), PRT_OK);
+    print_message("export: %s\n", res.report);
+    for (int i = 0; i < 2; ++i) {
+        snprintf(path, sizeof path, "%s/%s", dir, stale[i]);
+        assert_int_not_equal(access(path, F_OK), 0);
+    }
+    snprintf(path, sizeof path, "%s/index.json", dir);
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    const long size = ftell(f);
+    rewind(f);
+    char *text = malloc((size_t)size + 1);
+    assert_int_equal(fread(text, 1, (size_t)size, f), (size_t)size);
+    text[size] = 0;
+    fclose(f);
+    cJSON *index = cJSON_Parse(text);
+    free(text);
+    assert_non_null(index);
+    assert_int_equal(cJSON_GetObjectItem(index, "version")->valueint, 2);
+    prt_offset_info info;
+    assert_true(prt_transfer_offset_info(t, &info));
+    const int W = info.width, H = info.height;
+    assert_int_equal(cJSON_GetObjectItem(index, "width")->valueint, W);
+    float *map = malloc((size_t)W * H * 3 * sizeof *map), *back = malloc((size_t)W * H * 3 * sizeof *back);
+    uint8_t *seen = malloc((size_t)W * H);
+    static const char *const names[2] = {"radiosity", "subsurface"};
+    int pieces = 0, split = 0;
+    for (int kind = 0; kind < 2; ++kind) {
+        const cJSON *list = cJSON_GetObjectItem(cJSON_GetObjectItem(index, "kinds"), names[kind]);
+        assert_non_null(list);
+        assert_int_equal(cJSON_GetArraySize(list), info.count);
+        for (int k = 0; k < info.count; ++k) {
+            int off[2];
+            assert_int_equal(prt_transfer_offset_map(t, (prt_offset_kind)kind, k, off, map), PRT_OK);
+            const cJSON *e = cJSON_GetArrayItem(list, k), *eo = cJSON_GetObjectItem(e, "offset"), *ps = cJSON_GetObjectItem(e, "pieces");
+            assert_int_equal(cJSON_GetArrayItem(eo, 0)->valueint, off[0]);
+            assert_int_equal(cJSON_GetArrayItem(eo, 1)->valueint, off[1]);
+            assert_true(cJSON_IsArray(ps));
+            memset(back, 0, (size_t)W * H * 3 * sizeof *back);
+            memset(seen, 0, (size_t)W * H);
+            split += cJSON_GetArraySize(ps) > 1;
+            for (int p = 0; p < cJSON_GetArraySize(ps); ++p, ++pieces) {
+                const cJSON *pc = cJSON_GetArrayItem(ps, p), *crop = cJSON_GetObjectItem(pc, "crop");
+                int box[4];
+                for (int i = 0; i < 4; ++i) box[i] = cJSON_GetArrayItem(crop, i)->valueint;
+                assert_true(box[0] >= 0 && box[1] >= 0 && box[2] >= 1 && box[3] >= 1 && box[0] + box[2] <= W && box[1] + box[3] <= H);
+                snprintf(path, sizeof path, "%s/%s", dir, cJSON_GetObjectItem(pc, "file")->valuestring);
+                prt_image img;
+                assert_int_equal(prt_image_load(path, &img), PRT_OK);
+                assert_int_equal(img.width, box[2]);
+                assert_int_equal(img.height, box[3]);
+                for (int y = 0; y < box[3]; ++y)   /* the image's bottom row is texel row y0 */
+                    for (int x = 0; x < box[2]; ++x) {
+                        const size_t at = (size_t)(box[1] + y) * W + box[0] + x;
+                        assert_int_equal(seen[at], 0);
+                        seen[at] = 1;
+                        memcpy(back + at * 3, img.rgb + ((size_t)(box[3] - 1 - y) * box[2] + x) * 3, 3 * sizeof *back);
+                    }
+                prt_image_free(&img);
+            }
+            assert_memory_equal(back, map, (size_t)W * H * 3 * sizeof *map);
+        }
+    }
+    print_message("%d maps of %d x %d texels exported in %d pieces, %d maps in more than one\n", 2 * info.count, W, H, pieces, split);
+    assert_true(split > 0);
+    free(map);
+    free(back);
+    free(seen);
+    cJSON_Delete(index);
+    prt_export_result_free(&res);
+    prt_options_release(o);
     prt_transfer_release(t);
     prt_scene_release(scene);
     prt_context_release(ctx);
@@ -1080,8 +1304,25 @@ static void test_gpu_accumulation(void **state)
     prt_image_free(&both);
     prt_image_free(&left);
     prt_image_free(&right);
-    /* Refused: an input of the wrong size, a description whose slice leaves the map. */
+    /* The atlases hold the boxes of the maps' axial slicing, each texel of them once: fewer
+     * texels than one box per map. */
     assert_non_null(fin.gpu_passes);
+    for (int kind = 0; kind < 2; ++kind) {
+        const prt__offset_set *os = ((const struct prt_transfer *)t)->state;
+        const prt_render_map_set *set = kind ? &fin.gpu_passes->scatter : &fin.gpu_passes->bounce;
+        prt__offset_crops c;
+        assert_int_equal(prt__offset_crop_maps(ctx, os, kind ? os->subsurface : os->radiosity, &c), PRT_OK);
+        int64_t texels = 0;
+        for (int i = 0; i < set->slice_count; ++i) texels += (int64_t)set->slices[i].w * set->slices[i].h;
+        print_message("%s maps: %d boxes, %.0f%% of their texels hold data (%.0f%% of one box per map), %d slices in %d atlases of %d^2\n",
+                      kind ? "subsurface" : "radiosity", c.count, 100.0 * (double)c.data / (double)c.area, 100.0 * (double)c.data / (double)c.whole,
+                      set->slice_count, set->atlas_layers, set->atlas_size);
+        assert_true(texels == c.area && c.data <= c.area && c.area <= c.whole);
+        if (!kind) assert_true(c.area < c.whole);   /* the subsurface maps' boxes have no band worth cutting */
+        assert_true((int64_t)set->atlas_layers * set->atlas_size * set->atlas_size >= c.area);
+        prt__offset_crops_free(&c);
+    }
+    /* Refused: an input of the wrong size, a description whose slice leaves the map. */
     rm.gpu_passes = fin.gpu_passes;
     rm.gpu_input = fin.gpu_input;
     rm.texel_width = W / 2;
@@ -1197,6 +1438,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_dipole),
         cmocka_unit_test(test_thin_beam),
         cmocka_unit_test(test_binning),
+        cmocka_unit_test(test_slicing),
+        cmocka_unit_test(test_export_maps),
         cmocka_unit_test(test_offset_method),
         cmocka_unit_test(test_bounce_across_charts),
         cmocka_unit_test(test_multi_bounce_maps),
