@@ -2,8 +2,7 @@
  * chosen by the largest (or mean) transfer they carry, the maps TR TVA for radiosity and/or
  * subsurface scattering, and each texel's shadowed SH transfer for first-order light from the
  * environment. Stages: offsets, transfer maps, environment. */
-#include "methods/offset/sampling.h"
-#include "methods/offset/transfer.h"
+#include "methods/offset/importance.h"
 #include "geom/uv_atlas.h"
 #include "light/light_sample.h"
 #include "methods/offset/offset.h"
@@ -28,46 +27,6 @@ typedef struct obake {
 
 /* ---- offsets ---- */
 
-typedef struct importance_job {
-    obake *ob;
-    const uint32_t *sample;      /* texels looked at */
-    size_t count;
-    double *value;               /* scratch, count entries */
-    prt__progress *p;
-} importance_job;
-
-/* How much an offset carries: the largest (or mean) transfer times source area over the sampled
- * texels, both kinds together. */
-static double importance(void *user, int dx, int dy)
-{
-    importance_job *j = user;
-    const obake *ob = j->ob;
-    const int W = ob->patches.width, H = ob->patches.height;
-    prt__progress_add(j->p, 1);
-    if (prt__progress_cancelled(j->p)) return 0;
-    double *value = j->value;
-#pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ob->base.ctx))
-    for (size_t i = 0; i < j->count; ++i) {
-        value[i] = 0;
-        const size_t t = j->sample[i];
-        const int sx = (int)(t % (size_t)W) + dx, sy = (int)(t / (size_t)W) + dy;
-        if (sx < 0 || sx >= W || sy < 0 || sy >= H) continue;
-        const size_t s = (size_t)sy * W + sx;
-        double v = 0;
-        for (int k = 0; k < 2; ++k) {
-            if (!(ob->d.kinds & (1u << k))) continue;
-            float tr[3];
-            prt__offset_tr(&ob->x[k], t, s, tr);
-            v += fmax(tr[0], fmax(tr[1], tr[2])) * ob->patches.area[s];
-        }
-        value[i] = v;
-    }
-    /* Summed in order: the same offsets whatever the thread count. */
-    double top = 0, sum = 0;
-    for (size_t i = 0; i < j->count; ++i) { top = fmax(top, value[i]); sum += value[i]; }
-    return ob->d.importance ? sum / (double)j->count : top;
-}
-
 static prt_status offsets_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
 {
     obake *ob = (obake *)base;
@@ -80,14 +39,11 @@ static prt_status offsets_step(prt__bake_job *base, prt_context *ctx, prt__progr
     for (size_t i = 0, seen = 0; i < n; ++i)
         if (ob->patches.area[i] > 0 && seen++ % stride == 0) sample[count++] = (uint32_t)i;
     prt__progress_begin(p, p->stage, (uint64_t)(121 + ob->d.iterations));
-    double *value = malloc((count + 1) * sizeof *value);
-    if (!value) { free(sample); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory choosing offsets"); }
-    importance_job j = {ob, sample, count, value, p};
+    const prt__offset_importance_desc id = {&ob->patches, ob->x, ob->d.kinds, ob->d.importance, sample, count, NULL};
     const prt__offset_desc od = {s->width, s->height, ob->d.count, ob->d.iterations, (uint64_t)ob->d.seed};
     int got = 0;
-    prt_status st = prt__choose_offsets(ctx, &od, importance, &j, &s->offsets, &got);
+    prt_status st = prt__offset_choose(ctx, &id, &od, p, &s->offsets, &got);
     free(sample);
-    free(value);
     if (!st && prt__progress_cancelled(p)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     if (!st) s->count = got;
     return st;
