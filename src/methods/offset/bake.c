@@ -39,7 +39,7 @@ static prt_status offsets_step(prt__bake_job *base, prt_context *ctx, prt__progr
     for (size_t i = 0, seen = 0; i < n; ++i)
         if (ob->patches.area[i] > 0 && seen++ % stride == 0) sample[count++] = (uint32_t)i;
     prt__progress_begin(p, p->stage, (uint64_t)(121 + ob->d.iterations));
-    const prt__offset_importance_desc id = {&ob->patches, ob->x, ob->d.kinds, ob->d.importance, sample, count, NULL};
+    const prt__offset_importance_desc id = {&ob->patches, ob->x, ob->d.kinds, ob->d.importance, sample, count};
     const prt__offset_desc od = {s->width, s->height, ob->d.count, ob->d.iterations, (uint64_t)ob->d.seed};
     int got = 0;
     prt_status st = prt__offset_choose(ctx, &id, &od, p, &s->offsets, &got);
@@ -155,16 +155,25 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
          * (a chart's texels crowding into a point, as at a sphere's pole), scale the texel's maps
          * down to the bound: the bounces then converge, and no texel shines. */
         size_t capped = 0;
-        for (size_t i = 0; i < nc; ++i)
+        double top = 1, total = 0;   /* the cap's factors (gathered / bound), over the texels capped */
+        for (size_t i = 0; i < nc; ++i) {
+            double factor = 1;
             for (int c = 0; c < 3; ++c) {
                 double sum = 0;
                 for (int o = 0; o < K; ++o) sum += maps[((size_t)o * nc + i) * 3 + c];
                 const prt__dipole *dm = k && s->medium[i] ? &ob->dipoles[s->medium[i] - 1][c] : NULL;
                 const double limit = k == 0 ? s->albedo[i * 3 + c] : dm ? prt__dipole_total(dm) * (dm->falloff > 0 ? s->albedo[i * 3 + c] : 1.0) : 0.0;
                 if (!(sum > limit) || !(sum > 0)) continue;
-                capped += c == 0;
+                factor = fmax(factor, limit > 0 ? sum / limit : INFINITY);
                 for (int o = 0; o < K; ++o) maps[((size_t)o * nc + i) * 3 + c] *= (float)(limit / sum);
             }
+            if (!(factor > 1)) continue;
+            capped++;
+            top = fmax(top, factor);
+            total += factor;
+        }
+        s->cap_known = true;
+        s->cap[k] = (prt__offset_cap){(uint32_t)capped, (float)fmin(top, 1e30), capped ? (float)fmin(total / (double)capped, 1e30) : 1.0f};
         if (capped)
             prt__log(ctx, PRT_LOG_INFO, "%s maps: %zu of %zu texels would gather more than they %s (their offsets' cells overlap; %s); scaled down to that",
                      k ? "subsurface" : "radiosity", capped, nc, k ? "scatter" : "reflect",
@@ -421,6 +430,7 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
     s->kinds = d.kinds;
     s->iterations = d.iterations;
     s->map_bounces = d.map_bounces > 1 ? d.map_bounces : 1;
+    s->cap[0] = s->cap[1] = (prt__offset_cap){0, 1, 1};   /* none capped until maps_step says */
     s->importance = d.importance;
     s->eta = d.eta;
     s->mm_per_unit = d.mm_per_unit;

@@ -57,7 +57,7 @@ static void chunk_value(const prt__offset_importance_desc *d, const int *o, size
             if (!(d->kinds & (1u << k))) continue;
             float tr[3];
             prt__offset_tr(&d->x[k], t, s, tr);
-            v += fmax(tr[0], fmax(tr[1], tr[2])) * pt->area[s] * (d->gain ? d->gain[i][k] : 1.0f);
+            v += fmax(tr[0], fmax(tr[1], tr[2])) * pt->area[s];
         }
         top = fmax(top, v);
         sum += v;

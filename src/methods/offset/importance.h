@@ -15,9 +15,6 @@ typedef struct prt__offset_importance_desc {
     int mean;                        /* 0: the largest over the sample texels, 1: their mean */
     const uint32_t *sample;          /* texels looked at (y * width + x) */
     size_t count;
-    /* Per sample texel and kind, a factor on its transfer (NULL: 1): what the one-bounce transfer
-     * it receives grows to over the bounces the maps hold. */
-    const float (*gain)[2];
 } prt__offset_importance_desc;
 
 /* prt__choose_offsets with this importance, on prt__threads(ctx) threads; the same offsets for any

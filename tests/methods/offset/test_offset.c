@@ -12,6 +12,8 @@
 #include "methods/offset/offset.h"
 #include "transfer/transfer.h"
 
+#include <cjson/cJSON.h>
+
 static uint64_t rng_state = 12345;
 static double rnd(void)
 {
@@ -562,6 +564,55 @@ static prt_transfer *bake_offset(prt_context *ctx, const prt_scene *scene, const
     assert_int_equal(prt_bake(ctx, scene, m, o, NULL, &t), PRT_OK);
     prt_options_release(o);
     return t;
+}
+
+/* The offsets and the maps do not depend on the thread count (the importance is evaluated by a
+ * team whose helpers the choosing thread never waits for: whoever computes a chunk, its value is
+ * the same), and the bake records its energy cap, which the file keeps and prt info reports. */
+static void test_threads_and_cap(void **state)
+{
+    (void)state;
+    prt_context *one = test_context(1), *two = test_context(2);
+    prt_scene *scene = load_demo_scene(one);
+    const char *const kv[] = {"texels", "32", "offsets", "60", "iterations", "200", "map-bounces", "1", NULL};
+    prt_transfer *t1 = bake_offset(one, scene, kv), *t2 = bake_offset(two, scene, kv);
+    const prt__offset_set *s1 = t1->state, *s2 = t2->state;
+    assert_int_equal(s1->count, 60);
+    assert_int_equal(s2->count, 60);
+    assert_memory_equal(s1->offsets, s2->offsets, (size_t)s1->count * 2 * sizeof(int));
+    assert_int_equal(s1->covered, s2->covered);
+    assert_memory_equal(s1->radiosity, s2->radiosity, (size_t)s1->count * s1->covered * 3 * sizeof(float));
+    assert_true(s1->cap_known);
+    assert_memory_equal(s1->cap, s2->cap, sizeof s1->cap);
+    print_message("energy cap on the demo at 32^2, 60 offsets: %u of %u texels, factor up to %.3g (mean %.3g)\n", s1->cap[0].texels, s1->covered,
+                  s1->cap[0].max, s1->cap[0].mean);
+    assert_true(s1->cap[0].texels > 0 && s1->cap[0].max >= s1->cap[0].mean && s1->cap[0].mean > 1);
+    /* Through a file: kept, and described. */
+    char path[600];
+    snprintf(path, sizeof path, "%s/cap.prt", test_dir);
+    assert_int_equal(prt_transfer_save(t1, path), PRT_OK);
+    prt_transfer *back = NULL;
+    assert_int_equal(prt_transfer_load(one, path, &back), PRT_OK);
+    const prt__offset_set *sb = back->state;
+    assert_true(sb->cap_known);
+    assert_memory_equal(sb->cap, s1->cap, sizeof sb->cap);
+    char *json = NULL;
+    assert_int_equal(prt_transfer_describe(back, path, 1, &json), PRT_OK);
+    cJSON *root = cJSON_Parse(json);
+    assert_non_null(root);
+    const cJSON *cap = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(root, "energy_cap"), "radiosity");
+    assert_non_null(cap);
+    assert_int_equal((int)cJSON_GetObjectItemCaseSensitive(cap, "texels")->valuedouble, (int)s1->cap[0].texels);
+    assert_float_equal(cJSON_GetObjectItemCaseSensitive(cap, "max_factor")->valuedouble, s1->cap[0].max, 1e-6 * s1->cap[0].max);
+    assert_null(cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(root, "energy_cap"), "subsurface"));
+    cJSON_Delete(root);
+    free(json);
+    prt_transfer_release(back);
+    prt_transfer_release(t1);
+    prt_transfer_release(t2);
+    prt_scene_release(scene);
+    prt_context_release(one);
+    prt_context_release(two);
 }
 
 /* The method end to end on the demo scene under a point light: first-order light matches the path
@@ -1130,6 +1181,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_thin_beam),
         cmocka_unit_test(test_binning),
         cmocka_unit_test(test_offset_method),
+        cmocka_unit_test(test_threads_and_cap),
         cmocka_unit_test(test_multi_bounce_maps),
         cmocka_unit_test(test_default_maps_converge),
     };
