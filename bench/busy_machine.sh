@@ -34,6 +34,7 @@ OPTS_ao=${OPTS_ao:---no-refine}
 mkdir -p "$OUT"
 
 pids=""
+# shellcheck disable=SC2317   # called by the traps
 stop_load() { for p in $pids; do kill "$p" 2>/dev/null || true; done; pids=""; }
 trap stop_load EXIT
 trap 'stop_load; exit 130' INT TERM
@@ -64,6 +65,7 @@ printf '%-7s %-11s %-20s %8s %8s %7s\n' scene method stage "j1 s" "j2 s" j2/j1
 for scene in $scenes; do
     for m in $METHODS; do
         case " $SKIP " in *" $scene:$m "*) echo "busy_machine: $m on $scene skipped (SKIP)" >&2; continue ;; esac
+        opts=""
         eval "opts=\$OPTS_$m"
         for j in 1 2; do
             : >"$OUT/${scene}_$m.j$j.all"
