@@ -91,6 +91,9 @@ expect 0 "bake --method offset" -- "$PRT" bake -q "$T/demo.obj" --method offset 
 expect 0 "info of an offset bake" -- "$PRT" info "$T/offset.prt"
 grep -q "light map:   32 x 32 texels" "$T/out" && ok || bad "info does not describe the light map"
 grep -q "crops:.*of their texels hold data (.*in one box per map)" "$T/out" && ok || bad "info does not state how tightly the maps are cropped"
+grep -q "energy cap:" "$T/out" && ok || bad "info does not report the offset maps' energy cap"
+expect 0 "info --json of an offset bake" -- "$PRT" info --json "$T/offset.prt"
+grep -q '"energy_cap"' "$T/out" && grep -q '"max_factor"' "$T/out" && ok || bad "info --json does not report the offset maps' energy cap"
 expect 0 "relight offset" -- "$PRT" relight -q "$T/offset.prt" --env none --light point:0.3,1.2,0.4:2 -o "$T/offset.json"
 grep -q '"indirect"' "$T/offset.json" && ok || bad "an offset relight lacks its indirect light"
 expect 0 "render offset" -- $NOLEAK "$PRT" render -q "$T/offset.prt" --env none --light point:0.3,1.2,0.4:2 -o "$T/offset.png" --width 64 --height 48

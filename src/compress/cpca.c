@@ -136,6 +136,13 @@ static bool subspace(const float *X, const size_t *members, size_t n, const doub
     return true;
 }
 
+/* The threads for a parallel pass of about `work` multiply-adds: one below a millisecond's worth.
+ * A pass ends in a barrier that waits for every thread of its team, and where cores are shared
+ * that wait is a scheduler's time slice: the light cloud's zones (clustered PCA of a few thousand
+ * short vectors each, K + 2 passes per iteration) took 4.6 times as long on 2 threads as on 1
+ * beside two busy processes. The result does not depend on the team. */
+static int team(const prt_context *ctx, double work) { return work < (double)(1 << 21) ? 1 : prt__threads(ctx); }
+
 prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim, const prt_compress_desc *d, prt__progress *prog, prt__cpca **out)
 {
     return prt__cpca_build_ex(ctx, X, nv, dim, d, FULL_EIGEN_MAX_DIM, prog, out);
@@ -185,7 +192,7 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
             /* K passes over every vector: long ones (glossy matrices) take a second or more. */
             if (prog && prt__progress_cancelled(prog)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); goto done; }
             const int prev = k - 1;
-#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
+#pragma omp parallel for schedule(static) num_threads(team(ctx, (double)nv * dim))
             for (size_t v = 0; v < nv; ++v) {
                 if (prt__progress_poll(prog, v, 1023)) continue;
                 double e = 0;
@@ -223,7 +230,7 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
         int lapack_failed = 0;
         double *small = large ? malloc((size_t)K * sub * sub * sizeof(double)) : NULL;   /* projected scatter per cluster */
         if (large && !small) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
-#pragma omp parallel for schedule(dynamic, 1) num_threads(prt__threads(ctx))
+#pragma omp parallel for schedule(dynamic, 1) num_threads(team(ctx, (double)nv * dim * sub))
         for (int k = 0; k < K; ++k) {
             size_t n = first[k + 1] - first[k];
             M[k].members = n;
@@ -314,7 +321,7 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
         }
         /* Reassign every vertex to the cluster that reconstructs it best. */
         size_t moved = 0;
-#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx)) reduction(+ : moved)
+#pragma omp parallel for schedule(static) num_threads(team(ctx, (double)nv * dim * (large ? 5 : K) * (K ? total_vectors / (size_t)K + 1 : 1))) reduction(+ : moved)
         for (size_t v = 0; v < nv; ++v) {
             if (prt__progress_poll(prog, v, 255)) continue;   /* assign[v] stays: the pass is thrown away */
             double be = INFINITY;
@@ -390,7 +397,7 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
      * file, the same for any thread count. */
     double *verr = prt__calloc(2 * nv, sizeof(double));
     if (!verr) { prt__cpca_free(c); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
-#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
+#pragma omp parallel for schedule(static) num_threads(team(ctx, (double)nv * dim * (wt / (nv ? nv : 1) + 1)))
     for (size_t v = 0; v < nv; ++v) {
         if (prt__progress_poll(prog, v, 1023)) continue;
         uint32_t k = c->cluster_of[v];

@@ -2,8 +2,7 @@
  * chosen by the largest (or mean) transfer they carry, the maps TR TVA for radiosity and/or
  * subsurface scattering, and each texel's shadowed SH transfer for first-order light from the
  * environment. Stages: offsets, transfer maps, environment. */
-#include "methods/offset/sampling.h"
-#include "methods/offset/transfer.h"
+#include "methods/offset/importance.h"
 #include "geom/uv_atlas.h"
 #include "geom/uv_islands.h"
 #include "light/light_sample.h"
@@ -33,46 +32,6 @@ typedef struct obake {
 
 /* ---- offsets ---- */
 
-typedef struct importance_job {
-    obake *ob;
-    const uint32_t *sample;      /* texels looked at */
-    size_t count;
-    double *value;               /* scratch, count entries */
-    prt__progress *p;
-} importance_job;
-
-/* How much an offset carries: the largest (or mean) transfer times source area over the sampled
- * texels, both kinds together. */
-static double importance(void *user, int dx, int dy)
-{
-    importance_job *j = user;
-    const obake *ob = j->ob;
-    const int W = ob->patches.width, H = ob->patches.height;
-    prt__progress_add(j->p, 1);
-    if (prt__progress_cancelled(j->p)) return 0;
-    double *value = j->value;
-#pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ob->base.ctx))
-    for (size_t i = 0; i < j->count; ++i) {
-        value[i] = 0;
-        const size_t t = j->sample[i];
-        const int sx = (int)(t % (size_t)W) + dx, sy = (int)(t / (size_t)W) + dy;
-        if (sx < 0 || sx >= W || sy < 0 || sy >= H) continue;
-        const size_t s = (size_t)sy * W + sx;
-        double v = 0;
-        for (int k = 0; k < 2; ++k) {
-            if (!(ob->d.kinds & (1u << k))) continue;
-            float tr[3];
-            prt__offset_tr(&ob->x[k], t, s, tr);
-            v += fmax(tr[0], fmax(tr[1], tr[2])) * ob->patches.area[s];
-        }
-        value[i] = v;
-    }
-    /* Summed in order: the same offsets whatever the thread count. */
-    double top = 0, sum = 0;
-    for (size_t i = 0; i < j->count; ++i) { top = fmax(top, value[i]); sum += value[i]; }
-    return ob->d.importance ? sum / (double)j->count : top;
-}
-
 static prt_status offsets_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
 {
     obake *ob = (obake *)base;
@@ -85,14 +44,11 @@ static prt_status offsets_step(prt__bake_job *base, prt_context *ctx, prt__progr
     for (size_t i = 0, seen = 0; i < n; ++i)
         if (ob->patches.area[i] > 0 && seen++ % stride == 0) sample[count++] = (uint32_t)i;
     prt__progress_begin(p, p->stage, (uint64_t)(121 + ob->d.iterations));
-    double *value = malloc((count + 1) * sizeof *value);
-    if (!value) { free(sample); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory choosing offsets"); }
-    importance_job j = {ob, sample, count, value, p};
+    const prt__offset_importance_desc id = {&ob->patches, ob->x, ob->d.kinds, ob->d.importance, sample, count};
     const prt__offset_desc od = {s->width, s->height, ob->d.count, ob->d.iterations, (uint64_t)ob->d.seed};
     int got = 0;
-    prt_status st = prt__choose_offsets(ctx, &od, importance, &j, &s->offsets, &got);
+    prt_status st = prt__offset_choose(ctx, &id, &od, p, &s->offsets, &got);
     free(sample);
-    free(value);
     if (!st && prt__progress_cancelled(p)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     if (!st) s->count = got;
     return st;
@@ -360,16 +316,25 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
          * (a chart's texels crowding into a point, as at a sphere's pole), scale the texel's maps
          * down to the bound: the bounces then converge, and no texel shines. */
         size_t capped = 0;
-        for (size_t i = 0; i < nc; ++i)
+        double top = 1, total = 0;   /* the cap's factors (gathered / bound), over the texels capped */
+        for (size_t i = 0; i < nc; ++i) {
+            double factor = 1;
             for (int c = 0; c < 3; ++c) {
                 double sum = 0;
                 for (int o = 0; o < K; ++o) sum += maps[((size_t)o * nc + i) * 3 + c];
                 const prt__dipole *dm = k && s->medium[i] ? &ob->dipoles[s->medium[i] - 1][c] : NULL;
                 const double limit = k == 0 ? s->albedo[i * 3 + c] : dm ? prt__dipole_total(dm) * (dm->falloff > 0 ? s->albedo[i * 3 + c] : 1.0) : 0.0;
                 if (!(sum > limit) || !(sum > 0)) continue;
-                capped += c == 0;
+                factor = fmax(factor, limit > 0 ? sum / limit : INFINITY);
                 for (int o = 0; o < K; ++o) maps[((size_t)o * nc + i) * 3 + c] *= (float)(limit / sum);
             }
+            if (!(factor > 1)) continue;
+            capped++;
+            top = fmax(top, factor);
+            total += factor;
+        }
+        s->cap_known = true;
+        s->cap[k] = (prt__offset_cap){(uint32_t)capped, (float)fmin(top, 1e30), capped ? (float)fmin(total / (double)capped, 1e30) : 1.0f};
         if (capped)
             prt__log(ctx, PRT_LOG_INFO, "%s maps: %zu of %zu texels would gather more than they %s (their offsets' cells overlap; %s); scaled down to that",
                      k ? "subsurface" : "radiosity", capped, nc, k ? "scatter" : "reflect",
@@ -620,6 +585,7 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
     s->kinds = d.kinds;
     s->iterations = d.iterations;
     s->map_bounces = d.map_bounces > 1 ? d.map_bounces : 1;
+    s->cap[0] = s->cap[1] = (prt__offset_cap){0, 1, 1};   /* none capped until maps_step says */
     s->importance = d.importance;
     s->eta = d.eta;
     s->mm_per_unit = d.mm_per_unit;

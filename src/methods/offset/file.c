@@ -11,6 +11,8 @@
 /* The maps as halves (files before them hold floats in OFSR and OFSS, still read). */
 #define CHUNK_OFHR PRT__FOURCC('O', 'F', 'H', 'R')
 #define CHUNK_OFHS PRT__FOURCC('O', 'F', 'H', 'S')
+/* The bake's energy cap per kind (optional: files before it lack it, readers before it skip it). */
+#define CHUNK_OFSC PRT__FOURCC('O', 'F', 'S', 'C')
 #define OFSP_HEADER 72
 
 prt_status prt__offset_save(const prt_transfer *t, prt__chunk_list *l)
@@ -47,6 +49,16 @@ prt_status prt__offset_save(const prt_transfer *t, prt__chunk_list *l)
         if (l->version < 2) l->version = 2;   /* readers of version 1 would miss the maps */
         h[values] = 0;
         prt__chunks_add(l, k ? CHUNK_OFHS : CHUNK_OFHR, h, values * sizeof(uint16_t) + (values & 1 ? 2 : 0), NULL);
+    }
+    if (s->cap_known) {
+        unsigned char *cap = prt__chunks_alloc(l, 24);
+        if (!cap) return PRT_OK;
+        for (int k = 0; k < 2; ++k) {
+            prt__put32(cap + 12 * k, s->cap[k].texels);
+            memcpy(cap + 12 * k + 4, &s->cap[k].max, 4);
+            memcpy(cap + 12 * k + 8, &s->cap[k].mean, 4);
+        }
+        prt__chunks_add(l, CHUNK_OFSC, cap, (size_t)24, NULL);
     }
     if (s->subsurface) {
         /* The media: count, 7 floats each, then each texel's (padded to 4 bytes). */
@@ -223,8 +235,22 @@ prt_status prt__offset_load(prt_context *ctx, prt_transfer *t, const cJSON *meta
         for (size_t i = 0; i < nc; ++i)
             if (s->medium[i] > s->medium_count) return bad(ctx, "a texel's medium is out of range");
     }
-    static const uint32_t ids[7] = {CHUNK_OFSP, CHUNK_OFST, CHUNK_OFSR, CHUNK_OFSS, CHUNK_OFHR, CHUNK_OFHS, CHUNK_OFSD};
-    for (int i = 0; i < 7; ++i)
+    if ((c = prt__chunk_take(chunks, count, CHUNK_OFSC))) {
+        if (c->size != 24) return bad(ctx, "offset cap chunk size mismatch");
+        for (int k = 0; k < 2; ++k) {
+            prt__offset_cap *cap = &s->cap[k];
+            cap->texels = prt__get32(c->data + 12 * k);
+            memcpy(&cap->max, c->data + 12 * k + 4, 4);
+            memcpy(&cap->mean, c->data + 12 * k + 8, 4);
+            const bool baked = s->kinds & (k ? PRT__OFFSET_SUBSURFACE_BIT : PRT__OFFSET_RADIOSITY_BIT);
+            if (cap->texels > s->covered || (!baked && cap->texels) || !(cap->max >= 1 && cap->max <= 1e30f) || !(cap->mean >= 1 && cap->mean <= cap->max) ||
+                (!cap->texels && (cap->max != 1 || cap->mean != 1)))
+                return bad(ctx, "offset cap out of range");
+        }
+        s->cap_known = true;
+    }
+    static const uint32_t ids[8] = {CHUNK_OFSP, CHUNK_OFST, CHUNK_OFSR, CHUNK_OFSS, CHUNK_OFHR, CHUNK_OFHS, CHUNK_OFSD, CHUNK_OFSC};
+    for (int i = 0; i < 8; ++i)
         if (prt__chunk_take(chunks, count, ids[i])) return bad(ctx, "an offset chunk appears twice");
     return PRT_OK;
 }

@@ -218,6 +218,17 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
             cJSON_AddNumberToObject(o, "unsliced_data_share", c[k].whole ? (double)c[k].data / (double)c[k].whole : 0.0);
         }
         if (cropped) { prt__offset_crops_free(&c[0]); prt__offset_crops_free(&c[1]); }
+        if (s->cap_known) {
+            cJSON *cap = cJSON_AddObjectToObject(j, "energy_cap");
+            for (int k = 0; k < 2; ++k) {
+                if (!(s->kinds & (1u << k))) continue;
+                cJSON *e = cJSON_AddObjectToObject(cap, k ? "subsurface" : "radiosity");
+                cJSON_AddNumberToObject(e, "texels", s->cap[k].texels);
+                cJSON_AddNumberToObject(e, "fraction", (double)s->cap[k].texels / s->covered);
+                cJSON_AddNumberToObject(e, "max_factor", s->cap[k].max);
+                cJSON_AddNumberToObject(e, "mean_factor", s->cap[k].mean);
+            }
+        }
         return;
     }
     prt__describe_line(d, "light map:", "%d x %d texels, %u on the surface (%.0f%%)", s->width, s->height, s->covered,
@@ -239,6 +250,15 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
                                           : s->map_bounces > 1 ? "the radiosity maps hold %d bounces (one pass at run time)"
                                                                : "the radiosity maps hold one; the run time repeats the pass",
                            s->map_bounces);
+    for (int k = 0; s->cap_known && k < 2; ++k) {
+        if (!(s->kinds & (1u << k))) continue;
+        const prt__offset_cap *c = &s->cap[k];
+        if (!c->texels)
+            prt__describe_line(d, "energy cap:", "%s maps: no texel gathered more than it can", k ? "subsurface" : "radiosity");
+        else
+            prt__describe_line(d, "energy cap:", "%s maps: %u texels (%.1f%%) gathered more than they can, scaled down by up to %.3g (mean %.3g)",
+                               k ? "subsurface" : "radiosity", c->texels, 100.0 * c->texels / s->covered, c->max, c->mean);
+    }
     for (int k = 0; k < s->medium_count; ++k) {
         size_t texels = 0;
         for (size_t i = 0; i < s->covered; ++i) texels += s->medium[i] == k + 1;

@@ -20,6 +20,14 @@
 #define PRT__OFFSET_MAX_MAP_BOUNCES 64 /* --map-bounces: the default, the whole series (paths end earlier by weight) */
 #define PRT__OFFSET_MAX_ENTRIES ((uint64_t)1 << 28)   /* texels x offsets, each 3 floats: 3 GiB */
 
+/* The bake's per-texel energy cap on one kind of map (maps_step): how many texels gathered more
+ * than they can reflect (or scatter) and were scaled down, the largest and mean factor over
+ * them (gathered / bound, 1 when none). */
+typedef struct prt__offset_cap {
+    uint32_t texels;
+    float max, mean;
+} prt__offset_cap;
+
 typedef struct prt__offset_set {
     int width, height, count;     /* the light map; offsets */
     unsigned kinds;               /* PRT__OFFSET_*_BIT */
@@ -42,6 +50,9 @@ typedef struct prt__offset_set {
     int medium_count;
     prt_medium *media;
     uint8_t *medium;
+    /* The cap per kind (radiosity, subsurface), as the bake recorded it (files before it: unknown). */
+    bool cap_known;
+    prt__offset_cap cap[2];
     int32_t *index;               /* [width * height] covered index, -1 off the surface (derived) */
     int32_t *xy;                  /* [2][covered] texel columns, then rows (derived) */
     int32_t *source;              /* [width * height] the covered texel each texel reads: itself, or

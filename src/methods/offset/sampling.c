@@ -346,14 +346,19 @@ prt_status prt__choose_offsets(const prt_context *ctx, const prt__offset_desc *d
             const double p[2] = {i / 5.0 - 1, j / 5.0 - 1};
             int dx, dy;
             snap(&data, p, &dx, &dy);
-            if (!data.taken[(size_t)(dy + d->height - 1) * (size_t)(2 * d->width - 1) + (size_t)(dx + d->width - 1)])
-                offset_add(&data, dx, dy, importance(user, dx, dy));
+            if (!data.taken[(size_t)(dy + d->height - 1) * (size_t)(2 * d->width - 1) + (size_t)(dx + d->width - 1)]) offset_add(&data, dx, dy, 0);
         }
+    if (!st && data.n) importance(user, data.xy, data.n, data.w);
     uint64_t rng = d->seed * 0x2545F4914F6CDD1Dull + 1;
     prt__plpdf pdf = {0};
-    /* Refinement: samples from the current density add data points; rebuilt every 20. */
+    /* Refinement: samples from the current density add data points; rebuilt every 20. A sample's
+     * importance only counts from the next build on, so the 20 drawn from one build are evaluated
+     * together when the batch is complete: the same offsets as one at a time. */
+    size_t pending = data.n;   /* the first data point not yet evaluated */
     for (int it = 0; !st && it < iterations && data.n < all; ++it) {
         if (it % 20 == 0) {
+            if (pending < data.n) importance(user, data.xy + pending * 2, data.n - pending, data.w + pending);
+            pending = data.n;
             prt__plpdf_free(&pdf);
             if ((st = build_density(ctx, &data, &pdf))) break;
             if (prt__cancelled(ctx)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled choosing offsets"); break; }
@@ -365,10 +370,11 @@ prt_status prt__choose_offsets(const prt_context *ctx, const prt__offset_desc *d
             prt__plpdf_sample(&pdf, u, p);
             snap(&data, p, &dx, &dy);
             if (data.taken[(size_t)(dy + d->height - 1) * (size_t)(2 * d->width - 1) + (size_t)(dx + d->width - 1)]) continue;
-            offset_add(&data, dx, dy, importance(user, dx, dy));
+            offset_add(&data, dx, dy, 0);
             break;
         }
     }
+    if (!st && pending < data.n) importance(user, data.xy + pending * 2, data.n - pending, data.w + pending);
     /* The final offsets from the converged density: (0, 0) first (a texel's own light), then
      * distinct samples. */
     if (!st) {

@@ -35,9 +35,13 @@ void prt__plpdf_sample(const prt__plpdf *p, const double u[4], double out[2]);
  * cells then tile it: the areas sum to 4). Points must lie in the square. */
 prt_status prt__voronoi_areas(const prt_context *ctx, const double *xy, size_t n, double *areas);
 
-/* What an importance callback says for offset (dx, dy) in texels: the largest (or mean)
- * transference of any texel to the texel that far away. */
-typedef double (*prt__offset_importance_fn)(void *user, int dx, int dy);
+/* What an importance callback says for each of n offsets (offsets: dx, dy in texels, 2 each) into
+ * out[n]: the largest (or mean) transference of any texel to the texel that far away. Called with
+ * a batch at a time - the seed grid, then the samples drawn from one build of the distribution -
+ * so that a callback can spread a whole batch over its threads at once (one parallel region per
+ * batch, not per offset: tiny regions stall when cores are shared). Its values must not depend on
+ * how it splits the work. */
+typedef void (*prt__offset_importance_fn)(void *user, const int *offsets, size_t n, double *out);
 
 typedef struct prt__offset_desc {
     int width, height;       /* the map, texels */
@@ -48,8 +52,10 @@ typedef struct prt__offset_desc {
 
 /* Chooses desc->count distinct integer offsets (dx, dy in texels, |dx| < width, |dy| < height;
  * (0, 0) always among them) by importance: the grid seed, then `iterations` samples from the
- * distribution of what the callback said so far, then the final offsets from the converged
- * distribution. offsets gets 2 ints per offset. Deterministic for a seed. */
+ * distribution of what the callback said so far (each 20 drawn from one build, then evaluated as
+ * one batch: the paper's "batch of offsets with the same iteration of the distribution"), then the
+ * final offsets from the converged distribution. offsets gets 2 ints per offset. Deterministic
+ * for a seed. */
 prt_status prt__choose_offsets(const prt_context *ctx, const prt__offset_desc *desc, prt__offset_importance_fn importance, void *user,
                                int **offsets, int *count);
 

@@ -150,13 +150,17 @@ static void test_voronoi_areas_tile_the_square(void **state)
 
 /* Transfer that falls off with distance, strongest along +x: offsets should crowd near 0 and
  * lean to +x. */
-static int calls;
-static double falloff(void *user, int dx, int dy)
+static int calls, batches;
+static void falloff(void *user, const int *offsets, size_t n, double *out)
 {
     (void)user;
-    calls++;
-    const double r2 = (double)dx * dx + (double)dy * dy;
-    return (dx >= 0 ? 1.0 : 0.25) / (1 + r2 / 16);
+    batches++;
+    for (size_t i = 0; i < n; ++i) {
+        calls++;
+        const int dx = offsets[i * 2], dy = offsets[i * 2 + 1];
+        const double r2 = (double)dx * dx + (double)dy * dy;
+        out[i] = (dx >= 0 ? 1.0 : 0.25) / (1 + r2 / 16);
+    }
 }
 
 static void test_choose_offsets(void **state)
@@ -165,11 +169,13 @@ static void test_choose_offsets(void **state)
     prt_context *ctx = test_context(2);
     prt__offset_desc d = {.width = 64, .height = 64, .count = 200, .seed = 7};
     int *o1 = NULL, *o2 = NULL, n1 = 0, n2 = 0;
-    calls = 0;
+    calls = batches = 0;
     assert_int_equal(prt__choose_offsets(ctx, &d, falloff, NULL, &o1, &n1), PRT_OK);
-    print_message("200 offsets on a 64^2 map after %d importance evaluations\n", calls);
+    print_message("200 offsets on a 64^2 map after %d importance evaluations in %d batches\n", calls, batches);
     assert_int_equal(n1, 200);
     assert_true(calls > 900 && calls <= 121 + 1000);
+    /* Evaluated a batch at a time: the seed grid, then one batch per build of the density. */
+    assert_true(batches <= 1 + 1000 / 20);
     assert_int_equal(o1[0], 0);
     assert_int_equal(o1[1], 0);
     int near = 0, right = 0, left = 0;
@@ -411,11 +417,14 @@ static void test_dipole(void **state)
  * is the dipole's profile (and the offset form with every offset equals it, as above); with 300
  * offsets chosen by importance the scattered power stays within 10% and the profile is followed
  * ring by ring. */
-static double slab_importance(void *user, int dx, int dy)
+static void slab_importance(void *user, const int *offsets, size_t n, double *out)
 {
     const prt__offset_transfer *x = user;
     const double h = 20.0 / 64;   /* mm per texel */
-    return prt__dipole_rd(&x->dipole[0], h * sqrt((double)dx * dx + (double)dy * dy));
+    for (size_t i = 0; i < n; ++i) {
+        const double dx = offsets[i * 2], dy = offsets[i * 2 + 1];
+        out[i] = prt__dipole_rd(&x->dipole[0], h * sqrt(dx * dx + dy * dy));
+    }
 }
 
 static void test_thin_beam(void **state)
@@ -854,6 +863,55 @@ static void test_export_maps(void **state)
     prt_transfer_release(t);
     prt_scene_release(scene);
     prt_context_release(ctx);
+}
+
+/* The offsets and the maps do not depend on the thread count (the importance is evaluated by a
+ * team whose helpers the choosing thread never waits for: whoever computes a chunk, its value is
+ * the same), and the bake records its energy cap, which the file keeps and prt info reports. */
+static void test_threads_and_cap(void **state)
+{
+    (void)state;
+    prt_context *one = test_context(1), *two = test_context(2);
+    prt_scene *scene = load_demo_scene(one);
+    const char *const kv[] = {"texels", "32", "offsets", "60", "iterations", "200", "map-bounces", "1", NULL};
+    prt_transfer *t1 = bake_offset(one, scene, kv), *t2 = bake_offset(two, scene, kv);
+    const prt__offset_set *s1 = t1->state, *s2 = t2->state;
+    assert_int_equal(s1->count, 60);
+    assert_int_equal(s2->count, 60);
+    assert_memory_equal(s1->offsets, s2->offsets, (size_t)s1->count * 2 * sizeof(int));
+    assert_int_equal(s1->covered, s2->covered);
+    assert_memory_equal(s1->radiosity, s2->radiosity, (size_t)s1->count * s1->covered * 3 * sizeof(float));
+    assert_true(s1->cap_known);
+    assert_memory_equal(s1->cap, s2->cap, sizeof s1->cap);
+    print_message("energy cap on the demo at 32^2, 60 offsets: %u of %u texels, factor up to %.3g (mean %.3g)\n", s1->cap[0].texels, s1->covered,
+                  s1->cap[0].max, s1->cap[0].mean);
+    assert_true(s1->cap[0].texels > 0 && s1->cap[0].max >= s1->cap[0].mean && s1->cap[0].mean > 1);
+    /* Through a file: kept, and described. */
+    char path[600];
+    snprintf(path, sizeof path, "%s/cap.prt", test_dir);
+    assert_int_equal(prt_transfer_save(t1, path), PRT_OK);
+    prt_transfer *back = NULL;
+    assert_int_equal(prt_transfer_load(one, path, &back), PRT_OK);
+    const prt__offset_set *sb = back->state;
+    assert_true(sb->cap_known);
+    assert_memory_equal(sb->cap, s1->cap, sizeof sb->cap);
+    char *json = NULL;
+    assert_int_equal(prt_transfer_describe(back, path, 1, &json), PRT_OK);
+    cJSON *root = cJSON_Parse(json);
+    assert_non_null(root);
+    const cJSON *cap = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(root, "energy_cap"), "radiosity");
+    assert_non_null(cap);
+    assert_int_equal((int)cJSON_GetObjectItemCaseSensitive(cap, "texels")->valuedouble, (int)s1->cap[0].texels);
+    assert_float_equal(cJSON_GetObjectItemCaseSensitive(cap, "max_factor")->valuedouble, s1->cap[0].max, 1e-6 * s1->cap[0].max);
+    assert_null(cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(root, "energy_cap"), "subsurface"));
+    cJSON_Delete(root);
+    free(json);
+    prt_transfer_release(back);
+    prt_transfer_release(t1);
+    prt_transfer_release(t2);
+    prt_scene_release(scene);
+    prt_context_release(one);
+    prt_context_release(two);
 }
 
 /* The method end to end on the demo scene under a point light: first-order light matches the path
@@ -1442,6 +1500,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_export_maps),
         cmocka_unit_test(test_offset_method),
         cmocka_unit_test(test_bounce_across_charts),
+        cmocka_unit_test(test_threads_and_cap),
         cmocka_unit_test(test_multi_bounce_maps),
         cmocka_unit_test(test_default_maps_converge),
     };
