@@ -135,9 +135,10 @@ typedef struct cli_light {
     "  --brdf-of NAME=SPEC   reflect with BRDF SPEC on surface NAME, repeatable: one of the set\n" \
     "                        baked for it (prt info lists the sets; a scene material's \"brdfs\",\n" \
     "                        spectral files); its diffuse part becomes the colour (--albedo-of wins)\n" \
-    "  --paint FILE          first-order light painted onto the light map (.exr .pfm .hdr the\n" \
-    "                        map's size, as prt view's y saves it; offset files): reflected,\n" \
-    "                        scattered under the skin and bounced like a lamp's light\n"
+    "  --paint FILE          first-order light painted onto the light map (.exr .pfm .hdr of the\n" \
+    "                        map's size, as prt view's y saves it), for files whose method\n" \
+    "                        takes it (prt info says): reflected, scattered under the skin\n" \
+    "                        and bounced like a lamp's light\n"
 #define CLI_LIGHT_CONTROL_HELP \
     "  --control NAME=V      a run-time setting of the file's method (prt info lists them)\n"
 #define CLI_LIGHT_RELIGHT_HELP CLI_LIGHT_BRDF_HELP CLI_LIGHT_PAINT_HELP CLI_LIGHT_CONTROL_HELP

@@ -22,7 +22,7 @@ static const char *HELP =
     "       ctrl+left-drag rotates the environment lighting,\n"
     "       alt+left-drag moves the selected light in the view plane (turns a directional one),\n"
     "       alt+right-drag or alt+wheel moves it in depth.\n"
-    "       Paint mode (o; files whose method takes painted light: offset): left-drag\n"
+    "       Paint mode (o; files whose method takes painted light, prt info says): left-drag\n"
     "       paints first-order light onto the surface under the cursor, right-drag erases,\n"
     "       wheel sizes the brush, , . dim/brighten it, u its colour, v clears, y saves\n"
     "       prt-paint-N.exr (prt render --paint); the light's bounces and subsurface\n"
