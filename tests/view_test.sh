@@ -186,6 +186,37 @@ r=$(field relative_l2 "$T/cmp")
 awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "side by side drew the same as the final view (relative L2 $r)"
 within "$T/o4.exr" "$T/o2.exr" 0.002   # b on the CPU turns the GPU passes back on, side by side
 
+# Painting first-order light (offset files): dabs under the cursor light the scene and bounce; the
+# painting saved by the script renders the same with prt render --paint; painting nothing changes
+# nothing; paint-clear takes it all off; an SH file refuses painting with the reason.
+printf '%s\n' "0 screenshot $T/p0.exr" "0 paint 160 200 0.3 4,1,0.5" "0 paint 120 190 0.2 0,0,0" "0 screenshot $T/p1.exr" \
+    "0 paint-save $T/painting.pfm" "0 key g" "0.05 screenshot $T/p2.exr" "0.05 paint-clear" "0.1 screenshot $T/p3.exr" "0.1 quit" >"$T/pscript.txt"
+xrun -a -s "-screen 0 1024x768x24" "$PRT" view "$T/off.prt" --env none --light point:0.3,1.5,0.4:4 --width 320 --height 240 --script "$T/pscript.txt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 0 ] && ok || { bad "paint script exited $rc"; cat "$T/err"; }
+[ -s "$T/painting.pfm" ] && ok || bad "paint-save wrote nothing"
+within "$T/p0.exr" "$T/o1.exr" 0.002
+"$PRT" compare --json - -q "$T/p0.exr" "$T/p1.exr" >"$T/cmp"
+r=$(field relative_l2 "$T/cmp")
+awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "painting light changed nothing (relative L2 $r)"
+"$PRT" render -q "$T/off.prt" -o "$T/rp1.exr" --width 320 --height 240 --env none --light point:0.3,1.5,0.4:4 --accumulate gpu --paint "$T/painting.pfm"
+"$PRT" render -q "$T/off.prt" -o "$T/rp2.exr" --width 320 --height 240 --env none --light point:0.3,1.5,0.4:4 --paint "$T/painting.pfm"
+within "$T/p1.exr" "$T/rp1.exr" 0.002
+within "$T/p2.exr" "$T/rp2.exr" 0.002
+within "$T/p3.exr" "$T/ro3.exr" 0.002
+"$PRT" relight -q "$T/off.prt" -o "$T/pv.ply" --paint "$T/painting.pfm" && ok || bad "prt relight --paint"
+printf '0 paint 160 120 0.3 1,1,1\n' >"$T/shpaint.txt"
+xrun -a "$PRT" view "$T/demo.prt" --script "$T/shpaint.txt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "cannot paint light on a file of the sh method" "$T/err" && ok || { bad "painting an SH file in the viewer: exit $rc"; cat "$T/err"; }
+"$PRT" render -q "$T/demo.prt" -o "$T/x.png" --paint "$T/painting.pfm" 2>"$T/err"
+rc=$?
+[ "$rc" -ne 0 ] && [ "$(wc -l <"$T/err")" -eq 1 ] && grep -q "first-order light map" "$T/err" && ok || { bad "prt render --paint on an SH file: exit $rc"; cat "$T/err"; }
+printf '0 paint 160 120 -1 1,1,1\n' >"$T/badpaint.txt"
+xrun -a "$PRT" view "$T/off.prt" --script "$T/badpaint.txt" >/dev/null 2>"$T/err"
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "paint takes X Y RADIUS" "$T/err" && ok || { bad "a bad paint line: exit $rc"; cat "$T/err"; }
+
 # Light cloud: a light dragged about in the viewer and back to where it started gives the picture
 # prt render draws there (relighting keeps no history: nothing lags or sticks).
 "$PRT" bake -q "$T/demo.obj" -o "$T/lc.prt" --method lightcloud --cloud-grid 3,2,3 --samples 64 --basis 64 || bad "lightcloud bake"

@@ -260,6 +260,12 @@ typedef struct prt_relight_desc {
      * `albedo` (NULL: each chosen BRDF's Lambertian part, elsewhere as baked) says. NULL = every
      * surface as baked. Methods that keep no sets refuse a choice. */
     const int *brdf_of;
+    /* First-order light painted onto the surface (prt/paint.h): paint_width x paint_height RGB
+     * over the file's light map (prt_paint_size), irradiance / pi added to what the lights
+     * deliver, then reflected, scattered and bounced with it. NULL = none. Methods without a
+     * first-order light map (prt_method_paintable) refuse it, saying why. */
+    const float *paint;
+    int paint_width, paint_height;
 } prt_relight_desc;
 
 /* What relighting produced: everything the renderer draws. Arrays are owned by the result

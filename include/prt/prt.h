@@ -21,5 +21,6 @@
 #include "prt/wavelet.h"
 #include "prt/spectral.h"
 #include "prt/offset.h"
+#include "prt/paint.h"
 
 #endif

@@ -176,7 +176,7 @@ typedef enum prt_event_type {
     PRT_EVENT_NONE = 0,
     PRT_EVENT_KEY,           /* key, action, mods */
     PRT_EVENT_BUTTON,        /* button (0 left, 1 right, 2 middle), action, mods, x, y */
-    PRT_EVENT_MOVE,          /* x, y: cursor position in pixels */
+    PRT_EVENT_MOVE,          /* x, y: cursor position in framebuffer pixels from the top left */
     PRT_EVENT_SCROLL,        /* y: wheel steps */
     PRT_EVENT_CLOSE          /* the window was asked to close */
 } prt_event_type;

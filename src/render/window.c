@@ -47,13 +47,27 @@ static void on_key(GLFWwindow *g, int key, int sc, int action, int m)
     (void)sc;
     push(glfwGetWindowUserPointer(g), (prt_event){PRT_EVENT_KEY, key, 0, action, mods_of(m), 0, 0});
 }
+/* Cursor positions in framebuffer pixels, the image's (they differ from the window's screen
+ * coordinates on high-density displays), so that a position picks what is drawn there. */
+static void to_pixels(GLFWwindow *g, double *x, double *y)
+{
+    int ww, wh, fw, fh;
+    glfwGetWindowSize(g, &ww, &wh);
+    glfwGetFramebufferSize(g, &fw, &fh);
+    if (ww > 0 && wh > 0) { *x *= (double)fw / ww; *y *= (double)fh / wh; }
+}
 static void on_button(GLFWwindow *g, int button, int action, int m)
 {
     double x, y;
     glfwGetCursorPos(g, &x, &y);
+    to_pixels(g, &x, &y);
     push(glfwGetWindowUserPointer(g), (prt_event){PRT_EVENT_BUTTON, 0, button, action, mods_of(m), x, y});
 }
-static void on_move(GLFWwindow *g, double x, double y) { push(glfwGetWindowUserPointer(g), (prt_event){PRT_EVENT_MOVE, 0, 0, 0, 0, x, y}); }
+static void on_move(GLFWwindow *g, double x, double y)
+{
+    to_pixels(g, &x, &y);
+    push(glfwGetWindowUserPointer(g), (prt_event){PRT_EVENT_MOVE, 0, 0, 0, 0, x, y});
+}
 static void on_scroll(GLFWwindow *g, double dx, double dy) { (void)dx; push(glfwGetWindowUserPointer(g), (prt_event){PRT_EVENT_SCROLL, 0, 0, 0, 0, 0, dy}); }
 static void on_close(GLFWwindow *g) { push(glfwGetWindowUserPointer(g), (prt_event){PRT_EVENT_CLOSE, 0, 0, 0, 0, 0, 0}); }
 

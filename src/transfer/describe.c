@@ -177,9 +177,10 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
     prt_lights_names(t->method->lighting, ", ", relights, sizeof relights);
     bool sets = false;
     for (int k = 1; k <= t->mesh.surface_count && !sets; ++k) sets = prt_transfer_brdf_set(t, k, -1, NULL) > 0;
-    prt__describe_line(&d, "relights:", "%s%s%s%s", relights, t->method->runtime_albedo ? "; surface colours live (--albedo-of)" : "",
+    prt__describe_line(&d, "relights:", "%s%s%s%s%s", relights, t->method->runtime_albedo ? "; surface colours live (--albedo-of)" : "",
                        sets ? "; BRDFs of the baked sets (--brdf-of)" : "",
-                       t->method->gpu_passes ? "; GPU passes (--accumulate gpu)" : "");
+                       t->method->gpu_passes ? "; GPU passes (--accumulate gpu)" : "",
+                       t->method->paint_layout ? "; painted first-order light (--paint, prt view's o)" : "");
     for (int i = 0; i < t->method->export_option_count; ++i)
         prt__describe_line(&d, i ? "" : "exports:", "--%s%s%s", t->method->export_options[i].name, t->method->export_options[i].arg ? " " : "",
                            t->method->export_options[i].arg ? t->method->export_options[i].arg : "");

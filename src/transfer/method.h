@@ -91,6 +91,18 @@ void prt__describe_line(prt__describe *d, const char *label, const char *fmt, ..
 /* The JSON object to add fields to, or NULL in text mode. */
 static inline cJSON *prt__describe_json(prt__describe *d) { return d->json ? d->root : NULL; }
 
+/* ---- Painted first-order light (prt/paint.h) ----
+ * The light map a painting covers and its texels on the surface, borrowed from the transfer. */
+typedef struct prt__paint_layout {
+    int width, height;
+    uint32_t covered;
+    const uint32_t *texel;       /* [covered] y * width + x */
+    const float *pos, *nrm;      /* [covered][3] the texels' surface points and normals */
+} prt__paint_layout;
+/* prt_relight's checks of desc->paint (transfer/paint.c): a method with a layout, the map's size,
+ * values finite and >= 0 on the surface. */
+prt_status prt__paint_check(const prt_context *ctx, const prt_transfer *t, const prt_relight_desc *d);
+
 /* ---- The entry ---- */
 struct prt_method {
     const char *name;       /* what --method and the file's META call it */
@@ -149,6 +161,9 @@ struct prt_method {
      * rgb. */
     prt_status (*relight)(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *out);
     prt_status (*shade)(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb);
+    /* Painted first-order light (prt_relight_desc.paint, prt/paint.h): t's light map and texels.
+     * NULL: the method relights from no first-order light map, and prt_relight refuses paint. */
+    void (*paint_layout)(const prt_transfer *t, prt__paint_layout *out);
 };
 
 /* A BRDF as PRT__BRDF_RECORD bytes of a .prt (model, lobes, 38 floats), and back (unchecked:

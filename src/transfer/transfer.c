@@ -280,7 +280,9 @@ prt_status prt_relight(prt_context *ctx, const prt_transfer *t, const prt_lighti
     if (d.albedo)
         for (size_t i = 0; i < t->mesh.vertex_count * 3; ++i)
             if (!(d.albedo[i] >= 0.0f && d.albedo[i] <= 1.0f)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "albedo must lie in [0, 1]");
-    prt_status st = prt_method_check_lighting(t->method, prt_relight_needs(t, l));
+    prt_status st = prt__paint_check(ctx, t, &d);
+    if (st) return st;
+    st = prt_method_check_lighting(t->method, prt_relight_needs(t, l));
     if (st) return prt__fail(ctx, st, "%s", prt_last_error());
     st = t->method->relight(ctx, t, l, &d, out);
     /* Overflow anywhere (lights of 1e38) is an error, never infinities handed on. */

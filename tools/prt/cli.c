@@ -434,6 +434,9 @@ int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg)
         snprintf(l->brdf_of[l->brdf_of_count++].spec, 128, "%s", eq + 1);
         return 1;
     }
+    case OPT_PAINT:
+        l->paint_path = arg;
+        return 1;
     case OPT_CONTROL: {
         const char *eq = strchr(arg, '=');
         char *end = NULL;
@@ -763,6 +766,18 @@ bool cli_check_accumulate(const cli *c, const prt_transfer *t, bool per_vertex)
     return true;
 }
 
+prt_status cli_painting(const cli *c, const cli_light *l, const prt_transfer *t, prt_relight_desc *d, float **owned)
+{
+    (void)c;   /* prt_last_error says what failed; the caller reports it */
+    *owned = NULL;
+    if (!l || !l->paint_path) return PRT_OK;
+    prt_status st = prt_paint_load(t, l->paint_path, owned);
+    if (!st) st = prt_paint_size(t, &d->paint_width, &d->paint_height);
+    if (st) { free(*owned); *owned = NULL; return st; }
+    d->paint = *owned;
+    return PRT_OK;
+}
+
 prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,
                        bool with_indirect, prt_relit *out)
 {
@@ -786,7 +801,10 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     if (st) { free(brdf_of); return st; }
     d.albedo = albedo;
     d.brdf_of = brdf_of;
-    st = prt_relight(c->ctx, t, lighting, &d, out);
+    float *painting = NULL;
+    st = cli_painting(c, l, t, &d, &painting);
+    if (!st) st = prt_relight(c->ctx, t, lighting, &d, out);
+    free(painting);
     free(albedo);
     free(brdf_of);
     if (st == PRT_ERR_INVALID_ARG) {

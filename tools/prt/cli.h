@@ -98,6 +98,7 @@ typedef struct cli_light {
     /* --control NAME=V: the method's run-time settings (prt_transfer_controls). */
     struct { char name[64]; int value; } control[PRT_MAX_CONTROLS];
     int control_count;
+    const char *paint_path;   /* --paint FILE: first-order light painted onto the light map (prt/paint.h) */
     bool gpu_finish;          /* --accumulate gpu: the method's last passes in the renderer */
     bool whole_texels;        /* a light map for a file: every light in it, none left to draw per pixel */
     char path_buf[1024];
@@ -133,7 +134,11 @@ typedef struct cli_light {
     "                        for methods that change colours without a rebake (prt info says)\n" \
     "  --brdf-of NAME=SPEC   reflect with BRDF SPEC on surface NAME, repeatable: one of the set\n" \
     "                        baked for it (prt info lists the sets; a scene material's \"brdfs\",\n" \
-    "                        spectral files); its diffuse part becomes the colour (--albedo-of wins)\n"
+    "                        spectral files); its diffuse part becomes the colour (--albedo-of wins)\n" \
+    "  --paint FILE          first-order light painted onto the light map (.exr .pfm .hdr of the\n" \
+    "                        map's size, as prt view's y saves it), for files whose method\n" \
+    "                        takes it (prt info says): reflected, scattered under the skin\n" \
+    "                        and bounced like a lamp's light\n"
 #define CLI_LIGHT_CONTROL_HELP \
     "  --control NAME=V      a run-time setting of the file's method (prt info lists them)\n"
 #define CLI_LIGHT_RELIGHT_HELP CLI_LIGHT_BRDF_HELP CLI_LIGHT_PAINT_HELP CLI_LIGHT_CONTROL_HELP
@@ -143,14 +148,15 @@ typedef struct cli_light {
 /* Returns 1 if the option was a lighting option (consumed), 0 if not, -1 on a bad value. */
 int cli_light_option(const cli *c, cli_light *l, int opt, const char *arg);
 enum { OPT_ENV = 1000, OPT_LAYOUT, OPT_ROTATE, OPT_INTENSITY, OPT_SUN, OPT_BRDF, OPT_LIGHT, OPT_EMISSION, OPT_ALBEDO_OF, OPT_CONTROL, OPT_BRDF_ALL,
-       OPT_BRDF_OF };
+       OPT_BRDF_OF, OPT_PAINT };
 #define CLI_LIGHT_LONG_OPTIONS \
     {"env", required_argument, 0, OPT_ENV}, {"layout", required_argument, 0, OPT_LAYOUT}, \
     {"rotate", required_argument, 0, OPT_ROTATE}, {"intensity", required_argument, 0, OPT_INTENSITY}, \
     {"sun", required_argument, 0, OPT_SUN}, {"brdf", required_argument, 0, OPT_BRDF}, \
     {"light", required_argument, 0, OPT_LIGHT}, {"emission", required_argument, 0, OPT_EMISSION}, \
     {"albedo-of", required_argument, 0, OPT_ALBEDO_OF}, {"control", required_argument, 0, OPT_CONTROL}, \
-    {"brdf-all", required_argument, 0, OPT_BRDF_ALL}, {"brdf-of", required_argument, 0, OPT_BRDF_OF}
+    {"brdf-all", required_argument, 0, OPT_BRDF_ALL}, {"brdf-of", required_argument, 0, OPT_BRDF_OF}, \
+    {"paint", required_argument, 0, OPT_PAINT}
 /* The lighting to use: what t (or, without t, the scene s; with neither, nothing) names, with the
  * command line's overrides. */
 prt_status cli_lighting(const cli *c, const cli_light *l, const prt_transfer *t, const prt_scene *s, prt_lighting **out);
@@ -174,6 +180,10 @@ prt_status cli_painted_albedo(const cli *c, const cli_light *l, const prt_transf
 /* The same for a choice of BRDFs made elsewhere (the viewer's): each chosen BRDF's diffuse part,
  * then --albedo-of. brdf_of as prt_relight_desc.brdf_of, or NULL. */
 prt_status cli_painted_albedo_for(const cli *c, const cli_light *l, const prt_transfer *t, const int *brdf_of, float **out);
+/* --paint FILE for t into d (paint, paint_width, paint_height); *owned is the map to free after
+ * relighting (NULL when none was given). Reports a file that does not fit or a method that
+ * takes no painting. */
+prt_status cli_painting(const cli *c, const cli_light *l, const prt_transfer *t, prt_relight_desc *d, float **owned);
 /* prt_relight_desc.brdf_of for --brdf-of (malloc'd, surface count + 1 entries; NULL and PRT_OK
  * when it asks nothing); reports an unknown surface or a BRDF not baked for it, listing them. */
 prt_status cli_brdf_choice(const cli *c, const cli_light *l, const prt_transfer *t, int **out);

@@ -258,15 +258,17 @@ static int relight_main(int argc, char **argv, bool exporting)
                     dd.controls = nc > 0 ? controls : NULL;
                     dd.brdf = light.have_brdf ? &light.brdf : NULL;
                     dd.brdf_everywhere = light.brdf_everywhere;
-                    float *albedo = NULL;
+                    float *albedo = NULL, *painting = NULL;
                     int *brdf_of = NULL;
                     prt_relit rd;
                     if (nc >= 0 && !cli_brdf_choice(&c, &light, t, &brdf_of) && !cli_painted_albedo_for(&c, &light, t, brdf_of, &albedo) &&
+                        !cli_painting(&c, &light, t, &dd, &painting) &&
                         (dd.albedo = albedo, dd.brdf_of = brdf_of, !prt_relight(c.ctx, t, lighting, &dd, &rd))) {
                         if ((direct = malloc(nv * 3 * sizeof(float))) && prt_relit_shade(c.ctx, t, &rd, eye, direct)) { free(direct); direct = NULL; }
                         prt_relit_free(&rd);
                     }
                     free(albedo);
+                    free(painting);
                     free(brdf_of);
                 }
                 cli_vertex_field f[3] = {{"radiance", rgb}, {"indirect", r.indirect}, {"direct", direct}};

@@ -22,6 +22,11 @@ static const char *HELP =
     "       ctrl+left-drag rotates the environment lighting,\n"
     "       alt+left-drag moves the selected light in the view plane (turns a directional one),\n"
     "       alt+right-drag or alt+wheel moves it in depth.\n"
+    "       Paint mode (o; files whose method takes painted light, prt info says): left-drag\n"
+    "       paints first-order light onto the surface under the cursor, right-drag erases,\n"
+    "       wheel sizes the brush, , . dim/brighten it, u its colour, v clears, y saves\n"
+    "       prt-paint-N.exr (prt render --paint); the light's bounces and subsurface\n"
+    "       scattering follow at once.\n"
     "Keys:  h lists them all; k what the file is relit as, d full/direct/indirect, the method's\n"
     "       own controls (h lists them), n add a light, g b the method's GPU passes on the\n"
     "       GPU or CPU and first-order and final light side by side (where it has them),\n"
@@ -42,7 +47,9 @@ static const char *HELP =
     "                             zoom F, env-rotate YAW PITCH, key NAME, drag left|right DX DY\n"
     "                             [ctrl|shift|alt], light-add TYPE [X Y Z], light-select N,\n"
     "                             light-move DX DY DZ, light-scale F, light-colour R G B,\n"
-    "                             light-remove, screenshot FILE (.png .exr), quit\n"
+    "                             light-remove, paint X Y RADIUS R,G,B (window pixels from\n"
+    "                             the top left, world radius; 0,0,0 erases), paint-clear,\n"
+    "                             paint-save FILE, screenshot FILE (.png .exr), quit\n"
     "      --stats                print frame and relight times as JSON on exit\n"
     "      --accumulate W         files whose method has GPU passes (prt info says): where they\n"
     "                             run - gpu (the default: binned atlases, additive blending; b\n"
@@ -188,6 +195,11 @@ static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
     d.albedo = v->albedo;
     d.brdf_of = v->brdf_of;
     d.gpu_finish = job->gpu;
+    if (job->painted && v->job_paint) {   /* the worker's copy, taken with the job */
+        d.paint = v->job_paint;
+        d.paint_width = v->paint_w;
+        d.paint_height = v->paint_h;
+    }
     if (!st) st = prt_relight(v->worker_ctx, v->t, v->lighting, &d, out);
     return st;
 }
@@ -200,6 +212,7 @@ static void *worker(void *arg)
         if (!v->job_posted) { pthread_cond_wait(&v->wake, &v->lock); continue; }
         relight_job job = v->job;
         v->job_posted = false;
+        if (job.painted && v->paint) memcpy(v->job_paint, v->paint, (size_t)v->paint_w * v->paint_h * 3 * sizeof *v->paint);
         pthread_mutex_unlock(&v->lock);
         double t0 = now();
         prt_relit r;
@@ -316,6 +329,9 @@ static void status_line(const viewer *v, char *buf, size_t n)
         len += snprintf(buf + len, n - (size_t)len, "\n%s light %d: %s", i == v->selected ? ">" : " ", i + 1, spec);
     }
     if (v->surface && len > 0 && (size_t)len < n) len += snprintf(buf + len, n - (size_t)len, "\nsurface: %s", prt_transfer_surface_name(v->t, v->surface));
+    char paint[256];
+    view_paint_status(v, paint, sizeof paint);
+    if (paint[0] && len > 0 && (size_t)len < n) len += snprintf(buf + len, n - (size_t)len, "\n%s", paint);
     if (v->message[0] && len > 0 && (size_t)len < n) len += snprintf(buf + len, n - (size_t)len, "\n%s", v->message);
     static const char *const mouse[] = {
         "  drag    orbit (fly mode: look around)", "  right-drag, shift+drag   pan", "  wheel   zoom",
@@ -324,6 +340,8 @@ static void status_line(const viewer *v, char *buf, size_t n)
     if (v->help)
         for (size_t i = 0; i < sizeof mouse / sizeof mouse[0] && len > 0 && (size_t)len < n; ++i)
             len += snprintf(buf + len, n - (size_t)len, "\n%s", mouse[i]);
+    if (v->help && prt_method_paintable(prt_transfer_method(v->t)) && len > 0 && (size_t)len < n)
+        len += snprintf(buf + len, n - (size_t)len, "\n  o, then drag   paint first-order light (right-drag erases, wheel: brush size)");
     if (v->help)
         for (int i = 0; i < v->ncontrols && len > 0 && (size_t)len < n; ++i)
             len += snprintf(buf + len, n - (size_t)len, "\n  %-7s %s", v->controls[i].name, v->controls[i].help);
@@ -382,13 +400,16 @@ static void handle(viewer *v, const prt_event *e)
         v->drag_mods = e->mods;
         v->last_x = e->x;
         v->last_y = e->y;
+        /* Paint mode: a click is a dab (left paints, right erases). */
+        if (v->paint_mode && !v->drag_mods && (v->drag_button == 1 || v->drag_button == 2)) view_paint_stroke(v, e->x, e->y, v->drag_button == 2);
         break;
     case PRT_EVENT_MOVE: {
         double dx = e->x - v->last_x, dy = e->y - v->last_y;
         v->last_x = e->x;
         v->last_y = e->y;
         if (!v->drag_button) break;
-        if (v->drag_mods & PRT_MOD_ALT) {
+        if (v->paint_mode && !v->drag_mods && (v->drag_button == 1 || v->drag_button == 2)) view_paint_stroke(v, e->x, e->y, v->drag_button == 2);
+        else if (v->drag_mods & PRT_MOD_ALT) {
             /* Lights follow the cursor: a pixel moves them by the view's extent at the target. */
             const float px = v->dist > 0 ? v->dist * 0.0015f : 0.01f;
             if (v->drag_button == 2) view_light_move(v, 0, 0, (float)dy * px);
@@ -399,7 +420,8 @@ static void handle(viewer *v, const prt_event *e)
         break;
     }
     case PRT_EVENT_SCROLL:
-        if (v->drag_mods & PRT_MOD_ALT) view_light_move(v, 0, 0, (float)e->y * (v->dist > 0 ? v->dist : 1.0f) * 0.05f);
+        if (v->paint_mode) view_paint_resize(v, (float)e->y);
+        else if (v->drag_mods & PRT_MOD_ALT) view_light_move(v, 0, 0, (float)e->y * (v->dist > 0 ? v->dist : 1.0f) * 0.05f);
         else view_zoom(v, powf(0.9f, (float)e->y));
         break;
     case PRT_EVENT_NONE: break;
@@ -414,6 +436,8 @@ int cmd_view(int argc, char **argv)
     viewer v;
     memset(&v, 0, sizeof v);
     v.c = &c;
+    pthread_mutex_init(&v.lock, NULL);   /* a painting given with --paint is loaded under it */
+    pthread_cond_init(&v.wake, NULL);
     v.light.intensity = 1.0f;
     v.hud = true;
     v.tonemap = 1;
@@ -477,6 +501,11 @@ int cmd_view(int argc, char **argv)
         if (cli_controls(&c, &v.light, v.t, v.want.controls) < 0) { c.reported = true; st = PRT_ERR_INVALID_ARG; }
         if (!st) st = cli_brdf_choice(&c, &v.light, v.t, &v.brdf_of);
         if (!st) st = cli_painted_albedo_for(&c, &v.light, v.t, v.brdf_of, &v.albedo);
+        if (!st && v.light.paint_path && !view_paint_load(&v, v.light.paint_path)) {
+            cli_error(&c, "--paint: %s", v.message);
+            c.reported = true;
+            st = PRT_ERR_INVALID_ARG;
+        }
     }
     if (!st) {
         /* The first frame is lit before the window opens, so a bad lighting fails at once. */
@@ -494,7 +523,10 @@ int cmd_view(int argc, char **argv)
         prt_lighting_release(v.lighting);
         free(v.albedo);
         free(v.brdf_of);
-    prt_transfer_release(v.t);
+        view_paint_free(&v);
+        pthread_mutex_destroy(&v.lock);
+        pthread_cond_destroy(&v.wake);
+        prt_transfer_release(v.t);
         prt_context_release(v.worker_ctx);
         prt_context_release(c.ctx);
         view_script_free(script);
@@ -504,6 +536,7 @@ int cmd_view(int argc, char **argv)
     view_register_method(&v);
     view_register_lights(&v);
     view_register_surfaces(&v);
+    view_register_paint(&v);
     const size_t nv = prt_transfer_vertex_count(v.t);
     {
         prt_render_mesh mesh;
@@ -523,8 +556,6 @@ int cmd_view(int argc, char **argv)
         cli_view_camera(&c, &view, prt_transfer_positions(v.t), nv, prt_transfer_indices(v.t), prt_transfer_triangle_count(v.t), (float)fw / fh, &v.start_cam);
     }
     v.result_version = v.shown_version = v.want.version;
-    pthread_mutex_init(&v.lock, NULL);
-    pthread_cond_init(&v.wake, NULL);
     pthread_create(&v.thread, NULL, worker, &v);
 
     double start = now();
@@ -565,6 +596,7 @@ int cmd_view(int argc, char **argv)
     prt_lighting_release(v.lighting);
     free(v.albedo);
     free(v.brdf_of);
+    view_paint_free(&v);
     prt_transfer_release(v.t);
     prt_context_release(v.worker_ctx);
     prt_context_release(c.ctx);

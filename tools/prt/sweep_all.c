@@ -390,7 +390,7 @@ int cmd_sweep_all(const char *cmd, int argc, char **argv)
     opterr = 0;   /* one line of our own instead of getopt's */
     while (!rc && (idx = -1, opt = getopt_long(argc, argv, ":o:j:qh", opts, &idx)) != -1) {
         const char *oname = idx >= 0 ? opts[idx].name : "";
-        if (opt == OPT_BRDF || opt == OPT_BRDF_ALL || opt == OPT_ALBEDO_OF || opt == OPT_BRDF_OF || opt == OPT_CONTROL) {
+        if (opt == OPT_BRDF || opt == OPT_BRDF_ALL || opt == OPT_ALBEDO_OF || opt == OPT_BRDF_OF || opt == OPT_CONTROL || opt == OPT_PAINT) {
             rc = cli_usage(&c, "--%s sets how one method's file is relit: it does not apply with --method all (give --method M)", oname);
             break;
         }

@@ -30,6 +30,7 @@ typedef struct relight_job {
     bool gpu;                  /* leave the method's last passes to the renderer (prt_relight_desc.gpu_finish) */
     prt_light lights[CLI_MAX_LIGHTS];
     int light_count;
+    bool painted;              /* relight with the painting (viewer.paint, copied to job_paint) */
     unsigned version;
 } relight_job;
 
@@ -80,6 +81,16 @@ struct viewer {
     /* fly mode: W A S D move, E Z rise and sink, dragging turns the view about the eye */
     bool fly;
     float scene_size;           /* the bounding box's diagonal: a fly step is 2% of it */
+    /* painting first-order light (files whose method takes it, prt/paint.h): o enters paint mode */
+    prt_painter *painter;       /* made on the first dab */
+    float *paint;               /* the painting: changed by the main thread under lock; NULL = none yet */
+    float *job_paint;           /* the worker's copy for the job it runs (taken under lock) */
+    int paint_w, paint_h;
+    bool paint_mode;            /* dragging paints (right-drag erases), the wheel sizes the brush */
+    float brush_radius;         /* world units; 0 = 3% of the scene until set */
+    float brush_light;          /* intensity times brush_colour: irradiance / pi */
+    int brush_colour;           /* in the palette */
+    int paintings;              /* y saves prt-paint-N.exr */
     /* statistics */
     double frame_ms_sum, draw_ms_sum, relight_ms_sum;
     long frames, draws, relights;
@@ -136,6 +147,25 @@ void view_sync(viewer *v);
 /* Draws a frame now; returns non-zero on a GL failure. */
 int view_frame(viewer *v);
 prt_status view_screenshot(viewer *v, const char *path);
+
+/* Painting first-order light (view_paint.c). Each returns false with v->message set when it does
+ * not apply (a file whose method takes no painting says why). */
+void view_register_paint(viewer *v);
+/* One dab at window pixel (x, y) (from the top left): the surface under it, a brush of `radius`
+ * world units painting rgb (irradiance / pi; zero erases). */
+bool view_paint_at(viewer *v, double x, double y, float radius, const float rgb[3]);
+/* The same with the current brush (erase: paints nothing), for mouse strokes. */
+bool view_paint_stroke(viewer *v, double x, double y, bool erase);
+bool view_paint_clear(viewer *v);
+bool view_paint_save(viewer *v, const char *path);
+bool view_paint_load(viewer *v, const char *path);
+/* Paint mode's own keys (, . brighten and dim the brush): true when key was taken. */
+bool view_paint_key(viewer *v, int key);
+/* The wheel in paint mode: the brush grows or shrinks by 10% a step. */
+void view_paint_resize(viewer *v, float steps);
+/* A status line for paint mode into buf ("" outside it). */
+void view_paint_status(const viewer *v, char *buf, size_t n);
+void view_paint_free(viewer *v);
 
 /* Script replay: returns 0 on success, an exit code after reporting a bad script. */
 typedef struct view_script view_script;

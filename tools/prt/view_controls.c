@@ -30,6 +30,7 @@ void view_press(viewer *v, int key)
                  key == 'E' ? 1.0f : key == 'Z' ? -1.0f : 0.0f);
         return;
     }
+    if (view_paint_key(v, key)) return;   /* paint mode takes , and . for the brush */
     for (int i = 0; i < v->ncontrols; ++i)
         if (v->controls[i].key == key) {
             v->message[0] = 0;

@@ -8,12 +8,13 @@
 #include <string.h>
 
 typedef enum { EV_ORBIT, EV_PAN, EV_ZOOM, EV_ENV, EV_KEY, EV_DRAG, EV_SCREENSHOT, EV_QUIT, EV_LIGHT_ADD, EV_LIGHT_SELECT, EV_LIGHT_MOVE,
-               EV_LIGHT_SCALE, EV_LIGHT_COLOUR, EV_LIGHT_REMOVE } ev_kind;
+               EV_LIGHT_SCALE, EV_LIGHT_COLOUR, EV_LIGHT_REMOVE, EV_PAINT, EV_PAINT_CLEAR, EV_PAINT_SAVE } ev_kind;
 
 typedef struct ev {
     double time;
     ev_kind kind;
     float a, b, c;
+    float rgb[3];      /* paint: the light */
     int button, mods;
     bool has_position;
     char text[512];    /* key name or screenshot path */
@@ -29,11 +30,12 @@ static const struct { const char *name; ev_kind kind; int nargs; } verbs[] = {
     {"drag", EV_DRAG, 3}, {"screenshot", EV_SCREENSHOT, -1}, {"quit", EV_QUIT, 0}, {"light-add", EV_LIGHT_ADD, 1},
     {"light-select", EV_LIGHT_SELECT, 1}, {"light-move", EV_LIGHT_MOVE, 3}, {"light-scale", EV_LIGHT_SCALE, 1},
     {"light-colour", EV_LIGHT_COLOUR, 3}, {"light-color", EV_LIGHT_COLOUR, 3}, {"light-remove", EV_LIGHT_REMOVE, 0},
+    {"paint", EV_PAINT, 4}, {"paint-clear", EV_PAINT_CLEAR, 0}, {"paint-save", EV_PAINT_SAVE, -1},
 };
 
 static const char *VERBS = "verbs: orbit DYAW DPITCH, pan DX DY, zoom F, env-rotate YAW PITCH, key NAME, drag left|right DX DY [ctrl|shift|alt], "
                            "light-add point|spot|directional|sphere [X Y Z], light-select N, light-move DX DY DZ, light-scale F, "
-                           "light-colour R G B, light-remove, screenshot FILE, quit";
+                           "light-colour R G B, light-remove, paint X Y RADIUS R,G,B, paint-clear, paint-save FILE, screenshot FILE, quit";
 
 static bool number(const char *text, float *out)
 {
@@ -97,13 +99,24 @@ int view_script_load(const cli *c, const char *path, view_script **out)
         e->kind = verbs[k].kind;
         bool numbers = true;
         if (e->kind == EV_KEY) snprintf(e->text, sizeof e->text, "%s", arg[0]);
-        else if (e->kind == EV_SCREENSHOT) {
+        else if (e->kind == EV_SCREENSHOT || e->kind == EV_PAINT_SAVE) {
             /* Relative to the script, as its other paths would be: the script can move with its shots. */
             const char *slash = strrchr(path, '/');
             const size_t dir = arg[0][0] == '/' || !slash ? 0 : (size_t)(slash - path) + 1;
             ok = dir + strlen(arg[0]) < sizeof e->text;
             if (ok) { memcpy(e->text, path, dir); memcpy(e->text + dir, arg[0], strlen(arg[0]) + 1); }
-            else { cli_error(c, "%s:%d: the screenshot path is too long", path, lineno); fclose(f); view_script_free(s); return EXIT_USAGE; }
+            else { cli_error(c, "%s:%d: the %s path is too long", path, lineno, verb); fclose(f); view_script_free(s); return EXIT_USAGE; }
+        }
+        else if (e->kind == EV_PAINT) {
+            /* X Y in window pixels from the top left, the radius in world units, the light >= 0. */
+            numbers = number(arg[0], &e->a) && number(arg[1], &e->b) && number(arg[2], &e->c) && e->c > 0 && cli_parse_vec3(arg[3], true, e->rgb) &&
+                      e->rgb[0] >= 0 && e->rgb[1] >= 0 && e->rgb[2] >= 0;
+            if (!numbers) {
+                cli_error(c, "%s:%d: paint takes X Y RADIUS R,G,B: pixels, a radius > 0 and light >= 0", path, lineno);
+                fclose(f);
+                view_script_free(s);
+                return EXIT_USAGE;
+            }
         }
         else if (e->kind == EV_LIGHT_ADD) {
             e->button = (int)type;
@@ -184,6 +197,12 @@ int view_script_step(view_script *s, viewer *v, double elapsed)
             break;
         }
         case EV_LIGHT_REMOVE: if (!view_light_remove(v)) return script_refused(v); break;
+        case EV_PAINT: if (!view_paint_at(v, e->a, e->b, e->c, e->rgb)) return script_refused(v); break;
+        case EV_PAINT_CLEAR: if (!view_paint_clear(v)) return script_refused(v); break;
+        case EV_PAINT_SAVE:
+            if (!view_paint_save(v, e->text)) return script_refused(v);
+            if (!v->c->quiet) fprintf(stderr, "prt view: wrote %s\n", e->text);
+            break;
         }
         v->dirty = true;
     }

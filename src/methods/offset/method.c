@@ -294,6 +294,14 @@ static prt_status offset_relight(prt_context *ctx, const prt_transfer *t, const 
     return prt__offset_relight(ctx, t, l, &dd, r);
 }
 
+/* A painting covers the first-order light map (prt/paint.h); relight.c adds it to what the lights
+ * deliver. */
+static void offset_paint_layout(const prt_transfer *t, prt__paint_layout *out)
+{
+    const prt__offset_set *s = t->state;
+    *out = (prt__paint_layout){s->width, s->height, s->covered, s->texel, s->pos, s->nrm};
+}
+
 const prt__method prt__method_offset = {
     .name = "offset",
     .title = "offset radiance transfer maps",
@@ -321,6 +329,7 @@ const prt__method prt__method_offset = {
     .control_range = offset_control_range,
     .relight = offset_relight,
     .shade = prt__offset_shade,
+    .paint_layout = offset_paint_layout,
 };
 
 /* ---- the offset public accessors ---- */

@@ -257,12 +257,13 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     const float emission = prt_lighting_emission(l);
     /* first: first-order radiance; a: irradiance / pi, what subsurface scattering takes in. The
      * emissive surfaces light the others directly (their baked irradiance); their own emission
-     * is added to what is shown, not bounced again. */
+     * is added to what is shown, not bounced again. Painted light (prt/paint.h) arrives as the
+     * lights' does: reflected, scattered and bounced with it (checked >= 0 by prt_relight). */
     for (size_t i = 0; i < nc; ++i)
         for (int c = 0; c < 3; ++c) {
             float e = (E[i * 3 + c] + (s->emit_in ? emission * s->emit_in[i * 3 + c] : 0.0f)) / (float)PRT_PI;
             for (int k = 0; k < PRT__OFFSET_ENV_COEFFS; ++k) e += s->env[i * PRT__OFFSET_ENV_COEFFS + k] * env.coeffs[c][k];
-            a[i * 3 + c] = e > 0 ? e : 0;
+            a[i * 3 + c] = (e > 0 ? e : 0) + (d->paint ? d->paint[(size_t)s->texel[i] * 3 + c] : 0.0f);
             first[i * 3 + c] = s->albedo[i * 3 + c] * a[i * 3 + c];
         }
     /* Drawn on the CPU path, the local lights' direct light on opaque surfaces is the renderer's,
