@@ -91,31 +91,15 @@ static bool build_adjacency(atlas *a)
                 a->across[t * 3 + k] = -1;
             }
         qsort(e, nt * 3, sizeof *e, by_edge);
-        /* Two triangles on an edge, running along it in opposite directions: one surface. Scans
-         * (vrip reconstructions) have edges shared by four or six, where sheets touch or faces
-         * are doubled: each pairs with the opposite one it bends least against, never with its
-         * own reverse. */
+        /* Exactly two triangles on an edge, running along it in opposite directions: one surface. */
         for (size_t i = 0; i < nt * 3;) {
             size_t j = i + 1;
             while (j < nt * 3 && e[j].a == e[i].a && e[j].b == e[i].b) j++;
-            for (size_t x = i; x < j && j - i <= 8; ++x) {
-                const uint32_t s = e[x].id;
-                if (a->across[s] >= 0) continue;
-                int64_t pick = -1;
-                double best = -INFINITY;
-                for (size_t y = i; y < j; ++y) {
-                    const uint32_t u = e[y].id;
-                    if (a->across[u] >= 0 || s / 3 == u / 3 || a->weld[m->indices[s]] == a->weld[m->indices[u]]) continue;
-                    const uint32_t *is = m->indices + (s / 3) * 3, *iu = m->indices + (u / 3) * 3;
-                    int shared = 0;
-                    for (int p = 0; p < 3; ++p)
-                        for (int q = 0; q < 3; ++q) shared += a->weld[is[p]] == a->weld[iu[q]];
-                    if (shared == 3) continue;
-                    const double d = a->normal[(s / 3) * 3] * a->normal[(u / 3) * 3] + a->normal[(s / 3) * 3 + 1] * a->normal[(u / 3) * 3 + 1] +
-                                     a->normal[(s / 3) * 3 + 2] * a->normal[(u / 3) * 3 + 2];
-                    if (d > best) { best = d; pick = u; }
-                }
-                if (pick >= 0) { a->across[s] = (int64_t)pick / 3; a->across[pick] = s / 3; }
+            if (j - i == 2) {
+                uint32_t s = e[i].id, u = e[i + 1].id;
+                uint32_t s0 = a->weld[m->indices[s]], u0 = a->weld[m->indices[u]];
+                bool opposite = s0 != u0 && s / 3 != u / 3;
+                if (opposite) { a->across[s] = u / 3; a->across[u] = s / 3; }
             }
             i = j;
         }
@@ -1017,7 +1001,7 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
         for (int c = 0; c < 3; ++c) a.smooth[t * 3 + c] = sl > 0 ? sn[c] / sl : a.normal[t * 3 + c];
     }
     if (!st && !(total > 0)) st = prt__fail(ctx, PRT_ERR_EMPTY, "the mesh has no area to lay out in UV space");
-    if (!st && !build_adjacency(&a)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");   /* pairs by the normals */
+    if (!st && !build_adjacency(&a)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
     if (!st) {
         a.local = malloc(a.nw * sizeof *a.local);
         if (!a.local) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
