@@ -79,8 +79,8 @@ static float distance2(const float u[3], const float v[3], float px, float py)
     return best;
 }
 
-/* Lays out m at res and checks everything an atlas promises. */
-static void check_atlas(prt__mesh *m, int res, const char *what)
+/* Lays out m at res and checks everything an atlas promises; coverage at least min_coverage. */
+static void check_atlas(prt__mesh *m, int res, const char *what, double min_coverage)
 {
     prt_context *ctx = test_context(1);
     const size_t nv0 = m->vertex_count, nt = m->triangle_count;
@@ -157,7 +157,26 @@ static void check_atlas(prt__mesh *m, int res, const char *what)
     assert_true(worst <= 4.0 + 1e-3);
     assert_true(mean < 1.2);
     assert_true(fabs(worst - r.worst_stretch) < 1e-9);
-    assert_true(r.coverage > 0.2);
+    assert_true(r.coverage >= min_coverage);
+    /* One texel density: every chart's UV area over its surface area is the map's, to float
+     * rounding of the UVs (1e-3 of a chart of a few texels). */
+    double *uv_area = calloc(nt, sizeof *uv_area), *world = calloc(nt, sizeof *world);
+    for (size_t t = 0; t < nt; ++t) {
+        const uint32_t *ix = m->indices + t * 3;
+        const float *a = m->uv + ix[0] * 2, *b = m->uv + ix[1] * 2, *c = m->uv + ix[2] * 2;
+        uv_area[chart[t]] += 0.5 * ((double)(b[0] - a[0]) * (c[1] - a[1]) - (double)(c[0] - a[0]) * (b[1] - a[1])) * res * res;
+        float e1[3], e2[3], n[3];
+        for (int k = 0; k < 3; ++k) { e1[k] = m->positions[ix[1] * 3 + k] - m->positions[ix[0] * 3 + k]; e2[k] = m->positions[ix[2] * 3 + k] - m->positions[ix[0] * 3 + k]; }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1]; n[1] = e1[2] * e2[0] - e1[0] * e2[2]; n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        world[chart[t]] += 0.5 * sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
+    }
+    double spread = 0;
+    for (size_t t = 0; t < nt; ++t)
+        if (world[t] > 0 && uv_area[t] > 4) spread = fmax(spread, fabs(uv_area[t] / world[t] / r.texel_density - 1));
+    print_message("%s: texel density %.4g per unit area, charts within %.2g%% of it\n", what, r.texel_density, 100 * spread);
+    assert_true(spread < 2e-3);
+    free(uv_area);
+    free(world);
     free(hit);
     free(owner);
     free(chart);
@@ -178,13 +197,13 @@ static void test_layouts(void **state)
     test_mesh t = {0};
     tm_sphere(&t, (float[3]){0, 0, 0}, 1.0f, 24, 48);
     prt__mesh m = to_mesh(&t);
-    check_atlas(&m, 256, "sphere");
+    check_atlas(&m, 256, "sphere", 0.6);
     prt__mesh_free(&m);
     tm_free(&t);
 
     bumpy_sphere(&t, 60, 120, 0.03f);
     m = to_mesh(&t);
-    check_atlas(&m, 512, "bumpy sphere");
+    check_atlas(&m, 512, "bumpy sphere", 0.65);
     /* Deterministic: the same mesh gives the same layout. */
     prt__mesh m2 = to_mesh(&t);
     prt_context *ctx = test_context(1);
@@ -193,6 +212,23 @@ static void test_layouts(void **state)
     assert_memory_equal(m2.uv, m.uv, m.vertex_count * 2 * sizeof(float));
     assert_memory_equal(m2.indices, m.indices, m.triangle_count * 3 * sizeof(uint32_t));
     prt__mesh_free(&m2);
+    prt__mesh_free(&m);
+    tm_free(&t);
+
+    /* A lumpy scan: bumps of several sizes on the noise. Charting cuts it into hundreds of ragged
+     * charts (folds in the flattening split them down to crumbs), which no packing brings near
+     * 70% at 128 texels: the open part of issue 30, held here at what it gives. */
+    bumpy_sphere(&t, 80, 160, 0.02f);
+    for (size_t v = 0; v < t.nv; ++v) {
+        float *p = t.pos + v * 3;
+        const float k = 1.0f + 0.25f * sinf(5 * p[0]) * sinf(4 * p[1] + 1) * sinf(6 * p[2] + 2) + 0.1f * sinf(13 * p[1]) * sinf(11 * p[0]);
+        for (int c = 0; c < 3; ++c) p[c] *= k;
+    }
+    m = to_mesh(&t);
+    check_atlas(&m, 128, "lumpy sphere at 128", 0.25);
+    prt__mesh_free(&m);
+    m = to_mesh(&t);
+    check_atlas(&m, 512, "lumpy sphere", 0.5);
     prt__mesh_free(&m);
     tm_free(&t);
 
@@ -207,21 +243,21 @@ static void test_layouts(void **state)
             tm_tri(&f, 0, 1 + i, 1 + (i + 1) % 3000);
         }
         m = to_mesh(&f);
-        check_atlas(&m, 256, "fan");
+        check_atlas(&m, 256, "fan", 0.7);
         prt__mesh_free(&m);
         tm_free(&f);
     }
 
     tm_pit(&t, 8);   /* a room without a ceiling: five planar charts meeting at right angles */
     m = to_mesh(&t);
-    check_atlas(&m, 128, "open box");
+    check_atlas(&m, 128, "open box", 0.45);
     prt__mesh_free(&m);
     tm_free(&t);
 
     /* Too many charts for the map: refused, saying what to do. */
     tm_sphere(&t, (float[3]){0, 0, 0}, 1.0f, 24, 48);
     m = to_mesh(&t);
-    assert_int_equal(prt__uv_atlas(ctx, &m, &(prt__atlas_desc){.resolution = 8}, NULL), PRT_ERR_INVALID_ARG);
+    assert_int_equal(prt__uv_atlas(ctx, &m, &(prt__atlas_desc){.resolution = 4}, NULL), PRT_ERR_INVALID_ARG);
     assert_non_null(strstr(prt_last_error(), "raise --texels"));
     prt__mesh_free(&m);
     tm_free(&t);
@@ -240,7 +276,13 @@ static void test_real_meshes(void **state)
         prt_context *ctx = test_context(1);
         prt_scene *s = NULL;
         assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
-        check_atlas(&s->mesh, 512, names[i]);
+        check_atlas(&s->mesh, 512, names[i], 0.65);
+        if (i == 0) {   /* the bunny at the offset method's default light map */
+            prt_scene *s2 = NULL;
+            assert_int_equal(prt_scene_load(ctx, path, NULL, &s2), PRT_OK);
+            check_atlas(&s2->mesh, 128, "bunny at 128", 0.6);
+            prt_scene_release(s2);
+        }
         prt_scene_release(s);
         prt_context_release(ctx);
     }

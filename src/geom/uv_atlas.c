@@ -4,14 +4,18 @@
  * projection onto its mean plane, and checked: a map that folds a triangle, stretches one beyond
  * MAX_STRETCH or overlaps itself falls back to the projection, and a chart neither can flatten is
  * cut in two and tried again. Charts are scaled to one texel density, turned to their smallest
- * bounding box and packed into shelves; the largest density that fits is found by bisection. */
+ * bounding box and packed by the texels they touch (four quarter turns each, into any hole they
+ * fit); the largest density that fits is found by bisection. */
 #include "geom/uv_atlas.h"
+
+#include "geom/texel_raster.h"
 
 #include <string.h>
 
 #define MAX_STRETCH 4.0       /* singular-value ratio a chart's worst triangle may reach */
 #define SPLIT_DEPTH 48
 #define PACK_ANGLES 32
+#define PACK_STEPS 16      /* bisections of the scale from 0: to 2e-5 of the largest (8 from 40%: 2e-3) */
 
 typedef struct chart {
     uint32_t *tris;
@@ -20,6 +24,7 @@ typedef struct chart {
     size_t nv;
     double *uv;         /* [nv][2], in scene units after flattening, texels after packing */
     double w, h;        /* bounding box after turning */
+    uint32_t *corner;   /* [nt][3] the triangles' corners as indices into uv, for packing */
 } chart;
 
 typedef struct atlas {
@@ -709,38 +714,178 @@ static void chart_orient(chart *c)
     c->h = turn ? hi[0] - lo[0] : hi[1] - lo[1];
 }
 
-typedef struct chart_key { double h, w; uint32_t i; } chart_key;
-static int by_height(const void *x, const void *y)
+typedef struct chart_key { double size, h; uint32_t i; } chart_key;
+static int by_size(const void *x, const void *y)
 {
     const chart_key *a = x, *b = y;
+    if (a->size != b->size) return a->size > b->size ? -1 : 1;
     if (a->h != b->h) return a->h > b->h ? -1 : 1;
-    if (a->w != b->w) return a->w > b->w ? -1 : 1;
     return a->i < b->i ? -1 : a->i > b->i;
 }
 
-/* Shelf packing at scale s (texels per scene unit); corners in texels, or false when it does not fit. */
-static bool pack(const atlas *a, const uint32_t *order, double s, int res, int pad, int32_t *at)
+/* A texel whose centre lies this near a chart is one it touches: a texel's square reaches
+ * sqrt(1/2) from its centre, so every texel holding some of the chart's surface is among them. */
+#define REACH 0.71
+
+typedef struct placement { int32_t x, y, turn; } placement;
+
+/* Scratch for packing at one scale: the chart's footprint, turned, and what is packed. */
+typedef struct packer {
+    const atlas *a;
+    int res, pad;
+    const uint32_t *order;
+    int words;              /* 64-bit words per row of the map */
+    uint8_t *bits;          /* the chart's footprint, unturned */
+    uint64_t *mask;         /* the footprint turned, as rows of bits */
+    uint64_t *occupied;     /* texels packed charts touch, grown by pad: res rows of words */
+    int32_t *bottom;        /* [column] of the turned footprint */
+    int32_t *floor;         /* [column] lowest texel not occupied */
+} packer;
+
+/* The chart's grid at scale s (turn 0): texels it touches, in a w x h box whose corner is REACH
+ * below and left of the chart's. */
+static void chart_grid(const chart *c, double s, int *w, int *h)
 {
-    long x = 0, y = 0, shelf = 0;
+    *w = (int)ceil(c->w * s + 2 * REACH);
+    *h = (int)ceil(c->h * s + 2 * REACH);
+}
+
+/* Marks the texels of the chart's grid that it touches. */
+static void footprint(packer *p, const chart *c, double s, int W, int H)
+{
+    memset(p->bits, 0, (size_t)W * H);
+    const double r2 = REACH * REACH;
+    for (size_t t = 0; t < c->nt; ++t) {
+        double u[3], v[3];
+        for (int k = 0; k < 3; ++k) {
+            const double *q = c->uv + (size_t)c->corner[t * 3 + k] * 2;
+            u[k] = q[0] * s + REACH;
+            v[k] = q[1] * s + REACH;
+        }
+        const double d = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
+        const int x0 = (int)fmax(0, floor(fmin(u[0], fmin(u[1], u[2])) - REACH)), x1 = (int)fmin(W, ceil(fmax(u[0], fmax(u[1], u[2])) + REACH));
+        const int y0 = (int)fmax(0, floor(fmin(v[0], fmin(v[1], v[2])) - REACH)), y1 = (int)fmin(H, ceil(fmax(v[0], fmax(v[1], v[2])) + REACH));
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) {
+                uint8_t *b = p->bits + (size_t)y * W + x;
+                if (*b) continue;
+                const double px = x + 0.5, py = y + 0.5;
+                if (d != 0) {
+                    const double b1 = ((px - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (py - v[0])) / d;
+                    const double b2 = ((u[1] - u[0]) * (py - v[0]) - (px - u[0]) * (v[1] - v[0])) / d;
+                    if (b1 >= 0 && b2 >= 0 && b1 + b2 <= 1) { *b = 1; continue; }
+                }
+                for (int e = 0; e < 3 && !*b; ++e) {
+                    const int i = e, j = (e + 1) % 3;
+                    const double ex = u[j] - u[i], ey = v[j] - v[i], l2 = ex * ex + ey * ey;
+                    const double f = l2 > 0 ? fmin(fmax(((px - u[i]) * ex + (py - v[i]) * ey) / l2, 0), 1) : 0;
+                    const double qx = u[i] + f * ex - px, qy = v[i] + f * ey - py;
+                    if (qx * qx + qy * qy <= r2) *b = 1;
+                }
+            }
+    }
+}
+
+/* The footprint turned by turn quarters counter-clockwise about its grid (texel (x, y) of the
+ * W x H grid goes to (H - 1 - y, x) at one turn), as rows of bits, and the lowest touched row of
+ * each column (INT32_MAX where none); its width and height. */
+static void turned(packer *p, int W, int H, int turn, int *w_out, int *h_out)
+{
+    const int w = turn & 1 ? H : W, h = turn & 1 ? W : H, words = (w + 63) / 64;
+    memset(p->mask, 0, (size_t)h * words * sizeof *p->mask);
+    for (int x = 0; x < w; ++x) p->bottom[x] = INT32_MAX;
+    int height = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            if (!p->bits[(size_t)y * W + x]) continue;
+            const int tx = turn == 0 ? x : turn == 1 ? H - 1 - y : turn == 2 ? W - 1 - x : y;
+            const int ty = turn == 0 ? y : turn == 1 ? x : turn == 2 ? H - 1 - y : W - 1 - x;
+            p->mask[(size_t)ty * words + tx / 64] |= (uint64_t)1 << (tx % 64);
+            if (ty < p->bottom[tx]) p->bottom[tx] = ty;
+            if (ty + 1 > height) height = ty + 1;
+        }
+    *w_out = w;
+    *h_out = height;
+}
+
+/* Does the turned footprint (w wide, h rows) touch no occupied texel when its corner is at (x, y)? */
+static bool fits(const packer *p, int w, int h, int x, int y)
+{
+    const int words = (w + 63) / 64, sh = x % 64, base = x / 64;
+    for (int r = 0; r < h; ++r) {
+        const uint64_t *m = p->mask + (size_t)r * words, *o = p->occupied + (size_t)(y + r) * p->words + base;
+        uint64_t carry = 0;
+        for (int k = 0; k <= words; ++k) {
+            const uint64_t cur = k < words ? m[k] : 0;
+            const uint64_t v = sh ? (cur << sh) | carry : cur;
+            carry = sh ? cur >> (64 - sh) : 0;
+            if (v && (base + k >= p->words || (o[k] & v))) return false;
+        }
+    }
+    return true;
+}
+
+/* Marks the turned footprint at (x, y), grown by pad texels every way, as occupied. */
+static void occupy(packer *p, int w, int h, int x, int y)
+{
+    const int words = (w + 63) / 64, res = p->res, pad = p->pad;
+    for (int r = 0; r < h; ++r)
+        for (int k = 0; k < w; ++k) {
+            if (!(p->mask[(size_t)r * words + k / 64] >> (k % 64) & 1)) continue;
+            for (int yy = y + r - pad; yy <= y + r + pad; ++yy) {
+                if (yy < 0 || yy >= res) continue;
+                for (int xx = x + k - pad; xx <= x + k + pad; ++xx)
+                    if (xx >= 0 && xx < res) p->occupied[(size_t)yy * p->words + xx / 64] |= (uint64_t)1 << (xx % 64);
+            }
+        }
+    for (int c = x - pad < 0 ? 0 : x - pad; c < x + w + pad && c < res; ++c) {
+        while (p->floor[c] < res && p->occupied[(size_t)p->floor[c] * p->words + c / 64] >> (c % 64) & 1) p->floor[c]++;
+    }
+}
+
+/* Packs the charts' footprints at scale s (texels per scene unit) into the map, largest first:
+ * each, at each quarter turn, goes where its top lies lowest, down into any hole it fits (not
+ * only onto the others' tops), keeping pad empty texels between its touched texels and any other
+ * chart's. Corners in at, or false when some chart does not fit. */
+static bool pack(packer *p, double s, placement *at)
+{
+    const atlas *a = p->a;
+    const int res = p->res;
+    memset(p->occupied, 0, (size_t)res * p->words * sizeof *p->occupied);
+    for (int x = 0; x < res; ++x) p->floor[x] = 0;
     for (size_t i = 0; i < a->count; ++i) {
-        const chart *c = &a->charts[order[i]];
-        if (!(c->w * s <= res) || !(c->h * s <= res)) return false;
-        long w = (long)ceil(c->w * s) + 2 * pad, h = (long)ceil(c->h * s) + 2 * pad;
-        if (w < 1 + 2 * pad) w = 1 + 2 * pad;
-        if (h < 1 + 2 * pad) h = 1 + 2 * pad;
-        if (w > res) return false;
-        if (x + w > res) { y += shelf; x = 0; shelf = 0; }
-        if (y + h > res) return false;
-        if (at) { at[order[i] * 2] = (int32_t)x; at[order[i] * 2 + 1] = (int32_t)y; }
-        x += w;
-        if (h > shelf) shelf = h;
+        const uint32_t ci = p->order[i];
+        const chart *c = &a->charts[ci];
+        int W, H;
+        chart_grid(c, s, &W, &H);
+        if (W > res || H > res) return false;
+        footprint(p, c, s, W, H);
+        int64_t best_top = INT64_MAX;
+        placement best = {0, 0, -1};
+        for (int turn = 0; turn < 4; ++turn) {
+            int w, h;
+            turned(p, W, H, turn, &w, &h);
+            for (int x = 0; x + w <= res; ++x) {
+                /* From the lowest free texel under every column up; above all that is packed it fits. */
+                int64_t y = 0;
+                for (int k = 0; k < w; ++k)
+                    if (p->bottom[k] != INT32_MAX && (int64_t)p->floor[x + k] - p->bottom[k] > y) y = (int64_t)p->floor[x + k] - p->bottom[k];
+                while (y + h < best_top && y + h <= res && !fits(p, w, h, x, (int)y)) y++;
+                if (y + h < best_top && y + h <= res) { best_top = y + h; best = (placement){x, (int32_t)y, turn}; }
+            }
+        }
+        if (best.turn < 0) return false;
+        int w, h;
+        turned(p, W, H, best.turn, &w, &h);
+        occupy(p, w, h, best.x, best.y);
+        if (at) at[ci] = best;
     }
     return true;
 }
 
 /* ---- the mesh with its new vertices ---- */
 
-static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, const int32_t *at, double s, int res, int pad, size_t *added)
+static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, const placement *at, double s, int res, size_t *added)
 {
     const size_t nv = m->vertex_count;
     int64_t *owner = malloc(nv * sizeof *owner);         /* chart that keeps the vertex's own id */
@@ -776,7 +921,8 @@ static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, c
     for (size_t ci = 0; ci < a->count; ++ci) {
         const chart *c = &a->charts[ci];
         for (size_t v = 0; v < c->nv; ++v) a->local[c->verts[v]] = (int32_t)v;
-        const double ox = at[ci * 2] + pad, oy = at[ci * 2 + 1] + pad;
+        int W, H;
+        chart_grid(c, s, &W, &H);
         for (size_t t = 0; t < c->nt; ++t)
             for (int k = 0; k < 3; ++k) {
                 uint32_t *slot = m->indices + (size_t)c->tris[t] * 3 + k, o = *slot, id = o;
@@ -796,8 +942,13 @@ static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, c
                     *slot = id;
                 }
                 const double *p = c->uv + a->local[a->weld[o]] * 2;
-                m->uv[(size_t)id * 2] = (float)((ox + p[0] * s) / res);
-                m->uv[(size_t)id * 2 + 1] = (float)((oy + p[1] * s) / res);
+                /* Where packing put it: its grid turned about the grid's corner (texels onto texels). */
+                const double gx = p[0] * s + REACH, gy = p[1] * s + REACH;
+                const int turn = at[ci].turn;
+                const double tx = turn == 0 ? gx : turn == 1 ? H - gy : turn == 2 ? W - gx : gy;
+                const double ty = turn == 0 ? gy : turn == 1 ? gx : turn == 2 ? H - gy : W - gx;
+                m->uv[(size_t)id * 2] = (float)((at[ci].x + tx) / res);
+                m->uv[(size_t)id * 2 + 1] = (float)((at[ci].y + ty) / res);
             }
         chart_release_locals(a, c);
     }
@@ -830,12 +981,7 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
     a.stamp = calloc(a.nt, sizeof *a.stamp);
     prt_status st = PRT_OK;
     double total = 0;
-    if (!a.weld || !a.rep || !a.across || !a.normal || !a.smooth || !a.area || !a.stamp || !build_adjacency(&a)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
-    if (!st) {
-        a.local = malloc(a.nw * sizeof *a.local);
-        if (!a.local) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
-        else for (size_t w = 0; w < a.nw; ++w) a.local[w] = -1;
-    }
+    if (!a.weld || !a.rep || !a.across || !a.normal || !a.smooth || !a.area || !a.stamp) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
     for (size_t t = 0; t < a.nt && !st; ++t) {
         const uint32_t *ix = m->indices + t * 3;
         const float *p0 = m->positions + ix[0] * 3, *p1 = m->positions + ix[1] * 3, *p2 = m->positions + ix[2] * 3;
@@ -855,20 +1001,33 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
         for (int c = 0; c < 3; ++c) a.smooth[t * 3 + c] = sl > 0 ? sn[c] / sl : a.normal[t * 3 + c];
     }
     if (!st && !(total > 0)) st = prt__fail(ctx, PRT_ERR_EMPTY, "the mesh has no area to lay out in UV space");
+    if (!st && !build_adjacency(&a)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    if (!st) {
+        a.local = malloc(a.nw * sizeof *a.local);
+        if (!a.local) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+        else for (size_t w = 0; w < a.nw; ++w) a.local[w] = -1;
+    }
     if (!st) st = grow_charts(ctx, &a, cos(max_angle * PRT_PI / 180.0));
-    int32_t *at = NULL;
+    placement *at = NULL;
     uint32_t *order = NULL;
     double s = 0;
+    packer pk = {0};
     if (!st) {
         /* One density for every chart: scale each so its UV area equals its area in space. */
-        for (size_t ci = 0; ci < a.count; ++ci) {
+        int side = 0;
+        for (size_t ci = 0; ci < a.count && !st; ++ci) {
             chart *c = &a.charts[ci];
             double uv_area = 0, area = 0;
+            c->corner = malloc(c->nt * 3 * sizeof *c->corner);
+            if (!c->corner) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); break; }
             for (size_t v = 0; v < c->nv; ++v) a.local[c->verts[v]] = (int32_t)v;
             for (size_t t = 0; t < c->nt; ++t) {
                 const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
                 const double *p[3];
-                for (int k = 0; k < 3; ++k) p[k] = c->uv + a.local[a.weld[ix[k]]] * 2;
+                for (int k = 0; k < 3; ++k) {
+                    c->corner[t * 3 + k] = (uint32_t)a.local[a.weld[ix[k]]];
+                    p[k] = c->uv + c->corner[t * 3 + k] * 2;
+                }
                 uv_area += 0.5 * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]));
                 area += a.area[c->tris[t]];
             }
@@ -877,34 +1036,48 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
             for (size_t v = 0; v < c->nv * 2; ++v) c->uv[v] *= k;
             chart_orient(c);
         }
+        side = res + 1;
         order = malloc(a.count * sizeof *order);
-        at = malloc(a.count * 2 * sizeof *at);
-        if (!order || !at) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+        at = malloc(a.count * sizeof *at);
+        pk = (packer){.a = &a, .res = res, .pad = pad, .order = order};
+        pk.words = (res + 63) / 64;
+        pk.bits = malloc((size_t)side * side);
+        pk.mask = malloc((size_t)side * pk.words * sizeof *pk.mask);
+        pk.occupied = malloc((size_t)side * pk.words * sizeof *pk.occupied);
+        pk.bottom = malloc(side * sizeof *pk.bottom); pk.floor = malloc(side * sizeof *pk.floor);
+        if (!st && (!order || !at || !pk.bits || !pk.mask || !pk.occupied || !pk.bottom || !pk.floor))
+            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
     }
     if (!st) {
+        /* Largest charts first: the small ones fill the room left around them. */
         chart_key *keys = malloc(a.count * sizeof *keys);
         if (!keys) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
         else {
-            for (size_t i = 0; i < a.count; ++i) keys[i] = (chart_key){a.charts[i].h, a.charts[i].w, (uint32_t)i};
-            qsort(keys, a.count, sizeof *keys, by_height);
+            for (size_t i = 0; i < a.count; ++i) keys[i] = (chart_key){a.charts[i].w * a.charts[i].h, a.charts[i].h, (uint32_t)i};
+            qsort(keys, a.count, sizeof *keys, by_size);
             for (size_t i = 0; i < a.count; ++i) order[i] = keys[i].i;
             free(keys);
         }
+        /* The surface itself bounds the scale; packing at a scale is not monotone in it, so the
+         * bisection keeps the largest scale that packed. */
         double lo = 0, hi = res / sqrt(total);
-        if (!st && !pack(&a, order, 0, res, pad, NULL))
+        int steps = PACK_STEPS;
+        /* Most scans pack to well over 40% of the map: starting there saves most of the steps. */
+        if (!st && pack(&pk, hi * sqrt(0.4), NULL)) { lo = hi * sqrt(0.4); steps = PACK_STEPS / 2; }
+        else if (!st && !pack(&pk, 0, NULL))
             st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels: raise --texels",
-                           a.count, 2 * pad, res, res);
-        for (int it = 0; it < 40 && !st; ++it) {
+                           a.count, pad, res, res);
+        for (int it = 0; it < steps && !st; ++it) {
             double mid = 0.5 * (lo + hi);
-            if (pack(&a, order, mid, res, pad, NULL)) lo = mid;
+            if (pack(&pk, mid, NULL)) lo = mid;
             else hi = mid;
         }
         s = lo;
         if (!st && !(s > 0))
             st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts leave no room for a texel each in %d x %d texels: raise --texels", a.count, res, res);
         if (!st) {
-            pack(&a, order, s, res, pad, at);
-            st = write_layout(ctx, &a, m, at, s, res, pad, &rep.added_vertices);
+            pack(&pk, s, at);
+            st = write_layout(ctx, &a, m, at, s, res, &rep.added_vertices);
         }
     }
     if (!st) {
@@ -914,14 +1087,22 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
         if (a.unchecked)
             prt__log(ctx, PRT_LOG_WARN, "UV atlas: %zu charts could not be flattened without folds or overlap after %d cuts; their texels may be shared",
                      a.unchecked, SPLIT_DEPTH);
-        rep.coverage = total * s * s / ((double)res * res);
+        /* Texels holding some of the surface, as the per-texel bakes count them. */
+        float *texel_area = malloc((size_t)res * res * sizeof *texel_area);
+        if (!texel_area || !prt__texel_areas(m, res, res, texel_area)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+        size_t on = 0;
+        for (size_t i = 0; !st && i < (size_t)res * res; ++i) on += texel_area[i] > 0;
+        free(texel_area);
+        rep.coverage = (double)on / ((double)res * res);
+        rep.texel_density = s * s;
         for (size_t t = 0; t < m->triangle_count; ++t) {
             double r = prt__uv_stretch(m, t);
             if (r > rep.worst_stretch) rep.worst_stretch = r;
         }
-        if (report) *report = rep;
+        if (report && !st) *report = rep;
     }
-    for (size_t i = 0; i < a.count; ++i) { free(a.charts[i].tris); free(a.charts[i].verts); free(a.charts[i].uv); }
+    free(pk.bits); free(pk.mask); free(pk.occupied); free(pk.bottom); free(pk.floor);
+    for (size_t i = 0; i < a.count; ++i) { free(a.charts[i].tris); free(a.charts[i].verts); free(a.charts[i].uv); free(a.charts[i].corner); }
     free(a.charts);
     free(a.weld); free(a.rep); free(a.across); free(a.normal); free(a.smooth); free(a.area); free(a.stamp); free(a.local);
     free(order);

@@ -1,6 +1,6 @@
 /* UV atlases for meshes without a usable texture layout: charts grown by normal deviation, each
- * flattened by least-squares conformal maps (Levy et al. 2002), packed into a square with a gutter
- * of empty texels around every chart. What per-texel transfer bakes over. */
+ * flattened by least-squares conformal maps (Levy et al. 2002), packed into a square by the texels
+ * they touch with a gutter of empty texels between charts. What per-texel transfer bakes over. */
 #ifndef PRT_GEOM_UV_ATLAS_H
 #define PRT_GEOM_UV_ATLAS_H
 
@@ -8,7 +8,7 @@
 
 typedef struct prt__atlas_desc {
     int resolution;    /* texels per side of the map the atlas is laid out for */
-    int padding;       /* empty texels on every side of a chart; 0 = 2 */
+    int padding;       /* empty texels between any two charts' texels; 0 = 2 */
     float max_angle;   /* degrees a triangle's normal may turn from its chart's mean; 0 = 60 */
 } prt__atlas_desc;
 
@@ -17,7 +17,8 @@ typedef struct prt__atlas_report {
     size_t charts;           /* after splitting charts that would fold or overlap */
     size_t added_vertices;   /* copies made where a vertex lies on a seam between charts */
     size_t flattened;        /* charts flattened by LSCM (the rest by projection onto their plane) */
-    double coverage;         /* share of the square's area inside charts */
+    double coverage;         /* share of the map's texels that hold some of the surface */
+    double texel_density;    /* texels per unit of surface area, the same in every chart */
     double worst_stretch;    /* largest ratio of a triangle map's singular values */
 } prt__atlas_report;
 

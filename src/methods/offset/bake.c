@@ -553,8 +553,8 @@ static prt_status layout(prt_context *ctx, const prt__offset_bake_desc *d, prt_t
     prt__atlas_report r;
     prt_status st = prt__uv_atlas(ctx, &t->mesh, &(prt__atlas_desc){.resolution = d->texels}, &r);
     if (!st)
-        prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts cover %.0f%% of the %dx%d light map", t->source, why, r.charts,
-                 100 * r.coverage, d->texels, d->texels);
+        prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts cover %.0f%% of the %dx%d light map, worst stretch %.2f", t->source, why,
+                 r.charts, 100 * r.coverage, d->texels, d->texels, r.worst_stretch);
     return st;
 }
 

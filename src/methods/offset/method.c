@@ -189,6 +189,7 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
         cJSON_AddNumberToObject(j, "texel_width", s->width);
         cJSON_AddNumberToObject(j, "texel_height", s->height);
         cJSON_AddNumberToObject(j, "covered_texels", s->covered);
+        cJSON_AddNumberToObject(j, "atlas_coverage", (double)s->covered / ((double)s->width * s->height));
         cJSON_AddNumberToObject(j, "offsets", s->count);
         cJSON_AddStringToObject(j, "transfer", kinds);
         cJSON_AddNumberToObject(j, "iterations", s->iterations);
@@ -231,7 +232,7 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
         }
         return;
     }
-    prt__describe_line(d, "light map:", "%d x %d texels, %u on the surface (%.0f%%)", s->width, s->height, s->covered,
+    prt__describe_line(d, "light map:", "%d x %d texels, %u on the surface (atlas coverage %.0f%%)", s->width, s->height, s->covered,
                        100.0 * s->covered / ((double)s->width * s->height));
     prt__describe_line(d, "transfer:", "%s: %d offset maps (drawn by %s transference, %d refinements), %.2f MiB", kinds, s->count,
                        s->importance ? "mean" : "max", s->iterations, offset_bytes(t) / 1048576.0);

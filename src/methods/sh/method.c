@@ -3,6 +3,7 @@
  * in bake*.c, relighting kernels in relight*.c, compression in compress.c, exports in
  * export.c. */
 #include "methods/sh/sh.h"
+#include "geom/texel_raster.h"
 #include "light/envmap_internal.h"
 
 #include <strings.h>
@@ -308,6 +309,19 @@ static size_t sh_bytes(const prt_transfer *t)
     return bytes + texel_bytes(s);
 }
 
+/* Share of the texel map's texels holding some of the surface, from the stored mesh's UVs (as
+ * the texel bake counts them); negative when it cannot be found. */
+static double texel_coverage(const prt_transfer *t, int w, int h)
+{
+    if (!prt__mesh_has_uv(&t->mesh) || w < 1 || h < 1) return -1;
+    float *area = malloc((size_t)w * h * sizeof *area);
+    if (!area || !prt__texel_areas(&t->mesh, w, h, area)) { free(area); return -1; }
+    size_t on = 0;
+    for (size_t i = 0; i < (size_t)w * h; ++i) on += area[i] > 0;
+    free(area);
+    return (double)on / ((double)w * h);
+}
+
 static void sh_describe(const prt_transfer *t, prt__describe *d)
 {
     const prt__sh_state *s = t->state;
@@ -346,6 +360,8 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
             cJSON_AddNumberToObject(tx, "width", s->texels.width);
             cJSON_AddNumberToObject(tx, "height", s->texels.height);
             cJSON_AddNumberToObject(tx, "bytes", (double)info.texel_bytes);
+            const double cov = texel_coverage(t, s->texels.width, s->texels.height);
+            if (cov >= 0) cJSON_AddNumberToObject(j, "atlas_coverage", cov);
             cJSON *tk = cJSON_AddArrayToObject(tx, "kinds");
             for (int k = 0; k < 3; ++k)
                 if (s->texels.coeffs[k]) cJSON_AddItemToArray(tk, cJSON_CreateString(prt_transfer_kind_name(prt__kind_from_index(k))));
@@ -389,7 +405,10 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
         size_t n = 0;
         for (int k = 0; k < 3; ++k)
             if (s->texels.coeffs[k]) n += (size_t)snprintf(tk + n, sizeof tk - n, "%s%s", n ? ", " : "", prt_transfer_kind_name(prt__kind_from_index(k)));
-        prt__describe_line(d, "texels:", "%d x %d (%s), %.2f MiB", s->texels.width, s->texels.height, tk, info.texel_bytes / 1048576.0);
+        const double cov = texel_coverage(t, s->texels.width, s->texels.height);
+        char on[64] = "";
+        if (cov >= 0) snprintf(on, sizeof on, ", atlas coverage %.0f%%", 100 * cov);
+        prt__describe_line(d, "texels:", "%d x %d (%s%s), %.2f MiB", s->texels.width, s->texels.height, tk, on, info.texel_bytes / 1048576.0);
     }
     prt__describe_line(d, "bake:", "%d samples, %d bounces, seed %u", s->samples, s->bounces, s->seed);
 }
