@@ -55,6 +55,11 @@ typedef struct prt_render_map_set {
     int slice_count;
     const prt_render_slice *slices;
     int atlas_size, atlas_layers;   /* layers of atlas_size^2 texels (a power of two) */
+    /* [map] the level of the light's pyramid each map reads (NULL: every map reads single
+     * texels): the area-weighted mean light over the level's block of 2^l x 2^l texels around
+     * the texel read, when all that block's surface is on that texel's chart, else the next level
+     * down's (prt_render_passes.area, .chart). */
+    const uint8_t *levels;
 } prt_render_map_set;
 
 typedef struct prt_render_passes {
@@ -66,6 +71,8 @@ typedef struct prt_render_passes {
     const float *albedo;      /* [covered][3] */
     const uint8_t *scatter_mask;   /* [covered] non-zero: the scatter pass replaces albedo x input; NULL: nowhere */
     const float *emission;    /* [covered][3] radiance at emission scale 1; NULL: none */
+    const float *area;        /* [covered] world area of each texel's surface; with levels */
+    const int32_t *chart;     /* [covered] the UV chart of each texel (>= 0, under 2^24); with levels */
     prt_render_map_set scatter, bounce;
 } prt_render_passes;
 

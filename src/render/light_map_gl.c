@@ -17,13 +17,14 @@ static const char *VS_ACCUM =
     "layout(location = 0) in vec2 corner;\n"
     "layout(location = 1) in ivec4 shift_offset;\n"
     "layout(location = 2) in int layer;\n"
+    "layout(location = 3) in int level;\n"
     "uniform vec2 size;\n"
-    "flat out ivec4 f_so; flat out int f_layer;\n"
-    "void main() { f_so = shift_offset; f_layer = layer; gl_Position = vec4(corner / size * 2.0 - 1.0, 0.0, 1.0); }\n";
+    "flat out ivec4 f_so; flat out int f_layer; flat out int f_level;\n"
+    "void main() { f_so = shift_offset; f_layer = layer; f_level = level; gl_Position = vec4(corner / size * 2.0 - 1.0, 0.0, 1.0); }\n";
 static const char *FS_ACCUM =
     "#version 330 core\n"
-    "flat in ivec4 f_so; flat in int f_layer;\n"
-    "uniform sampler2DArray atlas; uniform sampler2D light; uniform isampler2D source;\n"
+    "flat in ivec4 f_so; flat in int f_layer; flat in int f_level;\n"
+    "uniform sampler2DArray atlas; uniform sampler2D light, pyramid, charts; uniform isampler2D source;\n"
     "layout(location = 0) out vec4 bounce;\n"
     "layout(location = 1) out vec4 total;\n"
     "void main() {\n"
@@ -31,7 +32,28 @@ static const char *FS_ACCUM =
     "  if (any(lessThan(p, ivec2(0))) || any(greaterThanEqual(p, size))) discard;\n"
     "  ivec2 s = texelFetch(source, p, 0).xy;\n"
     "  if (s.x < 0) discard;\n"
-    "  vec3 c = texelFetch(atlas, ivec3(t + f_so.xy, f_layer), 0).rgb * texelFetch(light, s, 0).rgb;\n"
+    "  vec3 l = texelFetch(light, s, 0).rgb;\n"
+    /* The light around s at the map's level, over blocks on s's chart alone (prefilter.c). */
+    "  if (f_level > 0) {\n"
+    "    float own = texelFetch(charts, s, 0).r;\n"
+    "    for (int k = f_level; k > 0; --k) {\n"
+    "      float inv = 1.0 / float(1 << k);\n"
+    "      vec2 f = (vec2(s) + 0.5) * inv - 0.5;\n"
+    "      ivec2 b0 = ivec2(floor(f)), size = textureSize(pyramid, k);\n"
+    "      vec2 a = f - vec2(b0);\n"
+    "      vec3 num = vec3(0.0); float den = 0.0;\n"
+    "      for (int j = 0; j < 4; ++j) {\n"
+    "        ivec2 b = b0 + ivec2(j & 1, j >> 1);\n"
+    "        if (b.x < 0 || b.y < 0 || b.x >= size.x || b.y >= size.y) continue;\n"
+    "        vec4 q = texelFetch(pyramid, b, k);\n"
+    "        if (texelFetch(charts, b, k).r != own || !(q.a > 0.0)) continue;\n"
+    "        float w = ((j & 1) != 0 ? a.x : 1.0 - a.x) * ((j >> 1) != 0 ? a.y : 1.0 - a.y);\n"
+    "        num += w * q.rgb; den += w * q.a;\n"
+    "      }\n"
+    "      if (den > 0.0) { l = num / den; break; }\n"
+    "    }\n"
+    "  }\n"
+    "  vec3 c = texelFetch(atlas, ivec3(t + f_so.xy, f_layer), 0).rgb * l;\n"
     "  bounce = vec4(c, 0.0);\n"
     "  total = vec4(c, 0.0);\n"
     "}\n";
@@ -51,6 +73,40 @@ static const char *FS_FIRST =
     "  if (has_sub != 0 && texelFetch(mask, s, 0).r > 0.0) f = texelFetch(sub, s, 0).rgb;\n"
     "  color = vec4(f, 1.0);\n"
     "}\n";
+/* The light's pyramid (prefilter.c's, to the float): level 0 area x light and area, and each
+ * texel's chart (-2 off the surface); each level above the sums of its four children, in the same
+ * order, and their chart, -1 where they differ. */
+static const char *FS_PYRAMID0 =
+    "#version 330 core\n"
+    "uniform sampler2D light, area_chart;\n"
+    "layout(location = 0) out vec4 sum;\n"
+    "layout(location = 1) out vec4 chart;\n"
+    "void main() {\n"
+    "  ivec2 p = ivec2(gl_FragCoord.xy);\n"
+    "  if (any(greaterThanEqual(p, textureSize(area_chart, 0)))) { sum = vec4(0.0); chart = vec4(-2.0); return; }\n"
+    "  vec2 ac = texelFetch(area_chart, p, 0).rg;\n"
+    "  sum = vec4(ac.r * texelFetch(light, p, 0).rgb, ac.r);\n"
+    "  chart = vec4(ac.g);\n"
+    "}\n";
+static const char *FS_PYRAMID =
+    "#version 330 core\n"
+    "uniform sampler2D below, below_chart;\n"
+    "layout(location = 0) out vec4 sum;\n"
+    "layout(location = 1) out vec4 chart;\n"
+    "void main() {\n"
+    "  ivec2 p = ivec2(gl_FragCoord.xy) * 2, size = textureSize(below, 0);\n"
+    "  vec4 q = vec4(0.0); float c = -2.0;\n"
+    "  for (int j = 0; j < 4; ++j) {\n"
+    "    ivec2 d = p + ivec2(j & 1, j >> 1);\n"
+    "    if (d.x >= size.x || d.y >= size.y) continue;\n"
+    "    q += texelFetch(below, d, 0);\n"
+    "    float e = texelFetch(below_chart, d, 0).r;\n"
+    "    if (e == -2.0) continue;\n"
+    "    c = c == -2.0 ? e : c == e ? c : -1.0;\n"
+    "  }\n"
+    "  sum = q;\n"
+    "  chart = vec4(c);\n"
+    "}\n";
 /* What is shown: first-order plus emission, bounced light, or both (component 0 all, 1 direct,
  * 2 indirect); the first-order map alone as the second output. */
 static const char *FS_FINAL =
@@ -68,7 +124,7 @@ static const char *FS_FINAL =
 
 typedef struct quad_vertex {
     float x, y;
-    int32_t shift_x, shift_y, offset_x, offset_y, layer;
+    int32_t shift_x, shift_y, offset_x, offset_y, layer, level;
 } quad_vertex;
 
 static GLuint new_map(int w, int h, GLenum internal, GLenum format, GLenum type, const void *data)
@@ -105,13 +161,16 @@ void prt__light_map_gl_free(prt__light_map_gl *g)
         if (g->vbo[k]) glDeleteBuffers(1, &g->vbo[k]);
         if (g->vao[k]) glDeleteVertexArrays(1, &g->vao[k]);
     }
-    GLuint tex[] = {g->source, g->albedo, g->mask, g->emit, g->input, g->sub, g->first, g->bounce[0], g->bounce[1], g->total};
+    GLuint tex[] = {g->source, g->albedo, g->mask, g->emit, g->input, g->sub, g->first, g->bounce[0], g->bounce[1], g->total,
+                    g->area_chart, g->pyramid, g->charts};
     for (size_t i = 0; i < sizeof tex / sizeof *tex; ++i)
         if (tex[i]) glDeleteTextures(1, &tex[i]);
     if (g->fbo) glDeleteFramebuffers(1, &g->fbo);
     if (g->p_accum) glDeleteProgram(g->p_accum);
     if (g->p_first) glDeleteProgram(g->p_first);
     if (g->p_final) glDeleteProgram(g->p_final);
+    if (g->p_pyramid0) glDeleteProgram(g->p_pyramid0);
+    if (g->p_pyramid) glDeleteProgram(g->p_pyramid);
     memset(g, 0, sizeof *g);
 }
 
@@ -171,7 +230,8 @@ static prt_status upload_set(prt__light_map_gl *g, const prt_render_passes *lm, 
     }
     for (int p = 0; p < set->slice_count; ++p) {
         const prt_render_slice *pc = &set->slices[p];
-        const quad_vertex v = {0, 0, pc->ax - pc->x, pc->ay - pc->y, set->offsets[pc->map * 2], set->offsets[pc->map * 2 + 1], pc->layer};
+        const quad_vertex v = {0, 0, pc->ax - pc->x, pc->ay - pc->y, set->offsets[pc->map * 2], set->offsets[pc->map * 2 + 1], pc->layer,
+                               set->levels ? set->levels[pc->map] : 0};
         const float xs[6] = {0, 1, 1, 0, 1, 0}, ys[6] = {0, 0, 1, 0, 1, 1};
         for (int c = 0; c < 6; ++c) {
             quads[p * 6 + c] = v;
@@ -190,6 +250,8 @@ static prt_status upload_set(prt__light_map_gl *g, const prt_render_passes *lm, 
     glVertexAttribIPointer(1, 4, GL_INT, sizeof *quads, (void *)offsetof(quad_vertex, shift_x));
     glEnableVertexAttribArray(2);
     glVertexAttribIPointer(2, 1, GL_INT, sizeof *quads, (void *)offsetof(quad_vertex, layer));
+    glEnableVertexAttribArray(3);
+    glVertexAttribIPointer(3, 1, GL_INT, sizeof *quads, (void *)offsetof(quad_vertex, level));
     glBindVertexArray(0);
     g->vertices[k] = set->slice_count * 6;
     free(layer);
@@ -218,7 +280,17 @@ prt_status prt__light_map_gl_load(prt__light_map_gl *g, const prt_render_passes 
     g->p_accum = prt__gl_program(VS_ACCUM, NULL, FS_ACCUM);
     g->p_first = g->p_accum ? prt__gl_program(VS_FULL, NULL, FS_FIRST) : 0;
     g->p_final = g->p_first ? prt__gl_program(VS_FULL, NULL, FS_FINAL) : 0;
-    if (!g->p_final) { prt__light_map_gl_free(g); return PRT_ERR_BACKEND; }   /* prt__gl_program said why */
+    g->p_pyramid0 = g->p_final ? prt__gl_program(VS_FULL, NULL, FS_PYRAMID0) : 0;
+    g->p_pyramid = g->p_pyramid0 ? prt__gl_program(VS_FULL, NULL, FS_PYRAMID) : 0;
+    if (!g->p_pyramid) { prt__light_map_gl_free(g); return PRT_ERR_BACKEND; }   /* prt__gl_program said why */
+    g->levels = 0;
+    for (int k = 0; lm->bounce.levels && k < lm->bounce.map_count; ++k) g->levels = lm->bounce.levels[k] > g->levels ? lm->bounce.levels[k] : g->levels;
+    g->pyramid_size = 1;
+    while (g->pyramid_size < W || g->pyramid_size < H) g->pyramid_size *= 2;
+    if (g->levels && (!lm->area || !lm->chart || (1 << g->levels) > g->pyramid_size)) {
+        prt__light_map_gl_free(g);
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "the light map's description has pyramid levels without texel areas and charts, or past its size");
+    }
     while (glGetError() != GL_NO_ERROR) {}
     float *scratch = malloc(n * 3 * sizeof *scratch);
     int32_t *index = malloc(n * sizeof *index), *src = malloc(n * 2 * sizeof *src);
@@ -243,6 +315,28 @@ prt_status prt__light_map_gl_load(prt__light_map_gl *g, const prt_render_passes 
         g->emit = texel_map(lm, lm->emission, NULL, 3, scratch);
         GLuint *work[] = {&g->input, &g->sub, &g->first, &g->bounce[0], &g->bounce[1], &g->total};
         for (size_t i = 0; i < sizeof work / sizeof *work; ++i) *work[i] = new_map(W, H, GL_RGBA32F, GL_RGBA, GL_FLOAT, NULL);
+        if (g->levels) {   /* the prefilter's inputs and pyramid: every level allocated, so texelFetch may read any */
+            for (size_t i = 0; i < n * 3; ++i) scratch[i] = 0;
+            for (size_t i = 0; i < n; ++i) scratch[i * 2 + 1] = -2.0f;
+            for (size_t i = 0; i < lm->covered; ++i) {
+                scratch[(size_t)lm->texel[i] * 2] = lm->area[i];
+                scratch[(size_t)lm->texel[i] * 2 + 1] = (float)lm->chart[i];
+            }
+            g->area_chart = new_map(W, H, GL_RG32F, GL_RG, GL_FLOAT, scratch);
+            GLuint *pyr[2] = {&g->pyramid, &g->charts};
+            const GLenum internal[2] = {GL_RGBA32F, GL_R32F}, format[2] = {GL_RGBA, GL_RED};
+            for (int k = 0; k < 2; ++k) {
+                glGenTextures(1, pyr[k]);
+                glBindTexture(GL_TEXTURE_2D, *pyr[k]);
+                for (int l = 0; l <= g->levels; ++l)
+                    glTexImage2D(GL_TEXTURE_2D, l, (GLint)internal[k], g->pyramid_size >> l, g->pyramid_size >> l, 0, format[k], GL_FLOAT, NULL);
+                glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
+                glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+                glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
+                glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, g->levels);
+            }
+            glBindTexture(GL_TEXTURE_2D, 0);
+        }
         glGenFramebuffers(1, &g->fbo);
     }
     free(scratch);
@@ -282,6 +376,8 @@ static void accumulate(prt__light_map_gl *g, int k, GLuint light)
     bind(g->p_accum, "atlas", 0, GL_TEXTURE_2D_ARRAY, g->atlas[k]);
     bind(g->p_accum, "light", 1, GL_TEXTURE_2D, light);
     bind(g->p_accum, "source", 2, GL_TEXTURE_2D, g->source);
+    bind(g->p_accum, "pyramid", 3, GL_TEXTURE_2D, g->pyramid);
+    bind(g->p_accum, "charts", 4, GL_TEXTURE_2D, g->charts);
     glEnable(GL_BLEND);
     glBlendFunc(GL_ONE, GL_ONE);
     glBlendEquation(GL_FUNC_ADD);
@@ -289,6 +385,45 @@ static void accumulate(prt__light_map_gl *g, int k, GLuint light)
     glDrawArrays(GL_TRIANGLES, 0, g->vertices[k]);
     glBindVertexArray(0);
     glDisable(GL_BLEND);
+}
+
+/* The pyramid of `light` (FS_PYRAMID0, FS_PYRAMID): level l rendered while level l - 1 is the
+ * only one its textures show (base = max = l - 1), so no pass reads what it writes. */
+static void build_pyramid(prt__light_map_gl *g, GLuint light, GLuint vao)
+{
+    glBindVertexArray(vao);
+    for (int l = 0; l <= g->levels; ++l) {
+        glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, g->pyramid, l);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, g->charts, l);
+        const GLenum both[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+        glDrawBuffers(2, both);
+        glViewport(0, 0, g->pyramid_size >> l, g->pyramid_size >> l);
+        if (l == 0) {
+            glUseProgram(g->p_pyramid0);
+            bind(g->p_pyramid0, "light", 0, GL_TEXTURE_2D, light);
+            bind(g->p_pyramid0, "area_chart", 1, GL_TEXTURE_2D, g->area_chart);
+        } else {
+            GLuint tex[2] = {g->pyramid, g->charts};
+            for (int k = 0; k < 2; ++k) {
+                glBindTexture(GL_TEXTURE_2D, tex[k]);
+                glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, l - 1);
+                glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, l - 1);
+            }
+            glUseProgram(g->p_pyramid);
+            bind(g->p_pyramid, "below", 0, GL_TEXTURE_2D, g->pyramid);
+            bind(g->p_pyramid, "below_chart", 1, GL_TEXTURE_2D, g->charts);
+        }
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+    }
+    GLuint tex[2] = {g->pyramid, g->charts};
+    for (int k = 0; k < 2; ++k) {
+        glBindTexture(GL_TEXTURE_2D, tex[k]);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, g->levels);
+    }
+    glBindTexture(GL_TEXTURE_2D, 0);
+    glViewport(0, 0, g->width, g->height);
 }
 
 void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, float emission, int bounces, int component, GLuint final_tex, GLuint first_tex)
@@ -331,6 +466,7 @@ void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, float emiss
     GLuint from = g->first;
     for (int b = 0; b < bounces && g->vertices[0] && component != PRT_COMPONENT_DIRECT; ++b) {
         const GLuint to = g->bounce[b & 1];
+        if (g->levels) build_pyramid(g, from, empty_vao);
         target(g->fbo, to, g->total);
         glClearBufferfv(GL_COLOR, 0, zero);
         accumulate(g, 0, from);

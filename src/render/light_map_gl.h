@@ -20,7 +20,11 @@ typedef struct prt__light_map_gl {
     GLuint albedo, mask, emit;    /* per texel, off the surface as their sources */
     GLuint input, sub, first, bounce[2], total;   /* RGBA32F work maps */
     GLuint fbo;
-    GLuint p_accum, p_first, p_final;
+    GLuint p_accum, p_first, p_final, p_pyramid0, p_pyramid;
+    /* Prefiltered light for the bounce maps (prt_render_map_set.levels): texel area and chart,
+     * and the light's pyramid of pyramid_size^2 texels (the map's size up to a power of two). */
+    int levels, pyramid_size;
+    GLuint area_chart, pyramid, charts;
     bool has_emit, has_mask;
 } prt__light_map_gl;
 

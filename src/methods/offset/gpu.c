@@ -84,7 +84,7 @@ static prt_status slice_maps(prt_context *ctx, const prt__offset_set *s, const f
                  "%d x %d texels, %.1f MiB (the maps as halves: %.1f MiB, %.2fx)",
                  K, c.count, c.area ? 100.0 * (double)c.data / (double)c.area : 0.0, c.whole ? 100.0 * (double)c.data / (double)c.whole : 0.0, npieces, nbins,
                  bin_size, bin_size, atlas_mib, maps_mib, maps_mib > 0 ? atlas_mib / maps_mib : 0.0);
-        *set = (prt_render_map_set){K, maps, s->offsets, npieces, out, bin_size, nbins};
+        *set = (prt_render_map_set){K, maps, s->offsets, npieces, out, bin_size, nbins, NULL};
         *slices = out;
     } else {
         free(out);
@@ -99,8 +99,9 @@ prt_status prt__offset_gpu_passes(prt_context *ctx, const prt_transfer *t, const
     prt__offset_set *s = t->state;
     const prt_render_passes *ready = __atomic_load_n(&s->passes, __ATOMIC_ACQUIRE);
     if (ready) { *out = ready; return PRT_OK; }
+    prt_status st = s->radiosity ? prt__offset_filter_ready(ctx, t, s) : PRT_OK;
+    if (st) return st;
     pthread_mutex_lock(s->lock);
-    prt_status st = PRT_OK;
     if (!s->passes) {
         prt_render_passes *p = prt__calloc(1, sizeof *p);
         int bin_size = 1;
@@ -118,6 +119,11 @@ prt_status prt__offset_gpu_passes(prt_context *ctx, const prt_transfer *t, const
             p->albedo = s->albedo;
             p->scatter_mask = s->subsurface ? s->medium : NULL;
             p->emission = s->emit;
+            if (s->radiosity && s->levels) {   /* the bounces read prefiltered light, as the CPU's (prefilter.c) */
+                p->bounce.levels = s->level;
+                p->area = s->area;
+                p->chart = s->chart;
+            }
             __atomic_store_n(&s->passes, p, __ATOMIC_RELEASE);
         } else {
             free(p);

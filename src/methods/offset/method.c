@@ -16,6 +16,8 @@ void prt__offset_set_free(void *state)
     if (s->vertex_lights) { prt__vertex_lights_free(s->vertex_lights); free(s->vertex_lights); }
     free(s->sample_pos);
     free(s->sample_nrm);
+    free(s->chart);
+    free(s->level);
     free(s->passes);
     free(s->slices[0]);
     free(s->slices[1]);
@@ -256,9 +258,9 @@ static void offset_describe(const prt_transfer *t, prt__describe *d)
         const prt__offset_cap *c = &s->cap[k];
         if (!c->texels)
             prt__describe_line(d, "energy cap:", "%s maps: no texel gathered more than it can", k ? "subsurface" : "radiosity");
-        else
-            prt__describe_line(d, "energy cap:", "%s maps: %u texels (%.1f%%) gathered more than they can, scaled down by up to %.3g (mean %.3g)",
-                               k ? "subsurface" : "radiosity", c->texels, 100.0 * c->texels / s->covered, c->max, c->mean);
+        else   /* as the share they were over: factors near 1 would all read "1" */
+            prt__describe_line(d, "energy cap:", "%s maps: %u texels (%.1f%%) gathered more than they can, by up to %.3g%% (mean %.3g%%); scaled down to it",
+                               k ? "subsurface" : "radiosity", c->texels, 100.0 * c->texels / s->covered, 100.0 * (c->max - 1), 100.0 * (c->mean - 1));
     }
     for (int k = 0; k < s->medium_count; ++k) {
         size_t texels = 0;

@@ -65,6 +65,13 @@ typedef struct prt__offset_set {
      * visibility per vertex, and their direct light where a result is shaded per vertex). */
     prt__vertex_lights *vertex_lights;
     float *sample_pos, *sample_nrm;
+    /* Run-time: what the bounce maps read their light through (prefilter.c), built on first use
+     * under lock: each covered texel's UV chart, and each offset's level of the light's pyramid
+     * (levels = the pyramid's levels above the texels; 0: every offset reads single texels). */
+    int32_t *chart;
+    uint8_t *level;
+    int levels;
+    bool filter_ready;
     /* Run-time: the passes the renderer runs (gpu.c), built on first use under lock and published
      * atomically; its slices are owned here. */
     prt_render_passes *passes;
@@ -104,6 +111,20 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
 prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *r);
 /* prt_relit_shade's part: the lights drawn per pixel, per vertex with shadow rays. */
 prt_status prt__offset_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb);
+
+/* Prefiltered light for the bounce maps (prefilter.c). A far offset's cell stands for a wide patch
+ * of surface around its representative texel, but a map reads one texel's light: a small bright
+ * spot or a shadow edge under a sparse far offset then shows as copies of itself or as bands. The
+ * bounce passes read instead the light averaged over a block of texels of the representative's
+ * own chart, as large as the cell (the largest block of a power-of-two pyramid within the
+ * offset's level whose surface is all on that chart), area-weighted. */
+prt_status prt__offset_filter_ready(prt_context *ctx, const prt_transfer *t, prt__offset_set *s);
+/* The light each covered texel stands for at levels 0..s->levels: out[l] ([covered][3]; out[0] =
+ * in) the area-weighted mean of in over the level-l block around the texel when that block lies
+ * on the texel's chart alone, else the next level down's. scratch: prt__offset_filter_scratch
+ * floats. */
+size_t prt__offset_filter_scratch(const prt__offset_set *s);
+void prt__offset_filter(const prt__offset_set *s, const float *in, float *scratch, const float **out);
 
 /* The GPU passes for t (gpu.c): the maps cropped to their non-zero boxes and sliced into atlases
  * (bins.c, section 5.2), described for the renderer; built once, then borrowed from t. */

@@ -55,7 +55,8 @@ static void apply_map(int n, const int32_t *restrict x, const int32_t *restrict 
     }
 }
 
-static void apply(prt_context *ctx, const prt__offset_set *s, const float *maps, const float *restrict in, float *restrict out)
+/* in[l]: the light at the pyramid's level l (prt__offset_filter); level: each map's, NULL: 0. */
+static void apply(prt_context *ctx, const prt__offset_set *s, const float *maps, const float *const *in, const uint8_t *level, float *restrict out)
 {
     const int W = s->width, H = s->height;
     const size_t nc = s->covered, blocks = (nc + APPLY_BLOCK - 1) / APPLY_BLOCK;
@@ -66,7 +67,7 @@ static void apply(prt_context *ctx, const prt__offset_set *s, const float *maps,
         float *o = out + i0 * 3;
         memset(o, 0, (size_t)n * 3 * sizeof *o);
         for (int k = 0; k < s->count; ++k)
-            apply_map(n, s->xy + i0, s->xy + nc + i0, s->texel + i0, s->offsets[k * 2], s->offsets[k * 2 + 1], W, H, s->source, in,
+            apply_map(n, s->xy + i0, s->xy + nc + i0, s->texel + i0, s->offsets[k * 2], s->offsets[k * 2 + 1], W, H, s->source, in[level ? level[k] : 0],
                       maps + ((size_t)k * nc + i0) * 3, o);
     }
 }
@@ -295,18 +296,25 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
         goto done;
     }
     if (s->subsurface) {   /* on translucent texels the dipole replaces albedo x irradiance */
-        apply(ctx, s, s->subsurface, a, b);
+        const float *in[1] = {a};
+        apply(ctx, s, s->subsurface, in, NULL, b);
         for (size_t i = 0; i < nc; ++i)
             if (s->medium[i]) memcpy(first + i * 3, b + i * 3, 3 * sizeof(float));
     }
     /* Inter-reflection: each bounce gathers what the last one sent out. */
     if (s->radiosity && d->component != PRT_COMPONENT_DIRECT) {
+        if ((st = prt__offset_filter_ready(ctx, t, s))) goto done;
+        const float *in[16];
+        float *pyramid = malloc(prt__offset_filter_scratch(s) * sizeof *pyramid);
+        if (!pyramid) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
         memcpy(a, first, nc * 3 * sizeof(float));
         for (int k = 0; k < bounces; ++k) {
-            apply(ctx, s, s->radiosity, a, b);
+            prt__offset_filter(s, a, pyramid, in);
+            apply(ctx, s, s->radiosity, in, s->level, b);
             for (size_t i = 0; i < nc * 3; ++i) indirect[i] += b[i];
             float *tmp = a; a = b; b = tmp;
         }
+        free(pyramid);
     }
     if (s->emit)
         for (size_t i = 0; i < nc * 3; ++i) first[i] += emission * s->emit[i];

@@ -682,6 +682,66 @@ static prt_transfer *bake_offset(prt_context *ctx, const prt_scene *scene, const
     return t;
 }
 
+/* The sums of area and of area x channel 0 of light over texels [x0, x1) x [y0, y1); the mean. */
+static void block_sums(const prt__offset_set *s, const float *light, int x0, int x1, int y0, int y1, double *sa, double *sl)
+{
+    *sa = *sl = 0;
+    for (size_t k = 0; k < s->covered; ++k) {
+        const int x = (int)(s->texel[k] % (uint32_t)s->width), y = (int)(s->texel[k] / (uint32_t)s->width);
+        if (x >= x0 && x < x1 && y >= y0 && y < y1) { *sa += s->area[k]; *sl += s->area[k] * light[k * 3]; }
+    }
+}
+
+static double block_mean(const prt__offset_set *s, const float *light, int x0, int x1, int y0, int y1)
+{
+    double sa, sl;
+    block_sums(s, light, x0, x1, y0, y1, &sa, &sl);
+    return sl / sa;
+}
+
+/* Prefiltered light (prefilter.c): level l of a texel is the area-weighted mean of the light over
+ * the 2^l-texel blocks around its centre, bilinearly weighted, of those blocks whose surface is
+ * all on the texel's chart; none: level l - 1's. Texels off the surface count for nothing. An
+ * 8 x 8 map: two charts of four columns each, one texel of the first off the surface. */
+static void test_prefilter(void **state)
+{
+    (void)state;
+    enum { W = 8, H = 8 };
+    prt__offset_set s = {.width = W, .height = H, .levels = 3};
+    uint32_t texel[W * H];
+    float area[W * H], light[W * H * 3];
+    int32_t chart[W * H];
+    for (int i = 0, k = 0; i < W * H; ++i) {
+        if (i == 9) continue;   /* (1, 1): off the surface */
+        texel[k] = (uint32_t)i;
+        area[k] = 0.5f + (float)(i % 5);
+        chart[k] = i % W < 4 ? 0 : 1;
+        for (int c = 0; c < 3; ++c) light[k * 3 + c] = (float)rnd();
+        k++;
+    }
+    s.covered = W * H - 1;
+    s.texel = texel;
+    s.area = area;
+    s.chart = chart;
+    float *scratch = malloc(prt__offset_filter_scratch(&s) * sizeof *scratch);
+    const float *out[16];
+    prt__offset_filter(&s, light, scratch, out);
+    assert_ptr_equal(out[0], light);
+    assert_float_equal(out[1][0], block_mean(&s, light, 0, 2, 0, 2), 1e-6);            /* a pure block, the hole left out */
+    assert_float_equal(out[2][0], block_mean(&s, light, 0, 4, 0, 4), 1e-6);
+    assert_float_equal(out[3][0], block_mean(&s, light, 0, 4, 0, 4), 1e-6);            /* the whole map spans both charts: level 2's */
+    /* (2, 0) at level 1: centre (1.25, 0.25) in blocks of 2, between blocks (0, 0) and (1, 0)
+     * with weights 1/4 and 3/4 (the row of blocks below the map counts for nothing). */
+    double a0, l0, a1, l1;
+    block_sums(&s, light, 0, 2, 0, 2, &a0, &l0);
+    block_sums(&s, light, 2, 4, 0, 2, &a1, &l1);
+    assert_float_equal(out[1][2 * 3], (0.25 * l0 + 0.75 * l1) / (0.25 * a0 + 0.75 * a1), 1e-6);
+    const size_t right = 5;                                            /* (5, 0), chart 1 */
+    assert_float_equal(out[2][right * 3], block_mean(&s, light, 4, 8, 0, 4), 1e-6);
+    assert_float_equal(out[3][right * 3], block_mean(&s, light, 4, 8, 0, 4), 1e-6);
+    free(scratch);
+}
+
 /* Bounced light between surfaces on different charts of the map: one bounce through the maps
  * against the exact gather over every texel pair of the same transfer (eq. 3), on the demo scene
  * under a point light. A cell far from its receiver spans other charts - the floor under the torus
@@ -1325,6 +1385,8 @@ static void test_gpu_accumulation(void **state)
         prt_relit_free(&direct);
         prt_relit_free(&fin);
     }
+    /* ... with the bounce maps reading prefiltered light (prefilter.c) from several levels: the GPU's pyramid is the CPU's. */
+    assert_true(((const prt__offset_set *)t->state)->levels >= 2);
     /* Side by side: the left half draws the first-order map, the right half the final one, each as
      * a 64 x 64 image of the same camera shows it. */
     prt_renderer *wide = NULL;
@@ -1499,6 +1561,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_slicing),
         cmocka_unit_test(test_export_maps),
         cmocka_unit_test(test_offset_method),
+        cmocka_unit_test(test_prefilter),
         cmocka_unit_test(test_bounce_across_charts),
         cmocka_unit_test(test_threads_and_cap),
         cmocka_unit_test(test_multi_bounce_maps),
