@@ -318,6 +318,11 @@ typedef struct prt_relit {
     float *gpu_input;
     float gpu_emission;
     int gpu_bounces, gpu_component;
+    /* With gpu_input and pixel_lights: per texel (as gpu_input), the pixel lights' first-order
+     * light (albedo x their irradiance / pi on opaque texels), which the passes keep for the
+     * bounces but the shown maps leave out, as the CPU's texels do; radiance leaves it out too.
+     * NULL otherwise. */
+    float *gpu_pixel_direct;
 } prt_relit;
 
 /* The PRT_LIGHTS_* bits relighting t under lighting needs: what the lighting holds, with

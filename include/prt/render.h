@@ -38,8 +38,9 @@ typedef struct prt_camera {
  *   sub   = the scatter set's pass over the input (when it has maps),
  *   first = albedo x input, or sub on texels whose scatter_mask is set,
  *   b_1   = the bounce set's pass over first, b_k = its pass over b_(k-1), for gpu_bounces passes,
- *   final = first + emission scale x emission (PRT_COMPONENT_DIRECT), sum of b_k (INDIRECT), or
- *           both (ALL).
+ *   final = first + emission scale x emission, less the light drawn per pixel
+ *           (prt_render_mesh.gpu_pixel_direct) and clamped at zero (PRT_COMPONENT_DIRECT), sum
+ *           of b_k (INDIRECT), or both (ALL).
  * The maps are uploaded packed into square texture-array atlases as the slices say (the method
  * packs them: rectangles of its maps, each placed in one atlas layer). */
 typedef struct prt_render_slice {
@@ -138,6 +139,11 @@ typedef struct prt_render_mesh {
     const float *gpu_input;
     float gpu_emission;
     int gpu_bounces, gpu_component;
+    /* Optional with gpu_passes: width x height RGB (as gpu_input), light drawn per pixel
+     * (`lights`) that the shown maps leave out: first-order and final light are
+     * max(first + emission - gpu_pixel_direct, 0) (plus the bounces), as the CPU's map.
+     * NULL = none. */
+    const float *gpu_pixel_direct;
     /* With gpu_passes: the first-order light map on the left half of the image, the final one
      * on the right (the paper's side-by-side viewer). */
     int side_by_side;

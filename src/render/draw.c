@@ -344,7 +344,7 @@ prt_status prt__draw_upload_gpu(prt__draw *d, const prt_render_mesh *m)
         d->gpu_width = d->light_map.width;
         d->gpu_height = d->light_map.height;
     }
-    prt__light_map_gl_run(&d->light_map, m->gpu_input, m->gpu_emission, m->gpu_bounces, m->gpu_component, d->tex, d->tex_first);
+    prt__light_map_gl_run(&d->light_map, m->gpu_input, m->gpu_pixel_direct, m->gpu_emission, m->gpu_bounces, m->gpu_component, d->tex, d->tex_first);
     d->texel_width = d->light_map.width;
     d->texel_height = d->light_map.height;
     d->side_by_side = m->side_by_side != 0;
@@ -457,21 +457,23 @@ void prt__draw_mesh(prt__draw *d, const prt_camera *cam, int w, int h, const flo
     glEnable(GL_DEPTH_TEST);
     glDisable(GL_CULL_FACE);   /* one-sided walls must show from both sides */
     if (d->texel_width && d->side_by_side && d->tex_first) {
-        /* First-order light on the left, the final light on the right, each with half the width. */
+        /* First-order light on the left, the final light on the right, each with half the width;
+         * the lights drawn per pixel on both, as both maps leave their direct light out. */
         const int half = w / 2;
         float side[16];
         prt__camera_matrix(cam, (float)half / (float)h, NULL, side);
-        glUseProgram(d->program_t);
-        glUniformMatrix4fv(d->ut_mvp, 1, GL_FALSE, side);
-        glActiveTexture(GL_TEXTURE0);
-        glUniform1i(d->ut_map, 0);
-        glBindVertexArray(d->vao);
         for (int k = 0; k < 2; ++k) {
             glViewport(k ? half : 0, 0, k ? w - half : half, h);
+            glUseProgram(d->program_t);
+            glUniformMatrix4fv(d->ut_mvp, 1, GL_FALSE, side);
+            glActiveTexture(GL_TEXTURE0);
+            glUniform1i(d->ut_map, 0);
             glBindTexture(GL_TEXTURE_2D, k ? d->tex : d->tex_first);
+            glBindVertexArray(d->vao);
             glDrawElements(GL_TRIANGLES, (GLsizei)d->index_count, GL_UNSIGNED_INT, NULL);
+            glBindVertexArray(0);
+            prt__pixel_lights_draw(&d->lights, d->vao, d->index_count, side, cam->eye);
         }
-        glBindVertexArray(0);
         glViewport(0, 0, w, h);
         return;
     }

@@ -107,17 +107,19 @@ static const char *FS_PYRAMID =
     "  sum = q;\n"
     "  chart = vec4(c);\n"
     "}\n";
-/* What is shown: first-order plus emission, bounced light, or both (component 0 all, 1 direct,
- * 2 indirect); the first-order map alone as the second output. */
+/* What is shown: first-order plus emission less the light drawn per pixel (pixel_direct: the
+ * renderer's pixel lights on opaque texels, kept in first for the bounces), bounced light, or both
+ * (component 0 all, 1 direct, 2 indirect); the first-order map alone as the second output. */
 static const char *FS_FINAL =
     "#version 330 core\n"
-    "uniform isampler2D source; uniform sampler2D first, total, emit; uniform float emission; uniform int component;\n"
+    "uniform isampler2D source; uniform sampler2D first, total, emit, pixel_direct; uniform float emission; uniform int component, has_pixel;\n"
     "layout(location = 0) out vec4 color;\n"
     "layout(location = 1) out vec4 first_order;\n"
     "void main() {\n"
     "  ivec2 s = texelFetch(source, ivec2(gl_FragCoord.xy), 0).xy;\n"
     "  if (s.x < 0) { color = first_order = vec4(0.0, 0.0, 0.0, 1.0); return; }\n"
     "  vec3 f = texelFetch(first, s, 0).rgb + emission * texelFetch(emit, s, 0).rgb, g = texelFetch(total, s, 0).rgb;\n"
+    "  if (has_pixel != 0) f = max(f - texelFetch(pixel_direct, s, 0).rgb, 0.0);\n"
     "  color = vec4(component == 1 ? f : component == 2 ? g : f + g, 1.0);\n"
     "  first_order = vec4(f, 1.0);\n"
     "}\n";
@@ -161,7 +163,7 @@ void prt__light_map_gl_free(prt__light_map_gl *g)
         if (g->vbo[k]) glDeleteBuffers(1, &g->vbo[k]);
         if (g->vao[k]) glDeleteVertexArrays(1, &g->vao[k]);
     }
-    GLuint tex[] = {g->source, g->albedo, g->mask, g->emit, g->input, g->sub, g->first, g->bounce[0], g->bounce[1], g->total,
+    GLuint tex[] = {g->source, g->albedo, g->mask, g->emit, g->input, g->sub, g->first, g->bounce[0], g->bounce[1], g->total, g->pixel_direct,
                     g->area_chart, g->pyramid, g->charts};
     for (size_t i = 0; i < sizeof tex / sizeof *tex; ++i)
         if (tex[i]) glDeleteTextures(1, &tex[i]);
@@ -313,7 +315,7 @@ prt_status prt__light_map_gl_load(prt__light_map_gl *g, const prt_render_passes 
         g->mask = texel_map(lm, NULL, lm->scatter_mask, 1, scratch);
         g->has_emit = lm->emission != NULL;
         g->emit = texel_map(lm, lm->emission, NULL, 3, scratch);
-        GLuint *work[] = {&g->input, &g->sub, &g->first, &g->bounce[0], &g->bounce[1], &g->total};
+        GLuint *work[] = {&g->input, &g->sub, &g->first, &g->bounce[0], &g->bounce[1], &g->total, &g->pixel_direct};
         for (size_t i = 0; i < sizeof work / sizeof *work; ++i) *work[i] = new_map(W, H, GL_RGBA32F, GL_RGBA, GL_FLOAT, NULL);
         if (g->levels) {   /* the prefilter's inputs and pyramid: every level allocated, so texelFetch may read any */
             for (size_t i = 0; i < n * 3; ++i) scratch[i] = 0;
@@ -426,7 +428,8 @@ static void build_pyramid(prt__light_map_gl *g, GLuint light, GLuint vao)
     glViewport(0, 0, g->width, g->height);
 }
 
-void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, float emission, int bounces, int component, GLuint final_tex, GLuint first_tex)
+void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, const float *pixel_direct, float emission, int bounces, int component,
+                           GLuint final_tex, GLuint first_tex)
 {
     const float zero[4] = {0, 0, 0, 0};
     GLint viewport[4];
@@ -442,6 +445,10 @@ void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, float emiss
     glBindTexture(GL_TEXTURE_2D, g->input);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, g->width, g->height, GL_RGB, GL_FLOAT, input);
+    if (pixel_direct) {
+        glBindTexture(GL_TEXTURE_2D, g->pixel_direct);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, g->width, g->height, GL_RGB, GL_FLOAT, pixel_direct);
+    }
     GLuint empty_vao;
     glGenVertexArrays(1, &empty_vao);
     /* The scatter pass over the irradiance (subsurface scattering), then the first-order light map. */
@@ -478,8 +485,10 @@ void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, float emiss
     bind(g->p_final, "first", 1, GL_TEXTURE_2D, g->first);
     bind(g->p_final, "total", 2, GL_TEXTURE_2D, g->total);
     bind(g->p_final, "emit", 3, GL_TEXTURE_2D, g->emit);
+    bind(g->p_final, "pixel_direct", 4, GL_TEXTURE_2D, g->pixel_direct);
     glUniform1f(glGetUniformLocation(g->p_final, "emission"), g->has_emit ? emission : 0.0f);
     glUniform1i(glGetUniformLocation(g->p_final, "component"), component);
+    glUniform1i(glGetUniformLocation(g->p_final, "has_pixel"), pixel_direct != NULL);
     glBindVertexArray(empty_vao);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glBindVertexArray(0);

@@ -18,7 +18,7 @@ typedef struct prt__light_map_gl {
     GLsizei vertices[2];          /* 6 per slice */
     GLuint source;                /* RG32I: the surface texel each texel reads (-1: none) */
     GLuint albedo, mask, emit;    /* per texel, off the surface as their sources */
-    GLuint input, sub, first, bounce[2], total;   /* RGBA32F work maps */
+    GLuint input, sub, first, bounce[2], total, pixel_direct;   /* RGBA32F work maps */
     GLuint fbo;
     GLuint p_accum, p_first, p_final, p_pyramid0, p_pyramid;
     /* Prefiltered light for the bounce maps (prt_render_map_set.levels): texel area and chart,
@@ -33,9 +33,11 @@ typedef struct prt__light_map_gl {
 prt_status prt__light_map_gl_load(prt__light_map_gl *g, const prt_render_passes *lm);
 /* Runs the passes from input (width x height RGB irradiance / pi) and writes the result into
  * final_tex and, when first_tex is not 0, the first-order light into first_tex (both RGBA32F,
- * width x height, every texel filled: gutters take their source's value). component: the
- * PRT_COMPONENT_* of the light in final_tex. */
-void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, float emission, int bounces, int component, GLuint final_tex, GLuint first_tex);
+ * width x height, every texel filled: gutters take their source's value), both less
+ * pixel_direct (width x height RGB, the light drawn per pixel; NULL: none) and clamped at zero.
+ * component: the PRT_COMPONENT_* of the light in final_tex. */
+void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, const float *pixel_direct, float emission, int bounces, int component,
+                           GLuint final_tex, GLuint first_tex);
 void prt__light_map_gl_free(prt__light_map_gl *g);
 
 #endif

@@ -255,6 +255,7 @@ void prt_relit_free(prt_relit *r)
     free(r->pixel_material);
     free(r->pixel_brdfs);
     free(r->gpu_input);
+    free(r->gpu_pixel_direct);
     memset(r, 0, sizeof *r);
 }
 
@@ -347,6 +348,7 @@ void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render
         m->gpu_emission = r->gpu_emission;
         m->gpu_bounces = r->gpu_bounces;
         m->gpu_component = r->gpu_component;
+        m->gpu_pixel_direct = r->gpu_pixel_direct;
     }
 }
 

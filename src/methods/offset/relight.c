@@ -267,11 +267,11 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
             a[i * 3 + c] = (e > 0 ? e : 0) + (d->paint ? d->paint[(size_t)s->texel[i] * 3 + c] : 0.0f);
             first[i * 3 + c] = s->albedo[i * 3 + c] * a[i * 3 + c];
         }
-    /* Drawn on the CPU path, the local lights' direct light on opaque surfaces is the renderer's,
+    /* Drawn for the screen, the local lights' direct light on opaque surfaces is the renderer's,
      * per pixel with shadow maps: a shadow edge is then as sharp as the screen, not a staircase
      * of texels. The light map keeps it for the bounces and the subsurface scattering, and shows
-     * the rest (hide: what it leaves out). The GPU passes draw it per texel, as the paper. */
-    const int pixel = !d->gpu_finish && !d->per_vertex && !d->no_pixel_lights && d->component != PRT_COMPONENT_INDIRECT && nlocal <= PRT_MAX_PIXEL_LIGHTS ? nlocal : 0;
+     * the rest (hide: what it leaves out) - on the CPU here, on the GPU in its final pass. */
+    const int pixel = !d->per_vertex && !d->no_pixel_lights && d->component != PRT_COMPONENT_INDIRECT && nlocal <= PRT_MAX_PIXEL_LIGHTS ? nlocal : 0;
     float *hide = pixel ? prt__calloc(nc * 3, sizeof(float)) : NULL;
     if (pixel && !hide) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
     for (size_t i = 0; pixel && i < nc; ++i)
@@ -279,13 +279,18 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
             for (int c = 0; c < 3; ++c) hide[i * 3 + c] = s->albedo[i * 3 + c] * E[i * 3 + c] / (float)PRT_PI;
     if (pixel && (st = pixel_lights(ctx, t, s, local, pixel, r))) { free(hide); goto done; }
     if (d->gpu_finish) {   /* the renderer runs the passes below (gpu.c describes them) */
-        if ((st = prt__offset_gpu_passes(ctx, t, &r->gpu_passes))) goto done;
+        if ((st = prt__offset_gpu_passes(ctx, t, &r->gpu_passes))) { free(hide); goto done; }
         r->gpu_input = prt__calloc(n * 3, sizeof(float));
-        if (!r->gpu_input) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+        if (!r->gpu_input) { free(hide); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+        r->gpu_pixel_direct = hide ? prt__calloc(n * 3, sizeof(float)) : NULL;
+        if (hide && !r->gpu_pixel_direct) { free(hide); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
         for (size_t i = 0; i < nc; ++i) {
             memcpy(r->gpu_input + (size_t)s->texel[i] * 3, a + i * 3, 3 * sizeof(float));
-            for (int c = 0; c < 3; ++c) b[i * 3 + c] = first[i * 3 + c] + (s->emit ? emission * s->emit[i * 3 + c] : 0.0f);
+            if (hide) memcpy(r->gpu_pixel_direct + (size_t)s->texel[i] * 3, hide + i * 3, 3 * sizeof(float));
+            for (int c = 0; c < 3; ++c)
+                b[i * 3 + c] = fmaxf(first[i * 3 + c] + (s->emit ? emission * s->emit[i * 3 + c] : 0.0f) - (hide ? hide[i * 3 + c] : 0.0f), 0.0f);
         }
+        free(hide);
         spread(s, b, map);
         for (size_t v = 0; v < nv; ++v) sample_map(map, s->width, s->height, t->mesh.uv[v * 2], t->mesh.uv[v * 2 + 1], r->radiance + v * 3);
         r->gpu_emission = emission;
