@@ -11,7 +11,6 @@
 #define IMPORTANCE_TEXELS 4096   /* texels an offset's importance looks at (evenly spread) */
 #define ENV_DIRECTIONS 256       /* rays per texel for its environment visibility */
 #define EMITTER_SAMPLES 256      /* light samples per texel on the emissive surfaces */
-#define CENTRE_RING 8            /* how far the centre offset's exact sum reaches, texels */
 #define NEAR_FIELD 8             /* radiosity: texels of a receiver's own chart this far summed exactly */
 #define FAR_FIELD_RAYS 1024      /* radiosity: rays per texel estimating the rest (stratified) */
 
@@ -75,57 +74,6 @@ static void cosine_direction(const float n[3], double u1, double u2, float d[3])
     prt__cosine_dir(u1, u2, n, t1, t2, d);
 }
 
-
-/* The texel whose transfer stands for offset o's cell from texel (tx, ty): the one whose light the
- * run time multiplies by it - the offset itself on the surface, else its gutter's source
- * (s->source), so that map and light always describe the same patch. False off the map or when
- * the map holds no surface. */
-static bool representative(const prt__offset_set *s, int tx, int ty, int o, size_t *out)
-{
-    const int W = s->width, H = s->height, x = tx + s->offsets[o * 2], y = ty + s->offsets[o * 2 + 1];
-    if (x < 0 || x >= W || y < 0 || y >= H) return false;
-    const int32_t src = s->source[(size_t)y * W + x];
-    if (src < 0) return false;
-    *out = s->texel[src];
-    return true;
-}
-
-/* The integer offsets whose nearest chosen offset is offsets[0] = (0, 0) (the labelling of eq. 8:
- * normalised coordinates, ties to the lower index), grown ring by ring until a ring adds none. */
-static int *centre_cell(const int *offsets, int count, int W, int H, int *n_out)
-{
-    const double sx = 1.0 / (W - 1), sy = 1.0 / (H - 1);
-    int *list = NULL, n = 0, cap = 0;
-    /* At most CENTRE_RING texels out: with few offsets the cell would be the whole map, and its
-     * exact sum a gather over every texel pair. */
-    for (int ring = 0; ring <= CENTRE_RING && (ring < W || ring < H); ++ring) {
-        int added = 0;
-        for (int dy = -ring; dy <= ring; ++dy)
-            for (int dx = -ring; dx <= ring; ++dx) {
-                if (abs(dx) != ring && abs(dy) != ring) continue;   /* this ring only */
-                if (abs(dx) >= W || abs(dy) >= H) continue;
-                const double px = dx * sx, py = dy * sy, own = px * px + py * py;
-                bool nearest = true;
-                for (int k = 1; k < count && nearest; ++k) {
-                    const double ex = px - offsets[k * 2] * sx, ey = py - offsets[k * 2 + 1] * sy;
-                    nearest = own <= ex * ex + ey * ey;
-                }
-                if (!nearest) continue;
-                if (n == cap) {
-                    int *l = realloc(list, (size_t)(cap = cap ? cap * 2 : 64) * 2 * sizeof *l);
-                    if (!l) { free(list); return NULL; }
-                    list = l;
-                }
-                list[n * 2] = dx;
-                list[n * 2 + 1] = dy;
-                n++;
-                added++;
-            }
-        if (!added) break;
-    }
-    *n_out = n;
-    return list;
-}
 
 /* The landing texel of a ray from a texel's surface point: the covered texel whose light stands
  * for the hit (its gutter's source where the hit's texel centre is off the chart), -1 none. */
@@ -257,59 +205,160 @@ static bool radiosity_maps(obake *ob, const int32_t *label, float *maps, prt__pr
     return !short_of_memory;
 }
 
+/* How far a medium scatters: the distance (scene units) within which its kernel gives back all
+ * but 1e-3 of its total, the farthest of its channels. */
+static double medium_reach(const prt__dipole d[3])
+{
+    double reach = 0;
+    for (int c = 0; c < 3; ++c) {
+        const double total = prt__dipole_total(&d[c]);
+        double r = d[c].falloff > 0 ? d[c].falloff : 1 / d[c].sigma_tr;
+        if (!(total > 0) || !(r > 0) || !isfinite(r)) continue;
+        for (int k = 0; k < 200 && prt__dipole_disc(&d[c], r) < (1 - 1e-3) * total; ++k) r *= 1.25;
+        reach = fmax(reach, r);
+    }
+    return reach;
+}
+
+/* The mean of a medium's kernel over a disc of radius a whose centre lies r from the entry point
+ * (a source texel, flat): Gauss-Legendre over the disc's area in the radius squared, the midpoint
+ * rule over the angle (the kernel depends on the angle only through the distance, so half a
+ * turn). At a texel's distance, where the kernel changes most across the texel, its value at the
+ * centre is far from its mean: 12% under on the skin demo's sphere (an exponential falloff of 20
+ * mm over texels of about 15 mm), the texel's value at its rim's distance (prt__offset_tr's guard
+ * against slivers) further under. */
+static double disc_mean(const prt__dipole *d, double r, double a)
+{
+    static const double node[3] = {0.1127016653792583, 0.5, 0.8872983346207417}, weight[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
+    double sum = 0;
+    for (int i = 0; i < 3; ++i) {
+        const double rho = a * sqrt(node[i]);
+        for (int k = 0; k < 4; ++k) {
+            const double phi = PRT_PI * (k + 0.5) / 4, x = r + rho * cos(phi), y = rho * sin(phi);
+            sum += weight[i] / 4 * prt__dipole_rd(d, sqrt(x * x + y * y));
+        }
+    }
+    return sum;
+}
+
+/* Subsurface maps, entry (o, t) the dipole from every texel of t's medium within its reach,
+ * summed exactly into the cell that counts it (the label of its offset from t, split by chart as
+ * the radiosity maps' near field is): eq. 8's integral over the cell, not the transfer at its
+ * representative times its area - near t, where the cells are a texel or two, the dipole changes
+ * within a cell by orders of magnitude, and a cell's representative nearer t than most of its
+ * texels took the peak for the whole cell (the energy cap then fired on a quarter of the skin
+ * demo's texels, scaling some by 90). The texels within reach come from a grid over space, so
+ * other charts of the medium nearby count too. Summed in a fixed order: the same for any thread
+ * count. */
+static bool subsurface_maps(obake *ob, const int32_t *label, float *maps, prt__progress *p)
+{
+    prt__offset_set *s = ob->s;
+    const int W = s->width, H = s->height, K = s->count, gw = 2 * W - 1;
+    const size_t nc = s->covered;
+    double *reach = malloc(((size_t)s->medium_count + 1) * sizeof *reach), most = 0;
+    if (!reach) return false;
+    for (int m = 0; m < s->medium_count; ++m) most = fmax(most, reach[m] = medium_reach(ob->dipoles[m]));
+    /* A grid of cells at least `most` wide over the translucent texels (at most 2^21 cells). */
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < nc; ++i)
+        for (int c = 0; c < 3 && s->medium[i]; ++c) { lo[c] = fminf(lo[c], s->pos[i * 3 + c]); hi[c] = fmaxf(hi[c], s->pos[i * 3 + c]); }
+    double h = most > 0 ? most : 1;
+    int dim[3] = {1, 1, 1};
+    for (;;) {
+        for (int c = 0; c < 3; ++c) dim[c] = hi[c] >= lo[c] ? (int)fmin((hi[c] - lo[c]) / h, 1 << 20) + 1 : 1;
+        if ((uint64_t)dim[0] * dim[1] * dim[2] <= (1u << 21)) break;
+        h *= 2;
+    }
+    const size_t cells = (size_t)dim[0] * dim[1] * dim[2];
+    uint32_t *start = prt__calloc(cells + 1, sizeof *start), *order = malloc(nc * sizeof *order + 1), *at = malloc(nc * sizeof *at + 1);
+    if (!start || !order || !at) { free(reach); free(start); free(order); free(at); return false; }
+    for (size_t i = 0; i < nc; ++i) {
+        if (!s->medium[i]) continue;
+        int g[3];
+        for (int c = 0; c < 3; ++c) g[c] = (int)fmin((s->pos[i * 3 + c] - lo[c]) / h, dim[c] - 1);
+        at[i] = (uint32_t)(((size_t)g[2] * dim[1] + g[1]) * dim[0] + g[0]);
+        start[at[i] + 1]++;
+    }
+    for (size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+    {   /* counting sort: within a cell in covered order */
+        uint32_t *fill = malloc(cells * sizeof *fill + 1);
+        if (!fill) { free(reach); free(start); free(order); free(at); return false; }
+        memcpy(fill, start, cells * sizeof *fill);
+        for (size_t i = 0; i < nc; ++i)
+            if (s->medium[i]) order[fill[at[i]]++] = (uint32_t)i;
+        free(fill);
+    }
+    int short_of_memory = 0;
+#pragma omp parallel num_threads(prt__threads(ob->base.ctx))
+    {
+        int32_t *rep = malloc((size_t)K * 2 * sizeof *rep), *rep_chart = rep ? rep + K : NULL;
+        if (!rep) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
+#pragma omp for schedule(dynamic, 16)
+        for (size_t i = 0; i < nc; ++i) {
+            for (int o = 0; o < K; ++o) memset(maps + ((size_t)o * nc + i) * 3, 0, 3 * sizeof *maps);
+            if (!rep || prt__progress_cancelled(p)) continue;
+            if (s->medium[i]) {
+                const size_t t = s->texel[i];
+                const int tx = (int)(t % (size_t)W), ty = (int)(t / (size_t)W);
+                const double r2 = reach[s->medium[i] - 1] * reach[s->medium[i] - 1];
+                prt__offset_reps(&ob->charts, W, H, s->offsets, K, tx, ty, rep, rep_chart);
+                int g[3];
+                for (int c = 0; c < 3; ++c) g[c] = (int)fmin((s->pos[i * 3 + c] - lo[c]) / h, dim[c] - 1);
+                for (int z = g[2] - 1; z <= g[2] + 1; ++z)
+                    for (int y = g[1] - 1; y <= g[1] + 1; ++y)
+                        for (int x = g[0] - 1; x <= g[0] + 1; ++x) {
+                            if (x < 0 || y < 0 || z < 0 || x >= dim[0] || y >= dim[1] || z >= dim[2]) continue;
+                            const size_t cell = ((size_t)z * dim[1] + y) * dim[0] + x;
+                            for (uint32_t q = start[cell]; q < start[cell + 1]; ++q) {
+                                const uint32_t j = order[q];
+                                if (s->medium[j] != s->medium[i]) continue;
+                                float d[3];
+                                prt__v3_sub(s->pos + j * 3, s->pos + i * 3, d);
+                                if (prt__v3_dot(d, d) > r2) continue;
+                                const size_t src = s->texel[j];
+                                const int sx = (int)(src % (size_t)W), sy = (int)(src / (size_t)W);
+                                float tr[3];
+                                if (j == i) prt__offset_tr(&ob->x[1], t, src, tr);   /* its own disc, in closed form */
+                                else {
+                                    const prt__dipole *dm = ob->dipoles[s->medium[i] - 1];
+                                    const double r = sqrt((double)prt__v3_dot(d, d)), a = fmin(sqrt(s->area[j] / PRT_PI), r / 2);   /* the half nearer t is t's own texel's */
+                                    for (int c = 0; c < 3; ++c)
+                                        tr[c] = (float)disc_mean(&dm[c], r, a) * (dm[c].falloff > 0 ? ob->patches.albedo[t * 3 + c] : 1.0f);
+                                }
+                                const int o = src == t ? 0 : prt__offset_recell(&ob->charts, W, s->offsets, K, tx, ty, rep, rep_chart,
+                                                                                label[(size_t)(sy - ty + H - 1) * gw + sx - tx + W - 1], sx, sy, ob->chart[src]);
+                                if (o < 0) continue;
+                                for (int c = 0; c < 3; ++c) maps[((size_t)o * nc + i) * 3 + c] += tr[c] * s->area[j];
+                            }
+                        }
+            }
+            prt__progress_add(p, 1);
+        }
+        free(rep);
+    }
+    free(reach); free(start); free(order); free(at);
+    return !short_of_memory;
+}
+
 static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
 {
     obake *ob = (obake *)base;
     prt__offset_set *s = ob->s;
     const int W = s->width, H = s->height, K = s->count;
-    const size_t n = (size_t)W * H, nc = s->covered;
-    float *tva = malloc(n * (size_t)K * sizeof *tva + 1);
-    if (!tva) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the Voronoi areas of %d offsets over %d x %d texels", K, W, H);
+    const size_t nc = s->covered;
     ob->charts = (prt__offset_charts){ob->chart, s->source, s->texel, ob->patches.pos};
-    prt_status st = prt__offset_tva(ctx, ob->patches.area, &ob->charts, W, H, s->offsets, K, tva);
-    /* The cell of (0, 0) holds the texel itself and its nearest neighbours, where transfer
-     * changes fastest (subsurface scattering falls off within a texel or two): there the map is
-     * the exact sum over the cell, not the transfer at (0, 0) times the cell's area. */
-    int ncell = 0, *cell = st ? NULL : centre_cell(s->offsets, K, W, H, &ncell);
-    if (!st && !cell) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the transfer maps");
     int32_t *label = NULL;
-    if (!st) st = prt__offset_labels(ctx, W, H, s->offsets, K, &label);
+    prt_status st = prt__offset_labels(ctx, W, H, s->offsets, K, &label);
     if (!st && (s->offsets[0] != 0 || s->offsets[1] != 0)) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "the first offset must be (0, 0)");
     prt__progress_begin(p, p->stage, (uint64_t)nc * (uint64_t)((ob->d.kinds & 1) + ((ob->d.kinds >> 1) & 1)));
     for (int k = 0; k < 2 && !st; ++k) {
         if (!(ob->d.kinds & (1u << k))) continue;
         float *maps = malloc(nc * (size_t)K * 3 * sizeof *maps + 1);
         if (!maps) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %d transfer maps", K); break; }
-        if (k == 0 && !radiosity_maps(ob, label, maps, p)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the transfer maps");
-#pragma omp parallel for schedule(dynamic, 16) num_threads(prt__threads(ctx))
-        for (size_t i = 0; i < nc; ++i) {
-            if (k == 0) continue;   /* radiosity_maps */
-            if (prt__progress_cancelled(p)) continue;
-            const size_t t = s->texel[i];
-            const int tx = (int)(t % (size_t)W), ty = (int)(t / (size_t)W);
-            for (int o = 0; o < K; ++o) {
-                float *m = maps + ((size_t)o * nc + i) * 3;
-                m[0] = m[1] = m[2] = 0;
-                if (o == 0) {   /* its own chart's texels: the others' are counted with offsets on theirs (TVA) */
-                    for (int j = 0; j < ncell; ++j) {
-                        const int sx = tx + cell[j * 2], sy = ty + cell[j * 2 + 1];
-                        if (sx < 0 || sx >= W || sy < 0 || sy >= H) continue;
-                        const size_t src = (size_t)sy * W + sx;
-                        if (ob->chart[src] != ob->chart[t]) continue;
-                        float tr[3];
-                        prt__offset_tr(&ob->x[k], t, src, tr);
-                        for (int c = 0; c < 3; ++c) m[c] += tr[c] * ob->patches.area[src];
-                    }
-                    continue;
-                }
-                if (!(tva[t * (size_t)K + o] > 0)) continue;   /* no surface in this cell from t */
-                size_t src;
-                if (!representative(s, tx, ty, o, &src)) continue;
-                float tr[3];
-                prt__offset_tr(&ob->x[k], t, src, tr);
-                for (int c = 0; c < 3; ++c) m[c] = tr[c] * tva[t * (size_t)K + o];
-            }
-            prt__progress_add(p, 1);
+        if (!(k == 0 ? radiosity_maps(ob, label, maps, p) : subsurface_maps(ob, label, maps, p))) {
+            free(maps);
+            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the transfer maps");
+            break;
         }
         /* What a texel gathers is bounded: its form factors add up to at most 1 (all it sees),
          * the dipole to its total diffuse reflectance. Where the offsets' cells overestimate it
@@ -343,8 +392,6 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
         else s->subsurface = maps;
         if (prt__progress_cancelled(p)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     }
-    free(tva);
-    free(cell);
     free(label);
     return st;
 }
