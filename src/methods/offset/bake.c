@@ -292,16 +292,18 @@ static bool subsurface_maps(obake *ob, const int32_t *label, float *maps, prt__p
 #pragma omp parallel num_threads(prt__threads(ob->base.ctx))
     {
         int32_t *rep = malloc((size_t)K * 2 * sizeof *rep), *rep_chart = rep ? rep + K : NULL;
-        if (!rep) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
+        rep_index ix = {malloc((size_t)K * sizeof *ix.pt), 0};
+        if (!rep || !ix.pt) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
 #pragma omp for schedule(dynamic, 16)
         for (size_t i = 0; i < nc; ++i) {
             for (int o = 0; o < K; ++o) memset(maps + ((size_t)o * nc + i) * 3, 0, 3 * sizeof *maps);
-            if (!rep || prt__progress_cancelled(p)) continue;
+            if (!rep || !ix.pt || prt__progress_cancelled(p)) continue;
             if (s->medium[i]) {
                 const size_t t = s->texel[i];
                 const int tx = (int)(t % (size_t)W), ty = (int)(t / (size_t)W);
                 const double r2 = reach[s->medium[i] - 1] * reach[s->medium[i] - 1];
                 prt__offset_reps(&ob->charts, W, H, s->offsets, K, tx, ty, rep, rep_chart);
+                rep_index_build(ob, rep, K, &ix);
                 int g[3];
                 for (int c = 0; c < 3; ++c) g[c] = (int)fmin((s->pos[i * 3 + c] - lo[c]) / h, dim[c] - 1);
                 for (int z = g[2] - 1; z <= g[2] + 1; ++z)
@@ -325,8 +327,13 @@ static bool subsurface_maps(obake *ob, const int32_t *label, float *maps, prt__p
                                     for (int c = 0; c < 3; ++c)
                                         tr[c] = (float)disc_mean(&dm[c], r, a) * (dm[c].falloff > 0 ? ob->patches.albedo[t * 3 + c] : 1.0f);
                                 }
-                                const int o = src == t ? 0 : prt__offset_recell(&ob->charts, W, s->offsets, K, tx, ty, rep, rep_chart,
-                                                                                label[(size_t)(sy - ty + H - 1) * gw + sx - tx + W - 1], sx, sy, ob->chart[src]);
+                                /* Near in the map on t's chart: its cell there; else (across a seam, another
+                                 * chart) the surface around the representative nearest in space, as radiosity. */
+                                const bool near = ob->chart[src] == ob->chart[t] && abs(sx - tx) <= NEAR_FIELD && abs(sy - ty) <= NEAR_FIELD;
+                                const int o = src == t ? 0
+                                              : near ? prt__offset_recell(&ob->charts, W, s->offsets, K, tx, ty, rep, rep_chart,
+                                                                          label[(size_t)(sy - ty + H - 1) * gw + sx - tx + W - 1], sx, sy, ob->chart[src])
+                                                     : nearest_rep(ob, &ix, (uint32_t)src);
                                 if (o < 0) continue;
                                 for (int c = 0; c < 3; ++c) maps[((size_t)o * nc + i) * 3 + c] += tr[c] * s->area[j];
                             }
@@ -335,6 +342,7 @@ static bool subsurface_maps(obake *ob, const int32_t *label, float *maps, prt__p
             prt__progress_add(p, 1);
         }
         free(rep);
+        free(ix.pt);
     }
     free(reach); free(start); free(order); free(at);
     return !short_of_memory;

@@ -118,10 +118,11 @@ void prt__offset_filter(const prt__offset_set *s, const float *in, float *scratc
                 }
             }
     }
-    /* Each level's light per covered texel: the blocks around its centre, bilinearly weighted (the
-     * light then changes smoothly as the representative moves, with no edge at block borders),
-     * those whose surface is all on the texel's chart only, area-weighted; none such: the level
-     * below's. The GPU's pass (render/light_map_gl.c) does this arithmetic in the same order. */
+    /* Each level's light per covered texel: the four blocks around its centre, bilinearly weighted
+     * - each block whose surface is all on the texel's chart by its mean light, any other by the
+     * texel's own light of the level below - so the light changes smoothly as the representative
+     * moves, with no edge at block borders nor where blocks start to straddle a chart's border.
+     * The GPU's pass (render/light_map_gl.c) does this arithmetic in the same order. */
     for (int l = 1; l <= L; ++l) {
         float *o = res + (size_t)(l - 1) * nc * 3;
         const int w = (W + (1 << l) - 1) >> l, h = ((int)s->height + (1 << l) - 1) >> l;
@@ -130,21 +131,18 @@ void prt__offset_filter(const prt__offset_set *s, const float *in, float *scratc
             const int x = (int)(s->texel[i] % (uint32_t)W), y = (int)(s->texel[i] / (uint32_t)W);
             const float fx = ((float)x + 0.5f) * inv - 0.5f, fy = ((float)y + 0.5f) * inv - 0.5f;
             const int x0 = (int)floorf(fx), y0 = (int)floorf(fy);
-            const float ax = fx - (float)x0, ay = fy - (float)y0, own = (float)s->chart[i];
-            float num[3] = {0, 0, 0}, den = 0;
+            const float ax = fx - (float)x0, ay = fy - (float)y0, own = (float)s->chart[i], *below = out[l - 1] + i * 3;
+            float v[3] = {0, 0, 0};
             for (int j = 0; j < 4; ++j) {
                 const int bx = x0 + (j & 1), by = y0 + (j >> 1);
-                if (bx < 0 || by < 0 || bx >= w || by >= h) continue;
-                const float *q = pyr[l] + ((size_t)by * w + bx) * 5;
-                if (q[4] != own || !(q[3] > 0)) continue;
                 const float wt = ((j & 1) ? ax : 1.0f - ax) * ((j >> 1) ? ay : 1.0f - ay);
-                for (int c = 0; c < 3; ++c) num[c] += wt * q[c];
-                den += wt * q[3];
+                const float *q = bx >= 0 && by >= 0 && bx < w && by < h ? pyr[l] + ((size_t)by * w + bx) * 5 : NULL;
+                if (q && q[4] == own && q[3] > 0)
+                    for (int c = 0; c < 3; ++c) v[c] += wt * (q[c] / q[3]);
+                else
+                    for (int c = 0; c < 3; ++c) v[c] += wt * below[c];
             }
-            if (den > 0)
-                for (int c = 0; c < 3; ++c) o[i * 3 + c] = num[c] / den;
-            else
-                memcpy(o + i * 3, out[l - 1] + i * 3, 3 * sizeof *o);
+            memcpy(o + i * 3, v, sizeof v);
         }
         out[l] = o;
     }

@@ -470,11 +470,7 @@ int prt__offset_recell(const prt__offset_charts *c, int width, const int *offset
     return best >= 0 ? best : k;
 }
 
-/* A row's texels of one chart (-1: off the surface), left to right. */
-typedef struct segment { int x0, x1, chart; } segment;
-
-prt_status prt__offset_tva(const prt_context *ctx, const float *area, const prt__offset_charts *charts, int width, int height, const int *offsets,
-                           int count, float *out)
+prt_status prt__offset_tva(const prt_context *ctx, const float *area, int width, int height, const int *offsets, int count, float *out)
 {
     if (width < 1 || height < 1 || width > 16384 || height > 16384 || count < 1 || !area || !offsets || !out)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "TVA needs a map, offsets and an output");
@@ -507,56 +503,23 @@ prt_status prt__offset_tva(const prt_context *ctx, const float *area, const prt_
         p[0] = 0;
         for (int x = 0; x < width; ++x) p[x + 1] = p[x] + area[(size_t)y * width + x];
     }
-    /* Each row cut where the chart changes; seg_at: the segment holding each texel. */
-    const size_t n = (size_t)width * height;
-    segment *segs = charts ? malloc(n * sizeof *segs) : NULL;
-    int32_t *seg_at = charts ? malloc(n * sizeof *seg_at) : NULL, *row_end = charts ? malloc((size_t)height * sizeof *row_end) : NULL;
-    if (charts && (!segs || !seg_at || !row_end)) {
-        free(segs); free(seg_at); free(row_end); free(prefix); free(runs);
-        return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for TVA");
-    }
-    for (int y = 0, g = -1; charts && y < height; ++y) {
-        for (int x = 0; x < width; ++x) {
-            const int chart = area[(size_t)y * width + x] > 0 ? charts->chart[(size_t)y * width + x] : -1;
-            if (x == 0 || chart != segs[g].chart) segs[++g] = (segment){x, x, chart};
-            segs[g].x1 = x;
-            seg_at[(size_t)y * width + x] = g;
+    memset(out, 0, (size_t)width * height * count * sizeof *out);
+#pragma omp parallel for schedule(dynamic, 16) num_threads(prt__threads(ctx))
+    for (size_t t = 0; t < (size_t)width * height; ++t) {
+        if (!(area[t] > 0)) continue;   /* only texels on the charts gather */
+        const int tx = (int)(t % (size_t)width), ty = (int)(t / (size_t)width);
+        float *o = out + t * count;
+        for (size_t r = 0; r < nruns; ++r) {
+            const run *u = &runs[r];
+            const int y = ty + u->dy;
+            if (y < 0 || y >= height) continue;
+            const int x0 = tx + u->dx0 < 0 ? 0 : tx + u->dx0, x1 = tx + u->dx1 >= width ? width - 1 : tx + u->dx1;
+            if (x0 > x1) continue;
+            const double *p = prefix + (size_t)y * (width + 1);
+            o[u->k] += (float)(p[x1 + 1] - p[x0]);
         }
-        row_end[y] = g + 1;
     }
-    memset(out, 0, n * count * sizeof *out);
-    bool short_of_memory = false;
-#pragma omp parallel num_threads(prt__threads(ctx))
-    {
-        int32_t *rep = charts ? malloc((size_t)count * 2 * sizeof *rep) : NULL, *rep_chart = rep ? rep + count : NULL;
-        if (charts && !rep) __atomic_store_n(&short_of_memory, true, __ATOMIC_RELAXED);
-#pragma omp for schedule(dynamic, 16)
-        for (size_t t = 0; t < n; ++t) {
-            if (!(area[t] > 0) || (charts && !rep)) continue;   /* only texels on the charts gather */
-            const int tx = (int)(t % (size_t)width), ty = (int)(t / (size_t)width);
-            float *o = out + t * count;
-            if (charts) prt__offset_reps(charts, width, height, offsets, count, tx, ty, rep, rep_chart);
-            for (size_t r = 0; r < nruns; ++r) {
-                const run *u = &runs[r];
-                const int y = ty + u->dy;
-                if (y < 0 || y >= height) continue;
-                const int x0 = tx + u->dx0 < 0 ? 0 : tx + u->dx0, x1 = tx + u->dx1 >= width ? width - 1 : tx + u->dx1;
-                if (x0 > x1) continue;
-                const double *p = prefix + (size_t)y * (width + 1);
-                if (!charts) { o[u->k] += (float)(p[x1 + 1] - p[x0]); continue; }
-                for (int32_t g = seg_at[(size_t)y * width + x0]; g < row_end[y] && segs[g].x0 <= x1; ++g) {
-                    if (segs[g].chart < 0) continue;
-                    const int a = segs[g].x0 > x0 ? segs[g].x0 : x0, b = segs[g].x1 < x1 ? segs[g].x1 : x1;
-                    const int k = prt__offset_recell(charts, width, offsets, count, tx, ty, rep, rep_chart, u->k, (a + b) / 2, y, segs[g].chart);
-                    o[k] += (float)(p[b + 1] - p[a]);
-                }
-            }
-        }
-        free(rep);
-    }
-    free(segs); free(seg_at); free(row_end);
     free(prefix);
     free(runs);
-    if (short_of_memory) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for TVA");
     return PRT_OK;
 }

@@ -88,10 +88,9 @@ int prt__offset_recell(const prt__offset_charts *c, int width, const int *offset
 
 /* TVA of eq. 8: for texel t and offset k, the sum of texel areas A(t + v) over the integer offsets
  * v whose nearest chosen offset is k (v within |vx| < width, |vy| < height; ties to the lower
- * index), split by chart when charts is not NULL (prt__offset_recell). area: width * height texel
- * areas (0 outside the charts). out: width * height * count, texel-major. With every integer offset
- * chosen, TVA(t, k) = A(t + offset k). */
-prt_status prt__offset_tva(const prt_context *ctx, const float *area, const prt__offset_charts *charts, int width, int height, const int *offsets,
-                           int count, float *out);
+ * index). area: width * height texel areas (0 outside the charts). out: width * height * count,
+ * texel-major. With every integer offset chosen, TVA(t, k) = A(t + offset k). The bake no longer
+ * uses it (its cells are chart-aware, bake.c); the offset form of transfer.c does. */
+prt_status prt__offset_tva(const prt_context *ctx, const float *area, int width, int height, const int *offsets, int count, float *out);
 
 #endif

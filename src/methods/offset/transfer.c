@@ -150,7 +150,7 @@ prt_status prt__offset_maps(const prt_context *ctx, const prt__offset_transfer *
     const size_t n = (size_t)W * H;
     float *tva = malloc(n * (size_t)count * sizeof *tva), *out = prt__calloc(n * (size_t)count * 3, sizeof *out);
     if (!tva || !out) { free(tva); free(out); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %d transfer maps of %d x %d", count, W, H); }
-    prt_status st = prt__offset_tva(ctx, p->area, NULL, W, H, offsets, count, tva);
+    prt_status st = prt__offset_tva(ctx, p->area, W, H, offsets, count, tva);
     if (st) { free(tva); free(out); return st; }
 #pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ctx))
     for (size_t t = 0; t < n; ++t) {
