@@ -2,8 +2,10 @@
  * while a triangle's normal stays within max_angle of the chart's mean normal. Each chart is
  * flattened by least-squares conformal maps (Levy, Petitjean, Ray & Maillot 2002) started from its
  * projection onto its mean plane, and checked: a map that folds a triangle, stretches one beyond
- * MAX_STRETCH or overlaps itself falls back to the projection, and a chart neither can flatten is
- * cut in two and tried again. Charts are scaled to one texel density, turned to their smallest
+ * MAX_STRETCH or overlaps itself falls back to the projection; where neither is valid the faulty
+ * triangles and those around their corners are cut out and charted apart (a chart with too many
+ * faults is cut in two). Small charts then merge into neighbours while the union stays valid.
+ * Charts are scaled to one texel density, turned to their smallest
  * bounding box and packed by the texels they touch (four quarter turns each, into any hole they
  * fit); the largest density that fits is found by bisection. */
 #include "geom/uv_atlas.h"
@@ -15,6 +17,9 @@
 #define MAX_STRETCH 4.0       /* singular-value ratio a chart's worst triangle may reach */
 #define SPLIT_DEPTH 48
 #define PACK_ANGLES 32
+#define MERGE_AREA 3.0      /* how far a merged-in chart's texel density may stray from its host's */
+#define MERGE_TRIES 3       /* neighbours a chart tries to merge into */
+#define MERGE_SHARE 5e-4    /* charts with less of the surface than this merge into neighbours */
 #define PACK_STEPS 16      /* bisections of the scale from 0: to 2e-5 of the largest (8 from 40%: 2e-3) */
 
 typedef struct chart {
@@ -37,12 +42,16 @@ typedef struct atlas {
     double *normal;      /* [tri][3] unit, zero when degenerate */
     double *smooth;      /* [tri][3] mean of its vertex normals: what charts grow by */
     double *area;        /* [tri] */
-    int32_t *local;      /* [welded] index in the chart being worked on, -1 elsewhere */
+    uint8_t *twin;       /* [tri] 1 where a back-to-back duplicate face shares its corners */
+    uint32_t *fan;       /* [tri * 3 + corner] the least corner of its fan: corners at one position
+                          * joined through the triangles around it that meet across edges */
+    int32_t *vlocal;     /* [corner] the chart vertex of a fan in the chart being worked on, else -1 */
     uint32_t *stamp;     /* [tri] last pass that touched it */
     uint32_t pass;
     chart *charts;
     size_t count, cap;
     size_t flattened, grown, unchecked;
+    double total;
 } atlas;
 
 /* ---- welding and adjacency ---- */
@@ -64,6 +73,20 @@ static int by_edge(const void *x, const void *y)
     if (p->a != q->a) return p->a < q->a ? -1 : 1;
     if (p->b != q->b) return p->b < q->b ? -1 : 1;
     return p->id < q->id ? -1 : p->id > q->id;
+}
+
+static uint32_t uf_find(uint32_t *p, uint32_t i)
+{
+    while (p[i] != i) i = p[i] = p[p[i]];
+    return i;
+}
+
+/* Joins two sets under their least member, so roots do not depend on the order of joining. */
+static void uf_union(uint32_t *p, uint32_t x, uint32_t y)
+{
+    x = uf_find(p, x);
+    y = uf_find(p, y);
+    if (x != y) p[x > y ? x : y] = x < y ? x : y;
 }
 
 static bool build_adjacency(atlas *a)
@@ -91,18 +114,54 @@ static bool build_adjacency(atlas *a)
                 a->across[t * 3 + k] = -1;
             }
         qsort(e, nt * 3, sizeof *e, by_edge);
-        /* Exactly two triangles on an edge, running along it in opposite directions: one surface. */
+        /* Two triangles running along an edge in opposite directions are one surface. Scans have
+         * edges shared by 4-8 triangles (sheets touching, back-to-back duplicate faces): there
+         * each triangle pairs with the opposite-running one it continues most smoothly (face
+         * normals closest), never with its own back-to-back twin, so sheets stay sheets instead
+         * of every such edge becoming a seam. */
         for (size_t i = 0; i < nt * 3;) {
             size_t j = i + 1;
             while (j < nt * 3 && e[j].a == e[i].a && e[j].b == e[i].b) j++;
-            if (j - i == 2) {
-                uint32_t s = e[i].id, u = e[i + 1].id;
-                uint32_t s0 = a->weld[m->indices[s]], u0 = a->weld[m->indices[u]];
-                bool opposite = s0 != u0 && s / 3 != u / 3;
-                if (opposite) { a->across[s] = u / 3; a->across[u] = s / 3; }
+            for (int round = 0; round < 8 * 8 && j - i >= 2; ++round) {
+                double best = -INFINITY;
+                size_t bs = 0, bu = 0;
+                for (size_t x = i; x < j; ++x) {
+                    const uint32_t s = e[x].id;
+                    if (a->across[s] >= 0 || a->weld[m->indices[s]] != e[x].a) continue;   /* runs a -> b, unpaired */
+                    for (size_t y = i; y < j; ++y) {
+                        const uint32_t u = e[y].id;
+                        if (a->across[u] >= 0 || a->weld[m->indices[u]] == e[y].a || s / 3 == u / 3) continue;
+                        const uint32_t ts = s / 3, tu = u / 3;
+                        /* Twins: the same three corners. */
+                        const uint32_t cs = a->weld[m->indices[ts * 3 + (s % 3 + 2) % 3]], cu = a->weld[m->indices[tu * 3 + (u % 3 + 2) % 3]];
+                        if (cs == cu) { a->twin[ts] = a->twin[tu] = 1; continue; }
+                        const double *ns = a->normal + (size_t)ts * 3, *nu = a->normal + (size_t)tu * 3;
+                        const double d = j - i == 2 ? 0 : ns[0] * nu[0] + ns[1] * nu[1] + ns[2] * nu[2];
+                        if (d > best) { best = d; bs = s; bu = u; }
+                    }
+                }
+                if (best == -INFINITY) break;
+                a->across[bs] = bu / 3;
+                a->across[bu] = bs / 3;
             }
             i = j;
         }
+        /* Fans: the corners of triangles meeting across an edge, joined at both its ends. */
+        uint32_t *f = a->fan;
+        for (size_t i = 0; i < nt * 3; ++i) f[i] = (uint32_t)i;
+        for (size_t t = 0; t < nt; ++t)
+            for (int k = 0; k < 3; ++k) {
+                const int64_t o = a->across[t * 3 + k];
+                if (o < 0) continue;
+                const uint32_t p0 = a->weld[m->indices[t * 3 + k]], p1 = a->weld[m->indices[t * 3 + (k + 1) % 3]];
+                for (int j = 0; j < 3; ++j) {
+                    if (a->weld[m->indices[(size_t)o * 3 + j]] != p1 || a->weld[m->indices[(size_t)o * 3 + (j + 1) % 3]] != p0) continue;
+                    uf_union(f, (uint32_t)(t * 3 + k), (uint32_t)(o * 3 + (j + 1) % 3));
+                    uf_union(f, (uint32_t)(t * 3 + (k + 1) % 3), (uint32_t)(o * 3 + j));
+                    break;
+                }
+            }
+        for (size_t i = 0; i < nt * 3; ++i) f[i] = uf_find(f, (uint32_t)i);
     }
     free(order);
     free(e);
@@ -179,9 +238,10 @@ static void lscm_transpose(const lscm_tri *T, size_t nt, const double *r, double
         }
 }
 
-/* Minimises the conformal energy with two vertices pinned, by conjugate gradients on the normal
- * equations (Jacobi-preconditioned), starting from uv. False when it fails to converge. */
-static bool lscm_solve(const prt_context *ctx, const lscm_tri *T, size_t nt, size_t nv, const uint32_t pin[2], double *uv)
+/* Minimises the conformal energy with the fixed vertices (at least two) held where they are, by
+ * conjugate gradients on the normal equations (Jacobi-preconditioned), starting from uv. False
+ * when it fails to converge. */
+static bool lscm_solve(const prt_context *ctx, const lscm_tri *T, size_t nt, size_t nv, const uint8_t *fixed, double *uv)
 {
     const size_t n = nv * 2;
     double *r = malloc(nt * 2 * sizeof *r), *g = malloc(n * sizeof *g), *p = malloc(n * sizeof *p), *q = malloc(nt * 2 * sizeof *q),
@@ -195,7 +255,8 @@ static bool lscm_solve(const prt_context *ctx, const lscm_tri *T, size_t nt, siz
                 dinv[T[t].v[j] * 2 + 1] += s;
             }
         for (size_t i = 0; i < n; ++i) dinv[i] = dinv[i] > 0 ? 1.0 / dinv[i] : 0.0;
-        for (int k = 0; k < 2; ++k) dinv[pin[k] * 2] = dinv[pin[k] * 2 + 1] = 0;   /* pinned: never moves */
+        for (size_t v = 0; v < nv; ++v)
+            if (fixed[v]) dinv[v * 2] = dinv[v * 2 + 1] = 0;   /* pinned: never moves */
         /* Residual r = -A uv; the gradient of the energy is A^T r. */
         lscm_apply(T, nt, uv, r);
         for (size_t i = 0; i < nt * 2; ++i) r[i] = -r[i];
@@ -254,9 +315,8 @@ static bool triangles_overlap(const double p[3][2], const double q[3][2])
 /* Overlap by rasterizing interiors on a grid of about 64 cells per triangle (at most 4M): a cell
  * centre strictly inside two triangles. For charts whose buckets would hold too many pairs (fans
  * of long slivers); 1 overlap, 0 none, -1 out of memory. */
-static int raster_overlaps(const atlas *a, const chart *c, double umin, double vmin, double umax, double vmax, double area)
+static int raster_overlaps(const chart *c, uint8_t *bad, double umin, double vmin, double umax, double vmax, double area)
 {
-    const prt__mesh *m = a->m;
     double cell = sqrt(area / ((double)c->nt * 64));
     double gw = (umax - umin) / cell, gh = (vmax - vmin) / cell;
     if (gw * gh > 4e6) { double k = sqrt(gw * gh / 4e6); cell *= k; gw /= k; gh /= k; }
@@ -266,24 +326,23 @@ static int raster_overlaps(const atlas *a, const chart *c, double umin, double v
     uint8_t *grid = calloc((size_t)W * H, 1);
     if (!grid) return -1;
     int overlap = 0;
-    for (size_t t = 0; t < c->nt && !overlap; ++t) {
-        const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
+    for (size_t t = 0; t < c->nt && (!overlap || bad); ++t) {
         double u[3], v[3];
         for (int k = 0; k < 3; ++k) {
-            const double *p = c->uv + (size_t)a->local[a->weld[ix[k]]] * 2;
+            const double *p = c->uv + (size_t)c->corner[t * 3 + k] * 2;
             u[k] = (p[0] - umin) / cell; v[k] = (p[1] - vmin) / cell;
         }
         double d = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
         if (!(d > 0)) continue;
         int x0 = (int)fmax(0, floor(fmin(u[0], fmin(u[1], u[2])))), x1 = (int)fmin(W, ceil(fmax(u[0], fmax(u[1], u[2]))));
         int y0 = (int)fmax(0, floor(fmin(v[0], fmin(v[1], v[2])))), y1 = (int)fmin(H, ceil(fmax(v[0], fmax(v[1], v[2]))));
-        for (int y = y0; y < y1 && !overlap; ++y)
+        for (int y = y0; y < y1 && (!overlap || bad); ++y)
             for (int x = x0; x < x1; ++x) {
                 double px = x + 0.5, py = y + 0.5;
                 double b1 = ((px - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (py - v[0])) / d;
                 double b2 = ((u[1] - u[0]) * (py - v[0]) - (px - u[0]) * (v[1] - v[0])) / d;
                 if (b1 <= 1e-6 || b2 <= 1e-6 || b1 + b2 >= 1 - 1e-6) continue;
-                if (grid[(size_t)y * W + x]++) { overlap = 1; break; }
+                if (grid[(size_t)y * W + x]++) { overlap = 1; if (bad) bad[t] = 1; break; }
             }
     }
     free(grid);
@@ -292,13 +351,12 @@ static int raster_overlaps(const atlas *a, const chart *c, double umin, double v
 
 /* Any two of the chart's triangles overlapping in UV: candidates from a grid of buckets about
  * one mean triangle wide, then the exact test; 1 overlap, 0 none, -1 out of memory. */
-static int chart_overlaps(const atlas *a, const chart *c, double umin, double vmin, double umax, double vmax, double area)
+static int chart_overlaps(const chart *c, uint8_t *bad, double umin, double vmin, double umax, double vmax, double area)
 {
-    const prt__mesh *m = a->m;
     double cell = sqrt(2 * area / (double)c->nt);
     double gw = (umax - umin) / cell + 1, gh = (vmax - vmin) / cell + 1;
     if (gw * gh > 4.0 * c->nt + 16) { double k = sqrt(gw * gh / (4.0 * c->nt + 16)); cell *= k; gw = (umax - umin) / cell + 1; gh = (vmax - vmin) / cell + 1; }
-    if (gw > 4.0 * c->nt + 16 || gh > 4.0 * c->nt + 16) return raster_overlaps(a, c, umin, vmin, umax, vmax, area);
+    if (gw > 4.0 * c->nt + 16 || gh > 4.0 * c->nt + 16) return raster_overlaps(c, bad, umin, vmin, umax, vmax, area);
     const size_t W = (size_t)gw, H = (size_t)gh, cells = W * H;
     int32_t (*box)[4] = malloc(c->nt * sizeof *box);
     size_t *count = calloc(cells + 1, sizeof *count), *fill = NULL;
@@ -309,10 +367,9 @@ static int chart_overlaps(const atlas *a, const chart *c, double umin, double vm
     const double budget = 64.0 * c->nt + 4096;
     double entries = 0;
     for (size_t t = 0; t < c->nt; ++t) {
-        const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
         double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
         for (int k = 0; k < 3; ++k) {
-            const double *q = c->uv + (size_t)a->local[a->weld[ix[k]]] * 2;
+            const double *q = c->uv + (size_t)c->corner[t * 3 + k] * 2;
             lo[0] = fmin(lo[0], q[0]); hi[0] = fmax(hi[0], q[0]); lo[1] = fmin(lo[1], q[1]); hi[1] = fmax(hi[1], q[1]);
         }
         box[t][0] = (int32_t)fmax(0, fmin((double)W - 1, (lo[0] - umin) / cell));
@@ -329,7 +386,7 @@ static int chart_overlaps(const atlas *a, const chart *c, double umin, double vm
                 for (int32_t x = box[t][0]; x <= box[t][2]; ++x) count[(size_t)y * W + x + 1]++;
         for (size_t b = 1; b <= cells; ++b) pairs += 0.5 * (double)count[b] * (double)count[b];
     }
-    if (entries > budget || pairs > 4 * budget) { free(count); free(box); return raster_overlaps(a, c, umin, vmin, umax, vmax, area); }
+    if (entries > budget || pairs > 4 * budget) { free(count); free(box); return raster_overlaps(c, bad, umin, vmin, umax, vmax, area); }
     for (size_t i = 1; i <= cells; ++i) count[i] += count[i - 1];
     fill = calloc(cells, sizeof *fill);
     items = malloc(count[cells] * sizeof *items + 1);
@@ -341,16 +398,19 @@ static int chart_overlaps(const atlas *a, const chart *c, double umin, double vm
                 items[count[b] + fill[b]++] = (uint32_t)t;
             }
     int overlap = 0;
-    for (size_t b = 0; b < cells && !overlap; ++b)
-        for (size_t i = count[b]; i < count[b] + fill[b] && !overlap; ++i)
-            for (size_t j = i + 1; j < count[b] + fill[b] && !overlap; ++j) {
+    for (size_t b = 0; b < cells && (!overlap || bad); ++b)
+        for (size_t i = count[b]; i < count[b] + fill[b] && (!overlap || bad); ++i)
+            for (size_t j = i + 1; j < count[b] + fill[b] && (!overlap || bad); ++j) {
                 double p[3][2], q[3][2];
-                const uint32_t *ia = m->indices + (size_t)c->tris[items[i]] * 3, *ib = m->indices + (size_t)c->tris[items[j]] * 3;
                 for (int k = 0; k < 3; ++k) {
-                    memcpy(p[k], c->uv + (size_t)a->local[a->weld[ia[k]]] * 2, sizeof p[k]);
-                    memcpy(q[k], c->uv + (size_t)a->local[a->weld[ib[k]]] * 2, sizeof q[k]);
+                    memcpy(p[k], c->uv + (size_t)c->corner[(size_t)items[i] * 3 + k] * 2, sizeof p[k]);
+                    memcpy(q[k], c->uv + (size_t)c->corner[(size_t)items[j] * 3 + k] * 2, sizeof q[k]);
                 }
-                overlap = triangles_overlap((const double (*)[2])p, (const double (*)[2])q);
+                if (bad && bad[items[i]] && bad[items[j]]) continue;
+                if (triangles_overlap((const double (*)[2])p, (const double (*)[2])q)) {
+                    overlap = 1;
+                    if (bad) bad[items[i]] = bad[items[j]] = 1;
+                }
             }
     free(count);
     free(fill);
@@ -360,9 +420,11 @@ static int chart_overlaps(const atlas *a, const chart *c, double umin, double vm
 }
 
 /* Does the chart's map keep every triangle the right way round and within MAX_STRETCH, and
- * cover no point of the plane twice? 1 yes, 0 no, -1 out of memory. */
-static int chart_valid(const atlas *a, const chart *c)
+ * cover no point of the plane twice? 1 yes, 0 no, -1 out of memory. With bad (one per triangle,
+ * zeros), it goes on past the first fault and marks every triangle at fault. */
+static int chart_valid(const atlas *a, const chart *c, uint8_t *bad)
 {
+    int valid = 1;
     const prt__mesh *m = a->m;
     double umin = INFINITY, vmin = INFINITY, umax = -INFINITY, vmax = -INFINITY, area = 0;
     for (size_t t = 0; t < c->nt; ++t) {
@@ -370,29 +432,45 @@ static int chart_valid(const atlas *a, const chart *c)
         double x[3], y[3];
         if (!tri_frame(m, ix, x, y)) continue;   /* degenerate in space: anything goes */
         const double *p[3];
-        for (int k = 0; k < 3; ++k) p[k] = c->uv + a->local[a->weld[ix[k]]] * 2;
+        for (int k = 0; k < 3; ++k) p[k] = c->uv + (size_t)c->corner[t * 3 + k] * 2;
         double du1 = p[1][0] - p[0][0], dv1 = p[1][1] - p[0][1], du2 = p[2][0] - p[0][0], dv2 = p[2][1] - p[0][1];
         double sa = 0.5 * (du1 * dv2 - du2 * dv1);
-        if (!(sa > 1e-9 * a->area[tri])) return 0;
+        if (!(sa > 1e-9 * a->area[tri])) { valid = 0; if (!bad) return 0; bad[t] = 1; continue; }
         double ju0 = du1 / x[1], jv0 = dv1 / x[1], ju1 = (du2 - ju0 * x[2]) / y[2], jv1 = (dv2 - jv0 * x[2]) / y[2];
         double f = ju0 * ju0 + ju1 * ju1 + jv0 * jv0 + jv1 * jv1, det = ju0 * jv1 - ju1 * jv0;
         double disc = sqrt(fmax(0.0, f * f / 4 - det * det));
         double s1 = sqrt(f / 2 + disc), s2 = sqrt(fmax(0.0, f / 2 - disc));
-        if (!(s2 > 0) || s1 > MAX_STRETCH * s2) return 0;
+        if (!(s2 > 0) || s1 > MAX_STRETCH * s2) { valid = 0; if (!bad) return 0; bad[t] = 1; }
         area += sa;
     }
     for (size_t v = 0; v < c->nv; ++v) {
         umin = fmin(umin, c->uv[v * 2]); umax = fmax(umax, c->uv[v * 2]);
         vmin = fmin(vmin, c->uv[v * 2 + 1]); vmax = fmax(vmax, c->uv[v * 2 + 1]);
     }
-    if (c->nt < 2 || !(area > 0)) return 1;
-    const int overlap = chart_overlaps(a, c, umin, vmin, umax, vmax, area);
-    return overlap < 0 ? -1 : !overlap;
+    if (c->nt < 2 || !(area > 0)) return valid;
+    const int overlap = chart_overlaps(c, bad, umin, vmin, umax, vmax, area);
+    return overlap < 0 ? -1 : valid && !overlap;
+}
+
+/* Triangle t of chart c's terms in the conformal energy (none when degenerate in space). */
+static void lscm_term(const prt__mesh *m, const chart *c, size_t t, lscm_tri *T)
+{
+    const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
+    double x[3], y[3];
+    const bool ok = tri_frame(m, ix, x, y);
+    const double s = ok ? 1.0 / sqrt(x[1] * y[2]) : 0;   /* 1 / sqrt(2 area) */
+    for (int j = 0; j < 3; ++j) {
+        const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+        T->v[j] = c->corner[t * 3 + j];
+        T->a[j] = ok ? (x[j2] - x[j1]) * s : 0;
+        T->b[j] = ok ? (y[j2] - y[j1]) * s : 0;
+    }
 }
 
 /* Flattens chart c (its tris set, its verts found here): LSCM, else projection; false when neither
- * gives a valid map. */
-static bool flatten(atlas *a, chart *c, bool *ok_memory)
+ * gives a valid map, with the triangles at fault in LSCM's map (else the projection's) marked in
+ * bad (one per triangle, zeros). */
+static bool flatten(atlas *a, chart *c, uint8_t *bad, bool *ok_memory)
 {
     const prt__mesh *m = a->m;
     double n[3] = {0, 0, 0};
@@ -405,13 +483,14 @@ static bool flatten(atlas *a, chart *c, bool *ok_memory)
     plane_frame(n, t1, t2);
     double *proj = malloc(c->nv * 2 * sizeof *proj);
     lscm_tri *T = malloc(c->nt * sizeof *T);
-    if (!proj || !T) { free(proj); free(T); *ok_memory = false; return false; }
+    uint8_t *fixed = calloc(c->nv, 1);
+    if (!proj || !T || !fixed) { free(proj); free(T); free(fixed); *ok_memory = false; return false; }
     /* The projection, and the two vertices furthest apart along its wider axis as pins. */
     uint32_t pin[2] = {0, 0};
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     uint32_t at_lo[2] = {0, 0}, at_hi[2] = {0, 0};
     for (size_t v = 0; v < c->nv; ++v) {
-        const float *p = m->positions + (size_t)a->rep[c->verts[v]] * 3;
+        const float *p = m->positions + (size_t)c->verts[v] * 3;
         double pv[2] = {0, 0};
         for (int k = 0; k < 3; ++k) { pv[0] += t1[k] * p[k]; pv[1] += t2[k] * p[k]; }
         proj[v * 2] = pv[0];
@@ -425,33 +504,24 @@ static bool flatten(atlas *a, chart *c, bool *ok_memory)
     pin[0] = at_lo[axis];
     pin[1] = at_hi[axis];
     bool lscm = c->nt > 1 && pin[0] != pin[1];
-    for (size_t t = 0; t < c->nt && lscm; ++t) {
-        const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
-        double x[3], y[3];
-        if (!tri_frame(m, ix, x, y)) {   /* degenerate: no conformal constraint */
-            for (int j = 0; j < 3; ++j) { T[t].v[j] = (uint32_t)a->local[a->weld[ix[j]]]; T[t].a[j] = T[t].b[j] = 0; }
-            continue;
-        }
-        const double s = 1.0 / sqrt(x[1] * y[2]);   /* 1 / sqrt(2 area) */
-        for (int j = 0; j < 3; ++j) {
-            const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-            T[t].v[j] = (uint32_t)a->local[a->weld[ix[j]]];
-            T[t].a[j] = (x[j2] - x[j1]) * s;
-            T[t].b[j] = (y[j2] - y[j1]) * s;
-        }
-    }
+    fixed[pin[0]] = fixed[pin[1]] = 1;
+    for (size_t t = 0; t < c->nt && lscm; ++t) lscm_term(m, c, t, &T[t]);
     int done = 0;
+    bool marked = false;
     if (lscm) {
         memcpy(c->uv, proj, c->nv * 2 * sizeof *proj);
-        if (lscm_solve(a->ctx, T, c->nt, c->nv, pin, c->uv) && (done = chart_valid(a, c)) > 0) a->flattened++;
+        if (lscm_solve(a->ctx, T, c->nt, c->nv, fixed, c->uv) && (done = chart_valid(a, c, NULL)) > 0) a->flattened++;
+        if (done == 0) { done = chart_valid(a, c, bad); marked = true; }
     }
     if (done == 0) {
         memcpy(c->uv, proj, c->nv * 2 * sizeof *proj);
-        done = chart_valid(a, c);
+        done = chart_valid(a, c, NULL);
+        if (done == 0 && !marked) done = chart_valid(a, c, bad);
     }
     if (done < 0) *ok_memory = false;
     free(proj);
     free(T);
+    free(fixed);
     return done > 0;
 }
 
@@ -487,25 +557,26 @@ static heap_item heap_pop(heap_item *h, size_t *n)
     return top;
 }
 
-/* Fills c->verts (the welded ids its triangles use, numbered in a->local) and sizes c->uv. */
+/* Numbers the chart's vertices (c->corner: [nt][3] corners to chart vertices; c->verts: a mesh
+ * vertex at each) and sizes c->uv. Corners are one vertex where they share a fan (see fan), not
+ * merely a position: scans pinch sheets together at single vertices, and one UV there would fold
+ * the two fans onto each other. */
 static bool chart_vertices(atlas *a, chart *c)
 {
     const prt__mesh *m = a->m;
-    c->verts = malloc(c->nt * 3 * sizeof *c->verts);
-    if (!c->verts) return false;
+    const size_t n = c->nt * 3;
+    c->verts = malloc(n * sizeof *c->verts);
+    c->corner = malloc(n * sizeof *c->corner);
+    if (!c->verts || !c->corner) return false;
     c->nv = 0;
-    for (size_t t = 0; t < c->nt; ++t)
-        for (int k = 0; k < 3; ++k) {
-            uint32_t w = a->weld[m->indices[(size_t)c->tris[t] * 3 + k]];
-            if (a->local[w] < 0) { a->local[w] = (int32_t)c->nv; c->verts[c->nv++] = w; }
-        }
+    for (size_t i = 0; i < n; ++i) {
+        const uint32_t f = a->fan[(size_t)c->tris[i / 3] * 3 + i % 3];
+        if (a->vlocal[f] < 0) { a->vlocal[f] = (int32_t)c->nv; c->verts[c->nv++] = m->indices[(size_t)c->tris[i / 3] * 3 + i % 3]; }
+        c->corner[i] = (uint32_t)a->vlocal[f];
+    }
+    for (size_t i = 0; i < n; ++i) a->vlocal[a->fan[(size_t)c->tris[i / 3] * 3 + i % 3]] = -1;
     c->uv = malloc(c->nv * 2 * sizeof *c->uv);
     return c->uv != NULL;
-}
-
-static void chart_release_locals(atlas *a, const chart *c)
-{
-    for (size_t v = 0; v < c->nv; ++v) a->local[c->verts[v]] = -1;
 }
 
 static bool keep_chart(atlas *a, chart *c)
@@ -569,16 +640,46 @@ static prt_status place_piece(const prt_context *ctx, atlas *a, uint32_t *tris, 
         if (!c.tris) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); break; }
         memcpy(c.tris, order + start[p], c.nt * sizeof *c.tris);
         bool mem = true;
-        if (!chart_vertices(a, &c)) mem = false;
-        bool flat = mem && flatten(a, &c, &mem);
-        chart_release_locals(a, &c);
-        if (mem && prt__cancelled(ctx)) { free(c.tris); free(c.verts); free(c.uv); st = prt__fail(ctx, PRT_ERR_CANCELLED, "UV atlas cancelled"); break; }
+        uint8_t *bad = calloc(c.nt, 1);
+        if (!bad || !chart_vertices(a, &c)) mem = false;
+        bool flat = mem && flatten(a, &c, bad, &mem);
+        size_t cut = 0;
+        if (mem && !flat && c.nt > 1 && depth < SPLIT_DEPTH) {
+            /* Only the faulty triangles and those around their corners come out, to be charted
+             * on their own; the rest is flattened again. Scans fold around a few crumpled
+             * vertices, and halving the whole chart for them grinds it down to crumbs. */
+            uint8_t *hot = calloc(c.nv, 1);
+            if (!hot) mem = false;
+            for (size_t t = 0; hot && t < c.nt; ++t)
+                if (bad[t]) for (int k = 0; k < 3; ++k) hot[c.corner[t * 3 + k]] = 1;
+            for (size_t t = 0; hot && t < c.nt; ++t) {
+                bad[t] = hot[c.corner[t * 3]] || hot[c.corner[t * 3 + 1]] || hot[c.corner[t * 3 + 2]];
+                cut += bad[t];
+            }
+            free(hot);
+        }
+        if (mem && prt__cancelled(ctx)) { free(bad); free(c.tris); free(c.verts); free(c.uv); free(c.corner); st = prt__fail(ctx, PRT_ERR_CANCELLED, "UV atlas cancelled"); break; }
         if (!mem) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
         else if (flat || c.nt == 1 || depth >= SPLIT_DEPTH) {
             /* Not flat only past SPLIT_DEPTH (one triangle always is): it keeps its projection. */
             a->unchecked += !flat;
+            free(bad);
+            bad = NULL;
             if (!keep_chart(a, &c)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
             else continue;
+        } else if (cut > 0 && cut * 2 <= c.nt) {
+            uint32_t *sorted = malloc(c.nt * sizeof *sorted);
+            if (!sorted) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+            else {
+                size_t keep = 0, out = c.nt;
+                for (size_t t = 0; t < c.nt; ++t) {
+                    if (bad[t]) sorted[--out] = c.tris[t];
+                    else sorted[keep++] = c.tris[t];
+                }
+                st = place_piece(ctx, a, sorted, keep, depth + 1);
+                if (!st) st = place_piece(ctx, a, sorted + keep, c.nt - keep, depth + 1);
+                free(sorted);
+            }
         } else {
             /* Cut at the median centroid along the longest axis of the piece's box. */
             double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -620,9 +721,11 @@ static prt_status place_piece(const prt_context *ctx, atlas *a, uint32_t *tris, 
             free(key);
             free(sorted);
         }
+        free(bad);
         free(c.tris);
         free(c.verts);
         free(c.uv);
+        free(c.corner);
     }
     free(order);
     free(start);
@@ -677,6 +780,194 @@ static prt_status grow_charts(const prt_context *ctx, atlas *a, double cos_max)
     free(taken);
     free(members);
     free(heap);
+    return st;
+}
+
+/* ---- merging ---- */
+
+/* Tries to extend chart A by its neighbour B: A's map stays as it is, B's is moved onto it (the
+ * similarity that best takes B's UVs of their shared vertices to A's) and relaxed by LSCM with
+ * A's vertices held. The union must be valid, and B's triangles keep within MERGE_AREA of A's
+ * UV area per surface area (the texel density stays near even inside the chart). 1 with A
+ * replaced by the union, 0 not, -1 out of memory. */
+static int try_merge(atlas *a, chart *A, const chart *B)
+{
+    const prt__mesh *m = a->m;
+    chart M = {0};
+    M.nt = A->nt + B->nt;
+    M.tris = malloc(M.nt * sizeof *M.tris);
+    if (!M.tris) return -1;
+    memcpy(M.tris, A->tris, A->nt * sizeof *M.tris);
+    memcpy(M.tris + A->nt, B->tris, B->nt * sizeof *M.tris);
+    uint8_t *fixed = NULL;
+    int32_t *sub = NULL;
+    uint32_t *subv = NULL;
+    double *x = NULL;
+    lscm_tri *T = NULL;
+    int result = -1;
+    if (!chart_vertices(a, &M)) goto done;
+    fixed = calloc(M.nv, 1);
+    sub = malloc(M.nv * sizeof *sub);
+    if (!fixed || !sub) goto done;
+    for (size_t i = 0; i < A->nt * 3; ++i) {
+        const uint32_t v = M.corner[i];
+        fixed[v] = 1;
+        memcpy(M.uv + (size_t)v * 2, A->uv + (size_t)A->corner[i] * 2, 2 * sizeof *M.uv);
+    }
+    /* The similarity z -> alpha z + beta (complex) from B's UVs to A's at shared corners. */
+    double zc[2] = {0, 0}, wc[2] = {0, 0}, n = 0;
+    for (size_t i = 0; i < B->nt * 3; ++i) {
+        const uint32_t v = M.corner[A->nt * 3 + i];
+        if (!fixed[v]) continue;
+        const double *z = B->uv + (size_t)B->corner[i] * 2, *w = M.uv + (size_t)v * 2;
+        zc[0] += z[0]; zc[1] += z[1]; wc[0] += w[0]; wc[1] += w[1]; n++;
+    }
+    result = 0;
+    if (n < 2) goto done;
+    zc[0] /= n; zc[1] /= n; wc[0] /= n; wc[1] /= n;
+    double num[2] = {0, 0}, den = 0;
+    for (size_t i = 0; i < B->nt * 3; ++i) {
+        const uint32_t v = M.corner[A->nt * 3 + i];
+        if (!fixed[v]) continue;
+        const double *z = B->uv + (size_t)B->corner[i] * 2, *w = M.uv + (size_t)v * 2;
+        const double zr = z[0] - zc[0], zi = z[1] - zc[1], wr = w[0] - wc[0], wi = w[1] - wc[1];
+        num[0] += zr * wr + zi * wi;   /* conj(z) w */
+        num[1] += zr * wi - zi * wr;
+        den += zr * zr + zi * zi;
+    }
+    if (!(den > 0)) goto done;
+    const double ar = num[0] / den, ai = num[1] / den;
+    const double br = wc[0] - (ar * zc[0] - ai * zc[1]), bi = wc[1] - (ar * zc[1] + ai * zc[0]);
+    /* B's vertices, numbered on their own: the solve touches only them. */
+    size_t ns = 0;
+    subv = malloc(B->nt * 3 * sizeof *subv);
+    T = malloc(B->nt * sizeof *T);
+    if (!subv || !T) { result = -1; goto done; }
+    for (size_t v = 0; v < M.nv; ++v) sub[v] = -1;
+    for (size_t i = 0; i < B->nt * 3; ++i) {
+        const uint32_t v = M.corner[A->nt * 3 + i];
+        if (sub[v] < 0) { sub[v] = (int32_t)ns; subv[ns++] = v; }
+        if (!fixed[v]) {
+            const double *z = B->uv + (size_t)B->corner[i] * 2;
+            M.uv[(size_t)v * 2] = ar * z[0] - ai * z[1] + br;
+            M.uv[(size_t)v * 2 + 1] = ar * z[1] + ai * z[0] + bi;
+        }
+    }
+    x = malloc(ns * 2 * sizeof *x);
+    uint8_t *sfix = malloc(ns);
+    if (!x || !sfix) { free(sfix); result = -1; goto done; }
+    bool any_free = false;
+    for (size_t k = 0; k < ns; ++k) {
+        memcpy(x + k * 2, M.uv + (size_t)subv[k] * 2, 2 * sizeof *x);
+        sfix[k] = fixed[subv[k]];
+        any_free |= !sfix[k];
+    }
+    for (size_t t = 0; t < B->nt; ++t) {
+        lscm_term(m, &M, A->nt + t, &T[t]);
+        for (int j = 0; j < 3; ++j) T[t].v[j] = (uint32_t)sub[T[t].v[j]];
+    }
+    bool solved = !any_free || lscm_solve(a->ctx, T, B->nt, ns, sfix, x);
+    free(sfix);
+    if (!solved) goto done;
+    for (size_t k = 0; k < ns; ++k) memcpy(M.uv + (size_t)subv[k] * 2, x + k * 2, 2 * sizeof *x);
+    /* B's density against A's. */
+    double ua = 0, sa = 0;
+    for (size_t t = 0; t < A->nt; ++t) {
+        const double *p0 = M.uv + (size_t)M.corner[t * 3] * 2, *p1 = M.uv + (size_t)M.corner[t * 3 + 1] * 2, *p2 = M.uv + (size_t)M.corner[t * 3 + 2] * 2;
+        ua += 0.5 * ((p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1]));
+        sa += a->area[M.tris[t]];
+    }
+    const double density = sa > 0 ? ua / sa : 0;
+    for (size_t t = A->nt; t < M.nt; ++t) {
+        const double *p0 = M.uv + (size_t)M.corner[t * 3] * 2, *p1 = M.uv + (size_t)M.corner[t * 3 + 1] * 2, *p2 = M.uv + (size_t)M.corner[t * 3 + 2] * 2;
+        const double u = 0.5 * ((p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1]));
+        const double s = a->area[M.tris[t]] * density;
+        if (s > 0 && (u > MERGE_AREA * s || u * MERGE_AREA < s)) goto done;
+    }
+    result = chart_valid(a, &M, NULL);
+    if (result > 0) {
+        free(A->tris); free(A->verts); free(A->uv); free(A->corner);
+        *A = M;
+        M = (chart){0};
+    }
+done:
+    free(M.tris); free(M.verts); free(M.uv); free(M.corner);
+    free(fixed); free(sub); free(subv); free(x); free(T);
+    return result;
+}
+
+typedef struct merge_key { double area; uint32_t i; } merge_key;
+static int by_area(const void *x, const void *y)
+{
+    const merge_key *p = x, *q = y;
+    if (p->area != q->area) return p->area < q->area ? -1 : 1;
+    return p->i < q->i ? -1 : p->i > q->i;
+}
+
+/* Merges charts into neighbours, smallest first, each into the neighbour it shares the longest
+ * boundary with (else the next longest) while the union stays valid: fewer, larger charts waste
+ * fewer texels on gutters. */
+static prt_status merge_charts(const prt_context *ctx, atlas *a)
+{
+    const prt__mesh *m = a->m;
+    const size_t count = a->count;
+    uint32_t *owner = malloc(a->nt * sizeof *owner);
+    merge_key *keys = malloc(count * sizeof *keys);
+    double *shared = calloc(count, sizeof *shared);
+    uint32_t *near = malloc(count * sizeof *near);
+    uint8_t *dead = calloc(count, 1);
+    prt_status st = owner && keys && shared && near && dead ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    for (size_t ci = 0; ci < count && !st; ++ci) {
+        double area = 0;
+        for (size_t t = 0; t < a->charts[ci].nt; ++t) { owner[a->charts[ci].tris[t]] = (uint32_t)ci; area += a->area[a->charts[ci].tris[t]]; }
+        keys[ci] = (merge_key){area, (uint32_t)ci};
+    }
+    if (!st) qsort(keys, count, sizeof *keys, by_area);
+    for (size_t k = 0; k < count && !st; ++k) {
+        const uint32_t bi = keys[k].i;
+        chart *B = &a->charts[bi];
+        if (keys[k].area > MERGE_SHARE * a->total) break;
+        if (prt__cancelled(ctx)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "UV atlas cancelled"); break; }
+        /* Neighbours by shared boundary length. */
+        size_t nn = 0;
+        for (size_t t = 0; t < B->nt; ++t) {
+            const uint32_t tri = B->tris[t];
+            for (int e = 0; e < 3; ++e) {
+                const int64_t o = a->across[(size_t)tri * 3 + e];
+                if (o < 0 || owner[o] == bi) continue;
+                const uint32_t ci = owner[o];
+                const float *p = m->positions + m->indices[(size_t)tri * 3 + e] * 3, *q = m->positions + m->indices[(size_t)tri * 3 + (e + 1) % 3] * 3;
+                const double d = sqrt(((double)p[0] - q[0]) * ((double)p[0] - q[0]) + ((double)p[1] - q[1]) * ((double)p[1] - q[1]) + ((double)p[2] - q[2]) * ((double)p[2] - q[2]));
+                if (shared[ci] == 0) near[nn++] = ci;
+                shared[ci] += d + 1e-300;
+            }
+        }
+        for (int tries = 0; tries < MERGE_TRIES && nn && !st; ++tries) {
+            size_t best = 0;
+            for (size_t j = 1; j < nn; ++j)
+                if (shared[near[j]] > shared[near[best]] || (shared[near[j]] == shared[near[best]] && near[j] < near[best])) best = j;
+            const uint32_t ai = near[best];
+            if (shared[ai] <= 0) break;
+            shared[ai] = -1;   /* tried */
+            const int r = try_merge(a, &a->charts[ai], B);
+            if (r < 0) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+            else if (r > 0) {
+                for (size_t t = 0; t < B->nt; ++t) owner[B->tris[t]] = ai;
+                free(B->tris); free(B->verts); free(B->uv); free(B->corner);
+                *B = (chart){0};
+                dead[bi] = 1;
+                break;
+            }
+        }
+        for (size_t j = 0; j < nn; ++j) shared[near[j]] = 0;
+    }
+    if (!st) {
+        size_t kept = 0;
+        for (size_t ci = 0; ci < count; ++ci)
+            if (!dead[ci]) a->charts[kept++] = a->charts[ci];
+        a->count = kept;
+    }
+    free(owner); free(keys); free(shared); free(near); free(dead);
     return st;
 }
 
@@ -887,26 +1178,41 @@ static bool pack(packer *p, double s, placement *at)
 
 static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, const placement *at, double s, int res, size_t *added)
 {
-    const size_t nv = m->vertex_count;
-    int64_t *owner = malloc(nv * sizeof *owner);         /* chart that keeps the vertex's own id */
-    uint32_t *dup = malloc(nv * sizeof *dup), *dup_stamp = malloc(nv * sizeof *dup_stamp);
-    if (!owner || !dup || !dup_stamp) { free(owner); free(dup); free(dup_stamp); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); }
-    for (size_t v = 0; v < nv; ++v) { owner[v] = -1; dup_stamp[v] = UINT32_MAX; }
-    /* First pass: count copies. */
-    size_t extra = 0;
-    for (size_t ci = 0; ci < a->count; ++ci) {
+    const size_t nv = m->vertex_count, nt = m->triangle_count;
+    /* A mesh vertex keeps its id in the first chart vertex that uses it; every other chart vertex
+     * at it (across a seam, or the other fan of a pinch) gets a copy. */
+    uint32_t *own_c = malloc(nv * sizeof *own_c), *own_v = malloc(nv * sizeof *own_v);
+    uint32_t *dup = malloc(nv * sizeof *dup), *dup_c = malloc(nv * sizeof *dup_c), *dup_v = malloc(nv * sizeof *dup_v);
+    uint32_t *ids = malloc(nt * 3 * sizeof *ids), *src = NULL;
+    size_t extra = 0, cap = 0;
+    bool ok = own_c && own_v && dup && dup_c && dup_v && ids;
+    for (size_t v = 0; ok && v < nv; ++v) { own_c[v] = UINT32_MAX; dup_c[v] = UINT32_MAX; }
+    for (size_t ci = 0; ok && ci < a->count; ++ci) {
         const chart *c = &a->charts[ci];
-        for (size_t t = 0; t < c->nt; ++t)
-            for (int k = 0; k < 3; ++k) {
-                uint32_t o = m->indices[(size_t)c->tris[t] * 3 + k];
-                if (owner[o] < 0) owner[o] = (int64_t)ci;
-                else if (owner[o] != (int64_t)ci && dup_stamp[o] != ci) { dup_stamp[o] = (uint32_t)ci; extra++; }
+        for (size_t i = 0; ok && i < c->nt * 3; ++i) {
+            const size_t slot = (size_t)c->tris[i / 3] * 3 + i % 3;
+            const uint32_t o = m->indices[slot], v = c->corner[i];
+            if (own_c[o] == UINT32_MAX) { own_c[o] = (uint32_t)ci; own_v[o] = v; }
+            if (own_c[o] == ci && own_v[o] == v) { ids[slot] = o; continue; }
+            if (dup_c[o] != ci || dup_v[o] != v) {
+                if (nv + extra >= UINT32_MAX) { free(own_c); free(own_v); free(dup); free(dup_c); free(dup_v); free(ids); free(src);
+                    return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the UV atlas would need more than 2^32 vertices"); }
+                if (extra == cap) {
+                    cap = cap ? cap * 2 : 1024;
+                    uint32_t *ns = realloc(src, cap * sizeof *ns);
+                    if (!ns) { ok = false; break; }
+                    src = ns;
+                }
+                dup_c[o] = (uint32_t)ci; dup_v[o] = v;
+                dup[o] = (uint32_t)(nv + extra);
+                src[extra++] = o;
             }
+            ids[slot] = dup[o];
+        }
     }
-    if (nv + extra > UINT32_MAX) { free(owner); free(dup); free(dup_stamp); return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the UV atlas would need more than 2^32 vertices"); }
+    free(own_c); free(own_v); free(dup); free(dup_c); free(dup_v);
     const size_t nv2 = nv + extra;
-    bool ok = true;
-#define GROW(p, n) do { void *q_ = realloc((p), (n)); if (q_) (p) = q_; else ok = false; } while (0)
+#define GROW(p, n) do { if (ok) { void *q_ = realloc((p), (n)); if (q_) (p) = q_; else ok = false; } } while (0)
     GROW(m->positions, nv2 * 3 * sizeof(float));
     GROW(m->normals, nv2 * 3 * sizeof(float));
     GROW(m->albedo, nv2 * 3 * sizeof(float));
@@ -915,48 +1221,38 @@ static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, c
     if (m->surface) GROW(m->surface, nv2 * sizeof(uint16_t));
     if (m->emission) GROW(m->emission, nv2 * 3 * sizeof(float));
 #undef GROW
-    if (!ok) { free(owner); free(dup); free(dup_stamp); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); }
-    for (size_t v = 0; v < nv; ++v) dup_stamp[v] = UINT32_MAX;
-    size_t next = nv;
+    if (!ok) { free(ids); free(src); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); }
+    for (size_t k = 0; k < extra; ++k) {
+        const size_t o = src[k], next = nv + k;
+        memcpy(m->positions + next * 3, m->positions + o * 3, 3 * sizeof(float));
+        memcpy(m->normals + next * 3, m->normals + o * 3, 3 * sizeof(float));
+        memcpy(m->albedo + next * 3, m->albedo + o * 3, 3 * sizeof(float));
+        m->material[next] = m->material[o];
+        if (m->surface) m->surface[next] = m->surface[o];
+        if (m->emission) memcpy(m->emission + next * 3, m->emission + o * 3, 3 * sizeof(float));
+    }
     for (size_t ci = 0; ci < a->count; ++ci) {
         const chart *c = &a->charts[ci];
-        for (size_t v = 0; v < c->nv; ++v) a->local[c->verts[v]] = (int32_t)v;
         int W, H;
         chart_grid(c, s, &W, &H);
-        for (size_t t = 0; t < c->nt; ++t)
-            for (int k = 0; k < 3; ++k) {
-                uint32_t *slot = m->indices + (size_t)c->tris[t] * 3 + k, o = *slot, id = o;
-                if (owner[o] != (int64_t)ci) {
-                    if (dup_stamp[o] != ci) {
-                        dup_stamp[o] = (uint32_t)ci;
-                        dup[o] = (uint32_t)next;
-                        memcpy(m->positions + next * 3, m->positions + (size_t)o * 3, 3 * sizeof(float));
-                        memcpy(m->normals + next * 3, m->normals + (size_t)o * 3, 3 * sizeof(float));
-                        memcpy(m->albedo + next * 3, m->albedo + (size_t)o * 3, 3 * sizeof(float));
-                        m->material[next] = m->material[o];
-                        if (m->surface) m->surface[next] = m->surface[o];
-                        if (m->emission) memcpy(m->emission + next * 3, m->emission + (size_t)o * 3, 3 * sizeof(float));
-                        next++;
-                    }
-                    id = dup[o];
-                    *slot = id;
-                }
-                const double *p = c->uv + a->local[a->weld[o]] * 2;
-                /* Where packing put it: its grid turned about the grid's corner (texels onto texels). */
-                const double gx = p[0] * s + REACH, gy = p[1] * s + REACH;
-                const int turn = at[ci].turn;
-                const double tx = turn == 0 ? gx : turn == 1 ? H - gy : turn == 2 ? W - gx : gy;
-                const double ty = turn == 0 ? gy : turn == 1 ? gx : turn == 2 ? H - gy : W - gx;
-                m->uv[(size_t)id * 2] = (float)((at[ci].x + tx) / res);
-                m->uv[(size_t)id * 2 + 1] = (float)((at[ci].y + ty) / res);
-            }
-        chart_release_locals(a, c);
+        for (size_t i = 0; i < c->nt * 3; ++i) {
+            const size_t slot = (size_t)c->tris[i / 3] * 3 + i % 3;
+            const uint32_t id = ids[slot];
+            m->indices[slot] = id;
+            const double *p = c->uv + (size_t)c->corner[i] * 2;
+            /* Where packing put it: its grid turned about the grid's corner (texels onto texels). */
+            const double gx = p[0] * s + REACH, gy = p[1] * s + REACH;
+            const int turn = at[ci].turn;
+            const double tx = turn == 0 ? gx : turn == 1 ? H - gy : turn == 2 ? W - gx : gy;
+            const double ty = turn == 0 ? gy : turn == 1 ? gx : turn == 2 ? H - gy : W - gx;
+            m->uv[(size_t)id * 2] = (float)((at[ci].x + tx) / res);
+            m->uv[(size_t)id * 2 + 1] = (float)((at[ci].y + ty) / res);
+        }
     }
     m->vertex_count = nv2;
     *added = extra;
-    free(owner);
-    free(dup);
-    free(dup_stamp);
+    free(ids);
+    free(src);
     return PRT_OK;
 }
 
@@ -979,9 +1275,11 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
     a.area = malloc(a.nt * sizeof *a.area);
     a.smooth = malloc(a.nt * 3 * sizeof *a.smooth);
     a.stamp = calloc(a.nt, sizeof *a.stamp);
+    a.twin = calloc(a.nt, 1);
+    a.fan = malloc(a.nt * 3 * sizeof *a.fan);
     prt_status st = PRT_OK;
     double total = 0;
-    if (!a.weld || !a.rep || !a.across || !a.normal || !a.smooth || !a.area || !a.stamp) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    if (!a.weld || !a.rep || !a.across || !a.normal || !a.smooth || !a.area || !a.stamp || !a.twin || !a.fan) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
     for (size_t t = 0; t < a.nt && !st; ++t) {
         const uint32_t *ix = m->indices + t * 3;
         const float *p0 = m->positions + ix[0] * 3, *p1 = m->positions + ix[1] * 3, *p2 = m->positions + ix[2] * 3;
@@ -998,16 +1296,26 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
         for (int k = 0; k < 3; ++k)
             for (int c = 0; c < 3; ++c) sn[c] += m->normals[ix[k] * 3 + c];
         double sl = sqrt(sn[0] * sn[0] + sn[1] * sn[1] + sn[2] * sn[2]);
-        for (int c = 0; c < 3; ++c) a.smooth[t * 3 + c] = sl > 0 ? sn[c] / sl : a.normal[t * 3 + c];
+        for (int c = 0; c < 3; ++c) a.smooth[t * 3 + c] = sl != 0 ? sn[c] / sl : a.normal[t * 3 + c];
     }
     if (!st && !(total > 0)) st = prt__fail(ctx, PRT_ERR_EMPTY, "the mesh has no area to lay out in UV space");
     if (!st && !build_adjacency(&a)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    /* Back-to-back twins share their vertex normals: the one facing the other way grows by their
+     * opposite, so it never joins its twin's chart (both would map to one place). */
+    for (size_t t = 0; t < a.nt && !st; ++t) {
+        double *sm = a.smooth + t * 3;
+        const double *n = a.normal + t * 3;
+        if (a.twin[t] && sm[0] * n[0] + sm[1] * n[1] + sm[2] * n[2] < 0)
+            for (int c = 0; c < 3; ++c) sm[c] = -sm[c];
+    }
     if (!st) {
-        a.local = malloc(a.nw * sizeof *a.local);
-        if (!a.local) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
-        else for (size_t w = 0; w < a.nw; ++w) a.local[w] = -1;
+        a.vlocal = malloc(a.nt * 3 * sizeof *a.vlocal);
+        if (!a.vlocal) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+        else for (size_t i = 0; i < a.nt * 3; ++i) a.vlocal[i] = -1;
     }
     if (!st) st = grow_charts(ctx, &a, cos(max_angle * PRT_PI / 180.0));
+    a.total = total;
+    if (!st) st = merge_charts(ctx, &a);
     placement *at = NULL;
     uint32_t *order = NULL;
     double s = 0;
@@ -1018,20 +1326,12 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
         for (size_t ci = 0; ci < a.count && !st; ++ci) {
             chart *c = &a.charts[ci];
             double uv_area = 0, area = 0;
-            c->corner = malloc(c->nt * 3 * sizeof *c->corner);
-            if (!c->corner) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); break; }
-            for (size_t v = 0; v < c->nv; ++v) a.local[c->verts[v]] = (int32_t)v;
             for (size_t t = 0; t < c->nt; ++t) {
-                const uint32_t *ix = m->indices + (size_t)c->tris[t] * 3;
                 const double *p[3];
-                for (int k = 0; k < 3; ++k) {
-                    c->corner[t * 3 + k] = (uint32_t)a.local[a.weld[ix[k]]];
-                    p[k] = c->uv + c->corner[t * 3 + k] * 2;
-                }
+                for (int k = 0; k < 3; ++k) p[k] = c->uv + (size_t)c->corner[t * 3 + k] * 2;
                 uv_area += 0.5 * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]));
                 area += a.area[c->tris[t]];
             }
-            chart_release_locals(&a, c);
             const double k = uv_area > 0 && area > 0 ? sqrt(area / uv_area) : 1.0;
             for (size_t v = 0; v < c->nv * 2; ++v) c->uv[v] *= k;
             chart_orient(c);
@@ -1104,7 +1404,7 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
     free(pk.bits); free(pk.mask); free(pk.occupied); free(pk.bottom); free(pk.floor);
     for (size_t i = 0; i < a.count; ++i) { free(a.charts[i].tris); free(a.charts[i].verts); free(a.charts[i].uv); free(a.charts[i].corner); }
     free(a.charts);
-    free(a.weld); free(a.rep); free(a.across); free(a.normal); free(a.smooth); free(a.area); free(a.stamp); free(a.local);
+    free(a.weld); free(a.rep); free(a.across); free(a.normal); free(a.smooth); free(a.area); free(a.stamp); free(a.twin); free(a.vlocal); free(a.fan);
     free(order);
     free(at);
     return st;

@@ -14,9 +14,9 @@ typedef struct prt__atlas_desc {
 
 typedef struct prt__atlas_report {
     size_t grown;            /* charts grown by normal deviation */
-    size_t charts;           /* after splitting charts that would fold or overlap */
+    size_t charts;           /* after cutting charts that would fold or overlap, and merging small ones */
     size_t added_vertices;   /* copies made where a vertex lies on a seam between charts */
-    size_t flattened;        /* charts flattened by LSCM (the rest by projection onto their plane) */
+    size_t flattened;        /* charts flattened by LSCM before merging (the rest by projection onto their plane) */
     double coverage;         /* share of the map's texels that hold some of the surface */
     double texel_density;    /* texels per unit of surface area, the same in every chart */
     double worst_stretch;    /* largest ratio of a triangle map's singular values */
