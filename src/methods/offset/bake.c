@@ -140,6 +140,27 @@ static int nearest_rep(const obake *ob, const rep_index *ix, uint32_t land)
     return best;
 }
 
+/* A receiver's representatives, one set per thread: per offset the texel and chart
+ * (prt__offset_reps) and, sorted in space, nearest_rep's index. */
+typedef struct receiver { int32_t *rep, *rep_chart; rep_index ix; } receiver;
+
+static bool receiver_init(receiver *r, int K)
+{
+    r->rep = malloc((size_t)K * 2 * sizeof *r->rep);
+    r->rep_chart = r->rep ? r->rep + K : NULL;
+    r->ix = (rep_index){malloc((size_t)K * sizeof *r->ix.pt), 0};
+    return r->rep && r->ix.pt;
+}
+
+static void receiver_free(receiver *r) { free(r->rep); free(r->ix.pt); }
+
+static void receiver_at(const obake *ob, receiver *r, int tx, int ty)
+{
+    const prt__offset_set *s = ob->s;
+    prt__offset_reps(&ob->charts, s->width, s->height, s->offsets, s->count, tx, ty, r->rep, r->rep_chart);
+    rep_index_build(ob, r->rep, s->count, &r->ix);
+}
+
 /* First-bounce radiosity maps, entry (o, t) the transfer to t from the surface its cell o holds
  * (eq. 8's integral, not one texel's transfer times the cell's area: far from t, a cell spans
  * surfaces whose transfer to t differs wholly - the floor under a torus and the floor beyond).
@@ -155,18 +176,17 @@ static bool radiosity_maps(obake *ob, const int32_t *label, float *maps, prt__pr
     int short_of_memory = 0;
 #pragma omp parallel num_threads(prt__threads(ob->base.ctx))
     {
-        int32_t *rep = malloc((size_t)K * 2 * sizeof *rep), *rep_chart = rep ? rep + K : NULL;
-        rep_index ix = {malloc((size_t)K * sizeof *ix.pt), 0};
-        if (!rep || !ix.pt) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
+        receiver rc;
+        const bool ready = receiver_init(&rc, K);
+        if (!ready) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
 #pragma omp for schedule(dynamic, 16)
         for (size_t i = 0; i < nc; ++i) {
-            if (!rep || !ix.pt || prt__progress_cancelled(p)) continue;
+            if (!ready || prt__progress_cancelled(p)) continue;
             const size_t t = s->texel[i];
             const int tx = (int)(t % (size_t)W), ty = (int)(t / (size_t)W);
             const int32_t own = ob->chart[t];
             for (int o = 0; o < K; ++o) memset(maps + ((size_t)o * nc + i) * 3, 0, 3 * sizeof *maps);
-            prt__offset_reps(&ob->charts, W, H, s->offsets, K, tx, ty, rep, rep_chart);
-            rep_index_build(ob, rep, K, &ix);
+            receiver_at(ob, &rc, tx, ty);
             for (int dy = -NEAR_FIELD; dy <= NEAR_FIELD; ++dy)
                 for (int dx = -NEAR_FIELD; dx <= NEAR_FIELD; ++dx) {
                     const int sx = tx + dx, sy = ty + dy;
@@ -176,7 +196,7 @@ static bool radiosity_maps(obake *ob, const int32_t *label, float *maps, prt__pr
                     float tr[3];
                     prt__offset_tr(&ob->x[0], t, src, tr);
                     if (!(tr[0] > 0 || tr[1] > 0 || tr[2] > 0)) continue;
-                    const int o = prt__offset_recell(&ob->charts, W, s->offsets, K, tx, ty, rep, rep_chart,
+                    const int o = prt__offset_recell(&ob->charts, W, s->offsets, K, tx, ty, rc.rep, rc.rep_chart,
                                                      label[(size_t)(dy + H - 1) * gw + dx + W - 1], sx, sy, own);
                     for (int c = 0; c < 3; ++c) maps[((size_t)o * nc + i) * 3 + c] += tr[c] * ob->patches.area[src];
                 }
@@ -193,14 +213,13 @@ static bool radiosity_maps(obake *ob, const int32_t *label, float *maps, prt__pr
                 const uint32_t land = s->texel[at];
                 const int lx = (int)(land % (uint32_t)W), ly = (int)(land / (uint32_t)W);
                 if (ob->chart[land] == own && abs(lx - tx) <= NEAR_FIELD && abs(ly - ty) <= NEAR_FIELD) continue;   /* summed exactly */
-                const int o = nearest_rep(ob, &ix, land);
+                const int o = nearest_rep(ob, &rc.ix, land);
                 if (o < 0) continue;
                 for (int c = 0; c < 3; ++c) maps[((size_t)o * nc + i) * 3 + c] += s->albedo[i * 3 + c] * w;
             }
             prt__progress_add(p, 1);
         }
-        free(rep);
-        free(ix.pt);
+        receiver_free(&rc);
     }
     return !short_of_memory;
 }
@@ -291,19 +310,18 @@ static bool subsurface_maps(obake *ob, const int32_t *label, float *maps, prt__p
     int short_of_memory = 0;
 #pragma omp parallel num_threads(prt__threads(ob->base.ctx))
     {
-        int32_t *rep = malloc((size_t)K * 2 * sizeof *rep), *rep_chart = rep ? rep + K : NULL;
-        rep_index ix = {malloc((size_t)K * sizeof *ix.pt), 0};
-        if (!rep || !ix.pt) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
+        receiver rc;
+        const bool ready = receiver_init(&rc, K);
+        if (!ready) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
 #pragma omp for schedule(dynamic, 16)
         for (size_t i = 0; i < nc; ++i) {
             for (int o = 0; o < K; ++o) memset(maps + ((size_t)o * nc + i) * 3, 0, 3 * sizeof *maps);
-            if (!rep || !ix.pt || prt__progress_cancelled(p)) continue;
+            if (!ready || prt__progress_cancelled(p)) continue;
             if (s->medium[i]) {
                 const size_t t = s->texel[i];
                 const int tx = (int)(t % (size_t)W), ty = (int)(t / (size_t)W);
                 const double r2 = reach[s->medium[i] - 1] * reach[s->medium[i] - 1];
-                prt__offset_reps(&ob->charts, W, H, s->offsets, K, tx, ty, rep, rep_chart);
-                rep_index_build(ob, rep, K, &ix);
+                receiver_at(ob, &rc, tx, ty);
                 int g[3];
                 for (int c = 0; c < 3; ++c) g[c] = (int)fmin((s->pos[i * 3 + c] - lo[c]) / h, dim[c] - 1);
                 for (int z = g[2] - 1; z <= g[2] + 1; ++z)
@@ -331,9 +349,9 @@ static bool subsurface_maps(obake *ob, const int32_t *label, float *maps, prt__p
                                  * chart) the surface around the representative nearest in space, as radiosity. */
                                 const bool near = ob->chart[src] == ob->chart[t] && abs(sx - tx) <= NEAR_FIELD && abs(sy - ty) <= NEAR_FIELD;
                                 const int o = src == t ? 0
-                                              : near ? prt__offset_recell(&ob->charts, W, s->offsets, K, tx, ty, rep, rep_chart,
+                                              : near ? prt__offset_recell(&ob->charts, W, s->offsets, K, tx, ty, rc.rep, rc.rep_chart,
                                                                           label[(size_t)(sy - ty + H - 1) * gw + sx - tx + W - 1], sx, sy, ob->chart[src])
-                                                     : nearest_rep(ob, &ix, (uint32_t)src);
+                                                     : nearest_rep(ob, &rc.ix, (uint32_t)src);
                                 if (o < 0) continue;
                                 for (int c = 0; c < 3; ++c) maps[((size_t)o * nc + i) * 3 + c] += tr[c] * s->area[j];
                             }
@@ -341,8 +359,7 @@ static bool subsurface_maps(obake *ob, const int32_t *label, float *maps, prt__p
             }
             prt__progress_add(p, 1);
         }
-        free(rep);
-        free(ix.pt);
+        receiver_free(&rc);
     }
     free(reach); free(start); free(order); free(at);
     return !short_of_memory;
@@ -468,7 +485,7 @@ static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progr
 {
     obake *ob = (obake *)base;
     prt__offset_set *s = ob->s;
-    const int W = s->width, H = s->height, K = s->count, B = s->map_bounces, N = ob->d.walks > 0 ? ob->d.walks : 256;
+    const int W = s->width, K = s->count, B = s->map_bounces, N = ob->d.walks > 0 ? ob->d.walks : 256;
     const size_t nc = s->covered;
     const prt__mesh *m = &ob->t->mesh;
     prt__progress_begin(p, p->stage, nc);
@@ -478,16 +495,15 @@ static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progr
 #pragma omp parallel num_threads(prt__threads(ctx))
     {
         double *acc = malloc((size_t)K * 3 * sizeof *acc);
-        int32_t *rep = malloc((size_t)K * 2 * sizeof *rep), *rep_chart = rep ? rep + K : NULL;
-        rep_index ix = {malloc((size_t)K * sizeof *ix.pt), 0};
-        if (!acc || !rep || !ix.pt) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
+        receiver rc;
+        const bool ready = receiver_init(&rc, K) && acc;
+        if (!ready) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
 #pragma omp for schedule(dynamic, 16)
         for (size_t i = 0; i < nc; ++i) {
-            if (!acc || !rep || !ix.pt || prt__progress_cancelled(p)) continue;
+            if (!ready || prt__progress_cancelled(p)) continue;
             memset(acc, 0, (size_t)K * 3 * sizeof *acc);
             const int tx = (int)(s->texel[i] % (uint32_t)W), ty = (int)(s->texel[i] / (uint32_t)W);
-            prt__offset_reps(&ob->charts, W, H, s->offsets, K, tx, ty, rep, rep_chart);
-            rep_index_build(ob, rep, K, &ix);
+            receiver_at(ob, &rc, tx, ty);
             uint64_t rng = ((uint64_t)ob->d.seed << 32) ^ (i * 0xD1B54A32D192ED03ull);
             for (int w = 0; w < N; ++w) {
                 float o[3], n[3], d[3];
@@ -507,7 +523,7 @@ static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progr
                     const int32_t at = landing(ob, o, d, &h);
                     if (at < 0) break;
                     if (k > 1) {   /* the cell of the surface around the landing point (nearest_rep) */
-                        const int cell = nearest_rep(ob, &ix, s->texel[at]);
+                        const int cell = nearest_rep(ob, &rc.ix, s->texel[at]);
                         for (int c = 0; c < 3 && cell >= 0; ++c) acc[cell * 3 + c] += weight[c];
                     }
                     double most = 0;
@@ -532,8 +548,7 @@ static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progr
             prt__progress_add(p, 1);
         }
         free(acc);
-        free(rep);
-        free(ix.pt);
+        receiver_free(&rc);
     }
     if (short_of_memory) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory tracing the maps' bounces");
     if (prt__progress_cancelled(p)) return prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
@@ -608,7 +623,7 @@ static prt_status layout(prt_context *ctx, const prt__offset_bake_desc *d, prt_t
     prt__atlas_report r;
     prt_status st = prt__uv_atlas(ctx, &t->mesh, &(prt__atlas_desc){.resolution = d->texels}, &r);
     if (!st)
-        prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts cover %.0f%% of the %dx%d light map, worst stretch %.2f", t->source, why,
+        prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts touch %.0f%% of the %dx%d light map's texels (those whose centres they hold, the coverage prt info reports, are fewer), worst stretch %.2f", t->source, why,
                  r.charts, 100 * r.coverage, d->texels, d->texels, r.worst_stretch);
     return st;
 }

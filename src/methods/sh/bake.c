@@ -601,7 +601,7 @@ static prt_status texel_layout(prt_context *ctx, const prt_sh_bake_desc *d, prt_
     const size_t nv = t->mesh.vertex_count;
     prt_status st = prt__uv_atlas(ctx, &t->mesh, &(prt__atlas_desc){.resolution = d->texels}, &r);
     if (st) return st;
-    prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts cover %.0f%% of the %dx%d map, worst stretch %.2f; %zu of %zu vertices copied along seams",
+    prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts touch %.0f%% of the %dx%d map's texels, worst stretch %.2f; %zu of %zu vertices copied along seams",
              t->source, why, r.charts, 100 * r.coverage, d->texels, d->texels, r.worst_stretch, r.added_vertices, nv);
     return PRT_OK;
 }
