@@ -30,6 +30,7 @@ typedef struct chart {
     double *uv;         /* [nv][2], in scene units after flattening, texels after packing */
     double w, h;        /* bounding box after turning */
     uint32_t *corner;   /* [nt][3] the triangles' corners as indices into uv, for packing */
+    bool valid;         /* its map passed chart_valid: a merge need only check what it adds */
 } chart;
 
 typedef struct atlas {
@@ -350,8 +351,9 @@ static int raster_overlaps(const chart *c, uint8_t *bad, double umin, double vmi
 }
 
 /* Any two of the chart's triangles overlapping in UV: candidates from a grid of buckets about
- * one mean triangle wide, then the exact test; 1 overlap, 0 none, -1 out of memory. */
-static int chart_overlaps(const chart *c, uint8_t *bad, double umin, double vmin, double umax, double vmax, double area)
+ * one mean triangle wide, then the exact test; 1 overlap, 0 none, -1 out of memory. The first
+ * `known` triangles are known not to overlap one another: their pairs are skipped. */
+static int chart_overlaps(const chart *c, uint8_t *bad, double umin, double vmin, double umax, double vmax, double area, size_t known)
 {
     double cell = sqrt(2 * area / (double)c->nt);
     double gw = (umax - umin) / cell + 1, gh = (vmax - vmin) / cell + 1;
@@ -407,6 +409,7 @@ static int chart_overlaps(const chart *c, uint8_t *bad, double umin, double vmin
                     memcpy(q[k], c->uv + (size_t)c->corner[(size_t)items[j] * 3 + k] * 2, sizeof q[k]);
                 }
                 if (bad && bad[items[i]] && bad[items[j]]) continue;
+                if (items[i] < known && items[j] < known) continue;
                 if (triangles_overlap((const double (*)[2])p, (const double (*)[2])q)) {
                     overlap = 1;
                     if (bad) bad[items[i]] = bad[items[j]] = 1;
@@ -422,34 +425,81 @@ static int chart_overlaps(const chart *c, uint8_t *bad, double umin, double vmin
 /* Does the chart's map keep every triangle the right way round and within MAX_STRETCH, and
  * cover no point of the plane twice? 1 yes, 0 no, -1 out of memory. With bad (one per triangle,
  * zeros), it goes on past the first fault and marks every triangle at fault. */
+/* Does triangle t of chart c map the right way round and within MAX_STRETCH? Its UV area is
+ * added to *area (none when degenerate in space: anything goes there). */
+static bool triangle_valid(const atlas *a, const chart *c, size_t t, double *area)
+{
+    const prt__mesh *m = a->m;
+    const uint32_t tri = c->tris[t], *ix = m->indices + (size_t)tri * 3;
+    double x[3], y[3];
+    if (!tri_frame(m, ix, x, y)) return true;
+    const double *p[3];
+    for (int k = 0; k < 3; ++k) p[k] = c->uv + (size_t)c->corner[t * 3 + k] * 2;
+    double du1 = p[1][0] - p[0][0], dv1 = p[1][1] - p[0][1], du2 = p[2][0] - p[0][0], dv2 = p[2][1] - p[0][1];
+    double sa = 0.5 * (du1 * dv2 - du2 * dv1);
+    if (!(sa > 1e-9 * a->area[tri])) return false;
+    double ju0 = du1 / x[1], jv0 = dv1 / x[1], ju1 = (du2 - ju0 * x[2]) / y[2], jv1 = (dv2 - jv0 * x[2]) / y[2];
+    double f = ju0 * ju0 + ju1 * ju1 + jv0 * jv0 + jv1 * jv1, det = ju0 * jv1 - ju1 * jv0;
+    double disc = sqrt(fmax(0.0, f * f / 4 - det * det));
+    double s1 = sqrt(f / 2 + disc), s2 = sqrt(fmax(0.0, f / 2 - disc));
+    *area += sa;
+    return s2 > 0 && s1 <= MAX_STRETCH * s2;
+}
+
 static int chart_valid(const atlas *a, const chart *c, uint8_t *bad)
 {
     int valid = 1;
-    const prt__mesh *m = a->m;
     double umin = INFINITY, vmin = INFINITY, umax = -INFINITY, vmax = -INFINITY, area = 0;
-    for (size_t t = 0; t < c->nt; ++t) {
-        const uint32_t tri = c->tris[t], *ix = m->indices + (size_t)tri * 3;
-        double x[3], y[3];
-        if (!tri_frame(m, ix, x, y)) continue;   /* degenerate in space: anything goes */
-        const double *p[3];
-        for (int k = 0; k < 3; ++k) p[k] = c->uv + (size_t)c->corner[t * 3 + k] * 2;
-        double du1 = p[1][0] - p[0][0], dv1 = p[1][1] - p[0][1], du2 = p[2][0] - p[0][0], dv2 = p[2][1] - p[0][1];
-        double sa = 0.5 * (du1 * dv2 - du2 * dv1);
-        if (!(sa > 1e-9 * a->area[tri])) { valid = 0; if (!bad) return 0; bad[t] = 1; continue; }
-        double ju0 = du1 / x[1], jv0 = dv1 / x[1], ju1 = (du2 - ju0 * x[2]) / y[2], jv1 = (dv2 - jv0 * x[2]) / y[2];
-        double f = ju0 * ju0 + ju1 * ju1 + jv0 * jv0 + jv1 * jv1, det = ju0 * jv1 - ju1 * jv0;
-        double disc = sqrt(fmax(0.0, f * f / 4 - det * det));
-        double s1 = sqrt(f / 2 + disc), s2 = sqrt(fmax(0.0, f / 2 - disc));
-        if (!(s2 > 0) || s1 > MAX_STRETCH * s2) { valid = 0; if (!bad) return 0; bad[t] = 1; }
-        area += sa;
-    }
+    for (size_t t = 0; t < c->nt; ++t)
+        if (!triangle_valid(a, c, t, &area)) { valid = 0; if (!bad) return 0; bad[t] = 1; }
     for (size_t v = 0; v < c->nv; ++v) {
         umin = fmin(umin, c->uv[v * 2]); umax = fmax(umax, c->uv[v * 2]);
         vmin = fmin(vmin, c->uv[v * 2 + 1]); vmax = fmax(vmax, c->uv[v * 2 + 1]);
     }
     if (c->nt < 2 || !(area > 0)) return valid;
-    const int overlap = chart_overlaps(c, bad, umin, vmin, umax, vmax, area);
+    const int overlap = chart_overlaps(c, bad, umin, vmin, umax, vmax, area, 0);
     return overlap < 0 ? -1 : valid && !overlap;
+}
+
+/* chart_valid for the union M of a valid chart (M's first na triangles, their map unchanged) and
+ * triangles added to it: only what the union adds is checked, the added triangles' orientation
+ * and stretch, and overlap among them and with the host's triangles whose boxes meet theirs.
+ * Re-checking the whole host made merging most of an atlas's time on scans. */
+static int merge_valid(const atlas *a, const chart *M, size_t na)
+{
+    double area = 0, lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (size_t t = na; t < M->nt; ++t) {
+        if (!triangle_valid(a, M, t, &area)) return 0;
+        for (int k = 0; k < 3; ++k) {
+            const double *q = M->uv + (size_t)M->corner[t * 3 + k] * 2;
+            lo[0] = q[0] < lo[0] ? q[0] : lo[0]; hi[0] = q[0] > hi[0] ? q[0] : hi[0];
+            lo[1] = q[1] < lo[1] ? q[1] : lo[1]; hi[1] = q[1] > hi[1] ? q[1] : hi[1];
+        }
+    }
+    /* The host's triangles near the added ones, first (their pairs are known apart), then the added. */
+    chart sub = {.uv = M->uv};
+    sub.corner = malloc(M->nt * 3 * sizeof *sub.corner);
+    if (!sub.corner) return -1;
+    double ulo = lo[0], vlo = lo[1], uhi = hi[0], vhi = hi[1];
+    for (size_t t = 0; t < na; ++t) {
+        const double *p0 = M->uv + (size_t)M->corner[t * 3] * 2, *p1 = M->uv + (size_t)M->corner[t * 3 + 1] * 2, *p2 = M->uv + (size_t)M->corner[t * 3 + 2] * 2;
+        const double u0 = fmin(p0[0], fmin(p1[0], p2[0])), u1 = fmax(p0[0], fmax(p1[0], p2[0]));
+        if (u0 > hi[0] || u1 < lo[0]) continue;
+        const double v0 = fmin(p0[1], fmin(p1[1], p2[1])), v1 = fmax(p0[1], fmax(p1[1], p2[1]));
+        if (v0 > hi[1] || v1 < lo[1]) continue;
+        memcpy(sub.corner + sub.nt * 3, M->corner + t * 3, 3 * sizeof *sub.corner);
+        sub.nt++;
+        ulo = fmin(ulo, u0); uhi = fmax(uhi, u1); vlo = fmin(vlo, v0); vhi = fmax(vhi, v1);
+        double x[3], y[3];
+        if (tri_frame(a->m, a->m->indices + (size_t)M->tris[t] * 3, x, y))
+            area += 0.5 * ((p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1]));
+    }
+    const size_t known = sub.nt;
+    memcpy(sub.corner + sub.nt * 3, M->corner + na * 3, (M->nt - na) * 3 * sizeof *sub.corner);
+    sub.nt += M->nt - na;
+    const int overlap = sub.nt < 2 || !(area > 0) ? 0 : chart_overlaps(&sub, NULL, ulo, vlo, uhi, vhi, area, known);
+    free(sub.corner);
+    return overlap < 0 ? -1 : !overlap;
 }
 
 /* Triangle t of chart c's terms in the conformal energy (none when degenerate in space). */
@@ -663,6 +713,7 @@ static prt_status place_piece(const prt_context *ctx, atlas *a, uint32_t *tris, 
         else if (flat || c.nt == 1 || depth >= SPLIT_DEPTH) {
             /* Not flat only past SPLIT_DEPTH (one triangle always is): it keeps its projection. */
             a->unchecked += !flat;
+            c.valid = flat;
             free(bad);
             bad = NULL;
             if (!keep_chart(a, &c)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
@@ -884,8 +935,9 @@ static int try_merge(atlas *a, chart *A, const chart *B)
         const double s = a->area[M.tris[t]] * density;
         if (s > 0 && (u > MERGE_AREA * s || u * MERGE_AREA < s)) goto done;
     }
-    result = chart_valid(a, &M, NULL);
+    result = A->valid ? merge_valid(a, &M, A->nt) : chart_valid(a, &M, NULL);
     if (result > 0) {
+        M.valid = true;
         free(A->tris); free(A->verts); free(A->uv); free(A->corner);
         *A = M;
         M = (chart){0};
