@@ -12,6 +12,7 @@
 
 #include "geom/texel_raster.h"
 
+#include <limits.h>
 #include <string.h>
 
 #define MAX_STRETCH 4.0       /* singular-value ratio a chart's worst triangle may reach */
@@ -21,6 +22,8 @@
 #define MERGE_TRIES 3       /* neighbours a chart tries to merge into */
 #define MERGE_SHARE 5e-4    /* charts with less of the surface than this merge into neighbours */
 #define PACK_STEPS 16      /* bisections of the scale from 0: to 2e-5 of the largest (8 from 40%: 2e-3) */
+#define MIN_COVER 0.25     /* a map whose charts touch fewer of its texels is mostly gutter: a larger one is tried */
+#define ATLAS_MAX_RES 4096 /* the largest map an error suggests */
 
 typedef struct chart {
     uint32_t *tris;
@@ -1190,10 +1193,11 @@ static void occupy(packer *p, int w, int h, int x, int y)
  * each, at each quarter turn, goes where its top lies lowest, down into any hole it fits (not
  * only onto the others' tops), keeping pad empty texels between its touched texels and any other
  * chart's. Corners in at, or false when some chart does not fit. */
-static bool pack(packer *p, double s, placement *at)
+static bool pack(packer *p, double s, placement *at, size_t *touched)
 {
     const atlas *a = p->a;
     const int res = p->res;
+    if (touched) *touched = 0;
     memset(p->occupied, 0, (size_t)res * p->words * sizeof *p->occupied);
     for (int x = 0; x < res; ++x) p->floor[x] = 0;
     for (size_t i = 0; i < a->count; ++i) {
@@ -1203,6 +1207,7 @@ static bool pack(packer *p, double s, placement *at)
         chart_grid(c, s, &W, &H);
         if (W > res || H > res) return false;
         footprint(p, c, s, W, H);
+        for (size_t i = 0; touched && i < (size_t)W * H; ++i) *touched += p->bits[i];
         int64_t best_top = INT64_MAX;
         placement best = {0, 0, -1};
         for (int turn = 0; turn < 4; ++turn) {
@@ -1224,6 +1229,56 @@ static bool pack(packer *p, double s, placement *at)
         if (at) at[ci] = best;
     }
     return true;
+}
+
+/* Can n charts fit at all? Each touches a texel at least, and texels of two charts lie more than
+ * pad apart on both axes, so the (pad + 1)-wide squares at their corners are disjoint inside a
+ * map pad wider: n (pad + 1)^2 <= (res + pad)^2. Thousands of charts then fail at once. */
+static bool count_fits(size_t n, int res, int pad)
+{
+    return (double)n * (pad + 1) * (pad + 1) <= ((double)res + pad) * ((double)res + pad);
+}
+
+/* Packs the charts (in order) into res x res: the largest scale (texels per scene unit) that
+ * packed, by bisection, in *scale (0 when they fit at none) with the corners in at and the texels
+ * the charts touch in *touched (either may be NULL). With total < 0 only whether they fit at all. */
+static prt_status pack_map(const prt_context *ctx, const atlas *a, const uint32_t *order, int res, int pad, double total, double *scale,
+                           placement *at, size_t *touched)
+{
+    *scale = 0;
+    if (!a->count || !count_fits(a->count, res, pad)) return PRT_OK;
+    const int side = res + 1;
+    packer pk = {.a = a, .res = res, .pad = pad, .order = order};
+    pk.words = (res + 63) / 64;
+    pk.bits = malloc((size_t)side * side);
+    pk.mask = malloc((size_t)side * pk.words * sizeof *pk.mask);
+    pk.occupied = malloc((size_t)side * pk.words * sizeof *pk.occupied);
+    pk.bottom = malloc(side * sizeof *pk.bottom);
+    pk.floor = malloc(side * sizeof *pk.floor);
+    prt_status st = PRT_OK;
+    if (!pk.bits || !pk.mask || !pk.occupied || !pk.bottom || !pk.floor) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    else if (total < 0) *scale = pack(&pk, 0, NULL, NULL) ? 1 : 0;
+    else {
+        /* The surface itself bounds the scale; packing at a scale is not monotone in it, so the
+         * bisection keeps the largest scale that packed. */
+        double lo = 0, hi = res / sqrt(total);
+        int steps = PACK_STEPS;
+        /* Most scans pack to well over 40% of the map: starting there saves most of the steps. */
+        if (pack(&pk, hi * sqrt(0.4), NULL, NULL)) { lo = hi * sqrt(0.4); steps = PACK_STEPS / 2; }
+        else if (!pack(&pk, 0, NULL, NULL)) steps = 0;
+        for (int it = 0; it < steps; ++it) {
+            if (prt__cancelled(ctx)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "UV atlas cancelled"); break; }
+            double mid = 0.5 * (lo + hi);
+            if (pack(&pk, mid, NULL, NULL)) lo = mid;
+            else hi = mid;
+        }
+        if (!st && lo > 0) {
+            *scale = lo;
+            pack(&pk, lo, at, touched);
+        }
+    }
+    free(pk.bits); free(pk.mask); free(pk.occupied); free(pk.bottom); free(pk.floor);
+    return st;
 }
 
 /* ---- the mesh with its new vertices ---- */
@@ -1311,9 +1366,9 @@ static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, c
 prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_desc *d, prt__atlas_report *report)
 {
     prt__atlas_report rep = {0};
-    const int res = d->resolution, pad = d->padding > 0 ? d->padding : 2;
+    const int pad = d->padding > 0 ? d->padding : 2;
     const double max_angle = d->max_angle > 0 ? d->max_angle : 60.0;
-    if (res < 1) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "UV atlas resolution %d must be positive", res);
+    if (d->resolution < 1) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "UV atlas resolution %d must be positive", d->resolution);
     if (!(max_angle < 90.0)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "UV atlas chart angle must be below 90 degrees");
     if (!m->triangle_count) return prt__fail(ctx, PRT_ERR_EMPTY, "no triangles to lay out in UV space");
     atlas a = {0};
@@ -1371,11 +1426,10 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
     placement *at = NULL;
     uint32_t *order = NULL;
     double s = 0;
-    packer pk = {0};
+    int res = d->resolution;
     if (!st) {
         /* One density for every chart: scale each so its UV area equals its area in space. */
-        int side = 0;
-        for (size_t ci = 0; ci < a.count && !st; ++ci) {
+        for (size_t ci = 0; ci < a.count; ++ci) {
             chart *c = &a.charts[ci];
             double uv_area = 0, area = 0;
             for (size_t t = 0; t < c->nt; ++t) {
@@ -1388,49 +1442,53 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
             for (size_t v = 0; v < c->nv * 2; ++v) c->uv[v] *= k;
             chart_orient(c);
         }
-        side = res + 1;
         order = malloc(a.count * sizeof *order);
         at = malloc(a.count * sizeof *at);
-        pk = (packer){.a = &a, .res = res, .pad = pad, .order = order};
-        pk.words = (res + 63) / 64;
-        pk.bits = malloc((size_t)side * side);
-        pk.mask = malloc((size_t)side * pk.words * sizeof *pk.mask);
-        pk.occupied = malloc((size_t)side * pk.words * sizeof *pk.occupied);
-        pk.bottom = malloc(side * sizeof *pk.bottom); pk.floor = malloc(side * sizeof *pk.floor);
-        if (!st && (!order || !at || !pk.bits || !pk.mask || !pk.occupied || !pk.bottom || !pk.floor))
-            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
-    }
-    if (!st) {
-        /* Largest charts first: the small ones fill the room left around them. */
         chart_key *keys = malloc(a.count * sizeof *keys);
-        if (!keys) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+        if (!order || !at || !keys) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
         else {
+            /* Largest charts first: the small ones fill the room left around them. */
             for (size_t i = 0; i < a.count; ++i) keys[i] = (chart_key){a.charts[i].w * a.charts[i].h, a.charts[i].h, (uint32_t)i};
             qsort(keys, a.count, sizeof *keys, by_size);
             for (size_t i = 0; i < a.count; ++i) order[i] = keys[i].i;
-            free(keys);
         }
-        /* The surface itself bounds the scale; packing at a scale is not monotone in it, so the
-         * bisection keeps the largest scale that packed. */
-        double lo = 0, hi = res / sqrt(total);
-        int steps = PACK_STEPS;
-        /* Most scans pack to well over 40% of the map: starting there saves most of the steps. */
-        if (!st && pack(&pk, hi * sqrt(0.4), NULL)) { lo = hi * sqrt(0.4); steps = PACK_STEPS / 2; }
-        else if (!st && !pack(&pk, 0, NULL))
-            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels: raise --texels",
-                           a.count, pad, res, res);
-        for (int it = 0; it < steps && !st; ++it) {
-            double mid = 0.5 * (lo + hi);
-            if (pack(&pk, mid, NULL)) lo = mid;
-            else hi = mid;
+        free(keys);
+    }
+    /* The map: the size asked for, else (up to max_resolution) twice as wide while the charts do
+     * not fit or touch under MIN_COVER of its texels. Packing is cheap next to the charting. */
+    const int max_res = d->max_resolution > res ? d->max_resolution : res;
+    while (!st) {
+        size_t touched = 0;
+        st = pack_map(ctx, &a, order, res, pad, total, &s, at, &touched);
+        if (st) break;
+        const double cover = (double)touched / ((double)res * res);
+        if (s > 0 && (cover >= MIN_COVER || res == max_res)) break;
+        if (res * 2 > max_res || res > INT_MAX / 2) break;
+        rep.smaller = res;
+        rep.smaller_fit = s > 0;
+        rep.smaller_cover = cover;
+        res *= 2;
+    }
+    if (!st && !(s > 0)) {
+        /* It fits nowhere it may go: say which map would hold the charts at all. */
+        int need = res;
+        double s0 = 0;
+        while (!st && !(s0 > 0) && need <= ATLAS_MAX_RES / 2) {
+            need *= 2;
+            st = pack_map(ctx, &a, order, need, pad, -1, &s0, NULL, NULL);
         }
-        s = lo;
-        if (!st && !(s > 0))
-            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts leave no room for a texel each in %d x %d texels: raise --texels", a.count, res, res);
-        if (!st) {
-            pack(&pk, s, at);
-            st = write_layout(ctx, &a, m, at, s, res, &rep.added_vertices);
-        }
+        if (!st && s0 > 0)
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels: --texels %d would hold them",
+                           a.count, pad, res, res, need);
+        else if (!st && need > res)
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels, nor in %d x %d",
+                           a.count, pad, res, res, need, need);
+        else if (!st)
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels", a.count, pad, res, res);
+    }
+    if (!st) {
+        rep.resolution = res;
+        st = write_layout(ctx, &a, m, at, s, res, &rep.added_vertices);
     }
     if (!st) {
         rep.charts = a.count;
@@ -1453,7 +1511,6 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
         }
         if (report && !st) *report = rep;
     }
-    free(pk.bits); free(pk.mask); free(pk.occupied); free(pk.bottom); free(pk.floor);
     for (size_t i = 0; i < a.count; ++i) { free(a.charts[i].tris); free(a.charts[i].verts); free(a.charts[i].uv); free(a.charts[i].corner); }
     free(a.charts);
     free(a.weld); free(a.rep); free(a.across); free(a.normal); free(a.smooth); free(a.area); free(a.stamp); free(a.twin); free(a.vlocal); free(a.fan);
