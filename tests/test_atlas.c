@@ -256,11 +256,35 @@ static void test_layouts(void **state)
     prt__mesh_free(&m);
     tm_free(&t);
 
-    /* Too many charts for the map: refused, saying what to do. */
+    /* Too many charts for the map: refused, naming the size that would hold them. */
     tm_sphere(&t, (float[3]){0, 0, 0}, 1.0f, 24, 48);
     m = to_mesh(&t);
     assert_int_equal(prt__uv_atlas(ctx, &m, &(prt__atlas_desc){.resolution = 4}, NULL), PRT_ERR_INVALID_ARG);
-    assert_non_null(strstr(prt_last_error(), "raise --texels"));
+    print_message("sphere at 4 x 4: %s\n", prt_last_error());
+    assert_non_null(strstr(prt_last_error(), "would hold them"));
+    prt__mesh_free(&m);
+    tm_free(&t);
+    /* 3000 loose triangles: more charts than 64^2 or 128^2 hold with 2-texel gutters whatever
+     * their scale (a texel each and a gutter: (res + 2)^2 / 9), known by counting them, not by
+     * packing; 256^2 holds them. Given a larger map to go to, it goes there. */
+    for (uint32_t i = 0; i < 3000; ++i) {
+        const float x = (float)(i % 60), z = (float)(i / 60);
+        tm_vertex(&t, x, 0, z, 0, 1, 0);
+        tm_vertex(&t, x, 0, z + 0.8f, 0, 1, 0);
+        tm_vertex(&t, x + 0.8f, 0, z, 0, 1, 0);
+        tm_tri(&t, i * 3, i * 3 + 1, i * 3 + 2);
+    }
+    m = to_mesh(&t);
+    assert_int_equal(prt__uv_atlas(ctx, &m, &(prt__atlas_desc){.resolution = 64}, NULL), PRT_ERR_INVALID_ARG);
+    print_message("3000 loose triangles at 64 x 64: %s\n", prt_last_error());
+    assert_non_null(strstr(prt_last_error(), "3000 UV charts with 2-texel gutters do not fit in 64 x 64 texels: --texels 256 would hold them"));
+    prt__atlas_report r;
+    assert_int_equal(prt__uv_atlas(ctx, &m, &(prt__atlas_desc){.resolution = 64, .max_resolution = 1024}, &r), PRT_OK);
+    print_message("3000 loose triangles from 64 x 64: %d x %d, %.0f%% coverage (%d x %d: fit %d, %.0f%%)\n", r.resolution, r.resolution,
+                  100 * r.coverage, r.smaller, r.smaller, r.smaller_fit, 100 * r.smaller_cover);
+    assert_true(r.resolution >= 256 && r.resolution <= 1024);
+    assert_true(r.coverage >= 0.25 || r.resolution == 1024);
+    assert_int_equal(r.smaller, r.resolution / 2);
     prt__mesh_free(&m);
     tm_free(&t);
     prt_context_release(ctx);

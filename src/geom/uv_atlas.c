@@ -12,6 +12,7 @@
 
 #include "geom/texel_raster.h"
 
+#include <limits.h>
 #include <string.h>
 
 #define MAX_STRETCH 4.0       /* singular-value ratio a chart's worst triangle may reach */
@@ -21,6 +22,8 @@
 #define MERGE_TRIES 3       /* neighbours a chart tries to merge into */
 #define MERGE_SHARE 5e-4    /* charts with less of the surface than this merge into neighbours */
 #define PACK_STEPS 16      /* bisections of the scale from 0: to 2e-5 of the largest (8 from 40%: 2e-3) */
+#define MIN_COVER 0.25     /* a map whose charts touch fewer of its texels is mostly gutter: a larger one is tried */
+#define ATLAS_MAX_RES 4096 /* the largest map an error suggests */
 
 typedef struct chart {
     uint32_t *tris;
@@ -30,6 +33,7 @@ typedef struct chart {
     double *uv;         /* [nv][2], in scene units after flattening, texels after packing */
     double w, h;        /* bounding box after turning */
     uint32_t *corner;   /* [nt][3] the triangles' corners as indices into uv, for packing */
+    bool valid;         /* its map passed chart_valid: a merge need only check what it adds */
 } chart;
 
 typedef struct atlas {
@@ -350,8 +354,9 @@ static int raster_overlaps(const chart *c, uint8_t *bad, double umin, double vmi
 }
 
 /* Any two of the chart's triangles overlapping in UV: candidates from a grid of buckets about
- * one mean triangle wide, then the exact test; 1 overlap, 0 none, -1 out of memory. */
-static int chart_overlaps(const chart *c, uint8_t *bad, double umin, double vmin, double umax, double vmax, double area)
+ * one mean triangle wide, then the exact test; 1 overlap, 0 none, -1 out of memory. The first
+ * `known` triangles are known not to overlap one another: their pairs are skipped. */
+static int chart_overlaps(const chart *c, uint8_t *bad, double umin, double vmin, double umax, double vmax, double area, size_t known)
 {
     double cell = sqrt(2 * area / (double)c->nt);
     double gw = (umax - umin) / cell + 1, gh = (vmax - vmin) / cell + 1;
@@ -407,6 +412,7 @@ static int chart_overlaps(const chart *c, uint8_t *bad, double umin, double vmin
                     memcpy(q[k], c->uv + (size_t)c->corner[(size_t)items[j] * 3 + k] * 2, sizeof q[k]);
                 }
                 if (bad && bad[items[i]] && bad[items[j]]) continue;
+                if (items[i] < known && items[j] < known) continue;
                 if (triangles_overlap((const double (*)[2])p, (const double (*)[2])q)) {
                     overlap = 1;
                     if (bad) bad[items[i]] = bad[items[j]] = 1;
@@ -422,34 +428,81 @@ static int chart_overlaps(const chart *c, uint8_t *bad, double umin, double vmin
 /* Does the chart's map keep every triangle the right way round and within MAX_STRETCH, and
  * cover no point of the plane twice? 1 yes, 0 no, -1 out of memory. With bad (one per triangle,
  * zeros), it goes on past the first fault and marks every triangle at fault. */
+/* Does triangle t of chart c map the right way round and within MAX_STRETCH? Its UV area is
+ * added to *area (none when degenerate in space: anything goes there). */
+static bool triangle_valid(const atlas *a, const chart *c, size_t t, double *area)
+{
+    const prt__mesh *m = a->m;
+    const uint32_t tri = c->tris[t], *ix = m->indices + (size_t)tri * 3;
+    double x[3], y[3];
+    if (!tri_frame(m, ix, x, y)) return true;
+    const double *p[3];
+    for (int k = 0; k < 3; ++k) p[k] = c->uv + (size_t)c->corner[t * 3 + k] * 2;
+    double du1 = p[1][0] - p[0][0], dv1 = p[1][1] - p[0][1], du2 = p[2][0] - p[0][0], dv2 = p[2][1] - p[0][1];
+    double sa = 0.5 * (du1 * dv2 - du2 * dv1);
+    if (!(sa > 1e-9 * a->area[tri])) return false;
+    double ju0 = du1 / x[1], jv0 = dv1 / x[1], ju1 = (du2 - ju0 * x[2]) / y[2], jv1 = (dv2 - jv0 * x[2]) / y[2];
+    double f = ju0 * ju0 + ju1 * ju1 + jv0 * jv0 + jv1 * jv1, det = ju0 * jv1 - ju1 * jv0;
+    double disc = sqrt(fmax(0.0, f * f / 4 - det * det));
+    double s1 = sqrt(f / 2 + disc), s2 = sqrt(fmax(0.0, f / 2 - disc));
+    *area += sa;
+    return s2 > 0 && s1 <= MAX_STRETCH * s2;
+}
+
 static int chart_valid(const atlas *a, const chart *c, uint8_t *bad)
 {
     int valid = 1;
-    const prt__mesh *m = a->m;
     double umin = INFINITY, vmin = INFINITY, umax = -INFINITY, vmax = -INFINITY, area = 0;
-    for (size_t t = 0; t < c->nt; ++t) {
-        const uint32_t tri = c->tris[t], *ix = m->indices + (size_t)tri * 3;
-        double x[3], y[3];
-        if (!tri_frame(m, ix, x, y)) continue;   /* degenerate in space: anything goes */
-        const double *p[3];
-        for (int k = 0; k < 3; ++k) p[k] = c->uv + (size_t)c->corner[t * 3 + k] * 2;
-        double du1 = p[1][0] - p[0][0], dv1 = p[1][1] - p[0][1], du2 = p[2][0] - p[0][0], dv2 = p[2][1] - p[0][1];
-        double sa = 0.5 * (du1 * dv2 - du2 * dv1);
-        if (!(sa > 1e-9 * a->area[tri])) { valid = 0; if (!bad) return 0; bad[t] = 1; continue; }
-        double ju0 = du1 / x[1], jv0 = dv1 / x[1], ju1 = (du2 - ju0 * x[2]) / y[2], jv1 = (dv2 - jv0 * x[2]) / y[2];
-        double f = ju0 * ju0 + ju1 * ju1 + jv0 * jv0 + jv1 * jv1, det = ju0 * jv1 - ju1 * jv0;
-        double disc = sqrt(fmax(0.0, f * f / 4 - det * det));
-        double s1 = sqrt(f / 2 + disc), s2 = sqrt(fmax(0.0, f / 2 - disc));
-        if (!(s2 > 0) || s1 > MAX_STRETCH * s2) { valid = 0; if (!bad) return 0; bad[t] = 1; }
-        area += sa;
-    }
+    for (size_t t = 0; t < c->nt; ++t)
+        if (!triangle_valid(a, c, t, &area)) { valid = 0; if (!bad) return 0; bad[t] = 1; }
     for (size_t v = 0; v < c->nv; ++v) {
         umin = fmin(umin, c->uv[v * 2]); umax = fmax(umax, c->uv[v * 2]);
         vmin = fmin(vmin, c->uv[v * 2 + 1]); vmax = fmax(vmax, c->uv[v * 2 + 1]);
     }
     if (c->nt < 2 || !(area > 0)) return valid;
-    const int overlap = chart_overlaps(c, bad, umin, vmin, umax, vmax, area);
+    const int overlap = chart_overlaps(c, bad, umin, vmin, umax, vmax, area, 0);
     return overlap < 0 ? -1 : valid && !overlap;
+}
+
+/* chart_valid for the union M of a valid chart (M's first na triangles, their map unchanged) and
+ * triangles added to it: only what the union adds is checked, the added triangles' orientation
+ * and stretch, and overlap among them and with the host's triangles whose boxes meet theirs.
+ * Re-checking the whole host made merging most of an atlas's time on scans. */
+static int merge_valid(const atlas *a, const chart *M, size_t na)
+{
+    double area = 0, lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (size_t t = na; t < M->nt; ++t) {
+        if (!triangle_valid(a, M, t, &area)) return 0;
+        for (int k = 0; k < 3; ++k) {
+            const double *q = M->uv + (size_t)M->corner[t * 3 + k] * 2;
+            lo[0] = q[0] < lo[0] ? q[0] : lo[0]; hi[0] = q[0] > hi[0] ? q[0] : hi[0];
+            lo[1] = q[1] < lo[1] ? q[1] : lo[1]; hi[1] = q[1] > hi[1] ? q[1] : hi[1];
+        }
+    }
+    /* The host's triangles near the added ones, first (their pairs are known apart), then the added. */
+    chart sub = {.uv = M->uv};
+    sub.corner = malloc(M->nt * 3 * sizeof *sub.corner);
+    if (!sub.corner) return -1;
+    double ulo = lo[0], vlo = lo[1], uhi = hi[0], vhi = hi[1];
+    for (size_t t = 0; t < na; ++t) {
+        const double *p0 = M->uv + (size_t)M->corner[t * 3] * 2, *p1 = M->uv + (size_t)M->corner[t * 3 + 1] * 2, *p2 = M->uv + (size_t)M->corner[t * 3 + 2] * 2;
+        const double u0 = fmin(p0[0], fmin(p1[0], p2[0])), u1 = fmax(p0[0], fmax(p1[0], p2[0]));
+        if (u0 > hi[0] || u1 < lo[0]) continue;
+        const double v0 = fmin(p0[1], fmin(p1[1], p2[1])), v1 = fmax(p0[1], fmax(p1[1], p2[1]));
+        if (v0 > hi[1] || v1 < lo[1]) continue;
+        memcpy(sub.corner + sub.nt * 3, M->corner + t * 3, 3 * sizeof *sub.corner);
+        sub.nt++;
+        ulo = fmin(ulo, u0); uhi = fmax(uhi, u1); vlo = fmin(vlo, v0); vhi = fmax(vhi, v1);
+        double x[3], y[3];
+        if (tri_frame(a->m, a->m->indices + (size_t)M->tris[t] * 3, x, y))
+            area += 0.5 * ((p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1]));
+    }
+    const size_t known = sub.nt;
+    memcpy(sub.corner + sub.nt * 3, M->corner + na * 3, (M->nt - na) * 3 * sizeof *sub.corner);
+    sub.nt += M->nt - na;
+    const int overlap = sub.nt < 2 || !(area > 0) ? 0 : chart_overlaps(&sub, NULL, ulo, vlo, uhi, vhi, area, known);
+    free(sub.corner);
+    return overlap < 0 ? -1 : !overlap;
 }
 
 /* Triangle t of chart c's terms in the conformal energy (none when degenerate in space). */
@@ -663,6 +716,7 @@ static prt_status place_piece(const prt_context *ctx, atlas *a, uint32_t *tris, 
         else if (flat || c.nt == 1 || depth >= SPLIT_DEPTH) {
             /* Not flat only past SPLIT_DEPTH (one triangle always is): it keeps its projection. */
             a->unchecked += !flat;
+            c.valid = flat;
             free(bad);
             bad = NULL;
             if (!keep_chart(a, &c)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
@@ -884,8 +938,9 @@ static int try_merge(atlas *a, chart *A, const chart *B)
         const double s = a->area[M.tris[t]] * density;
         if (s > 0 && (u > MERGE_AREA * s || u * MERGE_AREA < s)) goto done;
     }
-    result = chart_valid(a, &M, NULL);
+    result = A->valid ? merge_valid(a, &M, A->nt) : chart_valid(a, &M, NULL);
     if (result > 0) {
+        M.valid = true;
         free(A->tris); free(A->verts); free(A->uv); free(A->corner);
         *A = M;
         M = (chart){0};
@@ -1138,10 +1193,11 @@ static void occupy(packer *p, int w, int h, int x, int y)
  * each, at each quarter turn, goes where its top lies lowest, down into any hole it fits (not
  * only onto the others' tops), keeping pad empty texels between its touched texels and any other
  * chart's. Corners in at, or false when some chart does not fit. */
-static bool pack(packer *p, double s, placement *at)
+static bool pack(packer *p, double s, placement *at, size_t *touched)
 {
     const atlas *a = p->a;
     const int res = p->res;
+    if (touched) *touched = 0;
     memset(p->occupied, 0, (size_t)res * p->words * sizeof *p->occupied);
     for (int x = 0; x < res; ++x) p->floor[x] = 0;
     for (size_t i = 0; i < a->count; ++i) {
@@ -1151,6 +1207,7 @@ static bool pack(packer *p, double s, placement *at)
         chart_grid(c, s, &W, &H);
         if (W > res || H > res) return false;
         footprint(p, c, s, W, H);
+        for (size_t i = 0; touched && i < (size_t)W * H; ++i) *touched += p->bits[i];
         int64_t best_top = INT64_MAX;
         placement best = {0, 0, -1};
         for (int turn = 0; turn < 4; ++turn) {
@@ -1172,6 +1229,56 @@ static bool pack(packer *p, double s, placement *at)
         if (at) at[ci] = best;
     }
     return true;
+}
+
+/* Can n charts fit at all? Each touches a texel at least, and texels of two charts lie more than
+ * pad apart on both axes, so the (pad + 1)-wide squares at their corners are disjoint inside a
+ * map pad wider: n (pad + 1)^2 <= (res + pad)^2. Thousands of charts then fail at once. */
+static bool count_fits(size_t n, int res, int pad)
+{
+    return (double)n * (pad + 1) * (pad + 1) <= ((double)res + pad) * ((double)res + pad);
+}
+
+/* Packs the charts (in order) into res x res: the largest scale (texels per scene unit) that
+ * packed, by bisection, in *scale (0 when they fit at none) with the corners in at and the texels
+ * the charts touch in *touched (either may be NULL). With total < 0 only whether they fit at all. */
+static prt_status pack_map(const prt_context *ctx, const atlas *a, const uint32_t *order, int res, int pad, double total, double *scale,
+                           placement *at, size_t *touched)
+{
+    *scale = 0;
+    if (!a->count || !count_fits(a->count, res, pad)) return PRT_OK;
+    const int side = res + 1;
+    packer pk = {.a = a, .res = res, .pad = pad, .order = order};
+    pk.words = (res + 63) / 64;
+    pk.bits = malloc((size_t)side * side);
+    pk.mask = malloc((size_t)side * pk.words * sizeof *pk.mask);
+    pk.occupied = malloc((size_t)side * pk.words * sizeof *pk.occupied);
+    pk.bottom = malloc(side * sizeof *pk.bottom);
+    pk.floor = malloc(side * sizeof *pk.floor);
+    prt_status st = PRT_OK;
+    if (!pk.bits || !pk.mask || !pk.occupied || !pk.bottom || !pk.floor) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    else if (total < 0) *scale = pack(&pk, 0, NULL, NULL) ? 1 : 0;
+    else {
+        /* The surface itself bounds the scale; packing at a scale is not monotone in it, so the
+         * bisection keeps the largest scale that packed. */
+        double lo = 0, hi = res / sqrt(total);
+        int steps = PACK_STEPS;
+        /* Most scans pack to well over 40% of the map: starting there saves most of the steps. */
+        if (pack(&pk, hi * sqrt(0.4), NULL, NULL)) { lo = hi * sqrt(0.4); steps = PACK_STEPS / 2; }
+        else if (!pack(&pk, 0, NULL, NULL)) steps = 0;
+        for (int it = 0; it < steps; ++it) {
+            if (prt__cancelled(ctx)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "UV atlas cancelled"); break; }
+            double mid = 0.5 * (lo + hi);
+            if (pack(&pk, mid, NULL, NULL)) lo = mid;
+            else hi = mid;
+        }
+        if (!st && lo > 0) {
+            *scale = lo;
+            pack(&pk, lo, at, touched);
+        }
+    }
+    free(pk.bits); free(pk.mask); free(pk.occupied); free(pk.bottom); free(pk.floor);
+    return st;
 }
 
 /* ---- the mesh with its new vertices ---- */
@@ -1259,9 +1366,9 @@ static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, c
 prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_desc *d, prt__atlas_report *report)
 {
     prt__atlas_report rep = {0};
-    const int res = d->resolution, pad = d->padding > 0 ? d->padding : 2;
+    const int pad = d->padding > 0 ? d->padding : 2;
     const double max_angle = d->max_angle > 0 ? d->max_angle : 60.0;
-    if (res < 1) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "UV atlas resolution %d must be positive", res);
+    if (d->resolution < 1) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "UV atlas resolution %d must be positive", d->resolution);
     if (!(max_angle < 90.0)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "UV atlas chart angle must be below 90 degrees");
     if (!m->triangle_count) return prt__fail(ctx, PRT_ERR_EMPTY, "no triangles to lay out in UV space");
     atlas a = {0};
@@ -1319,11 +1426,10 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
     placement *at = NULL;
     uint32_t *order = NULL;
     double s = 0;
-    packer pk = {0};
+    int res = d->resolution;
     if (!st) {
         /* One density for every chart: scale each so its UV area equals its area in space. */
-        int side = 0;
-        for (size_t ci = 0; ci < a.count && !st; ++ci) {
+        for (size_t ci = 0; ci < a.count; ++ci) {
             chart *c = &a.charts[ci];
             double uv_area = 0, area = 0;
             for (size_t t = 0; t < c->nt; ++t) {
@@ -1336,49 +1442,53 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
             for (size_t v = 0; v < c->nv * 2; ++v) c->uv[v] *= k;
             chart_orient(c);
         }
-        side = res + 1;
         order = malloc(a.count * sizeof *order);
         at = malloc(a.count * sizeof *at);
-        pk = (packer){.a = &a, .res = res, .pad = pad, .order = order};
-        pk.words = (res + 63) / 64;
-        pk.bits = malloc((size_t)side * side);
-        pk.mask = malloc((size_t)side * pk.words * sizeof *pk.mask);
-        pk.occupied = malloc((size_t)side * pk.words * sizeof *pk.occupied);
-        pk.bottom = malloc(side * sizeof *pk.bottom); pk.floor = malloc(side * sizeof *pk.floor);
-        if (!st && (!order || !at || !pk.bits || !pk.mask || !pk.occupied || !pk.bottom || !pk.floor))
-            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
-    }
-    if (!st) {
-        /* Largest charts first: the small ones fill the room left around them. */
         chart_key *keys = malloc(a.count * sizeof *keys);
-        if (!keys) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+        if (!order || !at || !keys) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
         else {
+            /* Largest charts first: the small ones fill the room left around them. */
             for (size_t i = 0; i < a.count; ++i) keys[i] = (chart_key){a.charts[i].w * a.charts[i].h, a.charts[i].h, (uint32_t)i};
             qsort(keys, a.count, sizeof *keys, by_size);
             for (size_t i = 0; i < a.count; ++i) order[i] = keys[i].i;
-            free(keys);
         }
-        /* The surface itself bounds the scale; packing at a scale is not monotone in it, so the
-         * bisection keeps the largest scale that packed. */
-        double lo = 0, hi = res / sqrt(total);
-        int steps = PACK_STEPS;
-        /* Most scans pack to well over 40% of the map: starting there saves most of the steps. */
-        if (!st && pack(&pk, hi * sqrt(0.4), NULL)) { lo = hi * sqrt(0.4); steps = PACK_STEPS / 2; }
-        else if (!st && !pack(&pk, 0, NULL))
-            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels: raise --texels",
-                           a.count, pad, res, res);
-        for (int it = 0; it < steps && !st; ++it) {
-            double mid = 0.5 * (lo + hi);
-            if (pack(&pk, mid, NULL)) lo = mid;
-            else hi = mid;
+        free(keys);
+    }
+    /* The map: the size asked for, else (up to max_resolution) twice as wide while the charts do
+     * not fit or touch under MIN_COVER of its texels. Packing is cheap next to the charting. */
+    const int max_res = d->max_resolution > res ? d->max_resolution : res;
+    while (!st) {
+        size_t touched = 0;
+        st = pack_map(ctx, &a, order, res, pad, total, &s, at, &touched);
+        if (st) break;
+        const double cover = (double)touched / ((double)res * res);
+        if (s > 0 && (cover >= MIN_COVER || res == max_res)) break;
+        if (res * 2 > max_res || res > INT_MAX / 2) break;
+        rep.smaller = res;
+        rep.smaller_fit = s > 0;
+        rep.smaller_cover = cover;
+        res *= 2;
+    }
+    if (!st && !(s > 0)) {
+        /* It fits nowhere it may go: say which map would hold the charts at all. */
+        int need = res;
+        double s0 = 0;
+        while (!st && !(s0 > 0) && need <= ATLAS_MAX_RES / 2) {
+            need *= 2;
+            st = pack_map(ctx, &a, order, need, pad, -1, &s0, NULL, NULL);
         }
-        s = lo;
-        if (!st && !(s > 0))
-            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts leave no room for a texel each in %d x %d texels: raise --texels", a.count, res, res);
-        if (!st) {
-            pack(&pk, s, at);
-            st = write_layout(ctx, &a, m, at, s, res, &rep.added_vertices);
-        }
+        if (!st && s0 > 0)
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels: --texels %d would hold them",
+                           a.count, pad, res, res, need);
+        else if (!st && need > res)
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels, nor in %d x %d",
+                           a.count, pad, res, res, need, need);
+        else if (!st)
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels", a.count, pad, res, res);
+    }
+    if (!st) {
+        rep.resolution = res;
+        st = write_layout(ctx, &a, m, at, s, res, &rep.added_vertices);
     }
     if (!st) {
         rep.charts = a.count;
@@ -1401,7 +1511,6 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
         }
         if (report && !st) *report = rep;
     }
-    free(pk.bits); free(pk.mask); free(pk.occupied); free(pk.bottom); free(pk.floor);
     for (size_t i = 0; i < a.count; ++i) { free(a.charts[i].tris); free(a.charts[i].verts); free(a.charts[i].uv); free(a.charts[i].corner); }
     free(a.charts);
     free(a.weld); free(a.rep); free(a.across); free(a.normal); free(a.smooth); free(a.area); free(a.stamp); free(a.twin); free(a.vlocal); free(a.fan);

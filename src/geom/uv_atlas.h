@@ -7,7 +7,10 @@
 #include "geom/mesh.h"
 
 typedef struct prt__atlas_desc {
-    int resolution;    /* texels per side of the map the atlas is laid out for */
+    int resolution;       /* texels per side of the map the atlas is laid out for */
+    int max_resolution;   /* above resolution: while the charts do not fit, or touch under a quarter of
+                           * the map's texels (mostly gutter), a map twice as wide is tried, up to
+                           * this; the report says which was taken */
     int padding;       /* empty texels between any two charts' texels; 0 = 2 */
     float max_angle;   /* degrees a triangle's normal may turn from its chart's mean; 0 = 60 */
 } prt__atlas_desc;
@@ -20,6 +23,10 @@ typedef struct prt__atlas_report {
     double coverage;         /* share of the map's texels that hold some of the surface */
     double texel_density;    /* texels per unit of surface area, the same in every chart */
     double worst_stretch;    /* largest ratio of a triangle map's singular values */
+    int resolution;          /* texels per side of the map laid out for */
+    int smaller;             /* the last smaller map tried and passed over (0: none), */
+    bool smaller_fit;        /* whether the charts fitted it (then they touched too few of its texels: */
+    double smaller_cover;    /* this share) */
 } prt__atlas_report;
 
 /* Replaces m's texture coordinates by a generated atlas inside [0, 1], copying vertices that lie

@@ -608,9 +608,15 @@ static prt_status texel_charts(prt_context *ctx, const prt__mesh *m, const prt__
     return PRT_OK;
 }
 
+/* The largest light map a generated atlas may grow to when no size was asked for: the map and
+ * its offsets within PRT__OFFSET_MAX_ENTRIES, and bakes of minutes rather than hours. */
+#define AUTO_MAX_TEXELS 1024
+
 /* The mesh's own UVs when they are a unique layout inside [0, 1], else a generated atlas (which
- * copies the vertices on chart seams: before anything is sized by the vertex count). */
-static prt_status layout(prt_context *ctx, const prt__offset_bake_desc *d, prt_transfer *t)
+ * copies the vertices on chart seams: before anything is sized by the vertex count). Without
+ * --texels, the atlas's map doubles (up to AUTO_MAX_TEXELS) while its charts do not fit or are
+ * mostly gutter (see prt__atlas_desc), and d->texels becomes the size taken. */
+static prt_status layout(prt_context *ctx, prt__offset_bake_desc *d, prt_transfer *t)
 {
     char why[160] = "asked for";
     if (d->uv_layout == PRT_UV_MESH) {
@@ -620,12 +626,23 @@ static prt_status layout(prt_context *ctx, const prt__offset_bake_desc *d, prt_t
         return PRT_OK;
     }
     if (d->uv_layout == PRT_UV_AUTO && !prt__uv_layout_unusable(&t->mesh, d->texels, why, sizeof why)) return PRT_OK;
+    int max = d->texels;
+    while (d->texels_default && max <= AUTO_MAX_TEXELS / 2 && (uint64_t)max * max * 4 * (uint64_t)d->count <= PRT__OFFSET_MAX_ENTRIES) max *= 2;
     prt__atlas_report r;
-    prt_status st = prt__uv_atlas(ctx, &t->mesh, &(prt__atlas_desc){.resolution = d->texels}, &r);
-    if (!st)
-        prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts touch %.0f%% of the %dx%d light map's texels (those whose centres they hold, the coverage prt info reports, are fewer), worst stretch %.2f", t->source, why,
-                 r.charts, 100 * r.coverage, d->texels, d->texels, r.worst_stretch);
-    return st;
+    prt_status st = prt__uv_atlas(ctx, &t->mesh, &(prt__atlas_desc){.resolution = d->texels, .max_resolution = max}, &r);
+    if (st) return st;
+    if (r.resolution != d->texels) {
+        char was[96];
+        if (r.smaller_fit) snprintf(was, sizeof was, "touch only %.0f%% of the texels of %d x %d (mostly gutter)", 100 * r.smaller_cover, r.smaller, r.smaller);
+        else snprintf(was, sizeof was, "do not fit %d x %d", r.smaller, r.smaller);
+        prt__log(ctx, PRT_LOG_INFO, "light map %d x %d: the %zu UV charts of '%s' %s (--texels sets the size)", r.resolution, r.resolution, r.charts,
+                 t->source, was);
+        d->texels = r.resolution;
+    }
+    prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts touch %.0f%% of the %dx%d light map's texels (those whose centres they hold, the "
+             "coverage prt info reports, are fewer), worst stretch %.2f", t->source, why,
+             r.charts, 100 * r.coverage, d->texels, d->texels, r.worst_stretch);
+    return PRT_OK;
 }
 
 prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc *desc, prt_transfer *t, prt__bake_job **out)

@@ -102,6 +102,7 @@ static prt_status offset_bake_begin(prt_context *ctx, const prt_scene *scene, co
 {
     prt__offset_bake_desc d = {0};
     d.texels = prt__opt_int(o, "texels", 128);
+    d.texels_default = !prt__opt(o, "texels");
     d.count = prt__opt_int(o, "offsets", 200);
     d.iterations = prt__opt_int(o, "iterations", 1000);
     d.importance = prt__opt_choice(o, "importance", 0);

@@ -91,6 +91,7 @@ bool prt__offset_set_index(prt__offset_set *s);
 
 typedef struct prt__offset_bake_desc {
     int texels, count, iterations, importance, seed;
+    bool texels_default;          /* texels was not asked for: a generated atlas may take a larger map */
     int map_bounces, walks;       /* radiosity maps holding map_bounces bounces (1: one, bounced at
                                    * run time); paths per texel for those past the first */
     unsigned kinds;

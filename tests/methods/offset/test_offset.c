@@ -994,6 +994,58 @@ static void test_threads_and_cap(void **state)
  * tracer's direct light, the bounces bring the indirect light close to its, the file round-trips,
  * and subsurface scattering much shorter than a texel reflects the medium's total diffuse
  * reflectance. */
+static void keep_size_message(void *user, prt_log_level level, const char *message)
+{
+    if (level == PRT_LOG_INFO && !strncmp(message, "light map", 9)) snprintf(user, 256, "%s", message);
+}
+
+/* 1900 loose squares: 1900 charts, more than a 128^2 map holds with 2-texel gutters (at most
+ * (128 + 2)^2 / 9 = 1877 charts of a texel each). Without --texels the bake takes the next size
+ * that holds them, saying why; --texels 128 is refused, naming the size that would. */
+static void test_atlas_size(void **state)
+{
+    (void)state;
+    char said[256] = "";
+    prt_context *ctx = NULL;
+    assert_int_equal(prt_context_create(&(prt_context_desc){.threads = 2, .log = keep_size_message, .log_user = said}, &ctx), PRT_OK);
+    test_mesh t = {0};
+    for (uint32_t i = 0; i < 1900; ++i) {
+        const float x = (float)(i % 50), z = (float)(i / 50);
+        tm_vertex(&t, x, 0, z, 0, 1, 0);
+        tm_vertex(&t, x, 0, z + 0.8f, 0, 1, 0);
+        tm_vertex(&t, x + 0.8f, 0, z + 0.8f, 0, 1, 0);
+        tm_vertex(&t, x + 0.8f, 0, z, 0, 1, 0);
+        tm_tri(&t, i * 4, i * 4 + 1, i * 4 + 2);
+        tm_tri(&t, i * 4, i * 4 + 2, i * 4 + 3);
+    }
+    prt_scene *scene = tm_scene(ctx, &t, 0.5f);
+    const char *const quick[] = {"offsets", "4", "iterations", "10", "map-bounces", "1", "transfer", "radiosity", NULL};
+    prt_transfer *x = bake_offset(ctx, scene, quick);
+    prt_offset_info info;
+    assert_true(prt_transfer_offset_info(x, &info));
+    print_message("%s\n", said);
+    assert_int_equal(info.width, 256);
+    assert_int_equal(info.height, 256);
+    assert_non_null(strstr(said, "light map 256 x 256"));
+    assert_non_null(strstr(said, "do not fit 128 x 128"));
+    prt_transfer_release(x);
+    const prt_method *m = prt_method_find("offset");
+    prt_options *o = NULL;
+    assert_int_equal(prt_options_create(m, &o), PRT_OK);
+    for (int i = 0; quick[i]; i += 2) assert_int_equal(prt_options_set(o, quick[i], quick[i + 1]), PRT_OK);
+    assert_int_equal(prt_options_set(o, "texels", "128"), PRT_OK);
+    x = NULL;
+    assert_int_equal(prt_bake(ctx, scene, m, o, NULL, &x), PRT_ERR_INVALID_ARG);
+    print_message("--texels 128: %s\n", prt_last_error());
+    assert_non_null(strstr(prt_last_error(), "1900 UV charts"));
+    assert_non_null(strstr(prt_last_error(), "--texels 256"));
+    assert_null(x);
+    prt_options_release(o);
+    prt_scene_release(scene);
+    tm_free(&t);
+    prt_context_release(ctx);
+}
+
 static void test_offset_method(void **state)
 {
     (void)state;
@@ -1677,6 +1729,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_slicing),
         cmocka_unit_test(test_export_maps),
         cmocka_unit_test(test_offset_method),
+        cmocka_unit_test(test_atlas_size),
         cmocka_unit_test(test_prefilter),
         cmocka_unit_test(test_bounce_across_charts),
         cmocka_unit_test(test_threads_and_cap),
