@@ -1552,7 +1552,7 @@ bool prt__uv_layout_unusable(const prt__mesh *m, int resolution, char *why, size
                 const bool strict = b1 > 1e-4f && b2 > 1e-4f && b1 + b2 < 1.0f - 1e-4f;
                 uint8_t *h = hit + (size_t)y * W + x;
                 if (!*h) covered++;
-                if (strict && (*h & 2)) overlap++;
+                if (strict && (*h & 2) && !(*h & 4)) { overlap++; *h |= 4; }   /* each texel once, however many claim it */
                 *h |= strict ? 3 : 1;
             }
     }
