@@ -1,8 +1,10 @@
 /* prt/offset.h - offset radiance transfer maps (Sunshine-Hill & Faloutsos 2006): what a file of
  * method "offset" holds. A light map of width x height texels over the mesh's UVs; for each of
- * `count` offsets dt and each transfer kind, a map whose texel t holds TR(t, t + dt) TVA(t, dt):
- * at run time the first-order light map, shifted by dt, is multiplied by it and summed over the
- * offsets (eq. 9). The maps are what relighting for the GPU hands the renderer, sliced into atlases
+ * `count` offsets dt and each transfer kind, a map whose texel t holds the transfer to t from the
+ * surface the offset's cell stands for (the paper's TR(t, t + dt) TVA(t, dt), eq. 10): at run time
+ * the first-order light map, shifted by dt, is multiplied by it and summed over the offsets (eq. 9)
+ * - for the radiosity maps of far offsets, the light prefiltered to their cell's size
+ * (prt_render_map_set.levels). The maps are what relighting for the GPU hands the renderer, sliced into atlases
  * (prt_relit.gpu_passes), and what prt export --maps writes as OpenEXR files with an index.
  * Everything else goes through prt/method.h.
  * prt-method: offset */
@@ -35,7 +37,8 @@ prt_status prt_transfer_offset_map(const prt_transfer *t, prt_offset_kind kind, 
 /* Where each texel's light is read (width x height values, y * width + x): itself on the
  * surface, else the surface texel that fills its gutter (rings grown outwards from the charts,
  * each texel taking the source of its first neighbour - left, right, down, up - in the ring
- * before), -1 when the map holds no surface. The maps multiply the light at source(t + dt). */
+ * before), -1 when the map holds no surface. The maps multiply the light at source(t + dt)
+ * (prefiltered for far radiosity maps: prt_render_map_set.levels). */
 prt_status prt_transfer_offset_sources(const prt_transfer *t, int32_t *source);
 
 /* Which texels scatter under their surface: width x height values, 0 opaque, k the k-th medium

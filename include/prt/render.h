@@ -56,10 +56,11 @@ typedef struct prt_render_map_set {
     int slice_count;
     const prt_render_slice *slices;
     int atlas_size, atlas_layers;   /* layers of atlas_size^2 texels (a power of two) */
-    /* [map] the level of the light's pyramid each map reads (NULL: every map reads single
-     * texels): the area-weighted mean light over the level's block of 2^l x 2^l texels around
-     * the texel read, when all that block's surface is on that texel's chart, else the next level
-     * down's (prt_render_passes.area, .chart). */
+    /* [map] the level (0..15) of the light's pyramid each map reads (NULL: every map reads
+     * single texels): over the four blocks of 2^l x 2^l texels around the texel read, bilinearly
+     * weighted, each block whose surface is all on that texel's chart by its area-weighted mean
+     * light, any other by the level below's light (prt_render_passes.area, .chart;
+     * methods/offset/prefilter.c). */
     const uint8_t *levels;
 } prt_render_map_set;
 
@@ -73,7 +74,8 @@ typedef struct prt_render_passes {
     const uint8_t *scatter_mask;   /* [covered] non-zero: the scatter pass replaces albedo x input; NULL: nowhere */
     const float *emission;    /* [covered][3] radiance at emission scale 1; NULL: none */
     const float *area;        /* [covered] world area of each texel's surface; with levels */
-    const int32_t *chart;     /* [covered] the UV chart of each texel (>= 0, under 2^24); with levels */
+    const int32_t *chart;     /* [covered] the UV chart of each texel (under 2^24; negative: the texel
+                               * is no block's with others, it reads single texels); with levels */
     prt_render_map_set scatter, bounce;
 } prt_render_passes;
 

@@ -289,7 +289,7 @@ prt_status prt__light_map_gl_load(prt__light_map_gl *g, const prt_render_passes 
     for (int k = 0; lm->bounce.levels && k < lm->bounce.map_count; ++k) g->levels = lm->bounce.levels[k] > g->levels ? lm->bounce.levels[k] : g->levels;
     g->pyramid_size = 1;
     while (g->pyramid_size < W || g->pyramid_size < H) g->pyramid_size *= 2;
-    if (g->levels && (!lm->area || !lm->chart || (1 << g->levels) > g->pyramid_size)) {
+    if (g->levels && (g->levels > 15 || !lm->area || !lm->chart || (1 << g->levels) > g->pyramid_size)) {
         prt__light_map_gl_free(g);
         return prt__fail(NULL, PRT_ERR_INVALID_ARG, "the light map's description has pyramid levels without texel areas and charts, or past its size");
     }
@@ -322,7 +322,7 @@ prt_status prt__light_map_gl_load(prt__light_map_gl *g, const prt_render_passes 
             for (size_t i = 0; i < n; ++i) scratch[i * 2 + 1] = -2.0f;
             for (size_t i = 0; i < lm->covered; ++i) {
                 scratch[(size_t)lm->texel[i] * 2] = lm->area[i];
-                scratch[(size_t)lm->texel[i] * 2 + 1] = (float)lm->chart[i];
+                scratch[(size_t)lm->texel[i] * 2 + 1] = lm->chart[i] < 0 ? -1.0f : (float)lm->chart[i];   /* no chart: never pure (prefilter.c) */
             }
             g->area_chart = new_map(W, H, GL_RG32F, GL_RG, GL_FLOAT, scratch);
             GLuint *pyr[2] = {&g->pyramid, &g->charts};

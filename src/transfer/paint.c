@@ -176,7 +176,7 @@ prt_status prt_paint_load(const prt_transfer *t, const char *path, float **out)
     for (int y = 0; y < h; ++y) memcpy(map + (size_t)y * w * 3, img.rgb + (size_t)(h - 1 - y) * w * 3, (size_t)w * 3 * sizeof(float));
     prt_image_free(&img);
     for (size_t i = 0; i < (size_t)w * h * 3; ++i)
-        if (!(map[i] >= 0.0f)) { free(map); return prt__fail(NULL, PRT_ERR_FORMAT, "painting '%s' holds negative light", path); }
+        if (!(map[i] >= 0.0f) || !isfinite(map[i])) { free(map); return prt__fail(NULL, PRT_ERR_FORMAT, "painting '%s' holds negative or non-finite light", path); }
     *out = map;
     return PRT_OK;
 }

@@ -1,6 +1,6 @@
 /* Baking offset transfer maps: a light map over the mesh's UVs (or a generated atlas), offsets
- * chosen by the largest (or mean) transfer they carry, the maps TR TVA for radiosity and/or
- * subsurface scattering, and each texel's shadowed SH transfer for first-order light from the
+ * chosen by the largest (or mean) transfer they carry, the maps (the transfer from each offset's
+ * cell, eq. 8) for radiosity and/or subsurface scattering, and each texel's shadowed SH transfer for first-order light from the
  * environment. Stages: offsets, transfer maps, environment. */
 #include "methods/offset/importance.h"
 #include "geom/uv_atlas.h"
@@ -181,11 +181,11 @@ static bool radiosity_maps(obake *ob, const int32_t *label, float *maps, prt__pr
         if (!ready) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
 #pragma omp for schedule(dynamic, 16)
         for (size_t i = 0; i < nc; ++i) {
+            for (int o = 0; o < K; ++o) memset(maps + ((size_t)o * nc + i) * 3, 0, 3 * sizeof *maps);   /* also when cancelled: the cap reads them */
             if (!ready || prt__progress_cancelled(p)) continue;
             const size_t t = s->texel[i];
             const int tx = (int)(t % (size_t)W), ty = (int)(t / (size_t)W);
             const int32_t own = ob->chart[t];
-            for (int o = 0; o < K; ++o) memset(maps + ((size_t)o * nc + i) * 3, 0, 3 * sizeof *maps);
             receiver_at(ob, &rc, tx, ty);
             for (int dy = -NEAR_FIELD; dy <= NEAR_FIELD; ++dy)
                 for (int dx = -NEAR_FIELD; dx <= NEAR_FIELD; ++dx) {

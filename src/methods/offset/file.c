@@ -116,6 +116,12 @@ static prt_status load_maps(prt_context *ctx, const prt__offset_set *s, const pr
     return PRT_OK;
 }
 
+static int key_cmp(const void *a, const void *b)
+{
+    const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
 prt_status prt__offset_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count)
 {
     (void)meta;
@@ -157,6 +163,16 @@ prt_status prt__offset_load(prt_context *ctx, prt_transfer *t, const cJSON *meta
         const int lim = k % 2 ? s->height : s->width;
         if (s->offsets[k] <= -lim || s->offsets[k] >= lim) return bad(ctx, "an offset lies beyond the light map");
     }
+    if (s->offsets[0] || s->offsets[1]) return bad(ctx, "the first offset is not (0, 0)");
+    /* Distinct offsets: the run time labels every integer offset by its nearest one. */
+    int64_t *key = malloc((size_t)s->count * sizeof *key + 1);
+    if (!key) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (int k = 0; k < s->count; ++k) key[k] = (int64_t)s->offsets[k * 2] * 16384 + s->offsets[k * 2 + 1];
+    qsort(key, (size_t)s->count, sizeof *key, key_cmp);
+    bool repeated = false;
+    for (int k = 1; k < s->count && !repeated; ++k) repeated = key[k] == key[k - 1];
+    free(key);
+    if (repeated) return bad(ctx, "an offset repeats another");
     if (!(c = prt__chunk_take(chunks, count, CHUNK_OFST))) return bad(ctx, "offset texel chunk missing");
     const size_t nc = s->covered;
     if (c->size != (uint64_t)nc * (4 + PRT__OFFSET_TEXEL_FLOATS * 4 + (emits ? 24 : 0))) return bad(ctx, "offset texel chunk size mismatch");

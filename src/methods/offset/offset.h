@@ -114,20 +114,19 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
 prt_status prt__offset_shade(prt_context *ctx, const prt_transfer *t, const prt_relit *r, const float eye[3], float *rgb);
 
 /* Prefiltered light for the bounce maps (prefilter.c). A far offset's cell stands for a wide patch
- * of surface around its representative texel, but a map reads one texel's light: a small bright
- * spot or a shadow edge under a sparse far offset then shows as copies of itself or as bands. The
- * bounce passes read instead the light averaged over a block of texels of the representative's
- * own chart, as large as the cell (the largest block of a power-of-two pyramid within the
- * offset's level whose surface is all on that chart), area-weighted. */
+ * of surface around its representative texel, but a map reads one texel's light: a shadow edge
+ * under a sparse far offset then shows as bands. The bounce passes read instead the light of an
+ * area-weighted pyramid at the offset's level (blocks up to half its cell's side), bilinear over
+ * the four blocks around the texel read, a block straddling a chart's border standing in by the
+ * level below. */
 prt_status prt__offset_filter_ready(prt_context *ctx, const prt_transfer *t, prt__offset_set *s);
 /* The light each covered texel stands for at levels 0..s->levels: out[l] ([covered][3]; out[0] =
- * in) the area-weighted mean of in over the level-l block around the texel when that block lies
- * on the texel's chart alone, else the next level down's. scratch: prt__offset_filter_scratch
- * floats. */
+ * in) as the comment above says, level by level from out[l - 1]. scratch:
+ * prt__offset_filter_scratch floats. */
 size_t prt__offset_filter_scratch(const prt__offset_set *s);
 void prt__offset_filter(const prt__offset_set *s, const float *in, float *scratch, const float **out);
 
-/* The GPU passes for t (gpu.c): the maps cropped to their non-zero boxes and sliced into atlases
+/* The GPU passes for t (gpu.c): the maps cropped to the boxes of their axial slicing and sliced into atlases
  * (bins.c, section 5.2), described for the renderer; built once, then borrowed from t. */
 prt_status prt__offset_gpu_passes(prt_context *ctx, const prt_transfer *t, const prt_render_passes **out);
 

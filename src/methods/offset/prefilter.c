@@ -9,6 +9,7 @@
 
 #define MIXED (-1)   /* a block whose surface spans charts */
 #define EMPTY (-2)   /* a block holding no surface */
+#define NO_CHART (-3)   /* a surface texel without a triangle of its own (none in practice): reads at level 0 only */
 
 prt_status prt__offset_filter_ready(prt_context *ctx, const prt_transfer *t, prt__offset_set *s)
 {
@@ -20,33 +21,31 @@ prt_status prt__offset_filter_ready(prt_context *ctx, const prt_transfer *t, prt
         const prt__mesh *m = &t->mesh;
         uint32_t *owner = prt__calloc(n, sizeof *owner), *island = malloc(m->triangle_count * sizeof *island + 1), islands = 0;
         float *bary = malloc(n * 2 * sizeof *bary);
-        double *xy = malloc((size_t)K * 2 * sizeof *xy + 1), *area = malloc((size_t)K * sizeof *area + 1);
+        uint64_t *area = prt__calloc((size_t)K + 1, sizeof *area);
         int32_t *chart = malloc(nc * sizeof *chart + 1);
         uint8_t *level = prt__calloc((size_t)K + 1, 1);
         size_t overlap, outside;
-        if (!owner || !island || !bary || !xy || !area || !chart || !level || !prt__texel_raster(m, W, H, owner, bary, &overlap, &outside))
+        if (!owner || !island || !bary || !area || !chart || !level || !prt__texel_raster(m, W, H, owner, bary, &overlap, &outside))
             st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         if (!st) st = prt__uv_islands(ctx, m, island, &islands);
         for (size_t i = 0; !st && i < nc; ++i) {
             const uint32_t tri = owner[s->texel[i]];
-            chart[i] = tri && tri <= m->triangle_count ? (int32_t)island[tri - 1] : (int32_t)islands + (int32_t)i;   /* no triangle: its own */
+            chart[i] = tri && tri <= m->triangle_count ? (int32_t)island[tri - 1] : NO_CHART;
         }
-        /* The levels: a cell of A texels reads blocks of side 2^l <= sqrt(A) / 2, so the block
-         * stays inside the cell wherever in the block the representative lies. */
+        /* The levels: a cell of A texels (the integer offsets nearest it, as eq. 8 labels them)
+         * reads blocks of side 2^l <= sqrt(A) / 2, so the block stays inside the cell wherever in
+         * the block the representative lies. */
         int top = 0;
         while ((2 << top) <= (W < H ? W : H) && top < 15) top++;
-        if (!st && K > 2) {
-            for (int k = 0; k < K; ++k) {
-                xy[k * 2] = W > 1 ? (double)s->offsets[k * 2] / (W - 1) : 0;
-                xy[k * 2 + 1] = H > 1 ? (double)s->offsets[k * 2 + 1] / (H - 1) : 0;
-            }
-            st = prt__voronoi_areas(ctx, xy, (size_t)K, area);
-            for (int k = 0; !st && k < K; ++k) {
-                const double side = sqrt(area[k] * (W > 1 ? W - 1 : 1) * (H > 1 ? H - 1 : 1)) / 2;
-                int l = 0;
-                while (l < top && (double)(2 << l) <= side) l++;
-                level[k] = (uint8_t)(s->offsets[k * 2] || s->offsets[k * 2 + 1] ? l : 0);
-            }
+        int32_t *label = NULL;
+        if (!st) st = prt__offset_labels(ctx, W, H, s->offsets, K, &label);
+        for (size_t i = 0, n2 = (size_t)(2 * W - 1) * (2 * H - 1); !st && i < n2; ++i) area[label[i]]++;
+        free(label);
+        for (int k = 0; !st && k < K; ++k) {
+            const double side = sqrt((double)area[k]) / 2;
+            int l = 0;
+            while (l < top && (double)(2 << l) <= side) l++;
+            level[k] = (uint8_t)(s->offsets[k * 2] || s->offsets[k * 2 + 1] ? l : 0);
         }
         int levels = 0;
         for (int k = 0; !st && k < K; ++k) levels = level[k] > levels ? level[k] : levels;
@@ -58,7 +57,7 @@ prt_status prt__offset_filter_ready(prt_context *ctx, const prt_transfer *t, prt
             chart = NULL;
             level = NULL;
         }
-        free(owner); free(island); free(bary); free(xy); free(area); free(chart); free(level);
+        free(owner); free(island); free(bary); free(area); free(chart); free(level);
     }
     pthread_mutex_unlock(s->lock);
     return st;
@@ -98,7 +97,7 @@ void prt__offset_filter(const prt__offset_set *s, const float *in, float *scratc
         float *q = pyr[0] + (size_t)s->texel[i] * 5;
         for (int c = 0; c < 3; ++c) q[c] = s->area[i] * in[i * 3 + c];
         q[3] = s->area[i];
-        q[4] = (float)s->chart[i];
+        q[4] = s->chart[i] < 0 ? MIXED : (float)s->chart[i];   /* no chart of its own: no block is pure with it */
     }
     for (int l = 1; l <= L; ++l) {
         const int pw = (W + (1 << (l - 1)) - 1) >> (l - 1), ph = ((int)s->height + (1 << (l - 1)) - 1) >> (l - 1);

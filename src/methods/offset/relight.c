@@ -225,7 +225,7 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     if (st) return st;
     float *E = prt__calloc(nc * 3, sizeof(float)), *first = malloc(nc * 3 * sizeof(float)), *indirect = prt__calloc(nc * 3, sizeof(float));
     float *a = malloc(nc * 3 * sizeof(float)), *b = malloc(nc * 3 * sizeof(float));
-    float *map = prt__calloc(n * 3, sizeof(float)), *imap = r->indirect ? prt__calloc(n * 3, sizeof(float)) : NULL;
+    float *map = prt__calloc(n * 3, sizeof(float)), *imap = r->indirect ? prt__calloc(n * 3, sizeof(float)) : NULL, *hide = NULL;
     if (!E || !first || !indirect || !a || !b || !map || (r->indirect && !imap) ) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     /* Local lights (directional ones too: sharp shadows), by shadow rays from each texel. */
     prt_light *local = NULL;
@@ -272,25 +272,24 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
      * of texels. The light map keeps it for the bounces and the subsurface scattering, and shows
      * the rest (hide: what it leaves out) - on the CPU here, on the GPU in its final pass. */
     const int pixel = !d->per_vertex && !d->no_pixel_lights && d->component != PRT_COMPONENT_INDIRECT && nlocal <= PRT_MAX_PIXEL_LIGHTS ? nlocal : 0;
-    float *hide = pixel ? prt__calloc(nc * 3, sizeof(float)) : NULL;
+    hide = pixel ? prt__calloc(nc * 3, sizeof(float)) : NULL;
     if (pixel && !hide) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
     for (size_t i = 0; pixel && i < nc; ++i)
         if (!(s->subsurface && s->medium && s->medium[i]))
             for (int c = 0; c < 3; ++c) hide[i * 3 + c] = s->albedo[i * 3 + c] * E[i * 3 + c] / (float)PRT_PI;
-    if (pixel && (st = pixel_lights(ctx, t, s, local, pixel, r))) { free(hide); goto done; }
+    if (pixel && (st = pixel_lights(ctx, t, s, local, pixel, r))) { goto done; }
     if (d->gpu_finish) {   /* the renderer runs the passes below (gpu.c describes them) */
-        if ((st = prt__offset_gpu_passes(ctx, t, &r->gpu_passes))) { free(hide); goto done; }
+        if ((st = prt__offset_gpu_passes(ctx, t, &r->gpu_passes))) { goto done; }
         r->gpu_input = prt__calloc(n * 3, sizeof(float));
-        if (!r->gpu_input) { free(hide); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+        if (!r->gpu_input) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
         r->gpu_pixel_direct = hide ? prt__calloc(n * 3, sizeof(float)) : NULL;
-        if (hide && !r->gpu_pixel_direct) { free(hide); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
+        if (hide && !r->gpu_pixel_direct) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
         for (size_t i = 0; i < nc; ++i) {
             memcpy(r->gpu_input + (size_t)s->texel[i] * 3, a + i * 3, 3 * sizeof(float));
             if (hide) memcpy(r->gpu_pixel_direct + (size_t)s->texel[i] * 3, hide + i * 3, 3 * sizeof(float));
             for (int c = 0; c < 3; ++c)
                 b[i * 3 + c] = fmaxf(first[i * 3 + c] + (s->emit ? emission * s->emit[i * 3 + c] : 0.0f) - (hide ? hide[i * 3 + c] : 0.0f), 0.0f);
         }
-        free(hide);
         spread(s, b, map);
         for (size_t v = 0; v < nv; ++v) sample_map(map, s->width, s->height, t->mesh.uv[v * 2], t->mesh.uv[v * 2 + 1], r->radiance + v * 3);
         r->gpu_emission = emission;
@@ -329,7 +328,6 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
             const float f = fmaxf(first[i * 3 + c] - (hide ? hide[i * 3 + c] : 0.0f), 0.0f), g = indirect[i * 3 + c];
             b[i * 3 + c] = d->component == PRT_COMPONENT_DIRECT ? f : d->component == PRT_COMPONENT_INDIRECT ? g : f + g;
         }
-    free(hide);
     spread(s, b, map);
     if (imap) spread(s, indirect, imap);
     /* Per vertex: the light map at the vertex's texture coordinates. */
@@ -344,6 +342,6 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     map = NULL;
 done:
     free(local);
-    free(E); free(first); free(indirect); free(a); free(b); free(map); free(imap);
+    free(E); free(first); free(indirect); free(a); free(b); free(map); free(imap); free(hide);
     return st;
 }

@@ -1673,12 +1673,14 @@ static void test_crafted_files(void **state)
     prt_transfer_release(u);
     size_t size;
     unsigned char *orig = test_slurp(path, &size), *f = malloc(size);
-    const uint32_t five = 5, big_offset = 8, zero = 0, medium_9 = 0x09090909u;
+    const uint32_t five = 5, big_offset = 8, zero = 0, medium_9 = 0x09090909u, one = 1, origin[2] = {0, 0};
     const float far = 1e6f, long_normal[3] = {0, 2, 0};
     const uint16_t bright = 0x5640, infinite = 0x7c00;   /* halves: 100, infinity */
     struct { const char *chunk; size_t offset; const void *bytes; size_t n; const char *says; } cases[] = {
         {"OFSP", 0, &five, 4, "parameters out of range"},                     /* a map of 5 texels a side */
         {"OFSP", 72, &big_offset, 4, "beyond the light map"},                 /* an offset as wide as the map */
+        {"OFSP", 72, &one, 4, "first offset is not (0, 0)"},
+        {"OFSP", 80, origin, 8, "repeats another"},                            /* the second offset (0, 0) again */
         {"OFST", 0, &medium_9, 4, "out of order or beyond"},                  /* a texel index past the map */
         {"OFST", (size_t)info.covered * 4, &far, 4, "outside the mesh"},        /* a texel point far away */
         {"OFST", (size_t)info.covered * 4 + 12, long_normal, 12, "unit length"},
