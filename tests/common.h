@@ -293,6 +293,18 @@ static inline void assert_same_file(prt_transfer *a, prt_transfer *b, const char
 }
 
 /* Writes the procedural demo scene into the scratch directory and loads it. */
+/* A bake by method name with options as NULL-terminated key, value pairs (kv may be NULL). */
+static inline prt_transfer *test_bake_with(prt_context *ctx, const prt_scene *scene, const char *method, const char *const *kv)
+{
+    prt_options *o = NULL;
+    assert_int_equal(prt_options_create(prt_method_find(method), &o), PRT_OK);
+    for (int i = 0; kv && kv[i]; i += 2) assert_int_equal(prt_options_set(o, kv[i], kv[i + 1]), PRT_OK);
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake(ctx, scene, prt_method_find(method), o, NULL, &t), PRT_OK);
+    prt_options_release(o);
+    return t;
+}
+
 static inline prt_scene *load_demo_scene(prt_context *ctx)
 {
     char path[512];

@@ -23,17 +23,6 @@ static const char cloud_json[] = "[[-0.25, 0.3, -0.25], [0.25, 0.3, -0.25], [-0.
                                  " [-0.25, 0.3, 0.25], [0.25, 0.3, 0.25], [-0.25, 0.7, 0.25], [0.25, 0.7, 0.25], [0, 0.75, 0]]";
 #define AT "0,0.75,0"   /* the user lights stand on the last cloud light */
 
-static prt_transfer *bake(prt_context *ctx, const prt_scene *s, const char *method, const char *const *opts)
-{
-    prt_options *o = NULL;
-    assert_int_equal(prt_options_create(prt_method_find(method), &o), PRT_OK);
-    for (int i = 0; opts && opts[i]; i += 2) assert_int_equal(prt_options_set(o, opts[i], opts[i + 1]), PRT_OK);
-    prt_transfer *t = NULL;
-    assert_int_equal(prt_bake(ctx, s, prt_method_find(method), o, NULL, &t), PRT_OK);
-    prt_options_release(o);
-    return t;
-}
-
 static prt_lighting *lighting_of(const prt_light *li)
 {
     prt_lighting *l = NULL;
@@ -106,12 +95,12 @@ static void setup(fixture *f, int max_order)
     char path[512];
     write_text("cloud.json", cloud_json, path, sizeof path);
     const char *so[] = {"samples", "256", "basis", "64", "partition", "150", NULL};
-    f->spectral = bake(f->ctx, f->s, "spectral", so);
+    f->spectral = test_bake_with(f->ctx, f->s, "spectral", so);
     for (int order = 2; order <= max_order; ++order) {
         char o[16];   /* room for any int: gcc -O0 cannot bound order */
         snprintf(o, sizeof o, "%d", order);
         const char *lo[] = {"cloud", path, "compress", "none", "merge-distance", "0", "emission-order", o, "samples", "256", "basis", "64", "partition", "150", NULL};
-        f->lc[order] = bake(f->ctx, f->s, "lightcloud", lo);
+        f->lc[order] = test_bake_with(f->ctx, f->s, "lightcloud", lo);
     }
 }
 
@@ -181,7 +170,7 @@ static void test_order1_refuses_spot(void **state)
     char path[512];
     write_text("cloud.json", cloud_json, path, sizeof path);
     const char *lo[] = {"cloud", path, "samples", "64", "basis", "32", "partition", "150", "bounces", "2", NULL};
-    prt_transfer *t = bake(ctx, s, "lightcloud", lo);
+    prt_transfer *t = test_bake_with(ctx, s, "lightcloud", lo);
     prt_light sp = spot(45);
     prt_lighting *l = lighting_of(&sp);
     prt_relit r;
@@ -233,7 +222,7 @@ static void test_file_round_trip(void **state)
     char path[512], file[600];
     write_text("cloud.json", cloud_json, path, sizeof path);
     const char *lo[] = {"cloud", path, "emission-order", "2", "samples", "64", "basis", "32", "partition", "150", "bounces", "2", NULL};
-    prt_transfer *t = bake(ctx, s, "lightcloud", lo);
+    prt_transfer *t = test_bake_with(ctx, s, "lightcloud", lo);
     snprintf(file, sizeof file, "%s/lobes.prt", test_dir);
     assert_int_equal(prt_transfer_save(t, file), PRT_OK);
     prt_transfer *u = NULL;

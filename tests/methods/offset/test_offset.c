@@ -671,15 +671,7 @@ static void test_slicing(void **state)
 
 static prt_transfer *bake_offset(prt_context *ctx, const prt_scene *scene, const char *const *kv)
 {
-    const prt_method *m = prt_method_find("offset");
-    assert_non_null(m);
-    prt_options *o = NULL;
-    assert_int_equal(prt_options_create(m, &o), PRT_OK);
-    for (int i = 0; kv[i]; i += 2) assert_int_equal(prt_options_set(o, kv[i], kv[i + 1]), PRT_OK);
-    prt_transfer *t = NULL;
-    assert_int_equal(prt_bake(ctx, scene, m, o, NULL, &t), PRT_OK);
-    prt_options_release(o);
-    return t;
+    return test_bake_with(ctx, scene, "offset", kv);
 }
 
 /* The sums of area and of area x channel 0 of light over texels [x0, x1) x [y0, y1); the mean. */

@@ -27,17 +27,6 @@ static prt_scene *floor_wall_tile(prt_context *ctx)
     return s;
 }
 
-static prt_transfer *bake(prt_context *ctx, const prt_scene *scene, const char *method, const char *const *kv)
-{
-    prt_options *o = NULL;
-    assert_int_equal(prt_options_create(prt_method_find(method), &o), PRT_OK);
-    for (int i = 0; kv && kv[i]; i += 2) assert_int_equal(prt_options_set(o, kv[i], kv[i + 1]), PRT_OK);
-    prt_transfer *t = NULL;
-    assert_int_equal(prt_bake(ctx, scene, prt_method_find(method), o, NULL, &t), PRT_OK);
-    prt_options_release(o);
-    return t;
-}
-
 /* The painting that makes the tile's texels send out TILE_L (irradiance / pi times the albedo). */
 static float *tile_painting(const prt_transfer *t, size_t *painted)
 {
@@ -80,7 +69,7 @@ static void test_tile_lights_the_wall(void **state)
 
     /* One bounce per pass: the offset form of the painting against the exact gather (eq. 3) of the
      * same transfer, texel by texel over the wall. */
-    prt_transfer *one = bake(ctx, scene, "offset", (const char *const[]){"texels", "64", "offsets", "300", "iterations", "300", "map-bounces", "1", NULL});
+    prt_transfer *one = test_bake_with(ctx, scene, "offset", (const char *const[]){"texels", "64", "offsets", "300", "iterations", "300", "map-bounces", "1", NULL});
     const prt__offset_set *s = one->state;
     size_t painted;
     float *paint = tile_painting(one, &painted);
@@ -171,7 +160,7 @@ static void test_tile_lights_the_wall(void **state)
 
     /* Every bounce (the default maps): the painted tile lights the wall as the path tracer's
      * emitting tile does, and as the file's own emitter does (its irradiance baked exactly). */
-    prt_transfer *all = bake(ctx, scene, "offset", (const char *const[]){"texels", "64", "offsets", "300", "iterations", "300", NULL});
+    prt_transfer *all = test_bake_with(ctx, scene, "offset", (const char *const[]){"texels", "64", "offsets", "300", "iterations", "300", NULL});
     s = all->state;
     paint = tile_painting(all, &painted);
     prt_relit pr, er;
@@ -248,7 +237,7 @@ static void test_tile_lights_the_wall(void **state)
     prt_transfer_release(all);
 
     /* Other methods have no first-order light map to paint: refused, saying so. */
-    prt_transfer *ao = bake(ctx, scene, "ao", (const char *const[]){"samples", "16", NULL});
+    prt_transfer *ao = test_bake_with(ctx, scene, "ao", (const char *const[]){"samples", "16", NULL});
     int w, h;
     assert_int_equal(prt_paint_size(ao, &w, &h), PRT_ERR_INVALID_ARG);
     assert_non_null(strstr(prt_last_error(), "the ao method"));
