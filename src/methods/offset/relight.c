@@ -159,8 +159,10 @@ static prt_status lights_ready(prt_context *ctx, const prt_transfer *t, prt__off
 }
 
 /* The lights the renderer draws per pixel: copies of the first count local lights, the albedo
- * they shade per vertex (zero on translucent surfaces, whose direct light the dipole replaces),
- * and each vertex's visibility of each (shadow rays from the vertices). */
+ * they shade per vertex and each vertex's visibility of each (shadow rays from the vertices). On
+ * translucent surfaces the albedo is the dipole's share that leaves within the texel the light
+ * entered (its subsurface map at offset (0, 0)): what the map would show as a staircase at a
+ * shadow edge is drawn per pixel, and only the light carried between texels stays in the map. */
 static prt_status pixel_lights(prt_context *ctx, const prt_transfer *t, const prt__offset_set *s, const prt_light *local, int count, prt_relit *r)
 {
     const size_t nv = t->mesh.vertex_count;
@@ -178,7 +180,7 @@ static prt_status pixel_lights(prt_context *ctx, const prt_transfer *t, const pr
             const int x = (int)fminf(fmaxf(t->mesh.uv[v * 2] * (float)s->width, 0.0f), (float)(s->width - 1));
             const int y = (int)fminf(fmaxf(t->mesh.uv[v * 2 + 1] * (float)s->height, 0.0f), (float)(s->height - 1));
             const int32_t c = s->source[(size_t)y * s->width + x];
-            if (c >= 0 && s->medium[c]) memset(r->pixel_albedo + v * 3, 0, 3 * sizeof(float));
+            if (c >= 0 && s->medium[c]) memcpy(r->pixel_albedo + v * 3, s->subsurface + (size_t)c * 3, 3 * sizeof(float));
         }
     prt__vertex_lights_visibility(ctx, s->vertex_lights, &t->mesh, r->pixel_lights, count, r->pixel_visibility);
     return prt__relit_pixel_materials(ctx, t, NULL, r);
@@ -274,9 +276,10 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     const int pixel = !d->per_vertex && !d->no_pixel_lights && d->component != PRT_COMPONENT_INDIRECT && nlocal <= PRT_MAX_PIXEL_LIGHTS ? nlocal : 0;
     hide = pixel ? prt__calloc(nc * 3, sizeof(float)) : NULL;
     if (pixel && !hide) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
-    for (size_t i = 0; pixel && i < nc; ++i)
-        if (!(s->subsurface && s->medium && s->medium[i]))
-            for (int c = 0; c < 3; ++c) hide[i * 3 + c] = s->albedo[i * 3 + c] * E[i * 3 + c] / (float)PRT_PI;
+    for (size_t i = 0; pixel && i < nc; ++i) {
+        const float *own = s->subsurface && s->medium && s->medium[i] ? s->subsurface + i * 3 : s->albedo + i * 3;   /* see pixel_lights */
+        for (int c = 0; c < 3; ++c) hide[i * 3 + c] = own[c] * E[i * 3 + c] / (float)PRT_PI;
+    }
     if (pixel && (st = pixel_lights(ctx, t, s, local, pixel, r))) { goto done; }
     if (d->gpu_finish) {   /* the renderer runs the passes below (gpu.c describes them) */
         if ((st = prt__offset_gpu_passes(ctx, t, &r->gpu_passes))) { goto done; }

@@ -1197,6 +1197,38 @@ static void test_offset_method(void **state)
         }
         assert_true(skin_texels > 100);
     }
+    /* Relit for drawing, the skin's own share of its direct light (what leaves the texel it
+     * entered: nearly all of it when scattering is far below a texel) is drawn per pixel like the
+     * floor's, so the sphere's shadow edges are as sharp as the screen; shaded per vertex, the
+     * split gives back the per-vertex result where the light is smooth. */
+    {
+        prt_relit drawn, whole;
+        assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = first_order}, &drawn), PRT_OK);
+        assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = first_order, .per_vertex = 1}, &whole), PRT_OK);
+        assert_int_equal(drawn.pixel_light_count, 1);
+        float *shaded = malloc(nv * 3 * sizeof(float));
+        assert_int_equal(prt_relit_shade(ctx, t, &drawn, NULL, shaded), PRT_OK);
+        double own = 0, kept = 0, total = 0, diff = 0;
+        size_t n = 0;
+        for (size_t v = 0; v < nv; ++v) {
+            const char *name = tm->surface[v] ? tm->surface_names[tm->surface[v] - 1] : "";
+            if (strcmp(name, "sphere") || !(whole.radiance[v * 3] > 0.05f)) continue;
+            own += drawn.pixel_albedo[v * 3];
+            kept += drawn.radiance[v * 3];
+            total += whole.radiance[v * 3];
+            diff += fabs(shaded[v * 3] - whole.radiance[v * 3]);
+            n++;
+        }
+        print_message("skin drawn per pixel: own share %.3f of skin's total %.3f; the map keeps %.2f of its light; shaded per vertex %.3f off\n",
+                      own / n, prt__dipole_total(&skin), kept / total, diff / total);
+        assert_true(n > 50);
+        assert_float_equal(own / n, prt__dipole_total(&skin), 0.05);
+        assert_true(kept < 0.2 * total);
+        assert_true(diff < 0.1 * total);
+        free(shaded);
+        prt_relit_free(&drawn);
+        prt_relit_free(&whole);
+    }
     prt_relit_free(&r);
     prt_relit_free(&first);
     prt_transfer_release(t);
