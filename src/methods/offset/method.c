@@ -42,7 +42,7 @@ bool prt__offset_cache_new(prt__offset_set *s)
 /* ---- bake options ---- */
 static const prt_option_desc options[] = {
     {"texels", "N", PRT_OPTION_INT, 8, 4096, NULL,
-     "light map of N x N texels over the mesh's UVs, or a generated atlas (see --uv) (default 128)"},
+     "light map of N x N texels over the mesh's UVs, or a generated atlas (see --uv) (default: from the scene's size, texels of 1/64 of its diagonal or finer, 128 to 512)"},
     {"offsets", "N", PRT_OPTION_INT, 1, 100000, NULL, "transfer maps, one per offset (default 200; the paper uses 50..400)"},
     {"iterations", "N", PRT_OPTION_INT, 0, 1000000, NULL,
      "refinements of the importance distribution the offsets are drawn from, rebuilt every 20 (default 1000)"},

@@ -106,6 +106,10 @@ typedef struct prt__offset_bake_desc {
 } prt__offset_bake_desc;
 
 prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc *d, prt_transfer *t, prt__bake_job **out);
+/* The light map's size for a scene when none was asked for: from least, doubled (up to 512, and
+ * within the map entries count offsets allow) until m's surface, over uv_share of the map, has
+ * texels at most a 64th of its diagonal wide; texel, diagonal, area: what it found. */
+int prt__offset_scene_texels(const prt__mesh *m, double uv_share, int least, int count, double *texel, double *diagonal, double *area);
 
 /* Run time: the light map after `bounces` (texels, width x height x 3, gutters filled) and its
  * first-order part; per vertex radiance and indirect light sampled from them. */

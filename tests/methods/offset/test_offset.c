@@ -1038,6 +1038,54 @@ static void test_atlas_size(void **state)
     prt_context_release(ctx);
 }
 
+/* k parallel unit squares, a unit apart in all, scaled by `scale`. */
+static prt__mesh stacked_squares(int k, float scale, float *pos, uint32_t *idx)
+{
+    for (int q = 0; q < k; ++q) {
+        const float y = k > 1 ? (float)q / (float)(k - 1) : 0.0f;
+        const float corner[4][3] = {{0, y, 0}, {1, y, 0}, {1, y, 1}, {0, y, 1}};
+        for (int c = 0; c < 4; ++c)
+            for (int d = 0; d < 3; ++d) pos[(q * 4 + c) * 3 + d] = corner[c][d] * scale;
+        const uint32_t t[6] = {0, 2, 1, 0, 3, 2};
+        for (int i = 0; i < 6; ++i) idx[q * 6 + i] = (uint32_t)(q * 4) + t[i];
+    }
+    return (prt__mesh){.vertex_count = (size_t)k * 4, .triangle_count = (size_t)k * 2, .positions = pos, .indices = idx};
+}
+
+/* Without --texels the light map follows the scene's size: texels of a 64th of its diagonal,
+ * whatever its units, between 128 and 512. */
+static void test_scene_size(void **state)
+{
+    (void)state;
+    float pos[256 * 12];
+    uint32_t idx[256 * 6];
+    double texel, diagonal, area;
+    prt__mesh m = stacked_squares(1, 1, pos, idx);   /* a unit square: texels of 1/64 need 45 */
+    assert_int_equal(prt__offset_scene_texels(&m, 1.0, 128, 200, &texel, &diagonal, &area), 128);
+    assert_float_equal(area, 1.0, 1e-6);
+    assert_float_equal(diagonal, sqrt(2.0), 1e-6);
+    assert_float_equal(texel, 1.0 / 128, 1e-9);
+    m = stacked_squares(16, 1, pos, idx);   /* 16 square units within a diagonal of sqrt 3: 148 */
+    assert_int_equal(prt__offset_scene_texels(&m, 1.0, 128, 200, &texel, &diagonal, &area), 256);
+    assert_true(texel <= diagonal / 64);
+    assert_int_equal(prt__offset_scene_texels(&m, 0.25, 128, 200, &texel, &diagonal, &area), 512);   /* a quarter of the map holds them */
+    m = stacked_squares(16, 1000, pos, idx);   /* the same in millimetres */
+    assert_int_equal(prt__offset_scene_texels(&m, 1.0, 128, 200, &texel, &diagonal, &area), 256);
+    assert_float_equal(texel, 1000.0 * 4 / 256, 1e-6);
+    m = stacked_squares(256, 1, pos, idx);   /* would need 591: held at 512 */
+    assert_int_equal(prt__offset_scene_texels(&m, 1.0, 128, 200, &texel, &diagonal, &area), 512);
+    assert_int_equal(prt__offset_scene_texels(&m, 1.0, 128, 300, &texel, &diagonal, &area), 512);
+    assert_int_equal(prt__offset_scene_texels(&m, 1.0, 128, 1100, &texel, &diagonal, &area), 256);   /* 512^2 x 1100 maps: too many entries */
+    /* The demo scene (its own UVs) keeps 128. */
+    prt_context *ctx = test_context(1);
+    prt_scene *scene = load_demo_scene(ctx);
+    prt_transfer *t = bake_offset(ctx, scene, (const char *const[]){"offsets", "1", "iterations", "0", "transfer", "radiosity", NULL});
+    assert_int_equal(((const prt__offset_set *)((const struct prt_transfer *)t)->state)->width, 128);
+    prt_transfer_release(t);
+    prt_scene_release(scene);
+    prt_context_release(ctx);
+}
+
 static void test_offset_method(void **state)
 {
     (void)state;
@@ -1754,6 +1802,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_binning),
         cmocka_unit_test(test_slicing),
         cmocka_unit_test(test_export_maps),
+        cmocka_unit_test(test_scene_size),
         cmocka_unit_test(test_offset_method),
         cmocka_unit_test(test_atlas_size),
         cmocka_unit_test(test_prefilter),
