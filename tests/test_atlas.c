@@ -230,7 +230,7 @@ static void test_layouts(void **state)
     check_atlas(&m, 128, "lumpy sphere at 128", 0.6);
     prt__mesh_free(&m);
     m = to_mesh(&t);
-    check_atlas(&m, 512, "lumpy sphere", 0.6);
+    check_atlas(&m, 512, "lumpy sphere", 0.66);   /* 69%: large charts also packed tilted between quarter turns */
     prt__mesh_free(&m);
     tm_free(&t);
 
@@ -302,8 +302,10 @@ static void test_real_meshes(void **state)
         prt_context *ctx = test_context(1);
         prt_scene *s = NULL;
         assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
-        /* Short of issue 30's 70%: ragged charts of a scan leave gaps the packer cannot fill. */
-        check_atlas(&s->mesh, 512, names[i], 0.64);
+        /* The bunny at 512: 72% (65% before large charts were also tried tilted between quarter
+         * turns). At 128 it stays short of issue 30's 70%: two-texel gutters around ragged charts
+         * take a quarter of the map. */
+        check_atlas(&s->mesh, 512, names[i], i == 0 ? 0.70 : 0.64);
         if (i == 0) {   /* the bunny at the offset method's default light map */
             prt_scene *s2 = NULL;
             assert_int_equal(prt_scene_load(ctx, path, NULL, &s2), PRT_OK);

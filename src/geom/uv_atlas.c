@@ -7,7 +7,8 @@
  * faults is cut in two). Small charts then merge into neighbours while the union stays valid.
  * Charts are scaled to one texel density, turned to their smallest
  * bounding box and packed by the texels they touch (four quarter turns each, into any hole they
- * fit); the largest density that fits is found by bisection. */
+ * fit; large charts also at angles between, when that packs a scale the upright charts do not);
+ * the largest density that fits is found by bisection. */
 #include "geom/uv_atlas.h"
 
 #include "geom/texel_raster.h"
@@ -1070,10 +1071,17 @@ static int by_size(const void *x, const void *y)
 }
 
 /* A texel whose centre lies this near a chart is one it touches: a texel's square reaches
- * sqrt(1/2) from its centre, so every texel holding some of the chart's surface is among them. */
+ * sqrt(1/2) from its centre, so every texel holding some of the chart's surface is among them, and
+ * so is every texel the per-texel bakes give a sliver without a centre of its own (texel_raster.c).
+ * The grid a chart is rasterised into has its box's corner REACH above and right of the grid's. */
 #define REACH 0.71
+/* Charts whose grid has at least this many texels are also tried at PACK_TILTS angles between
+ * quarter turns: large ragged charts nest into each other's bays. Small ones fill holes as they are. */
+#define PACK_TILTS 4
+#define TILT_TEXELS 256
+#define TILT_CHARTS 256 /* atlases of more charts pack upright only: a second packing per scale would cost most of their time */
 
-typedef struct placement { int32_t x, y, turn; } placement;
+typedef struct placement { int32_t x, y, turn, tilt; } placement;
 
 /* Scratch for packing at one scale: the chart's footprint, turned, and what is packed. */
 typedef struct packer {
@@ -1088,25 +1096,54 @@ typedef struct packer {
     int32_t *floor;         /* [column] lowest texel not occupied */
 } packer;
 
-/* The chart's grid at scale s (turn 0): texels it touches, in a w x h box whose corner is REACH
- * below and left of the chart's. */
-static void chart_grid(const chart *c, double s, int *w, int *h)
+/* A chart tilted by tilt / PACK_TILTS of a quarter turn: the rotation and the corner of its box. */
+typedef struct tilt_frame { double cs, sn, lo[2], w, h; } tilt_frame;
+
+static tilt_frame chart_tilt(const chart *c, int tilt)
 {
-    *w = (int)ceil(c->w * s + 2 * REACH);
-    *h = (int)ceil(c->h * s + 2 * REACH);
+    tilt_frame f = {1, 0, {0, 0}, c->w, c->h};
+    if (!tilt) return f;
+    const double th = (PRT_PI / 2) * tilt / PACK_TILTS;
+    f.cs = cos(th);
+    f.sn = sin(th);
+    double hi[2] = {-INFINITY, -INFINITY};
+    f.lo[0] = f.lo[1] = INFINITY;
+    for (size_t v = 0; v < c->nv; ++v) {
+        const double u = f.cs * c->uv[v * 2] - f.sn * c->uv[v * 2 + 1], w = f.sn * c->uv[v * 2] + f.cs * c->uv[v * 2 + 1];
+        f.lo[0] = fmin(f.lo[0], u); hi[0] = fmax(hi[0], u); f.lo[1] = fmin(f.lo[1], w); hi[1] = fmax(hi[1], w);
+    }
+    f.w = hi[0] - f.lo[0];
+    f.h = hi[1] - f.lo[1];
+    return f;
+}
+
+/* Where chart UV q lies in its grid at scale s, tilted by f: what packing rasterises and what the
+ * layout writes, one expression for both. */
+static void grid_point(const tilt_frame *f, const double *q, double s, double out[2])
+{
+    out[0] = (f->cs * q[0] - f->sn * q[1] - f->lo[0]) * s + REACH;
+    out[1] = (f->sn * q[0] + f->cs * q[1] - f->lo[1]) * s + REACH;
+}
+
+/* The chart's grid at scale s, tilted by f (turn 0): a w x h box holding every texel it touches. */
+static void chart_grid(const tilt_frame *f, double s, int *w, int *h)
+{
+    *w = (int)ceil(f->w * s + 2 * REACH);
+    *h = (int)ceil(f->h * s + 2 * REACH);
 }
 
 /* Marks the texels of the chart's grid that it touches. */
-static void footprint(packer *p, const chart *c, double s, int W, int H)
+static void footprint(packer *p, const chart *c, const tilt_frame *f, double s, int W, int H)
 {
     memset(p->bits, 0, (size_t)W * H);
     const double r2 = REACH * REACH;
     for (size_t t = 0; t < c->nt; ++t) {
         double u[3], v[3];
         for (int k = 0; k < 3; ++k) {
-            const double *q = c->uv + (size_t)c->corner[t * 3 + k] * 2;
-            u[k] = q[0] * s + REACH;
-            v[k] = q[1] * s + REACH;
+            double g[2];
+            grid_point(f, c->uv + (size_t)c->corner[t * 3 + k] * 2, s, g);
+            u[k] = g[0];
+            v[k] = g[1];
         }
         const double d = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
         const int x0 = (int)fmax(0, floor(fmin(u[0], fmin(u[1], u[2])) - REACH)), x1 = (int)fmin(W, ceil(fmax(u[0], fmax(u[1], u[2])) + REACH));
@@ -1124,8 +1161,8 @@ static void footprint(packer *p, const chart *c, double s, int W, int H)
                 for (int e = 0; e < 3 && !*b; ++e) {
                     const int i = e, j = (e + 1) % 3;
                     const double ex = u[j] - u[i], ey = v[j] - v[i], l2 = ex * ex + ey * ey;
-                    const double f = l2 > 0 ? fmin(fmax(((px - u[i]) * ex + (py - v[i]) * ey) / l2, 0), 1) : 0;
-                    const double qx = u[i] + f * ex - px, qy = v[i] + f * ey - py;
+                    const double fr = l2 > 0 ? fmin(fmax(((px - u[i]) * ex + (py - v[i]) * ey) / l2, 0), 1) : 0;
+                    const double qx = u[i] + fr * ex - px, qy = v[i] + fr * ey - py;
                     if (qx * qx + qy * qy <= r2) *b = 1;
                 }
             }
@@ -1193,7 +1230,7 @@ static void occupy(packer *p, int w, int h, int x, int y)
  * each, at each quarter turn, goes where its top lies lowest, down into any hole it fits (not
  * only onto the others' tops), keeping pad empty texels between its touched texels and any other
  * chart's. Corners in at, or false when some chart does not fit. */
-static bool pack(packer *p, double s, placement *at, size_t *touched)
+static bool pack(packer *p, double s, bool tilt, placement *at, size_t *touched)
 {
     const atlas *a = p->a;
     const int res = p->res;
@@ -1204,25 +1241,35 @@ static bool pack(packer *p, double s, placement *at, size_t *touched)
         const uint32_t ci = p->order[i];
         const chart *c = &a->charts[ci];
         int W, H;
-        chart_grid(c, s, &W, &H);
-        if (W > res || H > res) return false;
-        footprint(p, c, s, W, H);
-        for (size_t i = 0; touched && i < (size_t)W * H; ++i) *touched += p->bits[i];
+        tilt_frame f = chart_tilt(c, 0);
+        chart_grid(&f, s, &W, &H);
+        const int tilts = tilt && (int64_t)W * H >= TILT_TEXELS ? PACK_TILTS : 1;
         int64_t best_top = INT64_MAX;
-        placement best = {0, 0, -1};
-        for (int turn = 0; turn < 4; ++turn) {
-            int w, h;
-            turned(p, W, H, turn, &w, &h);
-            for (int x = 0; x + w <= res; ++x) {
-                /* From the lowest free texel under every column up; above all that is packed it fits. */
-                int64_t y = 0;
-                for (int k = 0; k < w; ++k)
-                    if (p->bottom[k] != INT32_MAX && (int64_t)p->floor[x + k] - p->bottom[k] > y) y = (int64_t)p->floor[x + k] - p->bottom[k];
-                while (y + h < best_top && y + h <= res && !fits(p, w, h, x, (int)y)) y++;
-                if (y + h < best_top && y + h <= res) { best_top = y + h; best = (placement){x, (int32_t)y, turn}; }
+        placement best = {0, 0, -1, 0};
+        for (int k = 0; k < tilts; ++k) {
+            f = chart_tilt(c, k);
+            chart_grid(&f, s, &W, &H);
+            if (W > res && H > res) continue;
+            footprint(p, c, &f, s, W, H);
+            for (int turn = 0; turn < 4; ++turn) {
+                int w, h;
+                if ((turn & 1 ? H : W) > res) continue;
+                turned(p, W, H, turn, &w, &h);
+                for (int x = 0; x + w <= res; ++x) {
+                    /* From the lowest free texel under every column up; above all that is packed it fits. */
+                    int64_t y = 0;
+                    for (int j = 0; j < w; ++j)
+                        if (p->bottom[j] != INT32_MAX && (int64_t)p->floor[x + j] - p->bottom[j] > y) y = (int64_t)p->floor[x + j] - p->bottom[j];
+                    while (y + h < best_top && y + h <= res && !fits(p, w, h, x, (int)y)) y++;
+                    if (y + h < best_top && y + h <= res) { best_top = y + h; best = (placement){x, (int32_t)y, turn, k}; }
+                }
             }
         }
         if (best.turn < 0) return false;
+        f = chart_tilt(c, best.tilt);
+        chart_grid(&f, s, &W, &H);
+        footprint(p, c, &f, s, W, H);
+        for (size_t i = 0; touched && i < (size_t)W * H; ++i) *touched += p->bits[i];
         int w, h;
         turned(p, W, H, best.turn, &w, &h);
         occupy(p, w, h, best.x, best.y);
@@ -1257,24 +1304,31 @@ static prt_status pack_map(const prt_context *ctx, const atlas *a, const uint32_
     pk.floor = malloc(side * sizeof *pk.floor);
     prt_status st = PRT_OK;
     if (!pk.bits || !pk.mask || !pk.occupied || !pk.bottom || !pk.floor) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
-    else if (total < 0) *scale = pack(&pk, 0, NULL, NULL) ? 1 : 0;
+    else if (total < 0) *scale = pack(&pk, 0, false, NULL, NULL) ? 1 : 0;
     else {
         /* The surface itself bounds the scale; packing at a scale is not monotone in it, so the
-         * bisection keeps the largest scale that packed. */
+         * bisection keeps the largest scale that packed. Tilting large charts packs most maps
+         * tighter but some looser (each chart takes what is best for it alone): a scale packs when
+         * either way does, the upright one tried first. */
         double lo = 0, hi = res / sqrt(total);
         int steps = PACK_STEPS;
+        bool tilt = false;
+#define PACKS(at_scale) (pack(&pk, (at_scale), false, NULL, NULL) ? (tilt = false, true) : \
+                         a->count <= TILT_CHARTS && pack(&pk, (at_scale), true, NULL, NULL) ? (tilt = true, true) : false)
         /* Most scans pack to well over 40% of the map: starting there saves most of the steps. */
-        if (pack(&pk, hi * sqrt(0.4), NULL, NULL)) { lo = hi * sqrt(0.4); steps = PACK_STEPS / 2; }
-        else if (!pack(&pk, 0, NULL, NULL)) steps = 0;
+        if (PACKS(hi * sqrt(0.4))) { lo = hi * sqrt(0.4); steps = PACK_STEPS / 2; }
+        else if (!PACKS(0)) steps = 0;
+        bool lo_tilt = tilt;
         for (int it = 0; it < steps; ++it) {
             if (prt__cancelled(ctx)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "UV atlas cancelled"); break; }
             double mid = 0.5 * (lo + hi);
-            if (pack(&pk, mid, NULL, NULL)) lo = mid;
+            if (PACKS(mid)) { lo = mid; lo_tilt = tilt; }
             else hi = mid;
         }
+#undef PACKS
         if (!st && lo > 0) {
             *scale = lo;
-            pack(&pk, lo, at, touched);
+            pack(&pk, lo, lo_tilt, at, touched);
         }
     }
     free(pk.bits); free(pk.mask); free(pk.occupied); free(pk.bottom); free(pk.floor);
@@ -1341,14 +1395,16 @@ static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, c
     for (size_t ci = 0; ci < a->count; ++ci) {
         const chart *c = &a->charts[ci];
         int W, H;
-        chart_grid(c, s, &W, &H);
+        const tilt_frame f = chart_tilt(c, at[ci].tilt);
+        chart_grid(&f, s, &W, &H);
         for (size_t i = 0; i < c->nt * 3; ++i) {
             const size_t slot = (size_t)c->tris[i / 3] * 3 + i % 3;
             const uint32_t id = ids[slot];
             m->indices[slot] = id;
-            const double *p = c->uv + (size_t)c->corner[i] * 2;
             /* Where packing put it: its grid turned about the grid's corner (texels onto texels). */
-            const double gx = p[0] * s + REACH, gy = p[1] * s + REACH;
+            double g[2];
+            grid_point(&f, c->uv + (size_t)c->corner[i] * 2, s, g);
+            const double gx = g[0], gy = g[1];
             const int turn = at[ci].turn;
             const double tx = turn == 0 ? gx : turn == 1 ? H - gy : turn == 2 ? W - gx : gy;
             const double ty = turn == 0 ? gy : turn == 1 ? gx : turn == 2 ? H - gy : W - gx;
