@@ -414,6 +414,10 @@ static void test_mesh_export_attributes(void **state)
     assert_non_null(strstr(text, "\"_ALBEDO\""));
     assert_non_null(strstr(text, "\"COLOR_0\""));
     assert_null(strstr(text, "COLOR_1"));
+    /* What the glTF-Validator would report of assimp's JSON is gone: extensions declared but
+     * unused (FB_ngon_encoding, KHR_materials_volume); the generator names prt. */
+    assert_null(strstr(text, "extensionsUsed"));
+    assert_non_null(strstr(text, "\"generator\":\"prt "));
     free(text);
     /* The values travel unclamped: 1000 + i is in the buffer as a float. */
     char *data = slurp(bin, &n);
@@ -454,6 +458,34 @@ static void test_mesh_export_attributes(void **state)
     d.attribute_names = names;
     d.attribute_count = 8;
     assert_int_equal(prt_mesh_export(gltf, &d), PRT_ERR_INVALID_ARG);
+    d.attribute_count = 2;
+
+    /* What glTF cannot hold is refused, not written: NaN or infinity in any accessor, a NORMAL
+     * that is no direction. Normals of other lengths are written as unit vectors. */
+    float bad_pos[12], bad_attr[32], nrm[12] = {0, 0, 2, 0, 0, 1, 0, 0, 1, 0, 0, 0.5f};
+    memcpy(bad_pos, pos, sizeof pos);
+    bad_pos[4] = NAN;
+    d.positions = bad_pos;
+    assert_int_equal(prt_mesh_export(glb, &d), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "position"));
+    d.positions = pos;
+    memcpy(bad_attr, attr, sizeof attr);
+    bad_attr[31] = INFINITY;
+    d.attributes = bad_attr;
+    assert_int_equal(prt_mesh_export(glb, &d), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "attribute"));
+    d.attributes = attr;
+    d.normals = nrm;
+    assert_int_equal(prt_mesh_export(gltf, &d), PRT_OK);
+    text = slurp(gltf, &n);   /* the NORMAL accessor's bounds: every normal (0, 0, 1) */
+    assert_non_null(strstr(text, "\"max\":[0,0,1],\"min\":[0,0,1]"));
+    free(text);
+    nrm[4] = NAN;
+    assert_int_equal(prt_mesh_export(gltf, &d), PRT_ERR_INVALID_ARG);
+    nrm[4] = 0;
+    nrm[5] = 0;
+    assert_int_equal(prt_mesh_export(gltf, &d), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "normal of vertex 1"));
 }
 
 int main(void)

@@ -35,7 +35,9 @@ void prt_image_free(prt_image *img);
 
 /* A mesh with per-vertex colours for other tools: glTF 2.0 (.glb, .gltf + .bin), PLY (.ply,
  * binary) or OBJ (.obj + .mtl, colours after each v). Written through assimp's exporter; every
- * file lands under its final name only when complete. */
+ * file lands under its final name only when complete. The glTF passes the Khronos glTF-Validator:
+ * positions and attributes must be finite and normals directions (written at unit length),
+ * else PRT_ERR_INVALID_ARG. */
 typedef enum prt_colour_encoding {
     PRT_COLOURS_DEFAULT = 0,   /* linear for glTF (its COLOR_0 is linear), sRGB for PLY and OBJ */
     PRT_COLOURS_SRGB,          /* sRGB-encoded, clamped to [0, 1]: what mesh viewers show as is */

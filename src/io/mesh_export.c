@@ -3,6 +3,7 @@
  * their main file and its companions (.bin, .mtl) by name, so they write into a fresh directory
  * beside the target, and each file is renamed into place once all are complete. */
 #include "core/internal.h"
+#include "io/container.h"
 #include "prt/image.h"
 
 #include <assimp/cexport.h>
@@ -84,6 +85,45 @@ static bool rename_attributes(cJSON *gltf, int count, const char *const *names)
     return renamed == count;
 }
 
+/* Whether an "extensions" object anywhere under item names the extension. */
+static bool extension_used(const cJSON *item, const char *name)
+{
+    const cJSON *c;
+    cJSON_ArrayForEach(c, item) {
+        if (c->string && !strcmp(c->string, "extensions") && cJSON_IsObject(c) && cJSON_GetObjectItemCaseSensitive(c, name)) return true;
+        if ((cJSON_IsObject(c) || cJSON_IsArray(c)) && extension_used(c, name)) return true;
+    }
+    return false;
+}
+
+/* extensionsUsed as the file uses them: assimp 5.2 declares FB_ngon_encoding (its triangles
+ * encoding polygons: prt's are triangles only) and KHR_materials_volume for a material with no
+ * volume, which the glTF-Validator reports and loaders may refuse or warn about. */
+static void prune_extensions(cJSON *gltf)
+{
+    cJSON *used = cJSON_GetObjectItemCaseSensitive(gltf, "extensionsUsed");
+    for (int i = cJSON_GetArraySize(used) - 1; i >= 0; --i) {
+        const cJSON *e = cJSON_GetArrayItem(used, i);
+        if (!cJSON_IsString(e) || !extension_used(gltf, e->valuestring)) cJSON_DeleteItemFromArray(used, i);
+    }
+    if (used && !cJSON_GetArraySize(used)) cJSON_DeleteItemFromObjectCaseSensitive(gltf, "extensionsUsed");
+}
+
+/* asset.generator names prt, then the exporter assimp named. */
+static bool name_generator(cJSON *gltf)
+{
+    cJSON *asset = cJSON_GetObjectItemCaseSensitive(gltf, "asset");
+    if (!cJSON_IsObject(asset)) return false;
+    const cJSON *was = cJSON_GetObjectItemCaseSensitive(asset, "generator");
+    char text[256];
+    snprintf(text, sizeof text, "prt %s%s%.200s", prt_version_string(), cJSON_IsString(was) ? " through " : "", cJSON_IsString(was) ? was->valuestring : "");
+    cJSON *g = cJSON_CreateString(text);
+    const bool ok = g && (cJSON_HasObjectItem(asset, "generator") ? cJSON_ReplaceItemInObjectCaseSensitive(asset, "generator", g)
+                                                                   : cJSON_AddItemToObject(asset, "generator", g));
+    if (g && !ok) cJSON_Delete(g);
+    return ok;
+}
+
 static unsigned char *read_all(const char *path, size_t *size)
 {
     FILE *f = fopen(path, "rb");
@@ -99,9 +139,11 @@ static unsigned char *read_all(const char *path, size_t *size)
 static uint32_t get_u32(const unsigned char *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
 static void put_u32(unsigned char *p, uint32_t v) { p[0] = (unsigned char)v; p[1] = (unsigned char)(v >> 8); p[2] = (unsigned char)(v >> 16); p[3] = (unsigned char)(v >> 24); }
 
-/* Renames the custom attributes in the file assimp wrote: the JSON of a .gltf, or the JSON chunk
- * of a .glb (its header and chunk lengths rewritten, the binary chunk kept as it is). */
-static bool name_attributes(const char *file, bool binary, int count, const char *const *names)
+/* Finishes the JSON of the file assimp wrote - the custom attributes named, extensionsUsed as
+ * used, the generator - so that the Khronos glTF-Validator finds nothing to report
+ * (tests/gltf_test.sh): the JSON of a .gltf, or the JSON chunk of a .glb (its header and chunk
+ * lengths rewritten, the binary chunk kept as it is). */
+static bool finish_gltf(const char *file, bool binary, int count, const char *const *names)
 {
     size_t size;
     unsigned char *data = read_all(file, &size);
@@ -115,7 +157,9 @@ static bool name_attributes(const char *file, bool binary, int count, const char
         rest_at = json_at + json_len;
     }
     cJSON *gltf = cJSON_ParseWithLength((const char *)data + json_at, json_len);
-    char *text = gltf && rename_attributes(gltf, count, names) ? cJSON_PrintUnformatted(gltf) : NULL;
+    bool named = gltf && rename_attributes(gltf, count, names) && name_generator(gltf);
+    if (named) prune_extensions(gltf);
+    char *text = named ? cJSON_PrintUnformatted(gltf) : NULL;
     cJSON_Delete(gltf);
     bool ok = text != NULL;
     FILE *f = ok ? fopen(file, "wb") : NULL;
@@ -149,6 +193,12 @@ prt_status prt_mesh_export(const char *path, const prt_mesh_export_desc *d)
     if (d->vertex_count > UINT32_MAX || d->triangle_count > UINT32_MAX / 3) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: too large");
     for (size_t i = 0; i < d->triangle_count * 3; ++i)
         if (d->indices[i] >= d->vertex_count) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: index %u out of range", d->indices[i]);
+    /* glTF allows no NaN or infinity in an accessor, and NORMAL only unit vectors. */
+    if (!prt__all_finite(d->positions, d->vertex_count * 3)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: a position is not finite");
+    for (size_t v = 0; d->normals && v < d->vertex_count; ++v) {
+        float n[3] = {d->normals[v * 3], d->normals[v * 3 + 1], d->normals[v * 3 + 2]};
+        if (!prt__v3_normalize(n)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: the normal of vertex %zu is not a direction", v);
+    }
     const char *ext = strrchr(path, '.'), *format = NULL;
     bool gltf = false;
     if (ext && !strcasecmp(ext, ".glb")) { format = "glb2"; gltf = true; }
@@ -166,6 +216,8 @@ prt_status prt_mesh_export(const char *path, const prt_mesh_export_desc *d)
         for (int j = 0; j < k; ++j)
             if (!strcmp(d->attribute_names[j], d->attribute_names[k])) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: attribute '%s' named twice", d->attribute_names[k]);
     }
+    if (d->attribute_count && !prt__all_finite(d->attributes, d->vertex_count * 4 * (size_t)d->attribute_count))
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: a custom attribute's value is not finite");
     const bool srgb = d->encoding == PRT_COLOURS_SRGB || (d->encoding == PRT_COLOURS_DEFAULT && !gltf);
     const float scale = exp2f(d->exposure_stops);
     if (!isfinite(scale)) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh export: exposure %g is out of range", d->exposure_stops);
@@ -181,7 +233,11 @@ prt_status prt_mesh_export(const char *path, const prt_mesh_export_desc *d)
     }
     for (size_t v = 0; v < nv; ++v) {
         pos[v] = (struct aiVector3D){d->positions[v * 3], d->positions[v * 3 + 1], d->positions[v * 3 + 2]};
-        if (nrm) nrm[v] = (struct aiVector3D){d->normals[v * 3], d->normals[v * 3 + 1], d->normals[v * 3 + 2]};
+        if (nrm) {   /* unit length, as glTF's NORMAL must be (checked above) */
+            float n[3] = {d->normals[v * 3], d->normals[v * 3 + 1], d->normals[v * 3 + 2]};
+            prt__v3_normalize(n);
+            nrm[v] = (struct aiVector3D){n[0], n[1], n[2]};
+        }
         float c[3];
         for (int k = 0; k < 3; ++k) {
             float x = d->rgb[v * 3 + k] * scale;
@@ -244,8 +300,9 @@ prt_status prt_mesh_export(const char *path, const prt_mesh_export_desc *d)
         snprintf(tmp_path, sizeof tmp_path, "%s/%s", dir, base);
         if (aiExportScene(&scene, format, tmp_path, 0) != aiReturn_SUCCESS)
             st = prt__fail(NULL, PRT_ERR_IO, "assimp could not write '%s': %s", path, aiGetErrorString());
-        else if (d->attribute_count && !name_attributes(tmp_path, !strcmp(format, "glb2"), d->attribute_count, d->attribute_names))
-            st = prt__fail(NULL, PRT_ERR_IO, "cannot name the custom attributes of '%s' (assimp's glTF did not hold the colour sets)", path);
+        else if (gltf && !finish_gltf(tmp_path, !strcmp(format, "glb2"), d->attribute_count, d->attribute_names))
+            st = prt__fail(NULL, PRT_ERR_IO, "cannot rewrite the JSON of '%s' that assimp wrote (unreadable, or without its asset%s)", path,
+                           d->attribute_count ? " or the colour sets of the custom attributes" : "");
         else if (!move_out(dir, parent))
             st = prt__fail(NULL, PRT_ERR_IO, "cannot move '%s' into place: %s", path, strerror(errno));
         if (st) remove_dir(dir);
