@@ -415,8 +415,12 @@ static void test_mesh_export_attributes(void **state)
     assert_non_null(strstr(text, "\"COLOR_0\""));
     assert_null(strstr(text, "COLOR_1"));
     /* What the glTF-Validator would report of assimp's JSON is gone: extensions declared but
-     * unused (FB_ngon_encoding, KHR_materials_volume); the generator names prt. */
-    assert_null(strstr(text, "extensionsUsed"));
+     * unused (FB_ngon_encoding, KHR_materials_volume); the one declared is the one used (the
+     * colours are light: the material is unlit); the generator names prt. */
+    assert_null(strstr(text, "FB_ngon_encoding"));
+    assert_null(strstr(text, "KHR_materials_volume"));
+    assert_non_null(strstr(text, "\"extensionsUsed\":[\"KHR_materials_unlit\"]"));
+    assert_non_null(strstr(text, "\"extensions\":{\"KHR_materials_unlit\":{}}"));
     assert_non_null(strstr(text, "\"generator\":\"prt "));
     free(text);
     /* The values travel unclamped: 1000 + i is in the buffer as a float. */

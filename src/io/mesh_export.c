@@ -109,6 +109,27 @@ static void prune_extensions(cJSON *gltf)
     if (used && !cJSON_GetArraySize(used)) cJSON_DeleteItemFromObjectCaseSensitive(gltf, "extensionsUsed");
 }
 
+/* The colours are light already (relit radiance, baked transfer): every material is marked
+ * unlit (KHR_materials_unlit, meant for baked lighting), so that viewers show them as they are
+ * instead of lighting them a second time. */
+static bool mark_unlit(cJSON *gltf)
+{
+    cJSON *materials = cJSON_GetObjectItemCaseSensitive(gltf, "materials"), *m;
+    if (!cJSON_GetArraySize(materials)) return true;
+    cJSON_ArrayForEach(m, materials) {
+        cJSON *ext = cJSON_GetObjectItemCaseSensitive(m, "extensions");
+        if (!ext && !(ext = cJSON_AddObjectToObject(m, "extensions"))) return false;
+        if (!cJSON_HasObjectItem(ext, "KHR_materials_unlit") && !cJSON_AddObjectToObject(ext, "KHR_materials_unlit")) return false;
+    }
+    cJSON *used = cJSON_GetObjectItemCaseSensitive(gltf, "extensionsUsed");
+    if (!used && !(used = cJSON_AddArrayToObject(gltf, "extensionsUsed"))) return false;
+    const cJSON *e;
+    cJSON_ArrayForEach(e, used) if (cJSON_IsString(e) && !strcmp(e->valuestring, "KHR_materials_unlit")) return true;
+    cJSON *name = cJSON_CreateString("KHR_materials_unlit");
+    if (!name || !cJSON_AddItemToArray(used, name)) { cJSON_Delete(name); return false; }
+    return true;
+}
+
 /* asset.generator names prt, then the exporter assimp named. */
 static bool name_generator(cJSON *gltf)
 {
@@ -139,8 +160,8 @@ static unsigned char *read_all(const char *path, size_t *size)
 static uint32_t get_u32(const unsigned char *p) { return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24; }
 static void put_u32(unsigned char *p, uint32_t v) { p[0] = (unsigned char)v; p[1] = (unsigned char)(v >> 8); p[2] = (unsigned char)(v >> 16); p[3] = (unsigned char)(v >> 24); }
 
-/* Finishes the JSON of the file assimp wrote - the custom attributes named, extensionsUsed as
- * used, the generator - so that the Khronos glTF-Validator finds nothing to report
+/* Finishes the JSON of the file assimp wrote - the custom attributes named, the material unlit,
+ * extensionsUsed as used, the generator - so that the Khronos glTF-Validator finds nothing to report
  * (tests/gltf_test.sh): the JSON of a .gltf, or the JSON chunk of a .glb (its header and chunk
  * lengths rewritten, the binary chunk kept as it is). */
 static bool finish_gltf(const char *file, bool binary, int count, const char *const *names)
@@ -157,7 +178,7 @@ static bool finish_gltf(const char *file, bool binary, int count, const char *co
         rest_at = json_at + json_len;
     }
     cJSON *gltf = cJSON_ParseWithLength((const char *)data + json_at, json_len);
-    bool named = gltf && rename_attributes(gltf, count, names) && name_generator(gltf);
+    bool named = gltf && rename_attributes(gltf, count, names) && name_generator(gltf) && mark_unlit(gltf);
     if (named) prune_extensions(gltf);
     char *text = named ? cJSON_PrintUnformatted(gltf) : NULL;
     cJSON_Delete(gltf);
