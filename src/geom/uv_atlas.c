@@ -1249,7 +1249,7 @@ static bool pack(packer *p, double s, bool tilt, placement *at, size_t *touched)
         for (int k = 0; k < tilts; ++k) {
             f = chart_tilt(c, k);
             chart_grid(&f, s, &W, &H);
-            if (W > res && H > res) continue;
+            if (W > res || H > res) continue;   /* turned or not, it needs both within the map (and bits holds no more) */
             footprint(p, c, &f, s, W, H);
             for (int turn = 0; turn < 4; ++turn) {
                 int w, h;
