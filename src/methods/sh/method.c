@@ -516,7 +516,9 @@ static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_
                          "(prt info lists what it holds)");
     if (d->brdf && prt__kind_glossy(k) && s->glossy_exit)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this transfer has its BRDF baked in; a run-time BRDF cannot replace it (re-bake without --brdf)");
-    const int window = d->controls && d->controls[1] >= 0 && d->controls[1] < PRT__SH_WINDOW_COUNT ? d->controls[1] : PRT__SH_LIGHT_WINDOW_DEFAULT;
+    const int window = d->controls ? d->controls[1] : PRT__SH_LIGHT_WINDOW_DEFAULT;
+    if (window < 0 || window >= PRT__SH_WINDOW_COUNT)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "light-window %d: use 0 (none), 1 (Hanning) or 2 (Lanczos)", window);
     prt_sh_light sh;
     prt_status st = project(ctx, l, s->order, &sh);
     if (st) return st;

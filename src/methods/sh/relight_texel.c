@@ -46,7 +46,7 @@ prt_status prt__relight_sh_texels_local(prt_context *ctx, const prt_transfer *t,
     if (!prt__mesh_has_uv(&t->mesh)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "local lights per texel need the file's UVs, and it has none");
     const int W = s->width, H = s->height, n = sh->order * sh->order, nl = order * order, ch = s->channels[k];
     const size_t ntex = (size_t)W * H;
-    uint32_t *owner = malloc(ntex * sizeof *owner);
+    uint32_t *owner = calloc(ntex, sizeof *owner);   /* the raster claims texels whose owner is 0 */
     float *bary = malloc(ntex * 2 * sizeof *bary), *points = malloc(ntex * 3 * sizeof *points);
     size_t overlap, outside, count = 0;
     size_t *index = malloc(ntex * sizeof *index);
