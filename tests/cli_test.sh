@@ -479,8 +479,16 @@ says "holds wavelet"
 # Local lights: parsed strictly, relit by the methods that can, refused clearly by the others.
 expect 2 "bad light" -- "$PRT" relight "$T/demo.prt" --light point:1,2 -o "$T/x.json"
 says "expected point:X,Y,Z"
-expect 2 "point light on SH" -- "$PRT" relight "$T/demo.prt" --light point:0,2,0:10,10,10 -o "$T/x.json"
+expect 2 "point light on a wavelet file" -- "$PRT" relight "$FX/wav.prt" --light point:0,2,0:10,10,10 -o "$T/x.json"
 says "cannot relight point lights"
+expect 0 "point light on SH (its SH per vertex)" -- "$PRT" relight "$T/demo.prt" --env none --light point:0,2,0:10,10,10 -o "$T/pt.json"
+grep -q '"radiance": \[\[0, 0, 0\]' "$T/pt.json" && bad "a point light on SH lit nothing" || ok
+expect 0 "spot, sphere, directional and the environment on SH" -- "$PRT" relight "$T/demo.prt" --light spot:0,2,0:0,-1,0:40,30:5 \
+    --light sphere:1,1.5,1:0.2:20 --light directional:0.3,1,0.2:1 -o "$T/x.json"
+expect 2 "a bad light window" -- "$PRT" relight "$T/demo.prt" --light point:0,2,0:1 --control light-window=3 -o "$T/x.json"
+says "out of range 0..2"
+expect 2 "export --sh with a point light" -- "$PRT" export -q "$T/demo.prt" -o "$T/shp.gltf" --sh --light point:0,2,0:1
+says "differ per vertex"
 expect 0 "directional light, no environment" -- "$PRT" relight "$T/demo.prt" --env none --light directional:0.3,1,0.2:3,3,3 -o "$T/dir.json"
 expect 0 "nothing but a directional light renders" -- $NOLEAK "$PRT" render "$T/demo.prt" --env none --light directional:0.3,1,0.2:3,3,3 -o "$T/dir.png" --width 64 --height 48
 expect 0 "no light at all" -- "$PRT" relight "$T/demo.prt" --env none -o "$T/dark.json"
@@ -494,7 +502,7 @@ expect 0 "bake a scene with lights" -- "$PRT" bake "$T/lamp.json" -o "$T/lamp.pr
 expect 0 "info lists the scene's lights" -- "$PRT" info "$T/lamp.prt"
 grep -q "point:0,3,0" "$T/out" && grep -q "directional:" "$T/out" && ok || bad "info does not list the lights"
 expect 0 "the scene's point light on SH" -- "$PRT" relight "$T/lamp.prt" -o "$T/x.json"
-says "cannot relight the scene's point lights: left out"
+grep -q "left out" "$T/err" && bad "SH left the scene's point light out" || ok
 expect 2 "an unknown option in one line" -- "$PRT" relight "$T/lamp.prt" -o "$T/x.json" --oder 3
 says "unknown option '--oder'"
 expect 2 "a missing value" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --order

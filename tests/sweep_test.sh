@@ -64,10 +64,10 @@ for name, m in rows.items():
             errors.append("%s: %s %r" % (name, k, m[k]))
     if m["reused"] != reused:
         errors.append("%s: reused %r" % (name, m["reused"]))
-for name in ("lightcloud", "spectral", "offset"):
+for name in ("lightcloud", "spectral", "offset", "sh"):
     if name in rows and rows[name]["skipped"]:
         errors.append(name + " relights point lights but was skipped: " + rows[name]["skipped"])
-for name in ("sh", "ao"):
+for name in ("ao",):
     if name in rows and not rows[name]["skipped"]:
         errors.append(name + " cannot relight point lights but was not skipped")
 if measured == 0:

@@ -145,9 +145,9 @@ awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "moving, dimm
 r=$(field relative_l2 "$T/cmp")
 awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "adding a light changed nothing (relative L2 $r)"
 printf '0 light-add point\n' >"$T/point.txt"
-xrun -a "$PRT" view "$T/demo.prt" --script "$T/point.txt" >/dev/null 2>"$T/err"
+xrun -a "$PRT" view "$T/wavelet.prt" --script "$T/point.txt" >/dev/null 2>"$T/err"
 rc=$?
-[ "$rc" -eq 2 ] && grep -q "cannot relight point lights" "$T/err" && ok || { bad "point light on SH in the viewer: exit $rc"; cat "$T/err"; }
+[ "$rc" -eq 2 ] && grep -q "cannot relight point lights" "$T/err" && ok || { bad "point light on a wavelet file in the viewer: exit $rc"; cat "$T/err"; }
 printf '0 light-scale 2\n' >"$T/nolight.txt"
 xrun -a "$PRT" view "$T/demo.prt" --script "$T/nolight.txt" >/dev/null 2>"$T/err"
 rc=$?

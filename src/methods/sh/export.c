@@ -92,8 +92,14 @@ prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_exp
      * at the same order, so that the shader gives exactly the colours in the file. */
     if (d->controls && d->controls[0] > EXPORT_ORDER)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--sh exports SH order %d: --control order must be 1..%d with it", EXPORT_ORDER, EXPORT_ORDER);
-    const int order = d->controls && d->controls[0] >= 1 ? d->controls[0] : s->order < EXPORT_ORDER ? s->order : EXPORT_ORDER;
-    prt_relight_desc rd = {.variant = d->variant, .per_vertex = 1, .controls = &order};
+    /* The shader dots one lighting vector for every vertex: lights with a position differ per
+     * vertex, so colours relit with them could not agree with it. */
+    if (prt__sh_local_count(d->lighting))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--sh exports transfer for distant lighting (environment, directional lights), and this lighting "
+                         "holds point, spot, sphere or ies lights, which differ per vertex: export without them (--light directional:... replaces them)");
+    const int controls[2] = {d->controls && d->controls[0] >= 1 ? d->controls[0] : s->order < EXPORT_ORDER ? s->order : EXPORT_ORDER,
+                             PRT__SH_WINDOW_NONE};   /* the shader's lighting is prt_lighting_sh's, unwindowed */
+    prt_relight_desc rd = {.variant = d->variant, .per_vertex = 1, .controls = controls};
     prt_relit r;
     prt_status st = prt_relight(ctx, t, d->lighting, &rd, &r);
     if (st) return st;

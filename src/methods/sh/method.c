@@ -227,6 +227,7 @@ static const prt_option_desc export_options[] = {
 };
 static const prt_control_desc controls[] = {
     {"order", "SH order used for lighting (truncates the file's)", '[', ']', 0},
+    {"light-window", "window on the SH of point, spot, sphere and directional lights: 0 none, 1 Hanning, 2 Lanczos", 'J', 'U', 0},
 };
 
 static prt_status load_normal_map(prt_context *ctx, const char *path, prt_image *out)
@@ -459,8 +460,13 @@ static int sh_find_variant(const prt_transfer *t, const char *name)
 
 static void sh_control_range(const prt_transfer *t, int i, int *lo, int *hi, int *def)
 {
-    (void)i;
     const prt__sh_state *s = t->state;
+    if (i == 1) {
+        *lo = 0;
+        *hi = PRT__SH_WINDOW_COUNT - 1;
+        *def = PRT__SH_LIGHT_WINDOW_DEFAULT;
+        return;
+    }
     *lo = 1;
     *hi = s->order;
     *def = s->order;
@@ -473,17 +479,29 @@ static prt_status project(prt_context *ctx, const prt_lighting *l, int order, pr
     return st ? prt__fail(ctx, st, "%s", prt_last_error()) : PRT_OK;
 }
 
-static prt_status relight_kind(prt_context *ctx, const prt_transfer *t, int k, const prt_sh_light *sh, const prt_relight_desc *d, float *rgb, float *exit)
+/* local: the positioned lights' SH per vertex at sh's order, or NULL. */
+static prt_status relight_kind(prt_context *ctx, const prt_transfer *t, int k, const prt_sh_light *sh, const float *local, const prt_relight_desc *d,
+                               float *rgb, float *exit)
 {
     const prt_transfer_kind kind = prt__kind_from_index(k);
-    if (!prt__kind_glossy(k)) return prt_relight_sh(ctx, t, kind, sh, rgb);
-    const prt_transfer_kind diffuse = prt_transfer_kind_diffuse_part(kind);
     prt_status st = PRT_OK;
-    if (prt_transfer_channels(t, diffuse)) st = prt_relight_sh(ctx, t, diffuse, sh, rgb);
-    else memset(rgb, 0, t->mesh.vertex_count * 3 * sizeof(float));
-    if (!st) st = prt__relight_sh_glossy(ctx, t, kind, sh, d->brdf, d->brdf_everywhere, exit);
+    if (!prt__kind_glossy(k)) {
+        st = prt_relight_sh(ctx, t, kind, sh, rgb);
+        return st || !local ? st : prt__relight_sh_local(ctx, t, k, local, sh->order, rgb);
+    }
+    const prt_transfer_kind diffuse = prt_transfer_kind_diffuse_part(kind);
+    if (prt_transfer_channels(t, diffuse)) {
+        st = prt_relight_sh(ctx, t, diffuse, sh, rgb);
+        if (!st && local) st = prt__relight_sh_local(ctx, t, prt__kind_index(diffuse), local, sh->order, rgb);
+    } else {
+        memset(rgb, 0, t->mesh.vertex_count * 3 * sizeof(float));
+    }
+    if (!st) st = prt__relight_sh_glossy(ctx, t, kind, sh, d->brdf, d->brdf_everywhere, local, sh->order, exit);
     return st;
 }
+
+static prt_status relight_with(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, const prt__sh_state *s, int k,
+                               const prt_sh_light *shl, const float *local, int window, prt_relit *r);
 
 static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, prt_relit *r)
 {
@@ -498,10 +516,31 @@ static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_
                          "(prt info lists what it holds)");
     if (d->brdf && prt__kind_glossy(k) && s->glossy_exit)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this transfer has its BRDF baked in; a run-time BRDF cannot replace it (re-bake without --brdf)");
+    const int window = d->controls ? d->controls[1] : PRT__SH_LIGHT_WINDOW_DEFAULT;
+    if (window < 0 || window >= PRT__SH_WINDOW_COUNT)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "light-window %d: use 0 (none), 1 (Hanning) or 2 (Lanczos)", window);
     prt_sh_light sh;
     prt_status st = project(ctx, l, s->order, &sh);
     if (st) return st;
     sh.order = order;
+    prt__sh_window_directional(l, window, &sh);
+    /* Point, spot, ies and sphere lights: their SH at every vertex (local.c). */
+    float *local = NULL;
+    if (prt__sh_local_count(l)) {
+        if (!(local = malloc(nv * 3 * (size_t)order * order * sizeof(float)))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        prt__sh_local_project(ctx, l, order, window, t->mesh.positions, nv, local);
+    }
+    st = relight_with(ctx, t, l, d, s, k, &sh, local, window, r);
+    free(local);
+    return st;
+}
+
+static prt_status relight_with(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, const prt__sh_state *s, int k,
+                               const prt_sh_light *shl, const float *local, int window, prt_relit *r)
+{
+    const size_t nv = t->mesh.vertex_count;
+    const int order = shl->order;
+    prt_status st;
     /* Direct light is the shadowed pair; indirect the inter-reflected pair minus it. */
     const bool split_ok = s->sets[1].channels && s->sets[2].channels && (!prt__kind_glossy(k) || (s->sets[3].channels && s->sets[4].channels));
     if (d->component && !split_ok)
@@ -518,13 +557,13 @@ static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_
         r->exit_order = s->order;
         r->exit_mirror = !s->glossy_exit;
     }
-    if ((st = relight_kind(ctx, t, k, &sh, d, r->radiance, r->exit_sh))) return st;
+    if ((st = relight_kind(ctx, t, k, shl, local, d, r->radiance, r->exit_sh))) return st;
     if (want_indirect) {
         /* The part that bounced: this kind minus its shadowed counterpart. */
         const int direct = k == 4 ? 3 : 1;
         float *dexit = direct == 3 ? prt__calloc(nv * exit_floats, sizeof(float)) : NULL;
         if (direct == 3 && !dexit) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        st = relight_kind(ctx, t, direct, &sh, d, r->indirect, dexit);
+        st = relight_kind(ctx, t, direct, shl, local, d, r->indirect, dexit);
         for (size_t i = 0; !st && i < nv * 3; ++i) r->indirect[i] = r->radiance[i] - r->indirect[i];
         if (!st && d->component == PRT_COMPONENT_INDIRECT) {
             memcpy(r->radiance, r->indirect, nv * 3 * sizeof(float));
@@ -539,7 +578,8 @@ static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_
         r->texel_height = s->texels.height;
         r->texels = prt__calloc((size_t)r->texel_width * r->texel_height * 3, sizeof(float));
         if (!r->texels) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        if ((st = prt_relight_sh_texels(ctx, t, prt__kind_from_index(k), &sh, r->texels))) return st;
+        if ((st = prt_relight_sh_texels(ctx, t, prt__kind_from_index(k), shl, r->texels))) return st;
+        if (local && (st = prt__relight_sh_texels_local(ctx, t, k, l, order, window, r->texels))) return st;
     }
     return PRT_OK;
 }
@@ -548,7 +588,7 @@ const prt__method prt__method_sh = {
     .name = "sh",
     .title = "spherical-harmonic PRT",
     .summary = "spherical-harmonic PRT (Sloan et al.): diffuse and glossy, per vertex or texel, compressible",
-    .lighting = PRT_LIGHTS_ENVIRONMENT | PRT_LIGHTS_DIRECTIONAL,
+    .lighting = PRT_LIGHTS_ENVIRONMENT | PRT_LIGHTS_DIRECTIONAL | PRT_LIGHTS_POINT | PRT_LIGHTS_SPOT | PRT_LIGHTS_SPHERE | PRT_LIGHTS_IES,
     .light_map_option = "texels",
     .options = options,
     .option_count = (int)(sizeof options / sizeof options[0]),

@@ -172,3 +172,44 @@ prt_status prt_relight_sh(prt_context *ctx, const prt_transfer *t, prt_transfer_
     }
     return PRT_OK;
 }
+
+/* Vertex v's transfer vector of set s (dim floats), reconstructed when compressed. */
+static const float *set_row(const prt__sh_set *s, size_t v, size_t dim, float *buf)
+{
+    if (!s->cpca) return s->coeffs + v * dim;
+    const prt__cpca *c = s->cpca;
+    const uint32_t cl = c->cluster_of[v];
+    memcpy(buf, c->means + (size_t)cl * dim, dim * sizeof(float));
+    for (uint32_t j = 0; j < c->counts[cl]; ++j) {
+        const float w = c->weights[c->weight_start[v] + j], *b = c->basis + (c->basis_start[cl] + j) * dim;
+        for (size_t i = 0; i < dim; ++i) buf[i] += w * b[i];
+    }
+    return buf;
+}
+
+/* Local lights differ per vertex, so each vertex dots its own lighting: n multiply-adds per
+ * channel, as cheap as the distant lighting's kernel without its vector tricks. */
+prt_status prt__relight_sh_local(prt_context *ctx, const prt_transfer *t, int k, const float *local, int order, float *out_rgb)
+{
+    const prt__sh_state *sh = prt__sh_need(ctx, t);
+    if (!sh) return PRT_ERR_INVALID_ARG;
+    const prt__sh_set *s = &sh->sets[k];
+    if (k < 0 || k > 2 || !s->channels || order < 1 || order > sh->order)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "local lights: no diffuse set %d at order %d", k, order);
+    const int stride = sh->order * sh->order, n = order * order, ch = s->channels;
+    const size_t dim = prt__set_dim(sh, k);
+    const float *albedo = t->mesh.albedo;
+    const long nv = (long)t->mesh.vertex_count;
+#pragma omp parallel for schedule(static) num_threads(nv < 4096 ? 1 : prt__threads(ctx))
+    for (long v = 0; v < nv; ++v) {
+        float buf[3 * PRT_SH_MAX_COEFFS];
+        const float *T = set_row(s, (size_t)v, dim, buf), *L = local + (size_t)v * 3 * n;
+        for (int c = 0; c < 3; ++c) {
+            const float *Tc = T + (ch == 3 ? c * stride : 0), *Lc = L + c * n;
+            float sum = 0.0f;
+            for (int i = 0; i < n; ++i) sum += Tc[i] * Lc[i];
+            out_rgb[v * 3 + c] += ch == 1 ? sum * albedo[v * 3 + c] : sum;
+        }
+    }
+    return PRT_OK;
+}

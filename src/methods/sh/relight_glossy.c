@@ -7,6 +7,7 @@
  * renderer's, per pixel (prt_glossy_eval on the CPU). */
 #include "methods/sh/sh.h"
 
+#include <omp.h>
 #include <string.h>
 
 /* out[c][i] = sum_j X[c or 0][j][i] L[c][j] for the first nl lighting coefficients. One pass
@@ -73,11 +74,11 @@ static prt_status lobe_factors(const prt_transfer *t, int order, const prt_brdf 
 prt_status prt_relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light,
                                  const prt_brdf *brdf, float *out_exit)
 {
-    return prt__relight_sh_glossy(ctx, t, kind, light, brdf, true, out_exit);
+    return prt__relight_sh_glossy(ctx, t, kind, light, brdf, true, NULL, 0, out_exit);
 }
 
 prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light,
-                                  const prt_brdf *brdf, bool brdf_everywhere, float *out_exit)
+                                  const prt_brdf *brdf, bool brdf_everywhere, const float *local, int local_order, float *out_exit)
 {
     if (!t || !light || !out_exit) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_relight_sh_glossy: transfer, light and output are required");
     const prt__sh_state *sh = prt__sh_need(ctx, t);
@@ -113,21 +114,38 @@ prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_t
     const int n = sh->order * sh->order, nl = light->order < sh->order ? light->order * light->order : n;
     const size_t nv = t->mesh.vertex_count, dim = prt__set_dim(sh, k);
     const prt__cpca *cp = s->cpca;
+    if (local && (local_order < 1 || local_order > light->order || local_order > sh->order))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "local lights at order %d for a lighting of order %d", local_order, light->order);
+    const int nloc = local ? local_order * local_order : 0;
+    /* Compressed sets meet per-vertex lighting one vertex at a time: its matrix rebuilt in a
+     * buffer of the thread's own. */
+    const int threads = prt__threads(ctx);
+    float *rows = cp && local ? malloc((size_t)threads * dim * sizeof(float)) : NULL;
+    if (cp && local && !rows) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     /* Compressed: every mean and PCA vector meets the lighting once. */
     float *proj_mean = NULL, *proj_basis = NULL;
     if (cp) {
         proj_mean = malloc((size_t)cp->clusters * 3 * n * sizeof(float));
         proj_basis = malloc((cp->vectors_total ? cp->vectors_total : 1) * 3 * (size_t)n * sizeof(float));
-        if (!proj_mean || !proj_basis) { free(proj_mean); free(proj_basis); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+        if (!proj_mean || !proj_basis) { free(proj_mean); free(proj_basis); free(rows); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
 #pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
         for (size_t q = 0; q < (size_t)cp->clusters + cp->vectors_total; ++q) {
             if (q < (size_t)cp->clusters) apply_light(cp->means + q * dim, s->channels, n, nl, light, proj_mean + q * 3 * n);
             else apply_light(cp->basis + (q - cp->clusters) * dim, s->channels, n, nl, light, proj_basis + (q - cp->clusters) * 3 * n);
         }
     }
-#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
+#pragma omp parallel for schedule(static) num_threads(threads)
     for (size_t v = 0; v < nv; ++v) {
         float *e = out_exit + v * 3 * n;
+        prt_sh_light here;   /* the distant lighting plus this vertex's local lights */
+        const prt_sh_light *lv = light;
+        if (local && !cp) {
+            here = *light;
+            const float *L = local + v * 3 * (size_t)nloc;
+            for (int c = 0; c < 3; ++c)
+                for (int i = 0; i < nloc; ++i) here.coeffs[c][i] += L[c * nloc + i];
+            lv = &here;
+        }
         const int own = t->mesh.material ? t->mesh.material[v] : 0;
         const int mat = !brdf ? own : brdf_everywhere || (own && scene_glossy[own - 1]) ? 1 : 0;
         if (!sh->glossy_exit && (!mat || !has[mat - 1])) { memset(e, 0, (size_t)3 * n * sizeof(float)); continue; }
@@ -151,8 +169,23 @@ prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_t
 #pragma omp simd
                 for (int i = 0; i < m3; ++i) e[i] += wj * bj[i];
             }
+            if (local) {
+                float *M = rows + (size_t)omp_get_thread_num() * dim, add[3 * PRT_SH_MAX_COEFFS];
+                memcpy(M, cp->means + (size_t)cl * dim, dim * sizeof(float));
+                for (j = 0; j < cnt; ++j) {
+                    const float wj = w[j], *restrict bj = cp->basis + (cp->basis_start[cl] + j) * dim;
+#pragma omp simd
+                    for (size_t i = 0; i < dim; ++i) M[i] += wj * bj[i];
+                }
+                memset(&here, 0, sizeof here);
+                here.order = local_order;
+                const float *L = local + v * 3 * (size_t)nloc;
+                for (int c = 0; c < 3; ++c) memcpy(here.coeffs[c], L + c * nloc, (size_t)nloc * sizeof(float));
+                apply_light(M, s->channels, n, nloc, &here, add);
+                for (int i = 0; i < m3; ++i) e[i] += add[i];
+            }
         } else {
-            apply_light(s->coeffs + v * dim, s->channels, n, nl, light, e);
+            apply_light(s->coeffs + v * dim, s->channels, n, nl, lv, e);
         }
         if (!sh->glossy_exit) {
             const float *f = table[mat - 1];
@@ -163,5 +196,6 @@ prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_t
     }
     free(proj_mean);
     free(proj_basis);
+    free(rows);
     return PRT_OK;
 }

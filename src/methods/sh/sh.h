@@ -78,8 +78,27 @@ prt_status prt__sh_compress_set(prt_context *ctx, prt__sh_state *s, size_t verte
 prt_status prt__sh_quantize(prt_context *ctx, prt__sh_state *s, size_t vertex_count, int bits);
 /* prt_relight_sh_glossy with a choice of where a run-time lobe applies: every vertex, or only
  * the vertices whose scene material is glossy (what prt_relight_desc.brdf_everywhere chooses). */
+/* local (NULL = none): per-vertex lighting added to light, [vertex][3][local_order^2]. */
 prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_transfer_kind kind, const prt_sh_light *light,
-                                  const prt_brdf *brdf, bool brdf_everywhere, float *out_exit);
+                                  const prt_brdf *brdf, bool brdf_everywhere, const float *local, int local_order, float *out_exit);
+
+/* Local lights (local.c): point, spot, ies and sphere lights as SH of incident radiance at points.
+ * Windows on the bands of their projection (and of directional lights'): none, Hanning, Lanczos. */
+enum { PRT__SH_WINDOW_NONE, PRT__SH_WINDOW_HANNING, PRT__SH_WINDOW_LANCZOS, PRT__SH_WINDOW_COUNT };
+#define PRT__SH_LIGHT_WINDOW_DEFAULT PRT__SH_WINDOW_NONE
+/* How many of l's lights have a position. */
+int prt__sh_local_count(const prt_lighting *l);
+/* sigma[l] for l < order. */
+void prt__sh_window(int window, int order, double *sigma);
+/* Applies the window to the directional lights that prt_lighting_sh put into sh unwindowed. */
+void prt__sh_window_directional(const prt_lighting *l, int window, prt_sh_light *sh);
+/* out[point][channel][order^2]: l's positioned lights' incident radiance at each of count points. */
+void prt__sh_local_project(prt_context *ctx, const prt_lighting *l, int order, int window, const float *points, size_t count, float *out);
+/* Adds to out_rgb what diffuse set k makes of per-vertex lighting local ([vertex][3][order^2],
+ * order at most the file's), times albedo for one-channel sets. */
+prt_status prt__relight_sh_local(prt_context *ctx, const prt_transfer *t, int k, const float *local, int order, float *out_rgb);
+/* The same per texel (points from the file's UV layout), into a texel map. */
+prt_status prt__relight_sh_texels_local(prt_context *ctx, const prt_transfer *t, int k, const prt_lighting *l, int order, int window, float *out_rgb);
 
 /* prt export (export.c): --sh and --glsl. */
 prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);
