@@ -349,7 +349,9 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
     /* Mutual visibility of the pairs that could merge (V_jk of eq. 9). */
     if (!st && (!(b->visible = prt__calloc((size_t)n * n, 1)) || !(b->dark = prt__calloc(n, 1)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) {
-#pragma omp parallel for schedule(dynamic, 4) num_threads(job->threads)
+        /* A pair is one ray, a microsecond: below 256 lights (32,640 pairs) the loop takes less
+         * than waking a team costs on a loaded machine (a scheduler's time slice). */
+#pragma omp parallel for schedule(dynamic, 4) num_threads(job->threads) if (n >= 256)
         for (uint32_t j = 0; j < n; ++j)
             for (uint32_t k = j + 1; k < n; ++k) {
                 float d[3];
