@@ -1632,8 +1632,8 @@ static void test_gpu_accumulation(void **state)
     prt_context_release(ctx);
 }
 
-/* Offset files (texel patches, maps, media) whose checksums are right but whose contents are
- * not: each is refused with a message that says what. */
+/* Offset files (texel patches, maps, media, energy caps) whose checksums are right but whose
+ * contents are not: each is refused with a message that says what. */
 static void test_crafted_files(void **state)
 {
     (void)state;
@@ -1688,8 +1688,66 @@ static void test_crafted_files(void **state)
         if (!strstr(prt_last_error(), cases[i].says)) fail_msg("case %zu: '%s' does not say '%s'", i, prt_last_error(), cases[i].says);
         assert_null(u);
     }
+    /* The energy cap (OFSC: per kind, radiosity then subsurface, the capped texels and the largest
+     * and mean factor): a chunk cut short or too long, counts beyond the file's, factors that no
+     * cap gives. A plausible one loads: the cases fail for what they change. */
+    const uint32_t covered = info.covered, over = info.covered + 1;
+    const float nan = NAN, inf = INFINITY;
+    struct { size_t kind; uint32_t texels; float max, mean; const char *says; } caps[] = {
+        {0, 1, 2.0f, 1.5f, NULL},
+        {1, covered, 1e30f, 1.0f, NULL},
+        {0, over, 2.0f, 1.5f, "radiosity texels capped of the"},     /* more than the file covers */
+        {1, over, 2.0f, 1.5f, "subsurface texels capped of the"},
+        {0, 0, 2.0f, 1.0f, "factors largest 2"},                     /* none capped, yet a factor */
+        {0, 0, 1.0f, 2.0f, "factors largest 1"},
+        {0, 1, nan, 1.0f, "factors largest nan"},
+        {0, 1, -2.0f, 1.0f, "factors largest -2"},
+        {0, 1, 0.5f, 0.5f, "factors largest 0.5"},                    /* a cap never raises light */
+        {1, 1, inf, 1.0f, "factors largest inf"},
+        {1, 1, 2.0f, nan, "mean nan"},
+        {1, 1, 2.0f, -1.0f, "mean -1"},
+        {1, 1, 2.0f, 3.0f, "mean 3"},                                  /* the mean above the largest */
+    };
+    for (size_t i = 0; i < sizeof caps / sizeof caps[0]; ++i) {
+        unsigned char kind[12];
+        memcpy(kind, &caps[i].texels, 4);
+        memcpy(kind + 4, &caps[i].max, 4);
+        memcpy(kind + 8, &caps[i].mean, 4);
+        memcpy(f, orig, size);
+        test_patch_chunk(f, "OFSC", 12 * caps[i].kind, kind, 12);
+        const prt_status st = prt_transfer_load_memory(ctx, f, size, &u);
+        if (!caps[i].says) {
+            if (st) fail_msg("cap case %zu: refused (%s)", i, prt_last_error());
+            prt_transfer_release(u);
+            u = NULL;
+            continue;
+        }
+        assert_int_equal(st, PRT_ERR_FORMAT);
+        if (!strstr(prt_last_error(), caps[i].says)) fail_msg("cap case %zu: '%s' does not say '%s'", i, prt_last_error(), caps[i].says);
+        assert_null(u);
+    }
+    const uint64_t lengths[] = {0, 12, 20, 28, 32};   /* the chunk is 24 bytes */
+    for (size_t i = 0; i < sizeof lengths / sizeof lengths[0]; ++i) {
+        memcpy(f, orig, size);
+        test_resize_chunk(f, size, "OFSC", lengths[i]);
+        assert_int_equal(prt_transfer_load_memory(ctx, f, size, &u), PRT_ERR_FORMAT);
+        if (!strstr(prt_last_error(), "offset cap chunk size mismatch")) fail_msg("cap length %llu: '%s'", (unsigned long long)lengths[i], prt_last_error());
+        assert_null(u);
+    }
     free(orig);
     free(f);
+    /* Capped texels of a kind the file does not have (radiosity maps only). */
+    prt_transfer_release(t);
+    t = NULL;
+    assert_int_equal(prt_options_set(o, "transfer", "radiosity"), PRT_OK);
+    assert_int_equal(prt_bake(ctx, scene, prt_method_find("offset"), o, NULL, &t), PRT_OK);
+    assert_int_equal(prt_transfer_save(t, path), PRT_OK);
+    orig = test_slurp(path, &size);
+    test_patch_chunk(orig, "OFSC", 12, &one, 4);
+    assert_int_equal(prt_transfer_load_memory(ctx, orig, size, &u), PRT_ERR_FORMAT);
+    if (!strstr(prt_last_error(), "no subsurface maps")) fail_msg("'%s' does not say 'no subsurface maps'", prt_last_error());
+    assert_null(u);
+    free(orig);
     prt_transfer_release(t);
     prt_options_release(o);
     prt_scene_release(scene);
