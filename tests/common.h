@@ -232,6 +232,31 @@ static inline void test_patch_chunk(unsigned char *file, const char *id, size_t 
     fail_msg("no chunk %s", id);
 }
 
+/* Gives chunk `id` of a .prt file held in memory `len` bytes (shorter: its tail cut off; longer:
+ * the padding and the next chunk's bytes read as its own, within the file's `size`) and fixes
+ * every checksum, so that only the loader's own checks can catch it. */
+static inline void test_resize_chunk(unsigned char *file, size_t size, const char *id, uint64_t len)
+{
+    uint32_t count;
+    memcpy(&count, file + 12, 4);
+    for (uint32_t i = 0; i < count; ++i) {
+        unsigned char *e = file + 24 + 24 * (size_t)i;
+        if (memcmp(e, id, 4)) continue;
+        uint64_t off;
+        memcpy(&off, e + 8, 8);
+        assert_true(off + len <= size);
+        memcpy(e + 16, &len, 8);
+        uint32_t crc = (uint32_t)crc32(0L, file + off, (uInt)len);
+        memcpy(e + 4, &crc, 4);
+        uint32_t zero = 0;
+        memcpy(file + 20, &zero, 4);
+        crc = (uint32_t)crc32(0L, file, (uInt)(24 + 24 * (size_t)count));
+        memcpy(file + 20, &crc, 4);
+        return;
+    }
+    fail_msg("no chunk %s", id);
+}
+
 /* Writes text into the scratch directory as name; path gets the full path. */
 static inline void write_text(const char *name, const char *text, char *path, size_t n)
 {

@@ -6,6 +6,7 @@
 
 #include <cblas.h>
 #include <lapacke.h>
+#include <omp.h>
 #include <string.h>
 
 void prt__cpca_free(prt__cpca *c)
@@ -140,8 +141,9 @@ static bool subspace(const float *X, const size_t *members, size_t n, const doub
  * A pass ends in a barrier that waits for every thread of its team, and where cores are shared
  * that wait is a scheduler's time slice: the light cloud's zones (clustered PCA of a few thousand
  * short vectors each, K + 2 passes per iteration) took 4.6 times as long on 2 threads as on 1
- * beside two busy processes. The result does not depend on the team. */
-static int team(const prt_context *ctx, double work) { return work < (double)(1 << 21) ? 1 : prt__threads(ctx); }
+ * beside two busy processes. Called from a parallel region (one zone per thread), one: the
+ * caller's threads are busy already. The result does not depend on the team. */
+static int team(const prt_context *ctx, double work) { return work < (double)(1 << 21) || omp_in_parallel() ? 1 : prt__threads(ctx); }
 
 prt_status prt__cpca_build(prt_context *ctx, const float *X, size_t nv, int dim, const prt_compress_desc *d, prt__progress *prog, prt__cpca **out)
 {
@@ -212,8 +214,9 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
     }
     /* The eigen problems are tiny (at most 300 x 300): OpenBLAS's own thread pool would only spin
      * against prt's threads (40x slower measured), so it runs single-threaded meanwhile. */
-    const int blas_threads = openblas_get_num_threads();
-    openblas_set_num_threads(1);
+    const bool nested = omp_in_parallel();   /* the caller's team sets OpenBLAS's threads (racing here would undo it) */
+    const int blas_threads = nested ? 0 : openblas_get_num_threads();
+    if (!nested) openblas_set_num_threads(1);
     size_t total_vectors = 0;
     for (int it = 0; it <= iterations && !st; ++it) {
         /* Members of each cluster, in vertex order. */
@@ -358,7 +361,7 @@ prt_status prt__cpca_build_ex(prt_context *ctx, const float *X, size_t nv, int d
         if (prog && prt__progress_cancelled(prog)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "compression cancelled"); break; }
         if (moved == 0 && total_vectors == budget) it = iterations - 1;   /* converged: go to the final refit */
     }
-    openblas_set_num_threads(blas_threads);
+    if (!nested) openblas_set_num_threads(blas_threads);
     if (st) goto done;
     /* Keep the non-empty clusters; store means, vectors and per-vertex weights. */
     prt__cpca *c = prt__calloc(1, sizeof *c);

@@ -252,16 +252,26 @@ prt_status prt__offset_load(prt_context *ctx, prt_transfer *t, const cJSON *meta
             if (s->medium[i] > s->medium_count) return bad(ctx, "a texel's medium is out of range");
     }
     if ((c = prt__chunk_take(chunks, count, CHUNK_OFSC))) {
-        if (c->size != 24) return bad(ctx, "offset cap chunk size mismatch");
+        if (c->size != 24)
+            return prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: offset cap chunk size mismatch (%llu bytes, 24 expected)", (unsigned long long)c->size);
         for (int k = 0; k < 2; ++k) {
             prt__offset_cap *cap = &s->cap[k];
             cap->texels = prt__get32(c->data + 12 * k);
             memcpy(&cap->max, c->data + 12 * k + 4, 4);
             memcpy(&cap->mean, c->data + 12 * k + 8, 4);
             const bool baked = s->kinds & (k ? PRT__OFFSET_SUBSURFACE_BIT : PRT__OFFSET_RADIOSITY_BIT);
-            if (cap->texels > s->covered || (!baked && cap->texels) || !(cap->max >= 1 && cap->max <= 1e30f) || !(cap->mean >= 1 && cap->mean <= cap->max) ||
-                (!cap->texels && (cap->max != 1 || cap->mean != 1)))
-                return bad(ctx, "offset cap out of range");
+            const char *kind = k ? "subsurface" : "radiosity";
+            if (cap->texels > s->covered)
+                return prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: offset cap out of range: %u %s texels capped of the %u covered", cap->texels, kind,
+                                 s->covered);
+            if (!baked && cap->texels)
+                return prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: offset cap out of range: %u %s texels capped, but the file has no %s maps",
+                                 cap->texels, kind, kind);
+            /* Factors are gathered / bound over capped texels: at least 1, the mean at most the
+             * largest, both exactly 1 when none was capped (NaN fails every comparison). */
+            if (!(cap->max >= 1 && cap->max <= 1e30f) || !(cap->mean >= 1 && cap->mean <= cap->max) || (!cap->texels && (cap->max != 1 || cap->mean != 1)))
+                return prt__fail(ctx, PRT_ERR_FORMAT, "corrupt .prt file: offset cap out of range: %s factors largest %g, mean %g over %u texels", kind,
+                                 (double)cap->max, (double)cap->mean, cap->texels);
         }
         s->cap_known = true;
     }

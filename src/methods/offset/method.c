@@ -21,6 +21,8 @@ void prt__offset_set_free(void *state)
     free(s->passes);
     free(s->slices[0]);
     free(s->slices[1]);
+    for (int i = 0; i < s->pyramid_count; ++i) free(s->pyramids[i]);
+    free(s->pyramids);
     if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
     free(s);
 }

@@ -72,6 +72,11 @@ typedef struct prt__offset_set {
     uint8_t *level;
     int levels;
     bool filter_ready;
+    /* Run-time: pyramids (prt__offset_filter_scratch floats each) that radiosity relights have
+     * finished with, under lock: relights run side by side, each taking one of its own, and the
+     * next ones reuse them instead of allocating levels x covered x 12 bytes each time. */
+    float **pyramids;
+    int pyramid_count, pyramid_cap;
     /* Run-time: the passes the renderer runs (gpu.c), built on first use under lock and published
      * atomically; its slices are owned here. */
     prt_render_passes *passes;
@@ -128,6 +133,11 @@ prt_status prt__offset_filter_ready(prt_context *ctx, const prt_transfer *t, prt
  * in) as the comment above says, level by level from out[l - 1]. scratch:
  * prt__offset_filter_scratch floats. */
 size_t prt__offset_filter_scratch(const prt__offset_set *s);
+/* A pyramid's scratch for a relight (one the set keeps, or a new one; NULL when out of memory),
+ * given back when the relight ends; the set frees them with itself. After
+ * prt__offset_filter_ready. */
+float *prt__offset_filter_take(prt__offset_set *s);
+void prt__offset_filter_give(prt__offset_set *s, float *scratch);
 void prt__offset_filter(const prt__offset_set *s, const float *in, float *scratch, const float **out);
 
 /* The GPU passes for t (gpu.c): the maps cropped to the boxes of their axial slicing and sliced into atlases

@@ -77,6 +77,28 @@ size_t prt__offset_filter_scratch(const prt__offset_set *s)
     return blocks * 5 + (size_t)s->levels * s->covered * 3 + 1;
 }
 
+float *prt__offset_filter_take(prt__offset_set *s)
+{
+    pthread_mutex_lock(s->lock);
+    float *p = s->pyramid_count ? s->pyramids[--s->pyramid_count] : NULL;
+    pthread_mutex_unlock(s->lock);
+    return p ? p : malloc(prt__offset_filter_scratch(s) * sizeof *p);
+}
+
+void prt__offset_filter_give(prt__offset_set *s, float *scratch)
+{
+    if (!scratch) return;
+    pthread_mutex_lock(s->lock);
+    if (s->pyramid_count == s->pyramid_cap) {   /* as many as relights ever ran at once */
+        const int cap = s->pyramid_cap ? 2 * s->pyramid_cap : 2;
+        float **p = realloc(s->pyramids, (size_t)cap * sizeof *p);
+        if (p) { s->pyramids = p; s->pyramid_cap = cap; }
+    }
+    if (s->pyramid_count < s->pyramid_cap) { s->pyramids[s->pyramid_count++] = scratch; scratch = NULL; }
+    pthread_mutex_unlock(s->lock);
+    free(scratch);   /* no room to keep it: the next relight allocates again */
+}
+
 void prt__offset_filter(const prt__offset_set *s, const float *in, float *scratch, const float **out)
 {
     const int W = s->width, L = s->levels;

@@ -312,7 +312,7 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
     if (s->radiosity && d->component != PRT_COMPONENT_DIRECT) {
         if ((st = prt__offset_filter_ready(ctx, t, s))) goto done;
         const float *in[16];
-        float *pyramid = malloc(prt__offset_filter_scratch(s) * sizeof *pyramid);
+        float *pyramid = prt__offset_filter_take(s);
         if (!pyramid) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
         memcpy(a, first, nc * 3 * sizeof(float));
         for (int k = 0; k < bounces; ++k) {
@@ -321,7 +321,7 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
             for (size_t i = 0; i < nc * 3; ++i) indirect[i] += b[i];
             float *tmp = a; a = b; b = tmp;
         }
-        free(pyramid);
+        prt__offset_filter_give(s, pyramid);
     }
     if (s->emit)
         for (size_t i = 0; i < nc * 3; ++i) first[i] += emission * s->emit[i];

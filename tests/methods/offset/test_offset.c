@@ -13,6 +13,7 @@
 #include "transfer/transfer.h"
 
 #include <cjson/cJSON.h>
+#include <pthread.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -982,6 +983,76 @@ static void test_threads_and_cap(void **state)
     prt_context_release(two);
 }
 
+/* Relights side by side from several threads: each takes a prefilter pyramid of its own from
+ * those the transfer keeps (or a new one), so every result equals a relight alone, bit for bit,
+ * and afterwards the transfer keeps no more pyramids than relights ran at once, reused by the
+ * next relight rather than allocated again. */
+typedef struct side_by_side {
+    prt_context *ctx;
+    prt_transfer *t;
+    prt_lighting *l;
+    const float *want;
+    size_t n;
+    int same;
+} side_by_side;
+
+static void *relight_thread(void *user)
+{
+    side_by_side *j = user;
+    const int bounces = 3;
+    j->same = 1;
+    for (int k = 0; k < 3; ++k) {
+        prt_relit r;
+        if (prt_relight(j->ctx, j->t, j->l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .controls = &bounces}, &r)) { j->same = 0; break; }
+        j->same &= !memcmp(r.texels, j->want, j->n * sizeof(float));
+        prt_relit_free(&r);
+    }
+    return NULL;
+}
+
+static void test_relights_side_by_side(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    prt_scene *scene = load_demo_scene(ctx);
+    prt_transfer *t = bake_offset(ctx, scene, (const char *const[]){"texels", "32", "offsets", "60", "iterations", "100", "map-bounces", "1",
+                                                                  "transfer", "radiosity", NULL});
+    prt_lighting *l = NULL;
+    prt_light bulb;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    assert_int_equal(prt_light_parse("point:0.3,1.2,0.4:2", &bulb), PRT_OK);
+    assert_int_equal(prt_lighting_add(l, &bulb, NULL), PRT_OK);
+    const int bounces = 3;
+    prt_relit alone;
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .per_vertex = 1, .controls = &bounces}, &alone), PRT_OK);
+    const prt__offset_set *s = t->state;
+    assert_true(s->levels > 0);   /* the bounces read a pyramid */
+    assert_int_equal(s->pyramid_count, 1);
+    const size_t n = (size_t)alone.texel_width * alone.texel_height * 3;
+    enum { THREADS = 4 };
+    pthread_t th[THREADS];
+    side_by_side jobs[THREADS];
+    for (int i = 0; i < THREADS; ++i) {
+        jobs[i] = (side_by_side){ctx, t, l, alone.texels, n, 0};
+        assert_int_equal(pthread_create(&th[i], NULL, relight_thread, &jobs[i]), 0);
+    }
+    for (int i = 0; i < THREADS; ++i) {
+        assert_int_equal(pthread_join(th[i], NULL), 0);
+        assert_true(jobs[i].same);
+    }
+    const int kept = s->pyramid_count;
+    print_message("%d relights on %d threads: the transfer keeps %d pyramids of %zu floats\n", 3 * THREADS, THREADS, kept, prt__offset_filter_scratch(s));
+    assert_true(kept >= 1 && kept <= THREADS);
+    relight_thread(&jobs[0]);   /* alone again: one of the kept ones, none added */
+    assert_true(jobs[0].same);
+    assert_int_equal(s->pyramid_count, kept);
+    prt_relit_free(&alone);
+    prt_lighting_release(l);
+    prt_transfer_release(t);
+    prt_scene_release(scene);
+    prt_context_release(ctx);
+}
+
 /* The method end to end on the demo scene under a point light: first-order light matches the path
  * tracer's direct light, the bounces bring the indirect light close to its, the file round-trips,
  * and subsurface scattering much shorter than a texel reflects the medium's total diffuse
@@ -1712,8 +1783,8 @@ static void test_gpu_accumulation(void **state)
     prt_context_release(ctx);
 }
 
-/* Offset files (texel patches, maps, media) whose checksums are right but whose contents are
- * not: each is refused with a message that says what. */
+/* Offset files (texel patches, maps, media, energy caps) whose checksums are right but whose
+ * contents are not: each is refused with a message that says what. */
 static void test_crafted_files(void **state)
 {
     (void)state;
@@ -1768,8 +1839,66 @@ static void test_crafted_files(void **state)
         if (!strstr(prt_last_error(), cases[i].says)) fail_msg("case %zu: '%s' does not say '%s'", i, prt_last_error(), cases[i].says);
         assert_null(u);
     }
+    /* The energy cap (OFSC: per kind, radiosity then subsurface, the capped texels and the largest
+     * and mean factor): a chunk cut short or too long, counts beyond the file's, factors that no
+     * cap gives. A plausible one loads: the cases fail for what they change. */
+    const uint32_t covered = info.covered, over = info.covered + 1;
+    const float nan = NAN, inf = INFINITY;
+    struct { size_t kind; uint32_t texels; float max, mean; const char *says; } caps[] = {
+        {0, 1, 2.0f, 1.5f, NULL},
+        {1, covered, 1e30f, 1.0f, NULL},
+        {0, over, 2.0f, 1.5f, "radiosity texels capped of the"},     /* more than the file covers */
+        {1, over, 2.0f, 1.5f, "subsurface texels capped of the"},
+        {0, 0, 2.0f, 1.0f, "factors largest 2"},                     /* none capped, yet a factor */
+        {0, 0, 1.0f, 2.0f, "factors largest 1"},
+        {0, 1, nan, 1.0f, "factors largest nan"},
+        {0, 1, -2.0f, 1.0f, "factors largest -2"},
+        {0, 1, 0.5f, 0.5f, "factors largest 0.5"},                    /* a cap never raises light */
+        {1, 1, inf, 1.0f, "factors largest inf"},
+        {1, 1, 2.0f, nan, "mean nan"},
+        {1, 1, 2.0f, -1.0f, "mean -1"},
+        {1, 1, 2.0f, 3.0f, "mean 3"},                                  /* the mean above the largest */
+    };
+    for (size_t i = 0; i < sizeof caps / sizeof caps[0]; ++i) {
+        unsigned char kind[12];
+        memcpy(kind, &caps[i].texels, 4);
+        memcpy(kind + 4, &caps[i].max, 4);
+        memcpy(kind + 8, &caps[i].mean, 4);
+        memcpy(f, orig, size);
+        test_patch_chunk(f, "OFSC", 12 * caps[i].kind, kind, 12);
+        const prt_status st = prt_transfer_load_memory(ctx, f, size, &u);
+        if (!caps[i].says) {
+            if (st) fail_msg("cap case %zu: refused (%s)", i, prt_last_error());
+            prt_transfer_release(u);
+            u = NULL;
+            continue;
+        }
+        assert_int_equal(st, PRT_ERR_FORMAT);
+        if (!strstr(prt_last_error(), caps[i].says)) fail_msg("cap case %zu: '%s' does not say '%s'", i, prt_last_error(), caps[i].says);
+        assert_null(u);
+    }
+    const uint64_t lengths[] = {0, 12, 20, 28, 32};   /* the chunk is 24 bytes */
+    for (size_t i = 0; i < sizeof lengths / sizeof lengths[0]; ++i) {
+        memcpy(f, orig, size);
+        test_resize_chunk(f, size, "OFSC", lengths[i]);
+        assert_int_equal(prt_transfer_load_memory(ctx, f, size, &u), PRT_ERR_FORMAT);
+        if (!strstr(prt_last_error(), "offset cap chunk size mismatch")) fail_msg("cap length %llu: '%s'", (unsigned long long)lengths[i], prt_last_error());
+        assert_null(u);
+    }
     free(orig);
     free(f);
+    /* Capped texels of a kind the file does not have (radiosity maps only). */
+    prt_transfer_release(t);
+    t = NULL;
+    assert_int_equal(prt_options_set(o, "transfer", "radiosity"), PRT_OK);
+    assert_int_equal(prt_bake(ctx, scene, prt_method_find("offset"), o, NULL, &t), PRT_OK);
+    assert_int_equal(prt_transfer_save(t, path), PRT_OK);
+    orig = test_slurp(path, &size);
+    test_patch_chunk(orig, "OFSC", 12, &one, 4);
+    assert_int_equal(prt_transfer_load_memory(ctx, orig, size, &u), PRT_ERR_FORMAT);
+    if (!strstr(prt_last_error(), "no subsurface maps")) fail_msg("'%s' does not say 'no subsurface maps'", prt_last_error());
+    assert_null(u);
+    free(orig);
     prt_transfer_release(t);
     prt_options_release(o);
     prt_scene_release(scene);
@@ -1808,6 +1937,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_prefilter),
         cmocka_unit_test(test_bounce_across_charts),
         cmocka_unit_test(test_threads_and_cap),
+        cmocka_unit_test(test_relights_side_by_side),
         cmocka_unit_test(test_multi_bounce_maps),
         cmocka_unit_test(test_default_maps_converge),
     };
