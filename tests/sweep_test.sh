@@ -64,12 +64,16 @@ for name, m in rows.items():
             errors.append("%s: %s %r" % (name, k, m[k]))
     if m["reused"] != reused:
         errors.append("%s: reused %r" % (name, m["reused"]))
-for name in ("lightcloud", "spectral", "offset", "sh"):
+for name in ("lightcloud", "spectral", "offset"):
     if name in rows and rows[name]["skipped"]:
         errors.append(name + " relights point lights but was skipped: " + rows[name]["skipped"])
-for name in ("ao",):
+# ao relights no point light; SH relights them but not inside a closed room (its transfer finds
+# every direction blocked beyond the lamp): both skipped, saying why.
+for name in ("ao", "sh"):
     if name in rows and not rows[name]["skipped"]:
-        errors.append(name + " cannot relight point lights but was not skipped")
+        errors.append(name + " cannot relight this room's point light but was not skipped")
+if "sh" in rows and "inside the scene" not in rows["sh"]["skipped"]:
+    errors.append("sh skipped for another reason: " + rows["sh"]["skipped"])
 if measured == 0:
     errors.append("nothing measured")
 if not d.get("pick"):

@@ -237,7 +237,7 @@ printf '0 frobnicate 1 2\n' >"$T/bad.txt"
 xrun -a "$PRT" view "$T/demo.prt" --script "$T/bad.txt" >/dev/null 2>"$T/err"
 rc=$?
 [ "$rc" -eq 2 ] && grep -q "bad.txt:1" "$T/err" && ok || { bad "bad script: exit $rc"; cat "$T/err"; }
-printf '0 key j\n' >"$T/badkey.txt"
+printf '0 key F9\n' >"$T/badkey.txt"
 xrun -a "$PRT" view "$T/demo.prt" --script "$T/badkey.txt" >/dev/null 2>"$T/err"
 rc=$?
 [ "$rc" -eq 2 ] && grep -q "no control is bound" "$T/err" && ok || { bad "unbound key: exit $rc"; cat "$T/err"; }

@@ -93,29 +93,38 @@ prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_exp
     if (d->controls && d->controls[0] > EXPORT_ORDER)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--sh exports SH order %d: --control order must be 1..%d with it", EXPORT_ORDER, EXPORT_ORDER);
     /* The shader dots one lighting vector for every vertex: lights with a position differ per
-     * vertex, so colours relit with them could not agree with it. */
-    if (prt__sh_local_count(d->lighting))
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--sh exports transfer for distant lighting (environment, directional lights), and this lighting "
-                         "holds point, spot, sphere or ies lights, which differ per vertex: export without them (--light directional:... replaces them)");
+     * vertex, so colours relit with them could not agree with it. They are left out of the
+     * colours and the shader alike, and the export says so (a scene's lamps should not stop an
+     * export of its distant lighting). */
+    prt_lighting *distant = NULL;
+    const int local = prt__sh_local_count(d->lighting);
+    prt_status st = prt_lighting_copy(d->lighting, &distant);
+    for (int i = prt_lighting_count(distant) - 1; !st && i >= 0; --i)
+        if (prt__sh_light_positioned(prt_lighting_light(distant, i))) st = prt_lighting_remove(distant, i);
+    if (st) { prt_lighting_release(distant); return prt__fail(ctx, st, "%s", prt_last_error()); }
+    if (local)
+        prt__export_report(out, "left out %d point, spot, sphere or ies light%s: --sh exports transfer for distant lighting (environment, directional "
+                           "lights), one vector for every vertex, and their light differs per vertex", local, local == 1 ? "" : "s");
     const int controls[2] = {d->controls && d->controls[0] >= 1 ? d->controls[0] : s->order < EXPORT_ORDER ? s->order : EXPORT_ORDER,
                              PRT__SH_WINDOW_NONE};   /* the shader's lighting is prt_lighting_sh's, unwindowed */
     prt_relight_desc rd = {.variant = d->variant, .per_vertex = 1, .controls = controls};
     prt_relit r;
-    prt_status st = prt_relight(ctx, t, d->lighting, &rd, &r);
-    if (st) return st;
+    st = prt_relight(ctx, t, distant, &rd, &r);
+    if (st) { prt_lighting_release(distant); return st; }
     out->radiance = r.radiance;   /* taken from r */
     r.radiance = NULL;
     prt_relit_free(&r);
     int channels = 0, coeffs = 0;
-    if ((st = attributes(ctx, t, kind, out, &channels, &coeffs))) return st;
+    if ((st = attributes(ctx, t, kind, out, &channels, &coeffs))) { prt_lighting_release(distant); return st; }
     prt__export_report(out, "the SH transfer (%s, order %d) as %d glTF attributes", vname, coeffs == 1 ? 1 : coeffs == 4 ? 2 : 3, out->attribute_count);
     if (glsl) {
         prt_sh_light sh;
-        st = prt_lighting_sh(d->lighting, EXPORT_ORDER, &sh);
-        if (st) return prt__fail(ctx, st, "%s", prt_last_error());
+        st = prt_lighting_sh(distant, EXPORT_ORDER, &sh);
+        if (st) { prt_lighting_release(distant); return prt__fail(ctx, st, "%s", prt_last_error()); }
         if ((st = write_glsl(ctx, glsl, d->source ? d->source : t->source, vname, channels, coeffs, out->attribute_count, &sh))) return st;
         if (!prt__export_file(out, glsl)) { remove(glsl); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
         prt__export_report(out, "wrote %s (prtRadiance() from the %d attributes)", glsl, out->attribute_count);
     }
+    prt_lighting_release(distant);
     return PRT_OK;
 }

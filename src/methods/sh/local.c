@@ -18,7 +18,7 @@
 #include <math.h>
 #include <string.h>
 
-static bool positioned(const prt_light *l)
+bool prt__sh_light_positioned(const prt_light *l)
 {
     return l->type == PRT_LIGHT_POINT || l->type == PRT_LIGHT_SPOT || l->type == PRT_LIGHT_SPHERE || l->type == PRT_LIGHT_IES;
 }
@@ -26,7 +26,7 @@ static bool positioned(const prt_light *l)
 int prt__sh_local_count(const prt_lighting *l)
 {
     int n = 0;
-    for (int i = 0; l && i < prt_lighting_count(l); ++i) n += positioned(prt_lighting_light(l, i));
+    for (int i = 0; l && i < prt_lighting_count(l); ++i) n += prt__sh_light_positioned(prt_lighting_light(l, i));
     return n;
 }
 
@@ -109,7 +109,7 @@ void prt__sh_local_project(prt_context *ctx, const prt_lighting *l, int order, i
         memset(o, 0, 3 * (size_t)n * sizeof(float));
         for (int i = 0; i < lights; ++i) {
             const prt_light *li = prt_lighting_light(l, i);
-            if (positioned(li)) add_light(li, points + v * 3, order, sigma, o);
+            if (prt__sh_light_positioned(li)) add_light(li, points + v * 3, order, sigma, o);
         }
     }
 }

@@ -527,6 +527,7 @@ static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_
     /* Point, spot, ies and sphere lights: their SH at every vertex (local.c). */
     float *local = NULL;
     if (prt__sh_local_count(l)) {
+        if ((st = prt__sh_local_reach(ctx, t, l))) return st;
         if (!(local = malloc(nv * 3 * (size_t)order * order * sizeof(float)))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         prt__sh_local_project(ctx, l, order, window, t->mesh.positions, nv, local);
     }

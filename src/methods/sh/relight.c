@@ -5,8 +5,11 @@
  * kernels are instantiated per order so the compiler unrolls them completely. Vertices are split
  * statically across threads. */
 #include "methods/sh/sh.h"
+#include "geom/raycast.h"
+#include "prt/sh.h"
 
 #include <immintrin.h>
+#include <math.h>
 #include <omp.h>
 #include <string.h>
 
@@ -185,6 +188,63 @@ static const float *set_row(const prt__sh_set *s, size_t v, size_t dim, float *b
         for (size_t i = 0; i < dim; ++i) buf[i] += w * b[i];
     }
     return buf;
+}
+
+/* SH transfer holds visibility to infinity, so a light inside the scene (a lamp in a room, a bulb
+ * under a roof) lies in directions the transfer finds blocked beyond the light, and would light
+ * nothing. Over up to REACH_VERTICES vertices that face a light and see it (a shadow ray), the
+ * transfer's response to a delta towards it (pi T(w) / albedo: 1 unoccluded, as cos) is compared
+ * with the cosine; a light that gets under a quarter of it on average is refused, naming it,
+ * rather than drawn dark. */
+#define REACH_VERTICES 512
+#define REACH_LEAST 0.25
+
+prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const prt_lighting *l)
+{
+    const prt__sh_state *sh = t->state;
+    const int k = sh->sets[1].channels ? 1 : sh->sets[2].channels ? 2 : -1;   /* shadowed, else inter-reflected */
+    const prt__mesh *m = &t->mesh;
+    if (k < 0 || !m->normals || !m->vertex_count) return PRT_OK;
+    const prt__sh_set *s = &sh->sets[k];
+    const int stride = sh->order * sh->order, ch = s->channels;
+    const size_t dim = prt__set_dim(sh, k), nv = m->vertex_count, step = nv > REACH_VERTICES ? nv / REACH_VERTICES : 1;
+    prt__raycaster rc;
+    prt_status st = prt__raycaster_create(ctx, m, &rc);
+    if (st) return st;
+    const float off = prt__ray_offset(m);
+    for (int i = 0; !st && i < prt_lighting_count(l); ++i) {
+        const prt_light *li = prt_lighting_light(l, i);
+        if (!prt__sh_light_positioned(li)) continue;
+        double sum = 0;
+        size_t n = 0;
+        for (size_t v = 0; v < nv; v += step) {
+            const float *p = m->positions + v * 3, *nr = m->normals + v * 3;
+            float d[3] = {li->position[0] - p[0], li->position[1] - p[1], li->position[2] - p[2]};
+            const float r = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            if (!(r > 2 * off)) continue;
+            for (int c = 0; c < 3; ++c) d[c] /= r;
+            const float cosine = d[0] * nr[0] + d[1] * nr[1] + d[2] * nr[2];
+            if (cosine < 0.3f) continue;
+            const float o[3] = {p[0] + nr[0] * off, p[1] + nr[1] * off, p[2] + nr[2] * off};
+            if (prt__raycaster_occluded(&rc, o, d, r - 2 * off - (li->type == PRT_LIGHT_SPHERE ? li->radius : 0.0f))) continue;
+            float buf[3 * PRT_SH_MAX_COEFFS], y[PRT_SH_MAX_COEFFS];
+            const float *T = set_row(s, v, dim, buf);
+            prt_sh_eval_f(sh->order, d, y);
+            double resp = 0, albedo = 0;
+            for (int c = 0; c < (ch == 3 ? 3 : 1); ++c) {
+                for (int j = 0; j < stride; ++j) resp += (double)T[c * stride + j] * y[j];
+                albedo += ch == 3 ? m->albedo[v * 3 + c] : 1.0;
+            }
+            if (albedo > 0) { sum += PRT_PI * resp / albedo / cosine; n++; }
+        }
+        if (n >= 8 && sum / (double)n < REACH_LEAST)
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "light %d (%s at %g, %g, %g) is inside the scene where SH transfer cannot carry it: from the vertices that "
+                           "see it, the transfer finds the way towards it blocked beyond it (%.0f%% of the light gets through on average; a room, a roof). "
+                           "SH transfer holds visibility to infinity: bake with --method spectral, lightcloud or offset for lights inside a scene",
+                           i + 1, prt_light_type_name(li->type), li->position[0], li->position[1], li->position[2], 100 * sum / (double)n);
+    }
+    prt__raycaster_release(&rc);
+    return st;
 }
 
 /* Local lights differ per vertex, so each vertex dots its own lighting: n multiply-adds per

@@ -86,6 +86,11 @@ prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_t
  * Windows on the bands of their projection (and of directional lights'): none, Hanning, Lanczos. */
 enum { PRT__SH_WINDOW_NONE, PRT__SH_WINDOW_HANNING, PRT__SH_WINDOW_LANCZOS, PRT__SH_WINDOW_COUNT };
 #define PRT__SH_LIGHT_WINDOW_DEFAULT PRT__SH_WINDOW_NONE
+/* Is l a light at a point (point, spot, sphere, ies), whose light differs per vertex? */
+bool prt__sh_light_positioned(const prt_light *l);
+/* Refuses, naming it, a positioned light of l that the file's shadowed transfer finds blocked
+ * beyond it from the vertices that see it (a light inside a room): it would light nothing. */
+prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const prt_lighting *l);
 /* How many of l's lights have a position. */
 int prt__sh_local_count(const prt_lighting *l);
 /* sigma[l] for l < order. */

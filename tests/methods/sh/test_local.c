@@ -371,6 +371,48 @@ static void test_bad_inputs(void **state)
     prt_context_release(ctx);
 }
 
+/* SH transfer holds visibility to infinity: a lamp inside a closed box finds every direction
+ * towards it blocked beyond it, so it would light nothing - refused, naming it and what to use;
+ * above the open box, the same lamp relights. */
+static void test_light_inside(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(1);
+    test_mesh m = {0};
+    tm_pit(&m, 8);
+    tm_quad(&m, (float[3]){-0.5f, 1, -0.5f}, (float[3]){1, 0, 0}, (float[3]){0, 0, 1}, 8);   /* the lid, facing down */
+    prt_scene *closed = tm_scene(ctx, &m, 0.5f);
+    prt_transfer *t = bake(ctx, closed, 3, 64, PRT_TRANSFER_SHADOWED, 0);
+    prt_lighting *l = NULL;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    prt_light lamp = {.type = PRT_LIGHT_POINT, .position = {0, 0.5f, 0}, .intensity = {1, 1, 1}};
+    assert_int_equal(prt_lighting_add(l, &lamp, NULL), PRT_OK);
+    prt_relit r;
+    assert_int_equal(prt_relight(ctx, t, l, NULL, &r), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "light 1 (point at 0, 0.5, 0) is inside the scene"));
+    assert_non_null(strstr(prt_last_error(), "--method spectral, lightcloud or offset"));
+    lamp.type = PRT_LIGHT_SPHERE;
+    lamp.radius = 0.1f;
+    assert_int_equal(prt_lighting_set(l, 0, &lamp), PRT_OK);
+    assert_int_equal(prt_relight(ctx, t, l, NULL, &r), PRT_ERR_INVALID_ARG);
+    prt_transfer_release(t);
+    prt_scene_release(closed);
+    tm_free(&m);
+    /* The open box lit from above: the floor and the far walls see the lamp and the sky beyond it. */
+    tm_pit(&m, 8);
+    prt_scene *open = tm_scene(ctx, &m, 0.5f);
+    t = bake(ctx, open, 3, 64, PRT_TRANSFER_SHADOWED, 0);
+    lamp = (prt_light){.type = PRT_LIGHT_POINT, .position = {0, 2, 0}, .intensity = {1, 1, 1}};
+    assert_int_equal(prt_lighting_set(l, 0, &lamp), PRT_OK);
+    assert_int_equal(prt_relight(ctx, t, l, NULL, &r), PRT_OK);
+    prt_relit_free(&r);
+    prt_transfer_release(t);
+    prt_scene_release(open);
+    tm_free(&m);
+    prt_lighting_release(l);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -378,6 +420,7 @@ int main(void)
         cmocka_unit_test(test_sphere_over_plane),
         cmocka_unit_test(test_glossy_and_compressed),
         cmocka_unit_test(test_bad_inputs),
+        cmocka_unit_test(test_light_inside),
         cmocka_unit_test_setup_teardown(test_demo_against_reference, test_dir_setup, test_dir_teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
