@@ -266,6 +266,11 @@ typedef struct prt_relight_desc {
      * first-order light map (prt_method_paintable) refuse it, saying why. */
     const float *paint;
     int paint_width, paint_height;
+    /* Non-zero: a light the method finds it cannot carry in this scene (an SH file's lamp inside a
+     * closed room, which its transfer sees blocked beyond the lamp) is left out with a warning
+     * through the log hook instead of refused - for lights the file's scene named rather than
+     * lights asked for. */
+    int leave_out_unreachable;
 } prt_relight_desc;
 
 /* What relighting produced: everything the renderer draws. Arrays are owned by the result

@@ -790,6 +790,7 @@ prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *
     d.brdf_everywhere = l && l->brdf_everywhere;
     d.no_pixel_lights = l && l->whole_texels;
     d.gpu_finish = l && l->gpu_finish;
+    d.leave_out_unreachable = !(l && l->set_lights);   /* the scene's own lamps: left out with a warning; lights asked for: refused */
     int controls[PRT_MAX_CONTROLS];
     const int nc = cli_controls(c, l, t, controls);
     if (nc < 0) { ((cli *)c)->reported = true; return PRT_ERR_INVALID_ARG; }

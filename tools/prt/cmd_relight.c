@@ -258,6 +258,7 @@ static int relight_main(int argc, char **argv, bool exporting)
                     dd.controls = nc > 0 ? controls : NULL;
                     dd.brdf = light.have_brdf ? &light.brdf : NULL;
                     dd.brdf_everywhere = light.brdf_everywhere;
+                    dd.leave_out_unreachable = !light.set_lights;
                     float *albedo = NULL, *painting = NULL;
                     int *brdf_of = NULL;
                     prt_relit rd;

@@ -195,6 +195,7 @@ static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
     d.albedo = v->albedo;
     d.brdf_of = v->brdf_of;
     d.gpu_finish = job->gpu;
+    d.leave_out_unreachable = 1;   /* live: a lamp dragged where the method cannot carry it is left out, with a warning, not the frame */
     if (job->painted && v->job_paint) {   /* the worker's copy, taken with the job */
         d.paint = v->job_paint;
         d.paint_width = v->paint_w;

@@ -656,7 +656,7 @@ int cmd_sweep_all(const char *cmd, int argc, char **argv)
         double t0 = now_seconds();
         st = cli_relight(&c, t, lighting, &light, variant, true, true, &rl);
         r->relight_s = now_seconds() - t0;
-        if (st == PRT_ERR_INVALID_ARG) {   /* the method refused this lighting for this scene (an SH file, a lamp inside a room) */
+        if (st == PRT_ERR_INVALID_ARG && !c.reported) {   /* the method refused this lighting for this scene (an SH file, a lamp inside a room) */
             snprintf(r->skipped, sizeof r->skipped, "%s", prt_last_error());
             if (!c.quiet) fprintf(stderr, "prt %s: %s: skipped: %s\n", c.cmd, mname, r->skipped);
             st = PRT_OK;

@@ -103,7 +103,7 @@ prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_exp
         if (prt__sh_light_positioned(prt_lighting_light(distant, i))) st = prt_lighting_remove(distant, i);
     if (st) { prt_lighting_release(distant); return prt__fail(ctx, st, "%s", prt_last_error()); }
     if (local)
-        prt__export_report(out, "left out %d point, spot, sphere or ies light%s: --sh exports transfer for distant lighting (environment, directional "
+        prt__export_report(out, "left out %d point, spot, sphere or IES light%s: --sh exports transfer for distant lighting (environment, directional "
                            "lights), one vector for every vertex, and their light differs per vertex", local, local == 1 ? "" : "s");
     const int controls[2] = {d->controls && d->controls[0] >= 1 ? d->controls[0] : s->order < EXPORT_ORDER ? s->order : EXPORT_ORDER,
                              PRT__SH_WINDOW_NONE};   /* the shader's lighting is prt_lighting_sh's, unwindowed */
@@ -121,8 +121,11 @@ prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_exp
         prt_sh_light sh;
         st = prt_lighting_sh(distant, EXPORT_ORDER, &sh);
         if (st) { prt_lighting_release(distant); return prt__fail(ctx, st, "%s", prt_last_error()); }
-        if ((st = write_glsl(ctx, glsl, d->source ? d->source : t->source, vname, channels, coeffs, out->attribute_count, &sh))) return st;
-        if (!prt__export_file(out, glsl)) { remove(glsl); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+        if ((st = write_glsl(ctx, glsl, d->source ? d->source : t->source, vname, channels, coeffs, out->attribute_count, &sh))) {
+            prt_lighting_release(distant);
+            return st;
+        }
+        if (!prt__export_file(out, glsl)) { remove(glsl); prt_lighting_release(distant); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
         prt__export_report(out, "wrote %s (prtRadiance() from the %d attributes)", glsl, out->attribute_count);
     }
     prt_lighting_release(distant);

@@ -527,13 +527,22 @@ static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_
     /* Point, spot, ies and sphere lights: their SH at every vertex (local.c). */
     float *local = NULL;
     if (prt__sh_local_count(l)) {
-        if ((st = prt__sh_local_reach(ctx, t, l))) return st;
-        if (!(local = malloc(nv * 3 * (size_t)order * order * sizeof(float)))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        prt__sh_local_project(ctx, l, order, window, t->mesh.positions, nv, local);
+        uint8_t *unreachable = malloc((size_t)prt_lighting_count(l) + 1);
+        prt_lighting *reach = NULL;
+        if (!unreachable) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        st = prt__sh_local_reach(ctx, t, l, d->leave_out_unreachable, unreachable);
+        if (!st) st = prt_lighting_copy(l, &reach);
+        for (int i = prt_lighting_count(l) - 1; !st && i >= 0; --i)
+            if (unreachable[i]) st = prt_lighting_remove(reach, i);
+        free(unreachable);
+        if (!st && !(local = malloc(nv * 3 * (size_t)order * order * sizeof(float)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        if (!st) prt__sh_local_project(ctx, reach, order, window, t->mesh.positions, nv, local);
+        if (!st) st = relight_with(ctx, t, reach, d, s, k, &sh, local, window, r);   /* per texel too, without what was left out */
+        prt_lighting_release(reach);
+        free(local);
+        return st;
     }
-    st = relight_with(ctx, t, l, d, s, k, &sh, local, window, r);
-    free(local);
-    return st;
+    return relight_with(ctx, t, l, d, s, k, &sh, NULL, window, r);
 }
 
 static prt_status relight_with(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, const prt__sh_state *s, int k,

@@ -199,12 +199,14 @@ static const float *set_row(const prt__sh_set *s, size_t v, size_t dim, float *b
 #define REACH_VERTICES 512
 #define REACH_LEAST 0.25
 
-prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const prt_lighting *l)
+prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, bool leave_out, uint8_t *out)
 {
     const prt__sh_state *sh = t->state;
     const int k = sh->sets[1].channels ? 1 : sh->sets[2].channels ? 2 : -1;   /* shadowed, else inter-reflected */
     const prt__mesh *m = &t->mesh;
-    if (k < 0 || !m->normals || !m->vertex_count) return PRT_OK;
+    if (out) memset(out, 0, (size_t)prt_lighting_count(l));
+    /* At order 1 an open light's response is a quarter of its cosine overhead: nothing to tell. */
+    if (k < 0 || sh->order < 2 || !m->normals || !m->vertex_count) return PRT_OK;
     const prt__sh_set *s = &sh->sets[k];
     const int stride = sh->order * sh->order, ch = s->channels;
     const size_t dim = prt__set_dim(sh, k), nv = m->vertex_count, step = nv > REACH_VERTICES ? nv / REACH_VERTICES : 1;
@@ -237,11 +239,19 @@ prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const pr
             }
             if (albedo > 0) { sum += PRT_PI * resp / albedo / cosine; n++; }
         }
-        if (n >= 8 && sum / (double)n < REACH_LEAST)
-            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "light %d (%s at %g, %g, %g) is inside the scene where SH transfer cannot carry it: from the vertices that "
-                           "see it, the transfer finds the way towards it blocked beyond it (%.0f%% of the light gets through on average; a room, a roof). "
-                           "SH transfer holds visibility to infinity: bake with --method spectral, lightcloud or offset for lights inside a scene",
-                           i + 1, prt_light_type_name(li->type), li->position[0], li->position[1], li->position[2], 100 * sum / (double)n);
+        if (!(n >= 8 && sum / (double)n < REACH_LEAST)) continue;
+        char why[400];
+        snprintf(why, sizeof why, "light %d (%s at %g, %g, %g) is inside the scene where SH transfer cannot carry it: from most vertices that see it, "
+                 "the transfer finds the way towards it blocked beyond it (%.0f%% of its light gets through on average; a room, a roof, a wall behind "
+                 "it), for SH transfer holds visibility to infinity", i + 1, prt_light_type_name(li->type), li->position[0], li->position[1],
+                 li->position[2], 100 * sum / (double)n);
+        if (leave_out) {
+            prt__log(ctx, PRT_LOG_WARN, "%s: left out (bake with --method spectral, lightcloud or offset for lights inside a scene)", why);
+            if (out) out[i] = 1;
+        } else {
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s: bake with --method spectral, lightcloud or offset for lights inside a scene (--light none "
+                           "leaves the lights out)", why);
+        }
     }
     prt__raycaster_release(&rc);
     return st;

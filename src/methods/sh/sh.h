@@ -89,8 +89,9 @@ enum { PRT__SH_WINDOW_NONE, PRT__SH_WINDOW_HANNING, PRT__SH_WINDOW_LANCZOS, PRT_
 /* Is l a light at a point (point, spot, sphere, ies), whose light differs per vertex? */
 bool prt__sh_light_positioned(const prt_light *l);
 /* Refuses, naming it, a positioned light of l that the file's shadowed transfer finds blocked
- * beyond it from the vertices that see it (a light inside a room): it would light nothing. */
-prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const prt_lighting *l);
+ * beyond it from the vertices that see it (a light inside a room): it would light nothing. With
+ * leave_out, such lights are marked in out[light] (count of l's lights) with a warning instead. */
+prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, bool leave_out, uint8_t *out);
 /* How many of l's lights have a position. */
 int prt__sh_local_count(const prt_lighting *l);
 /* sigma[l] for l < order. */

@@ -391,6 +391,10 @@ static void test_light_inside(void **state)
     assert_int_equal(prt_relight(ctx, t, l, NULL, &r), PRT_ERR_INVALID_ARG);
     assert_non_null(strstr(prt_last_error(), "light 1 (point at 0, 0.5, 0) is inside the scene"));
     assert_non_null(strstr(prt_last_error(), "--method spectral, lightcloud or offset"));
+    /* A lamp the file's scene named is left out instead (with a warning): no light, no error. */
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.variant = -1, .leave_out_unreachable = 1}, &r), PRT_OK);
+    for (size_t i = 0; i < prt_transfer_vertex_count(t) * 3; ++i) assert_float_equal(r.radiance[i], 0.0f, 1e-7f);
+    prt_relit_free(&r);
     lamp.type = PRT_LIGHT_SPHERE;
     lamp.radius = 0.1f;
     assert_int_equal(prt_lighting_set(l, 0, &lamp), PRT_OK);
