@@ -10,7 +10,15 @@
 
 
 /* ---- state and kinds ---- */
-prt__sh_state *prt__sh_state_new(void) { return prt__calloc(1, sizeof(prt__sh_state)); }
+prt__sh_state *prt__sh_state_new(void)
+{
+    prt__sh_state *s = prt__calloc(1, sizeof(prt__sh_state));
+    pthread_mutex_t *lock = malloc(sizeof *lock);
+    if (!s || !lock) { free(s); free(lock); return NULL; }
+    pthread_mutex_init(lock, NULL);
+    s->lock = lock;
+    return s;
+}
 
 void prt__sh_state_free(void *state)
 {
@@ -21,6 +29,8 @@ void prt__sh_state_free(void *state)
         prt__cpca_free(s->sets[i].cpca);
     }
     prt__texel_sets_free(&s->texels);
+    if (s->rays_ready) prt__raycaster_release(&s->rays);
+    if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
     free(s);
 }
 

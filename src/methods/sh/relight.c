@@ -5,7 +5,6 @@
  * kernels are instantiated per order so the compiler unrolls them completely. Vertices are split
  * statically across threads. */
 #include "methods/sh/sh.h"
-#include "geom/raycast.h"
 #include "prt/sh.h"
 
 #include <immintrin.h>
@@ -210,9 +209,14 @@ prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const pr
     const prt__sh_set *s = &sh->sets[k];
     const int stride = sh->order * sh->order, ch = s->channels;
     const size_t dim = prt__set_dim(sh, k), nv = m->vertex_count, step = nv > REACH_VERTICES ? nv / REACH_VERTICES : 1;
-    prt__raycaster rc;
-    prt_status st = prt__raycaster_create(ctx, m, &rc);
+    /* The mesh in Embree once per transfer: a viewer relights on every drag of a lamp. */
+    prt__sh_state *state = t->state;
+    prt_status st = PRT_OK;
+    pthread_mutex_lock(state->lock);
+    if (!state->rays_ready && !(st = prt__raycaster_create(ctx, m, &state->rays))) state->rays_ready = true;
+    pthread_mutex_unlock(state->lock);
     if (st) return st;
+    const prt__raycaster *rc = &state->rays;
     const float off = prt__ray_offset(m);
     for (int i = 0; !st && i < prt_lighting_count(l); ++i) {
         const prt_light *li = prt_lighting_light(l, i);
@@ -228,7 +232,7 @@ prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const pr
             const float cosine = d[0] * nr[0] + d[1] * nr[1] + d[2] * nr[2];
             if (cosine < 0.3f) continue;
             const float o[3] = {p[0] + nr[0] * off, p[1] + nr[1] * off, p[2] + nr[2] * off};
-            if (prt__raycaster_occluded(&rc, o, d, r - 2 * off - (li->type == PRT_LIGHT_SPHERE ? li->radius : 0.0f))) continue;
+            if (prt__raycaster_occluded(rc, o, d, r - 2 * off - (li->type == PRT_LIGHT_SPHERE ? li->radius : 0.0f))) continue;
             float buf[3 * PRT_SH_MAX_COEFFS], y[PRT_SH_MAX_COEFFS];
             const float *T = set_row(s, v, dim, buf);
             prt_sh_eval_f(sh->order, d, y);
@@ -253,7 +257,6 @@ prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const pr
                            "leaves the lights out)", why);
         }
     }
-    prt__raycaster_release(&rc);
     return st;
 }
 

@@ -4,8 +4,11 @@
 #define PRT_METHODS_SH_H
 
 #include "compress/cpca.h"
+#include "geom/raycast.h"
 #include "transfer/method.h"
 #include "prt/sh_transfer.h"
+
+#include <pthread.h>
 
 #define PRT__KIND_COUNT 5
 
@@ -34,6 +37,10 @@ typedef struct prt__sh_state {
     uint32_t seed;
     bool glossy_exit;                    /* glossy sets hold exit radiance (BRDF baked in) */
     prt__texel_sets texels;
+    /* Shadow rays for the local-light reach check, built on first use under lock. */
+    pthread_mutex_t *lock;
+    prt__raycaster rays;
+    bool rays_ready;
 } prt__sh_state;
 
 extern const prt__method prt__method_sh;
