@@ -64,21 +64,27 @@ prt_status prt__relight_sh_texels_local(prt_context *ctx, const prt_transfer *t,
             points[count * 3 + c] = b0 * m->positions[ix[0] * 3 + c] + b1 * m->positions[ix[1] * 3 + c] + b2 * m->positions[ix[2] * 3 + c];
         index[count++] = i;
     }
-    float *local = malloc((count ? count : 1) * 3 * (size_t)nl * sizeof(float)), *map = calloc(ntex * 3, sizeof(float));
+    /* The lights' SH for a block of texels at a time: a whole 1024^2 map at order 6 would hold
+     * 430 MB of it. */
+    enum { BLOCK = 16384 };
+    float *local = malloc((size_t)BLOCK * 3 * (size_t)nl * sizeof(float)), *map = calloc(ntex * 3, sizeof(float));
     uint8_t *mask = calloc(ntex, 1);
     if (!local || !map || !mask) { free(local); free(map); free(mask); st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); goto done; }
-    prt__sh_local_project(ctx, l, order, window, points, count, local);
-#pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
-    for (size_t q = 0; q < count; ++q) {
-        const size_t i = index[q];
-        const float *T = s->coeffs[k] + i * (size_t)ch * n, *L = local + q * 3 * (size_t)nl;
-        for (int c = 0; c < 3; ++c) {
-            const float *Tc = T + (ch == 3 ? (size_t)c * n : 0), *Lc = L + c * nl;
-            float sum = 0.0f;
-            for (int j = 0; j < nl; ++j) sum += Tc[j] * Lc[j];
-            map[i * 3 + c] = ch == 1 ? sum * s->albedo[i * 3 + c] : sum;
+    for (size_t q0 = 0; q0 < count; q0 += BLOCK) {
+        const size_t nb = count - q0 < BLOCK ? count - q0 : BLOCK;
+        prt__sh_local_project(ctx, l, order, window, points + q0 * 3, nb, local);
+#pragma omp parallel for schedule(static) num_threads(nb < 4096 ? 1 : prt__threads(ctx))
+        for (size_t q = 0; q < nb; ++q) {
+            const size_t i = index[q0 + q];
+            const float *T = s->coeffs[k] + i * (size_t)ch * n, *L = local + q * 3 * (size_t)nl;
+            for (int c = 0; c < 3; ++c) {
+                const float *Tc = T + (ch == 3 ? (size_t)c * n : 0), *Lc = L + c * nl;
+                float sum = 0.0f;
+                for (int j = 0; j < nl; ++j) sum += Tc[j] * Lc[j];
+                map[i * 3 + c] = ch == 1 ? sum * s->albedo[i * 3 + c] : sum;
+            }
+            mask[i] = 1;
         }
-        mask[i] = 1;
     }
     const int three = 3;
     if (!prt__texel_fill_gutters(W, H, mask, &map, &three, 1)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
