@@ -193,6 +193,28 @@ static prt__mesh to_mesh(const test_mesh *t)
     return m;
 }
 
+/* A wall around a window built as four pieces meeting at T junctions (grids of different
+ * spacing, sharing no edge), as scene files bring them: one chart, its hole kept, so texels
+ * across the pieces' seams are neighbours in the map as on the wall. A second wall in another
+ * plane, touching it, stays a chart of its own. */
+static void test_flat_pieces(void **state)
+{
+    (void)state;
+    test_mesh t = {0};
+    tm_quad(&t, (float[3]){0, 0, 0}, (float[3]){3, 0, 0}, (float[3]){0, 1, 0}, 6);   /* below the window */
+    tm_quad(&t, (float[3]){0, 2, 0}, (float[3]){3, 0, 0}, (float[3]){0, 1, 0}, 5);   /* above */
+    tm_quad(&t, (float[3]){0, 1, 0}, (float[3]){1, 0, 0}, (float[3]){0, 1, 0}, 3);   /* left of it */
+    tm_quad(&t, (float[3]){2, 1, 0}, (float[3]){1, 0, 0}, (float[3]){0, 1, 0}, 4);   /* right of it */
+    prt__mesh m = to_mesh(&t);
+    assert_int_equal(check_atlas(&m, 128, "wall of four pieces", 0.3), 1);
+    prt__mesh_free(&m);
+    tm_quad(&t, (float[3]){3, 0, 0}, (float[3]){0, 0, -2}, (float[3]){0, 3, 0}, 4);   /* a side wall at x = 3 */
+    m = to_mesh(&t);
+    assert_int_equal(check_atlas(&m, 128, "two walls", 0.3), 2);
+    prt__mesh_free(&m);
+    tm_free(&t);
+}
+
 static void test_layouts(void **state)
 {
     (void)state;
@@ -385,6 +407,7 @@ static void test_texels_on_atlas(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_flat_pieces),
         cmocka_unit_test(test_layouts),
         cmocka_unit_test(test_real_meshes),
         cmocka_unit_test(test_dragon),

@@ -4,7 +4,8 @@
  * projection onto its mean plane, and checked: a map that folds a triangle, stretches one beyond
  * MAX_STRETCH or overlaps itself falls back to the projection; where neither is valid the faulty
  * triangles and those around their corners are cut out and charted apart (a chart with too many
- * faults is cut in two). Small charts then merge into neighbours while the union stays valid.
+ * faults is cut in two). Small charts then merge into neighbours while the union stays valid, and
+ * flat charts in one plane that touch (pieces meeting at T junctions) join, projected.
  * Charts are scaled to one texel density, turned to their smallest
  * bounding box and packed by the texels they touch (four quarter turns each, into any hole they
  * fit; large charts also at angles between, when that packs a scale the upright charts do not);
@@ -1027,6 +1028,145 @@ static prt_status merge_charts(const prt_context *ctx, atlas *a)
     return st;
 }
 
+/* ---- flat pieces ---- */
+
+static double diagonal_of(const prt__mesh *m)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, d2 = 0;
+    for (size_t v = 0; v < m->vertex_count; ++v)
+        for (int k = 0; k < 3; ++k) { lo[k] = fmin(lo[k], m->positions[v * 3 + k]); hi[k] = fmax(hi[k], m->positions[v * 3 + k]); }
+    for (int k = 0; k < 3 && m->vertex_count; ++k) d2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    return sqrt(d2);
+}
+
+/* A flat chart's plane (unit normal n, offset d = n.p) and box, or false when it is not flat. */
+typedef struct flat { double n[3], d, lo[3], hi[3]; bool ok; } flat;
+
+static flat chart_flat(const atlas *a, const chart *c, double eps)
+{
+    flat f = {.ok = false};
+    double n[3] = {0, 0, 0};
+    for (size_t t = 0; t < c->nt; ++t)
+        for (int k = 0; k < 3; ++k) n[k] += a->normal[(size_t)c->tris[t] * 3 + k] * a->area[c->tris[t]];
+    const double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(l > 0)) return f;
+    for (int k = 0; k < 3; ++k) f.n[k] = n[k] / l;
+    for (size_t t = 0; t < c->nt; ++t) {
+        const double *q = a->normal + (size_t)c->tris[t] * 3;
+        if (a->area[c->tris[t]] > 0 && q[0] * f.n[0] + q[1] * f.n[1] + q[2] * f.n[2] < 1 - 1e-6) return f;
+    }
+    const float *p0 = a->m->positions + (size_t)c->verts[0] * 3;
+    f.d = f.n[0] * p0[0] + f.n[1] * p0[1] + f.n[2] * p0[2];
+    for (int k = 0; k < 3; ++k) { f.lo[k] = INFINITY; f.hi[k] = -INFINITY; }
+    for (size_t v = 0; v < c->nv; ++v) {
+        const float *p = a->m->positions + (size_t)c->verts[v] * 3;
+        if (fabs(f.n[0] * p[0] + f.n[1] * p[1] + f.n[2] * p[2] - f.d) > eps) return f;
+        for (int k = 0; k < 3; ++k) { f.lo[k] = fmin(f.lo[k], p[k]); f.hi[k] = fmax(f.hi[k], p[k]); }
+    }
+    f.ok = true;
+    return f;
+}
+
+/* Does a vertex of B lie on an edge of A's (within eps)? Pieces of one wall that meet at T
+ * junctions (a wall built around a window, as scene files bring them) share no edge. */
+static bool pieces_touch(const atlas *a, const chart *A, const chart *B, double eps)
+{
+    const prt__mesh *m = a->m;
+    for (size_t t = 0; t < A->nt; ++t)
+        for (int e = 0; e < 3; ++e) {
+            if (a->across[(size_t)A->tris[t] * 3 + e] >= 0) continue;   /* inside A */
+            const float *p = m->positions + m->indices[(size_t)A->tris[t] * 3 + e] * 3, *q = m->positions + m->indices[(size_t)A->tris[t] * 3 + (e + 1) % 3] * 3;
+            const double ex = q[0] - p[0], ey = q[1] - p[1], ez = q[2] - p[2], l2 = ex * ex + ey * ey + ez * ez;
+            for (size_t v = 0; v < B->nv; ++v) {
+                const float *x = m->positions + (size_t)B->verts[v] * 3;
+                const double f = l2 > 0 ? fmin(fmax(((x[0] - p[0]) * ex + (x[1] - p[1]) * ey + (x[2] - p[2]) * ez) / l2, 0), 1) : 0;
+                const double dx = p[0] + f * ex - x[0], dy = p[1] + f * ey - x[1], dz = p[2] + f * ez - x[2];
+                if (dx * dx + dy * dy + dz * dz <= eps * eps) return true;
+            }
+        }
+    return false;
+}
+
+/* Joins flat charts lying in one plane that touch (pieces of a wall meeting at T junctions, which
+ * share no edge and so grew apart) into one chart mapped by projection onto the plane - exact for
+ * flat pieces - where the union maps without overlap. Texels on either side of such a seam are
+ * then neighbours in the map as on the surface: no chart border (and, in the offset method, no
+ * band where its cells change) where the surface runs on. */
+static prt_status join_flat_pieces(const prt_context *ctx, atlas *a, double diagonal)
+{
+    const size_t count = a->count;
+    if (count < 2 || count > 4096) return PRT_OK;   /* pairs: beyond that, the time is not worth it */
+    const double eps = 1e-6 * diagonal + 1e-12;
+    flat *f = malloc(count * sizeof *f);
+    uint32_t *group = malloc(count * sizeof *group);
+    uint8_t *dead = calloc(count, 1);
+    prt_status st = f && group && dead ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    for (size_t i = 0; !st && i < count; ++i) { f[i] = chart_flat(a, &a->charts[i], eps); group[i] = (uint32_t)i; }
+    for (size_t i = 0; !st && i < count; ++i) {
+        if (!f[i].ok) continue;
+        if (prt__cancelled(ctx)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "UV atlas cancelled"); break; }
+        for (size_t j = i + 1; j < count; ++j) {
+            if (!f[j].ok || f[i].n[0] * f[j].n[0] + f[i].n[1] * f[j].n[1] + f[i].n[2] * f[j].n[2] < 1 - 1e-6 || fabs(f[i].d - f[j].d) > eps) continue;
+            bool apart = false;
+            for (int k = 0; k < 3; ++k) apart |= f[i].lo[k] > f[j].hi[k] + eps || f[j].lo[k] > f[i].hi[k] + eps;
+            if (apart || uf_find(group, (uint32_t)i) == uf_find(group, (uint32_t)j)) continue;
+            if (pieces_touch(a, &a->charts[i], &a->charts[j], eps) || pieces_touch(a, &a->charts[j], &a->charts[i], eps))
+                uf_union(group, (uint32_t)i, (uint32_t)j);
+        }
+    }
+    /* Each group of two or more: the union, projected; kept where it is valid. */
+    for (size_t r = 0; !st && r < count; ++r) {
+        if (uf_find(group, (uint32_t)r) != r) continue;
+        chart M = {0};
+        size_t members = 0;
+        for (size_t i = r; i < count; ++i)
+            if (uf_find(group, (uint32_t)i) == r) { M.nt += a->charts[i].nt; members++; }
+        if (members < 2) continue;
+        if (!(M.tris = malloc(M.nt * sizeof *M.tris))) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); break; }
+        M.nt = 0;
+        for (size_t i = r; i < count; ++i)
+            if (uf_find(group, (uint32_t)i) == r) { memcpy(M.tris + M.nt, a->charts[i].tris, a->charts[i].nt * sizeof *M.tris); M.nt += a->charts[i].nt; }
+        int valid = -1;
+        if (chart_vertices(a, &M)) {
+            double t1[3], t2[3];
+            plane_frame(f[r].n, t1, t2);
+            valid = 0;
+            for (int mirror = 0; mirror < 2 && valid == 0; ++mirror) {   /* whichever way round keeps the triangles' orientation */
+                for (size_t v = 0; v < M.nv; ++v) {
+                    const float *p = a->m->positions + (size_t)M.verts[v] * 3;
+                    M.uv[v * 2] = t1[0] * p[0] + t1[1] * p[1] + t1[2] * p[2];
+                    M.uv[v * 2 + 1] = (mirror ? -1 : 1) * (t2[0] * p[0] + t2[1] * p[1] + t2[2] * p[2]);
+                }
+                valid = chart_valid(a, &M, NULL);
+            }
+        }
+        if (valid < 0) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas"); }
+        if (valid > 0) {
+            M.valid = true;
+            for (size_t i = r + 1; i < count; ++i)
+                if (uf_find(group, (uint32_t)i) == r) {
+                    chart *c = &a->charts[i];
+                    free(c->tris); free(c->verts); free(c->uv); free(c->corner);
+                    *c = (chart){0};
+                    dead[i] = 1;
+                }
+            chart *c = &a->charts[r];
+            free(c->tris); free(c->verts); free(c->uv); free(c->corner);
+            *c = M;
+        } else {
+            free(M.tris); free(M.verts); free(M.uv); free(M.corner);
+        }
+    }
+    if (!st) {
+        size_t kept = 0;
+        for (size_t ci = 0; ci < count; ++ci)
+            if (!dead[ci]) a->charts[kept++] = a->charts[ci];
+        a->count = kept;
+    }
+    free(f); free(group); free(dead);
+    return st;
+}
+
 /* ---- packing ---- */
 
 /* Turns a chart to the smallest-area bounding box of PACK_ANGLES tried, lying wide, corner at 0. */
@@ -1479,6 +1619,7 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
     if (!st) st = grow_charts(ctx, &a, cos(max_angle * PRT_PI / 180.0));
     a.total = total;
     if (!st) st = merge_charts(ctx, &a);
+    if (!st) st = join_flat_pieces(ctx, &a, diagonal_of(m));
     placement *at = NULL;
     uint32_t *order = NULL;
     double s = 0;
