@@ -207,6 +207,18 @@ static inline void test_spit(const char *path, const void *p, size_t n)
     fclose(f);
 }
 
+/* The checksums of chunk entry e (its bytes at off, len long) and of the header and table of a
+ * .prt file held in memory with count chunks, recomputed. */
+static inline void test_fix_chunk_crc(unsigned char *file, uint32_t count, unsigned char *e, uint64_t off, uint64_t len)
+{
+    uint32_t crc = (uint32_t)crc32(0L, file + off, (uInt)len);
+    memcpy(e + 4, &crc, 4);
+    uint32_t zero = 0;
+    memcpy(file + 20, &zero, 4);
+    crc = (uint32_t)crc32(0L, file, (uInt)(24 + 24 * (size_t)count));
+    memcpy(file + 20, &crc, 4);
+}
+
 /* Overwrites bytes of chunk `id` of a .prt file held in memory at `offset` and fixes every
  * checksum, so that only the loader's own checks can catch the change. */
 static inline void test_patch_chunk(unsigned char *file, const char *id, size_t offset, const void *bytes, size_t n)
@@ -221,12 +233,7 @@ static inline void test_patch_chunk(unsigned char *file, const char *id, size_t 
         memcpy(&len, e + 16, 8);
         assert_true(offset + n <= len);
         memcpy(file + off + offset, bytes, n);
-        uint32_t crc = (uint32_t)crc32(0L, file + off, (uInt)len);
-        memcpy(e + 4, &crc, 4);
-        uint32_t zero = 0;
-        memcpy(file + 20, &zero, 4);
-        crc = (uint32_t)crc32(0L, file, (uInt)(24 + 24 * (size_t)count));
-        memcpy(file + 20, &crc, 4);
+        test_fix_chunk_crc(file, count, e, off, len);
         return;
     }
     fail_msg("no chunk %s", id);
@@ -246,12 +253,7 @@ static inline void test_resize_chunk(unsigned char *file, size_t size, const cha
         memcpy(&off, e + 8, 8);
         assert_true(off + len <= size);
         memcpy(e + 16, &len, 8);
-        uint32_t crc = (uint32_t)crc32(0L, file + off, (uInt)len);
-        memcpy(e + 4, &crc, 4);
-        uint32_t zero = 0;
-        memcpy(file + 20, &zero, 4);
-        crc = (uint32_t)crc32(0L, file, (uInt)(24 + 24 * (size_t)count));
-        memcpy(file + 20, &crc, 4);
+        test_fix_chunk_crc(file, count, e, off, len);
         return;
     }
     fail_msg("no chunk %s", id);
