@@ -207,6 +207,16 @@ static inline void test_spit(const char *path, const void *p, size_t n)
     fclose(f);
 }
 
+/* The table entry of chunk `id` in a .prt file held in memory (its chunk count in *count), or
+ * NULL. An entry: id, CRC, offset, length. */
+static inline unsigned char *test_chunk_entry(unsigned char *file, const char *id, uint32_t *count)
+{
+    memcpy(count, file + 12, 4);
+    for (uint32_t i = 0; i < *count; ++i)
+        if (!memcmp(file + 24 + 24 * (size_t)i, id, 4)) return file + 24 + 24 * (size_t)i;
+    return NULL;
+}
+
 /* The checksums of chunk entry e (its bytes at off, len long) and of the header and table of a
  * .prt file held in memory with count chunks, recomputed. */
 static inline void test_fix_chunk_crc(unsigned char *file, uint32_t count, unsigned char *e, uint64_t off, uint64_t len)
@@ -224,19 +234,14 @@ static inline void test_fix_chunk_crc(unsigned char *file, uint32_t count, unsig
 static inline void test_patch_chunk(unsigned char *file, const char *id, size_t offset, const void *bytes, size_t n)
 {
     uint32_t count;
-    memcpy(&count, file + 12, 4);
-    for (uint32_t i = 0; i < count; ++i) {
-        unsigned char *e = file + 24 + 24 * (size_t)i;
-        if (memcmp(e, id, 4)) continue;
-        uint64_t off, len;
-        memcpy(&off, e + 8, 8);
-        memcpy(&len, e + 16, 8);
-        assert_true(offset + n <= len);
-        memcpy(file + off + offset, bytes, n);
-        test_fix_chunk_crc(file, count, e, off, len);
-        return;
-    }
-    fail_msg("no chunk %s", id);
+    unsigned char *e = test_chunk_entry(file, id, &count);
+    if (!e) fail_msg("no chunk %s", id);
+    uint64_t off, len;
+    memcpy(&off, e + 8, 8);
+    memcpy(&len, e + 16, 8);
+    assert_true(offset + n <= len);
+    memcpy(file + off + offset, bytes, n);
+    test_fix_chunk_crc(file, count, e, off, len);
 }
 
 /* Gives chunk `id` of a .prt file held in memory `len` bytes (shorter: its tail cut off; longer:
@@ -245,18 +250,13 @@ static inline void test_patch_chunk(unsigned char *file, const char *id, size_t 
 static inline void test_resize_chunk(unsigned char *file, size_t size, const char *id, uint64_t len)
 {
     uint32_t count;
-    memcpy(&count, file + 12, 4);
-    for (uint32_t i = 0; i < count; ++i) {
-        unsigned char *e = file + 24 + 24 * (size_t)i;
-        if (memcmp(e, id, 4)) continue;
-        uint64_t off;
-        memcpy(&off, e + 8, 8);
-        assert_true(off + len <= size);
-        memcpy(e + 16, &len, 8);
-        test_fix_chunk_crc(file, count, e, off, len);
-        return;
-    }
-    fail_msg("no chunk %s", id);
+    unsigned char *e = test_chunk_entry(file, id, &count);
+    if (!e) fail_msg("no chunk %s", id);
+    uint64_t off;
+    memcpy(&off, e + 8, 8);
+    assert_true(off + len <= size);
+    memcpy(e + 16, &len, 8);
+    test_fix_chunk_crc(file, count, e, off, len);
 }
 
 /* Writes text into the scratch directory as name; path gets the full path. */

@@ -204,16 +204,12 @@ static void test_round_trip_within_bound(void **state)
 static unsigned char *chunk_in(unsigned char *file, const char *id, uint64_t *len)
 {
     uint32_t count;
-    memcpy(&count, file + 12, 4);
-    for (uint32_t i = 0; i < count; ++i) {
-        unsigned char *e = file + 24 + 24 * (size_t)i;
-        if (memcmp(e, id, 4)) continue;
-        uint64_t off;
-        memcpy(&off, e + 8, 8);
-        memcpy(len, e + 16, 8);
-        return file + off;
-    }
-    return NULL;
+    const unsigned char *e = test_chunk_entry(file, id, &count);
+    if (!e) return NULL;
+    uint64_t off;
+    memcpy(&off, e + 8, 8);
+    memcpy(len, e + 16, 8);
+    return file + off;
 }
 
 /* Files of one scale (the fuzz seeds, written by prt before format version 3) load with that
