@@ -194,18 +194,22 @@ static const float *set_row(const prt__sh_set *s, size_t v, size_t dim, float *b
  * nothing. Over up to REACH_VERTICES vertices that face a light and see it (a shadow ray), the
  * transfer's response to a delta towards it (pi T(w) / albedo: 1 unoccluded, as cos) is compared
  * with the cosine; a light that gets under a quarter of it on average is refused, naming it,
- * rather than drawn dark. */
+ * rather than drawn dark. Files holding only glossy matrices (no diffuse response to read) ask
+ * the geometry the same question: is the way on from the light, beyond it, open? */
 #define REACH_VERTICES 512
 #define REACH_LEAST 0.25
 
 prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, bool leave_out, uint8_t *out)
 {
     const prt__sh_state *sh = t->state;
-    const int k = sh->sets[1].channels ? 1 : sh->sets[2].channels ? 2 : -1;   /* shadowed, else inter-reflected */
+    int k = sh->sets[1].channels ? 1 : sh->sets[2].channels ? 2 : -1;   /* shadowed, else inter-reflected */
+    const bool geometric = k < 0 && (sh->sets[3].channels || sh->sets[4].channels);   /* glossy only */
     const prt__mesh *m = &t->mesh;
     if (out) memset(out, 0, (size_t)prt_lighting_count(l));
-    /* At order 1 an open light's response is a quarter of its cosine overhead: nothing to tell. */
-    if (k < 0 || sh->order < 2 || !m->normals || !m->vertex_count) return PRT_OK;
+    /* At order 1 an open light's response is a quarter of its cosine overhead: nothing to tell.
+     * Unshadowed transfer holds no visibility: every light reaches. */
+    if ((k < 0 && !geometric) || sh->order < 2 || !m->normals || !m->vertex_count) return PRT_OK;
+    if (geometric) k = sh->sets[3].channels ? 3 : 4;
     const prt__sh_set *s = &sh->sets[k];
     const int stride = sh->order * sh->order, ch = s->channels;
     const size_t dim = prt__set_dim(sh, k), nv = m->vertex_count, step = nv > REACH_VERTICES ? nv / REACH_VERTICES : 1;
@@ -232,7 +236,14 @@ prt_status prt__sh_local_reach(prt_context *ctx, const prt_transfer *t, const pr
             const float cosine = d[0] * nr[0] + d[1] * nr[1] + d[2] * nr[2];
             if (cosine < 0.3f) continue;
             const float o[3] = {p[0] + nr[0] * off, p[1] + nr[1] * off, p[2] + nr[2] * off};
-            if (prt__raycaster_occluded(rc, o, d, r - 2 * off - (li->type == PRT_LIGHT_SPHERE ? li->radius : 0.0f))) continue;
+            const float radius = li->type == PRT_LIGHT_SPHERE ? li->radius : 0.0f;
+            if (prt__raycaster_occluded(rc, o, d, r - 2 * off - radius)) continue;
+            if (geometric) {
+                const float beyond[3] = {li->position[0] + d[0] * (radius + off), li->position[1] + d[1] * (radius + off), li->position[2] + d[2] * (radius + off)};
+                sum += prt__raycaster_occluded(rc, beyond, d, INFINITY) ? 0.0 : 1.0;
+                n++;
+                continue;
+            }
             float buf[3 * PRT_SH_MAX_COEFFS], y[PRT_SH_MAX_COEFFS];
             const float *T = set_row(s, v, dim, buf);
             prt_sh_eval_f(sh->order, d, y);

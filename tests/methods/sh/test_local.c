@@ -211,6 +211,48 @@ static void test_sphere_over_plane(void **state)
     prt_context_release(ctx);
 }
 
+/* A sphere light far smaller than its distance is a point light of intensity L pi R^2: its cap's
+ * weights must not cancel to nothing (1 - cos of a half-angle of 1e-9 is 0 in double). */
+static void test_tiny_sphere(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    prt_scene *s = plane(ctx, &m, 0.5f);
+    prt_transfer *t = bake(ctx, s, 6, 1024, PRT_TRANSFER_UNSHADOWED, 0);
+    const size_t nv = prt_transfer_vertex_count(t);
+    prt_lighting *l = NULL;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    const float radii[3] = {1e-9f, 1e-6f, 1e-3f};
+    for (int k = 0; k < 3; ++k) {
+        const float R = radii[k], I = 2.0f;
+        prt_lighting_clear_lights(l);
+        prt_light ball = {.type = PRT_LIGHT_SPHERE, .position = {0.2f, 0.7f, 0}, .radius = R};
+        for (int c = 0; c < 3; ++c) ball.radiance[c] = (float)(I / (M_PI * (double)R * R));
+        assert_int_equal(prt_lighting_add(l, &ball, NULL), PRT_OK);
+        prt_relit sphere, point;
+        relight(ctx, t, l, 6, 0, 1, &sphere);
+        prt_lighting_clear_lights(l);
+        prt_light dot = {.type = PRT_LIGHT_POINT, .position = {0.2f, 0.7f, 0}, .intensity = {I, I, I}};
+        assert_int_equal(prt_lighting_add(l, &dot, NULL), PRT_OK);
+        relight(ctx, t, l, 6, 0, 1, &point);
+        double e2 = 0, b2 = 0;
+        for (size_t i = 0; i < nv * 3; ++i) {
+            e2 += (sphere.radiance[i] - point.radiance[i]) * (double)(sphere.radiance[i] - point.radiance[i]);
+            b2 += (double)point.radiance[i] * point.radiance[i];
+        }
+        print_message("sphere light of radius %g against a point light of its power: relative L2 %.2e\n", R, sqrt(e2 / b2));
+        assert_true(b2 > 0 && sqrt(e2 / b2) < 1e-3);
+        prt_relit_free(&sphere);
+        prt_relit_free(&point);
+    }
+    prt_lighting_release(l);
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 /* Glossy matrices and compressed sets meet each vertex's own lighting: relit with a point light,
  * a vertex's exit vector is what prt_relight_sh_glossy gives for that vertex's light as a distant
  * lighting (a delta I/r^2 y(w)); a compressed copy stays within its compression error. */
@@ -400,6 +442,15 @@ static void test_light_inside(void **state)
     assert_int_equal(prt_lighting_set(l, 0, &lamp), PRT_OK);
     assert_int_equal(prt_relight(ctx, t, l, NULL, &r), PRT_ERR_INVALID_ARG);
     prt_transfer_release(t);
+    /* A file of glossy matrices only is asked the same question of its geometry. */
+    prt_brdf shiny = {.model = PRT_BRDF_PHONG, .exponent = 8, .diffuse = {0.3f, 0.3f, 0.3f}, .specular = {0.5f, 0.5f, 0.5f}};
+    assert_int_equal(prt_scene_set_brdf(closed, 0, m.nv, &shiny), PRT_OK);
+    t = bake(ctx, closed, 3, 64, PRT_TRANSFER_GLOSSY_SHADOWED, 0);
+    const int controls[2] = {3, 0};
+    prt_relight_desc glossy = {.variant = prt_transfer_find_variant(t, "glossy-shadowed"), .controls = controls};
+    assert_int_equal(prt_relight(ctx, t, l, &glossy, &r), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "is inside the scene"));
+    prt_transfer_release(t);
     prt_scene_release(closed);
     tm_free(&m);
     /* The open box lit from above: the floor and the far walls see the lamp and the sky beyond it. */
@@ -409,6 +460,12 @@ static void test_light_inside(void **state)
     lamp = (prt_light){.type = PRT_LIGHT_POINT, .position = {0, 2, 0}, .intensity = {1, 1, 1}};
     assert_int_equal(prt_lighting_set(l, 0, &lamp), PRT_OK);
     assert_int_equal(prt_relight(ctx, t, l, NULL, &r), PRT_OK);
+    prt_relit_free(&r);
+    prt_transfer_release(t);
+    assert_int_equal(prt_scene_set_brdf(open, 0, m.nv, &shiny), PRT_OK);
+    t = bake(ctx, open, 3, 64, PRT_TRANSFER_GLOSSY_SHADOWED, 0);
+    glossy.variant = prt_transfer_find_variant(t, "glossy-shadowed");
+    assert_int_equal(prt_relight(ctx, t, l, &glossy, &r), PRT_OK);
     prt_relit_free(&r);
     prt_transfer_release(t);
     prt_scene_release(open);
@@ -422,6 +479,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_point_over_plane),
         cmocka_unit_test(test_sphere_over_plane),
+        cmocka_unit_test(test_tiny_sphere),
         cmocka_unit_test(test_glossy_and_compressed),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_light_inside),
