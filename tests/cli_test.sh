@@ -347,6 +347,15 @@ expect 2 "normal map with a generated atlas" -- "$PRT" bake "$T/nouv.obj" -o "$T
 says "normal map"
 expect 2 "--uv without --texels" -- "$PRT" bake "$T/nouv.obj" -o "$T/x.prt" --uv atlas
 says "--texels"
+expect 0 "height map" -- "$PRT" bake -q "$T/demo.obj" -o "$T/h.prt" --order 2 --samples 64 --bounces 1 --texels 32 --kinds shadowed --height-map "$T/nm.pfm" --bump-height 0.05
+expect 2 "height map without texels" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --height-map "$T/nm.pfm"
+says "--texels"
+expect 2 "bump height without a height map" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --texels 16 --bump-height 0.1
+says "--height-map"
+expect 2 "height map with a generated atlas" -- "$PRT" bake "$T/nouv.obj" -o "$T/x.prt" --texels 16 --height-map "$T/nm.pfm"
+says "height map"
+expect 1 "unreadable height map" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --texels 16 --height-map "$T/nm.ppm"
+says "height map"
 
 # An interrupted bake exits 130 and leaves neither the file nor a temporary.
 # The signal goes once the bake reports progress (its handler is in place by then); the bake is

@@ -61,6 +61,13 @@ typedef struct prt_sh_bake_desc {
      * (0.5, 0.5, 1 = unperturbed; +y of the map along +v), or NULL. It follows the mesh's own
      * texture coordinates, so it cannot go with a generated atlas. */
     const prt_image *normal_map;
+    /* Height map for the per-texel transfer (its first channel, [0, 1] as stored; white is
+     * highest): its bumps shade the texels through the normals their slopes give (unless a
+     * normal map does) and shadow one another (the course notes' self-shadowing bumps), so the
+     * shadows move as the lighting turns. Follows the mesh's own texture coordinates, or NULL.
+     * height_scale: world units of a stored 1; 0 = 1% of the scene's diagonal. */
+    const prt_image *height_map;
+    float height_scale;
     prt_progress_fn progress;
     void *progress_user;
 } prt_sh_bake_desc;

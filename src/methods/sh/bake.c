@@ -205,7 +205,8 @@ typedef struct sh_bake {
     stage_kind plan[80];
     int bounce_of[80];            /* ST_BOUNCE: its number; ST_COMPRESS: the set it compresses */
     int stages;
-    prt__sh_extra extra;          /* compression, quantization, the normal map (owned) */
+    prt__sh_extra extra;          /* compression, quantization, the normal and height maps (owned) */
+    prt__height_field height;     /* over d.height_map */
     prt_brdf brdf;                /* d.glossy_brdf points here */
     int compressing_set;
 } sh_bake;
@@ -404,7 +405,8 @@ static prt_status run_texels(prt__bake_job *b, prt_context *ctx, prt__progress *
     sh_bake *sb = (sh_bake *)b;
     prt_transfer *t = sb->t;
     prt__texel_input ti = {&t->mesh, t->source, sb->d.order, sb->d.samples, sb->job.dirs, sb->job.basis, sb->job.rc.scene, sb->job.offset,
-                           sb->s->sets[2].coeffs, sb->d.kinds & 7u, sb->d.texels, sb->d.texels, sb->d.normal_map, p};
+                           sb->s->sets[2].coeffs, sb->d.kinds & 7u, sb->d.texels, sb->d.texels, sb->d.normal_map,
+                           sb->d.height_map ? &sb->height : NULL, p};
     return prt__bake_texels(ctx, &ti, &sb->s->texels);
 }
 
@@ -584,6 +586,7 @@ static void sh_release(prt__bake_job *b)
     free(job->hits); free(job->hit_count); free(job->origins); free(job->buried); free(job->dirs); free(job->basis);
     free(sb->unsh); free(sb->shad); free(sb->gshad); free(sb->total); free(sb->prev); free(sb->next);
     prt_image_free(&sb->extra.normal_map);
+    prt_image_free(&sb->extra.height_map);
     free(sb);
 }
 
@@ -594,9 +597,9 @@ static prt_status texel_layout(prt_context *ctx, const prt_sh_bake_desc *d, prt_
     char why[160] = "asked for";
     if (d->uv_layout == PRT_UV_MESH) return PRT_OK;   /* the texel bake says what is wrong with them */
     if (d->uv_layout == PRT_UV_AUTO && !prt__uv_layout_unusable(&t->mesh, d->texels, why, sizeof why)) return PRT_OK;
-    if (d->normal_map)
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a normal map follows the mesh's own texture coordinates, and '%s' cannot use them for texels (%s)",
-                         t->source, why);
+    if (d->normal_map || d->height_map)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a %s map follows the mesh's own texture coordinates, and '%s' cannot use them for texels (%s)",
+                         d->normal_map ? "normal" : "height", t->source, why);
     prt__atlas_report r;
     const size_t nv = t->mesh.vertex_count;
     prt_status st = prt__uv_atlas(ctx, &t->mesh, &(prt__atlas_desc){.resolution = d->texels}, &r);
@@ -610,6 +613,7 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
 {
     prt_sh_bake_desc d = desc_in ? *desc_in : (prt_sh_bake_desc){0};
     if (extra && extra->normal_map.rgb) d.normal_map = &extra->normal_map;
+    if (extra && extra->height_map.rgb) d.height_map = &extra->height_map;
     prt_sh_bake_desc def = prt_sh_bake_desc_defaults();
     if (d.order == 0) d.order = def.order;
     if (d.samples == 0) d.samples = def.samples;
@@ -630,6 +634,12 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
     if (d.normal_map && !d.texels) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a normal map needs per-texel transfer (texels > 0)");
     if (d.normal_map && (d.normal_map->width < 1 || d.normal_map->height < 1 || !d.normal_map->rgb))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the normal map is empty");
+    if (d.height_map && !d.texels) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a height map needs per-texel transfer (texels > 0)");
+    if (d.height_scale < 0 || !isfinite(d.height_scale)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the height scale must be >= 0 (0: 1%% of the scene's diagonal)");
+    if (d.height_map) {
+        prt__height_field probe;
+        if (!prt__height_field_init(&probe, d.height_map, 1.0f)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the height map is empty or holds a value that is not a number");
+    }
     if (d.glossy_exit && !(d.kinds & (PRT_TRANSFER_GLOSSY_SHADOWED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "baking a BRDF in needs a glossy kind (glossy-shadowed or glossy-interreflected)");
     if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
@@ -649,7 +659,9 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
     if (extra) {   /* the job owns the normal map from here on */
         sb->extra = *extra;
         memset(&extra->normal_map, 0, sizeof extra->normal_map);
+        memset(&extra->height_map, 0, sizeof extra->height_map);
         if (d.normal_map == &extra->normal_map) d.normal_map = &sb->extra.normal_map;
+        if (d.height_map == &extra->height_map) d.height_map = &sb->extra.height_map;
     }
     if (d.glossy_brdf) { sb->brdf = *d.glossy_brdf; d.glossy_brdf = &sb->brdf; }
     sb->d = d;
@@ -658,6 +670,18 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
     t->state = s;   /* owned by t from here on, so a failed bake frees it with t */
     s->order = d.order;
     s->samples = d.samples;
+    if (sb->d.height_map) {
+        float scale = sb->d.height_scale;
+        if (scale == 0) {
+            float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+            for (size_t v = 0; v < t->mesh.vertex_count; ++v)
+                for (int c = 0; c < 3; ++c) { lo[c] = fminf(lo[c], t->mesh.positions[v * 3 + c]); hi[c] = fmaxf(hi[c], t->mesh.positions[v * 3 + c]); }
+            scale = 0.01f * sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+            prt__log(ctx, PRT_LOG_INFO, "height map: %dx%d, a stored 1 is %g (1%% of the scene's diagonal; --bump-height sets it)", sb->d.height_map->width,
+                     sb->d.height_map->height, scale);
+        }
+        prt__height_field_init(&sb->height, sb->d.height_map, scale > 0 ? scale : 1.0f);
+    }
     s->bounces = (d.kinds & (PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)) ? d.bounces : 0;
     s->seed = d.seed;
     bool scene_glossy = false;   /* some vertex has a material with a glossy part */

@@ -5,6 +5,7 @@
 #include "core/progress.h"
 #include "brdf/sh_matrix.h"
 #include "geom/raycast.h"
+#include "methods/sh/height_field.h"
 #include "methods/sh/sh.h"
 
 /* One occluded direction of a vertex and the front face it hit. */
@@ -45,6 +46,7 @@ typedef struct prt__texel_input {
     unsigned kinds;
     int width, height;
     const prt_image *normal_map;     /* tangent-space, values in [0, 1] (0.5 = flat), or NULL */
+    const prt__height_field *bumps;  /* a height field that shades and shadows the texels, or NULL */
     prt__progress *progress;
 } prt__texel_input;
 

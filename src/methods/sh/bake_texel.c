@@ -37,8 +37,9 @@ static void normal_map_at(const prt_image *img, float u, float v, float out[3])
     for (int c = 0; c < 3; ++c) out[c] = 2.0f * out[c] - 1.0f;
 }
 
-/* Point, geometric normal and shading normal of one covered texel; false if degenerate. */
-static bool texel_surface(const texel_job *job, size_t texel, float p[3], float ng[3], float ns[3], float *albedo)
+/* Point, geometric normal and shading normal of one covered texel, and the height field's frame
+ * there (bump->len_u = 0 when there is none); false if degenerate. */
+static bool texel_surface(const texel_job *job, size_t texel, float p[3], float ng[3], float ns[3], float *albedo, prt__bump_frame *bump)
 {
     const prt__mesh *m = job->m;
     const uint32_t tri = job->owner[texel] - 1, *ix = m->indices + (size_t)tri * 3;
@@ -57,24 +58,42 @@ static bool texel_surface(const texel_job *job, size_t texel, float p[3], float 
     if (!prt__v3_normalize(ns)) memcpy(ns, ng, 3 * sizeof(float));
     if (prt__v3_dot(ng, ns) < 0) for (int c = 0; c < 3; ++c) ng[c] = -ng[c];   /* the side the shading normal faces */
     const prt_image *nm = job->in->normal_map;
-    if (nm) {
-        /* Tangent frame from the triangle's UV gradients (dP/du, and the sign of the UV map). */
+    const prt__height_field *hf = job->in->bumps;
+    bump->len_u = 0;
+    if (nm || hf) {
+        /* Tangent frame from the triangle's UV gradients (dP/du, dP/dv, and the sign of the UV map). */
         const float *t0 = m->uv + ix[0] * 2, *t1 = m->uv + ix[1] * 2, *t2 = m->uv + ix[2] * 2;
         float du1 = t1[0] - t0[0], dv1 = t1[1] - t0[1], du2 = t2[0] - t0[0], dv2 = t2[1] - t0[1];
         float det = du1 * dv2 - du2 * dv1;
         if (det != 0.0f) {
-            float tan[3], bit[3];
-            for (int c = 0; c < 3; ++c) tan[c] = (e1[c] * dv2 - e2[c] * dv1) / det;
+            float tan[3], bit[3], pv[3];
+            for (int c = 0; c < 3; ++c) { tan[c] = (e1[c] * dv2 - e2[c] * dv1) / det; pv[c] = (e2[c] * du1 - e1[c] * du2) / det; }
+            const float len_u = sqrtf(prt__v3_dot(tan, tan)), len_v = sqrtf(prt__v3_dot(pv, pv));
             float d = prt__v3_dot(tan, ns);
             for (int c = 0; c < 3; ++c) tan[c] -= d * ns[c];
             if (prt__v3_normalize(tan)) {
                 prt__v3_cross(ns, tan, bit);
                 if (det < 0) for (int c = 0; c < 3; ++c) bit[c] = -bit[c];
                 const float u = b0 * t0[0] + b1 * t1[0] + b2 * t2[0], v = b0 * t0[1] + b1 * t1[1] + b2 * t2[1];
-                float t[3], n2[3];
-                normal_map_at(nm, u, v, t);
-                for (int c = 0; c < 3; ++c) n2[c] = t[0] * tan[c] + t[1] * bit[c] + t[2] * ns[c];
-                if (prt__v3_normalize(n2)) memcpy(ns, n2, sizeof n2);
+                if (hf && len_u > 0 && len_v > 0) {
+                    memcpy(bump->t, tan, sizeof tan);
+                    memcpy(bump->b, bit, sizeof bit);
+                    memcpy(bump->n, ns, sizeof bump->n);
+                    bump->u = u;
+                    bump->v = v;
+                    bump->len_u = len_u;
+                    bump->len_v = len_v;
+                }
+                float n2[3];
+                if (nm) {
+                    float t[3];
+                    normal_map_at(nm, u, v, t);
+                    for (int c = 0; c < 3; ++c) n2[c] = t[0] * tan[c] + t[1] * bit[c] + t[2] * ns[c];
+                    if (prt__v3_normalize(n2)) memcpy(ns, n2, sizeof n2);
+                } else if (bump->len_u > 0) {
+                    prt__height_normal(hf, bump, n2);   /* without a normal map, the bumps' own slopes shade */
+                    memcpy(ns, n2, sizeof n2);
+                }
             }
         }
     }
@@ -88,7 +107,13 @@ static bool texel_bake(const texel_job *job, size_t texel, float *unsh, float *s
     const prt__mesh *m = job->m;
     const int nc = job->nc;
     float p[3], ng[3], ns[3], rho[3];
-    if (!texel_surface(job, texel, p, ng, ns, rho)) return true;
+    prt__bump_frame bump;
+    if (!texel_surface(job, texel, p, ng, ns, rho, &bump)) return true;
+    const prt__height_field *hf = bump.len_u > 0 ? in->bumps : NULL;
+    /* A direction the bumps block meets the surface around the texel, lit as the surface is:
+     * the texel's own triangle's inter-reflected transfer stands for what the bump sends back. */
+    const uint32_t *own = m->indices + (size_t)(job->owner[texel] - 1) * 3;
+    const float ob1 = job->bary[texel * 2], ob2 = job->bary[texel * 2 + 1], own_w[3] = {1.0f - ob1 - ob2, ob1, ob2};
     float org[3];
     for (int c = 0; c < 3; ++c) org[c] = p[c] + ng[c] * in->offset;
     /* A sample inside geometry (a scan folded through itself, a prop sunk into the floor) is left
@@ -111,6 +136,16 @@ static bool texel_bake(const texel_job *job, size_t texel, float *unsh, float *s
             if (c <= 0.0f) continue;
             if (unsh) { const float *y = in->basis + (size_t)j * nc; for (int i = 0; i < nc; ++i) unsh[i] += c * w * y[i]; }
             if (prt__v3_dot(d, ng) <= 0.0f) continue;   /* a bumped normal leaning past the real surface: blocked by it */
+            if (hf && prt__height_blocks(hf, &bump, d)) {
+                if (ir) {
+                    const float cw = c * (float)(4.0 * PRT_PI / in->samples);
+                    for (int q = 0; q < 3; ++q) {
+                        const float *T = in->vertex_ir + (size_t)own[q] * 3 * nc;
+                        for (int i = 0; i < 3 * nc; ++i) gather[i] += cw * own_w[q] * T[i];
+                    }
+                }
+                continue;
+            }
             lane_sample[lanes] = j;
             lane_cos[lanes] = c;
             lanes++;

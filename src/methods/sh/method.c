@@ -214,6 +214,10 @@ static const prt_option_desc options[] = {
     {"normal-map", "FILE", PRT_OPTION_TEXT, 0, 0, NULL,
      "tangent-space normal map perturbing the per-texel normals (.png/.jpg values as\n"
      "stored; .exr/.hdr/.pfm values in [0, 1])"},
+    {"height-map", "FILE", PRT_OPTION_TEXT, 0, 0, NULL,
+     "height map (its first channel, white highest) whose bumps shade the per-texel normals\n"
+     "and shadow one another; follows the mesh's own texture coordinates"},
+    {"bump-height", "H", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "world height of the height map's white (default 1% of the scene's diagonal)"},
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
     {"compress", "M", PRT_OPTION_CHOICE, 0, 0, "cpca|pca|vq",
      "store the sets compressed: clustered PCA (cpca), one cluster (pca), or clusters only\n"
@@ -240,11 +244,12 @@ static const prt_control_desc controls[] = {
     {"light-window", "window on the SH of point, spot, sphere and directional lights: 0 none, 1 Hanning, 2 Lanczos", 'J', 'U', 0},
 };
 
-static prt_status load_normal_map(prt_context *ctx, const char *path, prt_image *out)
+/* A map of numbers (normals, heights), not of colours. */
+static prt_status load_data_map(prt_context *ctx, const char *what, const char *path, prt_image *out)
 {
     prt_status st = prt_image_load(path, out);
-    if (st) return prt__fail(ctx, st, "normal map: %s", prt_last_error());
-    /* 8-bit images come back sRGB-decoded; a normal map stores plain numbers, so undo it. */
+    if (st) return prt__fail(ctx, st, "%s: %s", what, prt_last_error());
+    /* 8-bit images come back sRGB-decoded; a data map stores plain numbers, so undo it. */
     const char *ext = strrchr(path, '.');
     if (ext && (!strcasecmp(ext, ".png") || !strcasecmp(ext, ".jpg") || !strcasecmp(ext, ".jpeg")))
         for (size_t i = 0; i < (size_t)out->width * out->height * 3; ++i) {
@@ -287,8 +292,14 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
     if (!st && prt__opt(o, "uv") && !d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--uv needs --texels N");
     if (!st && prt__opt(o, "normal-map")) {
         if (!d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--normal-map needs --texels N");
-        else st = load_normal_map(ctx, prt__opt(o, "normal-map"), &extra.normal_map);
+        else st = load_data_map(ctx, "normal map", prt__opt(o, "normal-map"), &extra.normal_map);
     }
+    if (!st && prt__opt(o, "height-map")) {
+        if (!d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--height-map needs --texels N");
+        else st = load_data_map(ctx, "height map", prt__opt(o, "height-map"), &extra.height_map);
+    }
+    if (!st && prt__opt(o, "bump-height") && !prt__opt(o, "height-map")) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--bump-height needs --height-map FILE");
+    d.height_scale = prt__opt_float(o, "bump-height", 0.0f);
     /* --clusters or --vectors alone ask for clustered PCA. */
     extra.compressing = prt__opt(o, "compress") || prt__opt(o, "clusters") || prt__opt(o, "vectors");
     extra.compress.method = (prt_compress_method)prt__opt_choice(o, "compress", 0);
@@ -302,7 +313,8 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
         st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--quantize applies to uncompressed sets; drop --compress or --quantize");
     if (!st && extra.compressing) st = prt__compress_desc_check(ctx, &extra.compress);
     if (!st) st = prt__sh_bake_begin(ctx, &d, &extra, t, out);
-    prt_image_free(&extra.normal_map);   /* empty when the job took it */
+    prt_image_free(&extra.normal_map);   /* empty when the job took them */
+    prt_image_free(&extra.height_map);
     return st;
 }
 

@@ -72,6 +72,7 @@ typedef struct prt__sh_extra {
     prt_compress_desc compress;   /* defaults filled in (prt__compress_desc_check) */
     int quantize;                 /* 0, 8 or 16 */
     prt_image normal_map;         /* moved into the job when it holds pixels */
+    prt_image height_map;         /* likewise */
 } prt__sh_extra;
 
 /* The SH bake (bake.c) as stages of work units: validates d (defaults filled in),

@@ -97,6 +97,107 @@ static void test_plane_and_normal_map(void **state)
     prt_context_release(ctx);
 }
 
+/* Self-shadowing bumps: a height map holding a ridge along v (a wall of height h across a plane,
+ * repeating every unit of u). A texel of the floor at distance x from the wall's face sees the sky
+ * above the wall's top, at elevation a = atan(h / x) towards it: its sky view factor is
+ * (cos a1 + cos a2) / 2 with the next wall behind it, T_00 that times the open plane's 0.2821.
+ * Light from the wall's side low down is blocked there, light from the other side is not. */
+static void test_height_map_shadows(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    test_mesh m = {0};
+    tm_quad(&m, (float[3]){0, 0, 0}, (float[3]){1, 0, 0}, (float[3]){0, 0, -1}, 4);
+    prt_scene *s = tm_scene(ctx, &m, 0.5f);
+    float *uv = malloc(m.nv * 2 * sizeof(float));
+    for (size_t v = 0; v < m.nv; ++v) { uv[v * 2] = m.pos[v * 3]; uv[v * 2 + 1] = -m.pos[v * 3 + 2]; }
+    assert_int_equal(prt_scene_set_uv(s, 0, m.nv, uv), PRT_OK);
+    free(uv);
+    tm_free(&m);
+    /* 128 columns; columns 60..67 are the wall (centres u 0.473..0.527): its faces, halfway up
+     * the bilinear ramp, at u = 0.4688 and 0.5312. */
+    prt_image hm = {128, 4, calloc(128 * 4 * 3, sizeof(float))};
+    for (int y = 0; y < 4; ++y)
+        for (int x = 60; x <= 67; ++x) hm.rgb[(y * 128 + x) * 3] = 1.0f;
+    const double wall = 0.2, face = 0.46875;
+    prt_bake_desc d = {0};
+    d.order = 6;
+    d.samples = 8192;
+    d.kinds = PRT_TRANSFER_UNSHADOWED | PRT_TRANSFER_SHADOWED;
+    d.texels = 64;
+    d.uv_layout = PRT_UV_MESH;
+    d.height_map = &hm;
+    d.height_scale = (float)wall;
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &t), PRT_OK);
+    int w, h, ch;
+    assert_true(prt_transfer_texel_size(t, &w, &h));
+    const float *U = prt_transfer_texel_coeffs(t, PRT_TRANSFER_UNSHADOWED, &ch), *S = prt_transfer_texel_coeffs(t, PRT_TRANSFER_SHADOWED, NULL);
+    const int nc = 36;
+    const int columns[3] = {8, 16, 24};
+    for (int k = 0; k < 3; ++k) {
+        const double u = (columns[k] + 0.5) / w, x1 = face - u, x2 = u + face;   /* the next wall: at u - 1 */
+        const double svf = (cos(atan(wall / x1)) + cos(atan(wall / x2))) / 2;
+        const size_t i = (size_t)(h / 2) * w + columns[k];
+        print_message("floor %.3f from the wall (elevation %.1f deg): sky view %.4f, baked %.4f\n", x1, atan(wall / x1) * 180 / M_PI, svf, S[i * nc] / 0.28209479);
+        assert_float_equal(S[i * nc] / 0.28209479, svf, 0.02);
+        assert_float_equal(U[i * nc], 0.28209479f, 0.003f);   /* the floor is flat here: no bump turns its normal */
+        /* Low light (30 degrees up) from beyond the wall against the same light from behind. */
+        double towards[3] = {cos(M_PI / 6), sin(M_PI / 6), 0}, away[3] = {-cos(M_PI / 6), sin(M_PI / 6), 0}, ya[36], yb[36];
+        prt_sh_eval(6, towards, ya);
+        prt_sh_eval(6, away, yb);
+        double lit_towards = 0, lit_away = 0;
+        for (int j = 0; j < nc; ++j) { lit_towards += S[i * nc + j] * ya[j]; lit_away += S[i * nc + j] * yb[j]; }
+        if (atan(wall / x1) > M_PI / 5) assert_true(lit_towards < 0.5 * lit_away);
+    }
+    /* On the wall's top: open sky. */
+    const size_t top = (size_t)(h / 2) * w + 32;
+    print_message("wall top: sky view %.4f\n", S[top * nc] / 0.28209479);
+    assert_float_equal(S[top * nc] / 0.28209479, 1.0, 0.02);
+    prt_transfer_release(t);
+    /* A ramp rising 20 degrees along +u: its normal leans towards -u, and without a normal map the
+     * unshadowed transfer is that normal's clamped cosine. */
+    prt_image ramp = {64, 2, calloc(64 * 2 * 3, sizeof(float))};
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 64; ++x) ramp.rgb[(y * 64 + x) * 3] = (x + 0.5f) / 64;
+    const double a = 20 * M_PI / 180;
+    prt_bake_desc dr = d;
+    dr.order = 3;
+    dr.samples = 1024;
+    dr.kinds = PRT_TRANSFER_UNSHADOWED;
+    dr.texels = 16;
+    dr.height_map = &ramp;
+    dr.height_scale = (float)tan(a);
+    assert_int_equal(prt_bake_sh(ctx, s, &dr, &t), PRT_OK);
+    U = prt_transfer_texel_coeffs(t, PRT_TRANSFER_UNSHADOWED, NULL);
+    double n[3] = {-sin(a), cos(a), 0}, want[9], worst = 0;
+    clamped_cosine(3, n, want);
+    for (int x = 4; x < 12; ++x)
+        for (int k = 0; k < 9; ++k) worst = fmax(worst, fabs(U[(size_t)(8 * 16 + x) * 9 + k] - want[k]));
+    print_message("ramp of 20 degrees: worst |T - clamped cosine of its normal| %.4f\n", worst);
+    assert_true(worst < 0.01);
+    prt_transfer_release(t);
+    free(ramp.rgb);
+    /* Bad height maps are refused. */
+    prt_image empty = {0};
+    d.height_map = &empty;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &t), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "height map"));
+    hm.rgb[5 * 3] = NAN;
+    d.height_map = &hm;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &t), PRT_ERR_INVALID_ARG);
+    d.height_scale = -1;
+    hm.rgb[5 * 3] = 0;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &t), PRT_ERR_INVALID_ARG);
+    d.height_scale = 0;
+    d.texels = 0;
+    assert_int_equal(prt_bake_sh(ctx, s, &d, &t), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "per-texel"));
+    free(hm.rgb);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
 static void test_texel_errors(void **state)
 {
     (void)state;
@@ -179,6 +280,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_plane_and_normal_map),
+        cmocka_unit_test(test_height_map_shadows),
         cmocka_unit_test(test_texel_errors),
         cmocka_unit_test_setup_teardown(test_texel_file, test_dir_setup, test_dir_teardown),
     };
