@@ -9,7 +9,7 @@
 #error "the .prt reader and writer assume a little-endian host"
 #endif
 
-#define FILE_VERSION 3   /* the newest this prt reads; files are written at the lowest they need */
+#define FILE_VERSION 4   /* the newest this prt reads; files are written at the lowest they need */
 #define HEADER_SIZE 24
 #define ENTRY_SIZE 24
 #define MAX_CHUNKS 4096

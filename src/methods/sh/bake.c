@@ -558,11 +558,13 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
 static prt_status sh_finish(prt__bake_job *b, prt_transfer *t)
 {
     /* Every stage wrote into the state already. Quantized bakes (16-bit, the table's default)
-     * store their texel sets as halves (0.05% relative): the transfer holds what the file will. */
+     * store their texel sets as halves (0.05% relative), 8-bit ones as bytes with a scale and
+     * bias per coefficient (the course notes' quantized maps): the transfer holds what the file will. */
     const sh_bake *sb = (const sh_bake *)b;
     prt__sh_state *s = t->state;
     prt__texel_sets *tx = &s->texels;
     if (!sb->extra.quantize || !tx->width) return PRT_OK;
+    if (sb->extra.quantize == 8) return prt__texel_quantize8(tx, s->order) ? PRT_OK : PRT_ERR_NO_MEMORY;
     const size_t ntex = (size_t)tx->width * tx->height;
     for (int k = 0; k < 3; ++k)
         for (size_t i = 0; tx->coeffs[k] && i < ntex * (size_t)tx->channels[k] * s->order * s->order; ++i)

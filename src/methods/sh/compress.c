@@ -55,6 +55,28 @@ prt_status prt__sh_quantize(prt_context *ctx, prt__sh_state *s, size_t nv, int b
     return PRT_OK;
 }
 
+bool prt__texel_quantize8(prt__texel_sets *tx, int order)
+{
+    const size_t ntex = (size_t)tx->width * tx->height;
+    for (int k = 0; k < 3; ++k) {
+        if (!tx->coeffs[k]) continue;
+        const int dim = tx->channels[k] * order * order;
+        float *scale = malloc(2 * (size_t)dim * sizeof(float)), *bias = scale ? scale + dim : NULL;
+        if (!scale) return false;
+        prt__quant_grid(tx->coeffs[k], ntex, dim, 8, scale, bias);
+        for (size_t i = 0; i < ntex; ++i)
+            for (int j = 0; j < dim; ++j) {
+                float *x = &tx->coeffs[k][i * dim + j];
+                const float l = scale[j] > 0 ? fminf(fmaxf(roundf((*x - bias[j]) / scale[j]), 0.0f), 255.0f) : 0.0f;
+                *x = bias[j] + l * scale[j];
+            }
+        free(scale);
+    }
+    tx->bytes = true;
+    tx->halves = false;
+    return true;
+}
+
 /* A new SH transfer with in's mesh, settings and texel sets and no vertex sets yet. */
 static prt_status copy_without_sets(prt_context *ctx, const prt_transfer *in, const prt__sh_state *s, prt_transfer **out, prt__sh_state **state)
 {

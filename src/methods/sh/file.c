@@ -8,6 +8,7 @@
 #define CHUNK_TXAL PRT__FOURCC('T', 'X', 'A', 'L')
 #define CHUNK_TXLS PRT__FOURCC('T', 'X', 'L', 'S')
 #define CHUNK_TXLH PRT__FOURCC('T', 'X', 'L', 'H')   /* the same as halves */
+#define CHUNK_TXLQ PRT__FOURCC('T', 'X', 'L', 'Q')   /* the same as bytes, a scale and bias per coefficient */
 #define CPCA_HEADER 64
 
 void prt__sh_save_meta(const prt_transfer *t, cJSON *meta)
@@ -90,7 +91,24 @@ prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
             prt__put32(h + 8, (uint32_t)sh->order);
             prt__put32(h + 12, (uint32_t)tx->width);
             prt__put32(h + 16, (uint32_t)tx->height);
-            const size_t n = ntex * (size_t)tx->channels[k] * sh->order * sh->order;
+            const size_t dim = (size_t)tx->channels[k] * sh->order * sh->order, n = ntex * dim;
+            if (tx->bytes) {
+                /* scale[dim], bias[dim], then the levels, padded to 4 bytes. */
+                const size_t padded = (n + 3) & ~(size_t)3;
+                float *grid = prt__chunks_alloc(l, 2 * dim * sizeof(float));
+                unsigned char *q = prt__chunks_alloc(l, padded);
+                if (!grid || !q) break;
+                prt__quant_grid(tx->coeffs[k], ntex, (int)dim, 8, grid, grid + dim);
+                for (size_t i = 0; i < n; ++i) {
+                    const size_t j = i % dim;
+                    const float lv = grid[j] > 0 ? roundf((tx->coeffs[k][i] - grid[dim + j]) / grid[j]) : 0.0f;
+                    q[i] = (unsigned char)fminf(fmaxf(lv, 0.0f), 255.0f);
+                }
+                memset(q + n, 0, padded - n);
+                if (l->version < 4) l->version = 4;   /* readers of version 3 would skip the texel sets */
+                prt__chunks_add(l, CHUNK_TXLQ, h, (size_t)24, grid, 2 * dim * sizeof(float), q, padded, NULL);
+                continue;
+            }
             if (!tx->halves) {
                 prt__chunks_add(l, CHUNK_TXLS, h, (size_t)24, tx->coeffs[k], n * 4, NULL);
                 continue;
@@ -205,7 +223,7 @@ static prt_status load_texels(prt_context *ctx, prt__sh_state *sh, prt__chunk_in
     prt__chunk_in *in = prt__chunk_take(chunks, count, CHUNK_TXAL);
     prt__texel_sets *tx = &sh->texels;
     if (!in) {
-        if (prt__chunk_take(chunks, count, CHUNK_TXLS) || prt__chunk_take(chunks, count, CHUNK_TXLH))
+        if (prt__chunk_take(chunks, count, CHUNK_TXLS) || prt__chunk_take(chunks, count, CHUNK_TXLH) || prt__chunk_take(chunks, count, CHUNK_TXLQ))
             return bad(ctx, "corrupt .prt file: texel transfer without its albedo chunk");
         return PRT_OK;
     }
@@ -222,29 +240,41 @@ static prt_status load_texels(prt_context *ctx, prt__sh_state *sh, prt__chunk_in
     tx->width = (int)w;
     tx->height = (int)h;
     if (!prt__all_finite(tx->albedo, ntex * 3)) return bad(ctx, "corrupt .prt file: non-finite texel albedo");
-    bool floats = false;
-    while ((in = prt__chunk_take(chunks, count, CHUNK_TXLS)) || (in = prt__chunk_take(chunks, count, CHUNK_TXLH))) {
-        const bool halves = in->id == CHUNK_TXLH;
-        if ((halves && floats) || (!halves && tx->halves)) return bad(ctx, "corrupt .prt file: texel transfer both as floats and as halves");
-        floats |= !halves;
-        tx->halves = halves;
+    int form = 0;   /* the sets' one representation: 1 floats, 2 halves, 3 bytes */
+    while ((in = prt__chunk_take(chunks, count, CHUNK_TXLS)) || (in = prt__chunk_take(chunks, count, CHUNK_TXLH)) ||
+           (in = prt__chunk_take(chunks, count, CHUNK_TXLQ))) {
+        const int this_form = in->id == CHUNK_TXLS ? 1 : in->id == CHUNK_TXLH ? 2 : 3;
+        if (form && form != this_form) return bad(ctx, "corrupt .prt file: texel transfer sets stored in different forms");
+        form = this_form;
+        tx->halves = form == 2;
+        tx->bytes = form == 3;
         p = in->data;
         len = in->size;
         uint32_t kind = len >= 24 ? prt__get32(p) : 0, channels = len >= 24 ? prt__get32(p + 4) : 0, order = len >= 24 ? prt__get32(p + 8) : 0;
         uint32_t tw = len >= 24 ? prt__get32(p + 12) : 0, th = len >= 24 ? prt__get32(p + 16) : 0;
         int k = prt__kind_index((prt_transfer_kind)kind);
-        uint64_t n = (uint64_t)tw * th * channels * order * order;
+        const uint64_t dim = (uint64_t)channels * order * order, n = (uint64_t)tw * th * dim;
+        const uint64_t need = form == 1 ? 24 + n * 4 : form == 2 ? 24 + ((n * 2 + 3) & ~3ull) : 24 + 8 * dim + ((n + 3) & ~3ull);
         if (k < 0 || k > 2 || (channels != 1 && channels != 3) || (int)order != sh->order || (int)tw != tx->width || (int)th != tx->height ||
-            tx->coeffs[k] || 24 + (halves ? (n * 2 + 3) & ~3ull : n * 4) != len)
+            tx->coeffs[k] || need != len)
             return bad(ctx, "corrupt .prt file: invalid texel transfer chunk");
         if (!(tx->coeffs[k] = malloc(n * 4))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        if (halves)
+        if (form == 2)
             for (uint64_t i = 0; i < n; ++i) {
                 uint16_t hv;
                 memcpy(&hv, p + 24 + i * 2, 2);
                 tx->coeffs[k][i] = prt__half_to_float(hv);
             }
-        else
+        else if (form == 3) {
+            const unsigned char *grid = p + 24, *q = p + 24 + 8 * dim;
+            for (uint64_t i = 0; i < n; ++i) {
+                const uint64_t jj = i % dim;
+                float scale, bias;
+                memcpy(&scale, grid + 4 * jj, 4);
+                memcpy(&bias, grid + 4 * (dim + jj), 4);
+                tx->coeffs[k][i] = bias + (float)q[i] * scale;
+            }
+        } else
             memcpy(tx->coeffs[k], p + 24, n * 4);
         tx->channels[k] = (int)channels;
         if (!prt__all_finite(tx->coeffs[k], n)) return bad(ctx, "corrupt .prt file: non-finite texel transfer");

@@ -87,7 +87,10 @@ static size_t texel_bytes(const prt__sh_state *s)
     if (!tx->width) return 0;
     const size_t ntex = (size_t)tx->width * tx->height;
     size_t bytes = ntex * (3 * sizeof(float) + 1);
-    for (int k = 0; k < 3; ++k) bytes += ntex * (size_t)tx->channels[k] * s->order * s->order * (tx->halves ? 2 : sizeof(float));
+    for (int k = 0; k < 3; ++k) {
+        const size_t dim = (size_t)tx->channels[k] * s->order * s->order;
+        bytes += tx->bytes ? ntex * dim + 8 * dim : ntex * dim * (tx->halves ? 2 : sizeof(float));
+    }
     return bytes;
 }
 
@@ -174,6 +177,7 @@ prt_status prt__texel_sets_copy(prt__texel_sets *dst, const prt__texel_sets *src
     dst->width = src->width;
     dst->height = src->height;
     dst->halves = src->halves;
+    dst->bytes = src->bytes;
     dst->albedo = malloc(ntex * 3 * sizeof(float));
     dst->covered = malloc(ntex);
     bool ok = dst->albedo && dst->covered;
@@ -227,7 +231,8 @@ static const prt_option_desc options[] = {
     {"vectors", "N", PRT_OPTION_INT, 1, 300, NULL, "average PCA vectors per cluster for cpca and pca (default 8); alone: cpca"},
     {"quantize", "B", PRT_OPTION_CHOICE, 0, 0, "8|16|32",
      "store uncompressed per-vertex sets as 8- or 16-bit integers (scale and bias per coefficient) or 32-bit floats (default 16: half the "
-     "floats' size, its error some 1e-5 of each coefficient's range, far under a bake's own noise)"},
+     "floats' size, its error some 1e-5 of each coefficient's range, far under a bake's own noise); per-texel sets as 8-bit levels "
+     "(scale and bias per coefficient), halves (16) or floats"},
 };
 
 /* prt export's options for SH files (export.c). */
@@ -431,7 +436,8 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
         const double cov = texel_coverage(t, s->texels.width, s->texels.height);
         char on[64] = "";
         if (cov >= 0) snprintf(on, sizeof on, ", atlas coverage %.0f%%", 100 * cov);
-        prt__describe_line(d, "texels:", "%d x %d (%s%s), %.2f MiB", s->texels.width, s->texels.height, tk, on, info.texel_bytes / 1048576.0);
+        prt__describe_line(d, "texels:", "%d x %d (%s%s), %.2f MiB%s", s->texels.width, s->texels.height, tk, on, info.texel_bytes / 1048576.0,
+                           s->texels.bytes ? " (8-bit)" : s->texels.halves ? " (halves)" : "");
     }
     prt__describe_line(d, "bake:", "%d samples, %d bounces, seed %u", s->samples, s->bounces, s->seed);
 }

@@ -28,7 +28,12 @@ typedef struct prt__texel_sets {
     int channels[3];
     float *coeffs[3];     /* [texel][channel][order^2] */
     bool halves;          /* coeffs hold IEEE halves' values, as the file stores them */
+    bool bytes;           /* coeffs hold 8-bit levels' values (a scale and bias per coefficient), likewise */
 } prt__texel_sets;
+
+/* Rounds every texel set to 256 levels per coefficient between its least and greatest value
+ * (8-bit quantization, as the file will store it); false when out of memory. */
+bool prt__texel_quantize8(prt__texel_sets *tx, int order);
 
 typedef struct prt__sh_state {
     int order;

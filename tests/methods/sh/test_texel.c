@@ -276,6 +276,52 @@ static void test_texel_file(void **state)
     prt_context_release(ctx);
 }
 
+/* 8-bit texel sets (--quantize 8): 256 levels per coefficient between its least and greatest
+ * value, the transfer holding what the file stores (a load gives the same numbers), within half
+ * a level of the floats, and a quarter of the halves' bytes. */
+static void test_texel_bytes(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    prt_scene *s = uv_plane(ctx, 4, true, 0.8f);
+    prt_transfer *t[2] = {NULL, NULL}, *u = NULL;
+    const char *bits[2] = {"32", "8"};
+    for (int q = 0; q < 2; ++q) {
+        prt_options *o = NULL;
+        assert_int_equal(prt_options_create(prt_method_find("sh"), &o), PRT_OK);
+        assert_int_equal(prt_options_set(o, "order", "4"), PRT_OK);
+        assert_int_equal(prt_options_set(o, "samples", "256"), PRT_OK);
+        assert_int_equal(prt_options_set(o, "kinds", "shadowed"), PRT_OK);
+        assert_int_equal(prt_options_set(o, "texels", "32"), PRT_OK);
+        assert_int_equal(prt_options_set(o, "quantize", bits[q]), PRT_OK);
+        assert_int_equal(prt_bake(ctx, s, prt_method_find("sh"), o, NULL, &t[q]), PRT_OK);
+        prt_options_release(o);
+    }
+    const size_t n = 32 * 32 * 16;
+    const float *f = prt_transfer_texel_coeffs(t[0], PRT_TRANSFER_SHADOWED, NULL), *b = prt_transfer_texel_coeffs(t[1], PRT_TRANSFER_SHADOWED, NULL);
+    for (int j = 0; j < 16; ++j) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (size_t i = j; i < n; i += 16) { lo = fminf(lo, f[i]); hi = fmaxf(hi, f[i]); }
+        for (size_t i = j; i < n; i += 16) assert_true(fabsf(b[i] - f[i]) <= 0.5f * (hi - lo) / 255 * 1.001f + 1e-7f);
+    }
+    char path[600];
+    snprintf(path, sizeof path, "%s/bytes.prt", test_dir);
+    assert_int_equal(prt_transfer_save(t[1], path), PRT_OK);
+    assert_int_equal(prt_transfer_load(ctx, path, &u), PRT_OK);
+    const float *c = prt_transfer_texel_coeffs(u, PRT_TRANSFER_SHADOWED, NULL);
+    for (size_t i = 0; i < n; ++i) assert_float_equal(c[i], b[i], 1e-6f * (fabsf(b[i]) + 1e-3f));
+    prt_transfer_info a, z;
+    prt_transfer_get_info(t[0], &a);
+    prt_transfer_get_info(u, &z);
+    print_message("texel sets: %zu bytes as floats, %zu as 8-bit levels\n", (size_t)a.texel_bytes, (size_t)z.texel_bytes);
+    assert_true(z.texel_bytes < a.texel_bytes / 2);
+    prt_transfer_release(u);
+    prt_transfer_release(t[0]);
+    prt_transfer_release(t[1]);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -283,6 +329,7 @@ int main(void)
         cmocka_unit_test(test_height_map_shadows),
         cmocka_unit_test(test_texel_errors),
         cmocka_unit_test_setup_teardown(test_texel_file, test_dir_setup, test_dir_teardown),
+        cmocka_unit_test_setup_teardown(test_texel_bytes, test_dir_setup, test_dir_teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
