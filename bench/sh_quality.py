@@ -220,6 +220,12 @@ FONT = {   # 5 x 7, rows top down, for the panel labels
     '5': '11111 10000 11110 00001 00001 10001 01110', '6': '00110 01000 10000 11110 10001 10001 01110',
     '7': '11111 00001 00010 00100 01000 01000 01000', '8': '01110 10001 10001 01110 10001 10001 01110',
     '9': '01110 10001 10001 01111 00001 00010 01100', ' ': '00000 00000 00000 00000 00000 00000 00000',
+    '.': '00000 00000 00000 00000 00000 01100 01100', '-': '00000 00000 00000 11111 00000 00000 00000',
+    '=': '00000 00000 11111 00000 11111 00000 00000', ';': '00000 01100 01100 00000 01100 00100 01000',
+    ':': '00000 01100 01100 00000 01100 01100 00000', 'B': '11110 10001 10001 11110 10001 10001 11110',
+    'F': '11111 10000 10000 11110 10000 10000 10000', 'K': '10001 10010 10100 11000 10100 10010 10001',
+    'M': '10001 11011 10101 10101 10001 10001 10001', 'U': '10001 10001 10001 10001 10001 10001 01110',
+    'Y': '10001 10001 01010 00100 00100 00100 00100', 'Z': '11111 00001 00010 00100 01000 10000 11111',
 }
 
 
@@ -283,51 +289,98 @@ def draw_panel(cv, ox, oy, size, grid, n):
             cv.put(ox + a, oy + b, (220, 40, 40))
 
 
-# ---------------------------------------------------------------- SVG
+# ---------------------------------------------------------------- profile plot
 
-def write_svg(path, sizes, profiles, orders_shown):
+def profile_plot(sizes, profiles, orders_shown):
+    """The centre-line profiles as drawing primitives, for write_svg and draw_png."""
     w, h, pad = 300, 230, 40
-    total_w = pad + len(sizes) * (w + pad)
-    colours = ['#9ecae1', '#6baed6', '#3182bd', '#08519c', '#08306b', '#041a3d']
-    out = ['<svg xmlns="http://www.w3.org/2000/svg" width="%d" height="%d" font-family="sans-serif" font-size="11">'
-           % (total_w, h + 2 * pad + 30), '<rect width="100%" height="100%" fill="white"/>']
+    colours = ['#c6dbef', '#9ecae1', '#6baed6', '#3182bd', '#08519c', '#08306b']
+    prims = []
     for k, size in enumerate(sizes):
         ox, oy = pad + k * (w + pad), pad
         xs, curves = profiles[size]
 
-        def X(x):
+        def X(x, ox=ox):
             return ox + (x + VIEW) / (2 * VIEW) * w
 
-        def Y(v):
-            return oy + h - (v + 0.2) / 1.4 * h
-        out.append('<rect x="%d" y="%d" width="%d" height="%d" fill="none" stroke="#888"/>' % (ox, oy, w, h))
+        def Y(v, oy=oy):
+            return oy + h - (v + 0.4) / 1.6 * h
+        prims.append(('rect', ox, oy, w, h, '#888888'))
         for v in (0, 0.5, 1):
-            out.append('<line x1="%.1f" x2="%.1f" y1="%.1f" y2="%.1f" stroke="#ddd"/>' % (ox, ox + w, Y(v), Y(v)))
-            out.append('<text x="%d" y="%.1f" text-anchor="end">%g</text>' % (ox - 4, Y(v) + 4, v))
+            prims.append(('line', ox, Y(v), ox + w, Y(v), '#dddddd', 1, False))
+            prims.append(('text', ox - 4, Y(v) + 4, '%g' % v, 'end'))
         for x in (-0.5, 0, 0.5):
-            out.append('<text x="%.1f" y="%d" text-anchor="middle">%g</text>' % (X(x), oy + h + 14, x))
-        out.append('<text x="%.1f" y="%d" text-anchor="middle" font-size="13">%s</text>'
-                   % (ox + w / 2, oy - 10, 'point light' if size == 0 else '%g degree source' % size))
+            prims.append(('text', X(x), oy + h + 14, '%g' % x, 'middle'))
+        for x in (-HALF, HALF):
+            prims.append(('line', X(x), oy, X(x), oy + h, '#dd3333', 1, True))
+        prims.append(('text', ox + w / 2, oy - 10, 'point light' if size == 0 else '%g degree source' % size, 'middle'))
         keep = [i for i, x in enumerate(xs) if abs(x) <= VIEW + 1e-9]
-        series = [('SH %d' % o, curves['sh%d' % o], colours[m % len(colours)], '1.2', '')
-                  for m, o in enumerate(orders_shown)]
-        series += [('wavelet', curves['wavelet'], '#d62728', '1.6', ' stroke-dasharray="5,3"'),
-                   ('exact', curves['exact'], '#000', '1.6', '')]
-        for name, vals, col, sw, dash in series:
-            pts = ' '.join('%.1f,%.1f' % (X(xs[i]), Y(max(min(vals[i], 1.2), -0.2))) for i in keep)
-            out.append('<polyline points="%s" fill="none" stroke="%s" stroke-width="%s"%s/>' % (pts, col, sw, dash))
+        series = [(curves['sh%d' % o], colours[m % len(colours)], 1, False) for m, o in enumerate(orders_shown)]
+        series += [(curves['wavelet'], '#d62728', 2, True), (curves['exact'], '#000000', 2, False)]
+        for vals, col, sw, dash in series:
+            prims.append(('poly', [(X(xs[i]), Y(max(min(vals[i], 1.2), -0.4))) for i in keep], col, sw, dash))
     ly = h + 2 * pad + 10
     legend = [('SH %d' % o, colours[m % len(colours)]) for m, o in enumerate(orders_shown)]
-    legend += [('wavelet', '#d62728'), ('exact', '#000')]
+    legend += [('wavelet', '#d62728'), ('exact', '#000000')]
     for m, (name, col) in enumerate(legend):
         lx = pad + m * 80
-        out.append('<line x1="%d" x2="%d" y1="%d" y2="%d" stroke="%s" stroke-width="2"/>' % (lx, lx + 20, ly, ly, col))
-        out.append('<text x="%d" y="%d">%s</text>' % (lx + 24, ly + 4, name))
-    out.append('<text x="%d" y="%d">exit radiance along the centre line z = 0 (x across the shadow; blocker |x| &lt; 0.3)</text>'
-               % (pad, ly + 22))
+        prims.append(('line', lx, ly, lx + 20, ly, col, 2, False))
+        prims.append(('text', lx + 24, ly + 4, name, 'start'))
+    prims.append(('text', pad, ly + 24, 'exit radiance along the centre line z = 0; red: the blocker edges', 'start'))
+    return pad + len(sizes) * (w + pad), ly + 36, prims
+
+
+def write_svg(path, width, height, prims):
+    out = ['<svg xmlns="http://www.w3.org/2000/svg" width="%d" height="%d" font-family="sans-serif" font-size="11">'
+           % (width, height), '<rect width="100%" height="100%" fill="white"/>']
+    for p in prims:
+        if p[0] == 'rect':
+            out.append('<rect x="%.1f" y="%.1f" width="%.1f" height="%.1f" fill="none" stroke="%s"/>' % p[1:])
+        elif p[0] == 'line':
+            out.append('<line x1="%.1f" y1="%.1f" x2="%.1f" y2="%.1f" stroke="%s" stroke-width="%d"%s/>'
+                       % (p[1:7] + (' stroke-dasharray="5,3"' if p[7] else '',)))
+        elif p[0] == 'poly':
+            out.append('<polyline points="%s" fill="none" stroke="%s" stroke-width="%d"%s/>'
+                       % (' '.join('%.1f,%.1f' % q for q in p[1]), p[2], p[3], ' stroke-dasharray="5,3"' if p[4] else ''))
+        else:
+            out.append('<text x="%.1f" y="%.1f" text-anchor="%s">%s</text>' % (p[1], p[2], p[4], p[3]))
     out.append('</svg>')
     with open(path, 'w') as f:
         f.write('\n'.join(out) + '\n')
+
+
+def draw_png(path, width, height, prims):
+    cv = Canvas(width, height)
+
+    def rgb(col):
+        return tuple(int(col[i:i + 2], 16) for i in (1, 3, 5))
+
+    def segment(x0, y0, x1, y1, col, sw, dash, phase=0.0):
+        n = max(int(max(abs(x1 - x0), abs(y1 - y0)) * 2), 1)
+        for t in range(n + 1):
+            x, y = x0 + (x1 - x0) * t / n, y0 + (y1 - y0) * t / n
+            if dash and int((phase + t / 2) / 4) % 2:
+                continue
+            for d in range(sw):
+                cv.put(int(round(x)), int(round(y)) + d, col)
+        return phase + n / 2
+    for p in prims:
+        if p[0] == 'rect':
+            _, x, y, w, h, col = p
+            for a, b, c, e in ((x, y, x + w, y), (x, y + h, x + w, y + h), (x, y, x, y + h), (x + w, y, x + w, y + h)):
+                segment(a, b, c, e, rgb(col), 1, False)
+        elif p[0] == 'line':
+            segment(p[1], p[2], p[3], p[4], rgb(p[5]), p[6], p[7])
+        elif p[0] == 'poly':
+            phase = 0.0
+            for (a, b), (c, e) in zip(p[1], p[1][1:]):
+                phase = segment(a, b, c, e, rgb(p[2]), p[3], p[4], phase)
+        else:
+            _, x, y, text, anchor = p
+            tw = 6 * len(text)
+            x = x - tw if anchor == 'end' else x - tw / 2 if anchor == 'middle' else x
+            cv.text(int(x), int(y) - 7, text, scale=1)
+    cv.save(path)
 
 
 # ---------------------------------------------------------------- analysis
@@ -372,6 +425,17 @@ def analyse(d, orders, sizes, figure_orders, check):
                 entry['min'] = min(v)
             row[name] = entry
             grids[(size, name)] = [v[j * (n + 1):(j + 1) * (n + 1)] for j in range(n + 1)]
+        ref_path = os.path.join(d, 'reference_%s.json' % tag)
+        if os.path.exists(ref_path):
+            # The path tracer's direct light (the blocker's underside bounces a little light
+            # back, which the shadowed transfer leaves out) against the analytic answer: a
+            # check of the scene, the probe and the exact shadow, good to its noise.
+            ref = json.load(open(ref_path))
+            direct = [ref['direct'][k][0] for k in idx]
+            se = [ref['std_error'][k][0] for k in idx]
+            sel = [m for m, s in enumerate(inside) if s]
+            chi2 = sum((direct[m] - exact[m]) ** 2 / (se[m] ** 2 + 1e-12) for m in sel) / len(sel)
+            row['reference'] = {'rel_l2': rel_l2([direct[m] for m in sel], [exact[m] for m in sel]), 'chi2': chi2}
         results['sizes'][tag] = row
         profiles[size] = ([xs[m] for m in line],
                           {name: [g[mid][i] for i in range(n + 1)] for (s, name), g in grids.items() if s == size})
@@ -380,14 +444,16 @@ def analyse(d, orders, sizes, figure_orders, check):
 
     # The table (markdown).
     head = ['light'] + ['SH %d' % o for o in orders] + ['wavelet']
+    has_ref = all('reference' in results['sizes'][t] for t in results['sizes'])
     print('relative L2 of the exit radiance on the plane (|x|, |z| <= %g) against the exact shadow:' % MEASURE)
-    print('| ' + ' | '.join(head) + ' |')
-    print('| --- |' + ' ---: |' * (len(head) - 1))
+    print('| ' + ' | '.join(head + (['path tracer (direct)'] if has_ref else [])) + ' |')
+    print('| --- |' + ' ---: |' * (len(head) - 1 + has_ref))
     for size in sizes:
         tag = 'point' if size == 0 else '%g' % size
         r = results['sizes'][tag]
         print('| %s | ' % ('point' if size == 0 else '%g deg' % size)
-              + ' | '.join('%.3f' % r[k]['rel_l2'] for k in ['sh%d' % o for o in orders] + ['wavelet']) + ' |')
+              + ' | '.join('%.3f' % r[k]['rel_l2'] for k in ['sh%d' % o for o in orders] + ['wavelet'])
+              + (' | %.4f' % r['reference']['rel_l2'] if has_ref else '') + ' |')
     print()
     print('10-90%% penumbra width on the centre line (scene units; vertex spacing %.4f):' % cell)
     print('| ' + ' | '.join(head + ['exact']) + ' |')
@@ -410,8 +476,9 @@ def analyse(d, orders, sizes, figure_orders, check):
             for c, name in enumerate(cols):
                 draw_panel(cv, left + c * (panel + gap), top + r * (panel + gap), panel, grids[(size, name)], n)
         cv.save(os.path.join(d, 'sh_quality.png'))
-        write_svg(os.path.join(d, 'sh_quality_profile.svg'), sizes, profiles,
-                  [o for o in figure_orders if o in orders])
+        plot = profile_plot(sizes, profiles, [o for o in figure_orders if o in orders])
+        write_svg(os.path.join(d, 'sh_quality_profile.svg'), *plot)
+        draw_png(os.path.join(d, 'sh_quality_profile.png'), *plot)
 
     if check:
         failures = []
@@ -432,6 +499,11 @@ def analyse(d, orders, sizes, figure_orders, check):
             if not r['wavelet']['penumbra'] < r['sh%d' % low]['penumbra']:
                 failures.append('wavelet penumbra (%.3f) is not narrower than SH order %d (%.3f) for the %s source'
                                 % (r['wavelet']['penumbra'], low, r['sh%d' % low]['penumbra'], tag))
+        for tag, r in results['sizes'].items():
+            if 'reference' in r and not (r['reference']['chi2'] < 2 and r['reference']['rel_l2'] < 0.05):
+                failures.append('the path tracer disagrees with the exact shadow for the %s source: '
+                                'relative L2 %.4f, mean squared error over its variance %.2f'
+                                % (tag, r['reference']['rel_l2'], r['reference']['chi2']))
         for f in failures:
             print('FAIL: ' + f, file=sys.stderr)
         if failures:

@@ -9,7 +9,9 @@
 # 2 cores). Writes OUTDIR/sh_quality.png (rows: light sizes; columns: SH orders, wavelet, exact),
 # OUTDIR/sh_quality_profile.svg (the centre line), OUTDIR/results.json, and prints the tables.
 # Environment: ORDERS (default 2,...,10), FIGURE_ORDERS (2,3,4,6,8,10), SIZES (0,20,40),
-# WAVELET_SUPERSAMPLE (2), CHECK=1 to exit 1 unless the trends the notes show hold.
+# WAVELET_SUPERSAMPLE (2), WAVELET_COEFFICIENTS (prt's default, 128 per vertex), REFERENCE_SAMPLES
+# (1024 paths per vertex of `prt reference`, whose direct light checks the analytic shadow; 0: none),
+# CHECK=1 to exit 1 unless the trends the notes show hold and the path tracer agrees.
 set -eu
 PRT=$1
 OUT=$2
@@ -19,6 +21,8 @@ ORDERS=${ORDERS:-2,3,4,5,6,7,8,9,10}
 FIGURE_ORDERS=${FIGURE_ORDERS:-2,3,4,6,8,10}
 SIZES=${SIZES:-0,20,40}
 SUPERSAMPLE=${WAVELET_SUPERSAMPLE:-2}
+COEFFS=${WAVELET_COEFFICIENTS:+--coefficients $WAVELET_COEFFICIENTS}
+REFSAMPLES=${REFERENCE_SAMPLES:-1024}
 HERE=$(cd "$(dirname "$0")" && pwd)
 PY="python3 $HERE/sh_quality.py"
 mkdir -p "$OUT"
@@ -31,8 +35,9 @@ $PY scene "$OUT" --cells "$CELLS" --sizes "$SIZES"
 # truncation; one bake at the highest order, relit at each lower one (--control order=N).
 "$PRT" bake "$OUT/scene.obj" -o "$OUT/sh.prt" --method sh --order "$MAXORDER" --kinds shadowed \
     --samples "$SAMPLES" --quantize 32 --no-refine --albedo 1 -q
+# shellcheck disable=SC2086
 "$PRT" bake "$OUT/scene.obj" -o "$OUT/wavelet.prt" --method wavelet --bounces 0 \
-    --supersample "$SUPERSAMPLE" --no-refine --albedo 1 -q
+    --supersample "$SUPERSAMPLE" $COEFFS --no-refine --albedo 1 -q
 # Vertex positions (the relit JSON holds radiance only).
 "$PRT" relight "$OUT/sh.prt" -o "$OUT/sh.ply" --colors linear -q
 "$PRT" relight "$OUT/wavelet.prt" -o "$OUT/wavelet.ply" --colors linear -q
@@ -52,6 +57,11 @@ for SIZE in $(echo "$SIZES" | tr ',' ' '); do
     done
     # shellcheck disable=SC2086
     "$PRT" relight "$OUT/wavelet.prt" -o "$OUT/wavelet_$TAG.json" $LIGHT -q
+    rm -f "$OUT/reference_$TAG.json"
+    if [ "$REFSAMPLES" -gt 0 ]; then
+        # shellcheck disable=SC2086
+        "$PRT" reference "$OUT/sh.prt" -o "$OUT/reference_$TAG.json" --samples "$REFSAMPLES" $LIGHT -q
+    fi
 done
 
 CHECKFLAG=
