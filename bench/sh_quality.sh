@@ -9,7 +9,8 @@
 # 2 cores). Writes OUTDIR/sh_quality.png (rows: light sizes; columns: SH orders, wavelet, exact),
 # OUTDIR/sh_quality_profile.svg (the centre line), OUTDIR/results.json, and prints the tables.
 # Environment: ORDERS (default 2,...,10), FIGURE_ORDERS (2,3,4,6,8,10), SIZES (0,20,40),
-# WAVELET_SUPERSAMPLE (2), WAVELET_COEFFICIENTS (prt's default, 128 per vertex), REFERENCE_SAMPLES
+# WAVELET_SUPERSAMPLE (2), WAVELET_COEFFICIENTS and WAVELET_BITS (prt's defaults: 128 per vertex,
+# 8-bit), REFERENCE_SAMPLES
 # (1024 paths per vertex of `prt reference`, whose direct light checks the analytic shadow; 0: none),
 # CHECK=1 to exit 1 unless the trends the notes show hold and the path tracer agrees.
 set -eu
@@ -21,7 +22,7 @@ ORDERS=${ORDERS:-2,3,4,5,6,7,8,9,10}
 FIGURE_ORDERS=${FIGURE_ORDERS:-2,3,4,6,8,10}
 SIZES=${SIZES:-0,20,40}
 SUPERSAMPLE=${WAVELET_SUPERSAMPLE:-2}
-COEFFS=${WAVELET_COEFFICIENTS:+--coefficients $WAVELET_COEFFICIENTS}
+COEFFS="${WAVELET_COEFFICIENTS:+--coefficients $WAVELET_COEFFICIENTS} ${WAVELET_BITS:+--bits $WAVELET_BITS}"
 REFSAMPLES=${REFERENCE_SAMPLES:-1024}
 HERE=$(cd "$(dirname "$0")" && pwd)
 PY="python3 $HERE/sh_quality.py"
