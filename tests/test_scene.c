@@ -591,6 +591,32 @@ static void test_camera_framing(void **state)
     prt_context_release(ctx);
 }
 
+/* Objects without materials keep their own names as surfaces, in the file's order (assimp joined
+ * meshes sharing its default material into one, named after the last). */
+static void test_objects_without_materials(void **state)
+{
+    (void)state;
+    char path[512];
+    write_text("objects.obj", "o plane\nv 0 0 0\nv 1 0 0\nv 1 0 -1\nv 0 0 -1\nf 1 2 3\nf 1 3 4\no blocker\nv 0.2 0.5 -0.2\nv 0.8 0.5 -0.2\nv 0.8 0.5 -0.8\nf 5 7 6\n",
+               path, sizeof path);
+    prt_context *ctx = test_context(1);
+    prt_scene *s = NULL;
+    assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+    prt_options *o = NULL;
+    assert_int_equal(prt_options_create(prt_method_find("sh"), &o), PRT_OK);
+    assert_int_equal(prt_options_set(o, "order", "1"), PRT_OK);
+    assert_int_equal(prt_options_set(o, "samples", "16"), PRT_OK);
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake(ctx, s, prt_method_find("sh"), o, NULL, &t), PRT_OK);
+    assert_int_equal(prt_transfer_surface_count(t), 2);
+    assert_string_equal(prt_transfer_surface_name(t, 1), "plane");
+    assert_string_equal(prt_transfer_surface_name(t, 2), "blocker");
+    prt_transfer_release(t);
+    prt_options_release(o);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -606,6 +632,7 @@ int main(void)
         cmocka_unit_test(test_subdivision),
         cmocka_unit_test(test_demo_scene),
         cmocka_unit_test(test_shared_meshes),
+        cmocka_unit_test(test_objects_without_materials),
     };
     return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }

@@ -255,6 +255,9 @@ static void import_with_assimp(void *arg, prt__bytes *out)
     aiSetImportPropertyFloat(props, AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, desc->crease_angle_deg);
     /* Points and lines are dropped; only triangles take part in transport. */
     aiSetImportPropertyInteger(props, AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    /* Into world space without joining meshes that share a material: objects without materials
+     * (OBJ's "o plane", "o blocker") would otherwise become one surface under the last name. */
+    aiSetImportPropertyInteger(props, AI_CONFIG_PP_PTV_KEEP_HIERARCHY, 1);
     unsigned flags = aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
     const struct aiScene *sc = aiImportFileExWithProperties(path, flags, NULL, props);
     aiReleasePropertyStore(props);
