@@ -224,42 +224,6 @@ static bool radiosity_maps(obake *ob, const int32_t *label, float *maps, prt__pr
     return !short_of_memory;
 }
 
-/* How far a medium scatters: the distance (scene units) within which its kernel gives back all
- * but 1e-3 of its total, the farthest of its channels. */
-static double medium_reach(const prt__dipole d[3])
-{
-    double reach = 0;
-    for (int c = 0; c < 3; ++c) {
-        const double total = prt__dipole_total(&d[c]);
-        double r = d[c].falloff > 0 ? d[c].falloff : 1 / d[c].sigma_tr;
-        if (!(total > 0) || !(r > 0) || !isfinite(r)) continue;
-        for (int k = 0; k < 200 && prt__dipole_disc(&d[c], r) < (1 - 1e-3) * total; ++k) r *= 1.25;
-        reach = fmax(reach, r);
-    }
-    return reach;
-}
-
-/* The mean of a medium's kernel over a disc of radius a whose centre lies r from the entry point
- * (a source texel, flat): Gauss-Legendre over the disc's area in the radius squared, the midpoint
- * rule over the angle (the kernel depends on the angle only through the distance, so half a
- * turn). At a texel's distance, where the kernel changes most across the texel, its value at the
- * centre is far from its mean: 12% under on the skin demo's sphere (an exponential falloff of 20
- * mm over texels of about 15 mm), the texel's value at its rim's distance (prt__offset_tr's guard
- * against slivers) further under. */
-static double disc_mean(const prt__dipole *d, double r, double a)
-{
-    static const double node[3] = {0.1127016653792583, 0.5, 0.8872983346207417}, weight[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
-    double sum = 0;
-    for (int i = 0; i < 3; ++i) {
-        const double rho = a * sqrt(node[i]);
-        for (int k = 0; k < 4; ++k) {
-            const double phi = PRT_PI * (k + 0.5) / 4, x = r + rho * cos(phi), y = rho * sin(phi);
-            sum += weight[i] / 4 * prt__dipole_rd(d, sqrt(x * x + y * y));
-        }
-    }
-    return sum;
-}
-
 /* Subsurface maps, entry (o, t) the dipole from every texel of t's medium within its reach,
  * summed exactly into the cell that counts it (the label of its offset from t, split by chart as
  * the radiosity maps' near field is): eq. 8's integral over the cell, not the transfer at its
@@ -276,7 +240,7 @@ static bool subsurface_maps(obake *ob, const int32_t *label, float *maps, prt__p
     const size_t nc = s->covered;
     double *reach = malloc(((size_t)s->medium_count + 1) * sizeof *reach), most = 0;
     if (!reach) return false;
-    for (int m = 0; m < s->medium_count; ++m) most = fmax(most, reach[m] = medium_reach(ob->dipoles[m]));
+    for (int m = 0; m < s->medium_count; ++m) most = fmax(most, reach[m] = prt__dipole_reach(ob->dipoles[m]));
     /* A grid of cells at least `most` wide over the translucent texels (at most 2^21 cells). */
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < nc; ++i)
@@ -343,7 +307,7 @@ static bool subsurface_maps(obake *ob, const int32_t *label, float *maps, prt__p
                                     const prt__dipole *dm = ob->dipoles[s->medium[i] - 1];
                                     const double r = sqrt((double)prt__v3_dot(d, d)), a = fmin(sqrt(s->area[j] / PRT_PI), r / 2);   /* the half nearer t is t's own texel's */
                                     for (int c = 0; c < 3; ++c)
-                                        tr[c] = (float)disc_mean(&dm[c], r, a) * (dm[c].falloff > 0 ? ob->patches.albedo[t * 3 + c] : 1.0f);
+                                        tr[c] = (float)prt__dipole_disc_mean(&dm[c], r, a) * (dm[c].falloff > 0 ? ob->patches.albedo[t * 3 + c] : 1.0f);
                                 }
                                 /* Near in the map on t's chart: its cell there; else (across a seam, another
                                  * chart) the surface around the representative nearest in space, as radiosity. */
@@ -751,13 +715,7 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
         for (int k = 0; k < s->medium_count; ++k) {
             s->media[k] = d.surface_medium ? d.media[k] : (prt_medium){{d.sigma_a[0], d.sigma_a[1], d.sigma_a[2]}, {d.sigma_s[0], d.sigma_s[1], d.sigma_s[2]}, d.eta, 0};
             /* Per mm in the medium; the scene's lengths become mm through mm_per_unit. */
-            for (int c = 0; c < 3 && !st; ++c) {
-                if (s->media[k].falloff_mm > 0) {   /* the mean distance in scene units */
-                    ob->dipoles[k][c] = (prt__dipole){.falloff = s->media[k].falloff_mm / d.mm_per_unit};
-                    continue;
-                }
-                st = prt__dipole_init(s->media[k].sigma_a[c] * d.mm_per_unit, s->media[k].sigma_s[c] * d.mm_per_unit, s->media[k].eta, &ob->dipoles[k][c]);
-            }
+            if (!st) st = prt__dipole_from_medium(&s->media[k], d.mm_per_unit, ob->dipoles[k]);
         }
         if (st) { offset_release(&ob->base); return st; }
     }

@@ -53,47 +53,6 @@ prt_status prt__texel_patches_build(const prt_context *ctx, const prt__mesh *m, 
     return PRT_OK;
 }
 
-/* ---- the dipole --------------------------------------------------------------------------------- */
-
-prt_status prt__dipole_init(double sigma_a, double sigma_s_reduced, double eta, prt__dipole *out)
-{
-    if (!(sigma_a > 0) || !(sigma_s_reduced >= 0) || !(eta >= 1 && eta <= 4) || !isfinite(sigma_a) || !isfinite(sigma_s_reduced))
-        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "dipole: sigma_a > 0, sigma_s' >= 0 (finite) and eta in [1, 4] (got %g, %g, %g)", sigma_a,
-                         sigma_s_reduced, eta);
-    const double sigma_t = sigma_a + sigma_s_reduced;
-    /* Diffuse Fresnel reflectance (Egan and Hilgeman's fit) and the boundary term A. */
-    const double fdr = -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta, a = (1 + fdr) / (1 - fdr);
-    out->falloff = 0;
-    out->alpha = sigma_s_reduced / sigma_t;
-    out->sigma_tr = sqrt(3 * sigma_a * sigma_t);
-    out->zr = 1 / sigma_t;
-    out->zv = out->zr * (1 + 4 * a / 3);
-    return PRT_OK;
-}
-
-double prt__dipole_rd(const prt__dipole *d, double r)
-{
-    if (d->falloff > 0) return exp(-r / d->falloff) / (2 * PRT_PI * d->falloff * d->falloff);
-    const double dr = sqrt(r * r + d->zr * d->zr), dv = sqrt(r * r + d->zv * d->zv);
-    return d->alpha / (4 * PRT_PI) *
-           (d->zr * (d->sigma_tr * dr + 1) * exp(-d->sigma_tr * dr) / (dr * dr * dr) + d->zv * (d->sigma_tr * dv + 1) * exp(-d->sigma_tr * dv) / (dv * dv * dv));
-}
-
-double prt__dipole_disc(const prt__dipole *d, double a)
-{
-    if (d->falloff > 0) return 1 - exp(-a / d->falloff) * (1 + a / d->falloff);
-    /* Each pole: alpha / 2 (exp(-sigma_tr z) - z exp(-sigma_tr d(a)) / d(a)), d(a) = sqrt(a^2 + z^2). */
-    const double dr = sqrt(a * a + d->zr * d->zr), dv = sqrt(a * a + d->zv * d->zv);
-    return 0.5 * d->alpha * (exp(-d->sigma_tr * d->zr) - d->zr * exp(-d->sigma_tr * dr) / dr + exp(-d->sigma_tr * d->zv) - d->zv * exp(-d->sigma_tr * dv) / dv);
-}
-
-double prt__dipole_total(const prt__dipole *d)
-{
-    if (d->falloff > 0) return 1;
-    /* Each pole integrates to alpha / 2 exp(-sigma_tr z). */
-    return 0.5 * d->alpha * (exp(-d->sigma_tr * d->zr) + exp(-d->sigma_tr * d->zv));
-}
-
 /* ---- transfer between patches ------------------------------------------------------------------- */
 
 void prt__offset_tr(const prt__offset_transfer *x, size_t t, size_t s, float out[3])

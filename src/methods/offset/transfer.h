@@ -7,6 +7,7 @@
 #define PRT_METHODS_OFFSET_TRANSFER_H
 
 #include "geom/raycast.h"
+#include "brdf/dipole.h"
 
 /* The surface behind each texel of a W x H map over the mesh's UVs: the point and normal at the
  * texel centre (of the triangle that owns it), albedo, world area TA(t) (0 off the charts). */
@@ -18,22 +19,6 @@ typedef struct prt__texel_patches {
 
 prt_status prt__texel_patches_build(const prt_context *ctx, const prt__mesh *m, int width, int height, prt__texel_patches *out);
 void prt__texel_patches_free(prt__texel_patches *p);
-
-/* Jensen et al. 2001's dipole for one colour channel: sigma_a and reduced scattering sigma_s'
- * per unit length, relative index of refraction eta. */
-typedef struct prt__dipole {
-    double sigma_tr, alpha, zr, zv;
-    double falloff;   /* > 0: an exponential falloff of this mean distance instead, integrating to 1 */
-} prt__dipole;
-
-prt_status prt__dipole_init(double sigma_a, double sigma_s_reduced, double eta, prt__dipole *out);
-/* Diffuse reflectance R_d(r): exitance at distance r per unit flux entering at a point (1/area). */
-double prt__dipole_rd(const prt__dipole *d, double r);
-/* Its integral over the plane, in closed form: the total diffuse reflectance. */
-double prt__dipole_total(const prt__dipole *d);
-/* Its integral over a disc of radius a about the entry point, in closed form. With `falloff`
- * set, the three are those of exp(-r / d) / (2 pi d^2), whose total is 1. */
-double prt__dipole_disc(const prt__dipole *d, double a);
 
 /* Transfer from source texel s to receiver t per unit area of s, per colour channel. */
 typedef enum prt__offset_kind {
