@@ -68,6 +68,10 @@ typedef struct prt_sh_bake_desc {
      * height_scale: world units of a stored 1; 0 = 1% of the scene's diagonal. */
     const prt_image *height_map;
     float height_scale;
+    /* Millimetres per scene unit, the scale the scene's translucent materials (prt_scene_set_medium,
+     * a JSON material's "subsurface") scatter light at in the inter-reflected transfer; 0 = 1000
+     * (the scene is in metres). */
+    float mm_per_unit;
     prt_progress_fn progress;
     void *progress_user;
 } prt_sh_bake_desc;

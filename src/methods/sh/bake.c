@@ -186,7 +186,7 @@ static inline void gather_hit(const prt__mesh *m, const float *prev, int nc3, co
  * coupled glossy bounce loop or one stage per diffuse bounce, then texels and the BRDF. */
 #define BLOCK 64
 
-typedef enum { ST_VISIBILITY, ST_GLOSSY_BOUNCES, ST_BOUNCE, ST_TEXELS, ST_BRDF_IN, ST_COMPRESS, ST_QUANTIZE } stage_kind;
+typedef enum { ST_VISIBILITY, ST_GLOSSY_BOUNCES, ST_BOUNCE, ST_SUBSURFACE, ST_TEXELS, ST_BRDF_IN, ST_COMPRESS, ST_QUANTIZE } stage_kind;
 
 typedef struct sh_bake {
     prt__bake_job base;
@@ -207,6 +207,8 @@ typedef struct sh_bake {
     int stages;
     prt__sh_extra extra;          /* compression, quantization, the normal and height maps (owned) */
     prt__height_field height;     /* over d.height_map */
+    uint8_t *medium;              /* [vertex] 0 opaque, k: translucent with kernels[k - 1]; NULL when none is */
+    prt__dipole (*kernels)[3];
     prt_brdf brdf;                /* d.glossy_brdf points here */
     int compressing_set;
 } sh_bake;
@@ -410,6 +412,12 @@ static prt_status run_texels(prt__bake_job *b, prt_context *ctx, prt__progress *
     return prt__bake_texels(ctx, &ti, &sb->s->texels);
 }
 
+static prt_status run_subsurface(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    sh_bake *sb = (sh_bake *)b;
+    return prt__sh_subsurface(ctx, &sb->t->mesh, sb->medium, (const prt__dipole(*)[3])sb->kernels, sb->job.ncoeff, sb->s->sets[2].coeffs, p);
+}
+
 static prt_status run_brdf_in(prt__bake_job *b, prt_context *ctx, prt__progress *p)
 {
     (void)p;
@@ -543,6 +551,7 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
         out->save_unit = save_bounce;
         out->load_unit = load_bounce;
         break;
+    case ST_SUBSURFACE: snprintf(out->name, sizeof out->name, "subsurface"); out->whole = run_subsurface; break;
     case ST_TEXELS: snprintf(out->name, sizeof out->name, "texels"); out->whole = run_texels; break;
     case ST_BRDF_IN: snprintf(out->name, sizeof out->name, "bake BRDF in"); out->whole = run_brdf_in; break;
     case ST_COMPRESS:
@@ -586,6 +595,7 @@ static void sh_release(prt__bake_job *b)
     free(sb->noise);
     free(sb->scratch);
     free(job->hits); free(job->hit_count); free(job->origins); free(job->buried); free(job->dirs); free(job->basis);
+    free(sb->medium); free(sb->kernels);
     free(sb->unsh); free(sb->shad); free(sb->gshad); free(sb->total); free(sb->prev); free(sb->next);
     prt_image_free(&sb->extra.normal_map);
     prt_image_free(&sb->extra.height_map);
@@ -608,6 +618,44 @@ static prt_status texel_layout(prt_context *ctx, const prt_sh_bake_desc *d, prt_
     if (st) return st;
     prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts touch %.0f%% of the %dx%d map's texels, worst stretch %.2f; %zu of %zu vertices copied along seams",
              t->source, why, r.charts, 100 * r.coverage, d->texels, d->texels, r.worst_stretch, r.added_vertices, nv);
+    return PRT_OK;
+}
+
+/* The scene's translucent materials: which vertices scatter light under their surface, with
+ * which kernel, and the albedo their bounces reflect with (the dipole's total diffuse
+ * reflectance; an exponential falloff spreads the albedo the surface has). */
+static prt_status translucent_media(prt_context *ctx, sh_bake *sb, const prt_scene *scene, float mm_per_unit)
+{
+    prt__mesh *m = &sb->t->mesh;
+    if (!m->surface || !m->surface_count) return PRT_OK;
+    uint8_t *of_surface = prt__calloc((size_t)m->surface_count + 1, 1);
+    prt__dipole (*kernels)[3] = malloc(255 * sizeof *kernels);
+    if (!of_surface || !kernels) { free(of_surface); free(kernels); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    int count = 0;
+    prt_status st = PRT_OK;
+    for (int k = 0; k < m->surface_count && !st; ++k) {
+        prt_medium md;
+        if (!prt_scene_medium(scene, m->surface_names[k], &md)) continue;
+        if (count == 255) { st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "more than 255 translucent materials"); break; }
+        st = prt__dipole_from_medium(&md, mm_per_unit, kernels[count]);
+        of_surface[k + 1] = (uint8_t)++count;
+    }
+    if (!st && count) {
+        if (!(sb->medium = prt__calloc(m->vertex_count ? m->vertex_count : 1, 1))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        for (size_t v = 0; !st && v < m->vertex_count; ++v) {
+            const int k = m->surface[v] <= m->surface_count ? of_surface[m->surface[v]] : 0;
+            sb->medium[v] = (uint8_t)k;
+            for (int c = 0; k && c < 3; ++c)
+                if (!(kernels[k - 1][c].falloff > 0)) m->albedo[v * 3 + c] = (float)prt__dipole_total(&kernels[k - 1][c]);
+        }
+        if (!st && !(sb->d.kinds & PRT_TRANSFER_INTERREFLECTED))
+            prt__log(ctx, PRT_LOG_WARN, "%d translucent material%s scatter%s light under the surface in inter-reflected transfer only, which this bake leaves out: "
+                     "elsewhere %s reflect%s it as a diffuse surface of the medium's total reflectance", count, count > 1 ? "s" : "", count > 1 ? "" : "s",
+                     count > 1 ? "they" : "it", count > 1 ? "" : "s");
+    }
+    free(of_surface);
+    if (st || !count) { free(kernels); free(sb->medium); sb->medium = NULL; return st; }
+    sb->kernels = kernels;
     return PRT_OK;
 }
 
@@ -645,6 +693,7 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
     if (d.glossy_exit && !(d.kinds & (PRT_TRANSFER_GLOSSY_SHADOWED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "baking a BRDF in needs a glossy kind (glossy-shadowed or glossy-interreflected)");
     if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
+    if (d.mm_per_unit < 0 || !isfinite(d.mm_per_unit)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "millimetres per unit must be > 0 (0: 1000)");
 
     if ((unsigned)d.uv_layout > PRT_UV_GENERATE) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown UV layout %d", (int)d.uv_layout);
     if (d.texels) {
@@ -739,11 +788,13 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
     if (!st && !(job->buried = malloc(nv ? nv : 1))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) st = prt__unbury_origins(ctx, &job->rc, &t->mesh, job->offset, job->origins, job->buried, PRT_LOG_INFO);
     for (size_t v = 0; !st && v < nv; ++v) job->buried_count += job->buried[v] == 2;
+    if (!st && sb->extra.scene) st = translucent_media(ctx, sb, sb->extra.scene, d.mm_per_unit > 0 ? d.mm_per_unit : 1000.0f);
     if (st) { sh_release(&sb->base); return st; }
     sb->plan[sb->stages++] = ST_VISIBILITY;
     if (sb->coupled) sb->plan[sb->stages++] = ST_GLOSSY_BOUNCES;
     else if (d.kinds & PRT_TRANSFER_INTERREFLECTED)
         for (int bnc = 1; bnc <= d.bounces; ++bnc) { sb->bounce_of[sb->stages] = bnc; sb->plan[sb->stages++] = ST_BOUNCE; }
+    if (sb->medium && (d.kinds & PRT_TRANSFER_INTERREFLECTED)) sb->plan[sb->stages++] = ST_SUBSURFACE;
     if (d.texels) sb->plan[sb->stages++] = ST_TEXELS;
     if (d.glossy_exit) sb->plan[sb->stages++] = ST_BRDF_IN;
     if (sb->extra.compressing)
@@ -756,8 +807,10 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
 
 static prt_status begin_from_desc(prt_context *ctx, const prt_scene *scene, const void *desc, prt_transfer *t, prt__bake_job **job)
 {
-    (void)scene;
-    return prt__sh_bake_begin(ctx, desc, NULL, t, job);
+    prt__sh_extra extra;
+    memset(&extra, 0, sizeof extra);
+    extra.scene = scene;
+    return prt__sh_bake_begin(ctx, desc, &extra, t, job);
 }
 
 prt_status prt_bake_sh(prt_context *ctx, const prt_scene *scene, const prt_sh_bake_desc *desc, prt_transfer **out)

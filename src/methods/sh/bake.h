@@ -6,6 +6,7 @@
 #include "brdf/sh_matrix.h"
 #include "geom/raycast.h"
 #include "methods/sh/height_field.h"
+#include "brdf/dipole.h"
 #include "methods/sh/sh.h"
 
 /* One occluded direction of a vertex and the front face it hit. */
@@ -49,6 +50,14 @@ typedef struct prt__texel_input {
     const prt__height_field *bumps;  /* a height field that shades and shadows the texels, or NULL */
     prt__progress *progress;
 } prt__texel_input;
+
+/* Translucency (subsurface.c): the inter-reflected transfer T ([vertex][3][nc]) of every vertex
+ * of a medium (medium[v] = k > 0: kernels[k - 1]) becomes the light its medium carries to it
+ * from every vertex of the medium nearby. The mesh's albedo there must be what the bounces
+ * reflected with (the dipole's total diffuse reflectance, or the albedo an exponential falloff
+ * spreads). */
+prt_status prt__sh_subsurface(prt_context *ctx, const prt__mesh *m, const uint8_t *medium, const prt__dipole (*kernels)[3], int nc, float *T,
+                              prt__progress *p);
 
 /* Per-texel transfer of the diffuse kinds asked for; fails clearly without a unique UV layout. */
 prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__texel_sets *out);

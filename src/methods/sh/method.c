@@ -223,6 +223,8 @@ static const prt_option_desc options[] = {
      "and shadow one another; follows the mesh's own texture coordinates"},
     {"bump-height", "H", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "world height of the height map's white (default 1% of the scene's diagonal)"},
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
+    {"mm-per-unit", "S", PRT_OPTION_FLOAT, 1e-6, 1e9, NULL,
+     "millimetres per scene unit, the scale the scene's translucent materials (\"subsurface\") scatter\nlight at (default 1000: the scene is in metres)"},
     {"compress", "M", PRT_OPTION_CHOICE, 0, 0, "cpca|pca|vq",
      "store the sets compressed: clustered PCA (cpca), one cluster (pca), or clusters only\n"
      "(vq); "
@@ -266,7 +268,6 @@ static prt_status load_data_map(prt_context *ctx, const char *what, const char *
 
 static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **out)
 {
-    (void)scene;
     prt_sh_bake_desc d = {0};
     prt__sh_extra extra;
     memset(&extra, 0, sizeof extra);
@@ -278,6 +279,8 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
     d.texels = prt__opt_int(o, "texels", 0);
     d.uv_layout = (prt_uv_layout)prt__opt_choice(o, "uv", PRT_UV_AUTO);
     d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
+    d.mm_per_unit = prt__opt_float(o, "mm-per-unit", 0.0f);
+    extra.scene = scene;
     prt_status st = PRT_OK;
     if (prt__opt(o, "kinds")) {
         char buf[256], *save = NULL;

@@ -78,6 +78,7 @@ typedef struct prt__sh_extra {
     int quantize;                 /* 0, 8 or 16 */
     prt_image normal_map;         /* moved into the job when it holds pixels */
     prt_image height_map;         /* likewise */
+    const prt_scene *scene;       /* its translucent materials (prt_scene_medium), or NULL */
 } prt__sh_extra;
 
 /* The SH bake (bake.c) as stages of work units: validates d (defaults filled in),
