@@ -72,6 +72,10 @@ typedef struct prt_sh_bake_desc {
      * a JSON material's "subsurface") scatter light at in the inter-reflected transfer; 0 = 1000
      * (the scene is in metres). */
     float mm_per_unit;
+    /* Neighbourhood transfer (Sloan et al. 2002): a grid of this many points along each axis of
+     * the scene's bounding box grown on every side by a quarter of its largest extent (2..64; 0 = none), each holding
+     * how the scene changes the distant lighting arriving there (prt_sh_light_at). */
+    int neighbourhood;
     prt_progress_fn progress;
     void *progress_user;
 } prt_sh_bake_desc;
@@ -108,6 +112,15 @@ void prt_transfer_get_info(const prt_transfer *t, prt_transfer_info *info);
 int prt_transfer_channels(const prt_transfer *t, prt_transfer_kind kind);  /* 0 if absent */
 /* Borrowed pointer to a set's coefficients: vertex-major, channel, coefficient; NULL if absent. */
 const float *prt_transfer_coeffs(const prt_transfer *t, prt_transfer_kind kind);
+
+/* Neighbourhood transfer (prt_sh_bake_desc.neighbourhood): 1 and the grid (points per axis, its
+ * corners; any may be NULL) when the transfer holds one, else 0. */
+int prt_transfer_neighbourhood(const prt_transfer *t, int dims[3], float lo[3], float hi[3]);
+/* The radiance arriving at point p under the distant light `light`, as SH (of the light's order,
+ * at most the transfer's): the scene's shadow and the light its surfaces reflect included, so an
+ * object at p - a probe, a character - is shadowed and lit by the baked scene. Trilinear between
+ * the grid's points; outside the grid, its nearest face's. An error when there is no grid. */
+prt_status prt_sh_light_at(prt_context *ctx, const prt_transfer *t, const float p[3], const prt_sh_light *light, prt_sh_light *out);
 
 /* Exit radiance per vertex (RGB, 3 floats per vertex) under light. The light's order may differ
  * from the transfer's: the common bands are used. */

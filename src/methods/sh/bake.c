@@ -186,7 +186,7 @@ static inline void gather_hit(const prt__mesh *m, const float *prev, int nc3, co
  * coupled glossy bounce loop or one stage per diffuse bounce, then texels and the BRDF. */
 #define BLOCK 64
 
-typedef enum { ST_VISIBILITY, ST_GLOSSY_BOUNCES, ST_BOUNCE, ST_SUBSURFACE, ST_TEXELS, ST_BRDF_IN, ST_COMPRESS, ST_QUANTIZE } stage_kind;
+typedef enum { ST_VISIBILITY, ST_GLOSSY_BOUNCES, ST_BOUNCE, ST_SUBSURFACE, ST_NEIGHBOURHOOD, ST_TEXELS, ST_BRDF_IN, ST_COMPRESS, ST_QUANTIZE } stage_kind;
 
 typedef struct sh_bake {
     prt__bake_job base;
@@ -418,6 +418,27 @@ static prt_status run_subsurface(prt__bake_job *b, prt_context *ctx, prt__progre
     return prt__sh_subsurface(ctx, &sb->t->mesh, sb->medium, (const prt__dipole(*)[3])sb->kernels, sb->job.ncoeff, sb->s->sets[2].coeffs, p);
 }
 
+static prt_status run_neighbourhood(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    sh_bake *sb = (sh_bake *)b;
+    const prt__mesh *m = &sb->t->mesh;
+    prt__sh_grid *g = &sb->s->grid;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < m->vertex_count; ++v)
+        for (int c = 0; c < 3; ++c) { lo[c] = fminf(lo[c], m->positions[v * 3 + c]); hi[c] = fmaxf(hi[c], m->positions[v * 3 + c]); }
+    float size = 0;   /* the largest extent: a flat scene still gets room above and below */
+    for (int c = 0; c < 3; ++c) size = fmaxf(size, hi[c] - lo[c]);
+    if (!(size > 0)) size = 1;
+    for (int c = 0; c < 3; ++c) {
+        const float grow = 0.25f * size;
+        g->lo[c] = lo[c] - grow;
+        g->hi[c] = hi[c] + grow;
+        g->dims[c] = sb->d.neighbourhood;
+    }
+    const float *exit = sb->s->sets[2].coeffs ? sb->s->sets[2].coeffs : sb->shad;
+    return prt__sh_neighbourhood_bake(ctx, m, &sb->job.rc, sb->job.dirs, sb->job.basis, sb->d.samples, sb->d.order, exit, sb->s->sets[2].coeffs ? 3 : 1, g, p);
+}
+
 static prt_status run_brdf_in(prt__bake_job *b, prt_context *ctx, prt__progress *p)
 {
     (void)p;
@@ -552,6 +573,7 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
         out->load_unit = load_bounce;
         break;
     case ST_SUBSURFACE: snprintf(out->name, sizeof out->name, "subsurface"); out->whole = run_subsurface; break;
+    case ST_NEIGHBOURHOOD: snprintf(out->name, sizeof out->name, "neighbourhood"); out->whole = run_neighbourhood; break;
     case ST_TEXELS: snprintf(out->name, sizeof out->name, "texels"); out->whole = run_texels; break;
     case ST_BRDF_IN: snprintf(out->name, sizeof out->name, "bake BRDF in"); out->whole = run_brdf_in; break;
     case ST_COMPRESS:
@@ -693,6 +715,8 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
     if (d.glossy_exit && !(d.kinds & (PRT_TRANSFER_GLOSSY_SHADOWED | PRT_TRANSFER_GLOSSY_INTERREFLECTED)))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "baking a BRDF in needs a glossy kind (glossy-shadowed or glossy-interreflected)");
     if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
+    if (d.neighbourhood && (d.neighbourhood < 2 || d.neighbourhood > 64))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a neighbourhood grid has 2..64 points along each axis (got %d)", d.neighbourhood);
     if (d.mm_per_unit < 0 || !isfinite(d.mm_per_unit)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "millimetres per unit must be > 0 (0: 1000)");
 
     if ((unsigned)d.uv_layout > PRT_UV_GENERATE) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown UV layout %d", (int)d.uv_layout);
@@ -795,6 +819,7 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
     else if (d.kinds & PRT_TRANSFER_INTERREFLECTED)
         for (int bnc = 1; bnc <= d.bounces; ++bnc) { sb->bounce_of[sb->stages] = bnc; sb->plan[sb->stages++] = ST_BOUNCE; }
     if (sb->medium && (d.kinds & PRT_TRANSFER_INTERREFLECTED)) sb->plan[sb->stages++] = ST_SUBSURFACE;
+    if (d.neighbourhood) sb->plan[sb->stages++] = ST_NEIGHBOURHOOD;
     if (d.texels) sb->plan[sb->stages++] = ST_TEXELS;
     if (d.glossy_exit) sb->plan[sb->stages++] = ST_BRDF_IN;
     if (sb->extra.compressing)

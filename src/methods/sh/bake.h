@@ -59,6 +59,12 @@ typedef struct prt__texel_input {
 prt_status prt__sh_subsurface(prt_context *ctx, const prt__mesh *m, const uint8_t *medium, const prt__dipole (*kernels)[3], int nc, float *T,
                               prt__progress *p);
 
+/* Neighbourhood transfer (neighbourhood.c) over g's points (dims, lo, hi set): the sample
+ * directions dirs/basis from each point; exit the surfaces' transfer ([vertex][channels][order^2],
+ * channels 3 with albedo or 1 times the mesh's albedo) or NULL (only the shadow). */
+prt_status prt__sh_neighbourhood_bake(prt_context *ctx, const prt__mesh *m, const prt__raycaster *rc, const float *dirs, const float *basis, int samples,
+                                      int order, const float *exit, int exit_channels, prt__sh_grid *g, prt__progress *p);
+
 /* Per-texel transfer of the diffuse kinds asked for; fails clearly without a unique UV layout. */
 prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__texel_sets *out);
 

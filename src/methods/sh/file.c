@@ -9,6 +9,8 @@
 #define CHUNK_TXLS PRT__FOURCC('T', 'X', 'L', 'S')
 #define CHUNK_TXLH PRT__FOURCC('T', 'X', 'L', 'H')   /* the same as halves */
 #define CHUNK_TXLQ PRT__FOURCC('T', 'X', 'L', 'Q')   /* the same as bytes, a scale and bias per coefficient */
+#define CHUNK_NBHD PRT__FOURCC('N', 'B', 'H', 'D')   /* neighbourhood transfer */
+#define NBHD_HEADER 40
 #define CPCA_HEADER 64
 
 void prt__sh_save_meta(const prt_transfer *t, cJSON *meta)
@@ -119,6 +121,20 @@ prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
             if (l->version < 2) l->version = 2;   /* readers of version 1 would skip the texel sets */
             v[n] = 0;
             prt__chunks_add(l, CHUNK_TXLH, h, (size_t)24, v, n * 2 + (n & 1 ? 2 : 0), NULL);
+        }
+    }
+    const prt__sh_grid *g = &sh->grid;
+    if (g->matrices) {
+        unsigned char *h = prt__chunks_alloc(l, NBHD_HEADER);
+        if (h) {
+            for (int c = 0; c < 3; ++c) {
+                prt__put32(h + 4 * c, (uint32_t)g->dims[c]);
+                memcpy(h + 16 + 4 * c, &g->lo[c], 4);
+                memcpy(h + 28 + 4 * c, &g->hi[c], 4);
+            }
+            prt__put32(h + 12, (uint32_t)g->order);
+            const size_t n = (size_t)g->order * g->order;
+            prt__chunks_add(l, CHUNK_NBHD, h, (size_t)NBHD_HEADER, g->matrices, (size_t)g->dims[0] * g->dims[1] * g->dims[2] * 3 * n * n * sizeof(float), NULL);
         }
     }
     return PRT_OK;   /* allocation failures are recorded in the list and reported when writing */
@@ -282,6 +298,33 @@ static prt_status load_texels(prt_context *ctx, prt__sh_state *sh, prt__chunk_in
     return PRT_OK;
 }
 
+/* u32 dims[3], u32 order, f32 lo[3], f32 hi[3], then f32 [point][3][n][n]. */
+static prt_status load_grid(prt_context *ctx, prt__sh_state *sh, const prt__chunk_in *in)
+{
+    const unsigned char *p = in->data;
+    if (in->size < NBHD_HEADER) return bad(ctx, "corrupt .prt file: short neighbourhood chunk");
+    prt__sh_grid g = {0};
+    uint64_t points = 1;
+    for (int c = 0; c < 3; ++c) {
+        const uint32_t d = prt__get32(p + 4 * c);
+        if (d < 2 || d > 64) return bad(ctx, "corrupt .prt file: neighbourhood grid size out of range");
+        g.dims[c] = (int)d;
+        points *= d;
+        memcpy(&g.lo[c], p + 16 + 4 * c, 4);
+        memcpy(&g.hi[c], p + 28 + 4 * c, 4);
+        if (!isfinite(g.lo[c]) || !isfinite(g.hi[c]) || !(g.hi[c] > g.lo[c])) return bad(ctx, "corrupt .prt file: neighbourhood grid bounds invalid");
+    }
+    g.order = (int)prt__get32(p + 12);
+    if (g.order != sh->order) return bad(ctx, "corrupt .prt file: neighbourhood grid of another SH order than the transfer");
+    const uint64_t n = (uint64_t)g.order * g.order, floats = points * 3 * n * n;
+    if (NBHD_HEADER + floats * 4 != in->size) return bad(ctx, "corrupt .prt file: neighbourhood chunk size mismatch");
+    if (!(g.matrices = malloc(floats * 4))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(g.matrices, p + NBHD_HEADER, floats * 4);
+    if (!prt__all_finite(g.matrices, floats)) { free(g.matrices); return bad(ctx, "corrupt .prt file: non-finite neighbourhood transfer"); }
+    sh->grid = g;
+    return PRT_OK;
+}
+
 prt_status prt__sh_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count)
 {
     prt__sh_state *sh = prt__sh_state_new();
@@ -299,5 +342,7 @@ prt_status prt__sh_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, pr
     if (!st && !sh->order) st = bad(ctx, ".prt file holds no transfer");
     if (!st) st = load_texels(ctx, sh, chunks, count);
     if (!st && prt__chunk_take(chunks, count, CHUNK_TXAL)) st = bad(ctx, "corrupt .prt file: two texel albedo chunks");
+    if (!st && (in = prt__chunk_take(chunks, count, CHUNK_NBHD))) st = load_grid(ctx, sh, in);
+    if (!st && prt__chunk_take(chunks, count, CHUNK_NBHD)) st = bad(ctx, "corrupt .prt file: two neighbourhood chunks");
     return st;
 }

@@ -29,6 +29,7 @@ void prt__sh_state_free(void *state)
         prt__cpca_free(s->sets[i].cpca);
     }
     prt__texel_sets_free(&s->texels);
+    prt__sh_grid_free(&s->grid);
     if (s->rays_ready) prt__raycaster_release(&s->rays);
     if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
     free(s);
@@ -223,6 +224,8 @@ static const prt_option_desc options[] = {
      "and shadow one another; follows the mesh's own texture coordinates"},
     {"bump-height", "H", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "world height of the height map's white (default 1% of the scene's diagonal)"},
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "shadow-ray origin offset (default 1e-4 x scene diagonal)"},
+    {"neighbourhood", "N", PRT_OPTION_INT, 2, 64, NULL,
+     "neighbourhood transfer: a grid of N^3 points around the scene holding how it shadows and lights\nwhat moves through it (prt render --probe, the viewer's probe)"},
     {"mm-per-unit", "S", PRT_OPTION_FLOAT, 1e-6, 1e9, NULL,
      "millimetres per scene unit, the scale the scene's translucent materials (\"subsurface\") scatter\nlight at (default 1000: the scene is in metres)"},
     {"compress", "M", PRT_OPTION_CHOICE, 0, 0, "cpca|pca|vq",
@@ -280,6 +283,7 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
     d.uv_layout = (prt_uv_layout)prt__opt_choice(o, "uv", PRT_UV_AUTO);
     d.ray_offset = prt__opt_float(o, "ray-offset", 0.0f);
     d.mm_per_unit = prt__opt_float(o, "mm-per-unit", 0.0f);
+    d.neighbourhood = prt__opt_int(o, "neighbourhood", 0);
     extra.scene = scene;
     prt_status st = PRT_OK;
     if (prt__opt(o, "kinds")) {
@@ -327,6 +331,12 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
 }
 
 /* ---- description ---- */
+static size_t grid_bytes(const prt__sh_state *s)
+{
+    const prt__sh_grid *g = &s->grid;
+    return g->matrices ? (size_t)g->dims[0] * g->dims[1] * g->dims[2] * 3 * (size_t)g->order * g->order * g->order * g->order * sizeof(float) : 0;
+}
+
 static size_t sh_bytes(const prt_transfer *t)
 {
     const prt__sh_state *s = t->state;
@@ -337,7 +347,7 @@ static size_t sh_bytes(const prt_transfer *t)
             prt_transfer_compress_info(t, prt__kind_from_index(i), &ci);
             bytes += ci.bytes;
         }
-    return bytes + texel_bytes(s);
+    return bytes + texel_bytes(s) + grid_bytes(s);
 }
 
 /* Share of the texel map's texels holding some of the surface, from the stored mesh's UVs (as
@@ -397,6 +407,16 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
             for (int k = 0; k < 3; ++k)
                 if (s->texels.coeffs[k]) cJSON_AddItemToArray(tk, cJSON_CreateString(prt_transfer_kind_name(prt__kind_from_index(k))));
         }
+        if (s->grid.matrices) {
+            cJSON *g = cJSON_AddObjectToObject(j, "neighbourhood");
+            cJSON *dims = cJSON_AddArrayToObject(g, "points"), *lo = cJSON_AddArrayToObject(g, "from"), *hi = cJSON_AddArrayToObject(g, "to");
+            for (int c = 0; c < 3; ++c) {
+                cJSON_AddItemToArray(dims, cJSON_CreateNumber(s->grid.dims[c]));
+                cJSON_AddItemToArray(lo, cJSON_CreateNumber(s->grid.lo[c]));
+                cJSON_AddItemToArray(hi, cJSON_CreateNumber(s->grid.hi[c]));
+            }
+            cJSON_AddNumberToObject(g, "bytes", (double)grid_bytes(s));
+        }
         cJSON_AddNumberToObject(j, "samples", s->samples);
         cJSON_AddNumberToObject(j, "bounces", s->bounces);
         cJSON_AddNumberToObject(j, "seed", s->seed);
@@ -442,6 +462,10 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
         prt__describe_line(d, "texels:", "%d x %d (%s%s), %.2f MiB%s", s->texels.width, s->texels.height, tk, on, info.texel_bytes / 1048576.0,
                            s->texels.bytes ? " (8-bit)" : s->texels.halves ? " (halves)" : "");
     }
+    if (s->grid.matrices)
+        prt__describe_line(d, "neighbourhood:", "%d x %d x %d points from (%g, %g, %g) to (%g, %g, %g), %.2f MiB (prt render --probe)", s->grid.dims[0],
+                           s->grid.dims[1], s->grid.dims[2], s->grid.lo[0], s->grid.lo[1], s->grid.lo[2], s->grid.hi[0], s->grid.hi[1], s->grid.hi[2],
+                           grid_bytes(s) / 1048576.0);
     prt__describe_line(d, "bake:", "%d samples, %d bounces, seed %u", s->samples, s->bounces, s->seed);
 }
 

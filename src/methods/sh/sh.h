@@ -35,6 +35,19 @@ typedef struct prt__texel_sets {
  * (8-bit quantization, as the file will store it); false when out of memory. */
 bool prt__texel_quantize8(prt__texel_sets *tx, int order);
 
+/* Neighbourhood transfer (neighbourhood.c): dims[0] x dims[1] x dims[2] points spanning lo..hi
+ * (x fastest), each 3 matrices [channel][order^2][order^2] from distant lighting to the radiance
+ * arriving there; dims 0 when absent. */
+typedef struct prt__sh_grid {
+    int dims[3], order;
+    float lo[3], hi[3];
+    float *matrices;
+} prt__sh_grid;
+
+void prt__sh_grid_free(prt__sh_grid *g);
+/* The radiance arriving at p as SH of `order` (at most the grid's) under the distant light in. */
+void prt__sh_neighbourhood_eval(const prt__sh_grid *g, const float p[3], const prt_sh_light *in, int order, prt_sh_light *out);
+
 typedef struct prt__sh_state {
     int order;
     prt__sh_set sets[PRT__KIND_COUNT];   /* indexed by prt__kind_index */
@@ -42,6 +55,7 @@ typedef struct prt__sh_state {
     uint32_t seed;
     bool glossy_exit;                    /* glossy sets hold exit radiance (BRDF baked in) */
     prt__texel_sets texels;
+    prt__sh_grid grid;
     /* Shadow rays for the local-light reach check, built on first use under lock. */
     pthread_mutex_t *lock;
     prt__raycaster rays;
