@@ -347,6 +347,15 @@ expect 2 "normal map with a generated atlas" -- "$PRT" bake "$T/nouv.obj" -o "$T
 says "normal map"
 expect 2 "--uv without --texels" -- "$PRT" bake "$T/nouv.obj" -o "$T/x.prt" --uv atlas
 says "--texels"
+expect 0 "neighbourhood bake" -- "$PRT" bake -q "$T/demo.obj" -o "$T/nb.prt" --order 2 --samples 64 --bounces 1 --neighbourhood 4
+expect 0 "neighbourhood info" -- "$PRT" info "$T/nb.prt"
+grep -q "^neighbourhood: 4 x 4 x 4" "$T/out" && ok || bad "info does not show the neighbourhood grid"
+expect 0 "probe render" -- $NOLEAK "$PRT" render -q "$T/nb.prt" -o "$T/probe.png" --width 64 --height 48 --probe 0,0.5,0 --probe 0.5,0.3,0.5,0.1
+expect 1 "probe without a grid" -- $NOLEAK "$PRT" render "$T/texels.prt" -o "$T/probe.png" --width 64 --height 48 --per-vertex --probe 0,0.5,0
+says "--neighbourhood"
+expect 2 "bad probe" -- "$PRT" render "$T/nb.prt" -o "$T/probe.png" --probe 0,0.5
+says "--probe"
+expect 2 "grid too fine" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --neighbourhood 65
 expect 0 "height map" -- "$PRT" bake -q "$T/demo.obj" -o "$T/h.prt" --order 2 --samples 64 --bounces 1 --texels 32 --kinds shadowed --height-map "$T/nm.pfm" --bump-height 0.05
 expect 2 "height map without texels" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --height-map "$T/nm.pfm"
 says "--texels"

@@ -1,4 +1,5 @@
 #include "cli.h"
+#include "probe.h"
 
 #include <getopt.h>
 #include <math.h>
@@ -32,6 +33,9 @@ static const char *HELP =
     "                         repeatable, in the order of the --light options\n"
     "      --fps N            frames per second (1..100, default 12)\n"
     "Other:\n"
+    "      --probe X,Y,Z[,R]  a grey sphere (radius R; default 3% of the grid) at X,Y,Z, lit by the\n"
+    "                         file's neighbourhood transfer (bake --neighbourhood N): shadowed\n"
+    "                         and lit by the scene as an object moved there; repeatable (8)\n"
     "      --per-vertex       shade from the vertex sets even where the file has per-texel ones,\n"
     "                         and evaluate view-dependent parts per vertex rather than per pixel\n"
     "      --accumulate W     files whose method has GPU passes (prt info says): where the passes\n"
@@ -43,7 +47,7 @@ static const char *HELP =
 
 #define MAX_PANELS 16
 
-enum { OPT_FRAMES = 2600, OPT_LIGHT_TO, OPT_FPS };
+enum { OPT_FRAMES = 2600, OPT_LIGHT_TO, OPT_FPS, OPT_PROBE };
 
 /* One input: a .prt drawn as its kinds, or an image pasted as it is. */
 typedef struct source {
@@ -121,12 +125,13 @@ int cmd_render(int argc, char **argv)
     const char *output = NULL;
     bool per_vertex = false;
     cli_view view = CLI_VIEW_DEFAULTS;
-    int frames = 1, fps = 12, to_count = 0;
+    int frames = 1, fps = 12, to_count = 0, probe_count = 0;
+    float probes[CLI_MAX_PROBES][4];
     prt_light to[CLI_MAX_LIGHTS];
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'}, CLI_VIEW_LONG_OPTIONS, CLI_LIGHT_LONG_OPTIONS,
         {"frames", required_argument, 0, OPT_FRAMES}, {"light-to", required_argument, 0, OPT_LIGHT_TO}, {"fps", required_argument, 0, OPT_FPS},
-        {"threads", required_argument, 0, 'j'}, {"per-vertex", no_argument, 0, 'P'}, {"accumulate", required_argument, 0, 'A'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'},
+        {"probe", required_argument, 0, OPT_PROBE}, {"threads", required_argument, 0, 'j'}, {"per-vertex", no_argument, 0, 'P'}, {"accumulate", required_argument, 0, 'A'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     int opt;
     optind = 1;
@@ -145,6 +150,10 @@ int cmd_render(int argc, char **argv)
         case 'k':
             snprintf(kind_buf, sizeof kind_buf, "%s", optarg);
             if (!cli_relight_kinds(&kinds, kind_buf)) return cli_usage(&c, "--kind takes a comma list of at most 16 names");
+            break;
+        case OPT_PROBE:
+            if (probe_count == CLI_MAX_PROBES) return cli_usage(&c, "at most %d --probe", CLI_MAX_PROBES);
+            if (!cli_parse_probe(optarg, probes[probe_count++])) return cli_usage(&c, "--probe takes X,Y,Z or X,Y,Z,R (R > 0), got \"%s\"", optarg);
             break;
         case OPT_FRAMES: if (!cli_parse_int(optarg, 2, 1000, &frames)) return cli_usage(&c, "--frames must be 2..1000"); break;
         case OPT_FPS: if (!cli_parse_int(optarg, 1, 100, &fps)) return cli_usage(&c, "--fps must be 1..100"); break;
@@ -277,7 +286,10 @@ int cmd_render(int argc, char **argv)
                                              .triangle_count = mesh.triangle_count, .normals = mesh.normals};
                     mesh = plain;
                 }
+                cli_probe_mesh held = {0};
+                if (!st && probe_count) st = cli_probe_append(&c, t, lighting, (const float(*)[4])probes, probe_count, &mesh, &held, &mesh);
                 if (!st) st = prt_render(r, &mesh, &cam, view.background, &panel);
+                cli_probe_mesh_free(&held);
                 prt_relit_free(&relit);
                 if (st) break;
                 for (int y = 0; y < height; ++y)

@@ -94,9 +94,13 @@ static prt_status copy_without_sets(prt_context *ctx, const prt_transfer *in, co
     if ((st = prt__texel_sets_copy(&n->texels, &s->texels, s->order))) { prt_transfer_release(t); return prt__fail(ctx, st, "%s", prt_last_error()); }
     if (s->grid.matrices) {
         const size_t bytes = (size_t)s->grid.dims[0] * s->grid.dims[1] * s->grid.dims[2] * 3 * (size_t)s->grid.order * s->grid.order * s->grid.order * s->grid.order * sizeof(float);
+        const size_t points = (size_t)s->grid.dims[0] * s->grid.dims[1] * s->grid.dims[2];
         n->grid = s->grid;
-        if (!(n->grid.matrices = malloc(bytes))) { n->grid = (prt__sh_grid){0}; prt_transfer_release(t); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+        n->grid.matrices = malloc(bytes);
+        n->grid.front = malloc(points * sizeof(float));
+        if (!n->grid.matrices || !n->grid.front) { prt__sh_grid_free(&n->grid); prt_transfer_release(t); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
         memcpy(n->grid.matrices, s->grid.matrices, bytes);
+        memcpy(n->grid.front, s->grid.front, points * sizeof(float));
     }
     *out = t;
     *state = n;

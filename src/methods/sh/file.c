@@ -134,7 +134,8 @@ prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
             }
             prt__put32(h + 12, (uint32_t)g->order);
             const size_t n = (size_t)g->order * g->order;
-            prt__chunks_add(l, CHUNK_NBHD, h, (size_t)NBHD_HEADER, g->matrices, (size_t)g->dims[0] * g->dims[1] * g->dims[2] * 3 * n * n * sizeof(float), NULL);
+            const size_t points = (size_t)g->dims[0] * g->dims[1] * g->dims[2];
+            prt__chunks_add(l, CHUNK_NBHD, h, (size_t)NBHD_HEADER, g->matrices, points * 3 * n * n * sizeof(float), g->front, points * sizeof(float), NULL);
         }
     }
     return PRT_OK;   /* allocation failures are recorded in the list and reported when writing */
@@ -298,7 +299,7 @@ static prt_status load_texels(prt_context *ctx, prt__sh_state *sh, prt__chunk_in
     return PRT_OK;
 }
 
-/* u32 dims[3], u32 order, f32 lo[3], f32 hi[3], then f32 [point][3][n][n]. */
+/* u32 dims[3], u32 order, f32 lo[3], f32 hi[3], then f32 [point][3][n][n], f32 front[point]. */
 static prt_status load_grid(prt_context *ctx, prt__sh_state *sh, const prt__chunk_in *in)
 {
     const unsigned char *p = in->data;
@@ -317,10 +318,15 @@ static prt_status load_grid(prt_context *ctx, prt__sh_state *sh, const prt__chun
     g.order = (int)prt__get32(p + 12);
     if (g.order != sh->order) return bad(ctx, "corrupt .prt file: neighbourhood grid of another SH order than the transfer");
     const uint64_t n = (uint64_t)g.order * g.order, floats = points * 3 * n * n;
-    if (NBHD_HEADER + floats * 4 != in->size) return bad(ctx, "corrupt .prt file: neighbourhood chunk size mismatch");
-    if (!(g.matrices = malloc(floats * 4))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (NBHD_HEADER + (floats + points) * 4 != in->size) return bad(ctx, "corrupt .prt file: neighbourhood chunk size mismatch");
+    g.matrices = malloc(floats * 4);
+    g.front = malloc(points * 4);
+    if (!g.matrices || !g.front) { free(g.matrices); free(g.front); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
     memcpy(g.matrices, p + NBHD_HEADER, floats * 4);
-    if (!prt__all_finite(g.matrices, floats)) { free(g.matrices); return bad(ctx, "corrupt .prt file: non-finite neighbourhood transfer"); }
+    memcpy(g.front, p + NBHD_HEADER + floats * 4, points * 4);
+    bool ok = prt__all_finite(g.matrices, floats);
+    for (uint64_t i = 0; ok && i < points; ++i) ok = g.front[i] >= 0 && g.front[i] <= 1;
+    if (!ok) { free(g.matrices); free(g.front); return bad(ctx, "corrupt .prt file: non-finite neighbourhood transfer or a share of rays outside [0, 1]"); }
     sh->grid = g;
     return PRT_OK;
 }

@@ -334,7 +334,7 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
 static size_t grid_bytes(const prt__sh_state *s)
 {
     const prt__sh_grid *g = &s->grid;
-    return g->matrices ? (size_t)g->dims[0] * g->dims[1] * g->dims[2] * 3 * (size_t)g->order * g->order * g->order * g->order * sizeof(float) : 0;
+    return g->matrices ? (size_t)g->dims[0] * g->dims[1] * g->dims[2] * (3 * (size_t)g->order * g->order * g->order * g->order + 1) * sizeof(float) : 0;
 }
 
 static size_t sh_bytes(const prt_transfer *t)

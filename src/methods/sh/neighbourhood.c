@@ -14,6 +14,7 @@
 void prt__sh_grid_free(prt__sh_grid *g)
 {
     free(g->matrices);
+    free(g->front);
     memset(g, 0, sizeof *g);
 }
 
@@ -29,7 +30,9 @@ prt_status prt__sh_neighbourhood_bake(prt_context *ctx, const prt__mesh *m, cons
     const int n = order * order;
     const size_t points = (size_t)g->dims[0] * g->dims[1] * g->dims[2], per = 3 * (size_t)n * n;
     g->order = order;
-    if (!(g->matrices = prt__calloc(points * per, sizeof(float))))
+    g->matrices = prt__calloc(points * per, sizeof(float));
+    g->front = prt__calloc(points, sizeof(float));
+    if (!g->matrices || !g->front)
         return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for a neighbourhood grid of %zu points", points);
     prt__progress_begin(p, p->stage, points);
     const double w = 4.0 * PRT_PI / samples;
@@ -44,6 +47,7 @@ prt_status prt__sh_neighbourhood_bake(prt_context *ctx, const prt__mesh *m, cons
             float o[3];
             grid_point(g, x, y, z, o);
             memset(acc, 0, per * sizeof *acc);
+            int back = 0;
             for (int s = 0; s < samples; ++s) {
                 const float *d = dirs + (size_t)s * 3, *ys = basis + (size_t)s * n;
                 prt__ray_hit h;
@@ -55,7 +59,8 @@ prt_status prt__sh_neighbourhood_bake(prt_context *ctx, const prt__mesh *m, cons
                         }
                     continue;
                 }
-                if (!exit || h.ng[0] * d[0] + h.ng[1] * d[1] + h.ng[2] * d[2] >= 0) continue;   /* a back face: inside, dark */
+                if (h.ng[0] * d[0] + h.ng[1] * d[1] + h.ng[2] * d[2] >= 0) { back++; continue; }   /* a back face: inside, dark */
+                if (!exit) continue;
                 const uint32_t *t = m->indices + (size_t)h.prim * 3;
                 const float bw[3] = {1.0f - h.u - h.v, h.u, h.v};
                 float T[3][PRT_SH_MAX_COEFFS];
@@ -72,6 +77,7 @@ prt_status prt__sh_neighbourhood_bake(prt_context *ctx, const prt__mesh *m, cons
                     for (int i = 0; i < n; ++i)
                         for (int j = 0; j < n; ++j) acc[((size_t)c * n + i) * n + j] += w * ys[i] * T[c][j];
             }
+            g->front[k] = 1.0f - (float)back / (float)samples;
             float *out = g->matrices + k * per;
             for (size_t i = 0; i < per; ++i) out[i] = (float)acc[i];
             if (prt__progress_add(p, 1)) __atomic_store_n(&cancelled, 1, __ATOMIC_RELAXED);
@@ -101,19 +107,37 @@ void prt__sh_neighbourhood_eval(const prt__sh_grid *g, const float p[3], const p
         if (i0[c] >= g->dims[c] - 1) i0[c] = g->dims[c] > 1 ? g->dims[c] - 2 : 0;
         f[c] = g->dims[c] > 1 ? u - (float)i0[c] : 0.0f;
     }
+    /* A point inside or behind geometry (under a floor, behind a wall) stands in for the space
+     * around it less: its weight falls from 1 with half its rays meeting back faces to 0. */
+    float w8[8], total = 0;
+    int at8[3 * 8];
+    for (int corner = 0; corner < 8; ++corner) {
+        float wgt = 1;
+        for (int c = 0; c < 3; ++c) {
+            const int b = corner >> c & 1;
+            if (b && g->dims[c] == 1) { wgt = 0; break; }
+            at8[corner * 3 + c] = i0[c] + b;
+            wgt *= b ? f[c] : 1.0f - f[c];
+        }
+        w8[corner] = wgt;
+        if (wgt == 0) continue;
+        const float front = g->front[((size_t)at8[corner * 3 + 2] * g->dims[1] + at8[corner * 3 + 1]) * g->dims[0] + at8[corner * 3]];
+        const float trust = fminf(fmaxf(2.0f * front - 1.0f, 0.0f), 1.0f);
+        total += wgt * trust;
+    }
+    if (total > 1e-6f)
+        for (int corner = 0; corner < 8; ++corner) {
+            if (w8[corner] == 0) continue;
+            const float front = g->front[((size_t)at8[corner * 3 + 2] * g->dims[1] + at8[corner * 3 + 1]) * g->dims[0] + at8[corner * 3]];
+            w8[corner] *= fminf(fmaxf(2.0f * front - 1.0f, 0.0f), 1.0f) / total;
+        }
     float L[3][PRT_SH_MAX_COEFFS];
     memset(L, 0, sizeof L);
     for (int c = 0; c < 3; ++c)
         for (int j = 0; j < n && j < in->order * in->order; ++j) L[c][j] = in->coeffs[c][j];
     for (int corner = 0; corner < 8; ++corner) {
-        int ix[3];
-        float wgt = 1;
-        for (int c = 0; c < 3; ++c) {
-            const int b = corner >> c & 1;
-            if (b && g->dims[c] == 1) { wgt = 0; break; }
-            ix[c] = i0[c] + b;
-            wgt *= b ? f[c] : 1.0f - f[c];
-        }
+        const float wgt = w8[corner];
+        const int *ix = at8 + corner * 3;
         if (wgt == 0) continue;
         const float *M = g->matrices + (((size_t)ix[2] * g->dims[1] + ix[1]) * g->dims[0] + ix[0]) * 3 * (size_t)gn * gn;
         for (int c = 0; c < 3; ++c)

@@ -37,11 +37,13 @@ bool prt__texel_quantize8(prt__texel_sets *tx, int order);
 
 /* Neighbourhood transfer (neighbourhood.c): dims[0] x dims[1] x dims[2] points spanning lo..hi
  * (x fastest), each 3 matrices [channel][order^2][order^2] from distant lighting to the radiance
- * arriving there; dims 0 when absent. */
+ * arriving there, and the share of its rays that met no back face (under 1: the point lies inside
+ * or behind geometry, and stands in for the space around it less); dims 0 when absent. */
 typedef struct prt__sh_grid {
     int dims[3], order;
     float lo[3], hi[3];
     float *matrices;
+    float *front;
 } prt__sh_grid;
 
 void prt__sh_grid_free(prt__sh_grid *g);
