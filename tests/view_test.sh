@@ -67,6 +67,18 @@ within "$T/rotated.exr" "$T/render_rotated.exr" 0.002
 r=$(field relative_l2 "$T/cmp")
 awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.05) }' && ok || bad "rotating the environment changed nothing (relative L2 $r)"
 
+# The probe (j): a sphere at the view's target lit by the neighbourhood transfer, as prt render --probe draws it.
+"$PRT" bake -q "$T/demo.obj" -o "$T/nb.prt" --order 3 --samples 64 --bounces 1 --neighbourhood 4 || bad "neighbourhood bake"
+printf '%s\n' "0 key j" "0.1 screenshot p.exr" "0.1 quit" >"$T/pscript.txt"
+xrun -a -s "-screen 0 1024x768x24" "$PRT" view "$T/nb.prt" --width 160 --height 120 --eye 2.4,1.6,3 --target 1,0.3,0.9 --fov 45 --script "$T/pscript.txt" \
+    >/dev/null 2>"$T/err" && ok || { bad "probe script"; sed 's/^/    /' "$T/err"; }
+"$PRT" render -q "$T/nb.prt" -o "$T/p_ref.exr" --width 160 --height 120 --eye 2.4,1.6,3 --target 1,0.3,0.9 --fov 45 --probe 1,0.3,0.9
+"$PRT" render -q "$T/nb.prt" -o "$T/p_none.exr" --width 160 --height 120 --eye 2.4,1.6,3 --target 1,0.3,0.9 --fov 45
+within "$T/p.exr" "$T/p_ref.exr" 0.002
+"$PRT" compare --json - -q "$T/p.exr" "$T/p_none.exr" >"$T/cmp"
+r=$(field relative_l2 "$T/cmp")
+awk -v r="$r" 'BEGIN { exit !(r != "" && r > 0.01) }' && ok || bad "the probe changed nothing in the picture (relative L2 $r)"
+
 # Fly mode: w moves the eye forward and a drag turns the view (each changes the image); the
 # camera options set the starting view as prt render's do; screenshot paths follow the script.
 printf '%s\n' "0 screenshot f0.exr" "0 key f" "0 key w" "0 key w" "0.1 screenshot f1.exr" "0.1 drag left 20 0" "0.2 screenshot f2.exr" "0.2 quit" >"$T/fscript.txt"

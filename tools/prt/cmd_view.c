@@ -2,6 +2,7 @@
  * drawing; a worker thread relights whenever the lighting or the method's state changes, so a
  * large mesh never stalls the window. Camera motion only redraws. */
 #include "view.h"
+#include "probe.h"
 
 #include <getopt.h>
 #include <math.h>
@@ -175,7 +176,7 @@ void view_take_lights(viewer *v)
 }
 
 /* The job's lighting: the viewer's rotation on top of the lighting's own, and the job's lights. */
-static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
+static prt_status relight(viewer *v, const relight_job *job, prt_relit *out, prt_sh_light *probe)
 {
     double rj[9], r[9];
     prt_rotation_from_euler_deg(job->env_yaw, job->env_pitch, 0, rj);
@@ -202,6 +203,7 @@ static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
         d.paint_height = v->paint_h;
     }
     if (!st) st = prt_relight(v->worker_ctx, v->t, v->lighting, &d, out);
+    if (!st && job->probe && (st = cli_probe_arriving(v->worker_ctx, v->t, v->lighting, job->probe_at, probe))) prt_relit_free(out);
     return st;
 }
 
@@ -217,11 +219,14 @@ static void *worker(void *arg)
         pthread_mutex_unlock(&v->lock);
         double t0 = now();
         prt_relit r;
-        prt_status st = relight(v, &job, &r);
+        prt_sh_light probe;
+        prt_status st = relight(v, &job, &r, &probe);
         double ms = (now() - t0) * 1e3;
         pthread_mutex_lock(&v->lock);
         prt_relit_free(&v->result);
         v->result = r;
+        v->result_probe = probe;
+        v->result_probe_on = job.probe;
         v->result_status = st;
         if (st) snprintf(v->result_error, sizeof v->result_error, "%s", prt_last_error());
         v->result_version = job.version;
@@ -252,7 +257,23 @@ static void show(viewer *v, prt_relit *r)
                       (o->texels != NULL) == (r->texels != NULL) && o->texel_width == r->texel_width && o->texel_height == r->texel_height &&
                       (o->kvec != NULL) == (r->kvec != NULL) && o->kvec_terms == r->kvec_terms && o->exit_mirror == r->exit_mirror &&
                       (o->gpu_input != NULL) == (r->gpu_input != NULL);
-    if (same) {
+    /* A probe sphere joins the mesh: the whole mesh goes up while one is shown, and once more
+     * when it goes. */
+    const bool probe = v->result_probe_on;
+    if (probe || v->shown_probe_on) {
+        prt_render_mesh mesh, joined;
+        prt_relit_render_mesh(v->t, r, &mesh);
+        mesh.side_by_side = v->side_by_side;
+        cli_probe_mesh keep = {0};
+        const float at[1][4] = {{v->want.probe_at[0], v->want.probe_at[1], v->want.probe_at[2], 0}};
+        if (probe && !cli_probe_drawable(&mesh)) snprintf(v->message, sizeof v->message, "the probe draws over per-vertex radiance: this kind has per-pixel parts");
+        if (probe && cli_probe_drawable(&mesh) && cli_probe_spheres(&mesh, at, &v->result_probe, 1, cli_probe_radius(v->t), &keep, &joined))
+            prt_window_set_mesh(v->win, &joined);
+        else
+            prt_window_set_mesh(v->win, &mesh);
+        cli_probe_mesh_free(&keep);
+        v->shown_probe_on = probe;
+    } else if (same) {
         prt_window_set_radiance(v->win, r->radiance, nv);
         if (r->gpu_input) {
             prt_render_mesh mesh;
@@ -511,8 +532,9 @@ int cmd_view(int argc, char **argv)
     if (!st) {
         /* The first frame is lit before the window opens, so a bad lighting fails at once. */
         prt_relit first;
+        prt_sh_light none;
         v.job = v.want;
-        st = relight(&v, &v.want, &first);
+        st = relight(&v, &v.want, &first, &none);
         if (!st) v.shown = first;
     }
     char title[600];
@@ -538,6 +560,7 @@ int cmd_view(int argc, char **argv)
     view_register_lights(&v);
     view_register_surfaces(&v);
     view_register_paint(&v);
+    view_register_probe(&v);
     const size_t nv = prt_transfer_vertex_count(v.t);
     {
         prt_render_mesh mesh;

@@ -33,47 +33,45 @@ void cli_probe_mesh_free(cli_probe_mesh *p)
     memset(p, 0, sizeof *p);
 }
 
-prt_status cli_probe_append(cli *c, const prt_transfer *t, const prt_lighting *l, const float (*probes)[4], int count, const prt_render_mesh *in,
-                            cli_probe_mesh *keep, prt_render_mesh *out)
+prt_status cli_probe_arriving(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const float p[3], prt_sh_light *out)
 {
-    memset(keep, 0, sizeof *keep);
-    if (in->exit_sh || in->texel_radiance || in->kvec_terms || in->gpu_passes) {
-        cli_error(c, "--probe draws over per-vertex radiance: add --per-vertex, or draw a kind without per-pixel parts");
-        c->reported = true;
-        return PRT_ERR_INVALID_ARG;
-    }
-    int dims[3];
-    float lo[3], hi[3];
-    if (!prt_transfer_neighbourhood(t, dims, lo, hi)) {
-        cli_error(c, "'%s' holds no neighbourhood transfer for --probe: bake it with --neighbourhood N (SH)", prt_transfer_source(t));
-        c->reported = true;
-        return PRT_ERR_EMPTY;   /* the file lacks it: bad input, not a bad command */
-    }
-    prt_sh_light distant, at;
     prt_transfer_info info;
     prt_transfer_get_info(t, &info);
-    const int order = info.order;
-    prt_status st = prt_lighting_sh(l, order, &distant);
-    if (st) return st;
+    prt_sh_light distant;
+    prt_status st = prt_lighting_sh(l, info.order, &distant);
+    return st ? st : prt_sh_light_at(ctx, t, p, &distant, out);
+}
+
+float cli_probe_radius(const prt_transfer *t)
+{
+    int dims[3];
+    float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    prt_transfer_neighbourhood(t, dims, lo, hi);
+    return 0.03f * fmaxf(hi[0] - lo[0], fmaxf(hi[1] - lo[1], hi[2] - lo[2]));
+}
+
+bool cli_probe_spheres(const prt_render_mesh *in, const float (*probes)[4], const prt_sh_light *arriving, int count, float radius, cli_probe_mesh *keep,
+                       prt_render_mesh *out)
+{
+    memset(keep, 0, sizeof *keep);
     const size_t per = (size_t)(RINGS - 1) * SEGMENTS + 2, tris = (size_t)SEGMENTS * 2 * (RINGS - 1);
     const size_t nv = in->vertex_count + per * count, nt = in->triangle_count + tris * count;
     keep->positions = malloc(nv * 3 * sizeof(float));
     keep->radiance = malloc(nv * 3 * sizeof(float));
     keep->normals = malloc(nv * 3 * sizeof(float));
     keep->indices = malloc(nt * 3 * sizeof(uint32_t));
-    if (!keep->positions || !keep->radiance || !keep->normals || !keep->indices) { cli_probe_mesh_free(keep); return PRT_ERR_NO_MEMORY; }
+    if (!keep->positions || !keep->radiance || !keep->normals || !keep->indices) { cli_probe_mesh_free(keep); return false; }
     memcpy(keep->positions, in->positions, in->vertex_count * 3 * sizeof(float));
     memcpy(keep->radiance, in->radiance, in->vertex_count * 3 * sizeof(float));
     if (in->normals) memcpy(keep->normals, in->normals, in->vertex_count * 3 * sizeof(float));
     else memset(keep->normals, 0, in->vertex_count * 3 * sizeof(float));
     memcpy(keep->indices, in->indices, in->triangle_count * 3 * sizeof(uint32_t));
-    double zh[PRT_SH_MAX_ORDER];
-    prt_sh_clamped_cosine_zh(order, zh);
-    const float size = fmaxf(hi[0] - lo[0], fmaxf(hi[1] - lo[1], hi[2] - lo[2]));
     size_t v = in->vertex_count, f = in->triangle_count;
     for (int k = 0; k < count; ++k) {
-        const float *pc = probes[k], r = probes[k][3] > 0 ? probes[k][3] : 0.03f * size;
-        if ((st = prt_sh_light_at(c->ctx, t, pc, &distant, &at))) { cli_probe_mesh_free(keep); return st; }
+        const float *pc = probes[k], r = probes[k][3] > 0 ? probes[k][3] : radius;
+        const int order = arriving[k].order;
+        double zh[PRT_SH_MAX_ORDER];
+        prt_sh_clamped_cosine_zh(order, zh);
         const uint32_t base = (uint32_t)v;
         for (size_t i = 0; i < per; ++i, ++v) {
             /* The poles, then rings from the top. */
@@ -89,7 +87,7 @@ prt_status cli_probe_append(cli *c, const prt_transfer *t, const prt_lighting *l
             for (int ch = 0; ch < 3; ++ch) {
                 double E = 0;   /* irradiance: the arriving light convolved with the clamped cosine */
                 for (int l2 = 0; l2 < order; ++l2)
-                    for (int q = l2 * l2; q < (l2 + 1) * (l2 + 1); ++q) E += sqrt(4 * PROBE_PI / (2 * l2 + 1)) * zh[l2] * at.coeffs[ch][q] * y[q];
+                    for (int q = l2 * l2; q < (l2 + 1) * (l2 + 1); ++q) E += sqrt(4 * PROBE_PI / (2 * l2 + 1)) * zh[l2] * arriving[k].coeffs[ch][q] * y[q];
                 keep->radiance[v * 3 + ch] = (float)fmax(0.0, ALBEDO / PROBE_PI * E);
                 keep->positions[v * 3 + ch] = pc[ch] + r * (float)n[ch];
                 keep->normals[v * 3 + ch] = (float)n[ch];
@@ -118,5 +116,29 @@ prt_status cli_probe_append(cli *c, const prt_transfer *t, const prt_lighting *l
     out->vertex_count = nv;
     out->indices = keep->indices;
     out->triangle_count = nt;
-    return PRT_OK;
+    return true;
+}
+
+bool cli_probe_drawable(const prt_render_mesh *in) { return !in->exit_sh && !in->texel_radiance && !in->kvec_terms && !in->gpu_passes; }
+
+prt_status cli_probe_append(cli *c, const prt_transfer *t, const prt_lighting *l, const float (*probes)[4], int count, const prt_render_mesh *in,
+                            cli_probe_mesh *keep, prt_render_mesh *out)
+{
+    memset(keep, 0, sizeof *keep);
+    if (!cli_probe_drawable(in)) {
+        cli_error(c, "--probe draws over per-vertex radiance: add --per-vertex, or draw a kind without per-pixel parts");
+        c->reported = true;
+        return PRT_ERR_INVALID_ARG;
+    }
+    if (!prt_transfer_neighbourhood(t, NULL, NULL, NULL)) {
+        cli_error(c, "'%s' holds no neighbourhood transfer for --probe: bake it with --neighbourhood N (SH)", prt_transfer_source(t));
+        c->reported = true;
+        return PRT_ERR_EMPTY;   /* the file lacks it: bad input, not a bad command */
+    }
+    prt_sh_light arriving[CLI_MAX_PROBES];
+    for (int k = 0; k < count; ++k) {
+        prt_status st = cli_probe_arriving(c->ctx, t, l, probes[k], &arriving[k]);
+        if (st) return st;
+    }
+    return cli_probe_spheres(in, probes, arriving, count, cli_probe_radius(t), keep, out) ? PRT_OK : PRT_ERR_NO_MEMORY;
 }

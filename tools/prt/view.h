@@ -31,6 +31,8 @@ typedef struct relight_job {
     prt_light lights[CLI_MAX_LIGHTS];
     int light_count;
     bool painted;              /* relight with the painting (viewer.paint, copied to job_paint) */
+    bool probe;                /* a probe sphere lit by the file's neighbourhood transfer (j) */
+    float probe_at[3];
     unsigned version;
 } relight_job;
 
@@ -71,6 +73,8 @@ struct viewer {
     double relight_ms;
     prt_context *worker_ctx;
     prt_relit shown;            /* what the window draws now */
+    prt_sh_light result_probe;  /* the light arriving at the result's probe (with result, under lock) */
+    bool result_probe_on, shown_probe_on;
     /* input */
     view_control controls[VIEW_MAX_CONTROLS];
     int ncontrols;
@@ -135,6 +139,8 @@ bool view_surface_scale(viewer *v, float factor);
  * becomes the surface's colour). */
 bool view_surface_next_brdf(viewer *v);
 void view_register_surfaces(viewer *v);
+/* The probe (files with neighbourhood transfer): j shows or hides it, alt+drag then moves it. */
+void view_register_probe(viewer *v);
 /* Takes the lighting's rotation and lights as the viewer's starting point. */
 void view_take_lights(viewer *v);
 /* The light types the file's method relights (PRT_LIGHTS_* bits). */

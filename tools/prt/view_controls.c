@@ -270,8 +270,8 @@ bool view_light_remove(viewer *v)
 
 bool view_light_move(viewer *v, float dx, float dy, float dz)
 {
-    prt_light *l = selected(v);
-    if (!l) return false;
+    prt_light *l = v->want.probe ? NULL : selected(v);
+    if (!l && !v->want.probe) return false;
     prt_camera cam;
     view_camera(v, &cam);
     float f[3] = {cam.target[0] - cam.eye[0], cam.target[1] - cam.eye[1], cam.target[2] - cam.eye[2]}, up[3] = {0, 1, 0}, r[3], u[3];
@@ -281,6 +281,12 @@ bool view_light_move(viewer *v, float dx, float dy, float dz)
     float rl = sqrtf(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
     for (int k = 0; k < 3; ++k) r[k] /= rl > 0 ? rl : 1;
     u[0] = r[1] * f[2] - r[2] * f[1]; u[1] = r[2] * f[0] - r[0] * f[2]; u[2] = r[0] * f[1] - r[1] * f[0];
+    if (v->want.probe) {   /* the probe, while shown, is what alt+drag moves */
+        for (int k = 0; k < 3; ++k) v->want.probe_at[k] += dx * r[k] + dy * u[k] + dz * f[k];
+        snprintf(v->message, sizeof v->message, "probe at %.3g, %.3g, %.3g", v->want.probe_at[0], v->want.probe_at[1], v->want.probe_at[2]);
+        view_request_relight(v);
+        return true;
+    }
     prt_light moved = *l;
     if (l->type == PRT_LIGHT_DIRECTIONAL) {
         /* Turn the direction: dx about the view's up, dy about its right (degrees). */
@@ -477,4 +483,34 @@ void view_register_surfaces(viewer *v)
 {
     if (prt_method_runtime_albedo(prt_transfer_method(v->t)) && prt_transfer_surface_count(v->t))
         view_register(v, surfaces, (int)(sizeof surfaces / sizeof surfaces[0]));
+}
+
+/* ---- the probe (neighbourhood transfer) ---- */
+static void toggle_probe(viewer *v, int arg)
+{
+    (void)arg;
+    if (!prt_transfer_neighbourhood(v->t, NULL, NULL, NULL)) {
+        snprintf(v->message, sizeof v->message, "no neighbourhood transfer in this file: bake it with --neighbourhood N (SH)");
+        return;
+    }
+    v->want.probe = !v->want.probe;
+    if (v->want.probe) {
+        prt_camera cam;
+        view_camera(v, &cam);
+        memcpy(v->want.probe_at, cam.target, sizeof v->want.probe_at);
+        snprintf(v->message, sizeof v->message, "probe at %.3g, %.3g, %.3g: alt+drag moves it (alt+wheel in depth), j hides it", cam.target[0],
+                 cam.target[1], cam.target[2]);
+    } else {
+        snprintf(v->message, sizeof v->message, "probe hidden");
+    }
+    view_request_relight(v);
+}
+
+static const view_control probe_keys[] = {
+    {'J', "j", "neighbourhood transfer: show or hide a probe sphere lit by the scene (alt+drag moves it)", toggle_probe, 0},
+};
+
+void view_register_probe(viewer *v)
+{
+    if (prt_transfer_neighbourhood(v->t, NULL, NULL, NULL)) view_register(v, probe_keys, 1);
 }

@@ -251,7 +251,7 @@ static const prt_option_desc export_options[] = {
 };
 static const prt_control_desc controls[] = {
     {"order", "SH order used for lighting (truncates the file's)", '[', ']', 0},
-    {"light-window", "window on the SH of point, spot, sphere and directional lights: 0 none, 1 Hanning, 2 Lanczos", 'J', 'U', 0},
+    {"light-window", "window on the SH of point, spot, sphere and directional lights: 0 none, 1 Hanning, 2 Lanczos", '1', '2', 0},
 };
 
 /* A map of numbers (normals, heights), not of colours. */
