@@ -143,6 +143,13 @@ size_t prt_transfer_bytes(const prt_transfer *t);
 double prt_transfer_bake_seconds(const prt_transfer *t);
 int prt_transfer_bake_threads(const prt_transfer *t);
 const char *prt_transfer_source(const prt_transfer *t);
+/* Light arriving at points around a baked scene (a method's neighbourhood transfer: SH bakes it
+ * with --neighbourhood N): 1 and the box it covers (lo, hi may be NULL) when t holds it, else 0. */
+int prt_transfer_light_at_box(const prt_transfer *t, float lo[3], float hi[3]);
+/* The radiance arriving at p under l's distant part (environment, directional lights), as SH of
+ * the method's order: what an object moved to p is lit by, the scene's shadow and the light its
+ * surfaces reflect included. An error naming how to bake it when t holds none. */
+prt_status prt_transfer_light_at(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const float p[3], prt_sh_light *out);
 
 /* Text lines the method shows once after a bake (for example the separable BRDF fit error per
  * number of terms); *out is malloc'd (free it) and "" when there is nothing to say. */

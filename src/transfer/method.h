@@ -164,6 +164,11 @@ struct prt_method {
     /* Painted first-order light (prt_relight_desc.paint, prt/paint.h): t's light map and texels.
      * NULL: the method relights from no first-order light map, and prt_relight refuses paint. */
     void (*paint_layout)(const prt_transfer *t, prt__paint_layout *out);
+    /* Light arriving at points around the scene (prt_transfer_light_at): the box it covers
+     * (false: t holds none), and the radiance arriving at p under l's distant part, as SH of the
+     * method's order. NULL: the method never holds it. */
+    bool (*light_at_box)(const prt_transfer *t, float lo[3], float hi[3]);
+    prt_status (*light_at)(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const float p[3], prt_sh_light *out);
 };
 
 /* A BRDF as PRT__BRDF_RECORD bytes of a .prt (model, lobes, 38 floats), and back (unchecked:

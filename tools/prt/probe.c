@@ -1,4 +1,4 @@
-/* Probe spheres lit by a file's neighbourhood transfer (prt_sh_light_at): what an object moved
+/* Probe spheres lit by a file's neighbourhood transfer (prt_transfer_light_at): what an object moved
  * through a baked scene looks like there - in its shadow, in the light it reflects. Drawn by
  * prt render --probe as part of the scene's mesh. */
 #include "probe.h"
@@ -35,18 +35,13 @@ void cli_probe_mesh_free(cli_probe_mesh *p)
 
 prt_status cli_probe_arriving(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const float p[3], prt_sh_light *out)
 {
-    prt_transfer_info info;
-    prt_transfer_get_info(t, &info);
-    prt_sh_light distant;
-    prt_status st = prt_lighting_sh(l, info.order, &distant);
-    return st ? st : prt_sh_light_at(ctx, t, p, &distant, out);
+    return prt_transfer_light_at(ctx, t, l, p, out);
 }
 
 float cli_probe_radius(const prt_transfer *t)
 {
-    int dims[3];
     float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
-    prt_transfer_neighbourhood(t, dims, lo, hi);
+    prt_transfer_light_at_box(t, lo, hi);
     return 0.03f * fmaxf(hi[0] - lo[0], fmaxf(hi[1] - lo[1], hi[2] - lo[2]));
 }
 
@@ -130,7 +125,7 @@ prt_status cli_probe_append(cli *c, const prt_transfer *t, const prt_lighting *l
         c->reported = true;
         return PRT_ERR_INVALID_ARG;
     }
-    if (!prt_transfer_neighbourhood(t, NULL, NULL, NULL)) {
+    if (!prt_transfer_light_at_box(t, NULL, NULL)) {
         cli_error(c, "'%s' holds no neighbourhood transfer for --probe: bake it with --neighbourhood N (SH)", prt_transfer_source(t));
         c->reported = true;
         return PRT_ERR_EMPTY;   /* the file lacks it: bad input, not a bad command */

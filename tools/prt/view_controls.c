@@ -489,7 +489,7 @@ void view_register_surfaces(viewer *v)
 static void toggle_probe(viewer *v, int arg)
 {
     (void)arg;
-    if (!prt_transfer_neighbourhood(v->t, NULL, NULL, NULL)) {
+    if (!prt_transfer_light_at_box(v->t, NULL, NULL)) {
         snprintf(v->message, sizeof v->message, "no neighbourhood transfer in this file: bake it with --neighbourhood N (SH)");
         return;
     }
@@ -512,5 +512,5 @@ static const view_control probe_keys[] = {
 
 void view_register_probe(viewer *v)
 {
-    if (prt_transfer_neighbourhood(v->t, NULL, NULL, NULL)) view_register(v, probe_keys, 1);
+    if (prt_transfer_light_at_box(v->t, NULL, NULL)) view_register(v, probe_keys, 1);
 }

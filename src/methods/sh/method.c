@@ -675,4 +675,6 @@ const prt__method prt__method_sh = {
     .find_variant = sh_find_variant,
     .control_range = sh_control_range,
     .relight = sh_relight,
+    .light_at_box = prt__sh_light_at_box,
+    .light_at = prt__sh_light_at_lighting,
 };

@@ -171,3 +171,13 @@ prt_status prt_sh_light_at(prt_context *ctx, const prt_transfer *t, const float 
     prt__sh_neighbourhood_eval(&s->grid, p, light, light->order < s->grid.order ? light->order : s->grid.order, out);
     return PRT_OK;
 }
+
+bool prt__sh_light_at_box(const prt_transfer *t, float lo[3], float hi[3]) { return prt_transfer_neighbourhood(t, NULL, lo, hi) != 0; }
+
+prt_status prt__sh_light_at_lighting(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const float p[3], prt_sh_light *out)
+{
+    const prt__sh_state *s = prt__sh(t);
+    prt_sh_light distant;
+    prt_status st = prt_lighting_sh(l, s->grid.order, &distant);
+    return st ? prt__fail(ctx, st, "%s", prt_last_error()) : prt_sh_light_at(ctx, t, p, &distant, out);
+}

@@ -48,6 +48,9 @@ typedef struct prt__sh_grid {
 
 void prt__sh_grid_free(prt__sh_grid *g);
 /* The radiance arriving at p as SH of `order` (at most the grid's) under the distant light in. */
+/* The table entry's light_at_box and light_at (neighbourhood.c). */
+bool prt__sh_light_at_box(const prt_transfer *t, float lo[3], float hi[3]);
+prt_status prt__sh_light_at_lighting(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const float p[3], prt_sh_light *out);
 void prt__sh_neighbourhood_eval(const prt__sh_grid *g, const float p[3], const prt_sh_light *in, int order, prt_sh_light *out);
 
 typedef struct prt__sh_state {
