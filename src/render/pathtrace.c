@@ -13,7 +13,10 @@
  * prt_brdf_eval in the frame of prt_brdf_frame, as the bakes do.
  *
  * Sphere lights are not part of the ray-cast scene: they are transparent emitters, adding their
- * radiance to every ray that crosses them and blocking nothing (no other light, no surface). */
+ * radiance to every ray that crosses them and blocking nothing (no other light, no surface).
+ *
+ * Mirrors and glass (brdf/specular.c) are delta BSDFs: the path turns there without sampling a
+ * light, and the light it then meets counts with weight 1. */
 #include "core/progress.h"
 #include "prt/reference.h"
 #include "geom/raycast.h"
