@@ -11,6 +11,8 @@
  *  - Bad material specs are refused with one-line errors. */
 #include "common.h"
 
+#include "brdf/specular.h"
+
 static void grid(FILE *f, int *base, const double o[3], const double u[3], const double v[3], int n)
 {
     for (int j = 0; j <= n; ++j)
@@ -227,6 +229,80 @@ static void test_glass(void **state)
     prt_context_release(ctx);
 }
 
+/* The glass ball under the smooth sky: the floor beneath and around it agrees with the path
+ * tracer per vertex (two refractions, Fresnel's reflections and internal reflections on the way). */
+static void test_glass_matches_reference(void **state)
+{
+    (void)state;
+    write_meshes();
+    prt_context *ctx = test_context(0);
+    prt_scene *s = load(ctx, "glass3.json", "{\"materials\": {\"ball\": {\"albedo\": 0, \"specular\": \"glass\"}, \"floor\": {\"albedo\": 0.5}}, "
+                                            "\"meshes\": [{\"file\": \"floor.obj\", \"material\": \"floor\"}, {\"file\": \"ball.obj\", \"material\": \"ball\"}]}");
+    prt_envmap *env = quadratic_sky(256);
+    prt_sh_light L;
+    assert_int_equal(prt_envmap_project_sh(env, 3, &L), PRT_OK);
+    float *sh = bake_relit(ctx, s, 3, 4096, PRT_TRANSFER_INTERREFLECTED, &L);
+    prt_reference_desc d = {0};
+    d.samples = 1024;
+    prt_reference_vertices r;
+    assert_int_equal(prt_reference_trace_vertices(ctx, s, env, &d, &r), PRT_OK);
+    const float *pos = prt_scene_positions(s);
+    double num = 0, den = 0, noise = 0;
+    int n = 0, outside = 0;
+    for (size_t v = 0; v < r.vertex_count; ++v) {
+        if (fabsf(pos[v * 3 + 1]) > 1e-6f || hypot(pos[v * 3], pos[v * 3 + 2]) > 1.0) continue;   /* the floor near the ball */
+        const double got = sh[v * 3], ref = r.radiance[v * 3], err = r.std_error[v * 3];
+        num += (got - ref) * (got - ref);
+        den += ref * ref;
+        noise += err * err;
+        n++;
+        if (fabs(got - ref) > 4 * err + 0.03 * ref) outside++;
+    }
+    const double rel = sqrt(num / den), rel_noise = sqrt(noise / den);
+    print_message("glass ball (ior 1.5) under the smooth sky, order 3: relative L2 %.4f against the path tracer (its noise %.4f) over the %d floor vertices "
+                  "within 1 m, %d outside 4 sigma + 3%%\n", rel, rel_noise, n, outside);
+    assert_true(n > 100);
+    assert_true(rel < 1.5 * rel_noise + 0.01);
+    assert_true(outside <= n / 20);
+    free(sh);
+    prt_reference_vertices_free(&r);
+    prt_envmap_release(env);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
+/* Fresnel's equations at normal incidence ((n - 1) / (n + 1))^2, the same from either side,
+ * total internal reflection past the critical angle; a ray through a glass slab's faces. */
+static void test_optics(void **state)
+{
+    (void)state;
+    assert_true(fabs(prt__fresnel_dielectric(1.0, 1 / 1.5) - 0.04) < 1e-9);
+    assert_true(fabs(prt__fresnel_dielectric(1.0, 1.5) - 0.04) < 1e-9);
+    assert_true(prt__fresnel_dielectric(cos(42.5 * M_PI / 180), 1.5) == 1.0);   /* critical angle 41.8 degrees */
+    assert_true(prt__fresnel_dielectric(cos(41.0 * M_PI / 180), 1.5) < 1.0);
+    assert_true(fabs(prt__fresnel_dielectric(1e-6, 1 / 1.5) - 1.0) < 1e-4);   /* grazing */
+    const prt_specular glass = {PRT_SPECULAR_GLASS, 0, 1.5f}, mirror = {PRT_SPECULAR_MIRROR, 0.8f, 0};
+    const float up[3] = {0, 1, 0}, s30 = 0.5f, c30 = 0.8660254f, d[3] = {s30, -c30, 0};
+    float out[3], w;
+    /* u above F refracts into the back: Snell, sin t = sin 30 / 1.5 */
+    assert_int_equal(prt__specular_scatter(&glass, d, up, up, 0.99, out, &w), -1);
+    assert_true(fabsf(out[0] - s30 / 1.5f) < 1e-5f && out[1] < 0 && w == 1.0f);
+    /* out of the glass again through the slab's bottom face (its front faces down): the
+     * direction it came in with, on that face's front */
+    const float down[3] = {0, -1, 0};
+    float back[3];
+    assert_int_equal(prt__specular_scatter(&glass, out, down, down, 0.99, back, &w), 1);
+    assert_true(fabsf(back[0] - d[0]) < 1e-5f && fabsf(back[1] - d[1]) < 1e-5f);
+    /* u below F reflects */
+    assert_int_equal(prt__specular_scatter(&glass, d, up, up, 0.0, out, &w), 1);
+    assert_true(fabsf(out[0] - s30) < 1e-6f && fabsf(out[1] - c30) < 1e-6f);
+    /* a mirror reflects its reflectance; its back is dark */
+    assert_int_equal(prt__specular_scatter(&mirror, d, up, up, 0.5, out, &w), 1);
+    assert_true(fabsf(out[1] - c30) < 1e-6f && w == 0.8f);
+    const float from_below[3] = {0, 1, 0};
+    assert_int_equal(prt__specular_scatter(&mirror, from_below, up, up, 0.5, out, &w), 0);
+}
+
 static void refused(prt_context *ctx, const char *spec, const char *says)
 {
     char json[600], path[600];
@@ -270,9 +346,11 @@ static void test_bad_specs(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_optics),
         cmocka_unit_test(test_bad_specs),
         cmocka_unit_test(test_mirror),
         cmocka_unit_test(test_glass),
+        cmocka_unit_test(test_glass_matches_reference),
     };
     return cmocka_run_group_tests(tests, test_dir_setup, test_dir_teardown);
 }
