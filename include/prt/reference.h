@@ -9,7 +9,11 @@
  * estimation) and combined by multiple importance sampling with BRDF sampling where paths can
  * also hit them (environment, spheres, emissive triangles). Sphere lights are not scene geometry:
  * they are transparent emitters that add their radiance to the rays crossing them and occlude
- * nothing (neither other light nor surfaces behind them). Paths end by Russian roulette. Results are
+ * nothing (neither other light nor surfaces behind them). Specular surfaces (prt_scene_set_specular)
+ * turn paths as a perfect mirror or Fresnel glass (met from inside too) and sample no light; what
+ * a path meets after them counts whole (caustics; no light sample could have found it), so a
+ * caustic of a small source converges slowly. A path that starts at a vertex of a specular
+ * surface sees it as the bakes do: diffuse, of its albedo. Paths end by Russian roulette. Results are
  * deterministic for a seed whatever the thread count: each (vertex or pixel, sample) pair has its
  * own random stream. */
 #ifndef PRT_REFERENCE_H

@@ -175,6 +175,28 @@ prt_status prt_scene_set_medium(prt_scene *scene, const char *surface, const prt
 /* The medium of the surface called name: 1 and *out when it has one, else 0. */
 int prt_scene_medium(const prt_scene *scene, const char *surface, prt_medium *out);
 
+/* A specular surface: light meets it as a perfect mirror or a smooth dielectric (glass, water)
+ * instead of a diffuse reflector. Bakes that follow specular paths (SH transfer: caustics) and
+ * the reference path tracer turn rays at it; elsewhere it is the diffuse surface of its albedo. */
+typedef enum prt_specular_type {
+    PRT_SPECULAR_NONE = 0,
+    PRT_SPECULAR_MIRROR,   /* reflects `reflectance` of the light (one number: grey) */
+    PRT_SPECULAR_GLASS     /* reflects and refracts as Fresnel's equations say for `ior` */
+} prt_specular_type;
+typedef struct prt_specular {
+    prt_specular_type type;
+    float reflectance;     /* mirror: in [0, 1] */
+    float ior;             /* glass: index of refraction inside over outside, in [1, 4]; the
+                            * surface's front (its normals' side) is the outside */
+} prt_specular;
+/* Whether s is usable: a mirror's reflectance in [0, 1], a glass's ior in [1, 4]. */
+prt_status prt_specular_check(const prt_specular *s);
+/* Makes the surface called name specular (type NONE makes it diffuse again); an unknown name is
+ * an error listing the names. JSON scenes do this with a material's "specular". */
+prt_status prt_scene_set_specular(prt_scene *scene, const char *surface, const prt_specular *s);
+/* The specular material of the surface called name: 1 and *out when it has one, else 0. */
+int prt_scene_specular(const prt_scene *scene, const char *surface, prt_specular *out);
+
 /* Writes the procedural demo scene (a ribbed bowl and a torus knot-like ring of spheres over a
  * ground plane between a red and a green wall) as OBJ+MTL. */
 prt_status prt_demo_scene_write(const char *obj_path);

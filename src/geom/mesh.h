@@ -86,6 +86,8 @@ struct prt_scene {
     prt__brdf_choice *brdf_set;
     int medium_count;                 /* translucent surfaces, by name */
     struct prt__named_medium { char name[PRT__SURFACE_NAME]; prt_medium m; } *media;
+    int specular_count;               /* specular surfaces, by name */
+    struct prt__named_specular { char name[PRT__SURFACE_NAME]; prt_specular s; } *speculars;
 };
 
 /* Adds brdf to the candidates of surface (1-based) unless it is there; PRT_ERR_INVALID_ARG when

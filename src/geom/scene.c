@@ -179,6 +179,7 @@ void prt_scene_release(prt_scene *s)
     free(s->lights);
     free(s->brdf_set);
     free(s->media);
+    free(s->speculars);
     free(s);
 }
 
@@ -209,6 +210,40 @@ int prt_scene_medium(const prt_scene *s, const char *surface, prt_medium *out)
 {
     for (int k = 0; s && surface && k < s->medium_count; ++k)
         if (!strcmp(s->media[k].name, surface)) { if (out) *out = s->media[k].m; return 1; }
+    return 0;
+}
+
+prt_status prt_scene_set_specular(prt_scene *s, const char *surface, const prt_specular *sp)
+{
+    if (!s || !surface || !sp) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_specular: scene, surface and material are required");
+    prt_status st = sp->type == PRT_SPECULAR_NONE ? PRT_OK : prt_specular_check(sp);
+    if (st) return st;
+    int id = 0;
+    for (int k = 0; k < s->mesh.surface_count && !id; ++k)
+        if (!strcmp(s->mesh.surface_names[k], surface)) id = k + 1;
+    if (!id) {
+        const float keep[3] = {0, 0, 0};
+        return prt__mesh_paint(&s->mesh, surface, keep, NULL);   /* fails naming the surfaces there are */
+    }
+    for (int k = 0; k < s->specular_count; ++k)
+        if (!strcmp(s->speculars[k].name, surface)) { s->speculars[k].s = *sp; return PRT_OK; }
+    if (sp->type == PRT_SPECULAR_NONE) return PRT_OK;
+    struct prt__named_specular *grown = realloc(s->speculars, (size_t)(s->specular_count + 1) * sizeof *grown);
+    if (!grown) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    s->speculars = grown;
+    memset(&s->speculars[s->specular_count], 0, sizeof *s->speculars);
+    snprintf(s->speculars[s->specular_count].name, sizeof s->speculars[0].name, "%s", surface);
+    s->speculars[s->specular_count++].s = *sp;
+    return PRT_OK;
+}
+
+int prt_scene_specular(const prt_scene *s, const char *surface, prt_specular *out)
+{
+    for (int k = 0; s && surface && k < s->specular_count; ++k)
+        if (!strcmp(s->speculars[k].name, surface) && s->speculars[k].s.type != PRT_SPECULAR_NONE) {
+            if (out) *out = s->speculars[k].s;
+            return 1;
+        }
     return 0;
 }
 

@@ -218,6 +218,31 @@ static prt_status read_camera(const prt_context *ctx, const char *path, const cJ
     return PRT_OK;
 }
 
+/* A material's "specular": "mirror" (reflectance 1), "glass" (ior 1.5), {"type": "mirror",
+ * "reflectance": R} or {"type": "glass", "ior": N}. */
+static prt_status read_specular(const prt_context *ctx, const char *path, const char *name, const cJSON *sp, prt_specular *out)
+{
+    static const char usage[] = "\"specular\" must be \"mirror\", \"glass\", {\"type\": \"mirror\", \"reflectance\": R} or {\"type\": \"glass\", \"ior\": N}";
+    memset(out, 0, sizeof *out);
+    const cJSON *type = cJSON_IsObject(sp) ? cJSON_GetObjectItemCaseSensitive(sp, "type") : sp;
+    if (!cJSON_IsString(type)) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': %s", path, name, usage);
+    if (!strcmp(type->valuestring, "mirror")) *out = (prt_specular){PRT_SPECULAR_MIRROR, 1.0f, 0.0f};
+    else if (!strcmp(type->valuestring, "glass")) *out = (prt_specular){PRT_SPECULAR_GLASS, 0.0f, 1.5f};
+    else return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': unknown specular type '%s' (mirror or glass)", path, name, type->valuestring);
+    const cJSON *v, *keys = cJSON_IsObject(sp) ? sp : NULL;
+    cJSON_ArrayForEach(v, keys) {
+        if (!strcmp(v->string, "type")) continue;
+        const char *key = out->type == PRT_SPECULAR_MIRROR ? "reflectance" : "ior";
+        if (strcmp(v->string, key))
+            return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': a %s has no \"%s\" (only \"%s\")", path, name, type->valuestring, v->string, key);
+        if (!cJSON_IsNumber(v)) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': \"%s\" must be a number", path, name, key);
+        if (out->type == PRT_SPECULAR_MIRROR) out->reflectance = (float)v->valuedouble;
+        else out->ior = (float)v->valuedouble;
+    }
+    if (prt_specular_check(out)) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s': %s", path, name, prt_last_error());
+    return PRT_OK;
+}
+
 prt_status prt__import_scene_json(const prt_context *ctx, const char *path, const prt_scene_desc *desc, prt_scene *scene)
 {
     prt__mesh *m = &scene->mesh;
@@ -283,8 +308,8 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
             a = cJSON_GetObjectItemCaseSensitive(mat, "albedo");
             b = material_brdf(mat);
             e = cJSON_GetObjectItemCaseSensitive(mat, "emission");
-            if (!a && !b && !e && !cJSON_GetObjectItemCaseSensitive(mat, "subsurface")) {
-                st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s' needs an \"albedo\", a \"brdf\", an \"emission\" or a \"subsurface\"", path,
+            if (!a && !b && !e && !cJSON_GetObjectItemCaseSensitive(mat, "subsurface") && !cJSON_GetObjectItemCaseSensitive(mat, "specular")) {
+                st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': material '%s' needs an \"albedo\", a \"brdf\", an \"emission\", a \"subsurface\" or a \"specular\"", path,
                                v->valuestring);
                 break;
             }
@@ -406,6 +431,17 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
         for (int k = 0; !st && k < m->surface_count && !worn; ++k) worn = !strcmp(m->surface_names[k], mat->string);
         if (!st && worn && prt_scene_set_medium(scene, mat->string, &med)) st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': %s", path, prt_last_error());
         if (st) break;
+    }
+    /* Specular materials: "specular" is "mirror", "glass" or an object saying which and how. */
+    const cJSON *specular = st ? NULL : materials;
+    cJSON_ArrayForEach(mat, specular) {
+        const cJSON *sp = cJSON_GetObjectItemCaseSensitive(mat, "specular");
+        if (!sp) continue;
+        prt_specular spec;
+        if ((st = read_specular(ctx, path, mat->string, sp, &spec))) break;
+        bool worn = false;
+        for (int k = 0; k < m->surface_count && !worn; ++k) worn = !strcmp(m->surface_names[k], mat->string);
+        if (worn && prt_scene_set_specular(scene, mat->string, &spec)) { st = prt__fail(ctx, PRT_ERR_FORMAT, "'%s': %s", path, prt_last_error()); break; }
     }
     free(light_points);
     cJSON_Delete(root);

@@ -13,12 +13,16 @@
  * prt_brdf_eval in the frame of prt_brdf_frame, as the bakes do.
  *
  * Sphere lights are not part of the ray-cast scene: they are transparent emitters, adding their
- * radiance to every ray that crosses them and blocking nothing (no other light, no surface). */
+ * radiance to every ray that crosses them and blocking nothing (no other light, no surface).
+ *
+ * Mirrors and glass (brdf/specular.c) are delta BSDFs: the path turns there without sampling a
+ * light, and the light it then meets counts with weight 1. */
 #include "core/progress.h"
 #include "prt/reference.h"
 #include "geom/raycast.h"
 #include "light/env_sample.h"
 #include "light/light_sample.h"
+#include "brdf/specular.h"
 
 #include <string.h>
 
@@ -47,6 +51,7 @@ typedef struct pt_job {
     uint32_t seed;
     const float *eye;
     float *origins;   /* per vertex, as the bakes use them */
+    prt_specular *spec;   /* per surface (prt__specular_table); NULL when nothing is specular */
 } pt_job;
 
 /* ---- counter-based random numbers: one stream per (item, sample), independent of threads */
@@ -90,6 +95,7 @@ static bool occluded(const pt_job *j, const float o[3], const float d[3], float 
 typedef struct surface {
     float p[3], n[3], ng[3], s[3], t[3], rho[3], o[3], le[3];
     int mat;
+    const prt_specular *sp;   /* a mirror or glass hit (n, ng its front's normals); NULL: diffuse */
     uint32_t tri;     /* the triangle hit (camera and path hits) */
     float dist;       /* of the hit along the ray that found it */
 } surface;
@@ -121,9 +127,11 @@ static int intersect(const pt_job *j, const float o[3], const float d[3], surfac
     if (!prt__raycaster_hit(&j->rc, o, d, &h)) return 0;
     s->dist = h.t;
     float ng[3] = {h.ng[0], h.ng[1], h.ng[2]};
-    if (prt__v3_dot(ng, d) >= 0.0f) return -1;   /* Ng faces where the triangle winds counter-clockwise */
-    prt__v3_normalize(ng);
     const prt__mesh *m = j->mesh;
+    /* Glass is met from inside too; everything else only from the front. */
+    s->sp = prt__specular_of(j->spec, m, h.prim);
+    if (prt__v3_dot(ng, d) >= 0.0f && !(s->sp && s->sp->type == PRT_SPECULAR_GLASS)) return -1;   /* Ng faces where the triangle winds counter-clockwise */
+    prt__v3_normalize(ng);
     const uint32_t *t = m->indices + (size_t)h.prim * 3;
     float w0 = 1.0f - h.u - h.v, w1 = h.u, w2 = h.v;
     for (int c = 0; c < 3; ++c) {
@@ -134,6 +142,13 @@ static int intersect(const pt_job *j, const float o[3], const float d[3], surfac
         s->o[c] = s->p[c] + ng[c] * j->offset;
     }
     s->mat = m->material[t[0]];   /* a triangle never joins two objects */
+    s->tri = h.prim;
+    if (s->sp) {   /* the specular turn needs the front's normals as they are */
+        if (!prt__v3_normalize(s->n) || prt__v3_dot(s->n, ng) <= 0.0f) memcpy(s->n, ng, sizeof ng);
+        memset(s->le, 0, sizeof s->le);
+        set_frame(s);
+        return 1;
+    }
     /* A shading normal turned away from the viewer would light the surface from behind. */
     if (!prt__v3_normalize(s->n) || prt__v3_dot(s->n, d) >= 0.0f) memcpy(s->n, ng, sizeof ng);
     set_frame(s);
@@ -342,13 +357,45 @@ static void spheres_along(const pt_job *j, const float p[3], const float o[3], c
 static void path(const pt_job *j, const surface *start, const float wo_world[3], rng *r, float direct[3], float indirect[3])
 {
     surface s = *start;
-    float beta[3] = {1, 1, 1}, wo[3];
+    float beta[3] = {1, 1, 1}, wo[3], dir[3] = {-wo_world[0], -wo_world[1], -wo_world[2]};   /* dir: the ray arriving at s */
     to_local(&s, wo_world, wo);
     direct[0] = direct[1] = direct[2] = indirect[0] = indirect[1] = indirect[2] = 0.0f;
     if (wo[2] <= 0.0f) return;   /* seen from behind: one-sided surfaces send nothing that way */
     for (int c = 0; c < 3; ++c) direct[c] += s.le[c];
     for (int depth = 0;; ++depth) {
         float *acc = depth == 0 ? direct : indirect;
+        if (s.sp) {
+            /* A mirror or glass: no light to sample (a delta BSDF), the path turns and whatever it
+             * meets counts whole - next-event estimation could not have found it. */
+            float nd[3], wgt, org[3], sph[3];
+            const int side = prt__specular_scatter(s.sp, dir, s.ng, s.n, uniform(r), nd, &wgt);
+            if (!side) break;
+            for (int c = 0; c < 3; ++c) { beta[c] *= wgt; org[c] = s.p[c] + (float)side * j->offset * s.ng[c]; }
+            surface next;
+            const int hit = intersect(j, org, nd, &next);
+            spheres_along(j, s.p, org, nd, hit ? next.dist : INFINITY, 0.0f, sph);
+            for (int c = 0; c < 3; ++c) acc[c] += beta[c] * sph[c];
+            if (hit == 0) {
+                if (j->has_env) {
+                    float L[3];
+                    prt__env_radiance(&j->env, nd, L);
+                    for (int c = 0; c < 3; ++c) acc[c] += beta[c] * L[c];
+                }
+                break;
+            }
+            if (hit < 0) break;
+            for (int c = 0; c < 3; ++c) acc[c] += beta[c] * next.le[c];
+            if (depth + 1 >= j->max_depth) break;
+            if (depth >= 2) {
+                float q = fminf(fmaxf(beta[0], fmaxf(beta[1], beta[2])), 0.95f);
+                if (!(q > 0.0f) || uniform(r) >= q) break;
+                for (int c = 0; c < 3; ++c) beta[c] /= q;
+            }
+            wo[0] = -prt__v3_dot(nd, next.s); wo[1] = -prt__v3_dot(nd, next.t); wo[2] = -prt__v3_dot(nd, next.n);
+            memcpy(dir, nd, sizeof dir);
+            s = next;
+            continue;
+        }
         prt__light_sample ls;
         /* Next-event estimation: the environment, each local light, one emitter point. */
         if (j->has_env) {
@@ -408,6 +455,7 @@ static void path(const pt_job *j, const surface *start, const float wo_world[3],
             for (int c = 0; c < 3; ++c) beta[c] /= q;
         }
         wo[0] = -prt__v3_dot(wi, next.s); wo[1] = -prt__v3_dot(wi, next.t); wo[2] = -prt__v3_dot(wi, next.n);
+        memcpy(dir, wi, sizeof dir);
         s = next;
     }
 }
@@ -418,6 +466,7 @@ static void job_free(pt_job *j)
     if (j->has_env) prt__env_sampler_free(&j->env);
     prt__emitters_free(&j->emit);
     free(j->origins);
+    free(j->spec);
 }
 
 static prt_status job_init(prt_context *ctx, const prt_scene *scene, const prt_envmap *env, const prt_reference_desc *d, pt_job *j)
@@ -457,6 +506,7 @@ static prt_status job_init(prt_context *ctx, const prt_scene *scene, const prt_e
     if (e) { st = prt__env_sampler_init(&j->env, e, rp, scale); j->has_env = !st; }
     if (!st) st = prt__emitters_init(&j->emit, j->mesh, emission);
     if (!st) st = prt__raycaster_create(ctx, j->mesh, &j->rc);
+    if (!st) st = prt__specular_table(ctx, scene, j->mesh, &j->spec);
     if (!st) st = prt__vertex_origins(j->mesh, j->offset, &j->origins);
     /* The same origins as the bakes, so that comparisons are of the same points. */
     if (!st) st = prt__unbury_origins(ctx, &j->rc, j->mesh, j->offset, j->origins, NULL, PRT_LOG_DEBUG);

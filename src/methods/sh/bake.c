@@ -10,6 +10,7 @@
 #include "methods/sh/bake.h"
 #include "geom/uv_atlas.h"
 #include "geom/raycast.h"
+#include "brdf/specular.h"
 
 #include <string.h>
 
@@ -31,6 +32,7 @@ typedef struct bake_job {
     bool need_hits;
     hit_entry **hits;     /* per vertex, for interreflection */
     uint32_t *hit_count;
+    prt_specular *spec;   /* per surface (prt__specular_table); NULL when nothing is specular */
 } bake_job;
 
 prt_sh_bake_desc prt_sh_bake_desc_defaults(void)
@@ -63,6 +65,70 @@ static void vertex_rotation(uint32_t seed, size_t v, double R[9])
     R[6] = 2 * (x * z - y * w);     R[7] = 2 * (y * z + x * w);     R[8] = 1 - 2 * (x * x + y * y);
 }
 
+/* Caustics: a sample ray of vertex v that met a specular surface goes on, reflected or refracted,
+ * for at most this many specular turns. */
+#define MAX_SPECULAR 8
+
+/* A number in [0, 1) from (seed, vertex, sample, turn) alone, so that glass chooses between
+ * reflection and refraction the same way for any thread count. */
+static double specular_choice(uint32_t seed, size_t v, uint32_t sample, int turn)
+{
+    uint64_t h = (uint64_t)v * 0x9E3779B97F4A7C15ull ^ ((uint64_t)sample << 20 | (uint64_t)turn) ^ ((uint64_t)seed << 40);
+    h ^= h >> 33; h *= 0xff51afd7ed558ccdull; h ^= h >> 33; h *= 0xc4ceb9fe1a85ec53ull; h ^= h >> 33;
+    return (double)(h >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* Follows sample ray `sample` of vertex v from its first hit (prim, barycentrics bu, bv at
+ * distance t along d from o), a specular surface, through its specular turns. Where it escapes,
+ * the SH basis of the escape direction times the throughput and c (the receiver's cosine and the
+ * sample's weight) joins caustic[] (world frame): the light the mirror or glass focuses on v.
+ * Where it ends on the front of a diffuse surface, *out is that hit, its weight carrying the
+ * throughput, for the bounces to gather. Returns whether *out was filled. */
+static bool follow_specular(const bake_job *job, size_t v, uint32_t sample, const float o[3], const float d_in[3], float t, uint32_t prim,
+                            float bu, float bv, float c, float hit_weight, float *caustic, hit_entry *out)
+{
+    const prt__mesh *m = job->mesh;
+    float p[3], d[3] = {d_in[0], d_in[1], d_in[2]}, throughput = 1.0f;
+    for (int k = 0; k < 3; ++k) p[k] = o[k] + t * d[k];
+    for (int turn = 0; turn < MAX_SPECULAR; ++turn) {
+        const prt_specular *sp = prt__specular_of(job->spec, m, prim);
+        const uint32_t *tri = m->indices + (size_t)prim * 3;
+        const float *a = m->positions + tri[0] * 3, *b = m->positions + tri[1] * 3, *cc = m->positions + tri[2] * 3;
+        float e1[3], e2[3], ng[3], ns[3];
+        prt__v3_sub(b, a, e1);
+        prt__v3_sub(cc, a, e2);
+        prt__v3_cross(e1, e2, ng);
+        if (!prt__v3_normalize(ng)) return false;
+        if (!sp) {   /* a diffuse surface: its front carries light to the bounces */
+            if (!out || prt__v3_dot(ng, d) >= 0.0f) return false;
+            *out = (hit_entry){prim, sample, bu, bv, hit_weight * throughput};
+            return true;
+        }
+        const float w0 = 1.0f - bu - bv;
+        for (int k = 0; k < 3; ++k) ns[k] = w0 * m->normals[tri[0] * 3 + k] + bu * m->normals[tri[1] * 3 + k] + bv * m->normals[tri[2] * 3 + k];
+        if (!prt__v3_normalize(ns) || prt__v3_dot(ns, ng) <= 0.0f) memcpy(ns, ng, sizeof ns);
+        float nd[3], weight;
+        const int side = prt__specular_scatter(sp, d, ng, ns, specular_choice(job->seed, v, sample, turn), nd, &weight);
+        throughput *= weight;
+        if (!side || !(throughput > 0.0f)) return false;
+        float org[3];
+        for (int k = 0; k < 3; ++k) org[k] = p[k] + (float)side * job->offset * ng[k];
+        memcpy(d, nd, sizeof d);
+        prt__ray_hit h;
+        if (!prt__raycaster_hit(&job->rc, org, d, &h)) {
+            double dd[3] = {d[0], d[1], d[2]}, y[PRT_SH_MAX_COEFFS];
+            prt_sh_eval(job->order, dd, y);
+            for (int i = 0; i < job->ncoeff; ++i) caustic[i] += c * throughput * (float)y[i];
+            return false;
+        }
+        for (int k = 0; k < 3; ++k) p[k] = org[k] + h.t * d[k];
+        prim = h.prim;
+        bu = h.u;
+        bv = h.v;
+    }
+    return false;
+}
+
 /* Visibility pass for one vertex: fills the unshadowed and shadowed sums and, when needed, the
  * list of occluded directions with what they hit. Returns false on allocation failure. */
 static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, float *glossy, hit_entry *scratch,
@@ -91,6 +157,7 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, f
     const int nc = job->ncoeff;
     const float *org = job->origins + v * 3;
     uint32_t nhits = 0;   /* scratch holds one entry per sample, so it never overflows */
+    float caustic[PRT_SH_MAX_COEFFS] = {0};   /* light specular surfaces send, world frame */
     int lane_sample[PACKET];
     float lane_cos[PACKET];
     int j = 0;
@@ -108,17 +175,27 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, f
         if (!lanes) break;
         _Alignas(64) int valid[PACKET];   /* Embree reads the mask with aligned 512-bit loads */
         bool blocked[PACKET];
-        if (job->need_hits) {
+        if (job->need_hits || job->spec) {
             _Alignas(64) struct RTCRayHit16 rh;
             prt__packet_rayhits(&rh, valid, org, dirs, lane_sample, lanes);
             rtcIntersect16(valid, job->rc.scene, &ictx, &rh);
             for (int k = 0; k < lanes; ++k) {
                 blocked[k] = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
                 if (!blocked[k]) continue;
+                const float *d = dirs + (size_t)lane_sample[k] * 3;
+                if (prt__specular_of(job->spec, m, rh.hit.primID[k])) {
+                    /* Not shadow but a turn: the light the surface reflects or refracts this way. */
+                    hit_entry e;
+                    if (sh && follow_specular(job, v, (uint32_t)lane_sample[k], org, d, rh.ray.tfar[k], rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k],
+                                              lane_cos[k] * w, lane_cos[k] * (float)(4.0 * PRT_PI / job->samples), caustic,
+                                              job->need_hits ? &e : NULL))
+                        scratch[nhits++] = e;
+                    continue;
+                }
+                if (!job->need_hits) continue;
                 /* Embree's unnormalized Ng points to the side from which the triangle winds
                  * counter-clockwise, like prt's normals (the pit and colour-bleeding tests pin
                  * this). The back of a surface emits nothing: only front-face hits carry light. */
-                const float *d = dirs + (size_t)lane_sample[k] * 3;
                 if (rh.hit.Ng_x[k] * d[0] + rh.hit.Ng_y[k] * d[1] + rh.hit.Ng_z[k] * d[2] >= 0.0f) continue;
                 scratch[nhits++] = (hit_entry){rh.hit.primID[k], (uint32_t)lane_sample[k], rh.hit.u[k], rh.hit.v[k],
                                                lane_cos[k] * (float)(4.0 * PRT_PI / job->samples)};
@@ -161,6 +238,7 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, f
         if (sh) { memcpy(tmp, sh, (size_t)nc * sizeof *tmp); prt_sh_rotation_apply(rot, 1, tmp, sh); }
         prt_sh_rotation_release(rot);
     }
+    for (int i = 0; sh && job->spec && i < nc; ++i) sh[i] += caustic[i];
     if (hits_out) {
         *nhits_out = nhits;
         *hits_out = NULL;
@@ -616,7 +694,7 @@ static void sh_release(prt__bake_job *b)
     free(sb->rdirs);
     free(sb->noise);
     free(sb->scratch);
-    free(job->hits); free(job->hit_count); free(job->origins); free(job->buried); free(job->dirs); free(job->basis);
+    free(job->hits); free(job->hit_count); free(job->spec); free(job->origins); free(job->buried); free(job->dirs); free(job->basis);
     free(sb->medium); free(sb->kernels);
     free(sb->unsh); free(sb->shad); free(sb->gshad); free(sb->total); free(sb->prev); free(sb->next);
     prt_image_free(&sb->extra.normal_map);
@@ -808,6 +886,13 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
         for (int i = 0; i < nc; ++i) job->basis[(size_t)j * nc + i] = (float)y[i];
     }
     if (!st) st = prt__raycaster_create(ctx, &t->mesh, &job->rc);
+    if (!st && sb->extra.scene) st = prt__specular_table(ctx, sb->extra.scene, &t->mesh, &job->spec);
+    if (!st && job->spec) {
+        int n = 0;
+        for (int k = 1; k <= t->mesh.surface_count; ++k) n += job->spec[k].type != PRT_SPECULAR_NONE;
+        prt__log(ctx, PRT_LOG_INFO, "%d specular surface%s: sample rays turn at %s (up to %d times) and carry the light %s focus%s into the shadowed and "
+                 "inter-reflected transfer (caustics)", n, n > 1 ? "s" : "", n > 1 ? "them" : "it", MAX_SPECULAR, n > 1 ? "they" : "it", n > 1 ? "" : "es");
+    }
     if (!st) st = prt__vertex_origins(&t->mesh, job->offset, &job->origins);
     if (!st && !(job->buried = malloc(nv ? nv : 1))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) st = prt__unbury_origins(ctx, &job->rc, &t->mesh, job->offset, job->origins, job->buried, PRT_LOG_INFO);
