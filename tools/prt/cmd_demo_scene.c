@@ -13,6 +13,8 @@ static const char *HELP =
     "                         --env none --light directional:0.3,0.6,1:30\n"
     "      --cell D           the room's grid spacing in metres (default 0.0625: about 30,000\n"
     "                         vertices)\n"
+    "  -q, --quiet            accepted for scripts, as every command takes it (this one prints\n"
+    "                         nothing but errors)\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
 int cmd_demo_scene(int argc, char **argv)
@@ -23,16 +25,17 @@ int cmd_demo_scene(int argc, char **argv)
     float cell = 0.0625f;
     int opt;
     static const struct option opts[] = {{"output", required_argument, 0, 'o'}, {"room", no_argument, 0, 'r'}, {"cell", required_argument, 0, 'c'},
-                                         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+                                         {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     optind = 1;
     opterr = 0;   /* one line of our own instead of getopt's */
-    while ((opt = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
+    while ((opt = getopt_long(argc, argv, ":o:qh", opts, NULL)) != -1) {
         if (opt == 'o') output = optarg;
         else if (opt == 'r') room = true;
         else if (opt == 'c') {
             if (!cli_parse_float(optarg, &cell) || !(cell >= 0.005f && cell <= 1.0f)) return cli_usage(&c, "--cell takes a spacing in 0.005..1 metres");
             have_cell = true;
         }
+        else if (opt == 'q') c.quiet = true;
         else if (opt == 'h') { fputs(HELP, stdout); return EXIT_OK; }
         else return cli_bad_option(&c, opt, argv, opts);
     }
