@@ -22,6 +22,7 @@ static const char *HELP =
     "                         (glossy surfaces) are evaluated per pixel\n"
     "      --width N          image width in pixels, per panel (default 800)\n"
     CLI_VIEW_CAMERA_HELP CLI_VIEW_TONE_HELP CLI_VIEW_BACKGROUND_HELP
+    CLI_TIME_HELP
     CLI_LIGHT_OPTIONS_HELP
     "Animation (an animated PNG that loops):\n"
     "      --frames N         draw N frames (2..1000) in which the lighting moves: by default it\n"
@@ -122,10 +123,12 @@ int cmd_render(int argc, char **argv)
     bool per_vertex = false;
     cli_view view = CLI_VIEW_DEFAULTS;
     int frames = 1, fps = 12, to_count = 0;
+    bool timed = false;
+    double time = 0;
     prt_light to[CLI_MAX_LIGHTS];
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'}, CLI_VIEW_LONG_OPTIONS, CLI_LIGHT_LONG_OPTIONS,
-        {"frames", required_argument, 0, OPT_FRAMES}, {"light-to", required_argument, 0, OPT_LIGHT_TO}, {"fps", required_argument, 0, OPT_FPS},
+        {"time", required_argument, 0, OPT_TIME}, {"frames", required_argument, 0, OPT_FRAMES}, {"light-to", required_argument, 0, OPT_LIGHT_TO}, {"fps", required_argument, 0, OPT_FPS},
         {"threads", required_argument, 0, 'j'}, {"per-vertex", no_argument, 0, 'P'}, {"accumulate", required_argument, 0, 'A'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     int opt;
@@ -145,6 +148,10 @@ int cmd_render(int argc, char **argv)
         case 'k':
             snprintf(kind_buf, sizeof kind_buf, "%s", optarg);
             if (!cli_relight_kinds(&kinds, kind_buf)) return cli_usage(&c, "--kind takes a comma list of at most 16 names");
+            break;
+        case OPT_TIME:
+            if (!cli_parse_time(&c, optarg, &time)) return EXIT_USAGE;
+            timed = true;
             break;
         case OPT_FRAMES: if (!cli_parse_int(optarg, 2, 1000, &frames)) return cli_usage(&c, "--frames must be 2..1000"); break;
         case OPT_FPS: if (!cli_parse_int(optarg, 1, 100, &fps)) return cli_usage(&c, "--fps must be 1..100"); break;
@@ -211,6 +218,7 @@ int cmd_render(int argc, char **argv)
             src[i].count = 1;
         } else {
             if ((st = prt_transfer_load(c.ctx, path, &src[i].t))) break;
+            if (timed && (st = cli_at_time(&c, path, time, &src[i].t))) break;
             if ((src[i].count = cli_relight_resolve(&c, &kinds, src[i].t, 1, src[i].variants, MAX_PANELS)) < 0) { rc = EXIT_USAGE; break; }
             if (light.gpu_finish && !cli_check_accumulate(&c, src[i].t, per_vertex)) { rc = EXIT_USAGE; break; }
             if ((st = cli_lighting(&c, &light, src[i].t, NULL, &src[i].lighting))) break;

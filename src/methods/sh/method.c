@@ -29,6 +29,7 @@ void prt__sh_state_free(void *state)
         prt__cpca_free(s->sets[i].cpca);
     }
     prt__texel_sets_free(&s->texels);
+    prt__sh_frames_free(&s->frames);
     if (s->rays_ready) prt__raycaster_release(&s->rays);
     if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
     free(s);
@@ -320,6 +321,12 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
     if (!st && extra.compressing && prt__opt(o, "quantize") && bits != 32)
         st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--quantize applies to uncompressed sets; drop --compress or --quantize");
     if (!st && extra.compressing) st = prt__compress_desc_check(ctx, &extra.compress);
+    /* A key frame's sets stay floats: the join compresses every frame's rows as one. */
+    if (prt__options_keyframe(o)) {
+        extra.compressing = false;
+        extra.quantize = 0;
+        if (!st && d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "key frames hold per-vertex transfer: drop --texels");
+    }
     if (!st) st = prt__sh_bake_begin(ctx, &d, &extra, t, out);
     prt_image_free(&extra.normal_map);   /* empty when the job took them */
     prt_image_free(&extra.height_map);
@@ -330,6 +337,7 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
 static size_t sh_bytes(const prt_transfer *t)
 {
     const prt__sh_state *s = t->state;
+    if (s->frames.count) return prt__sh_frames_bytes(s, t->mesh.vertex_count);
     size_t bytes = 0;
     for (int i = 0; i < PRT__KIND_COUNT; ++i)
         if (s->sets[i].channels) {
@@ -351,6 +359,16 @@ static double texel_coverage(const prt_transfer *t, int w, int h)
     for (size_t i = 0; i < (size_t)w * h; ++i) on += area[i] > 0;
     free(area);
     return (double)on / ((double)w * h);
+}
+
+/* What the key frames would take as separate files: each frame's sets at 16 bits (the default)
+ * and its mesh positions and normals. */
+static size_t separate_frames_bytes(const prt__sh_state *s, size_t nv)
+{
+    size_t bytes = 0;
+    for (int k = 0; k < PRT__KIND_COUNT; ++k)
+        if (s->sets[k].channels) bytes += nv * prt__set_dim(s, k) * 2 + 2 * prt__set_dim(s, k) * sizeof(float);
+    return (size_t)s->frames.count * (bytes + nv * 3 * sizeof(float) * (s->frames.normals ? 2 : 1));
 }
 
 static void sh_describe(const prt_transfer *t, prt__describe *d)
@@ -397,6 +415,20 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
             for (int k = 0; k < 3; ++k)
                 if (s->texels.coeffs[k]) cJSON_AddItemToArray(tk, cJSON_CreateString(prt_transfer_kind_name(prt__kind_from_index(k))));
         }
+        if (s->frames.count) {
+            cJSON *fr = cJSON_AddObjectToObject(j, "key_frames");
+            cJSON_AddNumberToObject(fr, "count", s->frames.count);
+            cJSON_AddNumberToObject(fr, "bytes", (double)prt__sh_frames_bytes(s, nv));
+            cJSON_AddNumberToObject(fr, "separate_bytes", (double)separate_frames_bytes(s, nv));
+            for (int k = 0; k < PRT__KIND_COUNT; ++k)
+                if (s->frames.sets[k]) {
+                    cJSON *o = cJSON_AddObjectToObject(fr, prt_transfer_kind_name(prt__kind_from_index(k)));
+                    cJSON_AddStringToObject(o, "compression", cnames[s->frames.sets[k]->method]);
+                    cJSON_AddNumberToObject(o, "clusters", s->frames.sets[k]->clusters);
+                    cJSON_AddNumberToObject(o, "pca_vectors", (double)s->frames.sets[k]->vectors_total);
+                    cJSON_AddNumberToObject(o, "relative_error", s->frames.sets[k]->relative_error);
+                }
+        }
         cJSON_AddNumberToObject(j, "samples", s->samples);
         cJSON_AddNumberToObject(j, "bounces", s->bounces);
         cJSON_AddNumberToObject(j, "seed", s->seed);
@@ -441,6 +473,17 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
         if (cov >= 0) snprintf(on, sizeof on, ", atlas coverage %.0f%%", 100 * cov);
         prt__describe_line(d, "texels:", "%d x %d (%s%s), %.2f MiB%s", s->texels.width, s->texels.height, tk, on, info.texel_bytes / 1048576.0,
                            s->texels.bytes ? " (8-bit)" : s->texels.halves ? " (halves)" : "");
+    }
+    if (s->frames.count) {
+        prt__describe_line(d, "key frames:", "%d (times 0 to %d), %.2f MiB with their poses, against %.2f MiB as %d separate files' 16-bit sets",
+                           s->frames.count, s->frames.count - 1, (double)prt__sh_frames_bytes(s, nv) / 1048576.0,
+                           (double)separate_frames_bytes(s, nv) / 1048576.0, s->frames.count);
+        for (int k = 0; k < PRT__KIND_COUNT; ++k) {
+            const prt__cpca *c = s->frames.sets[k];
+            if (c)
+                prt__describe_line(d, "", "%s: one %s over every frame's rows, %d clusters, %zu PCA vectors, relative error %.4f",
+                                   prt_transfer_kind_name(prt__kind_from_index(k)), long_names[c->method], c->clusters, c->vectors_total, c->relative_error);
+        }
     }
     prt__describe_line(d, "bake:", "%d samples, %d bounces, seed %u", s->samples, s->bounces, s->seed);
 }
@@ -651,4 +694,7 @@ const prt__method prt__method_sh = {
     .find_variant = sh_find_variant,
     .control_range = sh_control_range,
     .relight = sh_relight,
+    .join_frames = prt__sh_join_frames,
+    .frame_count = prt__sh_frame_count,
+    .at_time = prt__sh_at_time,
 };

@@ -35,6 +35,16 @@ typedef struct prt__texel_sets {
  * (8-bit quantization, as the file will store it); false when out of memory. */
 bool prt__texel_quantize8(prt__texel_sets *tx, int order);
 
+/* Key frames of an animated object (frames.c; the course notes' "animated objects"): every
+ * frame's pose, and each set's rows of every frame [frame][vertex] compressed as one, so that
+ * the frames share clusters and basis. */
+typedef struct prt__sh_frames {
+    int count;                          /* 0: one pose; else >= 2 */
+    float *positions;                   /* [frame][vertex][3] */
+    float *normals;                     /* likewise, or NULL when the mesh has none */
+    prt__cpca *sets[PRT__KIND_COUNT];   /* where sets[k].channels */
+} prt__sh_frames;
+
 typedef struct prt__sh_state {
     int order;
     prt__sh_set sets[PRT__KIND_COUNT];   /* indexed by prt__kind_index */
@@ -42,6 +52,8 @@ typedef struct prt__sh_state {
     uint32_t seed;
     bool glossy_exit;                    /* glossy sets hold exit radiance (BRDF baked in) */
     prt__texel_sets texels;
+    /* Key frames; sets[] then hold key frame 0 reconstructed (what relighting without a time uses). */
+    prt__sh_frames frames;
     /* Shadow rays for the local-light reach check, built on first use under lock. */
     pthread_mutex_t *lock;
     prt__raycaster rays;
@@ -122,6 +134,15 @@ prt_status prt__relight_sh_texels_local(prt_context *ctx, const prt_transfer *t,
 
 /* prt export (export.c): --sh and --glsl. */
 prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);
+
+/* Key frames (frames.c): the method entry's join_frames, frame_count and at_time; rows [vertex]
+ * of key frame f of a frames' set into out; the frames' storage in bytes. */
+prt_status prt__sh_join_frames(prt_context *ctx, prt_transfer *const *frames, int count, const prt_options *o, prt_transfer **out);
+int prt__sh_frame_count(const prt_transfer *t);
+prt_status prt__sh_at_time(prt_context *ctx, const prt_transfer *t, int frame, float w, prt_transfer *out);
+void prt__sh_frame_rows(const prt__cpca *c, size_t vertex_count, int f, float *out);
+size_t prt__sh_frames_bytes(const prt__sh_state *s, size_t vertex_count);
+void prt__sh_frames_free(prt__sh_frames *f);
 
 /* Its chunks (file.c). */
 void prt__sh_save_meta(const prt_transfer *t, cJSON *meta);
