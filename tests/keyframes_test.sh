@@ -1,0 +1,63 @@
+#!/bin/sh
+# Key-framed PRT on the command line (issue 27, animated objects): prt bake --frames of three OBJ
+# key frames (a blocker moving over a floor), relight and render --time, prt info; what is not a
+# key frame of the same object, or not a time the file holds, is refused by name.
+# Usage: keyframes_test.sh PATH/TO/prt
+set -u
+PRT=$1
+T=$(mktemp -d /tmp/prt_keyframes_XXXXXX)
+trap 'rm -rf "$T"' EXIT
+. "$(dirname "$0")/shell_checks.sh"
+
+# frame NAME X [EXTRA]: a 16 x 16 floor and a 0.6 x 0.6 blocker at height 0.4 centred on x; EXTRA
+# adds a triangle to the blocker (other topology).
+frame() {
+    awk -v x="$2" -v extra="${3:-}" 'BEGIN {
+        n = 16; print "o floor"
+        for (j = 0; j <= n; j++) for (i = 0; i <= n; i++) printf "v %g 0 %g\n", -1 + 2 * i / n, -1 + 2 * j / n
+        for (j = 0; j < n; j++) for (i = 0; i < n; i++) { a = j * (n + 1) + i + 1; printf "f %d %d %d\nf %d %d %d\n", a, a + n + 1, a + 1, a + 1, a + n + 1, a + n + 2 }
+        b = (n + 1) * (n + 1); print "o blocker"
+        printf "v %g 0.4 -0.3\nv %g 0.4 -0.3\nv %g 0.4 0.3\nv %g 0.4 0.3\n", x - 0.3, x + 0.3, x + 0.3, x - 0.3
+        printf "f %d %d %d\nf %d %d %d\n", b + 1, b + 2, b + 3, b + 1, b + 3, b + 4
+        if (extra != "") printf "f %d %d %d\n", b + 1, b + 2, b + 4
+    }' >"$T/$1.obj"
+}
+frame f0 -0.3; frame f1 0; frame f2 0.3; frame odd 0.3 extra
+BAKE="--order 4 --samples 256 --bounces 1"
+expect 0 "bake --frames" -- "$PRT" bake -q --frames "$T/f0.obj" "$T/f1.obj" "$T/f2.obj" -o "$T/anim.prt" $BAKE
+for f in 0 1 2; do
+    expect 0 "bake key frame $f alone" -- "$PRT" bake -q "$T/f$f.obj" -o "$T/s$f.prt" $BAKE --no-refine
+    expect 0 "relight key frame $f alone" -- "$PRT" relight -q "$T/s$f.prt" -o "$T/s$f.json"
+    expect 0 "relight --time $f" -- "$PRT" relight -q "$T/anim.prt" --time $f -o "$T/a$f.json"
+    same "$T/a$f.json" "$T/s$f.json" 0.02 "--time $f against key frame $f's own bake"
+done
+expect 0 "relight --time 0.5" -- "$PRT" relight -q "$T/anim.prt" --time 0.5 -o "$T/a05.json"
+# Between the key frames: neither of them.
+"$PRT" compare "$T/a05.json" "$T/a0.json" --json - -q >"$T/cmp" 2>/dev/null
+grep -q '"max_abs":[[:space:]]*0[,}]' "$T/cmp" && bad "--time 0.5 relights as key frame 0" || ok
+expect 0 "info" -- "$PRT" info "$T/anim.prt"
+grep -q "key frames: *3 (times 0 to 2)" "$T/out" && ok || bad "prt info does not give the key frames: $(grep -i frame "$T/out")"
+expect 0 "info --json" -- "$PRT" info --json "$T/anim.prt"
+grep -q '"key_frames"' "$T/out" && ok || bad "prt info --json has no key_frames"
+
+expect 2 "a time past the last key frame" -- "$PRT" relight -q "$T/anim.prt" --time 2.5 -o "$T/x.json"
+says "outside the key frames"
+expect 2 "a time on a file of one pose" -- "$PRT" relight -q "$T/s0.prt" --time 0 -o "$T/x.json"
+says "one pose"
+expect 2 "another topology" -- "$PRT" bake -q --frames "$T/f0.obj" "$T/f1.obj" "$T/odd.obj" -o "$T/x.prt" $BAKE
+says "odd.obj' differs in topology"
+expect 2 "one key frame" -- "$PRT" bake -q --frames "$T/f0.obj" -o "$T/x.prt" $BAKE
+says "2 to 1024 key frames"
+expect 2 "key frames refined" -- "$PRT" bake -q --frames "$T/f0.obj" "$T/f1.obj" -o "$T/x.prt" $BAKE --refine
+says "without refinement"
+[ -e "$T/x.prt" ] && bad "a refused bake wrote its file" || ok
+
+# render --time draws the pose between the key frames (headless EGL; skipped where it cannot start).
+if $NOLEAK "$PRT" render -q "$T/anim.prt" --time 1.5 --width 64 --height 48 -o "$T/r.png" 2>"$T/err"; then
+    [ -s "$T/r.png" ] && ok || bad "render --time wrote no image"
+else
+    grep -qi "egl\|opengl\|display" "$T/err" && echo "skipping render --time: $(head -n 1 "$T/err")" || { bad "render --time failed"; sed 's/^/    /' "$T/err"; }
+fi
+
+echo "keyframes: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
