@@ -59,5 +59,29 @@ else
     grep -qi "egl\|opengl\|display" "$T/err" && echo "skipping render --time: $(head -n 1 "$T/err")" || { bad "render --time failed"; sed 's/^/    /' "$T/err"; }
 fi
 
+# prt view under Xvfb: --time starts at a pose, / and \ step a tenth of a frame, space plays
+# and pauses; screenshots equal prt render --time of the same pose.
+if command -v xvfb-run >/dev/null 2>&1; then
+    printf '%s\n' "0 screenshot $T/v10.exr" "0 key /" "0 key /" "0 screenshot $T/v12.exr" "0 key space" "0.3 key space" "0.3 key \\" \
+        "0.4 screenshot $T/vp.exr" "0.4 quit" >"$T/vs.txt"
+    if $NOLEAK xvfb-run -a -s "-screen 0 640x480x24" "$PRT" view "$T/anim.prt" --time 1 --width 160 --height 120 --script "$T/vs.txt" >/dev/null 2>"$T/err"; then
+        ok
+        for tm in 1 1.2; do
+            expect 0 "render --time $tm" -- $NOLEAK "$PRT" render -q "$T/anim.prt" --time $tm --width 160 --height 120 -o "$T/r$tm.exr"
+        done
+        same "$T/v10.exr" "$T/r1.exr" 0.002 "view --time 1 against render --time 1"
+        same "$T/v12.exr" "$T/r1.2.exr" 0.002 "view after two steps against render --time 1.2"
+        [ -s "$T/vp.exr" ] && ok || bad "no screenshot after playing"
+    else
+        bad "scripted view of key frames"; sed 's/^/    /' "$T/err"
+    fi
+    expect 2 "view --time past the key frames" -- $NOLEAK "$PRT" view "$T/anim.prt" --time 3
+    says "outside the key frames"
+    expect 2 "view --play of one pose" -- $NOLEAK "$PRT" view "$T/s0.prt" --play
+    says "one pose"
+else
+    echo "skipping the viewer checks: xvfb-run is not installed"
+fi
+
 echo "keyframes: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -49,6 +49,7 @@ enum { OPT_FRAMES = 2600, OPT_LIGHT_TO, OPT_FPS };
 /* One input: a .prt drawn as its kinds, or an image pasted as it is. */
 typedef struct source {
     prt_transfer *t;
+    prt_transfer *file;       /* --time: the file as loaded (t is its pose), which the camera frames */
     prt_lighting *lighting;   /* what the command line and the file name, at frame 0 */
     prt_image image;
     int variants[MAX_PANELS], count;
@@ -218,7 +219,17 @@ int cmd_render(int argc, char **argv)
             src[i].count = 1;
         } else {
             if ((st = prt_transfer_load(c.ctx, path, &src[i].t))) break;
-            if (timed && (st = cli_at_time(&c, path, time, &src[i].t))) break;
+            if (timed) {
+                /* The camera frames the file's first key frame at every time: renders of one
+                 * animation share their view (as prt view's does). */
+                src[i].file = src[i].t;
+                if ((st = prt_transfer_at_time(c.ctx, src[i].file, time, &src[i].t))) {
+                    src[i].t = NULL;
+                    cli_error(&c, "--time %g: '%s': %s", time, path, prt_last_error());
+                    c.reported = true;
+                    break;
+                }
+            }
             if ((src[i].count = cli_relight_resolve(&c, &kinds, src[i].t, 1, src[i].variants, MAX_PANELS)) < 0) { rc = EXIT_USAGE; break; }
             if (light.gpu_finish && !cli_check_accumulate(&c, src[i].t, per_vertex)) { rc = EXIT_USAGE; break; }
             if ((st = cli_lighting(&c, &light, src[i].t, NULL, &src[i].lighting))) break;
@@ -249,7 +260,7 @@ int cmd_render(int argc, char **argv)
     prt_camera cam;
     float centre[3] = {0, 0, 0};
     if (!st && !rc) {
-        const prt_transfer *t0 = src[first].t;
+        const prt_transfer *t0 = src[first].file ? src[first].file : src[first].t;
         cli_view_camera(&c, &view, prt_transfer_positions(t0), prt_transfer_vertex_count(t0), prt_transfer_indices(t0), prt_transfer_triangle_count(t0),
                         (float)width / height, &cam);
         float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -324,6 +335,7 @@ int cmd_render(int argc, char **argv)
     for (int i = 0; i < ninputs; ++i) {
         prt_lighting_release(src[i].lighting);
         prt_transfer_release(src[i].t);
+        prt_transfer_release(src[i].file);
         prt_image_free(&src[i].image);
     }
     prt_context_release(c.ctx);

@@ -51,6 +51,10 @@ static const char *HELP =
     "                             the top left, world radius; 0,0,0 erases), paint-clear,\n"
     "                             paint-save FILE, screenshot FILE (.png .exr), quit\n"
     "      --stats                print frame and relight times as JSON on exit\n"
+    "      --time T               key-framed files (prt bake --frames): start at the pose T\n"
+    "                             frames in (0..F-1); space plays and pauses (a key frame a\n"
+    "                             second, looping), / and \\ step a tenth of a frame\n"
+    "      --play                 start playing\n"
     "      --accumulate W         files whose method has GPU passes (prt info says): where they\n"
     "                             run - gpu (the default: binned atlases, additive blending; b\n"
     "                             shows first-order and final side by side) or cpu; g switches\n"
@@ -174,9 +178,11 @@ void view_take_lights(viewer *v)
     v->selected = n ? 0 : -1;
 }
 
-/* The job's lighting: the viewer's rotation on top of the lighting's own, and the job's lights. */
-static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
+/* The job's lighting: the viewer's rotation on top of the lighting's own, and the job's lights;
+ * a key-framed file's pose at the job's time into *pose (NULL for files of one pose). */
+static prt_status relight(viewer *v, const relight_job *job, prt_relit *out, prt_transfer **pose)
 {
+    *pose = NULL;
     double rj[9], r[9];
     prt_rotation_from_euler_deg(job->env_yaw, job->env_pitch, 0, rj);
     for (int i = 0; i < 3; ++i)
@@ -201,7 +207,12 @@ static prt_status relight(viewer *v, const relight_job *job, prt_relit *out)
         d.paint_width = v->paint_w;
         d.paint_height = v->paint_h;
     }
-    if (!st) st = prt_relight(v->worker_ctx, v->t, v->lighting, &d, out);
+    if (!st && v->key_frames > 1) st = prt_transfer_at_time(v->worker_ctx, v->t, job->time, pose);
+    if (!st) st = prt_relight(v->worker_ctx, *pose ? *pose : v->t, v->lighting, &d, out);
+    if (st) {
+        prt_transfer_release(*pose);
+        *pose = NULL;
+    }
     return st;
 }
 
@@ -217,11 +228,14 @@ static void *worker(void *arg)
         pthread_mutex_unlock(&v->lock);
         double t0 = now();
         prt_relit r;
-        prt_status st = relight(v, &job, &r);
+        prt_transfer *pose = NULL;
+        prt_status st = relight(v, &job, &r, &pose);
         double ms = (now() - t0) * 1e3;
         pthread_mutex_lock(&v->lock);
         prt_relit_free(&v->result);
+        prt_transfer_release(v->result_pose);
         v->result = r;
+        v->result_pose = pose;
         v->result_status = st;
         if (st) snprintf(v->result_error, sizeof v->result_error, "%s", prt_last_error());
         v->result_version = job.version;
@@ -243,12 +257,14 @@ void view_request_relight(viewer *v)
     pthread_mutex_unlock(&v->lock);
 }
 
-/* Uploads a relit result: the whole mesh when what it holds changed, else only the arrays. */
-static void show(viewer *v, prt_relit *r)
+/* Uploads a relit result: the whole mesh when what it holds or its pose changed, else only the
+ * arrays. Takes r and pose (NULL: the file's own mesh). */
+static void show(viewer *v, prt_relit *r, prt_transfer *pose)
 {
     const size_t nv = prt_transfer_vertex_count(v->t);
     const prt_relit *o = &v->shown;
-    const bool same = o->radiance && (o->exit_sh != NULL) == (r->exit_sh != NULL) && o->exit_order == r->exit_order &&
+    const prt_transfer *t = pose ? pose : v->t;
+    const bool same = !pose && o->radiance && (o->exit_sh != NULL) == (r->exit_sh != NULL) && o->exit_order == r->exit_order &&
                       (o->texels != NULL) == (r->texels != NULL) && o->texel_width == r->texel_width && o->texel_height == r->texel_height &&
                       (o->kvec != NULL) == (r->kvec != NULL) && o->kvec_terms == r->kvec_terms && o->exit_mirror == r->exit_mirror &&
                       (o->gpu_input != NULL) == (r->gpu_input != NULL);
@@ -256,7 +272,7 @@ static void show(viewer *v, prt_relit *r)
         prt_window_set_radiance(v->win, r->radiance, nv);
         if (r->gpu_input) {
             prt_render_mesh mesh;
-            prt_relit_render_mesh(v->t, r, &mesh);
+            prt_relit_render_mesh(t, r, &mesh);
             mesh.side_by_side = v->side_by_side;
             prt_window_set_gpu_input(v->win, &mesh);
         }
@@ -264,16 +280,18 @@ static void show(viewer *v, prt_relit *r)
         if (r->texels) prt_window_set_texels(v->win, r->texels, r->texel_width, r->texel_height);
         if (r->kvec) prt_window_set_kvec(v->win, r->kvec, nv);
         prt_render_mesh mesh;
-        prt_relit_render_mesh(v->t, r, &mesh);
+        prt_relit_render_mesh(t, r, &mesh);
         prt_window_set_lights(v->win, &mesh);   /* shadow maps are redrawn only when the lights moved */
     } else {
         prt_render_mesh mesh;
-        prt_relit_render_mesh(v->t, r, &mesh);
+        prt_relit_render_mesh(t, r, &mesh);
         mesh.side_by_side = v->side_by_side;
         prt_window_set_mesh(v->win, &mesh);
     }
     prt_relit_free(&v->shown);
+    prt_transfer_release(v->shown_pose);
     v->shown = *r;
+    v->shown_pose = pose;
     memset(r, 0, sizeof *r);
 }
 
@@ -288,7 +306,8 @@ static bool take_result(viewer *v)
             snprintf(v->message, sizeof v->message, "%s", v->result_error);
             if (v->want.component) { v->want.component = 0; v->job = v->want; v->want.version++; v->job.version = v->want.version; v->job_posted = true; pthread_cond_broadcast(&v->wake); }
         } else {
-            show(v, &v->result);
+            show(v, &v->result, v->result_pose);
+            v->result_pose = NULL;
         }
         v->shown_version = v->result_version;
         v->result_ready = false;
@@ -329,6 +348,9 @@ static void status_line(const viewer *v, char *buf, size_t n)
         prt_light_format(&v->want.lights[i], spec, sizeof spec);
         len += snprintf(buf + len, n - (size_t)len, "\n%s light %d: %s", i == v->selected ? ">" : " ", i + 1, spec);
     }
+    if (v->key_frames > 1 && len > 0 && (size_t)len < n)
+        len += snprintf(buf + len, n - (size_t)len, "\ntime %.2f of 0..%d (%s; space %s, / \\ step)", v->want.time, v->key_frames - 1,
+                        v->playing ? "playing" : "paused", v->playing ? "pauses" : "plays");
     if (v->surface && len > 0 && (size_t)len < n) len += snprintf(buf + len, n - (size_t)len, "\nsurface: %s", prt_transfer_surface_name(v->t, v->surface));
     char paint[256];
     view_paint_status(v, paint, sizeof paint);
@@ -429,7 +451,7 @@ static void handle(viewer *v, const prt_event *e)
     }
 }
 
-enum { OPT_W = 2500, OPT_H, OPT_EXP, OPT_SCRIPT, OPT_STATS, OPT_ACCUMULATE };
+enum { OPT_W = 2500, OPT_H, OPT_EXP, OPT_SCRIPT, OPT_STATS, OPT_ACCUMULATE, OPT_PLAY };
 
 int cmd_view(int argc, char **argv)
 {
@@ -452,8 +474,9 @@ int cmd_view(int argc, char **argv)
         {"script", required_argument, 0, OPT_SCRIPT}, {"stats", no_argument, 0, OPT_STATS}, CLI_LIGHT_LONG_OPTIONS,
         {"accumulate", required_argument, 0, OPT_ACCUMULATE},
         {"view", required_argument, 0, OPT_VIEW}, {"eye", required_argument, 0, OPT_EYE}, {"target", required_argument, 0, OPT_TARGET},
-        {"fov", required_argument, 0, OPT_FOV},
+        {"fov", required_argument, 0, OPT_FOV}, {"time", required_argument, 0, OPT_TIME}, {"play", no_argument, 0, OPT_PLAY},
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    bool timed = false, play = false;
     int opt;
     optind = 1;
     opterr = 0;   /* one line of our own instead of getopt's */
@@ -471,6 +494,11 @@ int cmd_view(int argc, char **argv)
         case OPT_EXP: if (!cli_parse_float(optarg, &v.exposure)) return cli_usage(&c, "--exposure takes a number of stops"); break;
         case OPT_SCRIPT: script_path = optarg; break;
         case OPT_STATS: stats = true; break;
+        case OPT_TIME:
+            if (!cli_parse_time(&c, optarg, &v.want.time)) return EXIT_USAGE;
+            timed = true;
+            break;
+        case OPT_PLAY: play = true; break;
         case OPT_ACCUMULATE:
             if (!cli_parse_accumulate(optarg, &v.light.gpu_finish)) return cli_usage(&c, "--accumulate takes cpu or gpu");
             accumulate_given = true;
@@ -488,6 +516,19 @@ int cmd_view(int argc, char **argv)
     if (rc) return rc;
     if ((rc = cli_make_context(&c))) { view_script_free(script); return rc; }
     prt_status st = prt_transfer_load(c.ctx, argv[optind], &v.t);
+    if (!st) v.key_frames = prt_transfer_frame_count(v.t);
+    if (!st && (timed || play) && v.key_frames < 2) {
+        cli_error(&c, "--%s: '%s' holds one pose, no key frames (prt bake --frames)", timed ? "time" : "play", argv[optind]);
+        c.reported = true;
+        st = PRT_ERR_INVALID_ARG;
+    }
+    if (!st && !(v.want.time >= 0 && v.want.time <= v.key_frames - 1)) {
+        cli_error(&c, "--time %g lies outside the key frames of '%s', 0 to %d (times are not clamped)", v.want.time, argv[optind], v.key_frames - 1);
+        c.reported = true;
+        st = PRT_ERR_INVALID_ARG;
+    }
+    v.playing = play;
+    v.play_clock = -1;
     if (!st) st = cli_lighting(&c, &v.light, v.t, NULL, &v.lighting);
     if (!st) st = prt_context_create(&(prt_context_desc){.threads = c.threads}, &v.worker_ctx);
     if (!st) {
@@ -512,7 +553,7 @@ int cmd_view(int argc, char **argv)
         /* The first frame is lit before the window opens, so a bad lighting fails at once. */
         prt_relit first;
         v.job = v.want;
-        st = relight(&v, &v.want, &first);
+        st = relight(&v, &v.want, &first, &v.shown_pose);
         if (!st) v.shown = first;
     }
     char title[600];
@@ -521,6 +562,7 @@ int cmd_view(int argc, char **argv)
     if (st) {
         rc = cli_fail(&c, st);
         prt_relit_free(&v.shown);
+        prt_transfer_release(v.shown_pose);
         prt_lighting_release(v.lighting);
         free(v.albedo);
         free(v.brdf_of);
@@ -538,10 +580,11 @@ int cmd_view(int argc, char **argv)
     view_register_lights(&v);
     view_register_surfaces(&v);
     view_register_paint(&v);
+    view_register_frames(&v);
     const size_t nv = prt_transfer_vertex_count(v.t);
     {
         prt_render_mesh mesh;
-        prt_relit_render_mesh(v.t, &v.shown, &mesh);
+        prt_relit_render_mesh(v.shown_pose ? v.shown_pose : v.t, &v.shown, &mesh);
         prt_window_set_mesh(v.win, &mesh);
     }
     int fw, fh;
@@ -567,6 +610,7 @@ int cmd_view(int argc, char **argv)
         prt_event e;
         while (prt_window_next_event(v.win, &e)) handle(&v, &e);
         if (script) rc = view_script_step(script, &v, now() - start);
+        view_play(&v, now());
         if (take_result(&v)) v.dirty = true;
         if (v.quit || rc) break;
         if (v.dirty) {
@@ -594,6 +638,8 @@ int cmd_view(int argc, char **argv)
     pthread_cond_destroy(&v.wake);
     prt_relit_free(&v.result);
     prt_relit_free(&v.shown);
+    prt_transfer_release(v.result_pose);
+    prt_transfer_release(v.shown_pose);
     prt_lighting_release(v.lighting);
     free(v.albedo);
     free(v.brdf_of);

@@ -31,6 +31,7 @@ typedef struct relight_job {
     prt_light lights[CLI_MAX_LIGHTS];
     int light_count;
     bool painted;              /* relight with the painting (viewer.paint, copied to job_paint) */
+    double time;               /* key-framed files: the pose, in frames (prt_transfer_at_time) */
     unsigned version;
 } relight_job;
 
@@ -65,12 +66,18 @@ struct viewer {
     prt_lighting *lighting;
     double base_rot[9];         /* the lighting's own rotation, under the viewer's */
     prt_relit result;           /* written by the worker under lock */
+    prt_transfer *result_pose;  /* key-framed files: the pose `result` was relit on (owned) */
     prt_status result_status;
     char result_error[256];
     unsigned result_version, shown_version;
     double relight_ms;
     prt_context *worker_ctx;
     prt_relit shown;            /* what the window draws now */
+    prt_transfer *shown_pose;   /* and its pose (owned; NULL: the file's own mesh) */
+    /* key frames (prt bake --frames): space plays and pauses, / and \ step */
+    int key_frames;             /* the file's count; 1: one pose */
+    bool playing;
+    double play_clock;          /* when the time last moved while playing */
     /* input */
     view_control controls[VIEW_MAX_CONTROLS];
     int ncontrols;
@@ -135,6 +142,10 @@ bool view_surface_scale(viewer *v, float factor);
  * becomes the surface's colour). */
 bool view_surface_next_brdf(viewer *v);
 void view_register_surfaces(viewer *v);
+/* Key frames (files that hold them): play / pause, step; view_play advances a playing time to
+ * now (call once a main-loop iteration). */
+void view_register_frames(viewer *v);
+void view_play(viewer *v, double now_s);
 /* Takes the lighting's rotation and lights as the viewer's starting point. */
 void view_take_lights(viewer *v);
 /* The light types the file's method relights (PRT_LIGHTS_* bits). */
