@@ -19,7 +19,8 @@ static const char *HELP_HEAD =
     "                         vertex and triangle counts and indices; moved vertices): each is\n"
     "                         baked, and OUT.prt holds them all, compressed across frames\n"
     "                         (relight, render and view --time T pose it between them). The\n"
-    "                         meshes are kept as they are (no refinement), no checkpoint\n"
+    "                         meshes are kept as they are (no refinement, --winding keep unless\n"
+    "                         given), no checkpoint\n"
     "      --resume           continue an interrupted bake (Ctrl-C, kill, power cut) from\n"
     "                         OUT.prt.checkpoint: finished work is taken, not redone, and the\n"
     "                         result is the same file an uninterrupted bake writes\n"
@@ -282,9 +283,15 @@ static bool same_topology(cli *c, prt_scene *const *scenes, int count, char **pa
         const size_t v = prt_scene_vertex_count(scenes[f]), t = prt_scene_triangle_count(scenes[f]);
         if (v != nv || t != nt)
             cli_error(c, "--frames: '%s' differs in topology from '%s': %zu vertices and %zu triangles, not %zu and %zu", paths[f], paths[0], v, t, nv, nt);
-        else if (memcmp(prt_scene_indices(scenes[f]), prt_scene_indices(scenes[0]), nt * 3 * sizeof(uint32_t)))
-            cli_error(c, "--frames: '%s' differs in topology from '%s': its triangles join other vertices", paths[f], paths[0]);
-        else continue;
+        else if (memcmp(prt_scene_indices(scenes[f]), prt_scene_indices(scenes[0]), nt * 3 * sizeof(uint32_t))) {
+            /* The same triangles wound the other way: the importer turned one frame over. */
+            const uint32_t *a = prt_scene_indices(scenes[0]), *b = prt_scene_indices(scenes[f]);
+            size_t turned = 0;
+            for (size_t i = 0; i < nt; ++i) turned += a[i * 3] == b[i * 3] && a[i * 3 + 1] == b[i * 3 + 2] && a[i * 3 + 2] == b[i * 3 + 1];
+            if (turned) cli_error(c, "--frames: '%s' differs in topology from '%s': %zu of its triangles are wound the other way (--winding keep or flip "
+                                  "reads every frame alike)", paths[f], paths[0], turned);
+            else cli_error(c, "--frames: '%s' differs in topology from '%s': its triangles join other vertices", paths[f], paths[0]);
+        } else continue;
         return false;
     }
     return true;
@@ -303,8 +310,9 @@ int cmd_bake(int argc, char **argv)
     int nsets = 0;
     const prt_method *method = cli_method_from_argv(&c, argc, argv);
     if (!method) return EXIT_USAGE;
-    bool method_named = false;
+    bool method_named = false, winding_named = false;
     for (int i = 1; i < argc; ++i) method_named |= !strcmp(argv[i], "--method") || !strncmp(argv[i], "--method=", 9);
+    for (int i = 1; i < argc; ++i) winding_named |= !strncmp(argv[i], "--winding", 9);
     struct option opts[256];
     const char *names[200];
     collect_options(method, opts, 256, names, 200);
@@ -363,6 +371,9 @@ int cmd_bake(int argc, char **argv)
     if (key_frames) {
         checkpoint = false;
         no_refine = true;
+        /* --winding auto decides per file from its shape: a frame curled up could be turned over
+         * and its neighbours not. Key frames are read as they are wound unless told. */
+        if (!winding_named) sd.winding = PRT_WINDING_KEEP;
     }
     if (!rc && !output) rc = cli_usage(&c, "an output file is required (-o OUT.prt)");
     if (!rc && resume && !checkpoint) rc = cli_usage(&c, "--resume needs the checkpoint that --no-checkpoint turns off");
