@@ -475,9 +475,11 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
                            s->texels.bytes ? " (8-bit)" : s->texels.halves ? " (halves)" : "");
     }
     if (s->frames.count) {
-        prt__describe_line(d, "key frames:", "%d (times 0 to %d), %.2f MiB with their poses, against %.2f MiB as %d separate files' 16-bit sets",
-                           s->frames.count, s->frames.count - 1, (double)prt__sh_frames_bytes(s, nv) / 1048576.0,
-                           (double)separate_frames_bytes(s, nv) / 1048576.0, s->frames.count);
+        const double held = (double)prt__sh_frames_bytes(s, nv), apart = (double)separate_frames_bytes(s, nv);
+        const bool mib = apart >= 1048576.0;
+        prt__describe_line(d, "key frames:", "%d (times 0 to %d), %.2f %s with their poses, against %.2f %s as %d separate files' 16-bit sets",
+                           s->frames.count, s->frames.count - 1, held / (mib ? 1048576.0 : 1024.0), mib ? "MiB" : "KiB",
+                           apart / (mib ? 1048576.0 : 1024.0), mib ? "MiB" : "KiB", s->frames.count);
         for (int k = 0; k < PRT__KIND_COUNT; ++k) {
             const prt__cpca *c = s->frames.sets[k];
             if (c)
