@@ -50,6 +50,10 @@ expect 2 "one key frame" -- "$PRT" bake -q --frames "$T/f0.obj" -o "$T/x.prt" $B
 says "2 to 1024 key frames"
 expect 2 "key frames refined" -- "$PRT" bake -q --frames "$T/f0.obj" "$T/f1.obj" -o "$T/x.prt" $BAKE --refine
 says "without refinement"
+expect 2 "key frames quantized" -- "$PRT" bake -q --frames "$T/f0.obj" "$T/f1.obj" -o "$T/x.prt" $BAKE --quantize 8
+says "drop --quantize"
+expect 2 "key frames per texel" -- "$PRT" bake -q --frames "$T/f0.obj" "$T/f1.obj" -o "$T/x.prt" $BAKE --texels 64
+says "drop --texels"
 [ -e "$T/x.prt" ] && bad "a refused bake wrote its file" || ok
 
 # render --time draws the pose between the key frames (headless EGL; skipped where it cannot start).

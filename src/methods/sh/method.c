@@ -326,6 +326,8 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
         extra.compressing = false;
         extra.quantize = 0;
         if (!st && d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "key frames hold per-vertex transfer: drop --texels");
+        if (!st && prt__opt(o, "quantize") && bits != 32)
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "key frames are stored compressed across frames: drop --quantize");
     }
     if (!st) st = prt__sh_bake_begin(ctx, &d, &extra, t, out);
     prt_image_free(&extra.normal_map);   /* empty when the job took them */
