@@ -126,6 +126,13 @@ typedef struct prt_bake_run_desc {
  * announced through the log hook (PRT_LOG_INFO) and counted as done in the progress. */
 prt_status prt_bake(prt_context *ctx, const prt_scene *scene, const prt_method *m, const prt_options *o,
                     const prt_bake_run_desc *run, prt_transfer **out);
+/* Key-framed PRT (animated objects): bakes count (2..1024) key frames of one object - scenes of
+ * the same topology: vertex and triangle counts and indices; else an error naming the first key
+ * frame (1-based) that differs - each with o, and joins them into one transfer that holds every
+ * frame, compressed across frames where the method compresses (prt_transfer_at_time reads a pose
+ * between them). Methods without key frames refuse. run's checkpoint is not used. */
+prt_status prt_bake_frames(prt_context *ctx, const prt_scene *const *frames, int count, const prt_method *m, const prt_options *o,
+                           const prt_bake_run_desc *run, prt_transfer **out);
 
 /* ---- What a file holds ---- */
 const prt_method *prt_transfer_method(const prt_transfer *t);

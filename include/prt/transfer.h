@@ -36,6 +36,14 @@ prt_status prt_transfer_save(const prt_transfer *t, const char *path);
 prt_status prt_transfer_load(prt_context *ctx, const char *path, prt_transfer **out);
 prt_status prt_transfer_load_memory(prt_context *ctx, const void *data, size_t size, prt_transfer **out);
 
+/* Key frames (prt_bake_frames): how many t holds (1: one pose), and the pose at time `time` in
+ * frames (0: the first key frame, 0.5 halfway to the second, count - 1 the last) as a transfer of
+ * one pose: positions, normals and transfer interpolated linearly between the two key frames
+ * around it. Times outside [0, count - 1] are refused, not clamped; so is any time for a
+ * transfer of one pose. */
+int prt_transfer_frame_count(const prt_transfer *t);
+prt_status prt_transfer_at_time(prt_context *ctx, const prt_transfer *t, double time, prt_transfer **out);
+
 /* The lighting the baked scene named, if any (0 when none); see prt_scene_environment. */
 int prt_transfer_environment(const prt_transfer *t, prt_environment_desc *out);
 

@@ -213,3 +213,52 @@ prt_status prt_bake(prt_context *ctx, const prt_scene *scene, const prt_method *
                  "(spectral files do): each surface keeps the BRDF it wears", m->name);
     return prt__bake_with(ctx, scene, m, begin_from_options, o, run, out);
 }
+
+/* Key frames must share their topology: a transfer row of one frame is a row of the same vertex
+ * in every other, and the triangles between them the same. */
+static prt_status same_topology(prt_context *ctx, const prt_scene *const *frames, int count)
+{
+    const size_t nv = prt_scene_vertex_count(frames[0]), nt = prt_scene_triangle_count(frames[0]);
+    for (int f = 1; f < count; ++f) {
+        const size_t v = prt_scene_vertex_count(frames[f]), t = prt_scene_triangle_count(frames[f]);
+        if (v != nv || t != nt)
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "key frame %d differs in topology from key frame 1: %zu vertices and %zu triangles, not %zu and %zu",
+                             f + 1, v, t, nv, nt);
+        if (memcmp(prt_scene_indices(frames[f]), prt_scene_indices(frames[0]), nt * 3 * sizeof(uint32_t)))
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "key frame %d differs in topology from key frame 1: its triangles join other vertices", f + 1);
+    }
+    return PRT_OK;
+}
+
+prt_status prt_bake_frames(prt_context *ctx, const prt_scene *const *frames, int count, const prt_method *m, const prt_options *o,
+                           const prt_bake_run_desc *run, prt_transfer **out)
+{
+    if (!ctx || !frames || !m || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake_frames: context, frames, method and out are required");
+    *out = NULL;
+    if (count < 2 || count > 1024) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "key-framed bakes take 2 to 1024 key frames (got %d)", count);
+    for (int f = 0; f < count; ++f)
+        if (!frames[f]) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake_frames: key frame %d is missing", f + 1);
+    if (!m->join_frames) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s transfer holds one pose: --method %s bakes no key frames", m->name, m->name);
+    if (o && prt_options_method(o) != m)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_bake_frames: options made for method %s, not %s", prt_method_name(prt_options_method(o)), m->name);
+    prt_status st = same_topology(ctx, frames, count);
+    prt_options *ko = NULL;
+    if (!st) st = prt__options_keyframe_copy(m, o, &ko);
+    prt_transfer **baked = st ? NULL : prt__calloc((size_t)count, sizeof *baked);
+    if (!st && !baked) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    prt_bake_run_desc r = run ? *run : (prt_bake_run_desc){0};
+    r.checkpoint = NULL;
+    r.resume = 0;
+    double seconds = 0;
+    for (int f = 0; !st && f < count; ++f) {
+        st = prt_bake(ctx, frames[f], m, ko, &r, &baked[f]);
+        if (st) prt__fail(ctx, st, "key frame %d: %s", f + 1, prt_last_error());
+        else seconds += baked[f]->bake_seconds;
+    }
+    if (!st) st = m->join_frames(ctx, baked, count, o, out);
+    if (!st) (*out)->bake_seconds = seconds;
+    for (int f = 0; baked && f < count; ++f) prt_transfer_release(baked[f]);
+    free(baked);
+    prt_options_release(ko);
+    return st;
+}

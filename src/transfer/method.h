@@ -71,6 +71,11 @@ bool prt__opt_flag(const prt_options *o, const char *name);
 int prt__opt_choice(const prt_options *o, const char *name, int fallback);
 /* True for options made by prt_export_options_create. */
 bool prt__options_exporting(const prt_options *o);
+/* True for the options prt_bake_frames bakes each key frame with: the method leaves out what its
+ * join_frames does across all frames instead (compression, quantization). */
+bool prt__options_keyframe(const prt_options *o);
+/* A copy of o (NULL: defaults) for method m with that mark set. */
+prt_status prt__options_keyframe_copy(const prt_method *m, const prt_options *o, prt_options **out);
 /* Adds the options as given (sorted by name, so the order on a command line does not matter). */
 void prt__options_fingerprint(const prt_options *o, prt__fingerprint *fp);
 /* Adds the scene as t holds it - mesh (positions, normals, albedo, materials, UVs, emission,
@@ -169,6 +174,16 @@ struct prt_method {
      * method's order. NULL: the method never holds it. */
     bool (*light_at_box)(const prt_transfer *t, float lo[3], float hi[3]);
     prt_status (*light_at)(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const float p[3], prt_sh_light *out);
+
+    /* Key frames (prt_bake_frames, prt_transfer_at_time); NULL: the method bakes one pose.
+     * join_frames makes one animated transfer of count (>= 2) transfers baked from key frames of
+     * one topology with options marked prt__options_keyframe (o: the bake's options as given).
+     * frame_count: the key frames t holds (1: one pose). at_time fills out's state (out: a copy
+     * of t's frame, mesh of key frame 0, state NULL) with the pose and transfer between key frames
+     * `frame` and frame + 1 at weight w in [0, 1], one pose. */
+    prt_status (*join_frames)(prt_context *ctx, prt_transfer *const *frames, int count, const prt_options *o, prt_transfer **out);
+    int (*frame_count)(const prt_transfer *t);
+    prt_status (*at_time)(prt_context *ctx, const prt_transfer *t, int frame, float w, prt_transfer *out);
 };
 
 /* A BRDF as PRT__BRDF_RECORD bytes of a .prt (model, lobes, 38 floats), and back (unchecked:

@@ -8,6 +8,7 @@
 struct prt_options {
     const prt_method *method;
     bool exporting;   /* checked against the method's export options, not its bake options */
+    bool keyframe;    /* a key frame's bake (prt_bake_frames): the join compresses, not the bake */
     int count;
     const prt_option_desc *desc[MAX_VALUES];
     char *value[MAX_VALUES];
@@ -30,6 +31,25 @@ prt_status prt_export_options_create(const prt_method *m, prt_options **out)
 }
 
 bool prt__options_exporting(const prt_options *o) { return o && o->exporting; }
+
+bool prt__options_keyframe(const prt_options *o) { return o && o->keyframe; }
+
+prt_status prt__options_keyframe_copy(const prt_method *m, const prt_options *o, prt_options **out)
+{
+    prt_status st = prt_options_create(m, out);
+    if (st) return st;
+    (*out)->keyframe = true;
+    for (int i = 0; o && i < o->count; ++i) {
+        (*out)->desc[i] = o->desc[i];
+        if (o->value[i] && !((*out)->value[i] = strdup(o->value[i]))) {
+            prt_options_release(*out);
+            *out = NULL;
+            return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+        }
+        (*out)->count = i + 1;
+    }
+    return PRT_OK;
+}
 
 static const prt_option_desc *declared(const prt_method *m, bool exporting, const char *name)
 {

@@ -2,6 +2,7 @@
  * dispatch of variants, controls and relighting to the method's table entry. */
 #include "transfer/method.h"
 
+#include <math.h>
 #include <stdatomic.h>
 
 prt_status prt__mesh_copy(prt__mesh *dst, const prt__mesh *src)
@@ -86,6 +87,30 @@ void prt_transfer_release(prt_transfer *t)
 }
 
 const prt_method *prt_transfer_method(const prt_transfer *t) { return t ? t->method : NULL; }
+
+int prt_transfer_frame_count(const prt_transfer *t)
+{
+    return t && t->method->frame_count ? t->method->frame_count(t) : 1;
+}
+
+prt_status prt_transfer_at_time(prt_context *ctx, const prt_transfer *t, double time, prt_transfer **out)
+{
+    if (!t || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_at_time: transfer and out are required");
+    *out = NULL;
+    const int count = prt_transfer_frame_count(t);
+    if (count < 2 || !t->method->at_time) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the transfer holds one pose, no key frames to take a time between");
+    /* Refused rather than clamped: a time past the last key frame is a script's mistake to see. */
+    if (!(time >= 0 && time <= count - 1))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "time %g lies outside the key frames, 0 to %d (times are not clamped)", time, count - 1);
+    int frame = (int)floor(time);
+    if (frame > count - 2) frame = count - 2;
+    prt_transfer *n = NULL;
+    prt_status st = prt__transfer_copy_frame(ctx, t, &n);
+    if (!st) st = t->method->at_time(ctx, t, frame, (float)(time - frame), n);
+    if (st) { prt_transfer_release(n); return st; }
+    *out = n;
+    return PRT_OK;
+}
 double prt_transfer_bake_seconds(const prt_transfer *t) { return t ? t->bake_seconds : 0; }
 int prt_transfer_bake_threads(const prt_transfer *t) { return t ? t->threads : 0; }
 const char *prt_transfer_source(const prt_transfer *t) { return t ? t->source : ""; }

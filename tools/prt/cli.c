@@ -778,6 +778,28 @@ prt_status cli_painting(const cli *c, const cli_light *l, const prt_transfer *t,
     return PRT_OK;
 }
 
+bool cli_parse_time(const cli *c, const char *arg, double *time)
+{
+    float f;
+    if (cli_parse_float(arg, &f) && isfinite(f)) { *time = f; return true; }
+    cli_usage(c, "--time takes a number of frames (0 = the first key frame)");
+    return false;
+}
+
+prt_status cli_at_time(cli *c, const char *path, double time, prt_transfer **t)
+{
+    prt_transfer *posed = NULL;
+    const prt_status st = prt_transfer_at_time(c->ctx, *t, time, &posed);
+    if (st) {
+        cli_error(c, "--time %g: '%s': %s", time, path, prt_last_error());
+        c->reported = true;
+        return st;
+    }
+    prt_transfer_release(*t);
+    *t = posed;
+    return PRT_OK;
+}
+
 prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,
                        bool with_indirect, prt_relit *out)
 {

@@ -193,6 +193,17 @@ int cli_controls(const cli *c, const cli_light *l, const prt_transfer *t, int va
 bool cli_parse_accumulate(const char *arg, bool *gpu);
 /* Whether --accumulate gpu applies to t (its method has GPU passes, drawn per texel); reports when not. */
 bool cli_check_accumulate(const cli *c, const prt_transfer *t, bool per_vertex);
+/* --time T of relight, render and view: the pose of a key-framed file (prt bake --frames). */
+#define CLI_TIME_HELP \
+    "      --time T           key-framed files (prt bake --frames): the pose T frames in (0 the\n" \
+    "                         first key frame, 0.5 halfway to the second; times outside 0..F-1\n" \
+    "                         are refused, not clamped)\n"
+enum { OPT_TIME = 1090 };
+/* Parses --time's value; false (after reporting) when it is no number. */
+bool cli_parse_time(const cli *c, const char *arg, double *time);
+/* Replaces *t by its pose at time (prt_transfer_at_time); reports a time the file does not hold. */
+prt_status cli_at_time(cli *c, const char *path, double time, prt_transfer **t);
+
 /* Relights t into out with l (variant index, per-vertex only when asked). */
 prt_status cli_relight(const cli *c, const prt_transfer *t, const prt_lighting *lighting, const cli_light *l, int variant, bool per_vertex,
                        bool with_indirect, prt_relit *out);

@@ -11,9 +11,16 @@
 
 static const char *HELP_HEAD =
     "usage: prt bake SCENE -o OUT.prt [--method M] [options]\n"
+    "       prt bake --frames FRAME0 FRAME1 ... -o OUT.prt [--method M] [options]\n"
     "Precomputes radiance transfer for every vertex of SCENE (a mesh file assimp reads,\n"
     "or a .json scene, see docs/SCENE.md) and writes it to OUT.prt.\n\n"
     "  -o, --output FILE      the .prt file to write (required; written atomically)\n"
+    "      --frames           the scenes given are key frames of one animated object (same\n"
+    "                         vertex and triangle counts and indices; moved vertices): each is\n"
+    "                         baked, and OUT.prt holds them all, compressed across frames\n"
+    "                         (relight, render and view --time T pose it between them). The\n"
+    "                         meshes are kept as they are (no refinement, --winding keep unless\n"
+    "                         given), no checkpoint\n"
     "      --resume           continue an interrupted bake (Ctrl-C, kill, power cut) from\n"
     "                         OUT.prt.checkpoint: finished work is taken, not redone, and the\n"
     "                         result is the same file an uninterrupted bake writes\n"
@@ -58,7 +65,7 @@ static const char *HELP_TAIL =
     "  -q, --quiet            no progress or messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
-enum { OPT_BRDF_SET = 1498, OPT_BAKE_LIGHT = 1499, OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE, OPT_REFINE_VERTICES, OPT_REFINE_THRESHOLD,
+enum { OPT_KEY_FRAMES = 1497, OPT_BRDF_SET = 1498, OPT_BAKE_LIGHT = 1499, OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE, OPT_REFINE_VERTICES, OPT_REFINE_THRESHOLD,
        OPT_NO_REFINE, OPT_METHOD_OPTION = 3000 };
 
 /* "NAME  summary" at the description column, the summary wrapped at 100 columns. */
@@ -85,7 +92,7 @@ static int collect_options(const prt_method *chosen, struct option *opts, int ma
         {"no-checkpoint", no_argument, 0, OPT_NO_CHECKPOINT}, {"summary", required_argument, 0, OPT_SUMMARY},
         {"refine", no_argument, 0, OPT_REFINE}, {"no-refine", no_argument, 0, OPT_NO_REFINE}, {"refine-vertices", required_argument, 0, OPT_REFINE_VERTICES},
         {"refine-threshold", required_argument, 0, OPT_REFINE_THRESHOLD}, {"light", required_argument, 0, OPT_BAKE_LIGHT},
-        {"brdf-set", required_argument, 0, OPT_BRDF_SET}, CLI_SCENE_LONG_OPTIONS,
+        {"brdf-set", required_argument, 0, OPT_BRDF_SET}, {"frames", no_argument, 0, OPT_KEY_FRAMES}, CLI_SCENE_LONG_OPTIONS,
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}};
     int n = 0;
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; ++i) opts[n++] = fixed[i];
@@ -239,21 +246,73 @@ static prt_status write_summary(cli *c, const char *path, const char *input, con
     return st;
 }
 
+/* SCENE (or one key frame) with the command line's lights and BRDF sets. */
+static prt_status load_scene(cli *c, const char *path, const prt_scene_desc *sd, const cli_light *lights, const char *const *sets, int nsets,
+                             prt_scene **out)
+{
+    prt_scene *scene = NULL;
+    prt_status st = prt_scene_load(c->ctx, path, sd, &scene);
+    if (!st && lights->set_lights && (st = prt_scene_set_lights(scene, lights->lights, lights->light_count))) {
+        cli_error(c, "--light: %s", prt_last_error());
+        c->reported = true;
+    }
+    for (int i = 0; !st && i < nsets; ++i) {
+        /* NAME=SPEC,SPEC: a BRDF spec holds no comma. */
+        char name[128], list[1024];
+        const char *eq = strchr(sets[i], '=');
+        snprintf(name, sizeof name, "%.*s", (int)(eq - sets[i]), sets[i]);
+        snprintf(list, sizeof list, "%s", eq + 1);
+        for (char *save = NULL, *spec = strtok_r(list, ",", &save); spec && !st; spec = strtok_r(NULL, ",", &save)) {
+            prt_brdf b;
+            if ((st = prt_brdf_parse(spec, &b)) || (st = prt_scene_add_brdf_choice(scene, name, &b))) {
+                cli_error(c, "--brdf-set %s: %s", sets[i], prt_last_error());
+                c->reported = true;
+            }
+        }
+    }
+    if (st) prt_scene_release(scene);
+    else *out = scene;
+    return st;
+}
+
+/* Key frames share their topology; the first that does not is named. */
+static bool same_topology(cli *c, prt_scene *const *scenes, int count, char **paths)
+{
+    const size_t nv = prt_scene_vertex_count(scenes[0]), nt = prt_scene_triangle_count(scenes[0]);
+    for (int f = 1; f < count; ++f) {
+        const size_t v = prt_scene_vertex_count(scenes[f]), t = prt_scene_triangle_count(scenes[f]);
+        if (v != nv || t != nt)
+            cli_error(c, "--frames: '%s' differs in topology from '%s': %zu vertices and %zu triangles, not %zu and %zu", paths[f], paths[0], v, t, nv, nt);
+        else if (memcmp(prt_scene_indices(scenes[f]), prt_scene_indices(scenes[0]), nt * 3 * sizeof(uint32_t))) {
+            /* The same triangles wound the other way: the importer turned one frame over. */
+            const uint32_t *a = prt_scene_indices(scenes[0]), *b = prt_scene_indices(scenes[f]);
+            size_t turned = 0;
+            for (size_t i = 0; i < nt; ++i) turned += a[i * 3] == b[i * 3] && a[i * 3 + 1] == b[i * 3 + 2] && a[i * 3 + 2] == b[i * 3 + 1];
+            if (turned) cli_error(c, "--frames: '%s' differs in topology from '%s': %zu of its triangles are wound the other way (--winding keep or flip "
+                                  "reads every frame alike)", paths[f], paths[0], turned);
+            else cli_error(c, "--frames: '%s' differs in topology from '%s': its triangles join other vertices", paths[f], paths[0]);
+        } else continue;
+        return false;
+    }
+    return true;
+}
+
 int cmd_bake(int argc, char **argv)
 {
     cli c = {.cmd = "bake"};
     prt_scene_desc sd = {0};
     const char *output = NULL;
     const char *summary = NULL;
-    bool resume = false, checkpoint = true, refine = false, no_refine = false;
+    bool resume = false, checkpoint = true, refine = false, no_refine = false, key_frames = false;
     prt_refine_desc rd = {0};
     cli_light lights = {.intensity = 1.0f};   /* --light only */
     const char *sets[16];   /* --brdf-set */
     int nsets = 0;
     const prt_method *method = cli_method_from_argv(&c, argc, argv);
     if (!method) return EXIT_USAGE;
-    bool method_named = false;
+    bool method_named = false, winding_named = false;
     for (int i = 1; i < argc; ++i) method_named |= !strcmp(argv[i], "--method") || !strncmp(argv[i], "--method=", 9);
+    for (int i = 1; i < argc; ++i) winding_named |= !strncmp(argv[i], "--winding", 9);
     struct option opts[256];
     const char *names[200];
     collect_options(method, opts, 256, names, 200);
@@ -273,6 +332,7 @@ int cmd_bake(int argc, char **argv)
         switch (opt) {
         case 'o': output = optarg; break;
         case OPT_RESUME: resume = true; break;
+        case OPT_KEY_FRAMES: key_frames = true; break;
         case OPT_NO_CHECKPOINT: checkpoint = false; break;
         case OPT_SUMMARY: summary = optarg; break;
         case OPT_BRDF_SET:
@@ -304,7 +364,17 @@ int cmd_bake(int argc, char **argv)
         default: rc = cli_bad_option(&c, opt, argv, opts); break;
         }
     }
-    if (!rc && optind != argc - 1) rc = cli_usage(&c, "expected exactly one SCENE argument");
+    if (!rc && !key_frames && optind != argc - 1) rc = cli_usage(&c, "expected exactly one SCENE argument");
+    if (!rc && key_frames && (argc - optind < 2 || argc - optind > 1024)) rc = cli_usage(&c, "--frames takes 2 to 1024 key frames");
+    if (!rc && key_frames && (resume || refine))
+        rc = cli_usage(&c, "--frames bakes the key frames as they are, without %s", resume ? "a checkpoint to resume" : "refinement (it would split each frame differently)");
+    if (key_frames) {
+        checkpoint = false;
+        no_refine = true;
+        /* --winding auto decides per file from its shape: a frame curled up could be turned over
+         * and its neighbours not. Key frames are read as they are wound unless told. */
+        if (!winding_named) sd.winding = PRT_WINDING_KEEP;
+    }
     if (!rc && !output) rc = cli_usage(&c, "an output file is required (-o OUT.prt)");
     if (!rc && resume && !checkpoint) rc = cli_usage(&c, "--resume needs the checkpoint that --no-checkpoint turns off");
     if (!rc && refine && no_refine) rc = cli_usage(&c, "--no-refine contradicts --refine, --refine-vertices and --refine-threshold");
@@ -325,27 +395,18 @@ int cmd_bake(int argc, char **argv)
     float inside[CLI_MAX_INSIDE_POINTS * 3];
     sd.inside_point_count = cli_inside_points(&lights, NULL, inside);
     sd.inside_points = inside;
-    prt_status st = prt_scene_load(c.ctx, argv[optind], &sd, &scene);
-    if (!st && lights.set_lights && (st = prt_scene_set_lights(scene, lights.lights, lights.light_count))) {
-        cli_error(&c, "--light: %s", prt_last_error());
+    const int nframes = key_frames ? argc - optind : 1;
+    prt_scene **frames = calloc((size_t)nframes, sizeof *frames);
+    prt_status st = frames ? PRT_OK : PRT_ERR_NO_MEMORY;
+    for (int f = 0; !st && f < nframes; ++f) st = load_scene(&c, argv[optind + f], &sd, &lights, sets, nsets, &frames[f]);
+    if (!st && key_frames && !same_topology(&c, frames, nframes, argv + optind)) {
+        st = PRT_ERR_INVALID_ARG;
         c.reported = true;
     }
-    for (int i = 0; !st && i < nsets; ++i) {
-        /* NAME=SPEC,SPEC: a BRDF spec holds no comma. */
-        char name[128], list[1024];
-        const char *eq = strchr(sets[i], '=');
-        snprintf(name, sizeof name, "%.*s", (int)(eq - sets[i]), sets[i]);
-        snprintf(list, sizeof list, "%s", eq + 1);
-        for (char *save = NULL, *spec = strtok_r(list, ",", &save); spec && !st; spec = strtok_r(NULL, ",", &save)) {
-            prt_brdf b;
-            if ((st = prt_brdf_parse(spec, &b)) || (st = prt_scene_add_brdf_choice(scene, name, &b))) {
-                cli_error(&c, "--brdf-set %s: %s", sets[i], prt_last_error());
-                c.reported = true;
-            }
-        }
-    }
+    if (!st) scene = frames[0];
     if (!st && !c.quiet)
-        fprintf(stderr, "prt bake: %s: %zu vertices, %zu triangles\n", argv[optind], prt_scene_vertex_count(scene), prt_scene_triangle_count(scene));
+        fprintf(stderr, "prt bake: %s%s: %zu vertices, %zu triangles\n", argv[optind], key_frames ? " and the other key frames" : "", prt_scene_vertex_count(scene),
+                prt_scene_triangle_count(scene));
     prt_light sun;
     if (!st && refine && (rd.extra_light_count = sky_sun(method, scene, &sun))) rd.extra_lights = &sun;
     if (!st && refine) st = refine_scene(&c, scene, &rd);
@@ -354,7 +415,8 @@ int cmd_bake(int argc, char **argv)
         uint64_t recovered = 0, total = 0;
         prt_bake_run_desc run = {.progress = cli_progress, .progress_user = &c, .checkpoint = checkpoint ? checkpoint_path : NULL,
                                  .resume = resume, .recovered_units = &recovered, .total_units = &total};
-        st = prt_bake(c.ctx, scene, method, o, &run, &t);
+        if (key_frames) st = prt_bake_frames(c.ctx, (const prt_scene *const *)frames, nframes, method, o, &run, &t);
+        else st = prt_bake(c.ctx, scene, method, o, &run, &t);
         if (!st && resume && !c.quiet && total)
             fprintf(stderr, "prt bake: resumed: %llu of %llu work units (%.0f%%) came from %s\n", (unsigned long long)recovered,
                     (unsigned long long)total, 100.0 * (double)recovered / (double)total, checkpoint_path);
@@ -400,7 +462,8 @@ int cmd_bake(int argc, char **argv)
         rc = st ? cli_fail(&c, st) : EXIT_OK;
     }
     prt_transfer_release(t);
-    prt_scene_release(scene);
+    for (int f = 0; frames && f < nframes; ++f) prt_scene_release(frames[f]);
+    free(frames);
     prt_options_release(o);
     prt_context_release(c.ctx);
     return rc;

@@ -26,6 +26,7 @@ static const char *HELP =
     "      --eye X,Y,Z        the viewpoint each vertex's colour is seen from; needed when the\n"
     "                         result depends on the view (glossy surfaces)\n"
     "      --texels           write the per-texel radiance map (top row = v 1) instead\n"
+    CLI_TIME_HELP
     CLI_LIGHT_OPTIONS_HELP
     "Other:\n"
     "  -j, --threads N        worker threads\n"
@@ -108,6 +109,7 @@ static int relight_main(int argc, char **argv, bool exporting)
     const char *output = NULL, *kind = NULL;
     static const struct option fixed[] = {{"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'},
                                           {"eye", required_argument, 0, 'e'}, {"texels", no_argument, 0, 'T'}, CLI_LIGHT_LONG_OPTIONS,
+                                          {"time", required_argument, 0, OPT_TIME},
                                           {"colors", required_argument, 0, 'C'}, {"exposure", required_argument, 0, 'E'},
                                           {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}};
     /* Every method's export options are parsed, here and in relight (where each is refused by
@@ -122,7 +124,8 @@ static int relight_main(int argc, char **argv, bool exporting)
     int given = 0;
     int opt;
     float eye[3] = {0, 0, 0};
-    bool have_eye = false, texels = false;
+    bool have_eye = false, texels = false, timed = false;
+    double time = 0;
     prt_colour_encoding encoding = PRT_COLOURS_DEFAULT;
     float exposure = 0;
     optind = 1;
@@ -143,6 +146,10 @@ static int relight_main(int argc, char **argv, bool exporting)
         case 'o': output = optarg; break;
         case 'k': kind = optarg; break;
         case 'T': texels = true; break;
+        case OPT_TIME:
+            if (!cli_parse_time(&c, optarg, &time)) return EXIT_USAGE;
+            timed = true;
+            break;
         case 'C':
             if (!strcasecmp(optarg, "srgb")) encoding = PRT_COLOURS_SRGB;
             else if (!strcasecmp(optarg, "linear")) encoding = PRT_COLOURS_LINEAR;
@@ -202,6 +209,7 @@ static int relight_main(int argc, char **argv, bool exporting)
     float *rgb = NULL;
     int variant = -1;
     prt_status st = prt_transfer_load(c.ctx, argv[optind], &t);
+    if (!st && timed) st = cli_at_time(&c, argv[optind], time, &t);
     /* Export options are checked before anything is written. */
     if (!st && export_options(&c, t, given, given_names, given_values, &eo)) rc = EXIT_USAGE;
     if (!st && !rc) {

@@ -23,6 +23,7 @@ static const char *HELP =
     "                         (glossy surfaces) are evaluated per pixel\n"
     "      --width N          image width in pixels, per panel (default 800)\n"
     CLI_VIEW_CAMERA_HELP CLI_VIEW_TONE_HELP CLI_VIEW_BACKGROUND_HELP
+    CLI_TIME_HELP
     CLI_LIGHT_OPTIONS_HELP
     "Animation (an animated PNG that loops):\n"
     "      --frames N         draw N frames (2..1000) in which the lighting moves: by default it\n"
@@ -52,6 +53,7 @@ enum { OPT_FRAMES = 2600, OPT_LIGHT_TO, OPT_FPS, OPT_PROBE };
 /* One input: a .prt drawn as its kinds, or an image pasted as it is. */
 typedef struct source {
     prt_transfer *t;
+    prt_transfer *file;       /* --time: the file as loaded (t is its pose), which the camera frames */
     prt_lighting *lighting;   /* what the command line and the file name, at frame 0 */
     prt_image image;
     int variants[MAX_PANELS], count;
@@ -127,10 +129,12 @@ int cmd_render(int argc, char **argv)
     cli_view view = CLI_VIEW_DEFAULTS;
     int frames = 1, fps = 12, to_count = 0, probe_count = 0;
     float probes[CLI_MAX_PROBES][4];
+    bool timed = false;
+    double time = 0;
     prt_light to[CLI_MAX_LIGHTS];
     static const struct option opts[] = {
         {"output", required_argument, 0, 'o'}, {"kind", required_argument, 0, 'k'}, CLI_VIEW_LONG_OPTIONS, CLI_LIGHT_LONG_OPTIONS,
-        {"frames", required_argument, 0, OPT_FRAMES}, {"light-to", required_argument, 0, OPT_LIGHT_TO}, {"fps", required_argument, 0, OPT_FPS},
+        {"time", required_argument, 0, OPT_TIME}, {"frames", required_argument, 0, OPT_FRAMES}, {"light-to", required_argument, 0, OPT_LIGHT_TO}, {"fps", required_argument, 0, OPT_FPS},
         {"probe", required_argument, 0, OPT_PROBE}, {"threads", required_argument, 0, 'j'}, {"per-vertex", no_argument, 0, 'P'}, {"accumulate", required_argument, 0, 'A'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     int opt;
@@ -154,6 +158,10 @@ int cmd_render(int argc, char **argv)
         case OPT_PROBE:
             if (probe_count == CLI_MAX_PROBES) return cli_usage(&c, "at most %d --probe", CLI_MAX_PROBES);
             if (!cli_parse_probe(optarg, probes[probe_count++])) return cli_usage(&c, "--probe takes X,Y,Z or X,Y,Z,R (R > 0), got \"%s\"", optarg);
+            break;
+        case OPT_TIME:
+            if (!cli_parse_time(&c, optarg, &time)) return EXIT_USAGE;
+            timed = true;
             break;
         case OPT_FRAMES: if (!cli_parse_int(optarg, 2, 1000, &frames)) return cli_usage(&c, "--frames must be 2..1000"); break;
         case OPT_FPS: if (!cli_parse_int(optarg, 1, 100, &fps)) return cli_usage(&c, "--fps must be 1..100"); break;
@@ -220,6 +228,17 @@ int cmd_render(int argc, char **argv)
             src[i].count = 1;
         } else {
             if ((st = prt_transfer_load(c.ctx, path, &src[i].t))) break;
+            if (timed) {
+                /* The camera frames the file's first key frame at every time: renders of one
+                 * animation share their view (as prt view's does). */
+                src[i].file = src[i].t;
+                if ((st = prt_transfer_at_time(c.ctx, src[i].file, time, &src[i].t))) {
+                    src[i].t = NULL;
+                    cli_error(&c, "--time %g: '%s': %s", time, path, prt_last_error());
+                    c.reported = true;
+                    break;
+                }
+            }
             if ((src[i].count = cli_relight_resolve(&c, &kinds, src[i].t, 1, src[i].variants, MAX_PANELS)) < 0) { rc = EXIT_USAGE; break; }
             if (light.gpu_finish && !cli_check_accumulate(&c, src[i].t, per_vertex)) { rc = EXIT_USAGE; break; }
             if ((st = cli_lighting(&c, &light, src[i].t, NULL, &src[i].lighting))) break;
@@ -250,7 +269,7 @@ int cmd_render(int argc, char **argv)
     prt_camera cam;
     float centre[3] = {0, 0, 0};
     if (!st && !rc) {
-        const prt_transfer *t0 = src[first].t;
+        const prt_transfer *t0 = src[first].file ? src[first].file : src[first].t;
         cli_view_camera(&c, &view, prt_transfer_positions(t0), prt_transfer_vertex_count(t0), prt_transfer_indices(t0), prt_transfer_triangle_count(t0),
                         (float)width / height, &cam);
         float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -328,6 +347,7 @@ int cmd_render(int argc, char **argv)
     for (int i = 0; i < ninputs; ++i) {
         prt_lighting_release(src[i].lighting);
         prt_transfer_release(src[i].t);
+        prt_transfer_release(src[i].file);
         prt_image_free(&src[i].image);
     }
     prt_context_release(c.ctx);

@@ -52,6 +52,10 @@ static const char *HELP =
     "                             the top left, world radius; 0,0,0 erases), paint-clear,\n"
     "                             paint-save FILE, screenshot FILE (.png .exr), quit\n"
     "      --stats                print frame and relight times as JSON on exit\n"
+    "      --time T               key-framed files (prt bake --frames): start at the pose T\n"
+    "                             frames in (0..F-1); space plays and pauses (a key frame a\n"
+    "                             second, looping), / and \\ step a tenth of a frame\n"
+    "      --play                 start playing\n"
     "      --accumulate W         files whose method has GPU passes (prt info says): where they\n"
     "                             run - gpu (the default: binned atlases, additive blending; b\n"
     "                             shows first-order and final side by side) or cpu; g switches\n"
@@ -175,9 +179,12 @@ void view_take_lights(viewer *v)
     v->selected = n ? 0 : -1;
 }
 
-/* The job's lighting: the viewer's rotation on top of the lighting's own, and the job's lights. */
-static prt_status relight(viewer *v, const relight_job *job, prt_relit *out, prt_sh_light *probe)
+/* The job's lighting: the viewer's rotation on top of the lighting's own, and the job's lights;
+ * a key-framed file's pose at the job's time into *pose (NULL for files of one pose); with the
+ * probe shown, the light arriving at it into *probe. */
+static prt_status relight(viewer *v, const relight_job *job, prt_relit *out, prt_transfer **pose, prt_sh_light *probe)
 {
+    *pose = NULL;
     double rj[9], r[9];
     prt_rotation_from_euler_deg(job->env_yaw, job->env_pitch, 0, rj);
     for (int i = 0; i < 3; ++i)
@@ -202,8 +209,13 @@ static prt_status relight(viewer *v, const relight_job *job, prt_relit *out, prt
         d.paint_width = v->paint_w;
         d.paint_height = v->paint_h;
     }
-    if (!st) st = prt_relight(v->worker_ctx, v->t, v->lighting, &d, out);
+    if (!st && v->key_frames > 1) st = prt_transfer_at_time(v->worker_ctx, v->t, job->time, pose);
+    if (!st) st = prt_relight(v->worker_ctx, *pose ? *pose : v->t, v->lighting, &d, out);
     if (!st && job->probe && (st = cli_probe_arriving(v->worker_ctx, v->t, v->lighting, job->probe_at, probe))) prt_relit_free(out);
+    if (st) {
+        prt_transfer_release(*pose);
+        *pose = NULL;
+    }
     return st;
 }
 
@@ -219,12 +231,15 @@ static void *worker(void *arg)
         pthread_mutex_unlock(&v->lock);
         double t0 = now();
         prt_relit r;
+        prt_transfer *pose = NULL;
         prt_sh_light probe;
-        prt_status st = relight(v, &job, &r, &probe);
+        prt_status st = relight(v, &job, &r, &pose, &probe);
         double ms = (now() - t0) * 1e3;
         pthread_mutex_lock(&v->lock);
         prt_relit_free(&v->result);
+        prt_transfer_release(v->result_pose);
         v->result = r;
+        v->result_pose = pose;
         v->result_probe = probe;
         v->result_probe_on = job.probe;
         v->result_status = st;
@@ -248,12 +263,14 @@ void view_request_relight(viewer *v)
     pthread_mutex_unlock(&v->lock);
 }
 
-/* Uploads a relit result: the whole mesh when what it holds changed, else only the arrays. */
-static void show(viewer *v, prt_relit *r)
+/* Uploads a relit result: the whole mesh when what it holds or its pose changed, else only the
+ * arrays. Takes r and pose (NULL: the file's own mesh). */
+static void show(viewer *v, prt_relit *r, prt_transfer *pose)
 {
     const size_t nv = prt_transfer_vertex_count(v->t);
     const prt_relit *o = &v->shown;
-    const bool same = o->radiance && (o->exit_sh != NULL) == (r->exit_sh != NULL) && o->exit_order == r->exit_order &&
+    const prt_transfer *t = pose ? pose : v->t;
+    const bool same = !pose && o->radiance && (o->exit_sh != NULL) == (r->exit_sh != NULL) && o->exit_order == r->exit_order &&
                       (o->texels != NULL) == (r->texels != NULL) && o->texel_width == r->texel_width && o->texel_height == r->texel_height &&
                       (o->kvec != NULL) == (r->kvec != NULL) && o->kvec_terms == r->kvec_terms && o->exit_mirror == r->exit_mirror &&
                       (o->gpu_input != NULL) == (r->gpu_input != NULL);
@@ -262,7 +279,7 @@ static void show(viewer *v, prt_relit *r)
     const bool probe = v->result_probe_on;
     if (probe || v->shown_probe_on) {
         prt_render_mesh mesh, joined;
-        prt_relit_render_mesh(v->t, r, &mesh);
+        prt_relit_render_mesh(t, r, &mesh);
         mesh.side_by_side = v->side_by_side;
         cli_probe_mesh keep = {0};
         const float at[1][4] = {{v->want.probe_at[0], v->want.probe_at[1], v->want.probe_at[2], 0}};
@@ -277,7 +294,7 @@ static void show(viewer *v, prt_relit *r)
         prt_window_set_radiance(v->win, r->radiance, nv);
         if (r->gpu_input) {
             prt_render_mesh mesh;
-            prt_relit_render_mesh(v->t, r, &mesh);
+            prt_relit_render_mesh(t, r, &mesh);
             mesh.side_by_side = v->side_by_side;
             prt_window_set_gpu_input(v->win, &mesh);
         }
@@ -285,16 +302,18 @@ static void show(viewer *v, prt_relit *r)
         if (r->texels) prt_window_set_texels(v->win, r->texels, r->texel_width, r->texel_height);
         if (r->kvec) prt_window_set_kvec(v->win, r->kvec, nv);
         prt_render_mesh mesh;
-        prt_relit_render_mesh(v->t, r, &mesh);
+        prt_relit_render_mesh(t, r, &mesh);
         prt_window_set_lights(v->win, &mesh);   /* shadow maps are redrawn only when the lights moved */
     } else {
         prt_render_mesh mesh;
-        prt_relit_render_mesh(v->t, r, &mesh);
+        prt_relit_render_mesh(t, r, &mesh);
         mesh.side_by_side = v->side_by_side;
         prt_window_set_mesh(v->win, &mesh);
     }
     prt_relit_free(&v->shown);
+    prt_transfer_release(v->shown_pose);
     v->shown = *r;
+    v->shown_pose = pose;
     memset(r, 0, sizeof *r);
 }
 
@@ -309,7 +328,8 @@ static bool take_result(viewer *v)
             snprintf(v->message, sizeof v->message, "%s", v->result_error);
             if (v->want.component) { v->want.component = 0; v->job = v->want; v->want.version++; v->job.version = v->want.version; v->job_posted = true; pthread_cond_broadcast(&v->wake); }
         } else {
-            show(v, &v->result);
+            show(v, &v->result, v->result_pose);
+            v->result_pose = NULL;
         }
         v->shown_version = v->result_version;
         v->result_ready = false;
@@ -350,6 +370,9 @@ static void status_line(const viewer *v, char *buf, size_t n)
         prt_light_format(&v->want.lights[i], spec, sizeof spec);
         len += snprintf(buf + len, n - (size_t)len, "\n%s light %d: %s", i == v->selected ? ">" : " ", i + 1, spec);
     }
+    if (v->key_frames > 1 && len > 0 && (size_t)len < n)
+        len += snprintf(buf + len, n - (size_t)len, "\ntime %.2f of 0..%d (%s; space %s, / \\ step)", v->want.time, v->key_frames - 1,
+                        v->playing ? "playing" : "paused", v->playing ? "pauses" : "plays");
     if (v->surface && len > 0 && (size_t)len < n) len += snprintf(buf + len, n - (size_t)len, "\nsurface: %s", prt_transfer_surface_name(v->t, v->surface));
     char paint[256];
     view_paint_status(v, paint, sizeof paint);
@@ -450,7 +473,7 @@ static void handle(viewer *v, const prt_event *e)
     }
 }
 
-enum { OPT_W = 2500, OPT_H, OPT_EXP, OPT_SCRIPT, OPT_STATS, OPT_ACCUMULATE };
+enum { OPT_W = 2500, OPT_H, OPT_EXP, OPT_SCRIPT, OPT_STATS, OPT_ACCUMULATE, OPT_PLAY };
 
 int cmd_view(int argc, char **argv)
 {
@@ -473,8 +496,9 @@ int cmd_view(int argc, char **argv)
         {"script", required_argument, 0, OPT_SCRIPT}, {"stats", no_argument, 0, OPT_STATS}, CLI_LIGHT_LONG_OPTIONS,
         {"accumulate", required_argument, 0, OPT_ACCUMULATE},
         {"view", required_argument, 0, OPT_VIEW}, {"eye", required_argument, 0, OPT_EYE}, {"target", required_argument, 0, OPT_TARGET},
-        {"fov", required_argument, 0, OPT_FOV},
+        {"fov", required_argument, 0, OPT_FOV}, {"time", required_argument, 0, OPT_TIME}, {"play", no_argument, 0, OPT_PLAY},
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    bool timed = false, play = false;
     int opt;
     optind = 1;
     opterr = 0;   /* one line of our own instead of getopt's */
@@ -492,6 +516,11 @@ int cmd_view(int argc, char **argv)
         case OPT_EXP: if (!cli_parse_float(optarg, &v.exposure)) return cli_usage(&c, "--exposure takes a number of stops"); break;
         case OPT_SCRIPT: script_path = optarg; break;
         case OPT_STATS: stats = true; break;
+        case OPT_TIME:
+            if (!cli_parse_time(&c, optarg, &v.want.time)) return EXIT_USAGE;
+            timed = true;
+            break;
+        case OPT_PLAY: play = true; break;
         case OPT_ACCUMULATE:
             if (!cli_parse_accumulate(optarg, &v.light.gpu_finish)) return cli_usage(&c, "--accumulate takes cpu or gpu");
             accumulate_given = true;
@@ -509,6 +538,19 @@ int cmd_view(int argc, char **argv)
     if (rc) return rc;
     if ((rc = cli_make_context(&c))) { view_script_free(script); return rc; }
     prt_status st = prt_transfer_load(c.ctx, argv[optind], &v.t);
+    if (!st) v.key_frames = prt_transfer_frame_count(v.t);
+    if (!st && (timed || play) && v.key_frames < 2) {
+        cli_error(&c, "--%s: '%s' holds one pose, no key frames (prt bake --frames)", timed ? "time" : "play", argv[optind]);
+        c.reported = true;
+        st = PRT_ERR_INVALID_ARG;
+    }
+    if (!st && !(v.want.time >= 0 && v.want.time <= v.key_frames - 1)) {
+        cli_error(&c, "--time %g lies outside the key frames of '%s', 0 to %d (times are not clamped)", v.want.time, argv[optind], v.key_frames - 1);
+        c.reported = true;
+        st = PRT_ERR_INVALID_ARG;
+    }
+    v.playing = play;
+    v.play_clock = -1;
     if (!st) st = cli_lighting(&c, &v.light, v.t, NULL, &v.lighting);
     if (!st) st = prt_context_create(&(prt_context_desc){.threads = c.threads}, &v.worker_ctx);
     if (!st) {
@@ -534,7 +576,7 @@ int cmd_view(int argc, char **argv)
         prt_relit first;
         prt_sh_light none;
         v.job = v.want;
-        st = relight(&v, &v.want, &first, &none);
+        st = relight(&v, &v.want, &first, &v.shown_pose, &none);
         if (!st) v.shown = first;
     }
     char title[600];
@@ -543,6 +585,7 @@ int cmd_view(int argc, char **argv)
     if (st) {
         rc = cli_fail(&c, st);
         prt_relit_free(&v.shown);
+        prt_transfer_release(v.shown_pose);
         prt_lighting_release(v.lighting);
         free(v.albedo);
         free(v.brdf_of);
@@ -561,10 +604,11 @@ int cmd_view(int argc, char **argv)
     view_register_surfaces(&v);
     view_register_paint(&v);
     view_register_probe(&v);
+    view_register_frames(&v);
     const size_t nv = prt_transfer_vertex_count(v.t);
     {
         prt_render_mesh mesh;
-        prt_relit_render_mesh(v.t, &v.shown, &mesh);
+        prt_relit_render_mesh(v.shown_pose ? v.shown_pose : v.t, &v.shown, &mesh);
         prt_window_set_mesh(v.win, &mesh);
     }
     int fw, fh;
@@ -590,6 +634,7 @@ int cmd_view(int argc, char **argv)
         prt_event e;
         while (prt_window_next_event(v.win, &e)) handle(&v, &e);
         if (script) rc = view_script_step(script, &v, now() - start);
+        view_play(&v, now());
         if (take_result(&v)) v.dirty = true;
         if (v.quit || rc) break;
         if (v.dirty) {
@@ -617,6 +662,8 @@ int cmd_view(int argc, char **argv)
     pthread_cond_destroy(&v.wake);
     prt_relit_free(&v.result);
     prt_relit_free(&v.shown);
+    prt_transfer_release(v.result_pose);
+    prt_transfer_release(v.shown_pose);
     prt_lighting_release(v.lighting);
     free(v.albedo);
     free(v.brdf_of);

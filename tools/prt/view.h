@@ -33,6 +33,7 @@ typedef struct relight_job {
     bool painted;              /* relight with the painting (viewer.paint, copied to job_paint) */
     bool probe;                /* a probe sphere lit by the file's neighbourhood transfer (j) */
     float probe_at[3];
+    double time;               /* key-framed files: the pose, in frames (prt_transfer_at_time) */
     unsigned version;
 } relight_job;
 
@@ -67,6 +68,7 @@ struct viewer {
     prt_lighting *lighting;
     double base_rot[9];         /* the lighting's own rotation, under the viewer's */
     prt_relit result;           /* written by the worker under lock */
+    prt_transfer *result_pose;  /* key-framed files: the pose `result` was relit on (owned) */
     prt_status result_status;
     char result_error[256];
     unsigned result_version, shown_version;
@@ -75,6 +77,11 @@ struct viewer {
     prt_relit shown;            /* what the window draws now */
     prt_sh_light result_probe;  /* the light arriving at the result's probe (with result, under lock) */
     bool result_probe_on, shown_probe_on;
+    prt_transfer *shown_pose;   /* and its pose (owned; NULL: the file's own mesh) */
+    /* key frames (prt bake --frames): space plays and pauses, / and \ step */
+    int key_frames;             /* the file's count; 1: one pose */
+    bool playing;
+    double play_clock;          /* when the time last moved while playing */
     /* input */
     view_control controls[VIEW_MAX_CONTROLS];
     int ncontrols;
@@ -141,6 +148,10 @@ bool view_surface_next_brdf(viewer *v);
 void view_register_surfaces(viewer *v);
 /* The probe (files with neighbourhood transfer): j shows or hides it, alt+drag then moves it. */
 void view_register_probe(viewer *v);
+/* Key frames (files that hold them): play / pause, step; view_play advances a playing time to
+ * now (call once a main-loop iteration). */
+void view_register_frames(viewer *v);
+void view_play(viewer *v, double now_s);
 /* Takes the lighting's rotation and lights as the viewer's starting point. */
 void view_take_lights(viewer *v);
 /* The light types the file's method relights (PRT_LIGHTS_* bits). */

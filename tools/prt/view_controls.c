@@ -514,3 +514,47 @@ void view_register_probe(viewer *v)
 {
     if (prt_transfer_light_at_box(v->t, NULL, NULL)) view_register(v, probe_keys, 1);
 }
+
+/* ---- key frames: the time moves through the file's poses, a key frame a second ---- */
+static void play_pause(viewer *v, int arg)
+{
+    (void)arg;
+    v->playing = !v->playing;
+    v->play_clock = -1;   /* view_play starts the clock */
+    snprintf(v->message, sizeof v->message, "%s at time %.2f of 0..%d", v->playing ? "playing" : "paused", v->want.time, v->key_frames - 1);
+}
+
+static void step_time(viewer *v, int arg)
+{
+    const double end = v->key_frames - 1;
+    v->playing = false;
+    v->want.time = fmin(fmax(v->want.time + 0.1 * arg, 0.0), end);
+    snprintf(v->message, sizeof v->message, "time %.2f of 0..%d", v->want.time, v->key_frames - 1);
+    view_request_relight(v);
+}
+
+void view_play(viewer *v, double now_s)
+{
+    if (!v->playing) return;
+    if (v->play_clock < 0) { v->play_clock = now_s; return; }
+    /* One relight at a time: a slow relight shows fewer poses, not a growing queue. */
+    pthread_mutex_lock(&v->lock);
+    const bool busy = v->job_posted || v->result_version != v->want.version;
+    pthread_mutex_unlock(&v->lock);
+    if (busy) return;
+    const double end = v->key_frames - 1;
+    v->want.time = fmod(v->want.time + (now_s - v->play_clock), end);
+    v->play_clock = now_s;
+    view_request_relight(v);
+    v->dirty = true;
+}
+
+void view_register_frames(viewer *v)
+{
+    static const view_control table[] = {
+        {' ', "space", "key frames: play / pause (a key frame a second, looping)", play_pause, 0},
+        {'/', "/", "key frames: a tenth of a frame on", step_time, 1},
+        {'\\', "\\", "key frames: a tenth of a frame back", step_time, -1},
+    };
+    if (v->key_frames > 1) view_register(v, table, (int)(sizeof table / sizeof table[0]));
+}

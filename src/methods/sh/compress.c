@@ -113,6 +113,7 @@ prt_status prt_transfer_compress(prt_context *ctx, const prt_transfer *in, const
     *out = NULL;
     const prt__sh_state *s = prt__sh(in);
     if (!s) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s transfer cannot be compressed: compression applies to SH sets", in->method->name);
+    if (s->frames.count) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "the transfer's key frames are compressed across frames already");
     prt_compress_desc d = desc ? *desc : (prt_compress_desc){0};
     prt_status st = prt__compress_desc_check(ctx, &d);
     if (st) return st;
@@ -209,7 +210,7 @@ prt_status prt_transfer_quantize(prt_context *ctx, const prt_transfer *in, int b
     if (!s) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s transfer cannot be quantized this way: quantization applies to SH sets", in->method->name);
     if (bits != 8 && bits != 16) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "quantization takes 8 or 16 bits (got %d)", bits);
     for (int k = 0; k < PRT__KIND_COUNT; ++k)
-        if (s->sets[k].cpca) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "quantize before compressing: compressed sets keep float weights");
+        if (s->sets[k].cpca || s->frames.count) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "quantize before compressing: compressed sets keep float weights");
     prt_transfer *t = NULL;
     prt__sh_state *n = NULL;
     prt_status st = copy_without_sets(ctx, in, s, &t, &n);

@@ -11,7 +11,10 @@
 #define CHUNK_TXLQ PRT__FOURCC('T', 'X', 'L', 'Q')   /* the same as bytes, a scale and bias per coefficient */
 #define CHUNK_NBHD PRT__FOURCC('N', 'B', 'H', 'D')   /* neighbourhood transfer */
 #define NBHD_HEADER 40
+#define CHUNK_FRMS PRT__FOURCC('F', 'R', 'M', 'S')   /* key frames' poses */
+#define CHUNK_FRCP PRT__FOURCC('F', 'R', 'C', 'P')   /* a set's rows of every key frame, one CPCA */
 #define CPCA_HEADER 64
+#define FRMS_HEADER 16
 
 void prt__sh_save_meta(const prt_transfer *t, cJSON *meta)
 {
@@ -23,10 +26,56 @@ void prt__sh_save_meta(const prt_transfer *t, cJSON *meta)
     if (s->glossy_exit) cJSON_AddBoolToObject(meta, "glossy_exit", 1);
 }
 
+/* A CPCA chunk of `rows` rows; h: its header, kind, channels and order filled in. */
+static void save_cpca(prt__chunk_list *l, uint32_t id, unsigned char *h, const prt__cpca *c, size_t rows)
+{
+    prt__put32(h + 12, (uint32_t)c->method);
+    prt__put32(h + 16, (uint32_t)c->clusters);
+    prt__put32(h + 20, (uint32_t)c->dim);
+    prt__put64(h + 24, rows);
+    prt__put64(h + 32, c->vectors_total);
+    prt__put64(h + 40, c->weights_total);
+    memcpy(h + 48, &c->rms_error, 8);
+    memcpy(h + 56, &c->relative_error, 8);
+    const size_t dim = (size_t)c->dim;
+    prt__chunks_add(l, id, h, (size_t)CPCA_HEADER, c->counts, (size_t)c->clusters * 4, c->means, (size_t)c->clusters * dim * 4, c->basis,
+                    c->vectors_total * dim * 4, c->cluster_of, rows * 4, c->weights, c->weights_total * 4, NULL);
+}
+
+/* Key frames: FRMS (count, flags: 1 = normals, vertex count; then every frame's positions and
+ * normals), then one FRCP per set (a CPCA chunk over count x vertex-count rows). The sets of
+ * key frame 0 are not written again: they are the FRCP's first rows. */
+static void save_frames(const prt_transfer *t, prt__chunk_list *l)
+{
+    const prt__sh_state *sh = t->state;
+    const prt__sh_frames *fr = &sh->frames;
+    const size_t nv = t->mesh.vertex_count, rows = (size_t)fr->count * nv;
+    unsigned char *h = prt__chunks_alloc(l, FRMS_HEADER);
+    if (!h) return;
+    prt__put32(h, (uint32_t)fr->count);
+    prt__put32(h + 4, fr->normals ? 1u : 0u);
+    prt__put64(h + 8, nv);
+    if (fr->normals) prt__chunks_add(l, CHUNK_FRMS, h, (size_t)FRMS_HEADER, fr->positions, rows * 12, fr->normals, rows * 12, NULL);
+    else prt__chunks_add(l, CHUNK_FRMS, h, (size_t)FRMS_HEADER, fr->positions, rows * 12, NULL);
+    for (int k = 0; k < PRT__KIND_COUNT; ++k) {
+        if (!fr->sets[k]) continue;
+        unsigned char *c = prt__chunks_alloc(l, CPCA_HEADER);
+        if (!c) return;
+        prt__put32(c, (uint32_t)prt__kind_from_index(k));
+        prt__put32(c + 4, (uint32_t)sh->sets[k].channels);
+        prt__put32(c + 8, (uint32_t)sh->order);
+        save_cpca(l, CHUNK_FRCP, c, fr->sets[k], rows);
+    }
+}
+
 prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
 {
     const prt__sh_state *sh = t->state;
     const prt__mesh *m = &t->mesh;
+    if (sh->frames.count) {
+        save_frames(t, l);
+        return PRT_OK;   /* key frames hold no texel sets */
+    }
     for (int k = 0; k < PRT__KIND_COUNT; ++k) {
         const prt__sh_set *s = &sh->sets[k];
         if (!s->channels) continue;
@@ -59,18 +108,7 @@ prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
             prt__chunks_add(l, CHUNK_SHTR, h, (size_t)24, grid, 2 * dim * sizeof(float), q, padded, NULL);
             continue;
         }
-        const prt__cpca *c = s->cpca;
-        prt__put32(h + 12, (uint32_t)c->method);
-        prt__put32(h + 16, (uint32_t)c->clusters);
-        prt__put32(h + 20, (uint32_t)c->dim);
-        prt__put64(h + 24, m->vertex_count);
-        prt__put64(h + 32, c->vectors_total);
-        prt__put64(h + 40, c->weights_total);
-        memcpy(h + 48, &c->rms_error, 8);
-        memcpy(h + 56, &c->relative_error, 8);
-        const size_t dim = (size_t)c->dim;
-        prt__chunks_add(l, CHUNK_CPCA, h, (size_t)CPCA_HEADER, c->counts, (size_t)c->clusters * 4, c->means, (size_t)c->clusters * dim * 4,
-                        c->basis, c->vectors_total * dim * 4, c->cluster_of, m->vertex_count * 4, c->weights, c->weights_total * 4, NULL);
+        save_cpca(l, CHUNK_CPCA, h, s->cpca, m->vertex_count);
     }
     const prt__texel_sets *tx = &sh->texels;
     if (tx->width) {
@@ -143,7 +181,9 @@ prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
 
 static prt_status bad(prt_context *ctx, const char *msg) { return prt__fail(ctx, PRT_ERR_FORMAT, "%s", msg); }
 
-static prt_status load_cpca(prt_context *ctx, prt__sh_state *sh, const prt__chunk_in *in, uint64_t vertex_count)
+/* A CPCA chunk of vertex_count rows into sh->sets, or with frames, of frames x vertex count rows
+ * into sh->frames.sets. */
+static prt_status load_cpca(prt_context *ctx, prt__sh_state *sh, const prt__chunk_in *in, uint64_t vertex_count, bool frames)
 {
     const unsigned char *p = in->data;
     const uint64_t len = in->size;
@@ -155,7 +195,7 @@ static prt_status load_cpca(prt_context *ctx, prt__sh_state *sh, const prt__chun
     /* Every count is bounded by the chunk's own length before it sizes anything. */
     if (k < 0 || (channels != 1 && channels != 3) || order < 1 || order > PRT_SH_MAX_ORDER || method > PRT_COMPRESS_VQ ||
         dim != channels * order * order * (prt__kind_glossy(k) ? order * order : 1) || nv != vertex_count || (sh->order && (int)order != sh->order) ||
-        sh->sets[k].channels || clusters == 0 || clusters > len / 4 || nvec > len / 4 || nw > len / 4 || (uint64_t)clusters * dim > len / 4 ||
+        sh->sets[k].channels || (frames && sh->frames.sets[k]) || clusters == 0 || clusters > len / 4 || nvec > len / 4 || nw > len / 4 || (uint64_t)clusters * dim > len / 4 ||
         nvec * dim > len / 4 || CPCA_HEADER + 4 * ((uint64_t)clusters + (uint64_t)clusters * dim + nvec * dim + nv + nw) != len)
         return bad(ctx, "corrupt .prt file: invalid compressed transfer chunk");
     prt__cpca *c = prt__calloc(1, sizeof *c);
@@ -192,8 +232,55 @@ static prt_status load_cpca(prt_context *ctx, prt__sh_state *sh, const prt__chun
         return bad(ctx, "corrupt .prt file: non-finite compressed transfer");
     }
     sh->order = (int)order;
+    if (frames) {
+        sh->frames.sets[k] = c;
+        return PRT_OK;   /* the set's channels are given once every chunk is in (load_frames) */
+    }
     sh->sets[k].channels = (int)channels;
     sh->sets[k].cpca = c;
+    return PRT_OK;
+}
+
+/* Key frames (save_frames): the poses, then every set's rows; key frame 0's sets are then
+ * reconstructed into sh->sets, and its pose must be the mesh's. */
+static prt_status load_frames(prt_context *ctx, prt_transfer *t, prt__sh_state *sh, const prt__chunk_in *in, prt__chunk_in *chunks, int count)
+{
+    const unsigned char *p = in->data;
+    const uint64_t len = in->size, nv = t->mesh.vertex_count;
+    const uint32_t frames = len >= FRMS_HEADER ? prt__get32(p) : 0, flags = len >= FRMS_HEADER ? prt__get32(p + 4) : 0;
+    const uint64_t fnv = len >= FRMS_HEADER ? prt__get64(p + 8) : 0;
+    const bool normals = flags & 1;
+    if (sh->order) return bad(ctx, "corrupt .prt file: key frames beside transfer of one pose");
+    if (frames < 2 || frames > 1024 || flags > 1 || fnv != nv || normals != (t->mesh.normals != NULL) ||
+        FRMS_HEADER + (uint64_t)frames * nv * 12 * (normals ? 2 : 1) != len)
+        return bad(ctx, "corrupt .prt file: invalid key frames chunk");
+    const size_t rows = (size_t)frames * nv;
+    prt__sh_frames *fr = &sh->frames;
+    fr->positions = malloc(rows * 12 + 4);
+    fr->normals = normals ? malloc(rows * 12 + 4) : NULL;
+    if (!fr->positions || (normals && !fr->normals)) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(fr->positions, p + FRMS_HEADER, rows * 12);
+    if (normals) memcpy(fr->normals, p + FRMS_HEADER + rows * 12, rows * 12);
+    if (!prt__all_finite(fr->positions, rows * 3) || (normals && !prt__all_finite(fr->normals, rows * 3)))
+        return bad(ctx, "corrupt .prt file: non-finite key frame poses");
+    if (memcmp(fr->positions, t->mesh.positions, nv * 12) || (normals && memcmp(fr->normals, t->mesh.normals, nv * 12)))
+        return bad(ctx, "corrupt .prt file: key frame 0 is not the file's mesh");
+    fr->count = (int)frames;
+    const prt__chunk_in *c;
+    prt_status st = PRT_OK;
+    int channels[PRT__KIND_COUNT] = {0};
+    while (!st && (c = prt__chunk_take(chunks, count, CHUNK_FRCP))) {
+        st = load_cpca(ctx, sh, c, rows, true);
+        if (!st) channels[prt__kind_index((prt_transfer_kind)prt__get32(c->data))] = (int)prt__get32(c->data + 4);
+    }
+    if (st) return st;
+    if (!sh->order) return bad(ctx, "corrupt .prt file: key frames without transfer");
+    for (int k = 0; k < PRT__KIND_COUNT; ++k) {
+        if (!fr->sets[k]) continue;
+        sh->sets[k].channels = channels[k];
+        if (!(sh->sets[k].coeffs = malloc(nv * prt__set_dim(sh, k) * sizeof(float) + 4))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        prt__sh_frame_rows(fr->sets[k], nv, 0, sh->sets[k].coeffs);
+    }
     return PRT_OK;
 }
 
@@ -344,7 +431,10 @@ prt_status prt__sh_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, pr
     prt_status st = PRT_OK;
     const prt__chunk_in *in;
     while (!st && (in = prt__chunk_take(chunks, count, CHUNK_SHTR))) st = load_set(ctx, sh, in, t->mesh.vertex_count);
-    while (!st && (in = prt__chunk_take(chunks, count, CHUNK_CPCA))) st = load_cpca(ctx, sh, in, t->mesh.vertex_count);
+    while (!st && (in = prt__chunk_take(chunks, count, CHUNK_CPCA))) st = load_cpca(ctx, sh, in, t->mesh.vertex_count, false);
+    if (!st && (in = prt__chunk_take(chunks, count, CHUNK_FRMS))) st = load_frames(ctx, t, sh, in, chunks, count);
+    else if (!st && prt__chunk_take(chunks, count, CHUNK_FRCP)) st = bad(ctx, "corrupt .prt file: key-frame transfer without its key frames chunk");
+    if (!st && sh->frames.count && prt__chunk_take(chunks, count, CHUNK_FRMS)) st = bad(ctx, "corrupt .prt file: two key frames chunks");
     if (!st && !sh->order) st = bad(ctx, ".prt file holds no transfer");
     if (!st) st = load_texels(ctx, sh, chunks, count);
     if (!st && prt__chunk_take(chunks, count, CHUNK_TXAL)) st = bad(ctx, "corrupt .prt file: two texel albedo chunks");

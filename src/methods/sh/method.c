@@ -30,6 +30,7 @@ void prt__sh_state_free(void *state)
     }
     prt__texel_sets_free(&s->texels);
     prt__sh_grid_free(&s->grid);
+    prt__sh_frames_free(&s->frames);
     if (s->rays_ready) prt__raycaster_release(&s->rays);
     if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
     free(s);
@@ -324,6 +325,14 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
     if (!st && extra.compressing && prt__opt(o, "quantize") && bits != 32)
         st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--quantize applies to uncompressed sets; drop --compress or --quantize");
     if (!st && extra.compressing) st = prt__compress_desc_check(ctx, &extra.compress);
+    /* A key frame's sets stay floats: the join compresses every frame's rows as one. */
+    if (prt__options_keyframe(o)) {
+        extra.compressing = false;
+        extra.quantize = 0;
+        if (!st && d.texels) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "key frames hold per-vertex transfer: drop --texels");
+        if (!st && prt__opt(o, "quantize") && bits != 32)
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "key frames are stored compressed across frames: drop --quantize");
+    }
     if (!st) st = prt__sh_bake_begin(ctx, &d, &extra, t, out);
     prt_image_free(&extra.normal_map);   /* empty when the job took them */
     prt_image_free(&extra.height_map);
@@ -340,6 +349,7 @@ static size_t grid_bytes(const prt__sh_state *s)
 static size_t sh_bytes(const prt_transfer *t)
 {
     const prt__sh_state *s = t->state;
+    if (s->frames.count) return prt__sh_frames_bytes(s, t->mesh.vertex_count);
     size_t bytes = 0;
     for (int i = 0; i < PRT__KIND_COUNT; ++i)
         if (s->sets[i].channels) {
@@ -361,6 +371,16 @@ static double texel_coverage(const prt_transfer *t, int w, int h)
     for (size_t i = 0; i < (size_t)w * h; ++i) on += area[i] > 0;
     free(area);
     return (double)on / ((double)w * h);
+}
+
+/* What the key frames would take as separate files: each frame's sets at 16 bits (the default)
+ * and its mesh positions and normals. */
+static size_t separate_frames_bytes(const prt__sh_state *s, size_t nv)
+{
+    size_t bytes = 0;
+    for (int k = 0; k < PRT__KIND_COUNT; ++k)
+        if (s->sets[k].channels) bytes += nv * prt__set_dim(s, k) * 2 + 2 * prt__set_dim(s, k) * sizeof(float);
+    return (size_t)s->frames.count * (bytes + nv * 3 * sizeof(float) * (s->frames.normals ? 2 : 1));
 }
 
 static void sh_describe(const prt_transfer *t, prt__describe *d)
@@ -417,6 +437,20 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
             }
             cJSON_AddNumberToObject(g, "bytes", (double)grid_bytes(s));
         }
+        if (s->frames.count) {
+            cJSON *fr = cJSON_AddObjectToObject(j, "key_frames");
+            cJSON_AddNumberToObject(fr, "count", s->frames.count);
+            cJSON_AddNumberToObject(fr, "bytes", (double)prt__sh_frames_bytes(s, nv));
+            cJSON_AddNumberToObject(fr, "separate_bytes", (double)separate_frames_bytes(s, nv));
+            for (int k = 0; k < PRT__KIND_COUNT; ++k)
+                if (s->frames.sets[k]) {
+                    cJSON *o = cJSON_AddObjectToObject(fr, prt_transfer_kind_name(prt__kind_from_index(k)));
+                    cJSON_AddStringToObject(o, "compression", cnames[s->frames.sets[k]->method]);
+                    cJSON_AddNumberToObject(o, "clusters", s->frames.sets[k]->clusters);
+                    cJSON_AddNumberToObject(o, "pca_vectors", (double)s->frames.sets[k]->vectors_total);
+                    cJSON_AddNumberToObject(o, "relative_error", s->frames.sets[k]->relative_error);
+                }
+        }
         cJSON_AddNumberToObject(j, "samples", s->samples);
         cJSON_AddNumberToObject(j, "bounces", s->bounces);
         cJSON_AddNumberToObject(j, "seed", s->seed);
@@ -466,6 +500,19 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
         prt__describe_line(d, "neighbourhood:", "%d x %d x %d points from (%g, %g, %g) to (%g, %g, %g), %.2f MiB (prt render --probe)", s->grid.dims[0],
                            s->grid.dims[1], s->grid.dims[2], s->grid.lo[0], s->grid.lo[1], s->grid.lo[2], s->grid.hi[0], s->grid.hi[1], s->grid.hi[2],
                            grid_bytes(s) / 1048576.0);
+    if (s->frames.count) {
+        const double held = (double)prt__sh_frames_bytes(s, nv), apart = (double)separate_frames_bytes(s, nv);
+        const bool mib = apart >= 1048576.0;
+        prt__describe_line(d, "key frames:", "%d (times 0 to %d), %.2f %s with their poses, against %.2f %s as %d separate files' 16-bit sets",
+                           s->frames.count, s->frames.count - 1, held / (mib ? 1048576.0 : 1024.0), mib ? "MiB" : "KiB",
+                           apart / (mib ? 1048576.0 : 1024.0), mib ? "MiB" : "KiB", s->frames.count);
+        for (int k = 0; k < PRT__KIND_COUNT; ++k) {
+            const prt__cpca *c = s->frames.sets[k];
+            if (c)
+                prt__describe_line(d, "", "%s: one %s over every frame's rows, %d clusters, %zu PCA vectors, relative error %.4f",
+                                   prt_transfer_kind_name(prt__kind_from_index(k)), long_names[c->method], c->clusters, c->vectors_total, c->relative_error);
+        }
+    }
     prt__describe_line(d, "bake:", "%d samples, %d bounces, seed %u", s->samples, s->bounces, s->seed);
 }
 
@@ -677,4 +724,7 @@ const prt__method prt__method_sh = {
     .relight = sh_relight,
     .light_at_box = prt__sh_light_at_box,
     .light_at = prt__sh_light_at_lighting,
+    .join_frames = prt__sh_join_frames,
+    .frame_count = prt__sh_frame_count,
+    .at_time = prt__sh_at_time,
 };

@@ -52,6 +52,15 @@ void prt__sh_grid_free(prt__sh_grid *g);
 bool prt__sh_light_at_box(const prt_transfer *t, float lo[3], float hi[3]);
 prt_status prt__sh_light_at_lighting(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const float p[3], prt_sh_light *out);
 void prt__sh_neighbourhood_eval(const prt__sh_grid *g, const float p[3], const prt_sh_light *in, int order, prt_sh_light *out);
+/* Key frames of an animated object (frames.c; the course notes' "animated objects"): every
+ * frame's pose, and each set's rows of every frame [frame][vertex] compressed as one, so that
+ * the frames share clusters and basis. */
+typedef struct prt__sh_frames {
+    int count;                          /* 0: one pose; else >= 2 */
+    float *positions;                   /* [frame][vertex][3] */
+    float *normals;                     /* likewise, or NULL when the mesh has none */
+    prt__cpca *sets[PRT__KIND_COUNT];   /* where sets[k].channels */
+} prt__sh_frames;
 
 typedef struct prt__sh_state {
     int order;
@@ -61,6 +70,8 @@ typedef struct prt__sh_state {
     bool glossy_exit;                    /* glossy sets hold exit radiance (BRDF baked in) */
     prt__texel_sets texels;
     prt__sh_grid grid;
+    /* Key frames; sets[] then hold key frame 0 reconstructed (what relighting without a time uses). */
+    prt__sh_frames frames;
     /* Shadow rays for the local-light reach check, built on first use under lock. */
     pthread_mutex_t *lock;
     prt__raycaster rays;
@@ -141,6 +152,15 @@ prt_status prt__relight_sh_texels_local(prt_context *ctx, const prt_transfer *t,
 
 /* prt export (export.c): --sh and --glsl. */
 prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);
+
+/* Key frames (frames.c): the method entry's join_frames, frame_count and at_time; rows [vertex]
+ * of key frame f of a frames' set into out; the frames' storage in bytes. */
+prt_status prt__sh_join_frames(prt_context *ctx, prt_transfer *const *frames, int count, const prt_options *o, prt_transfer **out);
+int prt__sh_frame_count(const prt_transfer *t);
+prt_status prt__sh_at_time(prt_context *ctx, const prt_transfer *t, int frame, float w, prt_transfer *out);
+void prt__sh_frame_rows(const prt__cpca *c, size_t vertex_count, int f, float *out);
+size_t prt__sh_frames_bytes(const prt__sh_state *s, size_t vertex_count);
+void prt__sh_frames_free(prt__sh_frames *f);
 
 /* Its chunks (file.c). */
 void prt__sh_save_meta(const prt_transfer *t, cJSON *meta);
