@@ -7,7 +7,7 @@
  * faults is cut in two). Small charts then merge into neighbours while the union stays valid, and
  * flat charts in one plane that touch (pieces meeting at T junctions) join, projected.
  * Charts are scaled to one texel density, turned to their smallest
- * bounding box and packed by the texels they touch (four quarter turns each, into any hole they
+ * bounding box and packed by their bilinear supports, kept apart (four quarter turns each, into any hole they
  * fit; large charts also at angles between, when that packs a scale the upright charts do not);
  * the largest density that fits is found by bisection. */
 #include "geom/uv_atlas.h"
@@ -1210,11 +1210,14 @@ static int by_size(const void *x, const void *y)
     return a->i < b->i ? -1 : a->i > b->i;
 }
 
-/* A texel whose centre lies this near a chart is one it touches: a texel's square reaches
- * sqrt(1/2) from its centre, so every texel holding some of the chart's surface is among them, and
- * so is every texel the per-texel bakes give a sliver without a centre of its own (texel_raster.c).
+/* A chart's footprint is its bilinear support: the texels whose centres lie within one texel
+ * (on both axes) of some point of the chart, every texel a bilinear read on the chart can weigh
+ * (texel_raster.c's slivers reach less far). Packing keeps footprints disjoint, so each such
+ * texel can hold its own chart's light and no read on a chart takes another's (the gutter
+ * sources are chosen by chart, texel_raster.c). REACH_SLACK covers float UVs written after.
  * The grid a chart is rasterised into has its box's corner REACH above and right of the grid's. */
-#define REACH 0.71
+#define REACH 1.0
+#define REACH_SLACK 1e-3
 /* Charts whose grid has at least this many texels are also tried at PACK_TILTS angles between
  * quarter turns: large ragged charts nest into each other's bays. Small ones fill holes as they are. */
 #define PACK_TILTS 4
@@ -1272,11 +1275,12 @@ static void chart_grid(const tilt_frame *f, double s, int *w, int *h)
     *h = (int)ceil(f->h * s + 2 * REACH);
 }
 
-/* Marks the texels of the chart's grid that it touches. */
-static void footprint(packer *p, const chart *c, const tilt_frame *f, double s, int W, int H)
+/* Marks the texels of the chart's grid whose open square of half-side r about the centre the chart
+ * meets (separating axes: the square's two, the triangles' edge normals): r = REACH + REACH_SLACK,
+ * its bilinear support; r = 0.5, the texels holding some of its surface. */
+static void footprint(packer *p, const chart *c, const tilt_frame *f, double s, int W, int H, double r)
 {
     memset(p->bits, 0, (size_t)W * H);
-    const double r2 = REACH * REACH;
     for (size_t t = 0; t < c->nt; ++t) {
         double u[3], v[3];
         for (int k = 0; k < 3; ++k) {
@@ -1285,26 +1289,29 @@ static void footprint(packer *p, const chart *c, const tilt_frame *f, double s, 
             u[k] = g[0];
             v[k] = g[1];
         }
-        const double d = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
-        const int x0 = (int)fmax(0, floor(fmin(u[0], fmin(u[1], u[2])) - REACH)), x1 = (int)fmin(W, ceil(fmax(u[0], fmax(u[1], u[2])) + REACH));
-        const int y0 = (int)fmax(0, floor(fmin(v[0], fmin(v[1], v[2])) - REACH)), y1 = (int)fmin(H, ceil(fmax(v[0], fmax(v[1], v[2])) + REACH));
+        const double ulo = fmin(u[0], fmin(u[1], u[2])), uhi = fmax(u[0], fmax(u[1], u[2]));
+        const double vlo = fmin(v[0], fmin(v[1], v[2])), vhi = fmax(v[0], fmax(v[1], v[2]));
+        double nx[3], ny[3], lo[3], hi[3];
+        for (int e = 0; e < 3; ++e) {
+            const int j = (e + 1) % 3, k = (e + 2) % 3;
+            nx[e] = v[j] - v[e];
+            ny[e] = u[e] - u[j];
+            const double a = nx[e] * u[e] + ny[e] * v[e], b = nx[e] * u[k] + ny[e] * v[k];
+            lo[e] = fmin(a, b);
+            hi[e] = fmax(a, b);
+        }
+        const int x0 = (int)fmax(0, floor(ulo - r)), x1 = (int)fmin(W, ceil(uhi + r));
+        const int y0 = (int)fmax(0, floor(vlo - r)), y1 = (int)fmin(H, ceil(vhi + r));
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
-                uint8_t *b = p->bits + (size_t)y * W + x;
-                if (*b) continue;
                 const double px = x + 0.5, py = y + 0.5;
-                if (d != 0) {
-                    const double b1 = ((px - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (py - v[0])) / d;
-                    const double b2 = ((u[1] - u[0]) * (py - v[0]) - (px - u[0]) * (v[1] - v[0])) / d;
-                    if (b1 >= 0 && b2 >= 0 && b1 + b2 <= 1) { *b = 1; continue; }
+                if (ulo >= px + r || uhi <= px - r || vlo >= py + r || vhi <= py - r) continue;
+                bool apart = false;
+                for (int e = 0; e < 3 && !apart; ++e) {
+                    const double cproj = nx[e] * px + ny[e] * py, half = r * (fabs(nx[e]) + fabs(ny[e]));
+                    apart = half > 0 && (hi[e] <= cproj - half || lo[e] >= cproj + half);
                 }
-                for (int e = 0; e < 3 && !*b; ++e) {
-                    const int i = e, j = (e + 1) % 3;
-                    const double ex = u[j] - u[i], ey = v[j] - v[i], l2 = ex * ex + ey * ey;
-                    const double fr = l2 > 0 ? fmin(fmax(((px - u[i]) * ex + (py - v[i]) * ey) / l2, 0), 1) : 0;
-                    const double qx = u[i] + fr * ex - px, qy = v[i] + fr * ey - py;
-                    if (qx * qx + qy * qy <= r2) *b = 1;
-                }
+                if (!apart) p->bits[(size_t)y * W + x] = 1;
             }
     }
 }
@@ -1368,8 +1375,8 @@ static void occupy(packer *p, int w, int h, int x, int y)
 
 /* Packs the charts' footprints at scale s (texels per scene unit) into the map, largest first:
  * each, at each quarter turn, goes where its top lies lowest, down into any hole it fits (not
- * only onto the others' tops), keeping pad empty texels between its touched texels and any other
- * chart's. Corners in at, or false when some chart does not fit. */
+ * only onto the others' tops), its bilinear support apart from every other chart's (and pad more
+ * empty texels between them). Corners in at, or false when some chart does not fit. */
 static bool pack(packer *p, double s, bool tilt, placement *at, size_t *touched)
 {
     const atlas *a = p->a;
@@ -1390,7 +1397,7 @@ static bool pack(packer *p, double s, bool tilt, placement *at, size_t *touched)
             f = chart_tilt(c, k);
             chart_grid(&f, s, &W, &H);
             if (W > res || H > res) continue;   /* turned or not, it needs both within the map (and bits holds no more) */
-            footprint(p, c, &f, s, W, H);
+            footprint(p, c, &f, s, W, H, REACH + REACH_SLACK);
             for (int turn = 0; turn < 4; ++turn) {
                 int w, h;
                 if ((turn & 1 ? H : W) > res) continue;
@@ -1408,8 +1415,11 @@ static bool pack(packer *p, double s, bool tilt, placement *at, size_t *touched)
         if (best.turn < 0) return false;
         f = chart_tilt(c, best.tilt);
         chart_grid(&f, s, &W, &H);
-        footprint(p, c, &f, s, W, H);
-        for (size_t i = 0; touched && i < (size_t)W * H; ++i) *touched += p->bits[i];
+        if (touched) {
+            footprint(p, c, &f, s, W, H, 0.5);
+            for (size_t i = 0; i < (size_t)W * H; ++i) *touched += p->bits[i];
+        }
+        footprint(p, c, &f, s, W, H, REACH + REACH_SLACK);
         int w, h;
         turned(p, W, H, best.turn, &w, &h);
         occupy(p, w, h, best.x, best.y);
@@ -1418,9 +1428,9 @@ static bool pack(packer *p, double s, bool tilt, placement *at, size_t *touched)
     return true;
 }
 
-/* Can n charts fit at all? Each touches a texel at least, and texels of two charts lie more than
- * pad apart on both axes, so the (pad + 1)-wide squares at their corners are disjoint inside a
- * map pad wider: n (pad + 1)^2 <= (res + pad)^2. Thousands of charts then fail at once. */
+/* Can n charts fit at all? Each's support holds a texel at least, and texels of two charts' lie
+ * more than pad apart on both axes, so the (pad + 1)-wide squares at their corners are disjoint
+ * inside a map pad wider: n (pad + 1)^2 <= (res + pad)^2. */
 static bool count_fits(size_t n, int res, int pad)
 {
     return (double)n * (pad + 1) * (pad + 1) <= ((double)res + pad) * ((double)res + pad);
@@ -1562,7 +1572,7 @@ static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, c
 prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_desc *d, prt__atlas_report *report)
 {
     prt__atlas_report rep = {0};
-    const int pad = d->padding > 0 ? d->padding : 2;
+    const int pad = d->padding > 0 ? d->padding : 0;
     const double max_angle = d->max_angle > 0 ? d->max_angle : 60.0;
     if (d->resolution < 1) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "UV atlas resolution %d must be positive", d->resolution);
     if (!(max_angle < 90.0)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "UV atlas chart angle must be below 90 degrees");
@@ -1675,13 +1685,13 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
             st = pack_map(ctx, &a, order, need, pad, -1, &s0, NULL, NULL);
         }
         if (!st && s0 > 0)
-            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels: --texels %d would hold them",
-                           a.count, pad, res, res, need);
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts do not fit in %d x %d texels: --texels %d would hold them",
+                           a.count, res, res, need);
         else if (!st && need > res)
-            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels, nor in %d x %d",
-                           a.count, pad, res, res, need, need);
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts do not fit in %d x %d texels, nor in %d x %d",
+                           a.count, res, res, need, need);
         else if (!st)
-            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts with %d-texel gutters do not fit in %d x %d texels", a.count, pad, res, res);
+            st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%zu UV charts do not fit in %d x %d texels", a.count, res, res);
     }
     if (!st) {
         rep.resolution = res;
