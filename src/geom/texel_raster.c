@@ -26,14 +26,75 @@ static float nearest_on_triangle(const float u[3], const float v[3], float px, f
     return best;
 }
 
+/* A triangle's corners (position, then UV) sorted, so that one face either way round gives one key. */
+typedef struct face_key { float c[3][5]; uint32_t t; } face_key;
+static int corner_cmp(const float *a, const float *b)
+{
+    for (int k = 0; k < 5; ++k)
+        if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
+    return 0;
+}
+static int face_cmp(const void *x, const void *y)
+{
+    const face_key *p = x, *q = y;
+    for (int k = 0; k < 3; ++k) {
+        const int c = corner_cmp(p->c[k], q->c[k]);
+        if (c) return c;
+    }
+    return p->t < q->t ? -1 : p->t > q->t;
+}
+
+uint8_t *prt__texel_duplicates(const prt__mesh *m)
+{
+    const size_t nt = m->triangle_count;
+    face_key *key = malloc(nt * sizeof *key + 1);
+    uint8_t *skip = prt__calloc(nt + 1, 1);
+    if (!key || !skip) { free(key); free(skip); return NULL; }
+    for (size_t t = 0; t < nt; ++t) {
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t v = m->indices[t * 3 + k];
+            memcpy(key[t].c[k], m->positions + v * 3, 3 * sizeof(float));
+            memcpy(key[t].c[k] + 3, m->uv + v * 2, 2 * sizeof(float));
+        }
+        for (int i = 1; i < 3; ++i)   /* three corners: insertion sort */
+            for (int j = i; j > 0 && corner_cmp(key[t].c[j - 1], key[t].c[j]) > 0; --j) {
+                float tmp[5];
+                memcpy(tmp, key[t].c[j], sizeof tmp);
+                memcpy(key[t].c[j], key[t].c[j - 1], sizeof tmp);
+                memcpy(key[t].c[j - 1], tmp, sizeof tmp);
+            }
+        key[t].t = (uint32_t)t;
+    }
+    qsort(key, nt, sizeof *key, face_cmp);
+    for (size_t i = 0; i < nt;) {
+        size_t j = i + 1;
+        while (j < nt && !corner_cmp(key[j].c[0], key[i].c[0]) && !corner_cmp(key[j].c[1], key[i].c[1]) && !corner_cmp(key[j].c[2], key[i].c[2])) j++;
+        if (j - i > 1) {
+            size_t keep = i;   /* the first not mirrored in UV, else the first */
+            for (size_t k = i; k < j; ++k) {
+                const uint32_t *ix = m->indices + (size_t)key[k].t * 3;
+                const float *a = m->uv + ix[0] * 2, *b = m->uv + ix[1] * 2, *c = m->uv + ix[2] * 2;
+                if ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]) > 0) { keep = k; break; }
+            }
+            for (size_t k = i; k < j; ++k) skip[key[k].t] = k != keep;
+        }
+        i = j;
+    }
+    free(key);
+    return skip;
+}
+
 bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float *bary, size_t *overlap_out, size_t *outside_out)
 {
     /* Rasterize the UV layout: texel (x, y) has its centre at ((x + .5) / W, (y + .5) / H); the
      * first triangle to cover a texel owns it, later ones count as overlap. */
     size_t overlap = 0, outside = 0;
     const size_t ntex = (size_t)W * H;
+    uint8_t *dup = prt__texel_duplicates(m);
+    if (!dup) return false;
     for (size_t t = 0; t < m->triangle_count; ++t) {
         const uint32_t *ix = m->indices + t * 3;
+        if (dup[t]) continue;
         float u[3], v[3];
         for (int k = 0; k < 3; ++k) { u[k] = m->uv[ix[k] * 2] * W; v[k] = m->uv[ix[k] * 2 + 1] * H; }
         for (int k = 0; k < 3; ++k) outside += u[k] < -1e-3f * W || u[k] > W * 1.001f || v[k] < -1e-3f * H || v[k] > H * 1.001f;
@@ -66,13 +127,13 @@ bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float 
     {
         float *near = malloc(ntex * sizeof *near);
         uint8_t *owns = prt__calloc(m->triangle_count, 1);
-        if (!near || !owns) { free(near); free(owns); return false; }
+        if (!near || !owns) { free(near); free(owns); free(dup); return false; }
         for (size_t i = 0; i < ntex; ++i) {
             near[i] = INFINITY;
             if (owner[i]) owns[owner[i] - 1] = 1;
         }
         for (size_t t = 0; t < m->triangle_count; ++t) {
-            if (owns[t]) continue;
+            if (owns[t] || dup[t]) continue;
             const uint32_t *ix = m->indices + t * 3;
             float u[3], v[3];
             for (int k = 0; k < 3; ++k) { u[k] = m->uv[ix[k] * 2] * W; v[k] = m->uv[ix[k] * 2 + 1] * H; }
@@ -97,6 +158,7 @@ bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float 
         free(near);
         free(owns);
     }
+    free(dup);
     *overlap_out = overlap;
     *outside_out = outside;
     return true;
@@ -126,8 +188,10 @@ bool prt__texel_areas(const prt__mesh *m, int W, int H, float *area)
 {
     const size_t ntex = (size_t)W * H;
     double *acc = prt__calloc(ntex, sizeof *acc);
-    if (!acc) return false;
+    uint8_t *dup = acc ? prt__texel_duplicates(m) : NULL;
+    if (!acc || !dup) { free(acc); return false; }
     for (size_t t = 0; t < m->triangle_count; ++t) {
+        if (dup[t]) continue;
         const uint32_t *ix = m->indices + t * 3;
         float u[3], v[3], e1[3], e2[3], cr[3];
         for (int k = 0; k < 3; ++k) { u[k] = m->uv[ix[k] * 2] * W; v[k] = m->uv[ix[k] * 2 + 1] * H; }
@@ -156,6 +220,7 @@ bool prt__texel_areas(const prt__mesh *m, int W, int H, float *area)
     }
     for (size_t i = 0; i < ntex; ++i) area[i] = (float)acc[i];
     free(acc);
+    free(dup);
     return true;
 }
 

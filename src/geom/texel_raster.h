@@ -4,16 +4,24 @@
 
 #include "geom/mesh.h"
 
+/* Duplicate faces: triangles with the same three corners, in space and in UV, as another, either
+ * way round (a back-to-back twin on its face's texels, uv_atlas.h). 1 for all of each such set but
+ * one, the first not mirrored in UV (else the first): the one whose surface the texels hold. The
+ * raster and the texel areas leave the others out. NULL when out of memory; free() it. */
+uint8_t *prt__texel_duplicates(const prt__mesh *m);
+
 /* Rasterizes the mesh's UVs (every vertex has them) into a W x H grid: texel (x, y) has its
  * centre at ((x + .5) / W, (y + .5) / H) and belongs to the first triangle covering it (owner:
  * triangle + 1, 0 = none; bary: 2 barycentrics per texel); triangles no centre falls in take the
  * texels they touch. Counts centres claimed twice inside triangles (overlap) and vertex uses
- * outside [0, 1] (outside). False when out of memory. */
+ * outside [0, 1] (outside). Duplicate faces (prt__texel_duplicates) take no texels. False when out
+ * of memory. */
 bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float *bary, size_t *overlap, size_t *outside);
 
 /* The world-space surface area inside each texel of the W x H grid (each triangle clipped to
  * each texel square in UV space, scaled by its world-to-UV area ratio): the patch areas TA(t)
- * of texture-space transfer (Sunshine-Hill & Faloutsos 2006); their sum is the mesh's area when the layout covers it once. */
+ * of texture-space transfer (Sunshine-Hill & Faloutsos 2006); their sum is the mesh's area when the layout covers it once
+ * (duplicate faces, prt__texel_duplicates, left out). */
 bool prt__texel_areas(const prt__mesh *m, int W, int H, float *area);
 
 /* Each texel's UV chart (prt__uv_islands) when a bilinear read on the chart can weigh it (its

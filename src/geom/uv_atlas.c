@@ -4,8 +4,9 @@
  * projection onto its mean plane, and checked: a map that folds a triangle, stretches one beyond
  * MAX_STRETCH or overlaps itself falls back to the projection; where neither is valid the faulty
  * triangles and those around their corners are cut out and charted apart (a chart with too many
- * faults is cut in two). Small charts then merge into neighbours while the union stays valid, and
- * flat charts in one plane that touch (pieces meeting at T junctions) join, projected.
+ * faults is cut in two). Small charts then merge into neighbours while the union stays valid,
+ * flat charts in one plane that touch (pieces meeting at T junctions) join, projected, and charts
+ * of duplicate faces (back-to-back twins) lie on their faces' texels or, twins both alone, pair up.
  * Charts are scaled to one texel density, turned to their smallest
  * bounding box and packed by their bilinear supports, kept apart (four quarter turns each, into any hole they
  * fit; large charts also at angles between, when that packs a scale the upright charts do not);
@@ -49,6 +50,7 @@ typedef struct atlas {
     double *smooth;      /* [tri][3] mean of its vertex normals: what charts grow by */
     double *area;        /* [tri] */
     uint8_t *twin;       /* [tri] 1 where a back-to-back duplicate face shares its corners */
+    uint32_t *share;     /* [tri] the triangle on whose texels a duplicate face lies (share_duplicates), else itself */
     uint32_t *fan;       /* [tri * 3 + corner] the least corner of its fan: corners at one position
                           * joined through the triangles around it that meet across edges */
     int32_t *vlocal;     /* [corner] the chart vertex of a fan in the chart being worked on, else -1 */
@@ -56,7 +58,7 @@ typedef struct atlas {
     uint32_t pass;
     chart *charts;
     size_t count, cap;
-    size_t flattened, grown, unchecked;
+    size_t flattened, grown, unchecked, shared, glued;
     double total;
 } atlas;
 
@@ -1167,6 +1169,159 @@ static prt_status join_flat_pieces(const prt_context *ctx, atlas *a, double diag
     return st;
 }
 
+/* ---- duplicate faces ---- */
+
+typedef struct tri_key { uint32_t c[3], t; } tri_key;
+static int by_corners(const void *x, const void *y)
+{
+    const tri_key *p = x, *q = y;
+    for (int k = 0; k < 3; ++k)
+        if (p->c[k] != q->c[k]) return p->c[k] < q->c[k] ? -1 : 1;
+    return p->t < q->t ? -1 : p->t > q->t;
+}
+
+/* Do triangles t and u (the same three corners) run the same way round? */
+static bool same_winding(const atlas *a, uint32_t t, uint32_t u)
+{
+    const uint32_t *x = a->m->indices + (size_t)t * 3, *y = a->m->indices + (size_t)u * 3;
+    for (int k = 0; k < 3; ++k)
+        if (a->weld[y[k]] == a->weld[x[0]]) return a->weld[y[(k + 1) % 3]] == a->weld[x[1]];
+    return false;
+}
+
+/* Glues chart D, one triangle, the back-to-back twin of C's one, onto C across C's longest edge:
+ * D's third corner is C's mirrored over that edge (D runs the other way round, so it keeps its
+ * orientation). 1 with C the pair, 0 when the pair is not valid, -1 out of memory. */
+static int glue_twins(atlas *a, chart *C, const chart *D)
+{
+    const prt__mesh *m = a->m;
+    const uint32_t t = C->tris[0], u = D->tris[0], *x = m->indices + (size_t)t * 3, *y = m->indices + (size_t)u * 3;
+    int e = 0;
+    double best = -1;
+    for (int k = 0; k < 3; ++k) {
+        const float *p = m->positions + x[k] * 3, *q = m->positions + x[(k + 1) % 3] * 3;
+        const double l = ((double)p[0] - q[0]) * ((double)p[0] - q[0]) + ((double)p[1] - q[1]) * ((double)p[1] - q[1]) + ((double)p[2] - q[2]) * ((double)p[2] - q[2]);
+        if (l > best) { best = l; e = k; }
+    }
+    chart M = {0};
+    M.nt = 2;
+    M.nv = 4;
+    M.tris = malloc(2 * sizeof *M.tris);
+    M.verts = malloc(4 * sizeof *M.verts);
+    M.uv = malloc(8 * sizeof *M.uv);
+    M.corner = malloc(6 * sizeof *M.corner);
+    if (!M.tris || !M.verts || !M.uv || !M.corner) { free(M.tris); free(M.verts); free(M.uv); free(M.corner); return -1; }
+    M.tris[0] = t;
+    M.tris[1] = u;
+    /* C's corners in order as chart vertices 0..2; D's apex (opposite the edge) is vertex 3. */
+    for (int k = 0; k < 3; ++k) {
+        M.verts[k] = C->verts[C->corner[k]];
+        M.corner[k] = (uint32_t)k;
+        memcpy(M.uv + k * 2, C->uv + (size_t)C->corner[k] * 2, 2 * sizeof *M.uv);
+    }
+    const int ea = e, eb = (e + 1) % 3, apex = (e + 2) % 3;
+    for (int k = 0; k < 3; ++k) {
+        const uint32_t w = a->weld[y[k]];
+        M.corner[3 + k] = w == a->weld[x[ea]] ? (uint32_t)ea : w == a->weld[x[eb]] ? (uint32_t)eb : 3;
+        if (M.corner[3 + k] == 3) M.verts[3] = y[k];
+    }
+    const double *A = M.uv + ea * 2, *B = M.uv + eb * 2, *P = M.uv + apex * 2;
+    const double dx = B[0] - A[0], dy = B[1] - A[1], l2 = dx * dx + dy * dy;
+    const double f = l2 > 0 ? ((P[0] - A[0]) * dx + (P[1] - A[1]) * dy) / l2 : 0;
+    M.uv[6] = 2 * (A[0] + f * dx) - P[0];
+    M.uv[7] = 2 * (A[1] + f * dy) - P[1];
+    const int valid = chart_valid(a, &M, NULL);
+    if (valid > 0) {
+        M.valid = true;
+        free(C->tris); free(C->verts); free(C->uv); free(C->corner);
+        *C = M;
+        return 1;
+    }
+    free(M.tris); free(M.verts); free(M.uv); free(M.corner);
+    return valid;
+}
+
+/* Charts made only of duplicate faces (the same three corners as a triangle of a chart kept, either
+ * way round) are not packed: each of their triangles lies on its duplicate's texels, sharing its
+ * UVs. Scans are full of them: the dragon's decimation leaves a thousand back-to-back twins, the
+ * inward one of each a chart of one triangle on its own (inside the closed surface, facing into
+ * it: nothing there to light or see). Coplanar with its twin and drawn without culling, it then
+ * shows its twin's light rather than fighting it for the pixels; the per-texel bakes take such
+ * texels from the face that is not mirrored in UV (texel_raster.c). Larger charts are kept first. */
+static prt_status share_duplicates(const prt_context *ctx, atlas *a)
+{
+    const size_t nt = a->nt, count = a->count;
+    tri_key *key = malloc(nt * sizeof *key);
+    uint32_t *chart_of = malloc(nt * sizeof *chart_of), *first = malloc(nt * sizeof *first);
+    merge_key *order = malloc(count * sizeof *order + 1);
+    uint8_t *kept = calloc(count + 1, 1), *dropped = calloc(count + 1, 1);
+    prt_status st = key && chart_of && first && order && kept && dropped ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    for (size_t t = 0; !st && t < nt; ++t) {
+        uint32_t c[3] = {a->weld[a->m->indices[t * 3]], a->weld[a->m->indices[t * 3 + 1]], a->weld[a->m->indices[t * 3 + 2]]}, x;
+        if (c[0] > c[1]) { x = c[0]; c[0] = c[1]; c[1] = x; }
+        if (c[1] > c[2]) { x = c[1]; c[1] = c[2]; c[2] = x; }
+        if (c[0] > c[1]) { x = c[0]; c[0] = c[1]; c[1] = x; }
+        key[t] = (tri_key){{c[0], c[1], c[2]}, (uint32_t)t};
+        a->share[t] = (uint32_t)t;
+    }
+    if (!st) qsort(key, nt, sizeof *key, by_corners);
+    /* first[t]: where t's run of equal corners starts in key. */
+    for (size_t i = 0; !st && i < nt; ++i)
+        first[key[i].t] = i && !memcmp(key[i].c, key[i - 1].c, sizeof key[i].c) ? first[key[i - 1].t] : (uint32_t)i;
+    for (size_t ci = 0; !st && ci < count; ++ci) {
+        for (size_t t = 0; t < a->charts[ci].nt; ++t) chart_of[a->charts[ci].tris[t]] = (uint32_t)ci;
+        order[ci] = (merge_key){-(double)a->charts[ci].nt, (uint32_t)ci};
+    }
+    if (!st) qsort(order, count, sizeof *order, by_area);
+    for (size_t k = 0; !st && k < count; ++k) {
+        const uint32_t ci = order[k].i;
+        const chart *c = &a->charts[ci];
+        bool all = true;
+        for (size_t t = 0; t < c->nt && all; ++t) {
+            const uint32_t tri = c->tris[t];
+            bool found = false;
+            for (size_t i = first[tri]; i < nt && !memcmp(key[i].c, key[first[tri]].c, sizeof key[i].c) && !found; ++i)
+                found = key[i].t != tri && kept[chart_of[key[i].t]] && !(c->nt == 1 && a->charts[chart_of[key[i].t]].nt == 1 && !same_winding(a, tri, key[i].t));
+            all = found;
+        }
+        if (!all || c->nt == 0) { kept[ci] = 1; continue; }
+        dropped[ci] = 1;
+        for (size_t t = 0; t < c->nt; ++t) {
+            const uint32_t tri = c->tris[t];
+            for (size_t i = first[tri]; i < nt; ++i)
+                if (key[i].t != tri && kept[chart_of[key[i].t]]) { a->share[tri] = key[i].t; break; }
+        }
+    }
+    /* Twins both on their own: a fin of no thickness, or a sheet's two sides, each side seen. They
+     * keep their own texels, glued along their longest edge - where the two sides meet - into one
+     * chart of two: half the reach (the texels around charts) of two charts of one. */
+    for (size_t ci = 0; !st && ci < count; ++ci) {
+        chart *c = &a->charts[ci];
+        if (dropped[ci] || c->nt != 1) continue;
+        const uint32_t tri = c->tris[0];
+        for (size_t i = first[tri]; i < nt && !memcmp(key[i].c, key[first[tri]].c, sizeof key[i].c); ++i) {
+            const uint32_t u = key[i].t, di = chart_of[u];
+            if (u == tri || di == ci || dropped[di] || a->charts[di].nt != 1 || same_winding(a, tri, u)) continue;
+            const int r = glue_twins(a, c, &a->charts[di]);
+            if (r < 0) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+            else if (r > 0) { dropped[di] = 2; a->glued++; }
+            break;
+        }
+    }
+    if (!st) {
+        size_t live = 0;
+        for (size_t ci = 0; ci < count; ++ci) {
+            chart *c = &a->charts[ci];
+            if (dropped[ci] == 2) { free(c->tris); free(c->verts); free(c->uv); free(c->corner); }
+            else if (dropped[ci]) { a->shared += c->nt; free(c->tris); free(c->verts); free(c->uv); free(c->corner); }
+            else a->charts[live++] = *c;
+        }
+        a->count = live;
+    }
+    free(key); free(chart_of); free(first); free(order); free(kept); free(dropped);
+    return st;
+}
+
 /* ---- packing ---- */
 
 /* Turns a chart to the smallest-area bounding box of PACK_ANGLES tried, lying wide, corner at 0. */
@@ -1522,6 +1677,14 @@ static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, c
         }
     }
     free(own_c); free(own_v); free(dup); free(dup_c); free(dup_v);
+    /* A duplicate face takes the vertices of its duplicate's corners at its own (share_duplicates). */
+    for (size_t t = 0; ok && t < nt; ++t) {
+        const uint32_t d = a->share[t];
+        if (d == t) continue;
+        for (int k = 0; k < 3; ++k)
+            for (int j = 0; j < 3; ++j)
+                if (a->weld[m->indices[t * 3 + k]] == a->weld[m->indices[(size_t)d * 3 + j]]) { ids[t * 3 + k] = ids[(size_t)d * 3 + j]; break; }
+    }
     const size_t nv2 = nv + extra;
 #define GROW(p, n) do { if (ok) { void *q_ = realloc((p), (n)); if (q_) (p) = q_; else ok = false; } } while (0)
     GROW(m->positions, nv2 * 3 * sizeof(float));
@@ -1562,6 +1725,8 @@ static prt_status write_layout(const prt_context *ctx, atlas *a, prt__mesh *m, c
             m->uv[(size_t)id * 2 + 1] = (float)((at[ci].y + ty) / res);
         }
     }
+    for (size_t t = 0; t < nt; ++t)
+        if (a->share[t] != t) memcpy(m->indices + t * 3, ids + t * 3, 3 * sizeof *ids);
     m->vertex_count = nv2;
     *added = extra;
     free(ids);
@@ -1589,10 +1754,11 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
     a.smooth = malloc(a.nt * 3 * sizeof *a.smooth);
     a.stamp = calloc(a.nt, sizeof *a.stamp);
     a.twin = calloc(a.nt, 1);
+    a.share = malloc(a.nt * sizeof *a.share);
     a.fan = malloc(a.nt * 3 * sizeof *a.fan);
     prt_status st = PRT_OK;
     double total = 0;
-    if (!a.weld || !a.rep || !a.across || !a.normal || !a.smooth || !a.area || !a.stamp || !a.twin || !a.fan) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    if (!a.weld || !a.rep || !a.across || !a.normal || !a.smooth || !a.area || !a.stamp || !a.twin || !a.share || !a.fan) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
     for (size_t t = 0; t < a.nt && !st; ++t) {
         const uint32_t *ix = m->indices + t * 3;
         const float *p0 = m->positions + ix[0] * 3, *p1 = m->positions + ix[1] * 3, *p2 = m->positions + ix[2] * 3;
@@ -1630,6 +1796,7 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
     a.total = total;
     if (!st) st = merge_charts(ctx, &a);
     if (!st) st = join_flat_pieces(ctx, &a, diagonal_of(m));
+    if (!st) st = share_duplicates(ctx, &a);
     placement *at = NULL;
     uint32_t *order = NULL;
     double s = 0;
@@ -1699,6 +1866,8 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
     }
     if (!st) {
         rep.charts = a.count;
+        rep.shared = a.shared;
+        rep.glued = a.glued;
         rep.flattened = a.flattened;
         rep.grown = a.grown;
         if (a.unchecked)
@@ -1720,7 +1889,7 @@ prt_status prt__uv_atlas(const prt_context *ctx, prt__mesh *m, const prt__atlas_
     }
     for (size_t i = 0; i < a.count; ++i) { free(a.charts[i].tris); free(a.charts[i].verts); free(a.charts[i].uv); free(a.charts[i].corner); }
     free(a.charts);
-    free(a.weld); free(a.rep); free(a.across); free(a.normal); free(a.smooth); free(a.area); free(a.stamp); free(a.twin); free(a.vlocal); free(a.fan);
+    free(a.weld); free(a.rep); free(a.across); free(a.normal); free(a.smooth); free(a.area); free(a.stamp); free(a.twin); free(a.share); free(a.vlocal); free(a.fan);
     free(order);
     free(at);
     return st;
@@ -1737,11 +1906,12 @@ bool prt__uv_layout_unusable(const prt__mesh *m, int resolution, char *why, size
         outside += !(m->uv[v * 2] >= -1e-3f && m->uv[v * 2] <= 1.001f && m->uv[v * 2 + 1] >= -1e-3f && m->uv[v * 2 + 1] <= 1.001f);
     if (outside) { snprintf(why, why_size, "%zu of its texture coordinates lie outside [0, 1]", outside); return true; }
     const int W = resolution, H = resolution;
-    uint8_t *hit = calloc((size_t)W * H, 1);
-    if (!hit) { snprintf(why, why_size, "its UV layout could not be checked (out of memory)"); return true; }
+    uint8_t *hit = calloc((size_t)W * H, 1), *dup = hit ? prt__texel_duplicates(m) : NULL;
+    if (!dup) { free(hit); snprintf(why, why_size, "its UV layout could not be checked (out of memory)"); return true; }
     size_t overlap = 0, covered = 0;
     for (size_t t = 0; t < m->triangle_count; ++t) {
         const uint32_t *ix = m->indices + t * 3;
+        if (dup[t]) continue;   /* a duplicate face on its face's texels: one surface */
         float u[3], v[3];
         for (int k = 0; k < 3; ++k) { u[k] = m->uv[ix[k] * 2] * W; v[k] = m->uv[ix[k] * 2 + 1] * H; }
         float area = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
@@ -1764,6 +1934,7 @@ bool prt__uv_layout_unusable(const prt__mesh *m, int resolution, char *why, size
             }
     }
     free(hit);
+    free(dup);
     if (!covered) { snprintf(why, why_size, "its texture coordinates cover no texel centre of a %dx%d map", W, H); return true; }
     if (overlap * 100 > covered) {
         snprintf(why, why_size, "its UV layout overlaps itself on %.1f%% of the texels it covers", 100.0 * overlap / covered);

@@ -21,6 +21,8 @@ typedef struct prt__atlas_report {
     size_t grown;            /* charts grown by normal deviation */
     size_t charts;           /* after cutting charts that would fold or overlap, and merging small ones */
     size_t added_vertices;   /* copies made where a vertex lies on a seam between charts */
+    size_t shared;           /* duplicate faces laid on their duplicate's texels (back-to-back twins) */
+    size_t glued;            /* twins both on their own (a fin's two sides) glued into one chart */
     size_t flattened;        /* charts flattened by LSCM before merging (the rest by projection onto their plane) */
     double coverage;         /* share of the map's texels that hold some of the surface */
     double texel_density;    /* texels per unit of surface area, the same in every chart */
