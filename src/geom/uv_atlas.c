@@ -27,6 +27,7 @@
                              * dragon kept hundreds of charts of a few texels, each with its reach around it
                              * (res4 at 128: 54 -> 60%); at 4e-3 the bunny's larger charts pack worse */
 #define PACK_STEPS 16      /* bisections of the scale from 0: to 2e-5 of the largest (8 from 40%: 2e-3) */
+#define PACK_PROBES 8      /* scales 1%, 2%, .. above the bisection's also tried */
 #define MIN_COVER 0.25     /* a map whose charts touch fewer of its texels is mostly gutter: a larger one is tried */
 #define ATLAS_MAX_RES 4096 /* the largest map an error suggests */
 
@@ -1376,8 +1377,9 @@ static int by_size(const void *x, const void *y)
 #define REACH 1.0
 #define REACH_SLACK 1e-3
 /* Charts whose grid has at least this many texels are also tried at PACK_TILTS angles between
- * quarter turns: large ragged charts nest into each other's bays. Small ones fill holes as they are. */
-#define PACK_TILTS 4
+ * quarter turns (11.25 degrees apart): large ragged charts nest into each other's bays (the low
+ * resolution bunny at 128: 55 -> 59% from 4 angles to 8). Small ones fill holes as they are. */
+#define PACK_TILTS 8
 #define TILT_TEXELS 256
 #define TILT_CHARTS 256 /* atlases of more charts pack upright only: a second packing per scale would cost most of their time */
 
@@ -1632,6 +1634,11 @@ static prt_status pack_map(const prt_context *ctx, const atlas *a, const uint32_
             if (PACKS(mid)) { lo = mid; lo_tilt = tilt; }
             else hi = mid;
         }
+        /* Not monotone: a few scales just above the bisection's may pack too (the bunny at 128:
+         * 70.6 -> 71.7%). */
+        const double found = lo;
+        for (int k = 1; k <= PACK_PROBES && found > 0 && !st; ++k)
+            if (PACKS(found * (1 + 0.01 * k))) { lo = found * (1 + 0.01 * k); lo_tilt = tilt; }
 #undef PACKS
         if (!st && lo > 0) {
             *scale = lo;
