@@ -1373,9 +1373,13 @@ static int by_size(const void *x, const void *y)
  * (texel_raster.c's slivers reach less far). Packing keeps footprints disjoint, so each such
  * texel can hold its own chart's light and no read on a chart takes another's (the gutter
  * sources are chosen by chart, texel_raster.c). REACH_SLACK covers float UVs written after.
- * The grid a chart is rasterised into has its box's corner REACH above and right of the grid's. */
+ * The grid a chart is rasterised into has its box's corner ORIGIN above and right of the grid's:
+ * a chart w texels wide then reaches floor(w + 2) columns, where with its corner on a texel's edge
+ * it would reach round(w + 2) (a chart of a texel or less, as scans' loose triangles are: 2 x 2
+ * texels rather than 3 x 3). */
 #define REACH 1.0
 #define REACH_SLACK 1e-3
+#define ORIGIN (0.5 + 2 * REACH_SLACK)
 /* Charts whose grid has at least this many texels are also tried at PACK_TILTS angles between
  * quarter turns (11.25 degrees apart): large ragged charts nest into each other's bays (the low
  * resolution bunny at 128: 55 -> 59% from 4 angles to 8). Small ones fill holes as they are. */
@@ -1423,15 +1427,15 @@ static tilt_frame chart_tilt(const chart *c, int tilt)
  * layout writes, one expression for both. */
 static void grid_point(const tilt_frame *f, const double *q, double s, double out[2])
 {
-    out[0] = (f->cs * q[0] - f->sn * q[1] - f->lo[0]) * s + REACH;
-    out[1] = (f->sn * q[0] + f->cs * q[1] - f->lo[1]) * s + REACH;
+    out[0] = (f->cs * q[0] - f->sn * q[1] - f->lo[0]) * s + ORIGIN;
+    out[1] = (f->sn * q[0] + f->cs * q[1] - f->lo[1]) * s + ORIGIN;
 }
 
 /* The chart's grid at scale s, tilted by f (turn 0): a w x h box holding every texel it touches. */
 static void chart_grid(const tilt_frame *f, double s, int *w, int *h)
 {
-    *w = (int)ceil(f->w * s + 2 * REACH);
-    *h = (int)ceil(f->h * s + 2 * REACH);
+    *w = (int)ceil(f->w * s + ORIGIN + REACH + REACH_SLACK);
+    *h = (int)ceil(f->h * s + ORIGIN + REACH + REACH_SLACK);
 }
 
 /* Marks the texels of the chart's grid whose open square of half-side r about the centre the chart
