@@ -1373,10 +1373,11 @@ static int by_size(const void *x, const void *y)
  * (texel_raster.c's slivers reach less far). Packing keeps footprints disjoint, so each such
  * texel can hold its own chart's light and no read on a chart takes another's (the gutter
  * sources are chosen by chart, texel_raster.c). REACH_SLACK covers float UVs written after.
- * The grid a chart is rasterised into has its box's corner ORIGIN above and right of the grid's:
- * a chart w texels wide then reaches floor(w + 2) columns, where with its corner on a texel's edge
- * it would reach round(w + 2) (a chart of a texel or less, as scans' loose triangles are: 2 x 2
- * texels rather than 3 x 3). */
+ * The grid a chart is rasterised into has its box's corner on a texel's edge, one texel above
+ * and right of the grid's (a rectangle's texels then hold all of it), except along an axis where
+ * the chart is w texels wide with w's fraction half or more: there its corner lies on a texel's
+ * centre (ORIGIN), and it reaches floor(w + 2) columns rather than round(w + 2) (a chart of 0.5
+ * to 1 texel, as scans' loose triangles are: 2 texels rather than 3). */
 #define REACH 1.0
 #define REACH_SLACK 1e-3
 #define ORIGIN (0.5 + 2 * REACH_SLACK)
@@ -1425,17 +1426,24 @@ static tilt_frame chart_tilt(const chart *c, int tilt)
 
 /* Where chart UV q lies in its grid at scale s, tilted by f: what packing rasterises and what the
  * layout writes, one expression for both. */
-static void grid_point(const tilt_frame *f, const double *q, double s, double out[2])
+/* Where the box's corner lies in the grid along an axis where the chart is `extent` texels wide. */
+static double grid_origin(double extent)
 {
-    out[0] = (f->cs * q[0] - f->sn * q[1] - f->lo[0]) * s + ORIGIN;
-    out[1] = (f->sn * q[0] + f->cs * q[1] - f->lo[1]) * s + ORIGIN;
+    const double frac = extent - floor(extent);
+    return frac >= 0.5 && frac < 1 - 3 * REACH_SLACK ? ORIGIN : REACH;
 }
 
-/* The chart's grid at scale s, tilted by f (turn 0): a w x h box holding every texel it touches. */
+static void grid_point(const tilt_frame *f, const double *q, double s, double out[2])
+{
+    out[0] = (f->cs * q[0] - f->sn * q[1] - f->lo[0]) * s + grid_origin(f->w * s);
+    out[1] = (f->sn * q[0] + f->cs * q[1] - f->lo[1]) * s + grid_origin(f->h * s);
+}
+
+/* The chart's grid at scale s, tilted by f (turn 0): a w x h box holding every texel it reaches. */
 static void chart_grid(const tilt_frame *f, double s, int *w, int *h)
 {
-    *w = (int)ceil(f->w * s + ORIGIN + REACH + REACH_SLACK);
-    *h = (int)ceil(f->h * s + ORIGIN + REACH + REACH_SLACK);
+    *w = (int)ceil(f->w * s + grid_origin(f->w * s) + REACH + REACH_SLACK);
+    *h = (int)ceil(f->h * s + grid_origin(f->h * s) + REACH + REACH_SLACK);
 }
 
 /* Marks the texels of the chart's grid whose open square of half-side r about the centre the chart
