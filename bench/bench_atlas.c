@@ -83,9 +83,9 @@ int main(int argc, char **argv)
             size_t overlap = 0, outside = 0, centres = 0, touched = 0;
             if (!owner || !bary || !area || !prt__texel_raster(m, res, res, owner, bary, &overlap, &outside) || !prt__texel_areas(m, res, res, area)) return 1;
             for (size_t i = 0; i < n; ++i) { centres += owner[i] && area[i] > 0; touched += area[i] > 0; }
-            printf("{\"mesh\": \"%s\", \"texels\": %d, \"charts\": %zu, \"seconds\": %.3f, \"touched\": %.4f, \"centres\": %.4f, "
+            printf("{\"mesh\": \"%s\", \"texels\": %d, \"charts\": %zu, \"shared\": %zu, \"glued\": %zu, \"seconds\": %.3f, \"touched\": %.4f, \"centres\": %.4f, "
                    "\"worst_stretch\": %.3f, \"overlap\": %zu}\n",
-                   used, res, r.charts, dt, (double)touched / n, (double)centres / n, r.worst_stretch, overlap);
+                   used, res, r.charts, r.shared, r.glued, dt, (double)touched / n, (double)centres / n, r.worst_stretch, overlap);
             fflush(stdout);
             if (ppm) {
                 const char *base = strrchr(used, '/');

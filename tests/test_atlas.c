@@ -3,6 +3,7 @@
  * transfer over it matches the closed form on a convex object with every gutter texel filled. */
 #include "common.h"
 
+#include "geom/texel_raster.h"
 #include "geom/uv_atlas.h"
 
 /* A sphere with radial noise, like a scan: normals swing from triangle to triangle. */
@@ -61,22 +62,35 @@ static size_t *chart_of_triangles(const prt__mesh *m)
     return parent;
 }
 
-/* Squared distance from (px, py) to the triangle (u, v); 0 inside. */
-static float distance2(const float u[3], const float v[3], float px, float py)
+/* Does a bilinear read somewhere on triangle (u, v) (texel units) weigh the texel centred at
+ * (px, py)? A point of the triangle within one texel of it on both axes (the triangle clipped to
+ * that square keeps some area; a hair under one texel for the UVs' float rounding). */
+static bool reaches(const float u[3], const float v[3], float px, float py)
 {
-    float d = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
-    float b1 = ((px - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (py - v[0])) / d;
-    float b2 = ((u[1] - u[0]) * (py - v[0]) - (px - u[0]) * (v[1] - v[0])) / d;
-    if (b1 >= 0 && b2 >= 0 && b1 + b2 <= 1) return 0;
-    float best = INFINITY;
-    for (int e = 0; e < 3; ++e) {
-        int a = e, b = (e + 1) % 3;
-        float ex = u[b] - u[a], ey = v[b] - v[a], l2 = ex * ex + ey * ey;
-        float t = l2 > 0 ? fminf(fmaxf(((px - u[a]) * ex + (py - v[a]) * ey) / l2, 0), 1) : 0;
-        float qx = u[a] + t * ex - px, qy = v[a] + t * ey - py;
-        best = fminf(best, qx * qx + qy * qy);
+    const float r = 1.0f - 1e-4f;
+    float poly[12][2];
+    int n = 3;
+    for (int k = 0; k < 3; ++k) { poly[k][0] = u[k]; poly[k][1] = v[k]; }
+    for (int side = 0; side < 4 && n; ++side) {
+        const int axis = side / 2;
+        const float sign = side % 2 ? 1.0f : -1.0f, at = (axis ? py : px) + sign * r;   /* keep sign (p - at) < 0 */
+        float out[12][2];
+        int m = 0;
+        for (int i = 0; i < n && m < 11; ++i) {
+            const float *p = poly[i], *q = poly[(i + 1) % n];
+            const float dp = sign * (p[axis] - at), dq = sign * (q[axis] - at);
+            if (dp < 0) { out[m][0] = p[0]; out[m][1] = p[1]; m++; }
+            if ((dp < 0 && dq > 0) || (dp > 0 && dq < 0)) {
+                const float f = dp / (dp - dq);
+                out[m][0] = p[0] + f * (q[0] - p[0]);
+                out[m][1] = p[1] + f * (q[1] - p[1]);
+                m++;
+            }
+        }
+        memcpy(poly, out, sizeof out);
+        n = m;
     }
-    return best;
+    return n > 0;
 }
 
 /* Lays out m at res and checks everything an atlas promises; coverage at least min_coverage.
@@ -98,18 +112,22 @@ static size_t check_atlas(prt__mesh *m, int res, const char *what, double min_co
         for (int k = 0; k < 3; ++k) assert_memory_equal(tri_pos + t * 9 + k * 3, m->positions + m->indices[t * 3 + k] * 3, 3 * sizeof(float));
     free(tri_pos);
     for (size_t v = 0; v < m->vertex_count * 2; ++v) assert_true(m->uv[v] >= 0.0f && m->uv[v] <= 1.0f);
-    /* Bounded stretch, and no triangle turned over. */
+    /* Bounded stretch, and no triangle turned over but duplicate faces lying on their face's
+     * texels (a back-to-back twin runs the other way round); those are the atlas's shared ones. */
+    uint8_t *dup = prt__texel_duplicates(m);
+    size_t dups = 0;
     double worst = 0, mean = 0;
     for (size_t t = 0; t < nt; ++t) {
         double s = prt__uv_stretch(m, t);
         worst = fmax(worst, s);
         mean += s / nt;
+        dups += dup[t];
         const float *a = m->uv + m->indices[t * 3] * 2, *b = m->uv + m->indices[t * 3 + 1] * 2, *c = m->uv + m->indices[t * 3 + 2] * 2;
-        assert_true((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]) > 0);
+        if (!dup[t]) assert_true((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]) > 0);
     }
-    /* Charts at least 2 texels apart: texels a chart's triangles touch (within half a texel's
-     * diagonal of a centre) are never within one texel of another chart's, so bilinear taps at
-     * one chart's border never read another chart. */
+    assert_int_equal(dups, r.shared);
+    /* Charts' bilinear reaches apart: no texel centre lies within one texel (on both axes) of two
+     * charts, so a bilinear read on one chart never weighs a texel another chart's light is in. */
     size_t *chart = chart_of_triangles(m);
     size_t *owner = malloc((size_t)res * res * sizeof *owner);
     for (size_t i = 0; i < (size_t)res * res; ++i) owner[i] = SIZE_MAX;
@@ -128,16 +146,12 @@ static size_t check_atlas(prt__mesh *m, int res, const char *what, double min_co
         int y0 = (int)floorf(fminf(v[0], fminf(v[1], v[2]))) - 1, y1 = (int)ceilf(fmaxf(v[0], fmaxf(v[1], v[2]))) + 1;
         for (int y = y0 < 0 ? 0 : y0; y < y1 && y < res; ++y)
             for (int x = x0 < 0 ? 0 : x0; x < x1 && x < res; ++x) {
-                if (distance2(u, v, x + 0.5f, y + 0.5f) > 0.5f) continue;
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        int xx = x + dx, yy = y + dy;
-                        if (xx < 0 || yy < 0 || xx >= res || yy >= res) continue;
-                        size_t *o = owner + (size_t)yy * res + xx;
-                        if (*o == SIZE_MAX) *o = chart[t];
-                        else if (*o != chart[t]) clashes++;
-                    }
+                if (!reaches(u, v, x + 0.5f, y + 0.5f)) continue;
+                size_t *o = owner + (size_t)y * res + x;
+                if (*o == SIZE_MAX) *o = chart[t];
+                else if (*o != chart[t]) clashes++;
             }
+        if (dup[t]) continue;
         /* Overlap at 4x the resolution: a sample strictly inside two triangles. */
         float d = (uf[1] - uf[0]) * (vf[2] - vf[0]) - (uf[2] - uf[0]) * (vf[1] - vf[0]);
         int fx0 = (int)floorf(fminf(uf[0], fminf(uf[1], uf[2]))), fx1 = (int)ceilf(fmaxf(uf[0], fmaxf(uf[1], uf[2])));
@@ -163,6 +177,7 @@ static size_t check_atlas(prt__mesh *m, int res, const char *what, double min_co
      * rounding of the UVs (1e-3 of a chart of a few texels). */
     double *uv_area = calloc(nt, sizeof *uv_area), *world = calloc(nt, sizeof *world);
     for (size_t t = 0; t < nt; ++t) {
+        if (dup[t]) continue;   /* on its face's texels */
         const uint32_t *ix = m->indices + t * 3;
         const float *a = m->uv + ix[0] * 2, *b = m->uv + ix[1] * 2, *c = m->uv + ix[2] * 2;
         uv_area[chart[t]] += 0.5 * ((double)(b[0] - a[0]) * (c[1] - a[1]) - (double)(c[0] - a[0]) * (b[1] - a[1])) * res * res;
@@ -176,11 +191,32 @@ static size_t check_atlas(prt__mesh *m, int res, const char *what, double min_co
         if (world[t] > 0 && uv_area[t] > 4) spread = fmax(spread, fabs(uv_area[t] / world[t] / r.texel_density - 1));
     print_message("%s: texel density %.4g per unit area, charts within %.2g%% of it\n", what, r.texel_density, 100 * spread);
     assert_true(spread < 2e-3);
+    /* Every texel a chart's reads reach takes its value from that chart's own texels. */
+    {
+        const size_t n = (size_t)res * res;
+        int32_t *label = malloc(n * sizeof *label), *index = malloc(n * sizeof *index), *source = malloc(n * sizeof *source);
+        uint32_t *tri = calloc(n, sizeof *tri);
+        float *bary = malloc(n * 2 * sizeof *bary);
+        size_t overlap, outside, wrong = 0, reached = 0;
+        assert_true(prt__texel_raster(m, res, res, tri, bary, &overlap, &outside));
+        for (size_t i = 0; i < n; ++i) index[i] = tri[i] ? (int32_t)i : -1;
+        assert_int_equal(prt__texel_support_charts(ctx, m, res, res, label), PRT_OK);
+        assert_true(prt__texel_gutter_sources(res, res, index, label, source));
+        for (size_t i = 0; i < n; ++i) {
+            if (label[i] < 0) continue;
+            reached++;
+            wrong += source[i] < 0 || label[source[i]] != label[i];
+        }
+        print_message("%s: %zu texels within the charts' reach, %zu reading another chart\n", what, reached, wrong);
+        assert_int_equal(wrong, 0);
+        free(label); free(index); free(source); free(tri); free(bary);
+    }
     free(uv_area);
     free(world);
     free(hit);
     free(owner);
     free(chart);
+    free(dup);
     prt_context_release(ctx);
     return r.charts;
 }
@@ -286,9 +322,8 @@ static void test_layouts(void **state)
     assert_non_null(strstr(prt_last_error(), "would hold them"));
     prt__mesh_free(&m);
     tm_free(&t);
-    /* 3000 loose triangles: more charts than 64^2 or 128^2 hold with 2-texel gutters whatever
-     * their scale (a texel each and a gutter: (res + 2)^2 / 9), known by counting them, not by
-     * packing; 256^2 holds them. Given a larger map to go to, it goes there. */
+    /* 3000 loose triangles: more charts than 64^2 holds whatever their scale (each reaches 2 x 2
+     * texels at least); 128^2 holds them. Given a larger map to go to, it goes there. */
     for (uint32_t i = 0; i < 3000; ++i) {
         const float x = (float)(i % 60), z = (float)(i / 60);
         tm_vertex(&t, x, 0, z, 0, 1, 0);
@@ -299,16 +334,118 @@ static void test_layouts(void **state)
     m = to_mesh(&t);
     assert_int_equal(prt__uv_atlas(ctx, &m, &(prt__atlas_desc){.resolution = 64}, NULL), PRT_ERR_INVALID_ARG);
     print_message("3000 loose triangles at 64 x 64: %s\n", prt_last_error());
-    assert_non_null(strstr(prt_last_error(), "3000 UV charts with 2-texel gutters do not fit in 64 x 64 texels: --texels 256 would hold them"));
+    assert_non_null(strstr(prt_last_error(), "3000 UV charts do not fit in 64 x 64 texels: --texels 128 would hold them"));
     prt__atlas_report r;
     assert_int_equal(prt__uv_atlas(ctx, &m, &(prt__atlas_desc){.resolution = 64, .max_resolution = 1024}, &r), PRT_OK);
     print_message("3000 loose triangles from 64 x 64: %d x %d, %.0f%% coverage (%d x %d: fit %d, %.0f%%)\n", r.resolution, r.resolution,
                   100 * r.coverage, r.smaller, r.smaller, r.smaller_fit, 100 * r.smaller_cover);
-    assert_true(r.resolution >= 256 && r.resolution <= 1024);
+    assert_true(r.resolution >= 128 && r.resolution <= 1024);
     assert_true(r.coverage >= 0.25 || r.resolution == 1024);
     assert_int_equal(r.smaller, r.resolution / 2);
     prt__mesh_free(&m);
     tm_free(&t);
+    prt_context_release(ctx);
+}
+
+/* Gutter texels between two charts: a texel within the reach of chart 0's reads takes chart 0's
+ * value though chart 1's texel is nearer; texels no chart reaches take the nearest. A row of
+ * seven: chart 0 at 0, its reach 1..2, chart 1 at 3, its reach 4, nothing's 5..6. */
+static void test_gutters_by_chart(void **state)
+{
+    (void)state;
+    const int32_t index[7] = {0, -1, -1, 1, -1, -1, -1}, label[7] = {0, 0, 0, 1, 1, -1, -1};
+    int32_t source[7], blind[7];
+    assert_true(prt__texel_gutter_sources(7, 1, index, label, source));
+    assert_true(prt__texel_gutter_sources(7, 1, index, NULL, blind));
+    const int32_t want[7] = {0, 0, 0, 1, 1, 1, 1};
+    assert_memory_equal(source, want, sizeof want);
+    assert_int_equal(blind[2], 1);   /* by distance alone, chart 1's texel is the nearer */
+    float value[7] = {1, 0, 0, 5, 0, 0, 0};
+    uint8_t covered[7] = {1, 0, 0, 1, 0, 0, 0};
+    float *planes[1] = {value};
+    const int floats[1] = {1};
+    assert_true(prt__texel_fill_gutters(7, 1, label, covered, planes, floats, 1));
+    const float filled[7] = {1, 1, 1, 5, 5, 5, 5};
+    for (int i = 0; i < 7; ++i) assert_float_equal(value[i], filled[i], 0);
+    for (int i = 0; i < 7; ++i) assert_int_equal(covered[i], i == 0 || i == 3 ? 1 : 2);
+}
+
+/* Back-to-back twins, as decimated scans have them: a triangle of a closed sphere doubled the
+ * other way round (facing in, no neighbour of its own) lies on its face's texels, sharing its UVs:
+ * drawn where it fights its face for the pixels, it shows the same light, and the per-texel bakes
+ * give the texels its face's surface and area. A loose double-sided triangle (a fin, both sides
+ * seen) keeps texels for each side, one chart of two glued along the longest edge. */
+static void test_twins(void **state)
+{
+    (void)state;
+    test_mesh t = {0};
+    tm_sphere(&t, (float[3]){0, 0, 0}, 1.0f, 12, 24);
+    const size_t nt0 = t.nt;
+    const uint32_t face = 40;
+    tm_tri(&t, t.idx[face * 3], t.idx[face * 3 + 2], t.idx[face * 3 + 1]);
+    const uint32_t fin = (uint32_t)t.nv;
+    tm_vertex(&t, 2, 0, 0, 0, 0, 1);
+    tm_vertex(&t, 2.4f, 0, 0, 0, 0, 1);
+    tm_vertex(&t, 2.1f, 0.3f, 0, 0, 0, 1);
+    tm_tri(&t, fin, fin + 1, fin + 2);
+    tm_tri(&t, fin, fin + 2, fin + 1);
+    prt__mesh m = to_mesh(&t);
+    tm_free(&t);
+    prt__mesh plain = {0};
+    test_mesh s = {0};
+    tm_sphere(&s, (float[3]){0, 0, 0}, 1.0f, 12, 24);
+    plain = to_mesh(&s);
+    tm_free(&s);
+    prt_context *ctx = test_context(1);
+    prt__atlas_report rp;
+    assert_int_equal(prt__uv_atlas(ctx, &plain, &(prt__atlas_desc){.resolution = 128}, &rp), PRT_OK);
+    const size_t charts = check_atlas(&m, 128, "sphere with a twin and a fin", 0.5);
+    assert_int_equal(charts, rp.charts + 1);   /* the fin's chart; the twin none */
+    /* The twin on its face's UVs, corner by corner at the same position. */
+    const uint32_t tw = (uint32_t)nt0;
+    for (int k = 0; k < 3; ++k) {
+        const uint32_t v = m.indices[tw * 3 + k];
+        bool found = false;
+        for (int j = 0; j < 3; ++j) {
+            const uint32_t w = m.indices[face * 3 + j];
+            if (!memcmp(m.positions + v * 3, m.positions + w * 3, 12)) { found = true; assert_memory_equal(m.uv + v * 2, m.uv + w * 2, 8); }
+        }
+        assert_true(found);
+    }
+    /* No texel is the twin's; the texels' areas sum to the surface less the twin. */
+    const int res = 128;
+    uint32_t *owner = calloc((size_t)res * res, sizeof *owner);
+    float *bary = calloc((size_t)res * res * 2, sizeof *bary), *area = calloc((size_t)res * res, sizeof *area);
+    size_t overlap, outside, faces = 0;
+    assert_true(prt__texel_raster(&m, res, res, owner, bary, &overlap, &outside));
+    assert_true(prt__texel_areas(&m, res, res, area));
+    double sum = 0, surface = 0;
+    for (size_t i = 0; i < (size_t)res * res; ++i) {
+        assert_true(owner[i] != tw + 1);
+        faces += owner[i] == face + 1;
+        sum += area[i];
+    }
+    for (size_t f = 0; f < m.triangle_count; ++f) {
+        if (f == tw) continue;
+        const uint32_t *ix = m.indices + f * 3;
+        float e1[3], e2[3], n[3];
+        for (int k = 0; k < 3; ++k) { e1[k] = m.positions[ix[1] * 3 + k] - m.positions[ix[0] * 3 + k]; e2[k] = m.positions[ix[2] * 3 + k] - m.positions[ix[0] * 3 + k]; }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1]; n[1] = e1[2] * e2[0] - e1[0] * e2[2]; n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        surface += 0.5 * sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
+    }
+    print_message("twin's face owns %zu texels, the twin none; texel areas %.5f of a surface of %.5f without the twin\n", faces, sum, surface);
+    assert_true(faces > 0);
+    assert_int_equal(overlap, 0);
+    assert_true(fabs(sum - surface) < 1e-4 * surface);
+    /* The fin: both sides' texels, the back side the front's mirrored over the longest edge. */
+    const uint32_t f0 = (uint32_t)nt0 + 1, f1 = (uint32_t)nt0 + 2;
+    size_t own0 = 0, own1 = 0;
+    for (size_t i = 0; i < (size_t)res * res; ++i) { own0 += owner[i] == f0 + 1; own1 += owner[i] == f1 + 1; }
+    print_message("fin: %zu and %zu texels\n", own0, own1);
+    assert_true(own0 > 0 && own1 > 0);
+    free(owner); free(bary); free(area);
+    prt__mesh_free(&m);
+    prt__mesh_free(&plain);
     prt_context_release(ctx);
 }
 
@@ -324,14 +461,14 @@ static void test_real_meshes(void **state)
         prt_context *ctx = test_context(1);
         prt_scene *s = NULL;
         assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
-        /* The bunny at 512: 72% (65% before large charts were also tried tilted between quarter
-         * turns). At 128 it stays short of issue 30's 70%: two-texel gutters around ragged charts
-         * take a quarter of the map. */
+        /* The bunny at 512: 73% (65% before large charts were also tried tilted between quarter
+         * turns). At 128, issue 30's 70% (66.9% while two-texel gutters kept charts apart rather
+         * than their bilinear reaches). */
         check_atlas(&s->mesh, 512, names[i], i == 0 ? 0.70 : 0.64);
         if (i == 0) {   /* the bunny at the offset method's default light map */
             prt_scene *s2 = NULL;
             assert_int_equal(prt_scene_load(ctx, path, NULL, &s2), PRT_OK);
-            check_atlas(&s2->mesh, 128, "bunny at 128", 0.65);
+            check_atlas(&s2->mesh, 128, "bunny at 128", 0.70);
             prt_scene_release(s2);
         }
         prt_scene_release(s);
@@ -351,8 +488,9 @@ static void test_dragon(void **state)
     prt_context *ctx = test_context(1);
     prt_scene *s = NULL;
     assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
-    /* Most of the charts left are lone back-to-back duplicate faces, which no neighbour can take. */
-    assert_true(check_atlas(&s->mesh, 256, "dragon res3 at 256", 0.4) < 2000);
+    /* Of its 1555 charts, 1104 were single triangles, most the inward twin of a face of the closed
+     * surface (on its face's texels now), the rest loose double-sided triangles (a chart of two). */
+    assert_true(check_atlas(&s->mesh, 256, "dragon res3 at 256", 0.65) < 1000);
     prt_scene_release(s);
     prt_context_release(ctx);
 }
@@ -407,6 +545,8 @@ static void test_texels_on_atlas(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_gutters_by_chart),
+        cmocka_unit_test(test_twins),
         cmocka_unit_test(test_flat_pieces),
         cmocka_unit_test(test_layouts),
         cmocka_unit_test(test_real_meshes),

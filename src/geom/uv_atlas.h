@@ -1,6 +1,8 @@
 /* UV atlases for meshes without a usable texture layout: charts grown by normal deviation, each
  * flattened by least-squares conformal maps (Levy et al. 2002), packed into a square by the texels
- * they touch with a gutter of empty texels between charts. What per-texel transfer bakes over. */
+ * whose centres lie within a texel of them (a bilinear read's reach), those of two charts never the
+ * same texel: each holds its own chart's value (texel_raster.h's gutter sources and fill), and no
+ * read on one chart weighs another's. What per-texel transfer bakes over. */
 #ifndef PRT_GEOM_UV_ATLAS_H
 #define PRT_GEOM_UV_ATLAS_H
 
@@ -11,7 +13,7 @@ typedef struct prt__atlas_desc {
     int max_resolution;   /* above resolution: while the charts do not fit, or touch under a quarter of
                            * the map's texels (mostly gutter), a map twice as wide is tried, up to
                            * this; the report says which was taken */
-    int padding;       /* empty texels between any two charts' texels; 0 = 2 */
+    int padding;       /* empty texels between any two charts' bilinear supports; 0 = none */
     float max_angle;   /* degrees a triangle's normal may turn from its chart's mean; 0 = 60 */
 } prt__atlas_desc;
 
@@ -19,6 +21,8 @@ typedef struct prt__atlas_report {
     size_t grown;            /* charts grown by normal deviation */
     size_t charts;           /* after cutting charts that would fold or overlap, and merging small ones */
     size_t added_vertices;   /* copies made where a vertex lies on a seam between charts */
+    size_t shared;           /* duplicate faces laid on their duplicate's texels (back-to-back twins) */
+    size_t glued;            /* twins both on their own (a fin's two sides) glued into one chart */
     size_t flattened;        /* charts flattened by LSCM before merging (the rest by projection onto their plane) */
     double coverage;         /* share of the map's texels that hold some of the surface */
     double texel_density;    /* texels per unit of surface area, the same in every chart */

@@ -3,6 +3,7 @@
  * cell, eq. 8) for radiosity and/or subsurface scattering, and each texel's shadowed SH transfer for first-order light from the
  * environment. Stages: offsets, transfer maps, environment. */
 #include "methods/offset/importance.h"
+#include "geom/texel_raster.h"
 #include "geom/uv_atlas.h"
 #include "geom/uv_islands.h"
 #include "light/light_sample.h"
@@ -774,7 +775,13 @@ prt_status prt__offset_bake_begin(prt_context *ctx, const prt__offset_bake_desc 
             s->albedo[k * 3 + c] = ob->patches.albedo[(size_t)s->texel[k] * 3 + c] = (float)fmin(1.0, prt__dipole_total(dm));
         }
     }
-    if (!st && !prt__offset_set_index(s)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!st) {
+        int32_t *label = malloc(n * sizeof *label);
+        if (!label) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        if (!st) st = prt__texel_support_charts(ctx, &t->mesh, d.texels, d.texels, label);
+        if (!st && !prt__offset_set_index(s, label)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        free(label);
+    }
     if (!st) st = texel_charts(ctx, &t->mesh, &ob->patches, &ob->chart);
     if (!st) {
         ob->x[0] = (prt__offset_transfer){.kind = PRT__OFFSET_RADIOSITY, .patches = &ob->patches, .rc = &ob->rc, .ray_offset = s->ray_offset};

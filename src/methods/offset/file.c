@@ -3,6 +3,8 @@
  * chunk's size, the mesh and every other count before it sizes an allocation. */
 #include "methods/offset/offset.h"
 
+#include "geom/texel_raster.h"
+
 #define CHUNK_OFSP PRT__FOURCC('O', 'F', 'S', 'P')
 #define CHUNK_OFST PRT__FOURCC('O', 'F', 'S', 'T')
 #define CHUNK_OFSR PRT__FOURCC('O', 'F', 'S', 'R')
@@ -223,8 +225,13 @@ prt_status prt__offset_load(prt_context *ctx, prt_transfer *t, const cJSON *meta
             if (!(s->emit[i] >= 0 && s->emit[i] <= PRT__MAX_RADIANCE) || !(s->emit_in[i] >= 0 && s->emit_in[i] <= 1e30f))
                 return bad(ctx, "offset texel emission out of range");
     }
-    if (!prt__offset_set_index(s)) return bad(ctx, "offset texels out of order or beyond the light map");
-    prt_status st = PRT_OK;
+    int32_t *label = malloc((size_t)s->width * s->height * sizeof *label);
+    if (!label) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    prt_status st = prt__texel_support_charts(ctx, &t->mesh, s->width, s->height, label);
+    const bool indexed = !st && prt__offset_set_index(s, label);
+    free(label);
+    if (st) return st;
+    if (!indexed) return bad(ctx, "offset texels out of order or beyond the light map");
     for (int k = 0; k < 2; ++k) {   /* radiosity, then subsurface: halves, or floats (older files) */
         prt__chunk_in *f = prt__chunk_take(chunks, count, k ? CHUNK_OFSS : CHUNK_OFSR), *h = prt__chunk_take(chunks, count, k ? CHUNK_OFHS : CHUNK_OFHR);
         if (f && h) return bad(ctx, "an offset map chunk appears as floats and as halves");

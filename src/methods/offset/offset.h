@@ -88,9 +88,10 @@ extern const prt__method prt__method_offset;
 void prt__offset_set_free(void *state);
 /* The run-time cache (lock and shadow-ray state) of a new state; false when out of memory. */
 bool prt__offset_cache_new(prt__offset_set *s);
-/* Builds the covered-texel index (after load or bake); false when out of memory or the texel
- * list is not increasing and inside the map. */
-bool prt__offset_set_index(prt__offset_set *s);
+/* Builds the covered-texel index (after load or bake) and the gutter sources, each chart's reads
+ * from its own texels (label: prt__texel_support_charts of the mesh, NULL: by distance alone);
+ * false when out of memory or the texel list is not increasing and inside the map. */
+bool prt__offset_set_index(prt__offset_set *s, const int32_t *label);
 
 #define PRT__OFFSET_MAX_MEDIA 255
 

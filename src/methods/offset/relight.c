@@ -7,7 +7,7 @@
 #include "geom/texel_raster.h"
 
 
-bool prt__offset_set_index(prt__offset_set *s)
+bool prt__offset_set_index(prt__offset_set *s, const int32_t *label)
 {
     const size_t n = (size_t)s->width * s->height;
     free(s->index);
@@ -26,7 +26,7 @@ bool prt__offset_set_index(prt__offset_set *s)
         s->xy[k] = (int32_t)(s->texel[k] % (uint32_t)s->width);
         s->xy[s->covered + k] = (int32_t)(s->texel[k] / (uint32_t)s->width);
     }
-    return prt__texel_gutter_sources(s->width, s->height, s->index, s->source);
+    return prt__texel_gutter_sources(s->width, s->height, s->index, label, s->source);
 }
 
 /* out[i] = sum_k in(texel i + offset k) maps[k][i], over covered texels. An offset landing off

@@ -243,7 +243,13 @@ prt_status prt__bake_texels(prt_context *ctx, const prt__texel_input *in, prt__t
     {
         float *planes[4] = {out->coeffs[0], out->coeffs[1], out->coeffs[2], out->albedo};
         const int floats[4] = {nc, nc, 3 * nc, 3};
-        if (!prt__texel_fill_gutters(W, H, out->covered, planes, floats, 4)) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %dx%d texels", W, H); goto fail; }
+        int32_t *label = malloc(ntex * sizeof *label);
+        if (!label) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %dx%d texels", W, H); goto fail; }
+        /* Each chart's reads take only its own transfer: gutters between charts may be one texel. */
+        if (!(st = prt__texel_support_charts(ctx, m, W, H, label)) && !prt__texel_fill_gutters(W, H, label, out->covered, planes, floats, 4))
+            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %dx%d texels", W, H);
+        free(label);
+        if (st) goto fail;
     }
     free(job.owner);
     free(job.bary);

@@ -87,7 +87,11 @@ prt_status prt__relight_sh_texels_local(prt_context *ctx, const prt_transfer *t,
         }
     }
     const int three = 3;
-    if (!prt__texel_fill_gutters(W, H, mask, &map, &three, 1)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    int32_t *label = malloc(ntex * sizeof *label);
+    if (!label) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    else if (!(st = prt__texel_support_charts(ctx, m, W, H, label)) && !prt__texel_fill_gutters(W, H, label, mask, &map, &three, 1))
+        st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    free(label);
     for (size_t i = 0; !st && i < ntex; ++i)
         if (s->covered[i])
             for (int c = 0; c < 3; ++c) out_rgb[i * 3 + c] += map[i * 3 + c];

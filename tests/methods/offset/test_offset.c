@@ -1062,9 +1062,9 @@ static void keep_size_message(void *user, prt_log_level level, const char *messa
     if (level == PRT_LOG_INFO && !strncmp(message, "light map", 9)) snprintf(user, 256, "%s", message);
 }
 
-/* 1900 loose squares: 1900 charts, more than a 128^2 map holds with 2-texel gutters (at most
- * (128 + 2)^2 / 9 = 1877 charts of a texel each). Without --texels the bake takes the next size
- * that holds them, saying why; --texels 128 is refused, naming the size that would. */
+/* 5000 loose squares: 5000 charts, more than a 128^2 map holds (a chart's bilinear reach is 2 x 2
+ * texels at least: 128^2 holds 4096). Without --texels the bake takes the next size that holds
+ * them, saying why; --texels 128 is refused, naming the size that would. */
 static void test_atlas_size(void **state)
 {
     (void)state;
@@ -1072,8 +1072,8 @@ static void test_atlas_size(void **state)
     prt_context *ctx = NULL;
     assert_int_equal(prt_context_create(&(prt_context_desc){.threads = 2, .log = keep_size_message, .log_user = said}, &ctx), PRT_OK);
     test_mesh t = {0};
-    for (uint32_t i = 0; i < 1900; ++i) {
-        const float x = (float)(i % 50), z = (float)(i / 50);
+    for (uint32_t i = 0; i < 5000; ++i) {
+        const float x = (float)(i % 100), z = (float)(i / 100);
         tm_vertex(&t, x, 0, z, 0, 1, 0);
         tm_vertex(&t, x, 0, z + 0.8f, 0, 1, 0);
         tm_vertex(&t, x + 0.8f, 0, z + 0.8f, 0, 1, 0);
@@ -1100,7 +1100,7 @@ static void test_atlas_size(void **state)
     x = NULL;
     assert_int_equal(prt_bake(ctx, scene, m, o, NULL, &x), PRT_ERR_INVALID_ARG);
     print_message("--texels 128: %s\n", prt_last_error());
-    assert_non_null(strstr(prt_last_error(), "1900 UV charts"));
+    assert_non_null(strstr(prt_last_error(), "5000 UV charts"));
     assert_non_null(strstr(prt_last_error(), "--texels 256"));
     assert_null(x);
     prt_options_release(o);
