@@ -1,0 +1,104 @@
+#!/bin/sh
+# prt export --web in a real browser: headless Chromium (SwiftShader's WebGL2, no GPU) opens the
+# exported page from the file system, URL hash parameters drive it (environment rotation and
+# intensity, the method's controls), and each screenshot matches prt render of the same view and
+# lighting within a stated tolerance (relative L2 of the tone-mapped image, worst 16x16 block's
+# mean absolute difference; tests/web_compare.js). Without WebGL2 the page says so; methods
+# without a page are refused in one line. Skips (77) where chromium or node is missing
+# (scripts/setup-deps.sh installs both).
+# Usage: web_test.sh PATH/TO/prt SOURCE_DIR
+set -u
+PRT=$1
+SRC=$2
+CHROMIUM=${PRT_CHROMIUM:-}
+for c in chromium chromium-browser google-chrome; do
+    [ -z "$CHROMIUM" ] && command -v "$c" >/dev/null 2>&1 && CHROMIUM=$c
+done
+if [ -z "$CHROMIUM" ]; then
+    echo "SKIP: no chromium (scripts/setup-deps.sh installs Debian's chromium for this test)"
+    exit 77
+fi
+if ! command -v node >/dev/null 2>&1; then
+    echo "SKIP: no node (Node.js) to compare the screenshots: scripts/setup-deps.sh installs it"
+    exit 77
+fi
+T=$(mktemp -d /tmp/prt_web_XXXXXX)
+trap 'rm -rf "$T"' EXIT
+. "$SRC/tests/shell_checks.sh"
+
+W=320
+H=240
+# Headless, software WebGL2 (SwiftShader through ANGLE), one CSS pixel per pixel, a profile of
+# its own (tests run in parallel); the window is wider than the canvas by the panel.
+browser() {
+    timeout 120 "$CHROMIUM" --headless=new --no-sandbox --use-angle=swiftshader --enable-unsafe-swiftshader --force-device-scale-factor=1 \
+        --hide-scrollbars --no-first-run --disable-extensions --user-data-dir="$T/profile" --window-size=$((W + 260)),$H "$@" 2>>"$T/chromium.log"
+}
+# shot PAGE HASH OUT.png: a screenshot of the page opened from the file system at #HASH.
+shot() {
+    rm -f "$3"
+    browser --screenshot="$3" "file://$1/index.html#$2" >/dev/null
+    [ -s "$3" ] && ok || { bad "no screenshot of $1#$2"; tail -n 5 "$T/chromium.log"; }
+}
+# within A.png B.png L2 BLOCK WHAT: relative L2 <= L2 and worst block <= BLOCK.
+within() {
+    node "$SRC/tests/web_compare.js" "$1" "$2" $W $H >"$T/cmp" 2>"$T/err" || { bad "$5: compare failed"; cat "$T/err"; return; }
+    l2=$(sed -n 's/.*"relative_l2":\([0-9.eE+-]*\).*/\1/p' "$T/cmp")
+    wb=$(sed -n 's/.*"worst_block":\([0-9.eE+-]*\).*/\1/p' "$T/cmp")
+    echo "$5: relative L2 $l2, worst block $wb"
+    awk -v a="$l2" -v b="$wb" -v ta="$3" -v tb="$4" 'BEGIN { exit !(a != "" && b != "" && a + 0 <= ta + 0 && b + 0 <= tb + 0) }' && ok ||
+        bad "$5: relative L2 $l2 (at most $3), worst block $wb (at most $4)"
+}
+# apart A.png B.png MIN WHAT: the images differ (relative L2 > MIN): the change reached the page.
+apart() {
+    node "$SRC/tests/web_compare.js" "$1" "$2" $W $H >"$T/cmp" 2>"$T/err" || { bad "$4: compare failed"; return; }
+    l2=$(sed -n 's/.*"relative_l2":\([0-9.eE+-]*\).*/\1/p' "$T/cmp")
+    awk -v a="$l2" -v t="$3" 'BEGIN { exit !(a != "" && a + 0 > t + 0) }' && ok || bad "$4 changed nothing (relative L2 $l2)"
+}
+render() { $NOLEAK "$PRT" render -q --per-vertex --width $W --height $H "$@"; }
+
+expect 0 "demo-scene" -- "$PRT" demo-scene -o "$T/demo.obj"
+
+# ---- SH: the environment rotated and scaled in the browser, the order control ----
+expect 0 "bake sh" -- "$PRT" bake -q "$T/demo.obj" --method sh -o "$T/sh.prt" --order 4 --samples 64 --bounces 1
+expect 0 "export --web sh" -- "$PRT" export "$T/sh.prt" --web "$T/sh" --width $W --height $H
+for f in index.html data.js prt.js method.js; do [ -s "$T/sh/$f" ] && ok || bad "the page has no $f"; done
+grep -q '<script src="data.js">' "$T/sh/index.html" && ! grep -q 'type="module"\|fetch(' "$T/sh/index.html" "$T/sh/prt.js" "$T/sh/method.js" && ok ||
+    bad "the page loads its scripts otherwise than by classic <script src> (file:// refuses fetch and modules)"
+render "$T/sh.prt" -o "$T/sh_render.png"
+shot "$T/sh" "" "$T/sh_page.png"
+within "$T/sh_page.png" "$T/sh_render.png" 0.03 0.02 "sh, as exported"
+render "$T/sh.prt" -o "$T/sh_render_rot.png" --rotate 120,25,-10 --intensity 1.7 --control order=3
+shot "$T/sh" "rotate=120,25,-10&intensity=1.7&order=3" "$T/sh_page_rot.png"
+within "$T/sh_page_rot.png" "$T/sh_render_rot.png" 0.03 0.02 "sh, environment rotated and scaled, order 3"
+apart "$T/sh_page_rot.png" "$T/sh_page.png" 0.05 "rotating the environment in the page"
+# The camera given: the page opens where prt render looks from.
+expect 0 "export --web sh --eye --target --fov" -- "$PRT" export "$T/sh.prt" --web "$T/sh_eye" --width $W --height $H --eye 2.5,1.2,-2 --target 0,0.4,0 --fov 50
+render "$T/sh.prt" -o "$T/sh_render_eye.png" --eye 2.5,1.2,-2 --target 0,0.4,0 --fov 50
+shot "$T/sh_eye" "" "$T/sh_page_eye.png"
+within "$T/sh_page_eye.png" "$T/sh_render_eye.png" 0.03 0.02 "sh, camera given"
+# A file exported under a rotated, brighter environment opens under it.
+expect 0 "export --web sh --rotate" -- "$PRT" export "$T/sh.prt" --web "$T/sh_rot" --width $W --height $H --rotate 120,25,-10 --intensity 1.7 --control order=3
+shot "$T/sh_rot" "" "$T/sh_page_rot2.png"
+within "$T/sh_page_rot2.png" "$T/sh_render_rot.png" 0.03 0.02 "sh, exported rotated"
+
+# ---- without WebGL2 the page says so ----
+browser --disable-3d-apis --dump-dom --virtual-time-budget=3000 "file://$T/sh/index.html" >"$T/dom"
+grep -q 'id="message">This page relights the scene with WebGL2' "$T/dom" && ok || bad "without WebGL the page shows no message"
+
+# ---- usage ----
+expect 2 "--web with -o" -- "$PRT" export "$T/sh.prt" --web "$T/x" -o "$T/x.glb"
+says "leave out -o"
+expect 2 "--eye without --target" -- "$PRT" export "$T/sh.prt" --web "$T/x" --eye 1,1,1
+says "go together"
+expect 2 "--fov without --web" -- "$PRT" export "$T/sh.prt" -o "$T/x.glb" --fov 30
+says "go with --web"
+# A method without a page is refused in one line, and nothing is written.
+expect 0 "bake ao" -- "$PRT" bake -q "$T/demo.obj" --method ao -o "$T/ao.prt" --samples 16
+expect 2 "--web of an ao file" -- "$PRT" export "$T/ao.prt" --web "$T/x"
+says "no web page yet"
+[ "$(wc -l <"$T/err")" -eq 1 ] && ok || bad "the refusal is not one line"
+[ ! -e "$T/x" ] && ok || bad "a refused export left a page"
+
+echo "web: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
