@@ -82,6 +82,18 @@ expect 0 "export --web sh --rotate" -- "$PRT" export "$T/sh.prt" --web "$T/sh_ro
 shot "$T/sh_rot" "" "$T/sh_page_rot2.png"
 within "$T/sh_page_rot2.png" "$T/sh_render_rot.png" 0.03 0.02 "sh, exported rotated"
 
+# ---- wavelet: the environment rotated with exact areas, Haar-transformed and truncated in the
+# browser (a quick bake: no bounces, no refinement) ----
+expect 0 "bake wavelet" -- "$PRT" bake -q "$T/demo.obj" --method wavelet -o "$T/wl.prt" --supersample 1 --bounces 0 --no-refine
+expect 0 "export --web wavelet" -- "$PRT" export "$T/wl.prt" --web "$T/wl" --width $W --height $H
+render "$T/wl.prt" -o "$T/wl_render.png"
+shot "$T/wl" "" "$T/wl_page.png"
+within "$T/wl_page.png" "$T/wl_render.png" 0.03 0.02 "wavelet, as exported"
+render "$T/wl.prt" -o "$T/wl_render_rot.png" --rotate 120,25,-10 --intensity 1.7 --control light-coefficients=1024
+shot "$T/wl" "rotate=120,25,-10&intensity=1.7&light-coefficients=1024" "$T/wl_page_rot.png"
+within "$T/wl_page_rot.png" "$T/wl_render_rot.png" 0.03 0.02 "wavelet, environment rotated and scaled, 1024 coefficients"
+apart "$T/wl_page_rot.png" "$T/wl_page.png" 0.05 "rotating the environment in the wavelet page"
+
 # ---- without WebGL2 the page says so ----
 browser --disable-3d-apis --dump-dom --virtual-time-budget=3000 "file://$T/sh/index.html" >"$T/dom"
 grep -q 'id="message">This page relights the scene with WebGL2' "$T/dom" && ok || bad "without WebGL the page shows no message"

@@ -38,30 +38,35 @@ static bool put_base64(prt__bytes *b, const unsigned char *p, size_t n)
     return prt__bytes_put(b, chunk, at) && !b->failed;
 }
 
-/* 32-bit words as little-endian bytes (typed arrays in every browser are little-endian). */
-static bool add_array(prt__web *w, const char *name, const char *type, const void *v, size_t count)
+/* Elements of `size` bytes as little-endian bytes (typed arrays in every browser are). */
+static bool add_array(prt__web *w, const char *name, const char *type, const void *v, size_t count, int size)
 {
-    unsigned char *le = malloc(count * 4 + 1);
+    unsigned char *le = malloc(count * (size_t)size + 1);
     if (!le) return !(w->failed = true);
-    const uint32_t *u = v;
+    const unsigned char *p = v;
     for (size_t i = 0; i < count; ++i) {
-        uint32_t x;
-        memcpy(&x, u + i, 4);
-        le[i * 4] = (unsigned char)x;
-        le[i * 4 + 1] = (unsigned char)(x >> 8);
-        le[i * 4 + 2] = (unsigned char)(x >> 16);
-        le[i * 4 + 3] = (unsigned char)(x >> 24);
+        uint32_t x = 0;
+        if (size == 4) { uint32_t u; memcpy(&u, p + i * 4, 4); x = u; }
+        else if (size == 2) { uint16_t u; memcpy(&u, p + i * 2, 2); x = u; }
+        else x = p[i];
+        for (int b = 0; b < size; ++b) le[i * (size_t)size + (size_t)b] = (unsigned char)(x >> (8 * b));
     }
     prt__bytes *b = &w->arrays;
     bool ok = put_text(b, w->array_count++ ? ",\n\"" : "\"") && put_text(b, name) && put_text(b, "\": [\"") && put_text(b, type) &&
-              put_text(b, "\", \"") && put_base64(b, le, count * 4) && put_text(b, "\"]");
+              put_text(b, "\", \"") && put_base64(b, le, count * (size_t)size) && put_text(b, "\"]");
     free(le);
     if (!ok) w->failed = true;
     return ok;
 }
 
-bool prt__web_floats(prt__web *w, const char *name, const float *v, size_t count) { return add_array(w, name, "f32", v, count); }
-bool prt__web_uints(prt__web *w, const char *name, const uint32_t *v, size_t count) { return add_array(w, name, "u32", v, count); }
+bool prt__web_floats(prt__web *w, const char *name, const float *v, size_t count) { return add_array(w, name, "f32", v, count, 4); }
+bool prt__web_uints(prt__web *w, const char *name, const uint32_t *v, size_t count) { return add_array(w, name, "u32", v, count, 4); }
+bool prt__web_small(prt__web *w, const char *name, const char *type, const void *v, size_t count)
+{
+    const int size = !strcmp(type, "u16") || !strcmp(type, "i16") ? 2 : !strcmp(type, "u8") || !strcmp(type, "i8") ? 1 : 0;
+    if (!size) return !(w->failed = true);
+    return add_array(w, name, type, v, count, size);
+}
 cJSON *prt__web_meta(prt__web *w) { return w->meta; }
 void prt__web_script(prt__web *w, const char *js) { w->script = js; }
 

@@ -19,6 +19,8 @@ typedef struct prt__web prt__web;
  * are the method's own; the framework's are positions, normals, indices. False when out of memory. */
 bool prt__web_floats(prt__web *w, const char *name, const float *v, size_t count);
 bool prt__web_uints(prt__web *w, const char *name, const uint32_t *v, size_t count);
+/* The same for 8- and 16-bit integers: type "u8", "i8", "u16" or "i16" (Uint8Array ... Int16Array). */
+bool prt__web_small(prt__web *w, const char *name, const char *type, const void *v, size_t count);
 /* The method's parameters (api.meta in the page): add fields to it. */
 cJSON *prt__web_meta(prt__web *w);
 /* The method's script (static text, PRT.method(...)): written as method.js. */

@@ -17,7 +17,8 @@ var PRT = (function () {
     function decode(entry) {
         var bin = atob(entry[1]), bytes = new Uint8Array(bin.length);
         for (var i = 0; i < bin.length; ++i) bytes[i] = bin.charCodeAt(i);
-        return entry[0] === 'u32' ? new Uint32Array(bytes.buffer) : new Float32Array(bytes.buffer);
+        var Type = {f32: Float32Array, u32: Uint32Array, u16: Uint16Array, i16: Int16Array, u8: Uint8Array, i8: Int8Array}[entry[0]];
+        return new Type(bytes.buffer);
     }
 
     function numbers(text, count) {
