@@ -94,6 +94,23 @@ shot "$T/wl" "rotate=120,25,-10&intensity=1.7&light-coefficients=1024" "$T/wl_pa
 within "$T/wl_page_rot.png" "$T/wl_render_rot.png" 0.03 0.02 "wavelet, environment rotated and scaled, 1024 coefficients"
 apart "$T/wl_page_rot.png" "$T/wl_page.png" 0.05 "rotating the environment in the wavelet page"
 
+# ---- spectral: point lights per pixel with the page's shadow cubes (drawn as prt render draws
+# them, without --per-vertex), their light at the vertices bounced through the basis; lights moved
+# and added through the hash ----
+expect 0 "bake spectral" -- "$PRT" bake -q "$T/demo.obj" --method spectral -o "$T/sp.prt" --samples 512 --no-refine
+expect 0 "export --web spectral" -- "$PRT" export "$T/sp.prt" --web "$T/sp" --width $W --height $H --light point:0.5,1.2,0.6:3,3,3
+$NOLEAK "$PRT" render -q --width $W --height $H "$T/sp.prt" -o "$T/sp_render.png" --light point:0.5,1.2,0.6:3,3,3
+shot "$T/sp" "" "$T/sp_page.png"
+within "$T/sp_page.png" "$T/sp_render.png" 0.03 0.02 "spectral, sky and a point light"
+expect 0 "export --web spectral, no environment" -- "$PRT" export "$T/sp.prt" --web "$T/sp_dark" --width $W --height $H --env none --light point:0.5,1.2,0.6:3,3,3
+$NOLEAK "$PRT" render -q --width $W --height $H "$T/sp.prt" -o "$T/sp_render_moved.png" --env none --light point:-0.6,0.9,0.5:2,1.5,1 --light point:0.8,1.3,-0.4:1,1,2 --control bounces=2
+shot "$T/sp_dark" "lights=-0.6,0.9,0.5:2,1.5,1|0.8,1.3,-0.4:1,1,2&bounces=2" "$T/sp_page_moved.png"
+within "$T/sp_page_moved.png" "$T/sp_render_moved.png" 0.03 0.02 "spectral, a light moved and one added, 2 bounces"
+$NOLEAK "$PRT" render -q --width $W --height $H "$T/sp.prt" -o "$T/sp_render_dark.png" --env none --light point:0.5,1.2,0.6:3,3,3
+apart "$T/sp_page_moved.png" "$T/sp_render_dark.png" 0.05 "moving and adding lights in the spectral page"
+expect 2 "--web spectral with a spot light" -- "$PRT" export "$T/sp.prt" --web "$T/x" --light spot:0,1.4,0:0,-1,0:40:3,3,3
+says "point lights"
+
 # ---- without WebGL2 the page says so ----
 browser --disable-3d-apis --dump-dom --virtual-time-budget=3000 "file://$T/sh/index.html" >"$T/dom"
 grep -q 'id="message">This page relights the scene with WebGL2' "$T/dom" && ok || bad "without WebGL the page shows no message"

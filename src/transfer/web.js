@@ -40,7 +40,7 @@ var PRT = (function () {
 
     // prt render's camera (render/draw.c prt__camera_matrix): column-major, near and far at
     // 1/100 and 100 times the eye's distance to the target.
-    function cameraMatrix(eye, target, upIn, fovDeg, aspect) {
+    function cameraMatrix(eye, target, upIn, fovDeg, aspect, nearFar) {
         function sub(a, b) { return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]; }
         function cross(a, b) { return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]; }
         function dot(a, b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -51,7 +51,8 @@ var PRT = (function () {
         var s = norm(cross(f, up)) || norm(cross(f, [0, 0, 1]));
         var u = cross(s, f);
         var view = [s[0], u[0], -f[0], 0, s[1], u[1], -f[1], 0, s[2], u[2], -f[2], 0, -dot(s, eye), -dot(u, eye), dot(f, eye), 1];
-        var fov = (fovDeg > 0 ? fovDeg : 40) * Math.PI / 180, n = dist * 0.01, fa = dist * 100, t = 1 / Math.tan(fov * 0.5);
+        var fov = (fovDeg > 0 ? fovDeg : 40) * Math.PI / 180, n = nearFar ? nearFar[0] : dist * 0.01, fa = nearFar ? nearFar[1] : dist * 100;
+        var t = 1 / Math.tan(fov * 0.5);
         var proj = [t / aspect, 0, 0, 0, 0, t, 0, 0, 0, 0, (fa + n) / (n - fa), -1, 0, 0, 2 * fa * n / (n - fa), 0];
         var out = new Float32Array(16);
         for (var c = 0; c < 4; ++c)
@@ -60,6 +61,75 @@ var PRT = (function () {
                 for (var k = 0; k < 4; ++k) acc += proj[k * 4 + r] * view[c * 4 + k];
                 out[c * 4 + r] = acc;
             }
+        return out;
+    }
+
+    // ---- SH maths every SH-lit method shares (core/sh.c, core/sh_rotate.c) ----
+    // R = Ry(yaw) Rx(pitch) Rz(roll), row-major (prt_rotation_from_euler_deg).
+    function euler(yaw, pitch, roll) {
+        var a = yaw * Math.PI / 180, b = pitch * Math.PI / 180, c = roll * Math.PI / 180;
+        var ry = [Math.cos(a), 0, Math.sin(a), 0, 1, 0, -Math.sin(a), 0, Math.cos(a)];
+        var rx = [1, 0, 0, 0, Math.cos(b), -Math.sin(b), 0, Math.sin(b), Math.cos(b)];
+        var rz = [Math.cos(c), -Math.sin(c), 0, Math.sin(c), Math.cos(c), 0, 0, 0, 1];
+        function mul(x, y) {
+            var o = [];
+            for (var i = 0; i < 3; ++i)
+                for (var j = 0; j < 3; ++j) o[i * 3 + j] = x[i * 3] * y[j] + x[i * 3 + 1] * y[3 + j] + x[i * 3 + 2] * y[6 + j];
+            return o;
+        }
+        return mul(ry, mul(rx, rz));
+    }
+    // The Ivanic-Ruedenberg rotation of real SH of `order` by row-major rot: band l's
+    // (2l+1)^2 matrix, bands[l][(a + l) * (2l + 1) + (b + l)].
+    function shRotation(order, rot) {
+        var bands = [[1]];
+        function B(l, a, b) { return bands[l][(a + l) * (2 * l + 1) + (b + l)]; }
+        function P(i, l, a, b) {
+            var ri1 = B(1, i, 1), rim1 = B(1, i, -1), ri0 = B(1, i, 0);
+            if (b === l) return ri1 * B(l - 1, a, l - 1) - rim1 * B(l - 1, a, -l + 1);
+            if (b === -l) return ri1 * B(l - 1, a, -l + 1) + rim1 * B(l - 1, a, l - 1);
+            return ri0 * B(l - 1, a, b);
+        }
+        if (order > 1) {
+            var axis = [1, 2, 0], b1 = [];   // band 1 is (y, z, x) for m = -1, 0, 1
+            for (var a = -1; a <= 1; ++a)
+                for (var b = -1; b <= 1; ++b) b1[(a + 1) * 3 + (b + 1)] = rot[axis[a + 1] * 3 + axis[b + 1]];
+            bands[1] = b1;
+        }
+        for (var l = 2; l < order; ++l) {
+            var band = bands[l] = new Array((2 * l + 1) * (2 * l + 1));
+            for (var m = -l; m <= l; ++m)
+                for (var nn = -l; nn <= l; ++nn) {
+                    var am = Math.abs(m), d = m === 0 ? 1 : 0;
+                    var denom = Math.abs(nn) < l ? (l + nn) * (l - nn) : (2 * l) * (2 * l - 1);
+                    var u = Math.sqrt((l + m) * (l - m) / denom);
+                    var v = 0.5 * Math.sqrt((1 + d) * (l + am - 1) * (l + am) / denom) * (1 - 2 * d);
+                    var w = -0.5 * Math.sqrt((l - am - 1) * (l - am) / denom) * (1 - d);
+                    var val = 0;
+                    if (u !== 0) val += u * P(0, l, m, nn);
+                    if (v !== 0) {
+                        var vv;
+                        if (m === 0) vv = P(1, l, 1, nn) + P(-1, l, -1, nn);
+                        else if (m > 0) vv = P(1, l, m - 1, nn) * Math.sqrt(m === 1 ? 2 : 1) - (m === 1 ? 0 : P(-1, l, -m + 1, nn));
+                        else vv = (m === -1 ? 0 : P(1, l, m + 1, nn)) + P(-1, l, -m - 1, nn) * Math.sqrt(m === -1 ? 2 : 1);
+                        val += v * vv;
+                    }
+                    if (w !== 0) val += w * (m > 0 ? P(1, l, m + 1, nn) + P(-1, l, -m - 1, nn) : P(1, l, m - 1, nn) - P(-1, l, -m + 1, nn));
+                    band[(m + l) * (2 * l + 1) + (nn + l)] = val;
+                }
+        }
+        return bands;
+    }
+    // SH vectors (channels of n = order^2, channel-major) rotated: prt_sh_light_rotate.
+    function shRotate(order, channels, input, yaw, pitch, roll) {
+        var n = order * order, out = new Float32Array(channels * n), bands = shRotation(order, euler(yaw, pitch, roll));
+        for (var c = 0; c < channels; ++c)
+            for (var l = 0; l < order; ++l)
+                for (var a = -l; a <= l; ++a) {
+                    var s = 0;
+                    for (var b = -l; b <= l; ++b) s += bands[l][(a + l) * (2 * l + 1) + (b + l)] * input[c * n + l * l + b + l];
+                    out[c * n + l * l + a + l] = s;
+                }
         return out;
     }
 
@@ -104,6 +174,80 @@ var PRT = (function () {
     var POST_FS = '#version 300 es\nprecision highp float;\n' + TONEMAP +
         'uniform sampler2D hdr; out vec4 color;\n' +
         'void main() { vec3 c = texelFetch(hdr, ivec2(gl_FragCoord.xy), 0).rgb; color = tonemap(max(c, vec3(0.0))); }\n';
+
+    // ---- point lights per pixel with cube shadow maps: render/pixel_lights.c, point lights ----
+    var CUBE_RES = 1024;
+    var DEPTH_VS = '#version 300 es\n' +
+        'layout(location = 0) in vec3 pos; uniform mat4 vp; out vec3 w;\n' +
+        'void main() { w = pos; gl_Position = vp * vec4(pos, 1.0); }\n';
+    // Distance from the light; faces turned towards it pushed back by two texels plus their slope.
+    var CUBE_FS = '#version 300 es\nprecision highp float;\n' +
+        'in vec3 w; uniform vec3 light; uniform float texel; out vec4 dist;\n' +
+        'void main() {\n' +
+        '  float d = length(w - light);\n' +
+        '  vec3 ng = normalize(cross(dFdx(w), dFdy(w)));\n' +
+        '  float c = abs(dot(ng, (w - light) / d)), t = sqrt(max(0.0, 1.0 - c * c)) / max(c, 0.1);\n' +
+        '  dist = vec4(d + (gl_FrontFacing ? (2.0 + 8.0 * t) * d * texel : 0.0));\n' +
+        '}\n';
+    var LIGHT_COMMON =
+        'uniform vec3 lpos, colour; uniform highp samplerCube cube; uniform float texel, bias;\n' +
+        'const float PI = 3.14159265358979;\n' +
+        'float cube_lit(vec3 d, float dist, float step, int n) {\n' +
+        '  vec3 w = normalize(d);\n' +
+        '  vec3 t = normalize(abs(w.x) < 0.6 ? cross(w, vec3(1.0, 0.0, 0.0)) : cross(w, vec3(0.0, 1.0, 0.0)));\n' +
+        '  vec3 b = cross(w, t);\n' +
+        '  float lit = 0.0, h = 0.5 * float(n - 1), eps = 0.25 * dist * texel + bias;\n' +
+        '  for (int i = 0; i < n; ++i) for (int j = 0; j < n; ++j) {\n' +
+        '    vec3 q = d + ((float(i) - h) * t + (float(j) - h) * b) * step;\n' +
+        '    lit += dist - eps <= texture(cube, q).r ? 1.0 : 0.0;\n' +
+        '  }\n' +
+        '  return lit / float(n * n);\n' +
+        '}\n' +
+        // Irradiance from the point light at p (normal n) and the share of the taps that see it.
+        'vec4 point_light(vec3 p, vec3 n, int taps) {\n' +
+        '  vec3 d0 = lpos - p;\n' +
+        '  float r2 = dot(d0, d0), r = sqrt(r2);\n' +
+        '  if (r <= 0.0) return vec4(0.0);\n' +
+        '  float c = dot(n, d0 / r);\n' +
+        '  float lit = cube_lit(p + n * 4.0 * r * texel - lpos, r, r * texel, taps);\n' +
+        '  return vec4(c > 0.0 ? colour * c / r2 : vec3(0.0), lit);\n' +
+        '}\n';
+    var ADD_VS = '#version 300 es\n' +
+        'layout(location = 0) in vec3 pos; layout(location = 2) in vec3 normal; layout(location = 4) in vec3 albedo;\n' +
+        'layout(location = 5) in float visibility;\n' +
+        'uniform mat4 mvp;\n' +
+        'centroid out vec3 f_pos; centroid out vec3 f_nrm; centroid out vec3 f_alb; centroid out float f_vis;\n' +
+        'void main() { f_pos = pos; f_nrm = normal; f_alb = albedo; f_vis = visibility; gl_Position = mvp * vec4(pos, 1.0); }\n';
+    var ADD_FS = '#version 300 es\nprecision highp float;\n' + LIGHT_COMMON +
+        'centroid in vec3 f_pos; centroid in vec3 f_nrm; centroid in vec3 f_alb; centroid in float f_vis; out vec4 color;\n' +
+        'void main() {\n' +
+        '  if (f_vis <= 0.0) discard;   // no vertex of the triangle sees the light: nothing leaks along seams\n' +
+        '  vec4 e = point_light(f_pos, normalize(f_nrm), 3);\n' +
+        '  if (e.r + e.g + e.b <= 0.0) discard;\n' +
+        '  color = vec4(f_alb / PI * e.rgb * e.a, 1.0);\n' +
+        '}\n';
+    // Per vertex, into texel gl_VertexID of a float target: the irradiance the light gives the
+    // vertex through one shadow-map tap (the CPU's one shadow ray), and whether it sees the light.
+    var VERT_VS = '#version 300 es\n' +
+        'layout(location = 0) in vec3 pos; layout(location = 2) in vec3 normal; uniform int width, height;\n' +
+        'out vec3 v_pos; out vec3 v_nrm;\n' +
+        'void main() {\n' +
+        '  v_pos = pos; v_nrm = normal;\n' +
+        '  vec2 t = (vec2(float(gl_VertexID % width), float(gl_VertexID / width)) + 0.5) / vec2(float(width), float(height));\n' +
+        '  gl_Position = vec4(t * 2.0 - 1.0, 0.0, 1.0); gl_PointSize = 1.0;\n' +
+        '}\n';
+    var VERT_FS = '#version 300 es\nprecision highp float;\n' + LIGHT_COMMON +
+        'in vec3 v_pos; in vec3 v_nrm; out vec4 color;\n' +
+        'void main() { vec4 e = point_light(v_pos, normalize(v_nrm), 1); color = vec4(e.rgb * e.a, e.a); }\n';
+
+    function parseLights(text) {
+        var out = [];
+        String(text).split('|').forEach(function (spec) {
+            var parts = spec.replace(/^point:/, '').split(':'), pos = numbers(parts[0], 3), rgb = parts[1] ? numbers(parts[1], 3) : null;
+            if (pos && rgb && parts.length === 2) out.push({position: pos, intensity: rgb});
+        });
+        return out;
+    }
 
     function fail(text) {
         var m = document.getElementById('message');
@@ -170,6 +314,11 @@ var PRT = (function () {
         gl.bufferData(gl.ARRAY_BUFFER, positions, gl.STATIC_DRAW);
         gl.enableVertexAttribArray(0);
         gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+        var nrmBuf = gl.createBuffer();
+        gl.bindBuffer(gl.ARRAY_BUFFER, nrmBuf);
+        gl.bufferData(gl.ARRAY_BUFFER, array('normals'), gl.STATIC_DRAW);
+        gl.enableVertexAttribArray(2);
+        gl.vertexAttribPointer(2, 3, gl.FLOAT, false, 0, 0);
         var radBuf = gl.createBuffer();
         gl.bindBuffer(gl.ARRAY_BUFFER, radBuf);
         gl.bufferData(gl.ARRAY_BUFFER, nv * 12, gl.DYNAMIC_DRAW);
@@ -229,8 +378,217 @@ var PRT = (function () {
             redraw();
         });
 
+        // ---- point lights (api.pointLights): shadow cubes, the per-pixel pass, per-vertex irradiance ----
+        var lights = null;
+        function pointLights(o) {
+            if (!floatTargets) throw new Error('point lights need float render targets (EXT_color_buffer_float), which this browser does not offer');
+            var lo = meta.lo, hi = meta.hi, diag = Math.max(Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]), 1e-6);
+            var L = {list: [], albedoBuf: gl.createBuffer(), visBuf: [], cube: [], dirty: [], vertex: [], selected: 0, onChange: o.change,
+                     diag: diag, panel: null};
+            gl.bindBuffer(gl.ARRAY_BUFFER, L.albedoBuf);
+            gl.bufferData(gl.ARRAY_BUFFER, o.albedo, gl.STATIC_DRAW);
+            L.cubeProgram = compile(gl, DEPTH_VS, CUBE_FS);
+            L.addProgram = compile(gl, ADD_VS, ADD_FS);
+            L.vertProgram = compile(gl, VERT_VS, VERT_FS);
+            L.fbo = gl.createFramebuffer();
+            L.depth = gl.createRenderbuffer();
+            gl.bindRenderbuffer(gl.RENDERBUFFER, L.depth);
+            gl.renderbufferStorage(gl.RENDERBUFFER, gl.DEPTH_COMPONENT24, CUBE_RES, CUBE_RES);
+            L.vw = Math.min(nv, 2048);
+            L.vh = Math.ceil(nv / L.vw);
+            L.vtex = gl.createTexture();
+            gl.bindTexture(gl.TEXTURE_2D, L.vtex);
+            gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, L.vw, L.vh);
+            L.vfbo = gl.createFramebuffer();
+            gl.bindFramebuffer(gl.FRAMEBUFFER, L.vfbo);
+            gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, L.vtex, 0);
+            gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+            L.set = function (list) {
+                L.list = list.map(function (l) { return {position: l.position.slice(), intensity: l.intensity.slice()}; });
+                L.dirty = L.list.map(function () { return true; });
+                L.vertex = [];
+                L.selected = Math.min(L.selected, Math.max(0, L.list.length - 1));
+                L.buildPanel();
+                relightNeeded = true;
+            };
+            L.moved = function (i) { L.dirty[i] = true; L.vertex[i] = null; relightNeeded = true; redraw(); };
+            // The shadow cube of light i (render/pixel_lights.c: R32F distances, 6 faces of 90 degrees).
+            L.shadow = function (i) {
+                if (!L.dirty[i] && L.cube[i]) return;
+                var pos = L.list[i].position;
+                if (!L.cube[i]) {
+                    L.cube[i] = gl.createTexture();
+                    gl.bindTexture(gl.TEXTURE_CUBE_MAP, L.cube[i]);
+                    gl.texStorage2D(gl.TEXTURE_CUBE_MAP, 1, gl.R32F, CUBE_RES, CUBE_RES);
+                    gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+                    gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+                    gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+                    gl.texParameteri(gl.TEXTURE_CUBE_MAP, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+                }
+                var far = 0;
+                for (var corner = 0; corner < 8; ++corner) {
+                    var q = [corner & 1 ? hi[0] : lo[0], corner & 2 ? hi[1] : lo[1], corner & 4 ? hi[2] : lo[2]];
+                    far = Math.max(far, Math.hypot(q[0] - pos[0], q[1] - pos[1], q[2] - pos[2]));
+                }
+                var nf = [diag * 1e-4, far * 1.01 + diag * 1e-3];
+                var look = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]];
+                var ups = [[0, -1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1], [0, -1, 0], [0, -1, 0]];
+                gl.bindFramebuffer(gl.FRAMEBUFFER, L.fbo);
+                gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.DEPTH_ATTACHMENT, gl.RENDERBUFFER, L.depth);
+                gl.viewport(0, 0, CUBE_RES, CUBE_RES);
+                gl.enable(gl.DEPTH_TEST);
+                gl.depthFunc(gl.LESS);
+                gl.disable(gl.BLEND);
+                gl.useProgram(L.cubeProgram);
+                gl.uniform3fv(gl.getUniformLocation(L.cubeProgram, 'light'), pos);
+                gl.uniform1f(gl.getUniformLocation(L.cubeProgram, 'texel'), 2 / CUBE_RES);
+                gl.bindVertexArray(vao);
+                for (var f = 0; f < 6; ++f) {
+                    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_CUBE_MAP_POSITIVE_X + f, L.cube[i], 0);
+                    gl.clearBufferfv(gl.COLOR, 0, [1e30, 1e30, 1e30, 1e30]);
+                    gl.clear(gl.DEPTH_BUFFER_BIT);
+                    var target = [pos[0] + look[f][0], pos[1] + look[f][1], pos[2] + look[f][2]];
+                    gl.uniformMatrix4fv(gl.getUniformLocation(L.cubeProgram, 'vp'), false, cameraMatrix(pos, target, ups[f], 90, 1, nf));
+                    gl.drawElements(gl.TRIANGLES, indices.length, gl.UNSIGNED_INT, 0);
+                }
+                gl.bindVertexArray(null);
+                gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+                L.dirty[i] = false;
+            };
+            function lightUniforms(program, i) {
+                var l = L.list[i];
+                gl.uniform3fv(gl.getUniformLocation(program, 'lpos'), l.position);
+                gl.uniform3fv(gl.getUniformLocation(program, 'colour'), l.intensity);
+                gl.uniform1f(gl.getUniformLocation(program, 'texel'), 2 / CUBE_RES);
+                gl.uniform1f(gl.getUniformLocation(program, 'bias'), diag * 2e-5);
+                gl.activeTexture(gl.TEXTURE0);
+                gl.bindTexture(gl.TEXTURE_CUBE_MAP, L.cube[i]);
+                gl.uniform1i(gl.getUniformLocation(program, 'cube'), 0);
+            }
+            // Light i at every vertex: Float32Array of nv x (E r, g, b, visible).
+            L.atVertices = function (i) {
+                if (L.vertex[i]) return L.vertex[i];
+                L.shadow(i);
+                gl.bindFramebuffer(gl.FRAMEBUFFER, L.vfbo);
+                gl.viewport(0, 0, L.vw, L.vh);
+                gl.disable(gl.DEPTH_TEST);
+                gl.disable(gl.BLEND);
+                gl.clearBufferfv(gl.COLOR, 0, [0, 0, 0, 0]);
+                gl.useProgram(L.vertProgram);
+                lightUniforms(L.vertProgram, i);
+                gl.uniform1i(gl.getUniformLocation(L.vertProgram, 'width'), L.vw);
+                gl.uniform1i(gl.getUniformLocation(L.vertProgram, 'height'), L.vh);
+                gl.bindVertexArray(vao);
+                gl.drawArrays(gl.POINTS, 0, nv);
+                gl.bindVertexArray(null);
+                var px = new Float32Array(L.vw * L.vh * 4);
+                gl.readPixels(0, 0, L.vw, L.vh, gl.RGBA, gl.FLOAT, px);
+                gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+                var vis = new Float32Array(nv);
+                for (var v = 0; v < nv; ++v) vis[v] = px[v * 4 + 3];
+                if (!L.visBuf[i]) L.visBuf[i] = gl.createBuffer();
+                gl.bindBuffer(gl.ARRAY_BUFFER, L.visBuf[i]);
+                gl.bufferData(gl.ARRAY_BUFFER, vis, gl.DYNAMIC_DRAW);
+                return (L.vertex[i] = px.subarray(0, nv * 4));
+            };
+            // Added per pixel on top of the mesh (drawn into the bound target, depth kept).
+            L.draw = function (mvp) {
+                if (!L.list.length) return;
+                gl.enable(gl.BLEND);
+                gl.blendFunc(gl.ONE, gl.ONE);
+                gl.depthFunc(gl.LEQUAL);
+                gl.depthMask(false);
+                gl.enable(gl.POLYGON_OFFSET_FILL);
+                gl.polygonOffset(-1, -4);
+                gl.enable(gl.STENCIL_TEST);   // each sample takes a light once: coincident faces pass together
+                gl.stencilFunc(gl.EQUAL, 0, 0xff);
+                gl.stencilOp(gl.KEEP, gl.KEEP, gl.INCR);
+                gl.useProgram(L.addProgram);
+                gl.uniformMatrix4fv(gl.getUniformLocation(L.addProgram, 'mvp'), false, mvp);
+                gl.bindVertexArray(vao);
+                gl.bindBuffer(gl.ARRAY_BUFFER, L.albedoBuf);
+                gl.enableVertexAttribArray(4);
+                gl.vertexAttribPointer(4, 3, gl.FLOAT, false, 0, 0);
+                gl.enableVertexAttribArray(5);
+                for (var i = 0; i < L.list.length; ++i) {
+                    L.atVertices(i);   // the gate's visibility (and the shadow cube)
+                    gl.bindFramebuffer(gl.FRAMEBUFFER, msFbo);
+                    gl.viewport(0, 0, W, H);
+                    gl.useProgram(L.addProgram);
+                    gl.bindVertexArray(vao);
+                    gl.clear(gl.STENCIL_BUFFER_BIT);
+                    gl.bindBuffer(gl.ARRAY_BUFFER, L.visBuf[i]);
+                    gl.vertexAttribPointer(5, 1, gl.FLOAT, false, 0, 0);
+                    lightUniforms(L.addProgram, i);
+                    gl.drawElements(gl.TRIANGLES, indices.length, gl.UNSIGNED_INT, 0);
+                }
+                gl.disableVertexAttribArray(4);
+                gl.disableVertexAttribArray(5);
+                gl.bindVertexArray(null);
+                gl.disable(gl.STENCIL_TEST);
+                gl.disable(gl.POLYGON_OFFSET_FILL);
+                gl.disable(gl.BLEND);
+                gl.depthMask(true);
+                gl.depthFunc(gl.LESS);
+            };
+            // The panel: each light's position and intensity, add and remove; ctrl-drag moves the
+            // selected light across the view.
+            L.buildPanel = function () {
+                if (!L.panel) {
+                    ui.heading('Point lights');
+                    ui.note('Ctrl-drag (or alt-drag) moves the selected light across the view; the wheel with ctrl moves it nearer or farther.');
+                    ui.button('add a light', function () {
+                        var c = [(lo[0] + hi[0]) / 2, lo[1] + 0.8 * (hi[1] - lo[1]), (lo[2] + hi[2]) / 2];
+                        var k = L.list.length ? L.list[L.list.length - 1].intensity.slice() : [diag * diag / 4, diag * diag / 4, diag * diag / 4];
+                        L.set(L.list.concat([{position: c, intensity: k}]));
+                        L.selected = L.list.length - 1;
+                        L.buildPanel();
+                        redraw();
+                    });
+                    L.panel = el('div');
+                }
+                L.panel.textContent = '';
+                L.list.forEach(function (l, i) {
+                    var box = el('div', null, L.panel);
+                    box.style.borderTop = '1px solid #444';
+                    box.style.marginTop = '6px';
+                    var head = el('label', 'light ' + (i + 1) + (i === L.selected ? ' (selected)' : ''), box);
+                    head.style.cursor = 'pointer';
+                    head.addEventListener('click', function () { L.selected = i; L.buildPanel(); });
+                    ['x', 'y', 'z'].forEach(function (axis, k) {
+                        var pad = 0.5 * (hi[k] - lo[k]) + 0.1 * diag;
+                        sliderIn(box, {label: axis, min: lo[k] - pad, max: hi[k] + pad, step: diag / 1000, value: l.position[k],
+                                       format: function (v) { return v.toFixed(3); },
+                                       input: function (v) { l.position[k] = v; L.selected = i; L.moved(i); }});
+                    });
+                    var base = l.intensity.slice(), peak = Math.max(base[0], base[1], base[2]) || 1;
+                    sliderIn(box, {label: 'intensity (W/sr, brightest channel)', min: 0, max: 4 * peak, step: peak / 100, value: peak,
+                                   format: function (v) { return v.toFixed(2); },
+                                   input: function (v) { for (var c = 0; c < 3; ++c) l.intensity[c] = base[c] / peak * v; L.vertex[i] = null; relightNeeded = true; redraw(); }});
+                    var rm = el('button', 'remove', box);
+                    rm.addEventListener('click', function () { L.set(L.list.filter(function (x, j) { return j !== i; })); redraw(); });
+                });
+            };
+            L.set(o.lights);
+            lights = L;
+            return L;
+        }
+        function sliderIn(parent, o) {
+            var label = el('label', null, parent), input = document.createElement('input');
+            input.type = 'range';
+            input.min = o.min; input.max = o.max; input.step = o.step; input.value = o.value;
+            function show() { label.textContent = o.label + ': ' + (o.format ? o.format(+input.value) : input.value); }
+            input.addEventListener('input', function () { show(); o.input(+input.value); });
+            parent.appendChild(input);
+            show();
+        }
+
         var api = {
             gl: gl, meta: meta.params, vertexCount: nv, array: array, ui: ui, numbers: numbers,
+            // Point lights drawn per pixel with shadow maps on top of the method's radiance, which
+            // then holds everything else (o = {albedo, lights: [{position, intensity}]}); returns
+            // {list, atVertices(i)}. Hash: lights=X,Y,Z:R,G,B|X,Y,Z:R,G,B.
+            pointLights: pointLights,
             // The method calls this when its lighting changed (a control moved).
             relight: function () { relightNeeded = true; redraw(); }
         };
@@ -272,6 +630,7 @@ var PRT = (function () {
             gl.bindVertexArray(vao);
             gl.drawElements(gl.TRIANGLES, indices.length, gl.UNSIGNED_INT, 0);
             gl.bindVertexArray(null);
+            if (lights && floatTargets) lights.draw(mvp);
             if (floatTargets) {
                 gl.bindFramebuffer(gl.READ_FRAMEBUFFER, msFbo);
                 gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, resolveFbo);
@@ -303,9 +662,10 @@ var PRT = (function () {
             if (params.target && (v = numbers(params.target, 3))) cam.target = v;
             if (params.fov && isFinite(+params.fov)) cam.fov = +params.fov;
             if (params.exposure !== undefined && isFinite(+params.exposure)) { exposure = +params.exposure; exposureSlider.set(exposure); }
+            if (params.lights !== undefined && lights) lights.set(parseLights(params.lights));
             var rest = {};
             for (var k in params)
-                if (['eye', 'target', 'fov', 'exposure'].indexOf(k) < 0) rest[k] = params[k];
+                if (['eye', 'target', 'fov', 'exposure', 'lights'].indexOf(k) < 0) rest[k] = params[k];
             if (m.set) m.set(rest);
             relightNeeded = true;
         }
@@ -313,7 +673,7 @@ var PRT = (function () {
         // ---- orbit, pan and zoom about the target ----
         var drag = null;
         canvas.addEventListener('pointerdown', function (e) {
-            drag = {x: e.clientX, y: e.clientY, pan: e.shiftKey || e.button === 2};
+            drag = {x: e.clientX, y: e.clientY, pan: e.shiftKey || e.button === 2, light: (e.ctrlKey || e.altKey) && lights && lights.list.length > 0};
             canvas.setPointerCapture(e.pointerId);
         });
         canvas.addEventListener('pointerup', function () { drag = null; });
@@ -325,6 +685,21 @@ var PRT = (function () {
             drag.y = e.clientY;
             var o = [cam.eye[0] - cam.target[0], cam.eye[1] - cam.target[1], cam.eye[2] - cam.target[2]];
             var r = Math.hypot(o[0], o[1], o[2]);
+            if (drag.light) {
+                // Across the view plane through the light, a pixel's worth at its distance per pixel.
+                var l = lights.list[lights.selected], fw = [cam.target[0] - cam.eye[0], cam.target[1] - cam.eye[1], cam.target[2] - cam.eye[2]];
+                var fl = Math.hypot(fw[0], fw[1], fw[2]);
+                fw = [fw[0] / fl, fw[1] / fl, fw[2] / fl];
+                var sx = [fw[1] * 0 - fw[2] * 1, fw[2] * 0 - fw[0] * 0, fw[0] * 1 - fw[1] * 0], sxl = Math.hypot(sx[0], sx[1], sx[2]) || 1;
+                sx = [sx[0] / sxl, sx[1] / sxl, sx[2] / sxl];
+                var uy = [sx[1] * fw[2] - sx[2] * fw[1], sx[2] * fw[0] - sx[0] * fw[2], sx[0] * fw[1] - sx[1] * fw[0]];
+                var dl = Math.hypot(l.position[0] - cam.eye[0], l.position[1] - cam.eye[1], l.position[2] - cam.eye[2]);
+                var kk = dl * Math.tan(cam.fov * Math.PI / 360) * 2 / view.height;
+                for (var j = 0; j < 3; ++j) l.position[j] += (dx * sx[j] - dy * uy[j]) * kk;
+                lights.moved(lights.selected);
+                lights.buildPanel();
+                return;
+            }
             if (drag.pan) {
                 var f = [-o[0] / r, -o[1] / r, -o[2] / r], s = [f[2], 0, -f[0]], sl = Math.hypot(s[0], s[2]) || 1;
                 s = [-s[0] / sl, 0, -s[2] / sl];
@@ -346,6 +721,13 @@ var PRT = (function () {
         canvas.addEventListener('wheel', function (e) {
             e.preventDefault();
             var k = Math.exp(Math.max(-1, Math.min(1, e.deltaY * 0.001)));
+            if ((e.ctrlKey || e.altKey) && lights && lights.list.length) {
+                var l = lights.list[lights.selected];
+                for (var j = 0; j < 3; ++j) l.position[j] = cam.eye[j] + (l.position[j] - cam.eye[j]) * k;
+                lights.moved(lights.selected);
+                lights.buildPanel();
+                return;
+            }
             for (var i = 0; i < 3; ++i) cam.eye[i] = cam.target[i] + (cam.eye[i] - cam.target[i]) * k;
             redraw();
         }, {passive: false});
@@ -364,5 +746,5 @@ var PRT = (function () {
         document.body.setAttribute('data-prt-ready', stats.loadMs.toFixed(1));
     }
 
-    return { method: method, start: start };
+    return { method: method, start: start, euler: euler, shRotate: shRotate };
 })();

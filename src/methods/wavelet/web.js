@@ -169,20 +169,6 @@ PRT.method(function (api) {
         }
         deposit(acc, size, [unit(d0), unit(d1), unit(d2), unit(d3)], val, 0);
     }
-    // R = Ry(yaw) Rx(pitch) Rz(roll), row-major (prt_rotation_from_euler_deg).
-    function euler(yaw, pitch, roll) {
-        var a = yaw * Math.PI / 180, b = pitch * Math.PI / 180, c = roll * Math.PI / 180;
-        var ry = [Math.cos(a), 0, Math.sin(a), 0, 1, 0, -Math.sin(a), 0, Math.cos(a)];
-        var rx = [1, 0, 0, 0, Math.cos(b), -Math.sin(b), 0, Math.sin(b), Math.cos(b)];
-        var rz = [Math.cos(c), -Math.sin(c), 0, Math.sin(c), Math.cos(c), 0, 0, 0, 1];
-        function mul(x, y) {
-            var o = [];
-            for (var i = 0; i < 3; ++i)
-                for (var j = 0; j < 3; ++j) o[i * 3 + j] = x[i * 3] * y[j] + x[i * 3 + 1] * y[3 + j] + x[i * 3 + 2] * y[6 + j];
-            return o;
-        }
-        return mul(ry, mul(rx, rz));
-    }
     var perFace = new Float32Array(6 * DIM * 3), sum = new Float32Array(DIM * 3);
     // The environment's energy over the lighting cube under rotation R (prt__env_cube).
     function energy(R) {
@@ -257,7 +243,7 @@ PRT.method(function (api) {
         var t, c, j;
         planes.fill(0);
         if (p.environment) {
-            var e = energy(euler(state.rotate[0], state.rotate[1], state.rotate[2]));
+            var e = energy(PRT.euler(state.rotate[0], state.rotate[1], state.rotate[2]));
             for (t = 0; t < DIM; ++t)
                 for (c = 0; c < 3; ++c) planes[c * DIM + t] = Math.fround(e[t * 3 + c] / omega[t % (FACE * FACE)]) * state.intensity;
         }
