@@ -111,6 +111,18 @@ apart "$T/sp_page_moved.png" "$T/sp_render_dark.png" 0.05 "moving and adding lig
 expect 2 "--web spectral with a spot light" -- "$PRT" export "$T/sp.prt" --web "$T/x" --light spot:0,1.4,0:0,-1,0:40:3,3,3
 says "point lights"
 
+# ---- light cloud: the weights over the cloud with the page's own ray caster, the zones'
+# clustered-PCA responses, the direct light per pixel ----
+expect 0 "bake lightcloud" -- "$PRT" bake -q "$T/demo.obj" --method lightcloud -o "$T/lc.prt" --cloud-grid 3,2,3 --samples 512 --no-refine
+expect 0 "export --web lightcloud" -- "$PRT" export "$T/lc.prt" --web "$T/lc" --width $W --height $H --env none --light point:0.5,1.2,0.6:3,3,3
+$NOLEAK "$PRT" render -q --width $W --height $H "$T/lc.prt" -o "$T/lc_render.png" --env none --light point:0.5,1.2,0.6:3,3,3
+shot "$T/lc" "" "$T/lc_page.png"
+within "$T/lc_page.png" "$T/lc_render.png" 0.03 0.02 "lightcloud, a point light"
+$NOLEAK "$PRT" render -q --width $W --height $H "$T/lc.prt" -o "$T/lc_render_moved.png" --env none --light point:-0.6,0.9,0.5:2,1.5,1 --light point:0.8,1.3,-0.4:1,1,2 --control neighbours=4
+shot "$T/lc" "lights=-0.6,0.9,0.5:2,1.5,1|0.8,1.3,-0.4:1,1,2&neighbours=4" "$T/lc_page_moved.png"
+within "$T/lc_page_moved.png" "$T/lc_render_moved.png" 0.03 0.02 "lightcloud, a light moved and one added, 4 neighbours"
+apart "$T/lc_page_moved.png" "$T/lc_page.png" 0.05 "moving and adding lights in the light-cloud page"
+
 # ---- without WebGL2 the page says so ----
 browser --disable-3d-apis --dump-dom --virtual-time-budget=3000 "file://$T/sh/index.html" >"$T/dom"
 grep -q 'id="message">This page relights the scene with WebGL2' "$T/dom" && ok || bad "without WebGL the page shows no message"

@@ -4,6 +4,7 @@
  * relighting script. Browsers refuse fetch() and modules over file://, so everything is a classic
  * script: the data as base64 strings in data.js, assigned to a global. */
 #include "transfer/method.h"
+#include "prt/render.h"
 
 #include <errno.h>
 #include <stdarg.h>
@@ -153,7 +154,7 @@ static bool framework_meta(cJSON *root, const prt_transfer *t, const prt_export_
            cJSON_AddItemToObject(view, "target", vec3(web->target)) && cJSON_AddItemToObject(view, "up", vec3(up)) &&
            cJSON_AddNumberToObject(view, "fov", web->fov_y_deg > 0 ? web->fov_y_deg : 40.0) && cJSON_AddNumberToObject(view, "width", web->width) &&
            cJSON_AddNumberToObject(view, "height", web->height) && cJSON_AddNumberToObject(view, "exposure", web->exposure_stops) &&
-           cJSON_AddBoolToObject(view, "clamp", web->tonemap == 2) && cJSON_AddItemToObject(view, "background", vec3(web->background));
+           cJSON_AddBoolToObject(view, "clamp", web->tonemap == 2) && cJSON_AddNumberToObject(view, "max_pixel_lights", PRT_MAX_PIXEL_LIGHTS) && cJSON_AddItemToObject(view, "background", vec3(web->background));
 }
 
 prt_status prt_transfer_export_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *desc, const prt_web_desc *web, prt_export_result *out)

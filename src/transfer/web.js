@@ -240,6 +240,85 @@ var PRT = (function () {
         'in vec3 v_pos; in vec3 v_nrm; out vec4 color;\n' +
         'void main() { vec4 e = point_light(v_pos, normalize(v_nrm), 1); color = vec4(e.rgb * e.a, e.a); }\n';
 
+    // ---- rays against the mesh in JavaScript (for what the CPU run times test with shadow
+    // rays): a bounding-volume hierarchy of the triangles, split at the median of the longest
+    // axis, and segment tests as geom/raycast.c's prt__raycaster_segment_clear (hits from t = 0
+    // to the segment's length). ----
+    function raycaster(positions, indices) {
+        var nt = indices.length / 3, order = new Uint32Array(nt), cen = new Float32Array(nt * 3), i, k;
+        for (i = 0; i < nt; ++i) {
+            order[i] = i;
+            for (k = 0; k < 3; ++k) cen[i * 3 + k] = (positions[indices[i * 3] * 3 + k] + positions[indices[i * 3 + 1] * 3 + k] + positions[indices[i * 3 + 2] * 3 + k]) / 3;
+        }
+        var boxes = [], kids = [], first = [], count = [];   // node: box [6], children or a range of `order`
+        function build(lo, hi) {
+            var node = boxes.length, b = [Infinity, Infinity, Infinity, -Infinity, -Infinity, -Infinity], c = [Infinity, Infinity, Infinity, -Infinity, -Infinity, -Infinity];
+            for (var j = lo; j < hi; ++j) {
+                var t = order[j];
+                for (var v = 0; v < 3; ++v)
+                    for (var a = 0; a < 3; ++a) {
+                        var x = positions[indices[t * 3 + v] * 3 + a];
+                        if (x < b[a]) b[a] = x;
+                        if (x > b[3 + a]) b[3 + a] = x;
+                    }
+                for (a = 0; a < 3; ++a) { c[a] = Math.min(c[a], cen[t * 3 + a]); c[3 + a] = Math.max(c[3 + a], cen[t * 3 + a]); }
+            }
+            boxes.push(b); kids.push(null); first.push(lo); count.push(hi - lo);
+            if (hi - lo <= 4) return node;
+            var axis = 0;
+            for (a = 1; a < 3; ++a) if (c[3 + a] - c[a] > c[3 + axis] - c[axis]) axis = a;
+            var part = Array.prototype.slice.call(order.subarray(lo, hi)).sort(function (p, q) { return cen[p * 3 + axis] - cen[q * 3 + axis]; });
+            order.set(part, lo);
+            var mid = (lo + hi) >> 1;
+            kids[node] = [build(lo, mid), build(mid, hi)];
+            return node;
+        }
+        build(0, nt);
+        function slab(b, o, inv, len) {
+            var t0 = 0, t1 = len;
+            for (var a = 0; a < 3; ++a) {
+                var ta = (b[a] - o[a]) * inv[a], tb = (b[3 + a] - o[a]) * inv[a];
+                if (ta > tb) { var s = ta; ta = tb; tb = s; }
+                if (ta > t0) t0 = ta;
+                if (tb < t1) t1 = tb;
+                if (t0 > t1) return false;
+            }
+            return true;
+        }
+        function hits(t, o, d, len) {   // Moller-Trumbore, t in [0, len]
+            var a = indices[t * 3] * 3, b = indices[t * 3 + 1] * 3, c = indices[t * 3 + 2] * 3;
+            var e1 = [positions[b] - positions[a], positions[b + 1] - positions[a + 1], positions[b + 2] - positions[a + 2]];
+            var e2 = [positions[c] - positions[a], positions[c + 1] - positions[a + 1], positions[c + 2] - positions[a + 2]];
+            var pv = [d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2], d[0] * e2[1] - d[1] * e2[0]];
+            var det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
+            if (det === 0) return false;
+            var inv = 1 / det, tv = [o[0] - positions[a], o[1] - positions[a + 1], o[2] - positions[a + 2]];
+            var u = (tv[0] * pv[0] + tv[1] * pv[1] + tv[2] * pv[2]) * inv;
+            if (u < 0 || u > 1) return false;
+            var qv = [tv[1] * e1[2] - tv[2] * e1[1], tv[2] * e1[0] - tv[0] * e1[2], tv[0] * e1[1] - tv[1] * e1[0]];
+            var v = (d[0] * qv[0] + d[1] * qv[1] + d[2] * qv[2]) * inv;
+            if (v < 0 || u + v > 1) return false;
+            var tt = (e2[0] * qv[0] + e2[1] * qv[1] + e2[2] * qv[2]) * inv;
+            return tt >= 0 && tt <= len;
+        }
+        return {
+            segmentClear: function (a, b) {
+                var d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]], len = Math.hypot(d[0], d[1], d[2]);
+                if (!(len > 0)) return true;
+                d = [d[0] / len, d[1] / len, d[2] / len];
+                var inv = [1 / d[0], 1 / d[1], 1 / d[2]], stack = [0];
+                while (stack.length) {
+                    var node = stack.pop();
+                    if (!slab(boxes[node], a, inv, len)) continue;
+                    if (kids[node]) { stack.push(kids[node][0], kids[node][1]); continue; }
+                    for (var j = first[node]; j < first[node] + count[node]; ++j)
+                        if (hits(order[j], a, d, len)) return false;
+                }
+                return true;
+            }
+        };
+    }
+
     function parseLights(text) {
         var out = [];
         String(text).split('|').forEach(function (spec) {
@@ -379,7 +458,7 @@ var PRT = (function () {
         });
 
         // ---- point lights (api.pointLights): shadow cubes, the per-pixel pass, per-vertex irradiance ----
-        var lights = null;
+        var lights = null, rays = null;
         function pointLights(o) {
             if (!floatTargets) throw new Error('point lights need float render targets (EXT_color_buffer_float), which this browser does not offer');
             var lo = meta.lo, hi = meta.hi, diag = Math.max(Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]), 1e-6);
@@ -404,6 +483,7 @@ var PRT = (function () {
             gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, L.vtex, 0);
             gl.bindFramebuffer(gl.FRAMEBUFFER, null);
             L.set = function (list) {
+                list = list.slice(0, view.max_pixel_lights);   // prt render draws at most this many per pixel
                 L.list = list.map(function (l) { return {position: l.position.slice(), intensity: l.intensity.slice()}; });
                 L.dirty = L.list.map(function () { return true; });
                 L.vertex = [];
@@ -493,7 +573,10 @@ var PRT = (function () {
             };
             // Added per pixel on top of the mesh (drawn into the bound target, depth kept).
             L.draw = function (mvp) {
-                if (!L.list.length) return;
+                if (!L.list.length || o.perPixel === false) return;
+                for (var k = 0; k < L.list.length; ++k) L.atVertices(k);   // the gates' visibility and the shadow cubes, first
+                gl.bindFramebuffer(gl.FRAMEBUFFER, msFbo);
+                gl.viewport(0, 0, W, H);
                 gl.enable(gl.BLEND);
                 gl.blendFunc(gl.ONE, gl.ONE);
                 gl.depthFunc(gl.LEQUAL);
@@ -511,11 +594,6 @@ var PRT = (function () {
                 gl.vertexAttribPointer(4, 3, gl.FLOAT, false, 0, 0);
                 gl.enableVertexAttribArray(5);
                 for (var i = 0; i < L.list.length; ++i) {
-                    L.atVertices(i);   // the gate's visibility (and the shadow cube)
-                    gl.bindFramebuffer(gl.FRAMEBUFFER, msFbo);
-                    gl.viewport(0, 0, W, H);
-                    gl.useProgram(L.addProgram);
-                    gl.bindVertexArray(vao);
                     gl.clear(gl.STENCIL_BUFFER_BIT);
                     gl.bindBuffer(gl.ARRAY_BUFFER, L.visBuf[i]);
                     gl.vertexAttribPointer(5, 1, gl.FLOAT, false, 0, 0);
@@ -538,6 +616,7 @@ var PRT = (function () {
                     ui.heading('Point lights');
                     ui.note('Ctrl-drag (or alt-drag) moves the selected light across the view; the wheel with ctrl moves it nearer or farther.');
                     ui.button('add a light', function () {
+                        if (L.list.length >= view.max_pixel_lights) return;
                         var c = [(lo[0] + hi[0]) / 2, lo[1] + 0.8 * (hi[1] - lo[1]), (lo[2] + hi[2]) / 2];
                         var k = L.list.length ? L.list[L.list.length - 1].intensity.slice() : [diag * diag / 4, diag * diag / 4, diag * diag / 4];
                         L.set(L.list.concat([{position: c, intensity: k}]));
@@ -586,9 +665,12 @@ var PRT = (function () {
         var api = {
             gl: gl, meta: meta.params, vertexCount: nv, array: array, ui: ui, numbers: numbers,
             // Point lights drawn per pixel with shadow maps on top of the method's radiance, which
-            // then holds everything else (o = {albedo, lights: [{position, intensity}]}); returns
+            // then holds everything else (o = {albedo, lights: [{position, intensity}], perPixel: false when
+            // the method's radiance holds their direct light too}, at most view.max_pixel_lights); returns
             // {list, atVertices(i)}. Hash: lights=X,Y,Z:R,G,B|X,Y,Z:R,G,B.
             pointLights: pointLights,
+            // Segment tests against the mesh ({segmentClear(a, b)}), built on first use.
+            raycaster: function () { return rays || (rays = raycaster(positions, indices)); },
             // The method calls this when its lighting changed (a control moved).
             relight: function () { relightNeeded = true; redraw(); }
         };
