@@ -4,5 +4,8 @@
 file(READ "${IN}" hex HEX)
 string(REGEX REPLACE "([0-9a-f][0-9a-f])" "0x\\1," bytes "${hex}")
 string(REGEX REPLACE "(0x..,0x..,0x..,0x..,0x..,0x..,0x..,0x..,0x..,0x..,0x..,0x..,0x..,0x..,0x..,0x..,)" "\\1\n" bytes "${bytes}")
+if(bytes MATCHES "0x[89a-f]")
+  message(FATAL_ERROR "${IN}: keep the page's scripts ASCII (they are compiled in as char arrays)")
+endif()
 file(WRITE "${OUT}.tmp" "/* Generated from ${IN} by cmake/embed.cmake: do not edit. */\nconst char ${NAME}[] = {\n${bytes}0};\n")
 file(RENAME "${OUT}.tmp" "${OUT}")

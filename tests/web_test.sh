@@ -123,6 +123,20 @@ shot "$T/lc" "lights=-0.6,0.9,0.5:2,1.5,1|0.8,1.3,-0.4:1,1,2&neighbours=4" "$T/l
 within "$T/lc_page_moved.png" "$T/lc_render_moved.png" 0.03 0.02 "lightcloud, a light moved and one added, 4 neighbours"
 apart "$T/lc_page_moved.png" "$T/lc_page.png" 0.05 "moving and adding lights in the light-cloud page"
 
+# ---- offset: the light map's first-order light at the texels' shadow points, the offset maps'
+# passes over a prefiltered pyramid, the map drawn per texel and the lights per pixel ----
+expect 0 "bake offset" -- "$PRT" bake -q "$T/demo.obj" --method offset -o "$T/off.prt" --texels 64 --offsets 48 --iterations 100 --walks 32 --no-refine
+expect 0 "export --web offset" -- "$PRT" export "$T/off.prt" --web "$T/off" --width $W --height $H --light point:0.5,1.2,0.6:3,3,3
+$NOLEAK "$PRT" render -q --width $W --height $H "$T/off.prt" -o "$T/off_render.png" --light point:0.5,1.2,0.6:3,3,3
+shot "$T/off" "" "$T/off_page.png"
+within "$T/off_page.png" "$T/off_render.png" 0.03 0.02 "offset, sky and a point light"
+$NOLEAK "$PRT" render -q --width $W --height $H "$T/off.prt" -o "$T/off_render_moved.png" --light point:-0.6,0.9,0.5:2,1.5,1 --light point:0.8,1.3,-0.4:1,1,2 --rotate 120,25,-10 --intensity 0.5 --control bounces=0
+shot "$T/off" "lights=-0.6,0.9,0.5:2,1.5,1|0.8,1.3,-0.4:1,1,2&rotate=120,25,-10&intensity=0.5&bounces=0" "$T/off_page_moved.png"
+within "$T/off_page_moved.png" "$T/off_render_moved.png" 0.03 0.02 "offset, lights moved and added, sky turned, no bounce"
+apart "$T/off_page_moved.png" "$T/off_page.png" 0.05 "moving lights and turning the sky in the offset page"
+expect 2 "--web offset's first-order light" -- "$PRT" export "$T/off.prt" --web "$T/x" -k first-order
+says "final light"
+
 # ---- without WebGL2 the page says so ----
 browser --disable-3d-apis --dump-dom --virtual-time-budget=3000 "file://$T/sh/index.html" >"$T/dom"
 grep -q 'id="message">This page relights the scene with WebGL2' "$T/dom" && ok || bad "without WebGL the page shows no message"

@@ -169,6 +169,16 @@ var PRT = (function () {
             'in vec3 v_radiance; out vec4 color;\n' +
             'void main() { color = ' + (inline ? 'tonemap(v_radiance)' : 'vec4(v_radiance, 1.0)') + '; }\n';
     }
+    // Per texel: radiance from a light map over the UV layout (render/draw.c's VS_T, FS_T).
+    var TEX_VS = '#version 300 es\n' +
+        'layout(location = 0) in vec3 pos; layout(location = 3) in vec2 uv;\n' +
+        'uniform mat4 mvp; out vec2 v_uv;\n' +
+        'void main() { v_uv = uv; gl_Position = mvp * vec4(pos, 1.0); }\n';
+    function texFs(inline) {
+        return '#version 300 es\nprecision highp float;\n' + TONEMAP +
+            'in vec2 v_uv; uniform highp sampler2D map; out vec4 color;\n' +
+            'void main() { vec3 r = texture(map, v_uv).rgb; color = ' + (inline ? 'tonemap(r)' : 'vec4(r, 1.0)') + '; }\n';
+    }
     var POST_VS = '#version 300 es\n' +
         'void main() { vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0); gl_Position = vec4(p, 0.0, 1.0); }\n';
     var POST_FS = '#version 300 es\nprecision highp float;\n' + TONEMAP +
@@ -458,11 +468,37 @@ var PRT = (function () {
         });
 
         // ---- point lights (api.pointLights): shadow cubes, the per-pixel pass, per-vertex irradiance ----
+        // ---- a light map (api.lightMap): relight() then returns width x height x 3 texels ----
+        var lightMapTex = null, lightMapW = 0, lightMapH = 0, texProgram = null, texUpload = null;
+        function lightMap(w, h) {
+            var linear = !!gl.getExtension('OES_texture_float_linear');
+            lightMapW = w;
+            lightMapH = h;
+            lightMapTex = gl.createTexture();
+            gl.bindTexture(gl.TEXTURE_2D, lightMapTex);
+            // Filtered as prt render's per-texel path samples its map (RGBA32F, linear); halves
+            // where the browser cannot filter floats.
+            gl.texStorage2D(gl.TEXTURE_2D, 1, linear ? gl.RGBA32F : gl.RGBA16F, w, h);
+            gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR);
+            gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+            gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+            gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+            texUpload = new Float32Array(w * h * 4);
+            texProgram = compile(gl, TEX_VS, texFs(!floatTargets));
+            gl.bindVertexArray(vao);
+            var uvBuf = gl.createBuffer();
+            gl.bindBuffer(gl.ARRAY_BUFFER, uvBuf);
+            gl.bufferData(gl.ARRAY_BUFFER, array('uv'), gl.STATIC_DRAW);
+            gl.enableVertexAttribArray(3);
+            gl.vertexAttribPointer(3, 2, gl.FLOAT, false, 0, 0);
+            gl.bindVertexArray(null);
+        }
+
         var lights = null, rays = null;
         function pointLights(o) {
             if (!floatTargets) throw new Error('point lights need float render targets (EXT_color_buffer_float), which this browser does not offer');
             var lo = meta.lo, hi = meta.hi, diag = Math.max(Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]), 1e-6);
-            var L = {list: [], albedoBuf: gl.createBuffer(), visBuf: [], cube: [], dirty: [], vertex: [], selected: 0, onChange: o.change,
+            var L = {list: [], albedoBuf: gl.createBuffer(), visBuf: [], cube: [], dirty: [], selected: 0,
                      diag: diag, panel: null};
             gl.bindBuffer(gl.ARRAY_BUFFER, L.albedoBuf);
             gl.bufferData(gl.ARRAY_BUFFER, o.albedo, gl.STATIC_DRAW);
@@ -473,25 +509,42 @@ var PRT = (function () {
             L.depth = gl.createRenderbuffer();
             gl.bindRenderbuffer(gl.RENDERBUFFER, L.depth);
             gl.renderbufferStorage(gl.RENDERBUFFER, gl.DEPTH_COMPONENT24, CUBE_RES, CUBE_RES);
-            L.vw = Math.min(nv, 2048);
-            L.vh = Math.ceil(nv / L.vw);
-            L.vtex = gl.createTexture();
-            gl.bindTexture(gl.TEXTURE_2D, L.vtex);
-            gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, L.vw, L.vh);
-            L.vfbo = gl.createFramebuffer();
-            gl.bindFramebuffer(gl.FRAMEBUFFER, L.vfbo);
-            gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, L.vtex, 0);
-            gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+            // A set of points (positions, normals) the lights are evaluated at, on the GPU: the
+            // mesh's vertices, or a method's own (light-map texels' shadow samples).
+            L.points = function (pos, nrm) {
+                var P = {count: pos.length / 3, vao: gl.createVertexArray(), cache: []};
+                gl.bindVertexArray(P.vao);
+                [pos, nrm].forEach(function (a, k) {
+                    var buf = gl.createBuffer();
+                    gl.bindBuffer(gl.ARRAY_BUFFER, buf);
+                    gl.bufferData(gl.ARRAY_BUFFER, a, gl.STATIC_DRAW);
+                    gl.enableVertexAttribArray(k * 2);   // locations 0 and 2, as the mesh's
+                    gl.vertexAttribPointer(k * 2, 3, gl.FLOAT, false, 0, 0);
+                });
+                gl.bindVertexArray(null);
+                P.w = Math.min(P.count, 2048);
+                P.h = Math.ceil(P.count / P.w);
+                P.tex = gl.createTexture();
+                gl.bindTexture(gl.TEXTURE_2D, P.tex);
+                gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, P.w, P.h);
+                if (pos !== positions) L.sets.push(P);
+                P.fbo = gl.createFramebuffer();
+                gl.bindFramebuffer(gl.FRAMEBUFFER, P.fbo);
+                gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, P.tex, 0);
+                gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+                return P;
+            };
+            L.meshPoints = null;
             L.set = function (list) {
                 list = list.slice(0, view.max_pixel_lights);   // prt render draws at most this many per pixel
                 L.list = list.map(function (l) { return {position: l.position.slice(), intensity: l.intensity.slice()}; });
                 L.dirty = L.list.map(function () { return true; });
-                L.vertex = [];
+                L.sets.concat(L.meshPoints ? [L.meshPoints] : []).forEach(function (P) { P.cache = []; });
                 L.selected = Math.min(L.selected, Math.max(0, L.list.length - 1));
                 L.buildPanel();
                 relightNeeded = true;
             };
-            L.moved = function (i) { L.dirty[i] = true; L.vertex[i] = null; relightNeeded = true; redraw(); };
+            L.moved = function (i) { L.dirty[i] = true; L.forget(i); relightNeeded = true; redraw(); };
             // The shadow cube of light i (render/pixel_lights.c: R32F distances, 6 faces of 90 degrees).
             L.shadow = function (i) {
                 if (!L.dirty[i] && L.cube[i]) return;
@@ -545,32 +598,43 @@ var PRT = (function () {
                 gl.bindTexture(gl.TEXTURE_CUBE_MAP, L.cube[i]);
                 gl.uniform1i(gl.getUniformLocation(program, 'cube'), 0);
             }
-            // Light i at every vertex: Float32Array of nv x (E r, g, b, visible).
-            L.atVertices = function (i) {
-                if (L.vertex[i]) return L.vertex[i];
+            // Light i at every point of set P: Float32Array of count x (E r, g, b, visible), cached
+            // until the light changes.
+            L.atPoints = function (i, P) {
+                if (P.cache[i]) return P.cache[i];
                 L.shadow(i);
-                gl.bindFramebuffer(gl.FRAMEBUFFER, L.vfbo);
-                gl.viewport(0, 0, L.vw, L.vh);
+                gl.bindFramebuffer(gl.FRAMEBUFFER, P.fbo);
+                gl.viewport(0, 0, P.w, P.h);
                 gl.disable(gl.DEPTH_TEST);
                 gl.disable(gl.BLEND);
                 gl.clearBufferfv(gl.COLOR, 0, [0, 0, 0, 0]);
                 gl.useProgram(L.vertProgram);
                 lightUniforms(L.vertProgram, i);
-                gl.uniform1i(gl.getUniformLocation(L.vertProgram, 'width'), L.vw);
-                gl.uniform1i(gl.getUniformLocation(L.vertProgram, 'height'), L.vh);
-                gl.bindVertexArray(vao);
-                gl.drawArrays(gl.POINTS, 0, nv);
+                gl.uniform1i(gl.getUniformLocation(L.vertProgram, 'width'), P.w);
+                gl.uniform1i(gl.getUniformLocation(L.vertProgram, 'height'), P.h);
+                gl.bindVertexArray(P.vao);
+                gl.drawArrays(gl.POINTS, 0, P.count);
                 gl.bindVertexArray(null);
-                var px = new Float32Array(L.vw * L.vh * 4);
-                gl.readPixels(0, 0, L.vw, L.vh, gl.RGBA, gl.FLOAT, px);
+                var px = new Float32Array(P.w * P.h * 4);
+                gl.readPixels(0, 0, P.w, P.h, gl.RGBA, gl.FLOAT, px);
                 gl.bindFramebuffer(gl.FRAMEBUFFER, null);
-                var vis = new Float32Array(nv);
-                for (var v = 0; v < nv; ++v) vis[v] = px[v * 4 + 3];
-                if (!L.visBuf[i]) L.visBuf[i] = gl.createBuffer();
-                gl.bindBuffer(gl.ARRAY_BUFFER, L.visBuf[i]);
-                gl.bufferData(gl.ARRAY_BUFFER, vis, gl.DYNAMIC_DRAW);
-                return (L.vertex[i] = px.subarray(0, nv * 4));
+                return (P.cache[i] = px.subarray(0, P.count * 4));
             };
+            // Light i at every vertex; also the per-pixel pass's gate (which vertices see it).
+            L.atVertices = function (i) {
+                if (!L.meshPoints) L.meshPoints = L.points(positions, array('normals'));
+                var fresh = !L.meshPoints.cache[i], px = L.atPoints(i, L.meshPoints);
+                if (fresh || !L.visBuf[i]) {
+                    var vis = new Float32Array(nv);
+                    for (var v = 0; v < nv; ++v) vis[v] = px[v * 4 + 3];
+                    if (!L.visBuf[i]) L.visBuf[i] = gl.createBuffer();
+                    gl.bindBuffer(gl.ARRAY_BUFFER, L.visBuf[i]);
+                    gl.bufferData(gl.ARRAY_BUFFER, vis, gl.DYNAMIC_DRAW);
+                }
+                return px;
+            };
+            L.sets = [];
+            L.forget = function (i) { L.sets.concat(L.meshPoints ? [L.meshPoints] : []).forEach(function (P) { P.cache[i] = null; }); };
             // Added per pixel on top of the mesh (drawn into the bound target, depth kept).
             L.draw = function (mvp) {
                 if (!L.list.length || o.perPixel === false) return;
@@ -643,7 +707,7 @@ var PRT = (function () {
                     var base = l.intensity.slice(), peak = Math.max(base[0], base[1], base[2]) || 1;
                     sliderIn(box, {label: 'intensity (W/sr, brightest channel)', min: 0, max: 4 * peak, step: peak / 100, value: peak,
                                    format: function (v) { return v.toFixed(2); },
-                                   input: function (v) { for (var c = 0; c < 3; ++c) l.intensity[c] = base[c] / peak * v; L.vertex[i] = null; relightNeeded = true; redraw(); }});
+                                   input: function (v) { for (var c = 0; c < 3; ++c) l.intensity[c] = base[c] / peak * v; L.forget(i); relightNeeded = true; redraw(); }});
                     var rm = el('button', 'remove', box);
                     rm.addEventListener('click', function () { L.set(L.list.filter(function (x, j) { return j !== i; })); redraw(); });
                 });
@@ -671,6 +735,9 @@ var PRT = (function () {
             pointLights: pointLights,
             // Segment tests against the mesh ({segmentClear(a, b)}), built on first use.
             raycaster: function () { return rays || (rays = raycaster(positions, indices)); },
+            // Drawing from a light map over the mesh's UVs (data.js array 'uv'): relight() then
+            // returns width x height x 3 texels (row 0 at v = 0) instead of per-vertex radiance.
+            lightMap: lightMap,
             // The method calls this when its lighting changed (a control moved).
             relight: function () { relightNeeded = true; redraw(); }
         };
@@ -684,8 +751,19 @@ var PRT = (function () {
             if (relightNeeded) {
                 relightNeeded = false;
                 var radiance = m.relight();
-                gl.bindBuffer(gl.ARRAY_BUFFER, radBuf);
-                gl.bufferSubData(gl.ARRAY_BUFFER, 0, radiance);
+                if (lightMapTex) {
+                    for (var i = 0; i < lightMapW * lightMapH; ++i) {
+                        texUpload[i * 4] = radiance[i * 3];
+                        texUpload[i * 4 + 1] = radiance[i * 3 + 1];
+                        texUpload[i * 4 + 2] = radiance[i * 3 + 2];
+                        texUpload[i * 4 + 3] = 1;
+                    }
+                    gl.bindTexture(gl.TEXTURE_2D, lightMapTex);
+                    gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, lightMapW, lightMapH, gl.RGBA, gl.FLOAT, texUpload);
+                } else {
+                    gl.bindBuffer(gl.ARRAY_BUFFER, radBuf);
+                    gl.bufferSubData(gl.ARRAY_BUFFER, 0, radiance);
+                }
                 stats.relightMs = performance.now() - t;
             }
             var mvp = cameraMatrix(cam.eye, cam.target, cam.up, cam.fov, view.width / view.height);
@@ -694,8 +772,14 @@ var PRT = (function () {
             gl.viewport(0, 0, W, H);
             gl.enable(gl.DEPTH_TEST);
             gl.disable(gl.CULL_FACE);   // one-sided walls show from both sides, as in prt render
-            gl.useProgram(meshProgram);
-            gl.uniformMatrix4fv(gl.getUniformLocation(meshProgram, 'mvp'), false, mvp);
+            var program = lightMapTex ? texProgram : meshProgram;
+            gl.useProgram(program);
+            gl.uniformMatrix4fv(gl.getUniformLocation(program, 'mvp'), false, mvp);
+            if (lightMapTex) {
+                gl.activeTexture(gl.TEXTURE0);
+                gl.bindTexture(gl.TEXTURE_2D, lightMapTex);
+                gl.uniform1i(gl.getUniformLocation(program, 'map'), 0);
+            }
             if (floatTargets) {
                 gl.clearBufferfv(gl.COLOR, 0, [bg[0], bg[1], bg[2], 1]);
             } else {
@@ -705,8 +789,8 @@ var PRT = (function () {
                 c = c.map(function (x) { x = Math.min(Math.max(x * k, 0), 1); return x <= 0.0031308 ? 12.92 * x : 1.055 * Math.pow(x, 1 / 2.4) - 0.055; });
                 gl.clearColor(c[0], c[1], c[2], 1);
                 gl.clear(gl.COLOR_BUFFER_BIT);
-                gl.uniform1f(gl.getUniformLocation(meshProgram, 'u_scale'), scale);
-                gl.uniform1i(gl.getUniformLocation(meshProgram, 'u_clamp'), view.clamp ? 1 : 0);
+                gl.uniform1f(gl.getUniformLocation(program, 'u_scale'), scale);
+                gl.uniform1i(gl.getUniformLocation(program, 'u_clamp'), view.clamp ? 1 : 0);
             }
             gl.clear(gl.DEPTH_BUFFER_BIT);
             gl.bindVertexArray(vao);
