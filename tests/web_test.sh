@@ -134,6 +134,13 @@ $NOLEAK "$PRT" render -q --width $W --height $H "$T/off.prt" -o "$T/off_render_m
 shot "$T/off" "lights=-0.6,0.9,0.5:2,1.5,1|0.8,1.3,-0.4:1,1,2&rotate=120,25,-10&intensity=0.5&bounces=0" "$T/off_page_moved.png"
 within "$T/off_page_moved.png" "$T/off_render_moved.png" 0.03 0.02 "offset, lights moved and added, sky turned, no bounce"
 apart "$T/off_page_moved.png" "$T/off_page.png" 0.05 "moving lights and turning the sky in the offset page"
+# Subsurface scattering (examples/skin.json: the torus of skin): the dipole's pass, and the
+# dipole's albedo under the per-pixel lights.
+expect 0 "bake offset skin" -- "$PRT" bake -q "$SRC/examples/skin.json" --method offset -o "$T/skin.prt" --texels 64 --offsets 48 --iterations 100 --walks 32
+expect 0 "export --web offset skin" -- "$PRT" export "$T/skin.prt" --web "$T/skin" --width $W --height $H --light point:0.5,1.2,0.6:3,3,3
+$NOLEAK "$PRT" render -q --width $W --height $H "$T/skin.prt" -o "$T/skin_render.png" --light point:0.5,1.2,0.6:3,3,3
+shot "$T/skin" "" "$T/skin_page.png"
+within "$T/skin_page.png" "$T/skin_render.png" 0.03 0.02 "offset, subsurface (skin) and a point light"
 expect 2 "--web offset's first-order light" -- "$PRT" export "$T/off.prt" --web "$T/x" -k first-order
 says "final light"
 

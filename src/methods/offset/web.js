@@ -20,11 +20,12 @@ PRT.method(function (api) {
     var xs = new Int32Array(nc), ys = new Int32Array(nc);
     for (var i = 0; i < nc; ++i) { xs[i] = texel[i] % W; ys[i] = Math.floor(texel[i] / W); }
 
-    // out[i] = sum_k in[level k](source(texel i + offset k)) maps[k][i] (relight.c's apply).
-    function apply(maps, inputs, out) {
+    // out[i] = sum_k in[levels[k]](source(texel i + offset k)) maps[k][i] (relight.c's apply;
+    // levels null: every map reads inputs[0]).
+    function apply(maps, inputs, levels, out) {
         out.fill(0);
         for (var k = 0; k < K; ++k) {
-            var ox = offsets[k * 2], oy = offsets[k * 2 + 1], shift = oy * W + ox, src = inputs[level ? level[k] : 0], m = k * nc * 3;
+            var ox = offsets[k * 2], oy = offsets[k * 2 + 1], shift = oy * W + ox, src = inputs[levels ? levels[k] : 0], m = k * nc * 3;
             for (var i = 0; i < nc; ++i) {
                 if (xs[i] + ox < 0 || xs[i] + ox >= W || ys[i] + oy < 0 || ys[i] + oy >= H) continue;
                 var f = source[texel[i] + shift];
@@ -134,7 +135,7 @@ PRT.method(function (api) {
                     hide[i * 3 + c] = lights.list.length ? own * E[i * 3 + c] / PI : 0;
                 }
             if (subsurface) {
-                apply(subsurface, [a], b);
+                apply(subsurface, [a], null, b);
                 for (i = 0; i < nc; ++i)
                     if (medium[i]) for (c = 0; c < 3; ++c) first[i * 3 + c] = b[i * 3 + c];
             }
@@ -142,7 +143,7 @@ PRT.method(function (api) {
             if (radiosity) {
                 var cur = Float32Array.from(first), next = new Float32Array(nc * 3);
                 for (k = 0; k < state.bounces; ++k) {
-                    apply(radiosity, filter(cur), next);
+                    apply(radiosity, filter(cur), level, next);
                     for (i = 0; i < nc * 3; ++i) indirect[i] += next[i];
                     var tmp = cur; cur = next; next = tmp;
                 }
