@@ -93,6 +93,14 @@ render "$T/wl.prt" -o "$T/wl_render_rot.png" --rotate 120,25,-10 --intensity 1.7
 shot "$T/wl" "rotate=120,25,-10&intensity=1.7&light-coefficients=1024" "$T/wl_page_rot.png"
 within "$T/wl_page_rot.png" "$T/wl_render_rot.png" 0.03 0.02 "wavelet, environment rotated and scaled, 1024 coefficients"
 apart "$T/wl_page_rot.png" "$T/wl_page.png" 0.05 "rotating the environment in the wavelet page"
+# Glossy (a Phong lobe on every surface): the view factor per pixel from the separable BRDF's
+# view maps, seen from a camera moved through the hash and under a turned environment; prt render
+# draws it per pixel too.
+expect 0 "bake wavelet glossy" -- "$PRT" bake -q "$T/demo.obj" --method wavelet -o "$T/wlg.prt" --supersample 1 --bounces 0 --no-refine --brdf phong:30:0.5:0.4 --terms 2 --brdf-res 24
+expect 0 "export --web wavelet glossy" -- "$PRT" export "$T/wlg.prt" --web "$T/wlg" --width $W --height $H
+$NOLEAK "$PRT" render -q --width $W --height $H "$T/wlg.prt" -o "$T/wlg_render.png" --rotate 60,10,0 --eye 2.2,1.4,2.6 --target 0,0.5,0
+shot "$T/wlg" "rotate=60,10,0&eye=2.2,1.4,2.6&target=0,0.5,0" "$T/wlg_page.png"
+within "$T/wlg_page.png" "$T/wlg_render.png" 0.03 0.02 "wavelet glossy, environment turned, camera moved"
 
 # ---- spectral: point lights per pixel with the page's shadow cubes (drawn as prt render draws
 # them, without --per-vertex), their light at the vertices bounced through the basis; lights moved

@@ -494,7 +494,7 @@ var PRT = (function () {
             gl.bindVertexArray(null);
         }
 
-        var lights = null, rays = null;
+        var lights = null, rays = null, customPass = null;
         function pointLights(o) {
             if (!floatTargets) throw new Error('point lights need float render targets (EXT_color_buffer_float), which this browser does not offer');
             var lo = meta.lo, hi = meta.hi, diag = Math.max(Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]), 1e-6);
@@ -738,6 +738,14 @@ var PRT = (function () {
             // Drawing from a light map over the mesh's UVs (data.js array 'uv'): relight() then
             // returns width x height x 3 texels (row 0 at v = 0) instead of per-vertex radiance.
             lightMap: lightMap,
+            // A mesh pass of the method's own instead of the framework's (per-pixel view factors):
+            // fn(mvp, eye) draws into the bound linear target, depth test on; float targets only.
+            meshPass: function (fn) {
+                if (!floatTargets) throw new Error('this page draws per pixel into float render targets (EXT_color_buffer_float), which this browser does not offer');
+                customPass = fn;
+            },
+            compile: function (vs, fs) { return compile(gl, vs, fs); },
+            floatLinear: !!gl.getExtension('OES_texture_float_linear'),
             // The method calls this when its lighting changed (a control moved).
             relight: function () { relightNeeded = true; redraw(); }
         };
@@ -793,9 +801,13 @@ var PRT = (function () {
                 gl.uniform1i(gl.getUniformLocation(program, 'u_clamp'), view.clamp ? 1 : 0);
             }
             gl.clear(gl.DEPTH_BUFFER_BIT);
-            gl.bindVertexArray(vao);
-            gl.drawElements(gl.TRIANGLES, indices.length, gl.UNSIGNED_INT, 0);
-            gl.bindVertexArray(null);
+            if (customPass) {
+                customPass(mvp, cam.eye);
+            } else {
+                gl.bindVertexArray(vao);
+                gl.drawElements(gl.TRIANGLES, indices.length, gl.UNSIGNED_INT, 0);
+                gl.bindVertexArray(null);
+            }
             if (lights && floatTargets) lights.draw(mvp);
             if (floatTargets) {
                 gl.bindFramebuffer(gl.READ_FRAMEBUFFER, msFbo);

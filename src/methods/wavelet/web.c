@@ -2,8 +2,8 @@
  * fine cube (2 x 2 blocks, what a rotation deposits) and the directional lights, for the page
  * (methods/wavelet/web.js), which builds the lighting as lighting.c does - the cube rotated with
  * exact areas as light/env_cube.c, each face Haar-transformed, the largest coefficients kept and
- * quantized - and dots it with each vertex's transport as relight.c. Lambertian files only for
- * now: glossy vertices need the view maps per pixel. */
+ * quantized - and dots it with each vertex's transport as relight.c; glossy vertices' view factor
+ * per pixel from the separable BRDFs' view maps, as render/draw.c's FS_S. */
 #include "methods/wavelet/wavelet.h"
 
 #include "core/cubemap.h"
@@ -21,11 +21,11 @@ static bool same_rotation(const double a[9], const double b[9])
 prt_status prt__wavelet_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page)
 {
     const prt__wavelet_set *w = t->state;
-    int glossy = 0;
-    for (int k = 0; k < PRT__MAX_BRDFS; ++k) glossy += w->factors[k] != NULL;
-    if (glossy)
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web relights Lambertian wavelet files for now: this one has %d glossy material%s, "
-                         "whose view factor the page does not evaluate yet", glossy, glossy == 1 ? "" : "s");
+    /* Glossy materials: their view maps and each vertex's set, for the view factor per pixel. */
+    const float *view_maps = NULL;
+    const uint8_t *vertex_set = NULL;
+    int view_sets = 0, view_res = 0, polar = 0;
+    const bool glossy = prt_wavelet_view_maps(t, &view_maps, &view_sets, &view_res, &polar, &vertex_set) && view_sets > 0;
     const prt_lighting *l = d->lighting;
     const prt_envmap *env = prt_lighting_envmap(l);
     const size_t nv = t->mesh.vertex_count, vectors = w->store.vectors;
@@ -76,6 +76,11 @@ prt_status prt__wavelet_web(prt_context *ctx, const prt_transfer *t, const prt_e
         ok = prt__web_floats(page, "quads", quads, count);
         free(quads);
     }
+    ok = ok && cJSON_AddBoolToObject(meta, "glossy", glossy) &&
+         (!glossy || (cJSON_AddNumberToObject(meta, "view_sets", view_sets) && cJSON_AddNumberToObject(meta, "view_resolution", view_res) &&
+                      cJSON_AddBoolToObject(meta, "polar", polar) &&
+                      prt__web_floats(page, "view_maps", view_maps, (size_t)view_sets * w->terms * 3 * view_res * view_res) &&
+                      prt__web_small(page, "vertex_set", "u8", vertex_set, nv)));
     ok = ok && prt__web_small(page, "term_count", "u8", w->term_count, nv) && prt__web_small(page, "index", "u16", w->store.index, vectors * (size_t)n) &&
          prt__web_small(page, "values", w->store.bits == 8 ? "i8" : "i16", w->store.values, vectors * (size_t)n * 3) &&
          prt__web_floats(page, "scale", w->store.scale, vectors * 3) && prt__web_floats(page, "albedo", t->mesh.albedo, nv * 3);

@@ -3,7 +3,8 @@
 // light/env_cube.c rotates it (each 2 x 2 block of its fine cube shared among the texels the
 // rotated block covers), directional lights as deltas, each face Haar-transformed, the largest
 // coefficients kept and quantized to 16 bits - then each vertex's sparse transport dotted with it
-// (relight.c), times albedo / pi (Lambertian vertices). Hash parameters: rotate=YAW[,PITCH[,ROLL]]
+// (relight.c), times albedo / pi on Lambertian vertices; glossy ones meet the separable BRDF's view
+// maps per pixel (render/draw.c's FS_S). Hash parameters: rotate=YAW[,PITCH[,ROLL]]
 // (degrees), intensity=S, light-coefficients=N.
 'use strict';
 PRT.method(function (api) {
@@ -283,6 +284,126 @@ PRT.method(function (api) {
         return L;
     }
 
+    // ---- glossy vertices: the view factor per pixel (render/draw.c's FS_S). WebGL2 has no
+    // geometry shader to hand each fragment its triangle's corners, so the triangles are drawn
+    // unindexed, every corner carrying the three corners' ids and its barycentric coordinates;
+    // the K-vectors (rgb = g_k, a = the vertex's view-map set) and the radiance are textures. ----
+    var Kt = p.terms, vertexSet = p.glossy ? api.array('vertex_set') : null, kvec = p.glossy ? new Float32Array(nv * Kt * 3) : null;
+    var glossyPass = null;
+    if (p.glossy) (function () {
+        var gl = api.gl, idx = api.array('indices'), pos = api.array('positions'), nrm = api.array('normals'), nt = idx.length / 3;
+        var P = new Float32Array(nt * 9), Nn = new Float32Array(nt * 9), B = new Float32Array(nt * 9), I = new Uint32Array(nt * 9);
+        for (var t = 0; t < nt; ++t)
+            for (var k = 0; k < 3; ++k) {
+                var v = idx[t * 3 + k], o = (t * 3 + k) * 3;
+                for (var c = 0; c < 3; ++c) { P[o + c] = pos[v * 3 + c]; Nn[o + c] = nrm[v * 3 + c]; B[o + c] = k === c ? 1 : 0; I[o + c] = idx[t * 3 + c]; }
+            }
+        var vao = gl.createVertexArray();
+        gl.bindVertexArray(vao);
+        [P, Nn, B].forEach(function (a, loc) {
+            var buf = gl.createBuffer();
+            gl.bindBuffer(gl.ARRAY_BUFFER, buf);
+            gl.bufferData(gl.ARRAY_BUFFER, a, gl.STATIC_DRAW);
+            gl.enableVertexAttribArray(loc);
+            gl.vertexAttribPointer(loc, 3, gl.FLOAT, false, 0, 0);
+        });
+        var ibuf = gl.createBuffer();
+        gl.bindBuffer(gl.ARRAY_BUFFER, ibuf);
+        gl.bufferData(gl.ARRAY_BUFFER, I, gl.STATIC_DRAW);
+        gl.enableVertexAttribArray(3);
+        gl.vertexAttribIPointer(3, 3, gl.UNSIGNED_INT, 0, 0);
+        gl.bindVertexArray(null);
+        var TW = 2048;
+        function dataTexture(texels) {
+            var tex = gl.createTexture();
+            gl.bindTexture(gl.TEXTURE_2D, tex);
+            gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, TW, Math.ceil(texels / TW));
+            return {tex: tex, h: Math.ceil(texels / TW), data: new Float32Array(TW * Math.ceil(texels / TW) * 4)};
+        }
+        var kt = dataTexture(nv * Kt), rt = dataTexture(nv);
+        // [set][term][channel][res][res] -> one RGB(A) layer per (set, term), filtered as draw.c's.
+        var R = p.view_resolution, layers = p.view_sets * Kt, vm = api.array('view_maps'), rgba = new Float32Array(layers * R * R * 4);
+        for (var layer = 0; layer < layers; ++layer)
+            for (var i = 0; i < R * R; ++i) {
+                for (c = 0; c < 3; ++c) rgba[(layer * R * R + i) * 4 + c] = vm[(layer * 3 + c) * R * R + i];
+                rgba[(layer * R * R + i) * 4 + 3] = 1;
+            }
+        var maps = gl.createTexture();
+        gl.bindTexture(gl.TEXTURE_2D_ARRAY, maps);
+        gl.texStorage3D(gl.TEXTURE_2D_ARRAY, 1, api.floatLinear ? gl.RGBA32F : gl.RGBA16F, R, R, layers);
+        gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, 0, R, R, layers, gl.RGBA, gl.FLOAT, rgba);
+        gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MIN_FILTER, gl.LINEAR);
+        gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+        gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_WRAP_S, p.polar ? gl.REPEAT : gl.CLAMP_TO_EDGE);
+        gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+        var program = api.compile('#version 300 es\n' +
+            'layout(location = 0) in vec3 pos; layout(location = 1) in vec3 nrm; layout(location = 2) in vec3 bary; layout(location = 3) in uvec3 ids;\n' +
+            'uniform mat4 mvp; out vec3 f_pos; out vec3 f_nrm; out vec3 f_bary; flat out ivec3 f_ids;\n' +
+            'void main() { f_pos = pos; f_nrm = nrm; f_bary = bary; f_ids = ivec3(ids); gl_Position = mvp * vec4(pos, 1.0); }\n',
+            '#version 300 es\nprecision highp float; precision highp int; precision highp sampler2DArray;\n' +
+            'in vec3 f_pos; in vec3 f_nrm; in vec3 f_bary; flat in ivec3 f_ids;\n' +
+            'uniform highp sampler2D kvec, rad; uniform sampler2DArray maps; uniform int terms, polar; uniform vec3 eye;\n' +
+            'out vec4 color;\n' +
+            'vec4 fetch(highp sampler2D t, int i) { return texelFetch(t, ivec2(i % ' + TW + ', i / ' + TW + '), 0); }\n' +
+            'void main() {\n' +
+            '  vec3 n = normalize(f_nrm);\n' +
+            '  float ny1 = n.y + 1.0;\n' +
+            '  vec3 s = vec3(ny1 * ny1 + n.z * n.z - n.x * n.x, -2.0 * ny1 * n.x, -2.0 * n.x * n.z);\n' +
+            '  s = length(s) < 1e-6 ? vec3(1.0, 0.0, 0.0) : normalize(s);\n' +
+            '  vec3 t = normalize(cross(n, s));\n' +
+            '  vec3 wo = normalize(eye - f_pos);\n' +
+            '  vec3 l = vec3(dot(wo, s), dot(wo, t), dot(wo, n));\n' +
+            '  if (l.z < 0.02) { float r = length(l.xy); l.xy *= r > 0.0 ? sqrt(1.0 - 0.0004) / r : 0.0; l.z = 0.02; }\n' +
+            '  vec2 uv = polar != 0 ? vec2(fract(atan(l.y, l.x) / 6.28318530718), sqrt(max(0.0, 1.0 - l.z))) : 0.5 * (l.xy + 1.0);\n' +
+            '  vec3 acc = vec3(0.0);\n' +
+            '  for (int c = 0; c < 3; ++c) {\n' +
+            '    int id = f_ids[c];\n' +
+            '    int set = int(fetch(kvec, id * terms).a + 0.5);\n' +
+            '    if (set == 0) continue;\n' +
+            '    vec3 sum = vec3(0.0);\n' +
+            '    for (int k = 0; k < terms; ++k)\n' +
+            '      sum += texture(maps, vec3(uv, float((set - 1) * terms + k))).rgb * fetch(kvec, id * terms + k).rgb;\n' +
+            '    acc += f_bary[c] * sum;\n' +
+            '  }\n' +
+            '  vec3 f_rad = f_bary.x * fetch(rad, f_ids.x).rgb + f_bary.y * fetch(rad, f_ids.y).rgb + f_bary.z * fetch(rad, f_ids.z).rgb;\n' +
+            '  color = vec4(max(f_rad + acc, vec3(0.0)), 1.0);\n' +
+            '}\n');
+        glossyPass = function (radiance) {
+            for (var v = 0; v < nv; ++v) {
+                for (var k = 0; k < Kt; ++k) {
+                    var o = (v * Kt + k) * 4;
+                    kt.data[o] = kvec[(v * Kt + k) * 3]; kt.data[o + 1] = kvec[(v * Kt + k) * 3 + 1]; kt.data[o + 2] = kvec[(v * Kt + k) * 3 + 2];
+                    kt.data[o + 3] = vertexSet[v];
+                }
+                rt.data[v * 4] = radiance[v * 3]; rt.data[v * 4 + 1] = radiance[v * 3 + 1]; rt.data[v * 4 + 2] = radiance[v * 3 + 2];
+            }
+            gl.bindTexture(gl.TEXTURE_2D, kt.tex);
+            gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, TW, kt.h, gl.RGBA, gl.FLOAT, kt.data);
+            gl.bindTexture(gl.TEXTURE_2D, rt.tex);
+            gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, TW, rt.h, gl.RGBA, gl.FLOAT, rt.data);
+        };
+        api.meshPass(function (mvp, eye) {
+            gl.useProgram(program);
+            gl.uniformMatrix4fv(gl.getUniformLocation(program, 'mvp'), false, mvp);
+            gl.uniform3fv(gl.getUniformLocation(program, 'eye'), eye);
+            gl.uniform1i(gl.getUniformLocation(program, 'terms'), Kt);
+            gl.uniform1i(gl.getUniformLocation(program, 'polar'), p.polar ? 1 : 0);
+            [kt.tex, rt.tex].forEach(function (tex, unit) {
+                gl.activeTexture(gl.TEXTURE0 + unit);
+                gl.bindTexture(gl.TEXTURE_2D, tex);
+            });
+            gl.activeTexture(gl.TEXTURE2);
+            gl.bindTexture(gl.TEXTURE_2D_ARRAY, maps);
+            gl.activeTexture(gl.TEXTURE0);
+            gl.uniform1i(gl.getUniformLocation(program, 'kvec'), 0);
+            gl.uniform1i(gl.getUniformLocation(program, 'rad'), 1);
+            gl.uniform1i(gl.getUniformLocation(program, 'maps'), 2);
+            gl.bindVertexArray(vao);
+            gl.drawArrays(gl.TRIANGLES, 0, nt * 3);
+            gl.bindVertexArray(null);
+        });
+    })();
+
     var ui = api.ui, sliders = {};
     if (p.environment) {
         ui.heading('Environment');
@@ -299,20 +420,29 @@ PRT.method(function (api) {
 
     return {
         relight: function () {
-            var Lw = lighting();
+            var Lw = lighting(), PI = Math.fround(Math.PI);
             for (var v = 0; v < nv; ++v) {
-                // Lambertian: the first term's g times albedo / pi (prt_wavelet_shade).
-                var vec = vecStart[v], at = vec * n, a0 = 0, a1 = 0, a2 = 0;
-                for (var i = 0; i < n; ++i) {
-                    var l = index[at + i] * 4, q = (at + i) * 3;
-                    a0 += values[q] * Lw[l];
-                    a1 += values[q + 1] * Lw[l + 1];
-                    a2 += values[q + 2] * Lw[l + 2];
+                // Each term's g_k = T_k . L (prt_relight_wavelet); Lambertian vertices: the first
+                // term's times albedo / pi (prt_wavelet_shade), glossy ones per pixel.
+                var glossyVertex = vertexSet && vertexSet[v] > 0;
+                for (var k = 0; k < (glossyVertex ? termCount[v] : 1); ++k) {
+                    var vec = vecStart[v] + k, at = vec * n, a0 = 0, a1 = 0, a2 = 0;
+                    for (var i = 0; i < n; ++i) {
+                        var l = index[at + i] * 4, q = (at + i) * 3;
+                        a0 += values[q] * Lw[l];
+                        a1 += values[q + 1] * Lw[l + 1];
+                        a2 += values[q + 2] * Lw[l + 2];
+                    }
+                    var g0 = a0 * scale[vec * 3], g1 = a1 * scale[vec * 3 + 1], g2 = a2 * scale[vec * 3 + 2];
+                    if (kvec) { kvec[(v * Kt + k) * 3] = g0; kvec[(v * Kt + k) * 3 + 1] = g1; kvec[(v * Kt + k) * 3 + 2] = g2; }
+                    if (glossyVertex) continue;
+                    radiance[v * 3] = albedo[v * 3] / PI * g0;
+                    radiance[v * 3 + 1] = albedo[v * 3 + 1] / PI * g1;
+                    radiance[v * 3 + 2] = albedo[v * 3 + 2] / PI * g2;
                 }
-                radiance[v * 3] = albedo[v * 3] / Math.PI * a0 * scale[vec * 3];
-                radiance[v * 3 + 1] = albedo[v * 3 + 1] / Math.PI * a1 * scale[vec * 3 + 1];
-                radiance[v * 3 + 2] = albedo[v * 3 + 2] / Math.PI * a2 * scale[vec * 3 + 2];
+                if (glossyVertex) radiance[v * 3] = radiance[v * 3 + 1] = radiance[v * 3 + 2] = 0;
             }
+            if (glossyPass) glossyPass(radiance);
             return radiance;
         },
         set: function (q) {
