@@ -152,6 +152,13 @@ within "$T/skin_page.png" "$T/skin_render.png" 0.03 0.02 "offset, subsurface (sk
 expect 2 "--web offset's first-order light" -- "$PRT" export "$T/off.prt" --web "$T/x" -k first-order
 says "final light"
 
+# ---- ao: the environment's SH convolved with the clamped cosine, times accessibility ----
+expect 0 "bake ao" -- "$PRT" bake -q "$T/demo.obj" --method ao -o "$T/ao.prt" --samples 16
+expect 0 "export --web ao" -- "$PRT" export "$T/ao.prt" --web "$T/ao" --width $W --height $H
+render "$T/ao.prt" -o "$T/ao_render.png" --rotate 120,25,-10 --intensity 1.7
+shot "$T/ao" "rotate=120,25,-10&intensity=1.7" "$T/ao_page.png"
+within "$T/ao_page.png" "$T/ao_render.png" 0.03 0.02 "ao, environment turned and scaled"
+
 # ---- without WebGL2 the page says so ----
 browser --disable-3d-apis --dump-dom --virtual-time-budget=3000 "file://$T/sh/index.html" >"$T/dom"
 grep -q 'id="message">This page relights the scene with WebGL2' "$T/dom" && ok || bad "without WebGL the page shows no message"
@@ -163,10 +170,8 @@ expect 2 "--eye without --target" -- "$PRT" export "$T/sh.prt" --web "$T/x" --ey
 says "go together"
 expect 2 "--fov without --web" -- "$PRT" export "$T/sh.prt" -o "$T/x.glb" --fov 30
 says "go with --web"
-# A method without a page is refused in one line, and nothing is written.
-expect 0 "bake ao" -- "$PRT" bake -q "$T/demo.obj" --method ao -o "$T/ao.prt" --samples 16
-expect 2 "--web of an ao file" -- "$PRT" export "$T/ao.prt" --web "$T/x"
-says "no web page yet"
+# What a page cannot show is refused in one line, and nothing is written.
+expect 2 "--web spectral with a directional light" -- "$PRT" export "$T/sp.prt" --web "$T/x" --light directional:0,1,0:3,3,3
 [ "$(wc -l <"$T/err")" -eq 1 ] && ok || bad "the refusal is not one line"
 [ ! -e "$T/x" ] && ok || bad "a refused export left a page"
 
