@@ -108,11 +108,13 @@ within "$T/wlg_page.png" "$T/wlg_render.png" 0.03 0.02 "wavelet glossy, environm
 expect 0 "bake spectral" -- "$PRT" bake -q "$T/demo.obj" --method spectral -o "$T/sp.prt" --samples 512 --no-refine
 expect 0 "export --web spectral" -- "$PRT" export "$T/sp.prt" --web "$T/sp" --width $W --height $H --light point:0.5,1.2,0.6:3,3,3
 $NOLEAK "$PRT" render -q --width $W --height $H "$T/sp.prt" -o "$T/sp_render.png" --light point:0.5,1.2,0.6:3,3,3
-shot "$T/sp" "" "$T/sp_page.png"
+shot "$T/sp" "markers=0" "$T/sp_page.png"
 within "$T/sp_page.png" "$T/sp_render.png" 0.03 0.02 "spectral, sky and a point light"
+shot "$T/sp" "" "$T/sp_page_markers.png"
+apart "$T/sp_page_markers.png" "$T/sp_page.png" 0.001 "the lights' markers (shown unless markers=0)"
 expect 0 "export --web spectral, no environment" -- "$PRT" export "$T/sp.prt" --web "$T/sp_dark" --width $W --height $H --env none --light point:0.5,1.2,0.6:3,3,3
 $NOLEAK "$PRT" render -q --width $W --height $H "$T/sp.prt" -o "$T/sp_render_moved.png" --env none --light point:-0.6,0.9,0.5:2,1.5,1 --light point:0.8,1.3,-0.4:1,1,2 --control bounces=2
-shot "$T/sp_dark" "lights=-0.6,0.9,0.5:2,1.5,1|0.8,1.3,-0.4:1,1,2&bounces=2" "$T/sp_page_moved.png"
+shot "$T/sp_dark" "markers=0&lights=-0.6,0.9,0.5:2,1.5,1|0.8,1.3,-0.4:1,1,2&bounces=2" "$T/sp_page_moved.png"
 within "$T/sp_page_moved.png" "$T/sp_render_moved.png" 0.03 0.02 "spectral, a light moved and one added, 2 bounces"
 $NOLEAK "$PRT" render -q --width $W --height $H "$T/sp.prt" -o "$T/sp_render_dark.png" --env none --light point:0.5,1.2,0.6:3,3,3
 apart "$T/sp_page_moved.png" "$T/sp_render_dark.png" 0.05 "moving and adding lights in the spectral page"
@@ -124,10 +126,10 @@ says "point lights"
 expect 0 "bake lightcloud" -- "$PRT" bake -q "$T/demo.obj" --method lightcloud -o "$T/lc.prt" --cloud-grid 3,2,3 --samples 512 --no-refine
 expect 0 "export --web lightcloud" -- "$PRT" export "$T/lc.prt" --web "$T/lc" --width $W --height $H --env none --light point:0.5,1.2,0.6:3,3,3
 $NOLEAK "$PRT" render -q --width $W --height $H "$T/lc.prt" -o "$T/lc_render.png" --env none --light point:0.5,1.2,0.6:3,3,3
-shot "$T/lc" "" "$T/lc_page.png"
+shot "$T/lc" "markers=0" "$T/lc_page.png"
 within "$T/lc_page.png" "$T/lc_render.png" 0.03 0.02 "lightcloud, a point light"
 $NOLEAK "$PRT" render -q --width $W --height $H "$T/lc.prt" -o "$T/lc_render_moved.png" --env none --light point:-0.6,0.9,0.5:2,1.5,1 --light point:0.8,1.3,-0.4:1,1,2 --control neighbours=4
-shot "$T/lc" "lights=-0.6,0.9,0.5:2,1.5,1|0.8,1.3,-0.4:1,1,2&neighbours=4" "$T/lc_page_moved.png"
+shot "$T/lc" "markers=0&lights=-0.6,0.9,0.5:2,1.5,1|0.8,1.3,-0.4:1,1,2&neighbours=4" "$T/lc_page_moved.png"
 within "$T/lc_page_moved.png" "$T/lc_render_moved.png" 0.03 0.02 "lightcloud, a light moved and one added, 4 neighbours"
 apart "$T/lc_page_moved.png" "$T/lc_page.png" 0.05 "moving and adding lights in the light-cloud page"
 
@@ -136,10 +138,10 @@ apart "$T/lc_page_moved.png" "$T/lc_page.png" 0.05 "moving and adding lights in 
 expect 0 "bake offset" -- "$PRT" bake -q "$T/demo.obj" --method offset -o "$T/off.prt" --texels 64 --offsets 48 --iterations 100 --walks 32 --no-refine
 expect 0 "export --web offset" -- "$PRT" export "$T/off.prt" --web "$T/off" --width $W --height $H --light point:0.5,1.2,0.6:3,3,3
 $NOLEAK "$PRT" render -q --width $W --height $H "$T/off.prt" -o "$T/off_render.png" --light point:0.5,1.2,0.6:3,3,3
-shot "$T/off" "" "$T/off_page.png"
+shot "$T/off" "markers=0" "$T/off_page.png"
 within "$T/off_page.png" "$T/off_render.png" 0.03 0.02 "offset, sky and a point light"
 $NOLEAK "$PRT" render -q --width $W --height $H "$T/off.prt" -o "$T/off_render_moved.png" --light point:-0.6,0.9,0.5:2,1.5,1 --light point:0.8,1.3,-0.4:1,1,2 --rotate 120,25,-10 --intensity 0.5 --control bounces=0
-shot "$T/off" "lights=-0.6,0.9,0.5:2,1.5,1|0.8,1.3,-0.4:1,1,2&rotate=120,25,-10&intensity=0.5&bounces=0" "$T/off_page_moved.png"
+shot "$T/off" "markers=0&lights=-0.6,0.9,0.5:2,1.5,1|0.8,1.3,-0.4:1,1,2&rotate=120,25,-10&intensity=0.5&bounces=0" "$T/off_page_moved.png"
 within "$T/off_page_moved.png" "$T/off_render_moved.png" 0.03 0.02 "offset, lights moved and added, sky turned, no bounce"
 apart "$T/off_page_moved.png" "$T/off_page.png" 0.05 "moving lights and turning the sky in the offset page"
 # Subsurface scattering (examples/skin.json: the torus of skin): the dipole's pass, and the
@@ -147,7 +149,7 @@ apart "$T/off_page_moved.png" "$T/off_page.png" 0.05 "moving lights and turning 
 expect 0 "bake offset skin" -- "$PRT" bake -q "$SRC/examples/skin.json" --method offset -o "$T/skin.prt" --texels 64 --offsets 48 --iterations 100 --walks 32
 expect 0 "export --web offset skin" -- "$PRT" export "$T/skin.prt" --web "$T/skin" --width $W --height $H --light point:0.5,1.2,0.6:3,3,3
 $NOLEAK "$PRT" render -q --width $W --height $H "$T/skin.prt" -o "$T/skin_render.png" --light point:0.5,1.2,0.6:3,3,3
-shot "$T/skin" "" "$T/skin_page.png"
+shot "$T/skin" "markers=0" "$T/skin_page.png"
 within "$T/skin_page.png" "$T/skin_render.png" 0.03 0.02 "offset, subsurface (skin) and a point light"
 expect 2 "--web offset's first-order light" -- "$PRT" export "$T/off.prt" --web "$T/x" -k first-order
 says "final light"

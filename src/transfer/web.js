@@ -6,7 +6,9 @@
 // the file system may use neither fetch nor modules.
 //
 // URL hash parameters (#rotate=90,0,0&intensity=2) set the state at load and on change; the
-// framework's are eye=X,Y,Z target=X,Y,Z fov=DEG exposure=STOPS, the rest go to the method.
+// framework's are eye=X,Y,Z target=X,Y,Z fov=DEG exposure=STOPS, lights=X,Y,Z:R,G,B|... and
+// markers=0 (point lights without their markers, as prt render draws them), the rest go to the
+// method.
 // window.prtPage.set({...}) does the same from a script and draws at once.
 'use strict';
 var PRT = (function () {
@@ -328,6 +330,18 @@ var PRT = (function () {
             }
         };
     }
+
+    // The point lights' markers, drawn over the tone-mapped image (not part of prt render's).
+    var MARK_VS = '#version 300 es\n' +
+        'layout(location = 0) in vec3 pos; layout(location = 1) in float selected; uniform mat4 mvp; out float f_sel;\n' +
+        'void main() { f_sel = selected; gl_Position = mvp * vec4(pos, 1.0); gl_PointSize = 11.0; }\n';
+    var MARK_FS = '#version 300 es\nprecision highp float;\n' +
+        'in float f_sel; out vec4 color;\n' +
+        'void main() {\n' +
+        '  float r = length(gl_PointCoord - 0.5) * 2.0;\n' +
+        '  if (r > 1.0) discard;\n' +
+        '  color = r > 0.6 ? vec4(0.0, 0.0, 0.0, 1.0) : f_sel > 0.5 ? vec4(1.0, 0.85, 0.2, 1.0) : vec4(1.0);\n' +
+        '}\n';
 
     function parseLights(text) {
         var out = [];
@@ -679,6 +693,7 @@ var PRT = (function () {
                 if (!L.panel) {
                     ui.heading('Point lights');
                     ui.note('Ctrl-drag (or alt-drag) moves the selected light across the view; the wheel with ctrl moves it nearer or farther.');
+                    ui.checkbox('show the lights (markers, not part of the image)', true, function (v) { L.markers = v; redraw(); });
                     ui.button('add a light', function () {
                         if (L.list.length >= view.max_pixel_lights) return;
                         var c = [(lo[0] + hi[0]) / 2, lo[1] + 0.8 * (hi[1] - lo[1]), (lo[2] + hi[2]) / 2];
@@ -711,6 +726,27 @@ var PRT = (function () {
                     var rm = el('button', 'remove', box);
                     rm.addEventListener('click', function () { L.set(L.list.filter(function (x, j) { return j !== i; })); redraw(); });
                 });
+            };
+            L.markers = true;
+            L.markProgram = compile(gl, MARK_VS, MARK_FS);
+            L.markVao = gl.createVertexArray();
+            L.markBuf = gl.createBuffer();
+            L.drawMarkers = function (mvp) {
+                if (!L.markers || !L.list.length) return;
+                var data = new Float32Array(L.list.length * 4);
+                L.list.forEach(function (l, i) { data.set([l.position[0], l.position[1], l.position[2], i === L.selected ? 1 : 0], i * 4); });
+                gl.bindVertexArray(L.markVao);
+                gl.bindBuffer(gl.ARRAY_BUFFER, L.markBuf);
+                gl.bufferData(gl.ARRAY_BUFFER, data, gl.DYNAMIC_DRAW);
+                gl.enableVertexAttribArray(0);
+                gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 16, 0);
+                gl.enableVertexAttribArray(1);
+                gl.vertexAttribPointer(1, 1, gl.FLOAT, false, 16, 12);
+                gl.disable(gl.DEPTH_TEST);
+                gl.useProgram(L.markProgram);
+                gl.uniformMatrix4fv(gl.getUniformLocation(L.markProgram, 'mvp'), false, mvp);
+                gl.drawArrays(gl.POINTS, 0, L.list.length);
+                gl.bindVertexArray(null);
             };
             L.set(o.lights);
             lights = L;
@@ -825,6 +861,11 @@ var PRT = (function () {
                 gl.drawArrays(gl.TRIANGLES, 0, 3);
                 gl.bindVertexArray(null);
             }
+            if (lights) {
+                gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+                gl.viewport(0, 0, W, H);
+                lights.drawMarkers(mvp);
+            }
             stats.drawMs = performance.now() - t;
             stats.frames++;
             statsLine.textContent = 'loaded in ' + stats.loadMs.toFixed(0) + ' ms; relit in ' + stats.relightMs.toFixed(1) + ' ms' +
@@ -841,9 +882,10 @@ var PRT = (function () {
             if (params.fov && isFinite(+params.fov)) cam.fov = +params.fov;
             if (params.exposure !== undefined && isFinite(+params.exposure)) { exposure = +params.exposure; exposureSlider.set(exposure); }
             if (params.lights !== undefined && lights) lights.set(parseLights(params.lights));
+            if (params.markers !== undefined && lights) lights.markers = params.markers !== '0';
             var rest = {};
             for (var k in params)
-                if (['eye', 'target', 'fov', 'exposure', 'lights'].indexOf(k) < 0) rest[k] = params[k];
+                if (['eye', 'target', 'fov', 'exposure', 'lights', 'markers'].indexOf(k) < 0) rest[k] = params[k];
             if (m.set) m.set(rest);
             relightNeeded = true;
         }
