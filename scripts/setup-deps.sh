@@ -22,8 +22,14 @@ done
 node_missing=""
 command -v node >/dev/null 2>&1 || node_missing="nodejs"
 command -v npm >/dev/null 2>&1 || node_missing="$node_missing npm"
+# Chromium runs prt export --web's page headless in `make test` (tests/web_test.sh, with node
+# comparing its screenshots to prt render's); without it that test skips, so failing to install it
+# is said, not fatal. Any chromium on the PATH serves (the test also takes $PRT_CHROMIUM).
+chromium_missing=""
+command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || command -v google-chrome >/dev/null 2>&1 ||
+    chromium_missing="chromium"
 
-if [ -n "$missing$node_missing" ]; then
+if [ -n "$missing$node_missing$chromium_missing" ]; then
     SUDO=""
     [ "$(id -u)" -eq 0 ] || SUDO="sudo"
     export DEBIAN_FRONTEND=noninteractive
@@ -39,6 +45,12 @@ if [ -n "$missing$node_missing" ]; then
         { [ -n "$missing" ] || $SUDO apt-get update -qq; } >/dev/null 2>&1 &&
             $SUDO apt-get install -y -qq --no-install-recommends $node_missing >/dev/null 2>&1 ||
             echo "setup-deps: could not install$node_missing: the glTF validation test will skip" >&2
+    fi
+    if [ -n "$chromium_missing" ]; then
+        echo "setup-deps: installing: chromium (for the web page test)" >&2
+        { [ -n "$missing$node_missing" ] || $SUDO apt-get update -qq; } >/dev/null 2>&1 &&
+            $SUDO apt-get install -y -qq --no-install-recommends chromium >/dev/null 2>&1 ||
+            echo "setup-deps: could not install chromium: the web page test will skip" >&2
     fi
 fi
 

@@ -234,6 +234,28 @@ typedef struct prt_export_result {
  * A method without export options accepts only none. PRT_ERR_INVALID_ARG when the options do not
  * fit the file or the mesh (an SH attribute export to PLY, say), with nothing written. */
 prt_status prt_transfer_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *desc, prt_export_result *out);
+
+/* ---- A web page (prt export --web DIR) ----
+ * DIR/index.html and its scripts: WebGL2, no network, no build step, opened from the file system
+ * with a double click (classic <script src> tags: data as base64 in data.js). It opens at the
+ * camera given, tone-maps as prt render's PNGs do, and relights live with the method's run-time
+ * controls (environment rotation and intensity, lights). Methods without a page are refused
+ * (prt_method_web says which have one). */
+typedef struct prt_web_desc {
+    const char *dir;                    /* made when missing; its files are replaced */
+    float eye[3], target[3], up[3];     /* prt render's camera (up all zero = +y) */
+    float fov_y_deg;                    /* vertical; 0 = 40 */
+    int width, height;                  /* the canvas in CSS pixels; 0 = 800 x 600 */
+    float exposure_stops;               /* as prt_image_save_desc */
+    int tonemap;                        /* 0 or 1 Reinhard on luminance, 2 clamp */
+    float background[3];                /* linear radiance where no surface is hit */
+} prt_web_desc;
+/* Writes the page for t relit as desc says (lighting, variant, controls; options and mesh are
+ * ignored); out gets the files written and report lines. Nothing is left on failure. */
+prt_status prt_transfer_export_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *desc, const prt_web_desc *web,
+                                   prt_export_result *out);
+/* Non-zero when m's files can be exported as a web page. */
+int prt_method_web(const prt_method *m);
 void prt_export_result_free(prt_export_result *r);
 
 /* ---- Relighting ---- */

@@ -555,3 +555,23 @@ prt_status prt__env_cube(prt_context *ctx, const prt_envmap *env, const double r
     free(rot);
     return PRT_OK;
 }
+
+static void quads_of(const float *src, float *energy)
+{
+    for (int face = 0; face < 6; ++face)
+        for (int y = 0; y < PRT__ENV_CUBE_QUADS; ++y)
+            for (int x = 0; x < PRT__ENV_CUBE_QUADS; ++x) {
+                /* As deposit_rotated adds them. */
+                const float *e0 = src + (((size_t)face * SRC + 2 * y) * SRC + 2 * x) * 3, *e1 = e0 + (size_t)SRC * 3;
+                float *o = energy + (((size_t)face * PRT__ENV_CUBE_QUADS + y) * PRT__ENV_CUBE_QUADS + x) * 3;
+                for (int c = 0; c < 3; ++c) o[c] = e0[c] + e0[3 + c] + e1[c] + e1[3 + c];
+            }
+}
+
+prt_status prt__env_cube_quads(prt_context *ctx, const prt_envmap *env, float *energy)
+{
+    const float *src = source_cube(ctx, env);
+    if (!src) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    quads_of(src, energy);
+    return PRT_OK;
+}

@@ -38,6 +38,7 @@ const char *prt_method_baked_albedo_why(const prt_method *m) { return m && !m->r
 int prt_method_sharp_environment(const prt_method *m) { return m && m->sharp_environment; }
 int prt_method_light_map(const prt_method *m) { return m && m->light_map; }
 int prt_method_gpu_passes(const prt_method *m) { return m && m->gpu_passes; }
+int prt_method_web(const prt_method *m) { return m && m->web; }
 const char *prt_method_light_map_option(const prt_method *m) { return m ? m->light_map_option : NULL; }
 
 int prt_method_options(const prt_method *m, const prt_option_desc **out)

@@ -10,6 +10,7 @@
 #include "io/container.h"
 #include "transfer/checkpoint.h"
 #include "transfer/transfer.h"
+#include "transfer/web.h"
 
 #include <cjson/cJSON.h>
 
@@ -131,6 +132,10 @@ struct prt_method {
     const prt_option_desc *export_options;
     int export_option_count;
     prt_status (*export_files)(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);
+    /* prt export --web (transfer/web.h): the arrays, parameters and relighting script the page
+     * needs beyond the mesh and the view, for t relit as d says (lighting, variant, controls).
+     * NULL: no page; prt_transfer_export_web refuses the file. */
+    prt_status (*web)(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page);
 
     /* Bake: set up a job for t (which holds the scene's mesh, materials and lighting). */
     prt_status (*bake_begin)(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job);

@@ -49,6 +49,16 @@ static const char *HELP_EXPORT_HEAD =
     "  -k, --kind K           what to relight the file as (prt info lists what it holds);\n"
     "                         default: the richest view-independent one\n"
     "      --eye X,Y,Z        the viewpoint each vertex's colour is seen from (glossy surfaces)\n"
+    "A web page instead of a mesh (prt export FILE.prt --web DIR): DIR/index.html with its\n"
+    "scripts (WebGL2, nothing fetched: it opens from the file system with a double click) that\n"
+    "opens at prt render's view of the same options, tone-maps as its PNGs do, and relights\n"
+    "live: the environment's rotation and intensity, the method's controls, an orbit camera\n"
+    "      --web DIR          write the page into DIR (made when missing)\n"
+    "      --eye X,Y,Z --target X,Y,Z  the camera (default: prt render's auto framing)\n"
+    "      --view X,Y,Z       direction from the scene centre towards the camera (auto framing)\n"
+    "      --fov DEG          vertical field of view (default 40; 70 inside a closed scene)\n"
+    "      --width N, --height N  the canvas in pixels (default 800 x 600)\n"
+    "      --exposure STOPS, --tonemap reinhard|clamp, --background R,G,B  as prt render\n"
     CLI_LIGHT_OPTIONS_HELP;
 
 static const char *HELP_EXPORT_TAIL =
@@ -65,7 +75,46 @@ static void help_export(void)
     fputs(HELP_EXPORT_TAIL, stdout);
 }
 
-enum { OPT_EXPORT_OPTION = 3000 };
+enum { OPT_EXPORT_OPTION = 3000, OPT_WEB = 2900 };
+
+/* prt export --web DIR: the page, opened at prt render's camera for the same options. */
+static int export_web(cli *c, cli_light *light, cli_view *view, const char *dir, const char *path, const char *kind)
+{
+    int rc = cli_make_context(c);
+    if (rc) return rc;
+    prt_transfer *t = NULL;
+    prt_lighting *lighting = NULL;
+    prt_export_result er = {0};
+    prt_status st = prt_transfer_load(c->ctx, path, &t);
+    int variant = -1, controls[PRT_MAX_CONTROLS], nc = 0;
+    if (!st) {
+        variant = kind ? prt_transfer_find_variant(t, kind) : prt_transfer_default_variant(t, 0);
+        if (variant < 0) rc = cli_usage(c, "%s", prt_last_error());
+    }
+    if (!st && !rc) st = cli_lighting(c, light, t, NULL, &lighting);
+    if (!st && !rc && (nc = cli_controls(c, light, t, controls)) < 0) rc = EXIT_USAGE;
+    if (!st && !rc) {
+        prt_camera cam;
+        cli_view_camera(c, view, prt_transfer_positions(t), prt_transfer_vertex_count(t), prt_transfer_indices(t), prt_transfer_triangle_count(t),
+                        (float)view->width / (float)view->height, &cam);
+        prt_web_desc w = {.dir = dir, .fov_y_deg = cam.fov_y_deg, .width = view->width, .height = view->height,
+                          .exposure_stops = view->save.exposure_stops, .tonemap = view->save.tonemap};
+        memcpy(w.eye, cam.eye, sizeof w.eye);
+        memcpy(w.target, cam.target, sizeof w.target);
+        memcpy(w.up, cam.up, sizeof w.up);
+        memcpy(w.background, view->background, sizeof w.background);
+        const prt_export_desc d = {.lighting = lighting, .variant = variant, .controls = nc > 0 ? controls : NULL, .source = path};
+        st = prt_transfer_export_web(c->ctx, t, &d, &w, &er);
+        if (st == PRT_ERR_INVALID_ARG) { rc = cli_usage(c, "%s", prt_last_error()); st = PRT_OK; }
+        if (!st && !rc && !c->quiet) cli_print_lines(stderr, "prt export: ", er.report);
+    }
+    if (st && !rc) rc = cli_fail(c, st);
+    prt_export_result_free(&er);
+    prt_lighting_release(lighting);
+    prt_transfer_release(t);
+    prt_context_release(c->ctx);
+    return rc;
+}
 
 /* The method's export options as given, checked against the file's method; PRT_ERR_INVALID_ARG
  * after saying why when one is not its method's. */
@@ -111,7 +160,11 @@ static int relight_main(int argc, char **argv, bool exporting)
                                           {"eye", required_argument, 0, 'e'}, {"texels", no_argument, 0, 'T'}, CLI_LIGHT_LONG_OPTIONS,
                                           {"time", required_argument, 0, OPT_TIME},
                                           {"colors", required_argument, 0, 'C'}, {"exposure", required_argument, 0, 'E'},
-                                          {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}};
+                                          {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'},
+                                          {"web", required_argument, 0, OPT_WEB}, {"target", required_argument, 0, OPT_TARGET},
+                                          {"view", required_argument, 0, OPT_VIEW}, {"fov", required_argument, 0, OPT_FOV},
+                                          {"width", required_argument, 0, OPT_WIDTH}, {"height", required_argument, 0, OPT_HEIGHT},
+                                          {"tonemap", required_argument, 0, OPT_TONEMAP}, {"background", required_argument, 0, OPT_BACKGROUND}};
     /* Every method's export options are parsed, here and in relight (where each is refused by
      * name), and checked against the file's method once it is loaded. */
     struct option opts[128];
@@ -130,10 +183,16 @@ static int relight_main(int argc, char **argv, bool exporting)
     float exposure = 0;
     optind = 1;
     opterr = 0;   /* one line of our own instead of getopt's */
+    const char *web = NULL;
+    cli_view view = CLI_VIEW_DEFAULTS;
+    bool have_view_option = false;
     while ((opt = getopt_long(argc, argv, ":o:k:j:qh", opts, NULL)) != -1) {
         int r = cli_light_option(&c, &light, opt, optarg);
         if (r < 0) return EXIT_USAGE;
         if (r) continue;
+        if (opt == OPT_WEB) { web = optarg; continue; }
+        if ((r = cli_view_option(&c, &view, opt, optarg)) < 0) return EXIT_USAGE;
+        if (r) { have_view_option = true; continue; }
         if (opt >= OPT_EXPORT_OPTION) {
             const char *name = names[opt - OPT_EXPORT_OPTION];
             if (!exporting) return cli_usage(&c, "--%s belongs to prt export", name);
@@ -167,6 +226,15 @@ static int relight_main(int argc, char **argv, bool exporting)
         }
     }
     if (optind != argc - 1) return cli_usage(&c, "expected exactly one FILE.prt argument");
+    if (web) {
+        if (!exporting) return cli_usage(&c, "--web belongs to prt export");
+        if (output || given || texels || encoding) return cli_usage(&c, "--web writes a page: leave out -o, --texels, --colors and the method's export options");
+        if (have_eye != view.have_target) return cli_usage(&c, "with --web, --eye and --target go together (the camera)");
+        if (have_eye) { memcpy(view.eye, eye, sizeof eye); view.have_eye = true; }
+        view.save.exposure_stops = exposure;
+        return export_web(&c, &light, &view, web, argv[optind], kind);
+    }
+    if (have_view_option) return cli_usage(&c, "--target, --view, --fov, --width, --height, --tonemap and --background go with --web");
     if (given && !output) {   /* only the method's own files */
         int rc = cli_make_context(&c);
         if (rc) return rc;

@@ -23,6 +23,9 @@ typedef struct prt__ao_set {
 
 extern const prt__method prt__method_ao;
 
+/* prt export --web (web.c, web.js). */
+prt_status prt__ao_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page);
+
 static inline prt__ao_set *prt__ao(const prt_transfer *t) { return prt__state_of(t, &prt__method_ao); }
 void prt__ao_set_free(void *state);
 

@@ -82,6 +82,7 @@ const prt__method prt__method_ao = {
     .name = "ao",
     .title = "ambient occlusion",
     .summary = "ambient occlusion: one cosine-weighted visibility per vertex times the environment's irradiance, albedo live",
+    .web = prt__ao_web,
     .lighting = PRT_LIGHTS_ENVIRONMENT,
     .runtime_albedo = true,
     .options = options,

@@ -74,6 +74,9 @@ typedef struct prt__lightcloud_set {
 
 extern const prt__method prt__method_lightcloud;
 
+/* prt export --web (web.c, web.js). */
+prt_status prt__lightcloud_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page);
+
 static inline prt__lightcloud_set *prt__lightcloud(const prt_transfer *t) { return prt__state_of(t, &prt__method_lightcloud); }
 void prt__lightcloud_set_free(void *state);
 prt__lightcloud_cache *prt__lightcloud_cache_new(void);

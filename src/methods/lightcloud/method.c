@@ -428,6 +428,7 @@ const prt__method prt__method_lightcloud = {
     .describe = lightcloud_describe,
     .transfer_bytes = lightcloud_bytes,
     .control_range = lc_control_range,
+    .web = prt__lightcloud_web,
     .relight = lightcloud_relight,
     .shade = lightcloud_shade,
 };

@@ -333,6 +333,7 @@ const prt__method prt__method_offset = {
     .variant_name = offset_variant_name,
     .default_variant = offset_default_variant,
     .control_range = offset_control_range,
+    .web = prt__offset_web,
     .relight = offset_relight,
     .shade = prt__offset_shade,
     .paint_layout = offset_paint_layout,

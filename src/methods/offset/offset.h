@@ -85,6 +85,11 @@ typedef struct prt__offset_set {
 
 extern const prt__method prt__method_offset;
 
+/* prt export --web (web.c, web.js). */
+prt_status prt__offset_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page);
+/* Builds the texels' shadow-ray points (sample_pos, sample_nrm) and their ray caster, once. */
+prt_status prt__offset_shadow_samples(prt_context *ctx, const prt_transfer *t);
+
 void prt__offset_set_free(void *state);
 /* The run-time cache (lock and shadow-ray state) of a new state; false when out of memory. */
 bool prt__offset_cache_new(prt__offset_set *s);

@@ -158,6 +158,8 @@ static prt_status lights_ready(prt_context *ctx, const prt_transfer *t, prt__off
     return st;
 }
 
+prt_status prt__offset_shadow_samples(prt_context *ctx, const prt_transfer *t) { return lights_ready(ctx, t, t->state); }
+
 /* The lights the renderer draws per pixel: copies of the first count local lights, the albedo
  * they shade per vertex and each vertex's visibility of each (shadow rays from the vertices). On
  * translucent surfaces the albedo is the dipole's share that leaves within the texel the light

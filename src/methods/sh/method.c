@@ -709,6 +709,7 @@ const prt__method prt__method_sh = {
     .export_options = export_options,
     .export_option_count = (int)(sizeof export_options / sizeof export_options[0]),
     .export_files = prt__sh_export,
+    .web = prt__sh_web,
     .bake_begin = sh_bake_begin,
     .free_state = prt__sh_state_free,
     .save_meta = prt__sh_save_meta,

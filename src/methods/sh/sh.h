@@ -80,6 +80,9 @@ typedef struct prt__sh_state {
 
 extern const prt__method prt__method_sh;
 
+/* prt export --web (web.c, web.js). */
+prt_status prt__sh_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page);
+
 /* t's SH state, or NULL after recording an error naming t's method when t is not SH transfer. */
 prt__sh_state *prt__sh_need(prt_context *ctx, const prt_transfer *t);
 static inline prt__sh_state *prt__sh(const prt_transfer *t) { return prt__state_of(t, &prt__method_sh); }

@@ -380,6 +380,7 @@ const prt__method prt__method_spectral = {
     .describe = spectral_describe,
     .transfer_bytes = spectral_bytes,
     .control_range = spectral_control_range,
+    .web = prt__spectral_web,
     .brdf_set = spectral_brdf_set,
     .relight = spectral_relight,
     .shade = spectral_shade,

@@ -109,6 +109,9 @@ typedef struct prt__spectral_set {
 
 extern const prt__method prt__method_spectral;
 
+/* prt export --web (web.c, web.js). */
+prt_status prt__spectral_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page);
+
 static inline prt__spectral_set *prt__spectral(const prt_transfer *t) { return prt__state_of(t, &prt__method_spectral); }
 void prt__spectral_set_free(void *state);
 /* The run-time cache of a new state (shadow rays and glossy frames, built on first use); NULL

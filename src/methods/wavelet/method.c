@@ -313,6 +313,7 @@ const prt__method prt__method_wavelet = {
     .variant_name = wavelet_variant_name,
     .default_variant = wavelet_default_variant,
     .control_range = wavelet_control_range,
+    .web = prt__wavelet_web,
     .relight = wavelet_relight,
     .shade = wavelet_shade,
 };

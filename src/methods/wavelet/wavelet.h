@@ -22,6 +22,9 @@ typedef struct prt__wavelet_set {
 
 extern const prt__method prt__method_wavelet;
 
+/* prt export --web (web.c, web.js). */
+prt_status prt__wavelet_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page);
+
 static inline prt__wavelet_set *prt__wavelet(const prt_transfer *t) { return prt__state_of(t, &prt__method_wavelet); }
 void prt__wavelet_set_free(void *w);
 /* Fills vec_start from term_count; false if a count is 0 or above 16. */
