@@ -326,6 +326,14 @@ int cli_collect_method_options(const prt_method *chosen, cli_option_list_fn list
 void cli_print_lines(FILE *f, const char *prefix, const char *text);
 
 int cmd_bake(int argc, char **argv);
+/* The bake command's body (cmd_bake.c), also finishing prt merge: merged is the checkpoint the
+ * shards were put together into (NULL for a bake), note what a shard keeps of the command. */
+typedef struct cli_bake_extra {
+    const char *merged;
+    char *note;
+} cli_bake_extra;
+int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra);
+int cmd_merge(int argc, char **argv);
 int cmd_relight(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 int cmd_render(int argc, char **argv);
