@@ -78,6 +78,10 @@ static void print_method_line(const prt_method *m)
 static void help(const prt_method *only)
 {
     fputs(HELP_HEAD, stdout);
+    if (cli_cluster_build())
+        fputs("Under mpirun (this build has MPI): the processes share each stage that can be spread,\n"
+              "  rank 0 handing out work units as the others ask; only rank 0 writes OUT.prt, the\n"
+              "  same bytes as one process's (docs/CLUSTER.md)\n", stdout);
     for (int i = 0; i < prt_method_count(); ++i)
         if (!only || prt_method_at(i) == only) print_method_line(prt_method_at(i));
     fputs("Scene:\n" CLI_SCENE_FILE_HELP, stdout);
@@ -349,6 +353,12 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
     char from_abs[4096] = "";
     if (!rc && from && !realpath(from, from_abs)) rc = cli_usage(&c, "--from %s: no such file", from);
     if (shard_n || list_stages || merged) checkpoint = false;   /* they read --from, and write no checkpoint of their own */
+    const int rank = extra ? extra->rank : 0, ranks = extra && extra->ranks > 1 ? extra->ranks : 1;
+    if (!rc && ranks > 1 && (shard_n || list_stages)) rc = cli_usage(&c, "--shard and --stage are for bakes outside mpirun (under it, the processes share the stages)");
+    if (rank) {   /* only rank 0 speaks and writes */
+        c.quiet = true;
+        checkpoint = false;
+    }
     if (!rc && resume && !checkpoint) rc = cli_usage(&c, "--resume needs the checkpoint that --no-checkpoint turns off");
     if (!rc && refine && no_refine) rc = cli_usage(&c, "--no-refine contradicts --refine, --refine-vertices and --refine-threshold");
     char checkpoint_path[4096] = "";
@@ -406,13 +416,15 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
             run.shard_note = extra ? extra->note : NULL;
             run.stage_given = stage >= 0;
             run.stage = stage;
+        } else if (ranks > 1) {
+            run.spread = cli_cluster_spread;
         } else if (list_stages || merged) {
             run.checkpoint = list_stages ? (from ? from_abs : NULL) : merged;
             run.stop_at_missing = 1;
             if (list_stages) run.stage_seen = print_stage;
         }
         st = prt_bake(c.ctx, scene, method, o, &run, &t);
-        if (!st && !t) {   /* a shard written, or stages remain */
+        if (!st && (!t || list_stages)) {   /* a shard written, the stages listed, or stages remain */
             rc = EXIT_OK;
             if (shard_n && !c.quiet) {
                 prt_bake_shard info;
@@ -427,6 +439,8 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
                 }
             } else if (list_stages) {
                 if (stopped >= 0) printf("(the stages after %d are known once its shards are merged)\n", stopped);
+                else printf("(the end of the bake)\n");
+                prt_transfer_release(t);
             } else if (merged) {
                 if (rename(merged, output) != 0) { cli_error(&c, "cannot write %s", output); rc = EXIT_FAILURE_INPUT; }
                 else {
@@ -444,6 +458,13 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
         if (!st && resume && !c.quiet && total)
             fprintf(stderr, "prt bake: resumed: %llu of %llu work units (%.0f%%) came from %s\n", (unsigned long long)recovered,
                     (unsigned long long)total, 100.0 * (double)recovered / (double)total, checkpoint_path);
+    }
+    if (!st && rank) {   /* rank 0 writes the file */
+        prt_transfer_release(t);
+        prt_scene_release(scene);
+        prt_options_release(o);
+        prt_context_release(c.ctx);
+        return EXIT_OK;
     }
     if (!st && !c.quiet) {
         char *report = NULL;
@@ -541,7 +562,12 @@ int cmd_bake(int argc, char **argv)
         args[n++] = argv[i];
     }
     cli_bake_extra extra = {.note = shard_note(n, args)};
+    if (cli_cluster_start(&argc, &argv)) {
+        extra.rank = cli_cluster_rank();
+        extra.ranks = cli_cluster_size();
+    }
     const int rc = cli_bake_main(n, args, &extra);
+    cli_cluster_end(rc);
     cJSON_free(extra.note);
     for (int i = 0; i < nj; ++i) free(joined[i]);
     free(args);
