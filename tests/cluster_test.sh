@@ -61,7 +61,7 @@ for m in $METHODS; do
     expect 0 "$m: --stage" -- "$PRT" bake "$@" --stage
     grep -q "^0 " "$T/out" && ok || bad "$m: --stage lists no stage 0"
     # Shards of each stage until merge says done; --from is the last merge's output.
-    from="" stage=0 rounds=0
+    from="" rounds=0
     while :; do
         for i in 1 2 3; do
             expect 0 "$m: shard $i/3 of round $rounds" -- "$PRT" bake "$@" ${from:+--from "$from"} --shard $i/3 -o "$m.$rounds.$i.shard"
