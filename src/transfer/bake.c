@@ -168,9 +168,12 @@ static prt_status drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run
             const bool missing = spreadable && from_checkpoint < s.units;
             if (missing && (sharding || stopping)) {
                 *stopped = index;
-                if (sharding && run->stage_given && run->stage != index)
-                    st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "stage %d is not the next to spread: stage %d (%s) is, %s", run->stage, index,
-                                   s.name, cp ? "the checkpoint holds it only in part" : "and no merged stages were given");
+                if (sharding && run->stage_given && run->stage < index)
+                    st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "stage %d is not the next to spread: the checkpoint holds it, and stage %d (%s) "
+                                   "comes next", run->stage, index, s.name);
+                else if (sharding && run->stage_given && run->stage > index)
+                    st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "stage %d is not the next to spread: stage %d (%s) comes first, and %s", run->stage,
+                                   index, s.name, cp ? "the checkpoint holds it only in part" : "no finished stages were given");
                 else if (sharding && !(st = prt__checkpoint_open(ctx, run->shard, io->fp, false, &shard))) {
                     w.record_to = shard;
                     st = run_units(ctx, &w, run->shard_index, run->shard_count);
