@@ -248,7 +248,7 @@ bool prt__checkpoint_writable(const prt__checkpoint *c) { return c && !c->readon
 static const record *lookup(const prt__checkpoint *c, int stage, uint64_t unit)
 {
     record key = {stage, unit, 0, 0};
-    return bsearch(&key, c->records, c->count, sizeof key, cmp_record);
+    return c->count ? bsearch(&key, c->records, c->count, sizeof key, cmp_record) : NULL;   /* records is NULL when there are none */
 }
 
 uint64_t prt__checkpoint_count(const prt__checkpoint *c, int stage)

@@ -136,8 +136,9 @@ static void lead(prt_bake_work *w)
     {
         const int thread = omp_get_thread_num();
         if (thread == 0) {
-            /* The main thread serves the others' requests (MPI_THREAD_FUNNELED) and computes a unit
-             * whenever none is waiting. */
+            /* The main thread serves the others' requests (MPI_THREAD_FUNNELED). It computes units
+             * between requests only when it is rank 0's one thread: a unit can take seconds (a cloud
+             * light), and a process waiting for its next batch all that time would idle. */
             while (told_done < size - 1) {
                 int flag = 0;
                 MPI_Status st;
@@ -161,7 +162,7 @@ static void lead(prt_bake_work *w)
                     told_done += k == 0;
                     MPI_Send(batch, (int)(1 + k) * 8, MPI_BYTE, from, TAG_UNITS, MPI_COMM_WORLD);
                 } else {
-                    const uint64_t u = claim(w, &next);
+                    const uint64_t u = threads == 1 ? claim(w, &next) : units;
                     if (u < units) run_here(w, u, 0);
                     else nanosleep(&(struct timespec){0, 200000}, NULL);
                 }
