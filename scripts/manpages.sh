@@ -20,9 +20,9 @@ quote() { sed -e 's/\\/\\e/g' -e "s/^\\([.']\\)/\\\\\\&\\1/"; }
     "$PRT" --help 2>&1 | quote
     echo ".fi"
     echo ".SH SEE ALSO"
-    for cmd in bake relight export render view env info demo-scene reference compare sweep; do echo ".BR prt-$cmd (1)"; done
+    for cmd in bake merge relight export render view env info demo-scene reference compare sweep; do echo ".BR prt-$cmd (1)"; done
 } >"$OUT/prt.1"
-for cmd in bake relight export render view env info demo-scene reference compare sweep; do
+for cmd in bake merge relight export render view env info demo-scene reference compare sweep; do
     {
         echo ".TH PRT-$(echo "$cmd" | tr a-z A-Z) 1 \"\" \"prt $VERSION\" \"User Commands\""
         echo ".SH NAME"

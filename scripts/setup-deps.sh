@@ -7,7 +7,8 @@ set -eu
 PKGS="build-essential cmake pkg-config
 libembree-dev libassimp-dev libstb-dev libopenexr-dev libcjson-dev zlib1g-dev
 libcmocka-dev libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri gnuplot-nox
-libglfw3-dev xvfb xauth liblapacke-dev libopenblas-dev libmetis-dev libqhull-dev clang libomp-dev valgrind"
+libglfw3-dev xvfb xauth liblapacke-dev libopenblas-dev libmetis-dev libqhull-dev clang libomp-dev valgrind
+libopenmpi-dev openmpi-bin"
 
 missing=""
 for p in $PKGS; do

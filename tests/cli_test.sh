@@ -14,7 +14,7 @@ expect 2 "misspelt option" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --oder 3
 says "did you mean --order"
 [ "$(wc -l <"$T/err")" -eq 1 ] && ok || bad "a usage error takes one line, not $(wc -l <"$T/err")"
 
-for cmd in bake relight export render env info demo-scene reference compare sweep; do
+for cmd in bake merge relight export render env info demo-scene reference compare sweep; do
     expect 0 "$cmd --help" -- "$PRT" "$cmd" --help
     grep -q "Exit codes" "$T/out" && ok || bad "$cmd --help lacks exit codes"
 done

@@ -101,6 +101,9 @@ const prt_method *prt_options_method(const prt_options *o);
 int prt_options_light_map(const prt_options *o);
 
 /* ---- Baking ---- */
+/* A spreadable stage handed to prt_bake_run_desc.spread; valid during that call. */
+typedef struct prt_bake_work prt_bake_work;
+
 typedef struct prt_bake_run_desc {
     prt_progress_fn progress;   /* stage names and done/total units; return non-zero to cancel */
     void *progress_user;
@@ -119,7 +122,69 @@ typedef struct prt_bake_run_desc {
     int resume;
     /* Filled in when not NULL: work units taken from the checkpoint, and units of every stage run. */
     uint64_t *recovered_units, *total_units;
+
+    /* ---- Bakes over many machines (docs/CLUSTER.md) ----
+     * A stage whose units keep records (what checkpoints hold) can be spread; `whole` steps and
+     * stages without records run wherever the bake goes on. The fields below read the checkpoint
+     * without writing to it (any number of processes may read one file at once). */
+    /* Shards: shard_count > 0 computes only the units u with u % shard_count == shard_index - 1
+     * (shard_index in 1..shard_count) of the first spreadable stage the checkpoint does not hold
+     * whole, writes their records to `shard` (a checkpoint-format file that also names the bake,
+     * the stage, I/N, the checkpoint it continued and shard_note), and stops there: prt_bake
+     * returns PRT_OK with *out NULL. stage_given: that stage must be `stage` (an error otherwise).
+     * prt_bake_merge_shards puts the shards back together. */
+    int shard_index, shard_count, stage_given, stage;
+    const char *shard;
+    const char *shard_note;     /* free text kept in the shard (prt merge keeps the bake's command) */
+    /* Non-zero: stop (PRT_OK, *out NULL) at the first spreadable stage the checkpoint does not
+     * hold whole instead of computing it; with stage_seen, a list of the stages so far. */
+    int stop_at_missing;
+    /* Filled in when not NULL: the stage the bake stopped at (a shard's stage, or where
+     * stop_at_missing stopped), or -1 when it ran to the end. */
+    int *stopped_stage;
+    /* Called as each stage begins: its index, name, units (0 for a `whole` step), whether it can be
+     * spread, and how many of its units the checkpoint holds. */
+    void (*stage_seen)(void *user, int index, const char *name, uint64_t units, int spreadable, uint64_t recorded);
+    void *stage_user;
+    /* Spreads every spreadable stage over processes (prt bake under mpirun): called on every
+     * process for each such stage, it must leave every unit done, through prt_bake_work_run
+     * (computed here) or prt_bake_work_put (a record computed elsewhere). NULL: the units run here. */
+    prt_status (*spread)(void *user, prt_bake_work *work);
+    void *spread_user;
 } prt_bake_run_desc;
+
+int prt_bake_work_stage(const prt_bake_work *w);
+const char *prt_bake_work_name(const prt_bake_work *w);
+uint64_t prt_bake_work_units(const prt_bake_work *w);
+int prt_bake_work_threads(const prt_bake_work *w);     /* thread may be 0..this-1 below */
+int prt_bake_work_done(const prt_bake_work *w, uint64_t unit);
+int prt_bake_work_cancelled(const prt_bake_work *w);
+/* Computes unit on this process (thread: the calling thread's slot, each slot used by one thread at
+ * a time) and returns its record in *data, *size (valid until the slot's next call). */
+prt_status prt_bake_work_run(prt_bake_work *w, uint64_t unit, int thread, const void **data, size_t *size);
+/* Takes a record computed elsewhere (thread-safe for distinct units); PRT_ERR_FORMAT when it does
+ * not fit the bake. */
+prt_status prt_bake_work_put(prt_bake_work *w, uint64_t unit, const void *data, size_t size);
+/* The record of a done unit (as prt_bake_work_run gives it). */
+prt_status prt_bake_work_record(prt_bake_work *w, uint64_t unit, int thread, const void **data, size_t *size);
+
+/* What a shard file holds (prt_bake_shard_info). */
+typedef struct prt_bake_shard {
+    int index, count;           /* I/N */
+    int stage;                  /* -1: the bake had no stage left to spread */
+    char stage_name[48];
+    uint64_t units, records;    /* the stage's units; records the shard holds */
+    char from[4096];            /* the checkpoint it continued ("" for none) */
+    char *note;                 /* shard_note (malloc'd; free it) */
+} prt_bake_shard;
+/* Reads a shard's description; PRT_ERR_FORMAT for a file that is not a whole shard. */
+prt_status prt_bake_shard_info(prt_context *ctx, const char *path, prt_bake_shard *out);
+/* Checks that the shards belong together (one bake, one stage, one checkpoint continued, I/N with
+ * every I from 1 to N once) and writes `out`: a checkpoint holding the records of the checkpoint
+ * they continued and of all the shards, from which prt_bake resumes (stop_at_missing then tells
+ * whether stages remain). Each refusal names the file and what differs. info (may be NULL) gets
+ * the first shard's description. */
+prt_status prt_bake_merge_shards(prt_context *ctx, const char *const *paths, int count, const char *out, prt_bake_shard *info);
 
 /* Bakes scene with method m (o may be NULL for its defaults). The method runs as stages of
  * independent work units; results do not depend on the thread count. Restored units are

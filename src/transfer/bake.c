@@ -3,6 +3,7 @@
  * transfer/method.h and transfer/checkpoint.h). */
 #include "transfer/method.h"
 #include "transfer/checkpoint.h"
+#include "transfer/shard.h"
 
 #include <omp.h>
 
@@ -34,65 +35,173 @@ static prt_status restore_units(prt_context *ctx, prt__bake_job *job, const prt_
     return PRT_OK;
 }
 
-prt_status prt__bake_drive_checkpointed(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt__checkpoint *cp,
-                                        prt_transfer *t)
+/* One stage's units as they are run here or handed in from elsewhere (prt_bake_work in prt/method.h). */
+struct prt_bake_work {
+    prt__bake_job *job;
+    const prt__stage *s;
+    int index;
+    unsigned char *done;        /* [units] */
+    prt__bytes *out;            /* [threads] each thread's record */
+    prt__checkpoint *record_to; /* appends (NULL: none) */
+    prt__progress *prog;
+};
+
+int prt_bake_work_stage(const prt_bake_work *w) { return w->index; }
+const char *prt_bake_work_name(const prt_bake_work *w) { return w->s->name; }
+uint64_t prt_bake_work_units(const prt_bake_work *w) { return w->s->units; }
+int prt_bake_work_threads(const prt_bake_work *w) { return w->job->threads; }
+int prt_bake_work_done(const prt_bake_work *w, uint64_t unit) { return unit < w->s->units && __atomic_load_n(&w->done[unit], __ATOMIC_ACQUIRE); }
+int prt_bake_work_cancelled(const prt_bake_work *w) { return prt__progress_cancelled(w->prog); }
+
+prt_status prt_bake_work_record(prt_bake_work *w, uint64_t unit, int thread, const void **data, size_t *size)
+{
+    if (!w->s->save_unit || !prt_bake_work_done(w, unit) || thread < 0 || thread >= w->job->threads)
+        return prt__fail(w->job->ctx, PRT_ERR_INVALID_ARG, "prt_bake_work_record: unit %llu of %s is not done, or thread %d out of range",
+                         (unsigned long long)unit, w->s->name, thread);
+    prt__bytes *b = &w->out[thread];
+    b->size = 0;
+    b->failed = false;
+    w->s->save_unit(w->job, unit, b);
+    if (b->failed) return prt__fail(w->job->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    *data = b->data;
+    *size = b->size;
+    return PRT_OK;
+}
+
+prt_status prt_bake_work_run(prt_bake_work *w, uint64_t unit, int thread, const void **data, size_t *size)
+{
+    if (unit >= w->s->units || thread < 0 || thread >= w->job->threads)
+        return prt__fail(w->job->ctx, PRT_ERR_INVALID_ARG, "prt_bake_work_run: unit %llu or thread %d out of range", (unsigned long long)unit, thread);
+    prt_status st = w->s->run(w->job, unit, thread);
+    if (st) return st;
+    __atomic_store_n(&w->done[unit], 1, __ATOMIC_RELEASE);
+    prt__progress_add(w->prog, 1);
+    if (!data && (!w->record_to || !w->s->save_unit)) return PRT_OK;
+    const void *d;
+    size_t n;
+    if (prt_bake_work_record(w, unit, thread, &d, &n)) {
+        if (data) return PRT_ERR_NO_MEMORY;
+        return PRT_OK;   /* out of memory loses this unit's checkpoint record, not the bake */
+    }
+    if (w->record_to) prt__checkpoint_append(w->record_to, w->index, unit, d, n);
+    if (data) { *data = d; *size = n; }
+    return PRT_OK;
+}
+
+prt_status prt_bake_work_put(prt_bake_work *w, uint64_t unit, const void *data, size_t size)
+{
+    if (unit >= w->s->units) return prt__fail(w->job->ctx, PRT_ERR_FORMAT, "a record of %s names unit %llu of %llu", w->s->name,
+                                              (unsigned long long)unit, (unsigned long long)w->s->units);
+    if (!w->s->load_unit(w->job, unit, data, size))
+        return prt__fail(w->job->ctx, PRT_ERR_FORMAT, "the record of %s, unit %llu, does not fit this bake", w->s->name, (unsigned long long)unit);
+    if (!__atomic_exchange_n(&w->done[unit], 1, __ATOMIC_ACQ_REL)) prt__progress_add(w->prog, 1);
+    if (w->record_to) prt__checkpoint_append(w->record_to, w->index, unit, data, size);
+    return PRT_OK;
+}
+
+/* Runs the units not yet done here on all threads; only those of slice shard/of when of > 0. */
+static prt_status run_units(prt_context *ctx, prt_bake_work *w, int shard, int of)
+{
+    int failed = 0;
+    prt_status first = PRT_OK;
+    char why[512] = "";   /* errors are recorded per thread: keep the failing unit's */
+    /* Units are claimed in order by whichever thread is free; each writes only its own
+     * outputs, so the result is the same for any thread count and schedule. */
+#pragma omp parallel for schedule(dynamic, 1) num_threads(w->job->threads)
+    for (uint64_t u = 0; u < w->s->units; ++u) {
+        if (w->done[u] || (of && u % (uint64_t)of != (uint64_t)(shard - 1)) || __atomic_load_n(&failed, __ATOMIC_RELAXED) ||
+            prt__progress_cancelled(w->prog))
+            continue;
+        prt_status r = prt_bake_work_run(w, u, omp_get_thread_num(), NULL, NULL);
+        if (r && !__atomic_exchange_n(&failed, 1, __ATOMIC_RELAXED)) {
+            first = r;
+            snprintf(why, sizeof why, "%s", prt_last_error());
+        }
+    }
+    return first ? prt__fail(ctx, first, "%s", why[0] ? why : prt_status_string(first)) : PRT_OK;
+}
+
+/* The bake's checkpoints: `from` to resume from (read only when not writable), the shard to write,
+ * the fingerprint both are named by. */
+typedef struct drive_io {
+    prt__checkpoint *from;
+    const char *from_path;
+    const prt__fingerprint *fp;
+} drive_io;
+
+static prt_status drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, const drive_io *io, prt_transfer *t,
+                        int *stopped)
 {
     const double start = prt__now();
     prt__progress prog = {run ? run->progress : NULL, run ? run->progress_user : NULL, NULL, 0, 0, 0.0, 0, ctx};
+    prt__checkpoint *cp = io ? io->from : NULL, *shard = NULL;
+    const bool sharding = run && run->shard_count > 0, stopping = run && run->stop_at_missing;
+    *stopped = -1;
     job->ctx = ctx;
     job->threads = prt__threads(ctx);
     uint64_t recovered = 0, total = 0;
-    prt__bytes *out = cp ? prt__calloc((size_t)job->threads, sizeof *out) : NULL;
-    prt_status st = cp && !out ? prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory") : PRT_OK;
-    for (int index = 0; !st; ++index) {
+    prt__bytes *out = prt__calloc((size_t)job->threads, sizeof *out);
+    prt_status st = !out ? prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory") : PRT_OK;
+    for (int index = 0; !st && *stopped < 0; ++index) {
         prt__stage s;
         memset(&s, 0, sizeof s);
         if ((st = job->stage(job, index, &s))) break;
         if (!s.units && !s.whole) break;
+        const bool spreadable = s.units && s.save_unit && s.load_unit;
         prt__progress_begin(&prog, s.name, s.whole ? 1 : s.units);
         if (s.whole) {
+            if (run && run->stage_seen) run->stage_seen(run->stage_user, index, s.name, 0, 0, 0);
             st = s.whole(job, ctx, &prog);
         } else {
             total += s.units;
-            unsigned char *restored = NULL;
+            prt_bake_work w = {job, &s, index, prt__calloc((size_t)s.units, 1), out, prt__checkpoint_writable(cp) ? cp : NULL, &prog};
+            if (!w.done) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
             uint64_t from_checkpoint = 0;
             if (cp && s.load_unit && prt__checkpoint_count(cp, index)) {
-                if (!(restored = prt__calloc((size_t)s.units, 1))) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
-                if ((st = restore_units(ctx, job, &s, index, cp, restored, &from_checkpoint))) { free(restored); break; }
+                if ((st = restore_units(ctx, job, &s, index, cp, w.done, &from_checkpoint))) { free(w.done); break; }
                 prt__log(ctx, PRT_LOG_INFO, "%s: %llu of %llu work units recovered from the checkpoint", s.name,
                          (unsigned long long)from_checkpoint, (unsigned long long)s.units);
                 recovered += from_checkpoint;
                 prt__progress_add(&prog, from_checkpoint);
             }
-            int failed = 0;
-            prt_status first = PRT_OK;
-            char why[512] = "";   /* errors are recorded per thread: keep the failing unit's */
-            /* Units are claimed in order by whichever thread is free; each writes only its own
-             * outputs, so the result is the same for any thread count and schedule. */
-#pragma omp parallel for schedule(dynamic, 1) num_threads(job->threads)
-            for (uint64_t u = 0; u < s.units; ++u) {
-                if ((restored && restored[u]) || __atomic_load_n(&failed, __ATOMIC_RELAXED) || prt__progress_cancelled(&prog)) continue;
-                const int thread = omp_get_thread_num();
-                prt_status r = s.run(job, u, thread);
-                if (r && !__atomic_exchange_n(&failed, 1, __ATOMIC_RELAXED)) {
-                    first = r;
-                    snprintf(why, sizeof why, "%s", prt_last_error());
+            if (run && run->stage_seen) run->stage_seen(run->stage_user, index, s.name, s.units, spreadable, from_checkpoint);
+            const bool missing = spreadable && from_checkpoint < s.units;
+            if (missing && (sharding || stopping)) {
+                *stopped = index;
+                if (sharding && run->stage_given && run->stage < index)
+                    st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "stage %d is not the next to spread: the checkpoint holds it, and stage %d (%s) "
+                                   "comes next", run->stage, index, s.name);
+                else if (sharding && run->stage_given && run->stage > index)
+                    st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "stage %d is not the next to spread: stage %d (%s) comes first, and %s", run->stage,
+                                   index, s.name, cp ? "the checkpoint holds it only in part" : "no finished stages were given");
+                else if (sharding && !(st = prt__checkpoint_open(ctx, run->shard, io->fp, false, &shard))) {
+                    w.record_to = shard;
+                    st = run_units(ctx, &w, run->shard_index, run->shard_count);
+                    if (!st && !prt__progress_cancelled(&prog))
+                        st = prt__shard_describe(ctx, shard, run, index, s.name, s.units, cp, io->from_path);
                 }
-                if (!r && cp && s.save_unit) {
-                    out[thread].size = 0;
-                    out[thread].failed = false;   /* out of memory loses this unit's record, not the rest */
-                    s.save_unit(job, u, &out[thread]);
-                    if (!out[thread].failed) prt__checkpoint_append(cp, index, u, out[thread].data, out[thread].size);
-                }
-                prt__progress_add(&prog, 1);
+            } else if (spreadable && run && run->spread) {
+                /* Every process of a spread bake takes part in every spreadable stage, even one
+                 * this process holds whole: the others wait on it. */
+                st = run->spread(run->spread_user, &w);
+                for (uint64_t u = 0; !st && u < s.units; ++u)
+                    if (!w.done[u]) st = prt__fail(ctx, PRT_ERR_BACKEND, "%s: unit %llu was left undone by the spread", s.name, (unsigned long long)u);
+            } else {
+                st = run_units(ctx, &w, 0, 0);
             }
-            free(restored);
-            if (first) st = prt__fail(ctx, first, "%s", why[0] ? why : prt_status_string(first));
+            free(w.done);
         }
         if (!st) prt__progress_end(&prog);
         if (!st && prt__progress_cancelled(&prog)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     }
-    if (!st) st = job->finish(job, t);
+    if (!st && sharding && *stopped < 0) {
+        if (run->stage_given) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "stage %d: no stage is left to spread (the checkpoint holds them all)", run->stage);
+        else if (!(st = prt__checkpoint_open(ctx, run->shard, io->fp, false, &shard)))
+            st = prt__shard_describe(ctx, shard, run, -1, "", 0, cp, io->from_path);
+        *stopped = -1;
+    }
+    if (shard) prt__checkpoint_close(shard, st != PRT_OK);
+    if (!st && !(sharding || (stopping && *stopped >= 0))) st = job->finish(job, t);
     const int threads = job->threads;   /* release frees the job */
     job->release(job);
     for (int i = 0; out && i < threads; ++i) prt__bytes_free(&out[i]);
@@ -104,6 +213,14 @@ prt_status prt__bake_drive_checkpointed(prt_context *ctx, prt__bake_job *job, co
         t->threads = prt__threads(ctx);
     }
     return st;
+}
+
+prt_status prt__bake_drive_checkpointed(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt__checkpoint *cp,
+                                        prt_transfer *t)
+{
+    const drive_io io = {cp, NULL, NULL};
+    int stopped;
+    return drive(ctx, job, run, &io, t, &stopped);
 }
 
 prt_status prt__bake_drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run_desc *run, prt_transfer *t)
@@ -170,25 +287,35 @@ prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__m
     prt_status st = prt__cancelled(ctx) ? prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled") : prt__transfer_from_scene(ctx, m, scene, &t);
     prt__bake_job *job = NULL;
     prt__checkpoint *cp = NULL;
+    prt__fingerprint fp = {0, 0};
+    /* Shards and merges read their checkpoint, which many processes may share, and write nothing to it. */
+    const bool reading = run && (run->shard_count > 0 || run->stop_at_missing);
+    if (!st && run && run->shard_count > 0 && (run->shard_index < 1 || run->shard_index > run->shard_count || !run->shard))
+        st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "bake: shard %d/%d is not one of 1..%d, or no shard file was given", run->shard_index,
+                       run->shard_count, run->shard_count);
     /* Setting up a bake of tens of millions of triangles takes seconds a step: look between steps. */
     if (!st && prt__cancelled(ctx)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
-    if (!st && run && run->checkpoint) {
+    if (!st && run && (run->checkpoint || run->shard_count > 0)) {
         /* Only prt_bake passes options as desc (checkpoints need them for the fingerprint). */
-        prt__fingerprint fp;
         fingerprint(m, desc, t, scene, &fp);
-        st = prt__checkpoint_open(ctx, run->checkpoint, &fp, run->resume != 0, &cp);
+        if (run->checkpoint && reading) st = prt__checkpoint_open_read(ctx, run->checkpoint, &fp, NULL, &cp);
+        else if (run->checkpoint) st = prt__checkpoint_open(ctx, run->checkpoint, &fp, run->resume != 0, &cp);
     }
     if (!st) st = begin(ctx, scene, desc, t, &job);
     if (!st && prt__cancelled(ctx)) {
         job->release(job);
         st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     }
-    if (!st) st = prt__bake_drive_checkpointed(ctx, job, run, cp, t);
+    int stopped = -1;
+    const drive_io io = {cp, run ? run->checkpoint : NULL, &fp};
+    if (!st) st = drive(ctx, job, run, &io, t, &stopped);
+    if (run && run->stopped_stage) *run->stopped_stage = stopped;
     /* A checkpoint stays when its bake can go on later: cancelled, or stopped by memory, I/O or a
      * backend. One without a finished unit, or of a bake that would fail the same way again (bad
      * options, bad input), goes, so that the next bake is not asked whether to resume it. */
     const bool worth_keeping = st == PRT_ERR_CANCELLED || st == PRT_ERR_NO_MEMORY || st == PRT_ERR_IO || st == PRT_ERR_BACKEND;
     prt__checkpoint_close(cp, st != PRT_OK && (!worth_keeping || prt__checkpoint_records(cp) == 0));
+    if (!st && (stopped >= 0 || (run && run->shard_count > 0))) { prt_transfer_release(t); t = NULL; }   /* a shard, or stages remain */
     if (st) { prt_transfer_release(t); return st; }
     *out = t;
     return PRT_OK;

@@ -53,6 +53,7 @@ struct prt__checkpoint {
     char *path;
     int fd;
     bool broken;            /* a write failed: no more records */
+    bool readonly;
     pthread_mutex_t lock;
     record *records;        /* sorted by (stage, unit) */
     size_t count;
@@ -112,12 +113,18 @@ static void header_bytes(const prt__fingerprint *fp, unsigned char h[HEADER_BYTE
 }
 
 /* Indexes the valid records of an open file and cuts off a torn tail. */
-static prt_status scan(prt__checkpoint *c, const prt__fingerprint *fp, uint64_t file_size)
+static prt_status scan(prt__checkpoint *c, const prt__fingerprint *fp, prt__fingerprint *got, uint64_t file_size)
 {
     unsigned char h[HEADER_BYTES], want[HEADER_BYTES];
-    header_bytes(fp, want);
     if (file_size < HEADER_BYTES || !read_at(c->fd, h, HEADER_BYTES, 0) || memcmp(h, "PRTCKPT1", 8) != 0)
         return prt__fail(c->ctx, PRT_ERR_FORMAT, "'%s' is not a prt checkpoint (delete it, or bake without --resume)", c->path);
+    prt__fingerprint own;
+    memcpy(&own.a, h + 16, 8);
+    memcpy(&own.b, h + 24, 8);
+    header_bytes(fp ? fp : &own, want);
+    if (got) *got = own;
+    if (!fp && memcmp(h, want, HEADER_BYTES) != 0)
+        return prt__fail(c->ctx, PRT_ERR_FORMAT, "'%s' is not a prt checkpoint (its header is damaged)", c->path);
     if (memcmp(h, want, HEADER_BYTES) != 0)
         return prt__fail(c->ctx, PRT_ERR_INVALID_ARG, "checkpoint '%s' belongs to another bake (other scene, method, options or prt "
                          "version); delete it, or bake without --resume", c->path);
@@ -131,7 +138,7 @@ static prt_status scan(prt__checkpoint *c, const prt__fingerprint *fp, uint64_t 
         uint64_t unit, size;
         memcpy(&stage, r, 4); memcpy(&pad, r + 4, 4); memcpy(&unit, r + 8, 8); memcpy(&size, r + 16, 8);
         memcpy(&pcrc, r + 24, 4); memcpy(&hcrc, r + 28, 4);
-        if (hcrc != prt__crc32(r, 28) || pad != 0 || stage > 4096 || size > file_size - at - RECORD_BYTES) break;
+        if (hcrc != prt__crc32(r, 28) || pad != 0 || stage > PRT__CHECKPOINT_SHARD_STAGE || size > file_size - at - RECORD_BYTES) break;
         /* Read the payload to check it; bounded by the file's size, checked above. */
         if (payload.capacity < size) {
             unsigned char *q = realloc(payload.data, (size_t)size);
@@ -157,6 +164,7 @@ static prt_status scan(prt__checkpoint *c, const prt__fingerprint *fp, uint64_t 
     for (size_t i = 0; i < c->count; ++i)
         if (!out || cmp_record(&c->records[out - 1], &c->records[i]) != 0) c->records[out++] = c->records[i];
     c->count = out;
+    if (c->readonly) return PRT_OK;
     if (at < file_size && ftruncate(c->fd, (off_t)at) != 0)
         return prt__fail(c->ctx, PRT_ERR_IO, "cannot cut the torn end off checkpoint '%s': %s", c->path, strerror(errno));
     if (lseek(c->fd, (off_t)at, SEEK_SET) < 0) return prt__fail(c->ctx, PRT_ERR_IO, "cannot seek in checkpoint '%s': %s", c->path, strerror(errno));
@@ -190,7 +198,7 @@ prt_status prt__checkpoint_open(const prt_context *ctx, const char *path, const 
     else if (flock(c->fd, LOCK_EX | LOCK_NB) != 0)
         st = prt__fail(ctx, PRT_ERR_IO, "checkpoint '%s' is in use by another bake of the same output", path);
     else if (usable) {
-        st = scan(c, fp, (uint64_t)sb.st_size);
+        st = scan(c, fp, NULL, (uint64_t)sb.st_size);
     } else {
         unsigned char h[HEADER_BYTES];
         header_bytes(fp, h);
@@ -205,10 +213,42 @@ prt_status prt__checkpoint_open(const prt_context *ctx, const char *path, const 
     return PRT_OK;
 }
 
+prt_status prt__checkpoint_open_read(const prt_context *ctx, const char *path, const prt__fingerprint *fp, prt__fingerprint *got,
+                                     prt__checkpoint **out)
+{
+    *out = NULL;
+    prt__checkpoint *c = prt__calloc(1, sizeof *c);
+    if (!c || !(c->path = strdup(path))) { free(c); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    c->ctx = ctx;
+    c->readonly = c->broken = true;
+    pthread_mutex_init(&c->lock, NULL);
+    struct stat sb;
+    prt_status st = PRT_OK;
+    if ((c->fd = open(path, O_RDONLY | O_CLOEXEC)) < 0) st = prt__fail(ctx, PRT_ERR_IO, "cannot open '%s': %s", path, strerror(errno));
+    else if (fstat(c->fd, &sb) != 0 || !S_ISREG(sb.st_mode)) st = prt__fail(ctx, PRT_ERR_IO, "'%s' is not a regular file", path);
+    else st = scan(c, fp, got, (uint64_t)sb.st_size);
+    if (st) {
+        prt__checkpoint_close(c, false);
+        return st;
+    }
+    *out = c;
+    return PRT_OK;
+}
+
+size_t prt__checkpoint_size(const prt__checkpoint *c) { return c ? c->count : 0; }
+
+void prt__checkpoint_key(const prt__checkpoint *c, size_t i, int *stage, uint64_t *unit)
+{
+    *stage = c->records[i].stage;
+    *unit = c->records[i].unit;
+}
+
+bool prt__checkpoint_writable(const prt__checkpoint *c) { return c && !c->readonly; }
+
 static const record *lookup(const prt__checkpoint *c, int stage, uint64_t unit)
 {
     record key = {stage, unit, 0, 0};
-    return bsearch(&key, c->records, c->count, sizeof key, cmp_record);
+    return c->count ? bsearch(&key, c->records, c->count, sizeof key, cmp_record) : NULL;   /* records is NULL when there are none */
 }
 
 uint64_t prt__checkpoint_count(const prt__checkpoint *c, int stage)
@@ -259,7 +299,7 @@ void prt__checkpoint_close(prt__checkpoint *c, bool remove)
 {
     if (!c) return;
     if (c->fd >= 0) close(c->fd);
-    if (remove && c->path) unlink(c->path);
+    if (remove && c->path && !c->readonly) unlink(c->path);
     pthread_mutex_destroy(&c->lock);
     free(c->records);
     free(c->path);

@@ -23,6 +23,17 @@ void prt__fingerprint_add(prt__fingerprint *f, const void *data, size_t size);
  * indexed (a file of another bake is an error saying so; a missing file is an empty checkpoint);
  * without, any old file is replaced. */
 prt_status prt__checkpoint_open(const prt_context *ctx, const char *path, const prt__fingerprint *fp, bool resume, prt__checkpoint **out);
+/* Opens an existing checkpoint to read only (no lock, no repair, nothing appended: many bakes may
+ * read one at once). fp NULL accepts any bake's; *got (may be NULL) is the file's fingerprint. */
+prt_status prt__checkpoint_open_read(const prt_context *ctx, const char *path, const prt__fingerprint *fp, prt__fingerprint *got,
+                                     prt__checkpoint **out);
+/* The records in (stage, unit) order: their count, and the key of record i. */
+size_t prt__checkpoint_size(const prt__checkpoint *c);
+void prt__checkpoint_key(const prt__checkpoint *c, size_t i, int *stage, uint64_t *unit);
+/* False for a checkpoint opened to read only (appends are dropped). */
+bool prt__checkpoint_writable(const prt__checkpoint *c);
+/* The stage number of a shard's description record (transfer/shard.c): above any bake's. */
+#define PRT__CHECKPOINT_SHARD_STAGE 4096
 /* Units of stage recorded in the file. */
 uint64_t prt__checkpoint_count(const prt__checkpoint *c, int stage);
 /* The payload of (stage, unit) into out (replacing its contents); false when not recorded. */

@@ -337,6 +337,26 @@ int cli_collect_method_options(const prt_method *chosen, cli_option_list_fn list
 void cli_print_lines(FILE *f, const char *prefix, const char *text);
 
 int cmd_bake(int argc, char **argv);
+/* The bake command's body (cmd_bake.c), also finishing prt merge: merged is the checkpoint the
+ * shards were put together into (NULL for a bake), note what a shard keeps of the command. */
+typedef struct cli_bake_extra {
+    const char *merged;
+    char *note;
+    int rank, ranks;   /* under mpirun: this process's rank and how many there are */
+} cli_bake_extra;
+int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra);
+int cmd_merge(int argc, char **argv);
+/* prt bake under mpirun (cluster.c; without MPI in the build, one process and nothing spread).
+ * start: MPI is started when mpirun (or another launcher) started this process; true then. */
+bool cli_cluster_start(int *argc, char ***argv);
+int cli_cluster_rank(void);
+int cli_cluster_size(void);
+/* Ends MPI; a non-zero rc aborts every process of the job. */
+void cli_cluster_end(int rc);
+/* prt_bake_run_desc.spread over the job's processes. */
+prt_status cli_cluster_spread(void *user, prt_bake_work *w);
+/* "MPI" when the build can spread bakes over processes, else NULL. */
+const char *cli_cluster_build(void);
 int cmd_relight(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 int cmd_render(int argc, char **argv);

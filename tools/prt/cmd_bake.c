@@ -1,3 +1,4 @@
+#define _XOPEN_SOURCE 700   /* realpath */
 #include "cli.h"
 
 #include <cjson/cJSON.h>
@@ -54,6 +55,13 @@ static const char *HELP_HEAD =
     "                         BRDFs the surface NAME can switch among at run time (--brdf-of,\n"
     "                         the viewer's r), beside what it wears, as a scene material's\n"
     "                         \"brdfs\" (spectral files keep them); repeatable\n"
+    "      --shard I/N        compute slice I of N of the next stage that can be spread over\n"
+    "                         machines and write it to -o FILE, a shard for prt merge\n"
+    "                         (docs/CLUSTER.md); stages before it come from --from\n"
+    "      --stage K          with --shard: the stage must be K (an error otherwise); alone,\n"
+    "                         as the last option or followed by another, list the bake's stages\n"
+    "                         on stdout up to the first one --from does not hold (no -o needed)\n"
+    "      --from FILE        the stages prt merge put together (its -o when stages remained)\n"
     "      --method M         the PRT method (default: the first listed); each has the options\n"
     "                         listed below\n"
     "                         (prt bake --method M --help shows one method's)\n";
@@ -65,7 +73,7 @@ static const char *HELP_TAIL =
     "  -q, --quiet            no progress or messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
-enum { OPT_KEY_FRAMES = 1497, OPT_BRDF_SET = 1498, OPT_BAKE_LIGHT = 1499, OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE, OPT_REFINE_VERTICES, OPT_REFINE_THRESHOLD,
+enum { OPT_KEY_FRAMES = 1490, OPT_SHARD = 1495, OPT_STAGE, OPT_FROM, OPT_BRDF_SET = 1498, OPT_BAKE_LIGHT = 1499, OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE, OPT_REFINE_VERTICES, OPT_REFINE_THRESHOLD,
        OPT_NO_REFINE, OPT_METHOD_OPTION = 3000 };
 
 /* "NAME  summary" at the description column, the summary wrapped at 100 columns. */
@@ -77,6 +85,10 @@ static void print_method_line(const prt_method *m)
 static void help(const prt_method *only)
 {
     fputs(HELP_HEAD, stdout);
+    if (cli_cluster_build())
+        fputs("Under mpirun (this build has MPI): the processes share each stage that can be spread,\n"
+              "  rank 0 handing out work units as the others ask; only rank 0 writes OUT.prt, the\n"
+              "  same bytes as one process's (docs/CLUSTER.md)\n", stdout);
     for (int i = 0; i < prt_method_count(); ++i)
         if (!only || prt_method_at(i) == only) print_method_line(prt_method_at(i));
     fputs("Scene:\n" CLI_SCENE_FILE_HELP, stdout);
@@ -92,7 +104,8 @@ static int collect_options(const prt_method *chosen, struct option *opts, int ma
         {"no-checkpoint", no_argument, 0, OPT_NO_CHECKPOINT}, {"summary", required_argument, 0, OPT_SUMMARY},
         {"refine", no_argument, 0, OPT_REFINE}, {"no-refine", no_argument, 0, OPT_NO_REFINE}, {"refine-vertices", required_argument, 0, OPT_REFINE_VERTICES},
         {"refine-threshold", required_argument, 0, OPT_REFINE_THRESHOLD}, {"light", required_argument, 0, OPT_BAKE_LIGHT},
-        {"brdf-set", required_argument, 0, OPT_BRDF_SET}, {"frames", no_argument, 0, OPT_KEY_FRAMES}, CLI_SCENE_LONG_OPTIONS,
+        {"brdf-set", required_argument, 0, OPT_BRDF_SET}, {"frames", no_argument, 0, OPT_KEY_FRAMES}, {"shard", required_argument, 0, OPT_SHARD},
+        {"stage", optional_argument, 0, OPT_STAGE}, {"from", required_argument, 0, OPT_FROM}, CLI_SCENE_LONG_OPTIONS,
         {"threads", required_argument, 0, 'j'}, {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}};
     int n = 0;
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; ++i) opts[n++] = fixed[i];
@@ -297,9 +310,24 @@ static bool same_topology(cli *c, prt_scene *const *scenes, int count, char **pa
     return true;
 }
 
-int cmd_bake(int argc, char **argv)
+/* --stage's list, line by line as the bake reaches each stage. */
+static void print_stage(void *user, int index, const char *name, uint64_t units, int spreadable, uint64_t recorded)
 {
-    cli c = {.cmd = "bake"};
+    (void)user;
+    if (!units) printf("%-3d %-28s whole step (runs wherever the bake goes on)\n", index, name);
+    else if (!spreadable) printf("%-3d %-28s %llu units, no records (run wherever the bake goes on)\n", index, name, (unsigned long long)units);
+    else printf("%-3d %-28s %llu units, can be spread%s\n", index, name, (unsigned long long)units, recorded == units ? " (done in --from)" :
+                recorded ? " (partly in --from)" : "");
+    fflush(stdout);
+}
+
+int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
+{
+    cli c = {.cmd = extra && extra->merged ? "merge" : "bake"};
+    const char *merged = extra ? extra->merged : NULL;
+    int shard_i = 0, shard_n = 0, stage = -1;
+    bool list_stages = false;
+    const char *from = NULL;
     prt_scene_desc sd = {0};
     const char *output = NULL;
     const char *summary = NULL;
@@ -335,6 +363,17 @@ int cmd_bake(int argc, char **argv)
         case OPT_KEY_FRAMES: key_frames = true; break;
         case OPT_NO_CHECKPOINT: checkpoint = false; break;
         case OPT_SUMMARY: summary = optarg; break;
+        case OPT_SHARD: {
+            char tail;
+            if (sscanf(optarg, "%d/%d%c", &shard_i, &shard_n, &tail) != 2 || shard_n < 1 || shard_n > 1000000 || shard_i < 1 || shard_i > shard_n)
+                rc = cli_usage(&c, "--shard takes I/N with 1 <= I <= N (1/3, 2/3, 3/3), not '%s'", optarg);
+            break;
+        }
+        case OPT_STAGE:
+            if (!optarg) list_stages = true;
+            else if (!cli_parse_int(optarg, 0, 4095, &stage)) rc = cli_usage(&c, "--stage takes a stage number 0..4095 (--stage alone lists them)");
+            break;
+        case OPT_FROM: from = optarg; break;
         case OPT_BRDF_SET:
             if (nsets == 16 || !strchr(optarg, '=') || strchr(optarg, '=') == optarg) rc = cli_usage(&c, "--brdf-set takes NAME=SPEC[,SPEC...], at most 16 times");
             else sets[nsets++] = optarg;
@@ -376,6 +415,23 @@ int cmd_bake(int argc, char **argv)
         if (!winding_named) sd.winding = PRT_WINDING_KEEP;
     }
     if (!rc && !output) rc = cli_usage(&c, "an output file is required (-o OUT.prt)");
+    if (!rc && list_stages && (shard_n || stage >= 0)) rc = cli_usage(&c, "--stage alone lists the stages; --stage K goes with --shard I/N");
+    if (!rc && stage >= 0 && !shard_n) rc = cli_usage(&c, "--stage K needs --shard I/N (--stage alone lists the stages)");
+    if (!rc && from && !shard_n && !list_stages) rc = cli_usage(&c, "--from goes with --shard I/N or --stage (prt merge finishes a bake)");
+    if (!rc && (shard_n || list_stages || merged) && (resume || summary))
+        rc = cli_usage(&c, "--resume and --summary do not go with --shard or --stage");
+    if (!rc && !output && !list_stages) rc = cli_usage(&c, "an output file is required (-o %s)", shard_n ? "SHARD" : "OUT.prt");
+    char from_abs[4096] = "";
+    if (!rc && from && !realpath(from, from_abs)) rc = cli_usage(&c, "--from %s: no such file", from);
+    if (shard_n || list_stages || merged) checkpoint = false;   /* they read --from, and write no checkpoint of their own */
+    const int rank = extra ? extra->rank : 0, ranks = extra && extra->ranks > 1 ? extra->ranks : 1;
+    if (!rc && ranks > 1 && (shard_n || list_stages)) rc = cli_usage(&c, "--shard and --stage are for bakes outside mpirun (under it, the processes share the stages)");
+    if (rank) {   /* only rank 0 speaks and writes */
+        c.quiet = true;
+        checkpoint = false;
+    }
+    if (!rc && key_frames && (shard_n || list_stages || merged || ranks > 1))
+        rc = cli_usage(&c, "--frames bakes on one machine: not with --shard, --stage, prt merge or mpirun");
     if (!rc && resume && !checkpoint) rc = cli_usage(&c, "--resume needs the checkpoint that --no-checkpoint turns off");
     if (!rc && refine && no_refine) rc = cli_usage(&c, "--no-refine contradicts --refine, --refine-vertices and --refine-threshold");
     char checkpoint_path[4096] = "";
@@ -413,13 +469,69 @@ int cmd_bake(int argc, char **argv)
     else if (!st && !no_refine) st = auto_refine(&c, method, scene, o, sd.max_edge == 0);
     if (!st) {
         uint64_t recovered = 0, total = 0;
+        int stopped = -1;
         prt_bake_run_desc run = {.progress = cli_progress, .progress_user = &c, .checkpoint = checkpoint ? checkpoint_path : NULL,
-                                 .resume = resume, .recovered_units = &recovered, .total_units = &total};
+                                 .resume = resume, .recovered_units = &recovered, .total_units = &total, .stopped_stage = &stopped};
+        if (shard_n) {
+            run.checkpoint = from ? from_abs : NULL;
+            run.shard_index = shard_i;
+            run.shard_count = shard_n;
+            run.shard = output;
+            run.shard_note = extra ? extra->note : NULL;
+            run.stage_given = stage >= 0;
+            run.stage = stage;
+        } else if (ranks > 1) {
+            run.spread = cli_cluster_spread;
+        } else if (list_stages || merged) {
+            run.checkpoint = list_stages ? (from ? from_abs : NULL) : merged;
+            run.stop_at_missing = 1;
+            if (list_stages) run.stage_seen = print_stage;
+        }
         if (key_frames) st = prt_bake_frames(c.ctx, (const prt_scene *const *)frames, nframes, method, o, &run, &t);
         else st = prt_bake(c.ctx, scene, method, o, &run, &t);
+        if (!st && (!t || list_stages)) {   /* a shard written, the stages listed, or stages remain */
+            rc = EXIT_OK;
+            if (shard_n && !c.quiet) {
+                prt_bake_shard info;
+                if (!prt_bake_shard_info(c.ctx, output, &info)) {
+                    if (info.stage < 0)
+                        fprintf(stderr, "prt bake: warning: no stage of this bake can be spread (all its work is whole steps): %s holds "
+                                "nothing, and prt merge bakes it all\n", output);
+                    else
+                        fprintf(stderr, "prt bake: wrote shard %d/%d of stage %d (%s): %llu of its %llu units, to %s\n", shard_i, shard_n,
+                                info.stage, info.stage_name, (unsigned long long)info.records, (unsigned long long)info.units, output);
+                    free(info.note);
+                }
+            } else if (list_stages) {
+                if (stopped >= 0) printf("(the stages after %d are known once its shards are merged)\n", stopped);
+                else printf("(the end of the bake)\n");
+                prt_transfer_release(t);
+            } else if (merged) {
+                if (rename(merged, output) != 0) { cli_error(&c, "cannot write %s", output); rc = EXIT_FAILURE_INPUT; }
+                else {
+                    printf("next %d\n", stopped);
+                    if (!c.quiet)
+                        fprintf(stderr, "prt merge: stages remain: wrote the finished ones to %s; next, stage %d: prt bake ... --from %s --shard I/N\n",
+                                output, stopped, output);
+                }
+            }
+            prt_scene_release(scene);   /* one scene: --frames goes with none of these */
+            free(frames);
+            prt_options_release(o);
+            prt_context_release(c.ctx);
+            return rc;
+        }
         if (!st && resume && !c.quiet && total)
             fprintf(stderr, "prt bake: resumed: %llu of %llu work units (%.0f%%) came from %s\n", (unsigned long long)recovered,
                     (unsigned long long)total, 100.0 * (double)recovered / (double)total, checkpoint_path);
+    }
+    if (!st && rank) {   /* rank 0 writes the file */
+        prt_transfer_release(t);
+        prt_scene_release(scene);   /* one scene: --frames is not spread */
+        free(frames);
+        prt_options_release(o);
+        prt_context_release(c.ctx);
+        return EXIT_OK;
     }
     if (!st && !c.quiet) {
         char *report = NULL;
@@ -447,6 +559,10 @@ int cmd_bake(int argc, char **argv)
         if (st && summary) remove(summary);
     }
     if (!st && checkpoint) remove(checkpoint_path);   /* the result is safe: nothing to resume */
+    if (!st && merged) {
+        remove(merged);
+        printf("done\n");
+    }
     if (!st && !c.quiet) {
         char *text = NULL;
         if (!prt_transfer_describe(t, output, 0, &text)) {
@@ -466,5 +582,62 @@ int cmd_bake(int argc, char **argv)
     free(frames);
     prt_options_release(o);
     prt_context_release(c.ctx);
+    return rc;
+}
+
+/* The arguments a shard keeps for prt merge: the bake's own, without where this run writes or
+ * reads (-o, --shard, --stage, --from) nor how it runs (-j, -q, --progress, --summary). */
+static char *shard_note(int argc, char **argv)
+{
+    static const char *const skip_arg[] = {"-o", "--output", "--shard", "--from", "-j", "--threads", "--progress", "--summary"};
+    static const char *const skip[] = {"-q", "--quiet", "--resume", "--no-checkpoint"};
+    cJSON *j = cJSON_CreateObject(), *args = j ? cJSON_AddArrayToObject(j, "args") : NULL;
+    char cwd[4096];
+    if (!args || !getcwd(cwd, sizeof cwd)) { cJSON_Delete(j); return NULL; }
+    cJSON_AddStringToObject(j, "cwd", cwd);
+    for (int i = 1; i < argc; ++i) {
+        bool drop = false;
+        for (size_t k = 0; k < sizeof skip_arg / sizeof *skip_arg && !drop; ++k) {
+            const size_t n = strlen(skip_arg[k]);
+            if (!strcmp(argv[i], skip_arg[k])) { drop = true; i++; }
+            else if (!strncmp(argv[i], skip_arg[k], n) && (argv[i][n] == '=' || (n == 2 && argv[i][n]))) drop = true;
+        }
+        for (size_t k = 0; k < sizeof skip / sizeof *skip && !drop; ++k) drop = !strcmp(argv[i], skip[k]);
+        if (!strcmp(argv[i], "--stage") || !strncmp(argv[i], "--stage=", 8)) drop = true;
+        if (!drop) cJSON_AddItemToArray(args, cJSON_CreateString(argv[i]));
+    }
+    char *text = cJSON_PrintUnformatted(j);
+    cJSON_Delete(j);
+    return text;
+}
+
+int cmd_bake(int argc, char **argv)
+{
+    /* --stage K as two words (getopt takes an optional value only as --stage=K), --stage alone lists. */
+    char **args = calloc((size_t)argc + 1, sizeof *args), *joined[8];
+    int n = 0, nj = 0;
+    if (!args) { fprintf(stderr, "prt bake: out of memory\n"); return EXIT_NO_MEMORY; }
+    for (int i = 0; i < argc; ++i) {
+        if (!strcmp(argv[i], "--stage") && i + 1 < argc && argv[i + 1][0] >= '0' && argv[i + 1][0] <= '9' && nj < 8) {
+            const size_t len = strlen(argv[i + 1]) + 9;
+            if ((joined[nj] = malloc(len))) {
+                snprintf(joined[nj], len, "--stage=%s", argv[i + 1]);
+                args[n++] = joined[nj++];
+                i++;
+                continue;
+            }
+        }
+        args[n++] = argv[i];
+    }
+    cli_bake_extra extra = {.note = shard_note(n, args)};
+    if (cli_cluster_start(&argc, &argv)) {
+        extra.rank = cli_cluster_rank();
+        extra.ranks = cli_cluster_size();
+    }
+    const int rc = cli_bake_main(n, args, &extra);
+    cli_cluster_end(rc);
+    cJSON_free(extra.note);
+    for (int i = 0; i < nj; ++i) free(joined[i]);
+    free(args);
     return rc;
 }

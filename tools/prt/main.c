@@ -6,6 +6,7 @@
 
 static const struct { const char *name; int (*fn)(int, char **); const char *summary; } commands[] = {
     {"bake", cmd_bake, "precompute radiance transfer for a scene into a .prt file"},
+    {"merge", cmd_merge, "put the shards of a bake spread over machines back together (docs/CLUSTER.md)"},
     {"relight", cmd_relight, "per-vertex exit radiance of a .prt under a lighting: glTF, PLY, OBJ, JSON or a texel map"},
     {"export", cmd_export, "a .prt as a mesh for other tools: radiance as vertex colours, and what its method exports"},
     {"render", cmd_render, "draw a relit .prt to an image: PNG, EXR, HDR or PFM (headless OpenGL)"},

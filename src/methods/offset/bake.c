@@ -28,6 +28,8 @@ typedef struct obake {
     prt__offset_charts charts;   /* what splits the offsets' cells (with s->source, s->texel) */
     prt__dipole (*dipoles)[3];   /* per medium */
     prt__progress *progress;
+    struct bounce_scratch *bounce;   /* [bounce_threads] the bounces' per-thread scratch */
+    int bounce_threads;
 } obake;
 
 /* ---- offsets ---- */
@@ -144,6 +146,9 @@ static int nearest_rep(const obake *ob, const rep_index *ix, uint32_t land)
 /* A receiver's representatives, one set per thread: per offset the texel and chart
  * (prt__offset_reps) and, sorted in space, nearest_rep's index. */
 typedef struct receiver { int32_t *rep, *rep_chart; rep_index ix; } receiver;
+
+/* One thread's scratch in the bounces: acc NULL until first used. */
+typedef struct bounce_scratch { double *acc; receiver rc; } bounce_scratch;
 
 static bool receiver_init(receiver *r, int K)
 {
@@ -446,86 +451,125 @@ static prt_status env_step(prt__bake_job *base, prt_context *ctx, prt__progress 
  * surface around its representative, nearest_rep), as a unit emitter there would send it back.
  * Summed over a cell this is the integral of eq. 8, so no cell's surface goes missing; the first
  * bounce is radiosity_maps'. Seeded per texel: the same maps for any thread count. */
-static prt_status bounces_step(prt__bake_job *base, prt_context *ctx, prt__progress *p)
+/* Bounces are a stage of units (blocks of texels), so that they resume, shard and spread like any
+ * other: a unit's record is its texels' radiosity maps after the bounces. */
+#define BOUNCE_BLOCK 64
+
+static void bounce_texel(obake *ob, receiver *rc, double *acc, size_t i)
 {
-    obake *ob = (obake *)base;
     prt__offset_set *s = ob->s;
     const int W = s->width, K = s->count, B = s->map_bounces, N = ob->d.walks > 0 ? ob->d.walks : 256;
     const size_t nc = s->covered;
     const prt__mesh *m = &ob->t->mesh;
-    prt__progress_begin(p, p->stage, nc);
     const int strata = (int)sqrt((double)N);
-    int short_of_memory = 0;
-    ob->charts = (prt__offset_charts){ob->chart, s->source, s->texel, ob->patches.pos};
-#pragma omp parallel num_threads(prt__threads(ctx))
-    {
-        double *acc = malloc((size_t)K * 3 * sizeof *acc);
-        receiver rc;
-        const bool ready = receiver_init(&rc, K) && acc;
-        if (!ready) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
-#pragma omp for schedule(dynamic, 16)
-        for (size_t i = 0; i < nc; ++i) {
-            if (!ready || prt__progress_cancelled(p)) continue;
-            memset(acc, 0, (size_t)K * 3 * sizeof *acc);
-            const int tx = (int)(s->texel[i] % (uint32_t)W), ty = (int)(s->texel[i] / (uint32_t)W);
-            receiver_at(ob, &rc, tx, ty);
-            uint64_t rng = ((uint64_t)ob->d.seed << 32) ^ (i * 0xD1B54A32D192ED03ull);
-            for (int w = 0; w < N; ++w) {
-                float o[3], n[3], d[3];
-                double weight[3];
-                for (int c = 0; c < 3; ++c) {
-                    n[c] = s->nrm[i * 3 + c];
-                    o[c] = s->pos[i * 3 + c] + n[c] * s->ray_offset;
-                    weight[c] = s->albedo[i * 3 + c];
-                }
-                /* The first direction stratified: the paths spread evenly over the hemisphere. */
-                double u1 = walk_uniform(&rng), u2 = walk_uniform(&rng);
-                if (w < strata * strata) { u1 = (w / strata + u1) / strata; u2 = (w % strata + u2) / strata; }
-                for (int k = 1; k <= B; ++k) {
-                    if (k > 1) { u1 = walk_uniform(&rng); u2 = walk_uniform(&rng); }
-                    cosine_direction(n, u1, u2, d);
-                    prt__ray_hit h;
-                    const int32_t at = landing(ob, o, d, &h);
-                    if (at < 0) break;
-                    if (k > 1) {   /* the cell of the surface around the landing point (nearest_rep) */
-                        const int cell = nearest_rep(ob, &rc.ix, s->texel[at]);
-                        for (int c = 0; c < 3 && cell >= 0; ++c) acc[cell * 3 + c] += weight[c];
-                    }
-                    double most = 0;
-                    for (int c = 0; c < 3; ++c) { weight[c] *= s->albedo[(size_t)at * 3 + c]; most = fmax(most, weight[c]); }
-                    if (!(most > 1e-4)) break;
-                    /* On from the hit, off its surface along its (front-facing) shading normal. */
-                    const uint32_t *ix = m->indices + (size_t)h.prim * 3;
-                    const float b0 = 1 - h.u - h.v;
-                    float len = 0;
-                    for (int c = 0; c < 3; ++c) {
-                        n[c] = b0 * m->normals[ix[0] * 3 + c] + h.u * m->normals[ix[1] * 3 + c] + h.v * m->normals[ix[2] * 3 + c];
-                        len += n[c] * n[c];
-                    }
-                    if (!(len > 0) || prt__v3_dot(n, d) >= 0)   /* the front's geometric normal (it faces the ray) */
-                        for (int c = 0; c < 3; ++c) n[c] = h.ng[c];
-                    prt__v3_normalize(n);
-                    for (int c = 0; c < 3; ++c) o[c] = o[c] + d[c] * h.t + n[c] * s->ray_offset;
-                }
-            }
-            for (int k = 0; k < K; ++k)
-                for (int c = 0; c < 3; ++c) s->radiosity[((size_t)k * nc + i) * 3 + c] += (float)(acc[k * 3 + c] / N);
-            prt__progress_add(p, 1);
+    memset(acc, 0, (size_t)K * 3 * sizeof *acc);
+    const int tx = (int)(s->texel[i] % (uint32_t)W), ty = (int)(s->texel[i] / (uint32_t)W);
+    receiver_at(ob, rc, tx, ty);
+    uint64_t rng = ((uint64_t)ob->d.seed << 32) ^ (i * 0xD1B54A32D192ED03ull);
+    for (int w = 0; w < N; ++w) {
+        float o[3], n[3], d[3];
+        double weight[3];
+        for (int c = 0; c < 3; ++c) {
+            n[c] = s->nrm[i * 3 + c];
+            o[c] = s->pos[i * 3 + c] + n[c] * s->ray_offset;
+            weight[c] = s->albedo[i * 3 + c];
         }
-        free(acc);
-        receiver_free(&rc);
+        /* The first direction stratified: the paths spread evenly over the hemisphere. */
+        double u1 = walk_uniform(&rng), u2 = walk_uniform(&rng);
+        if (w < strata * strata) { u1 = (w / strata + u1) / strata; u2 = (w % strata + u2) / strata; }
+        for (int k = 1; k <= B; ++k) {
+            if (k > 1) { u1 = walk_uniform(&rng); u2 = walk_uniform(&rng); }
+            cosine_direction(n, u1, u2, d);
+            prt__ray_hit h;
+            const int32_t at = landing(ob, o, d, &h);
+            if (at < 0) break;
+            if (k > 1) {   /* the cell of the surface around the landing point (nearest_rep) */
+                const int cell = nearest_rep(ob, &rc->ix, s->texel[at]);
+                for (int c = 0; c < 3 && cell >= 0; ++c) acc[cell * 3 + c] += weight[c];
+            }
+            double most = 0;
+            for (int c = 0; c < 3; ++c) { weight[c] *= s->albedo[(size_t)at * 3 + c]; most = fmax(most, weight[c]); }
+            if (!(most > 1e-4)) break;
+            /* On from the hit, off its surface along its (front-facing) shading normal. */
+            const uint32_t *ix = m->indices + (size_t)h.prim * 3;
+            const float b0 = 1 - h.u - h.v;
+            float len = 0;
+            for (int c = 0; c < 3; ++c) {
+                n[c] = b0 * m->normals[ix[0] * 3 + c] + h.u * m->normals[ix[1] * 3 + c] + h.v * m->normals[ix[2] * 3 + c];
+                len += n[c] * n[c];
+            }
+            if (!(len > 0) || prt__v3_dot(n, d) >= 0)   /* the front's geometric normal (it faces the ray) */
+                for (int c = 0; c < 3; ++c) n[c] = h.ng[c];
+            prt__v3_normalize(n);
+            for (int c = 0; c < 3; ++c) o[c] = o[c] + d[c] * h.t + n[c] * s->ray_offset;
+        }
     }
-    if (short_of_memory) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory tracing the maps' bounces");
-    if (prt__progress_cancelled(p)) return prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
+    for (int k = 0; k < K; ++k)
+        for (int c = 0; c < 3; ++c) s->radiosity[((size_t)k * nc + i) * 3 + c] += (float)(acc[k * 3 + c] / N);
+}
+
+static prt_status bounce_unit(prt__bake_job *base, uint64_t unit, int thread)
+{
+    obake *ob = (obake *)base;
+    const int K = ob->s->count;
+    bounce_scratch *b = &ob->bounce[thread];
+    if (!b->acc) {
+        if (!(b->acc = malloc((size_t)K * 3 * sizeof *b->acc)) || !receiver_init(&b->rc, K)) {
+            receiver_free(&b->rc);
+            free(b->acc);
+            memset(b, 0, sizeof *b);
+            return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory tracing the maps' bounces");
+        }
+    }
+    const size_t nc = ob->s->covered, end = (size_t)(unit + 1) * BOUNCE_BLOCK < nc ? (size_t)(unit + 1) * BOUNCE_BLOCK : nc;
+    for (size_t i = (size_t)unit * BOUNCE_BLOCK; i < end; ++i) bounce_texel(ob, &b->rc, b->acc, i);
     return PRT_OK;
+}
+
+/* A unit's record: for each of its texels, for each offset, the map's RGB. */
+static void bounce_save(prt__bake_job *base, uint64_t unit, prt__bytes *out)
+{
+    const prt__offset_set *s = ((obake *)base)->s;
+    const size_t nc = s->covered, first = (size_t)unit * BOUNCE_BLOCK, end = first + BOUNCE_BLOCK < nc ? first + BOUNCE_BLOCK : nc;
+    for (int k = 0; k < s->count; ++k) prt__bytes_put(out, s->radiosity + ((size_t)k * nc + first) * 3, (end - first) * 3 * sizeof(float));
+}
+
+static bool bounce_load(prt__bake_job *base, uint64_t unit, const unsigned char *data, size_t size)
+{
+    const prt__offset_set *s = ((obake *)base)->s;
+    const size_t nc = s->covered, first = (size_t)unit * BOUNCE_BLOCK, end = first + BOUNCE_BLOCK < nc ? first + BOUNCE_BLOCK : nc;
+    const size_t row = (end - first) * 3 * sizeof(float);
+    if (first >= nc || size != row * (size_t)s->count) return false;
+    for (int k = 0; k < s->count; ++k) {
+        const float *v = (const float *)(data + row * (size_t)k);
+        for (size_t j = 0; j < (end - first) * 3; ++j) {
+            float x;
+            memcpy(&x, v + j, sizeof x);
+            if (!isfinite(x) || x < 0) return false;
+        }
+        memcpy(s->radiosity + ((size_t)k * nc + first) * 3, data + row * (size_t)k, row);
+    }
+    return true;
 }
 
 static prt_status offset_stage(prt__bake_job *base, int index, prt__stage *out)
 {
-    static const char *const names[4] = {"offsets", "transfer maps", "first-order light", "bounces"};
-    static prt_status (*const steps[4])(prt__bake_job *, prt_context *, prt__progress *) = {offsets_step, maps_step, env_step, bounces_step};
-    const obake *ob = (const obake *)base;
+    static const char *const names[3] = {"offsets", "transfer maps", "first-order light"};
+    static prt_status (*const steps[3])(prt__bake_job *, prt_context *, prt__progress *) = {offsets_step, maps_step, env_step};
+    obake *ob = (obake *)base;
     if (index < 0 || index > 3 || (index == 3 && (ob->s->map_bounces < 2 || !ob->s->radiosity))) return PRT_OK;
+    if (index == 3) {
+        free(ob->bounce);
+        if (!(ob->bounce = prt__calloc((size_t)base->threads, sizeof *ob->bounce))) return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        ob->bounce_threads = base->threads;
+        ob->charts = (prt__offset_charts){ob->chart, ob->s->source, ob->s->texel, ob->patches.pos};
+        snprintf(out->name, sizeof out->name, "bounces");
+        out->units = (ob->s->covered + BOUNCE_BLOCK - 1) / BOUNCE_BLOCK;
+        out->run = bounce_unit;
+        out->save_unit = bounce_save;
+        out->load_unit = bounce_load;
+        return PRT_OK;
+    }
     snprintf(out->name, sizeof out->name, "%s", names[index]);
     out->whole = steps[index];
     return PRT_OK;
@@ -550,6 +594,11 @@ static void offset_release(prt__bake_job *base)
     obake *ob = (obake *)base;
     prt__raycaster_release(&ob->rc);
     prt__texel_patches_free(&ob->patches);
+    for (int i = 0; ob->bounce && i < ob->bounce_threads; ++i) {
+        if (ob->bounce[i].acc) receiver_free(&ob->bounce[i].rc);
+        free(ob->bounce[i].acc);
+    }
+    free(ob->bounce);
     free(ob->texel_medium);
     free(ob->chart);
     free(ob->dipoles);
