@@ -355,6 +355,7 @@ expect 1 "probe without a grid" -- $NOLEAK "$PRT" render "$T/texels.prt" -o "$T/
 says "--neighbourhood"
 expect 2 "bad probe" -- "$PRT" render "$T/nb.prt" -o "$T/probe.png" --probe 0,0.5
 says "--probe"
+expect 2 "probe with trailing junk" -- "$PRT" render "$T/nb.prt" -o "$T/probe.png" --probe 0,0.5,0,0.1x
 expect 2 "grid too fine" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --neighbourhood 65
 expect 0 "height map" -- "$PRT" bake -q "$T/demo.obj" -o "$T/h.prt" --order 2 --samples 64 --bounces 1 --texels 32 --kinds shadowed --height-map "$T/nm.pfm" --bump-height 0.05
 expect 2 "height map without texels" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --height-map "$T/nm.pfm"

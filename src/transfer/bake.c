@@ -275,6 +275,24 @@ static void fingerprint(const prt__method *m, const prt_options *o, const prt_tr
         prt__fingerprint_add(fp, &scene->brdf_set[i].surface, sizeof scene->brdf_set[i].surface);
         prt__fingerprint_add(fp, &scene->brdf_set[i].brdf, sizeof scene->brdf_set[i].brdf);
     }
+    /* Translucent and specular surfaces change what units compute (only where named: older
+     * checkpoints stay valid); field by field, names with their terminators. */
+    for (int i = 0; i < scene->medium_count; ++i) {
+        const prt_medium *md = &scene->media[i].m;
+        prt__fingerprint_add(fp, scene->media[i].name, strlen(scene->media[i].name) + 1);
+        prt__fingerprint_add(fp, md->sigma_a, sizeof md->sigma_a);
+        prt__fingerprint_add(fp, md->sigma_s, sizeof md->sigma_s);
+        prt__fingerprint_add(fp, &md->eta, sizeof md->eta);
+        prt__fingerprint_add(fp, &md->falloff_mm, sizeof md->falloff_mm);
+    }
+    for (int i = 0; i < scene->specular_count; ++i) {
+        const prt_specular *sp = &scene->speculars[i].s;
+        const int32_t type = (int32_t)sp->type;
+        prt__fingerprint_add(fp, scene->speculars[i].name, strlen(scene->speculars[i].name) + 1);
+        prt__fingerprint_add(fp, &type, sizeof type);
+        prt__fingerprint_add(fp, &sp->reflectance, sizeof sp->reflectance);
+        prt__fingerprint_add(fp, &sp->ior, sizeof sp->ior);
+    }
 }
 
 prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__method *m, prt__bake_begin_fn begin, const void *desc,

@@ -20,7 +20,7 @@ prt_status prt_transfer_light_at(prt_context *ctx, const prt_transfer *t, const 
     if (!t || !l || !p || !out) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_light_at: transfer, lighting, point and out are required");
     if (!(isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]))) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "prt_transfer_light_at: the point is not finite");
     if (!prt_transfer_light_at_box(t, NULL, NULL))
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "'%s' holds no light for points around its scene (%s files bake none%s)", t->source, t->method->name,
-                         t->method->light_at ? "; --neighbourhood N bakes it" : "");
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "'%s' holds no light for points around its scene (%s)", t->source,
+                         t->method->light_at ? "bake it with --neighbourhood N" : "its method bakes none");
     return t->method->light_at(ctx, t, l, p, out);
 }

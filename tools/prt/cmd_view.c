@@ -233,6 +233,7 @@ static void *worker(void *arg)
         prt_relit r;
         prt_transfer *pose = NULL;
         prt_sh_light probe;
+        memset(&probe, 0, sizeof probe);
         prt_status st = relight(v, &job, &r, &pose, &probe);
         double ms = (now() - t0) * 1e3;
         pthread_mutex_lock(&v->lock);
@@ -242,6 +243,7 @@ static void *worker(void *arg)
         v->result_pose = pose;
         v->result_probe = probe;
         v->result_probe_on = job.probe;
+        memcpy(v->result_probe_at, job.probe_at, sizeof v->result_probe_at);
         v->result_status = st;
         if (st) snprintf(v->result_error, sizeof v->result_error, "%s", prt_last_error());
         v->result_version = job.version;
@@ -282,7 +284,7 @@ static void show(viewer *v, prt_relit *r, prt_transfer *pose)
         prt_relit_render_mesh(t, r, &mesh);
         mesh.side_by_side = v->side_by_side;
         cli_probe_mesh keep = {0};
-        const float at[1][4] = {{v->want.probe_at[0], v->want.probe_at[1], v->want.probe_at[2], 0}};
+        const float at[1][4] = {{v->result_probe_at[0], v->result_probe_at[1], v->result_probe_at[2], 0}};
         if (probe && !cli_probe_drawable(&mesh)) snprintf(v->message, sizeof v->message, "the probe draws over per-vertex radiance: this kind has per-pixel parts");
         if (probe && cli_probe_drawable(&mesh) && cli_probe_spheres(&mesh, at, &v->result_probe, 1, cli_probe_radius(v->t), &keep, &joined))
             prt_window_set_mesh(v->win, &joined);

@@ -15,10 +15,17 @@
 
 bool cli_parse_probe(const char *arg, float out[4])
 {
-    char tail;
+    int used = 0;
     out[3] = 0;
-    const int n = sscanf(arg, "%f,%f,%f,%f%c", &out[0], &out[1], &out[2], &out[3], &tail);
-    if (n != 3 && n != 4) return false;
+    int n = sscanf(arg, "%f,%f,%f%n", &out[0], &out[1], &out[2], &used);
+    if (n != 3) return false;
+    if (arg[used] == ',') {
+        int more = 0;
+        if (sscanf(arg + used + 1, "%f%n", &out[3], &more) != 1) return false;
+        used += 1 + more;
+        n = 4;
+    }
+    if (arg[used] != 0) return false;   /* nothing after the numbers */
     for (int k = 0; k < 4; ++k)
         if (!isfinite(out[k])) return false;
     return n == 3 || out[3] > 0;

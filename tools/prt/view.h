@@ -76,6 +76,7 @@ struct viewer {
     prt_context *worker_ctx;
     prt_relit shown;            /* what the window draws now */
     prt_sh_light result_probe;  /* the light arriving at the result's probe (with result, under lock) */
+    float result_probe_at[3];   /* where the result's probe was lit: drawn there, not where a drag has moved it since */
     bool result_probe_on, shown_probe_on;
     prt_transfer *shown_pose;   /* and its pose (owned; NULL: the file's own mesh) */
     /* key frames (prt bake --frames): space plays and pauses, / and \ step */

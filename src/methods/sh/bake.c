@@ -673,7 +673,8 @@ static prt_status sh_finish(prt__bake_job *b, prt_transfer *t)
     prt__sh_state *s = t->state;
     prt__texel_sets *tx = &s->texels;
     if (!sb->extra.quantize || !tx->width) return PRT_OK;
-    if (sb->extra.quantize == 8) return prt__texel_quantize8(tx, s->order) ? PRT_OK : PRT_ERR_NO_MEMORY;
+    if (sb->extra.quantize == 8)
+        return prt__texel_quantize8(tx, s->order) ? PRT_OK : prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory quantizing the texel sets");
     const size_t ntex = (size_t)tx->width * tx->height;
     for (int k = 0; k < 3; ++k)
         for (size_t i = 0; tx->coeffs[k] && i < ntex * (size_t)tx->channels[k] * s->order * s->order; ++i)
@@ -795,6 +796,14 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
     if (d.ray_offset < 0 || !isfinite(d.ray_offset)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ray offset must be >= 0");
     if (d.neighbourhood && (d.neighbourhood < 2 || d.neighbourhood > 64))
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a neighbourhood grid has 2..64 points along each axis (got %d)", d.neighbourhood);
+    if (d.neighbourhood) {
+        /* N^3 points x 3 x order^4 floats: said up front rather than found out of memory. */
+        const double n2 = (double)d.order * d.order, bytes = pow(d.neighbourhood, 3) * (3 * n2 * n2 + 1) * sizeof(float);
+        if (bytes > 2.0 * 1073741824.0)
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "a neighbourhood grid of %d^3 points at order %d would hold %.1f GiB (at most 2): fewer points or a "
+                             "lower --order", d.neighbourhood, d.order, bytes / 1073741824.0);
+        prt__log(ctx, PRT_LOG_INFO, "neighbourhood grid: %d^3 points, %.1f MiB", d.neighbourhood, bytes / 1048576.0);
+    }
     if (d.mm_per_unit < 0 || !isfinite(d.mm_per_unit)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "millimetres per unit must be > 0 (0: 1000)");
 
     if ((unsigned)d.uv_layout > PRT_UV_GENERATE) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "unknown UV layout %d", (int)d.uv_layout);

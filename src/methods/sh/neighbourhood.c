@@ -108,7 +108,8 @@ void prt__sh_neighbourhood_eval(const prt__sh_grid *g, const float p[3], const p
         f[c] = g->dims[c] > 1 ? u - (float)i0[c] : 0.0f;
     }
     /* A point inside or behind geometry (under a floor, behind a wall) stands in for the space
-     * around it less: its weight falls from 1 with half its rays meeting back faces to 0. */
+     * around it less: its weight falls from 1 with none of its rays meeting back faces to 0 with
+     * a quarter of them (points in the open meet front faces only). */
     float w8[8], total = 0;
     int at8[3 * 8];
     for (int corner = 0; corner < 8; ++corner) {
@@ -122,14 +123,14 @@ void prt__sh_neighbourhood_eval(const prt__sh_grid *g, const float p[3], const p
         w8[corner] = wgt;
         if (wgt == 0) continue;
         const float front = g->front[((size_t)at8[corner * 3 + 2] * g->dims[1] + at8[corner * 3 + 1]) * g->dims[0] + at8[corner * 3]];
-        const float trust = fminf(fmaxf(2.0f * front - 1.0f, 0.0f), 1.0f);
+        const float trust = fminf(fmaxf(4.0f * front - 3.0f, 0.0f), 1.0f);
         total += wgt * trust;
     }
     if (total > 1e-6f)
         for (int corner = 0; corner < 8; ++corner) {
             if (w8[corner] == 0) continue;
             const float front = g->front[((size_t)at8[corner * 3 + 2] * g->dims[1] + at8[corner * 3 + 1]) * g->dims[0] + at8[corner * 3]];
-            w8[corner] *= fminf(fmaxf(2.0f * front - 1.0f, 0.0f), 1.0f) / total;
+            w8[corner] *= fminf(fmaxf(4.0f * front - 3.0f, 0.0f), 1.0f) / total;
         }
     float L[3][PRT_SH_MAX_COEFFS];
     memset(L, 0, sizeof L);

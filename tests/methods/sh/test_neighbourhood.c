@@ -33,7 +33,7 @@ static void test_black_square(void **state)
     (void)state;
     prt_context *ctx = test_context(0);
     test_mesh m = {0};
-    /* A black square of side 2 at y = 1, facing down (and a speck far off to size the grid). */
+    /* A black square of side 2 at y = 1, facing down. */
     tm_quad(&m, (float[3]){-1, 1, -1}, (float[3]){0, 0, 2}, (float[3]){2, 0, 0}, 2);
     prt_scene *s = tm_scene(ctx, &m, 0.0f);
     prt_transfer *t = bake(ctx, s, 3, 16384, 9);
@@ -65,6 +65,42 @@ static void test_black_square(void **state)
     prt_transfer_release(t);
     prt_sh_bake_desc d = {.neighbourhood = 65};
     assert_int_equal(prt_bake_sh(ctx, s, &d, &t), PRT_ERR_INVALID_ARG);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+/* Between a grid point above a floor and one beneath it (many of its rays meet the floor's back),
+ * the light is nearly the upper point's: the one beneath counts for little (its weight falls with
+ * the share of its rays meeting back faces, to nothing at a quarter). Halfway between two open points
+ * it is their mean. */
+static void test_points_beneath(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_quad(&m, (float[3]){-1, 0, 1}, (float[3]){2, 0, 0}, (float[3]){0, 0, -2}, 2);   /* a floor, facing up */
+    prt_scene *s = tm_scene(ctx, &m, 0.5f);
+    prt_transfer *t = bake(ctx, s, 3, 4096, 4);   /* y points at -0.5, -1/6, 1/6, 0.5 */
+    prt_sh_light sky = uniform_light(3), mid, above, below, top;
+    float p[3], q[3], r[3];
+    point(t, 1, 1, 1, q);   /* beneath the floor */
+    point(t, 1, 2, 1, p);   /* above it */
+    point(t, 1, 3, 1, r);
+    assert_true(q[1] < 0 && p[1] > 0);
+    assert_int_equal(prt_sh_light_at(ctx, t, p, &sky, &above), PRT_OK);
+    assert_int_equal(prt_sh_light_at(ctx, t, q, &sky, &below), PRT_OK);
+    const float between[3] = {p[0], 0.5f * (p[1] + q[1]), p[2]};
+    assert_int_equal(prt_sh_light_at(ctx, t, between, &sky, &mid), PRT_OK);
+    print_message("above the floor %.4f, beneath it %.4f, halfway %.4f\n", above.coeffs[0][0], below.coeffs[0][0], mid.coeffs[0][0]);
+    assert_true(fabsf(above.coeffs[0][0] - below.coeffs[0][0]) > 0.1f * above.coeffs[0][0]);
+    const float plain = 0.5f * (above.coeffs[0][0] + below.coeffs[0][0]);   /* trilinear alone */
+    assert_true(fabsf(mid.coeffs[0][0] - above.coeffs[0][0]) < 0.25f * fabsf(plain - above.coeffs[0][0]));
+    const float open_mid[3] = {p[0], 0.5f * (p[1] + r[1]), p[2]};
+    assert_int_equal(prt_sh_light_at(ctx, t, r, &sky, &top), PRT_OK);
+    assert_int_equal(prt_sh_light_at(ctx, t, open_mid, &sky, &mid), PRT_OK);
+    for (int k = 0; k < 9; ++k) assert_float_equal(mid.coeffs[0][k], 0.5f * (above.coeffs[0][k] + top.coeffs[0][k]), 1e-5f);
+    prt_transfer_release(t);
     prt_scene_release(s);
     tm_free(&m);
     prt_context_release(ctx);
@@ -190,6 +226,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_black_square),
+        cmocka_unit_test(test_points_beneath),
         cmocka_unit_test(test_probe_against_reference),
         cmocka_unit_test_setup_teardown(test_grid_file, test_dir_setup, test_dir_teardown),
     };

@@ -61,7 +61,7 @@ static void test_slab(void **state)
     prt__dipole k[3];
     assert_int_equal(prt__dipole_from_medium(&skin, 1.0, k), PRT_OK);
     const double h = 10, thickness[2] = {1, 3}, y00 = 0.28209479177387814;
-    double transmitted_thin[3] = {0};
+    double baked_thin[3] = {0};
     for (int s = 0; s < 2; ++s) {
         char obj[600], json[600];
         snprintf(obj, sizeof obj, "%s/slab.obj", test_dir);
@@ -89,8 +89,9 @@ static void test_slab(void **state)
             print_message("skin slab %.0f mm thick, channel %d: dipole over the faces %.4f (own face %.4f + through the slab %.4f), baked %.4f\n",
                           thickness[s], c, own + through, own, through, got);
             assert_true(fabs(got - (own + through)) < 0.03 * (own + through));
-            if (s == 0) transmitted_thin[c] = through;
-            else assert_true(through < transmitted_thin[c]);
+            /* The thicker slab lets less through: the bake's own numbers say so. */
+            if (s == 0) baked_thin[c] = got;
+            else assert_true(got < baked_thin[c]);
         }
         prt_transfer_release(t);
         prt_options_release(o);
