@@ -414,7 +414,6 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
          * and its neighbours not. Key frames are read as they are wound unless told. */
         if (!winding_named) sd.winding = PRT_WINDING_KEEP;
     }
-    if (!rc && !output) rc = cli_usage(&c, "an output file is required (-o OUT.prt)");
     if (!rc && list_stages && (shard_n || stage >= 0)) rc = cli_usage(&c, "--stage alone lists the stages; --stage K goes with --shard I/N");
     if (!rc && stage >= 0 && !shard_n) rc = cli_usage(&c, "--stage K needs --shard I/N (--stage alone lists the stages)");
     if (!rc && from && !shard_n && !list_stages) rc = cli_usage(&c, "--from goes with --shard I/N or --stage (prt merge finishes a bake)");
