@@ -71,12 +71,11 @@ double prt__dipole_reach(const prt__dipole d[3])
 }
 
 /* The mean of a medium's kernel over a disc of radius a whose centre lies r from the entry point
- * (a source texel, flat): Gauss-Legendre over the disc's area in the radius squared, the midpoint
+ * (a source patch, flat): Gauss-Legendre over the disc's area in the radius squared, the midpoint
  * rule over the angle (the kernel depends on the angle only through the distance, so half a
- * turn). At a texel's distance, where the kernel changes most across the texel, its value at the
- * centre is far from its mean: 12% under on the skin demo's sphere (an exponential falloff of 20
- * mm over texels of about 15 mm), the texel's value at its rim's distance (prt__offset_tr's guard
- * against slivers) further under. */
+ * turn). At a patch's own distance, where the kernel changes most across it, its value at the
+ * centre is far from its mean (12% under for an exponential falloff of 20 mm over patches of
+ * about 15 mm), and its value at the rim's distance further under. */
 double prt__dipole_disc_mean(const prt__dipole *d, double r, double a)
 {
     static const double node[3] = {0.1127016653792583, 0.5, 0.8872983346207417}, weight[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
