@@ -2,40 +2,11 @@
  * checkpoint write) and resumed from their checkpoints write the same file, byte for byte outside
  * META, as an uninterrupted bake, for every method; a checkpoint of another bake is refused; torn
  * and damaged records are cut off and their units baked again. */
-#include "common.h"
+#include "small_bake.h"
 
 #include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
-
-/* The bake under test: a small scene every method bakes in about a second. */
-static prt_scene *make_scene(prt_context *ctx, test_mesh *m)
-{
-    tm_quad(m, (float[3]){-1, 0, 1}, (float[3]){2, 0, 0}, (float[3]){0, 0, -2}, 24);
-    tm_sphere(m, (float[3]){0, 0.45f, 0}, 0.4f, 16, 24);
-    return tm_scene(ctx, m, 0.6f);
-}
-
-static prt_options *make_options(const prt_method *method, const char *samples)
-{
-    prt_options *o = NULL;
-    assert_int_equal(prt_options_create(method, &o), PRT_OK);
-    if (!strcmp(prt_method_name(method), "sh")) {
-        assert_int_equal(prt_options_set(o, "samples", samples), PRT_OK);
-        assert_int_equal(prt_options_set(o, "bounces", "2"), PRT_OK);
-        assert_int_equal(prt_options_set(o, "compress", "cpca"), PRT_OK);   /* a `whole` stage after the units */
-        assert_int_equal(prt_options_set(o, "clusters", "4"), PRT_OK);
-    } else {
-        if (prt_method_option(method, "bounces")) assert_int_equal(prt_options_set(o, "bounces", "1"), PRT_OK);
-        if (prt_method_option(method, "gather-res")) assert_int_equal(prt_options_set(o, "gather-res", "8"), PRT_OK);
-        if (prt_method_option(method, "brdf-res")) assert_int_equal(prt_options_set(o, "brdf-res", "8"), PRT_OK);
-        if (prt_method_option(method, "cloud-grid")) {   /* light clouds: 18 lights, each a unit of its own */
-            assert_int_equal(prt_options_set(o, "cloud-grid", "3,2,3"), PRT_OK);
-            assert_int_equal(prt_options_set(o, "samples", samples), PRT_OK);
-        }
-    }
-    return o;
-}
 
 /* Progress events go down a pipe to the parent, which kills the child at the k-th. */
 static int progress_to_pipe(void *user, const char *stage, uint64_t done, uint64_t total)
@@ -60,9 +31,9 @@ static int child_bake(int method_index, const char *checkpoint, int kill_at, con
         prt_context *ctx = NULL;
         if (prt_context_create(&(prt_context_desc){.threads = 2}, &ctx)) _exit(2);
         test_mesh m = {0};
-        prt_scene *scene = make_scene(ctx, &m);
+        prt_scene *scene = small_bake_scene(ctx, &m);
         const prt_method *method = prt_method_at(method_index);
-        prt_options *o = make_options(method, "256");
+        prt_options *o = small_bake_options(method, "256");
         prt_bake_run_desc run = {.progress = progress_to_pipe, .progress_user = &fds[1], .checkpoint = checkpoint, .resume = 1};
         prt_transfer *t = NULL;
         int rc = prt_bake(ctx, scene, method, o, &run, &t) != PRT_OK || (save && prt_transfer_save(t, save) != PRT_OK);
@@ -123,10 +94,10 @@ static void test_killed_bakes_resume(void **state)
     /* No more forks: bake each method once without a checkpoint here and compare. */
     prt_context *ctx = test_context(2);
     test_mesh m = {0};
-    prt_scene *scene = make_scene(ctx, &m);
+    prt_scene *scene = small_bake_scene(ctx, &m);
     for (int mi = 0; mi < methods; ++mi) {
         const prt_method *method = prt_method_at(mi);
-        prt_options *o = make_options(method, "256");
+        prt_options *o = small_bake_options(method, "256");
         prt_transfer *plain = NULL;
         assert_int_equal(prt_bake(ctx, scene, method, o, NULL, &plain), PRT_OK);
         char pp[512];
@@ -158,9 +129,9 @@ static void test_damaged_checkpoints(void **state)
     (void)state;
     prt_context *ctx = test_context(2);
     test_mesh m = {0};
-    prt_scene *scene = make_scene(ctx, &m);
+    prt_scene *scene = small_bake_scene(ctx, &m);
     const prt_method *sh = prt_method_find("sh");
-    prt_options *o = make_options(sh, "64");
+    prt_options *o = small_bake_options(sh, "64");
     char cp[512];
     snprintf(cp, sizeof cp, "%s/damaged.checkpoint", test_dir);
     prt_transfer *plain = NULL;
@@ -201,9 +172,9 @@ static void test_foreign_checkpoints(void **state)
     (void)state;
     prt_context *ctx = test_context(2);
     test_mesh m = {0};
-    prt_scene *scene = make_scene(ctx, &m);
+    prt_scene *scene = small_bake_scene(ctx, &m);
     const prt_method *sh = prt_method_find("sh");
-    prt_options *o64 = make_options(sh, "64"), *o128 = make_options(sh, "128");
+    prt_options *o64 = small_bake_options(sh, "64"), *o128 = small_bake_options(sh, "128");
     char cp[512];
     snprintf(cp, sizeof cp, "%s/foreign.checkpoint", test_dir);
     prt_transfer *t = NULL;

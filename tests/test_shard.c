@@ -2,38 +2,9 @@
  * can be spread, merged stage by stage, writes the same file, byte for byte outside META, as one
  * bake; shards that do not belong together, a missing shard and one cut off are refused, naming
  * the file and what differs. */
-#include "common.h"
+#include "small_bake.h"
 
 #include <sys/stat.h>
-
-/* test_resume.c's scene: every method bakes it in about a second. */
-static prt_scene *make_scene(prt_context *ctx, test_mesh *m)
-{
-    tm_quad(m, (float[3]){-1, 0, 1}, (float[3]){2, 0, 0}, (float[3]){0, 0, -2}, 24);
-    tm_sphere(m, (float[3]){0, 0.45f, 0}, 0.4f, 16, 24);
-    return tm_scene(ctx, m, 0.6f);
-}
-
-static prt_options *make_options(const prt_method *method, const char *samples)
-{
-    prt_options *o = NULL;
-    assert_int_equal(prt_options_create(method, &o), PRT_OK);
-    if (!strcmp(prt_method_name(method), "sh")) {
-        assert_int_equal(prt_options_set(o, "samples", samples), PRT_OK);
-        assert_int_equal(prt_options_set(o, "bounces", "2"), PRT_OK);      /* three spread stages */
-        assert_int_equal(prt_options_set(o, "compress", "cpca"), PRT_OK);  /* a `whole` stage after them */
-        assert_int_equal(prt_options_set(o, "clusters", "4"), PRT_OK);
-    } else {
-        if (prt_method_option(method, "bounces")) assert_int_equal(prt_options_set(o, "bounces", "1"), PRT_OK);
-        if (prt_method_option(method, "gather-res")) assert_int_equal(prt_options_set(o, "gather-res", "8"), PRT_OK);
-        if (prt_method_option(method, "brdf-res")) assert_int_equal(prt_options_set(o, "brdf-res", "8"), PRT_OK);
-        if (prt_method_option(method, "cloud-grid")) {
-            assert_int_equal(prt_options_set(o, "cloud-grid", "3,2,3"), PRT_OK);
-            assert_int_equal(prt_options_set(o, "samples", samples), PRT_OK);
-        }
-    }
-    return o;
-}
 
 /* Shard I/N of the next stage from `from` (NULL: none) into path. */
 static void bake_shard(prt_context *ctx, const prt_scene *scene, const prt_method *m, const prt_options *o, const char *from, int i, int n,
@@ -55,11 +26,11 @@ static void test_shards_merge_to_the_same_bytes(void **state)
     (void)state;
     prt_context *ctx = test_context(2);
     test_mesh m = {0};
-    prt_scene *scene = make_scene(ctx, &m);
+    prt_scene *scene = small_bake_scene(ctx, &m);
     for (int mi = 0; mi < prt_method_count(); ++mi) {
         const prt_method *method = prt_method_at(mi);
         const char *name = prt_method_name(method);
-        prt_options *o = make_options(method, "128");
+        prt_options *o = small_bake_options(method, "128");
         char merged[2][512], plain[512], sharded[512];
         snprintf(merged[0], sizeof merged[0], "%s/%s_a.merged", test_dir, name);
         snprintf(merged[1], sizeof merged[1], "%s/%s_b.merged", test_dir, name);
@@ -119,9 +90,9 @@ static void test_mismatched_shards_are_refused(void **state)
     (void)state;
     prt_context *ctx = test_context(2);
     test_mesh m = {0};
-    prt_scene *scene = make_scene(ctx, &m);
+    prt_scene *scene = small_bake_scene(ctx, &m);
     const prt_method *sh = prt_method_find("sh");
-    prt_options *o = make_options(sh, "64"), *other = make_options(sh, "128");
+    prt_options *o = small_bake_options(sh, "64"), *other = small_bake_options(sh, "128");
     char p[3][512], q[512], two[512], cut[512], merged[512], later[512];
     for (int i = 0; i < 3; ++i) {
         shard_path(p[i], sizeof p[i], "mm", 0, i + 1);

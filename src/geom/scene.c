@@ -183,18 +183,21 @@ void prt_scene_release(prt_scene *s)
     free(s);
 }
 
+/* PRT_OK when the scene has a surface of that name; else the error naming the surfaces there are. */
+static prt_status require_surface(prt_scene *s, const char *surface)
+{
+    for (int k = 0; k < s->mesh.surface_count; ++k)
+        if (!strcmp(s->mesh.surface_names[k], surface)) return PRT_OK;
+    const float keep[3] = {0, 0, 0};
+    return prt__mesh_paint(&s->mesh, surface, keep, NULL);   /* fails naming the surfaces there are */
+}
+
 prt_status prt_scene_set_medium(prt_scene *s, const char *surface, const prt_medium *m)
 {
     if (!s || !surface || !m) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_medium: scene, surface and medium are required");
     prt_status st = prt_medium_check(m);
     if (st) return st;
-    int id = 0;
-    for (int k = 0; k < s->mesh.surface_count && !id; ++k)
-        if (!strcmp(s->mesh.surface_names[k], surface)) id = k + 1;
-    if (!id) {
-        const float keep[3] = {0, 0, 0};
-        return prt__mesh_paint(&s->mesh, surface, keep, NULL);   /* fails naming the surfaces there are */
-    }
+    if ((st = require_surface(s, surface))) return st;
     for (int k = 0; k < s->medium_count; ++k)
         if (!strcmp(s->media[k].name, surface)) { s->media[k].m = *m; return PRT_OK; }
     struct prt__named_medium *grown = realloc(s->media, (size_t)(s->medium_count + 1) * sizeof *grown);
@@ -218,13 +221,7 @@ prt_status prt_scene_set_specular(prt_scene *s, const char *surface, const prt_s
     if (!s || !surface || !sp) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_set_specular: scene, surface and material are required");
     prt_status st = sp->type == PRT_SPECULAR_NONE ? PRT_OK : prt_specular_check(sp);
     if (st) return st;
-    int id = 0;
-    for (int k = 0; k < s->mesh.surface_count && !id; ++k)
-        if (!strcmp(s->mesh.surface_names[k], surface)) id = k + 1;
-    if (!id) {
-        const float keep[3] = {0, 0, 0};
-        return prt__mesh_paint(&s->mesh, surface, keep, NULL);   /* fails naming the surfaces there are */
-    }
+    if ((st = require_surface(s, surface))) return st;
     for (int k = 0; k < s->specular_count; ++k)
         if (!strcmp(s->speculars[k].name, surface)) { s->speculars[k].s = *sp; return PRT_OK; }
     if (sp->type == PRT_SPECULAR_NONE) return PRT_OK;

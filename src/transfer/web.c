@@ -82,6 +82,63 @@ void prt__web_report(prt__web *w, const char *fmt, ...)
 }
 
 /* Writes dir/name from text, atomically, and records it. */
+bool prt__web_rotation_named(const prt_lighting *l)
+{
+    const prt_environment_desc *ed = prt_lighting_environment_desc(l);
+    double named[9], rot[9];
+    prt_rotation_from_euler_deg(ed->rotate_deg[0], ed->rotate_deg[1], ed->rotate_deg[2], named);
+    prt_lighting_rotation(l, rot);
+    for (int i = 0; i < 9; ++i)
+        if (fabs(named[i] - rot[i]) > 1e-6) return false;
+    return true;
+}
+
+prt_status prt__web_require_named_rotation(prt_context *ctx, const prt_lighting *l)
+{
+    if (prt_lighting_envmap(l) && !prt__web_rotation_named(l))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: the environment's rotation is not one of yaw, pitch and roll (give it with --rotate)");
+    return PRT_OK;
+}
+
+prt_status prt__web_point_lights_only(prt_context *ctx, const prt_lighting *l, const char *what, int max)
+{
+    for (int i = 0; i < prt_lighting_count(l); ++i)
+        if (prt_lighting_light(l, i)->type != PRT_LIGHT_POINT)
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: %s; light %d is not one (give --light point:X,Y,Z:R,G,B)", what, i + 1);
+    if (max > 0 && prt_lighting_count(l) > max)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: the page draws at most %d point lights", max);
+    return PRT_OK;
+}
+
+bool prt__web_point_lights_meta(cJSON *meta, const prt_lighting *l)
+{
+    cJSON *lights = cJSON_CreateArray();
+    bool ok = lights && cJSON_AddItemToObject(meta, "lights", lights);
+    for (int i = 0; ok && i < prt_lighting_count(l); ++i) {
+        const prt_light *li = prt_lighting_light(l, i);
+        cJSON *o = cJSON_CreateObject();
+        const double p[3] = {li->position[0], li->position[1], li->position[2]}, k[3] = {li->intensity[0], li->intensity[1], li->intensity[2]};
+        ok = o && cJSON_AddItemToArray(lights, o) && cJSON_AddItemToObject(o, "position", cJSON_CreateDoubleArray(p, 3)) &&
+             cJSON_AddItemToObject(o, "intensity", cJSON_CreateDoubleArray(k, 3));
+    }
+    return ok;
+}
+
+prt_status prt__web_unit_environment_sh(prt_context *ctx, const prt_lighting *l, int order, prt_sh_light *sh)
+{
+    static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    prt_lighting *unit = NULL;
+    prt_status st = prt_lighting_copy(l, &unit);
+    if (!st) {
+        prt_lighting_clear_lights(unit);
+        prt_lighting_set_rotation(unit, identity);
+        prt_lighting_set_intensity(unit, 1.0f);
+        st = prt_lighting_sh(unit, order, sh);
+    }
+    prt_lighting_release(unit);
+    return st ? prt__fail(ctx, st, "%s", prt_last_error()) : PRT_OK;
+}
+
 static prt_status write_file(prt_context *ctx, prt_export_result *out, const char *dir, const char *name, const char *text)
 {
     char path[4200];

@@ -25,6 +25,20 @@ bool prt__web_small(prt__web *w, const char *name, const char *type, const void 
 cJSON *prt__web_meta(prt__web *w);
 /* The method's script (static text, PRT.method(...)): written as method.js. */
 void prt__web_script(prt__web *w, const char *js);
+/* True when the lighting's rotation is the yaw, pitch and roll its environment was named with:
+ * the page starts there and rotates from it. */
+bool prt__web_rotation_named(const prt_lighting *l);
+/* PRT_OK, or the one-line refusal of an environment whose rotation the page cannot start at. */
+prt_status prt__web_require_named_rotation(prt_context *ctx, const prt_lighting *l);
+/* PRT_OK when every light is a point light and there are at most max (0: any number); else a
+ * one-line error that starts with what ("the offset page lights with point lights"). */
+prt_status prt__web_point_lights_only(prt_context *ctx, const prt_lighting *l, const char *what, int max);
+/* The environment's SH as the page rotates and scales it (unrotated, intensity 1; lights left
+ * out) at the given order, into sh. */
+prt_status prt__web_unit_environment_sh(prt_context *ctx, const prt_lighting *l, int order, prt_sh_light *sh);
+/* meta.lights: the lighting's point lights as [{position, intensity}] (api.pointLights's list).
+ * False when out of memory. */
+bool prt__web_point_lights_meta(cJSON *meta, const prt_lighting *l);
 /* A line for the export's report (what the page leaves out, say). */
 void prt__web_report(prt__web *w, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 

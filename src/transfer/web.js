@@ -460,6 +460,34 @@ var PRT = (function () {
                 return { set: function (v) { input.value = v; show(); }, get: function () { return +input.value; } };
             },
             button: function (text, click) { var b = el('button', text); b.addEventListener('click', click); return b; },
+            // The environment's panel when the file has one (or when shown is true): yaw, pitch,
+            // roll and intensity sliders bound to state.rotate and state.intensity (relighting as
+            // they move). Returns {set(q)}: the hash's rotate=Y,P,R and intensity=K applied.
+            environment: function (state, shown) {
+                var sliders = {};
+                if (shown === undefined ? meta.params.environment : shown) {
+                    ui.heading('Environment');
+                    ['yaw', 'pitch', 'roll'].forEach(function (name, k) {
+                        sliders[name] = ui.slider({label: name + ' (degrees)', min: -180, max: 180, step: 1, value: state.rotate[k],
+                                                   input: function (v) { state.rotate[k] = v; relightNeeded = true; redraw(); }});
+                    });
+                    sliders.intensity = ui.slider({label: 'intensity', min: 0, max: 4, step: 0.05, value: state.intensity,
+                                                   input: function (v) { state.intensity = v; relightNeeded = true; redraw(); }});
+                }
+                return {
+                    set: function (q) {
+                        var r;
+                        if (q.rotate && (r = numbers(q.rotate, 3))) {
+                            state.rotate = r;
+                            if (sliders.yaw) { sliders.yaw.set(r[0]); sliders.pitch.set(r[1]); sliders.roll.set(r[2]); }
+                        }
+                        if (q.intensity !== undefined && +q.intensity >= 0) {
+                            state.intensity = +q.intensity;
+                            if (sliders.intensity) sliders.intensity.set(state.intensity);
+                        }
+                    }
+                };
+            },
             checkbox: function (text, value, change) {
                 var label = el('label'), box = document.createElement('input');
                 box.type = 'checkbox';

@@ -15,22 +15,13 @@ prt_status prt__ao_web(prt_context *ctx, const prt_transfer *t, const prt_export
     const prt_lighting *l = d->lighting;
     const prt_envmap *env = prt_lighting_envmap(l);
     const prt_environment_desc *ed = prt_lighting_environment_desc(l);
-    double named[9], rot[9];
-    prt_rotation_from_euler_deg(ed->rotate_deg[0], ed->rotate_deg[1], ed->rotate_deg[2], named);
-    prt_lighting_rotation(l, rot);
-    for (int i = 0; env && i < 9; ++i)
-        if (fabs(named[i] - rot[i]) > 1e-6)
-            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: the environment's rotation is not one of yaw, pitch and roll (give it with --rotate)");
+    prt_status st = prt__web_require_named_rotation(ctx, l);
+    if (st) return st;
     float envflat[3 * 9];
     memset(envflat, 0, sizeof envflat);
     if (env) {
-        static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-        prt_lighting *unit = NULL;
         prt_sh_light sh;
-        prt_status st = prt_lighting_copy(l, &unit);
-        if (!st) { prt_lighting_set_rotation(unit, identity); prt_lighting_set_intensity(unit, 1.0f); st = prt_lighting_sh(unit, N, &sh); }
-        prt_lighting_release(unit);
-        if (st) return prt__fail(ctx, st, "%s", prt_last_error());
+        if ((st = prt__web_unit_environment_sh(ctx, l, N, &sh))) return st;
         for (int c = 0; c < 3; ++c) memcpy(envflat + c * n, sh.coeffs[c], (size_t)n * sizeof(float));
     }
     double zh[PRT__AO_ENV_ORDER];

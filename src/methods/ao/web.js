@@ -8,16 +8,8 @@ PRT.method(function (api) {
     var env = api.array('env'), basis = api.array('basis'), reflect = api.array('reflect');
     var state = {rotate: p.rotate.slice(), intensity: p.intensity};
     var radiance = new Float32Array(nv * 3);
-    var ui = api.ui, sliders = {};
-    if (p.environment) {
-        ui.heading('Environment');
-        ['yaw', 'pitch', 'roll'].forEach(function (name, k) {
-            sliders[name] = ui.slider({label: name + ' (degrees)', min: -180, max: 180, step: 1, value: state.rotate[k],
-                                       input: function (v) { state.rotate[k] = v; api.relight(); }});
-        });
-        sliders.intensity = ui.slider({label: 'intensity', min: 0, max: 4, step: 0.05, value: state.intensity,
-                                       input: function (v) { state.intensity = v; api.relight(); }});
-    }
+    var ui = api.ui;
+    var environment = ui.environment(state);
     return {
         relight: function () {
             var L = PRT.shRotate(N, 3, env, state.rotate[0], state.rotate[1], state.rotate[2]), c, l, k, v;
@@ -33,12 +25,7 @@ PRT.method(function (api) {
             return radiance;
         },
         set: function (q) {
-            var r;
-            if (q.rotate && (r = api.numbers(q.rotate, 3))) {
-                state.rotate = r;
-                if (sliders.yaw) { sliders.yaw.set(r[0]); sliders.pitch.set(r[1]); sliders.roll.set(r[2]); }
-            }
-            if (q.intensity !== undefined && +q.intensity >= 0) { state.intensity = +q.intensity; if (sliders.intensity) sliders.intensity.set(state.intensity); }
+            environment.set(q);
         }
     };
 });

@@ -41,12 +41,8 @@ prt_status prt__lightcloud_web(prt_context *ctx, const prt_transfer *t, const pr
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web relights diffuse light-cloud files for now: this one has %u glossy vertices, whose exit "
                          "radiance the page does not evaluate yet", s->glossy_count);
     const prt_lighting *l = d->lighting;
-    for (int i = 0; i < prt_lighting_count(l); ++i)
-        if (prt_lighting_light(l, i)->type != PRT_LIGHT_POINT)
-            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: the light-cloud page lights with point lights; light %d is not one "
-                             "(give --light point:X,Y,Z:R,G,B)", i + 1);
-    if (prt_lighting_count(l) > PRT_MAX_PIXEL_LIGHTS)
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: the page draws at most %d point lights", PRT_MAX_PIXEL_LIGHTS);
+    prt_status st = prt__web_point_lights_only(ctx, l, "the light-cloud page lights with point lights", PRT_MAX_PIXEL_LIGHTS);
+    if (st) return st;
     int lo, hi, def;
     t->method->control_range(t, 0, &lo, &hi, &def);
     const int neighbours = d->controls ? d->controls[0] : def;
@@ -58,15 +54,8 @@ prt_status prt__lightcloud_web(prt_context *ctx, const prt_transfer *t, const pr
         for (size_t i = 0; i < nv * 3; ++i)
             fixed[i] = emission * ((t->mesh.emission ? t->mesh.emission[i] : 0.0f) + (s->emit ? s->emit[i] + s->emit[nv * 3 + i] : 0.0f));
     }
-    cJSON *meta = prt__web_meta(page), *lights = cJSON_CreateArray(), *zones = cJSON_CreateArray();
-    bool ok = lights && zones && cJSON_AddItemToObject(meta, "lights", lights) && cJSON_AddItemToObject(meta, "zones", zones);
-    for (int i = 0; ok && i < prt_lighting_count(l); ++i) {
-        const prt_light *li = prt_lighting_light(l, i);
-        cJSON *o = cJSON_CreateObject();
-        const double p[3] = {li->position[0], li->position[1], li->position[2]}, k[3] = {li->intensity[0], li->intensity[1], li->intensity[2]};
-        ok = o && cJSON_AddItemToArray(lights, o) && cJSON_AddItemToObject(o, "position", cJSON_CreateDoubleArray(p, 3)) &&
-             cJSON_AddItemToObject(o, "intensity", cJSON_CreateDoubleArray(k, 3));
-    }
+    cJSON *meta = prt__web_meta(page), *zones = cJSON_CreateArray();
+    bool ok = zones && cJSON_AddItemToObject(meta, "zones", zones) && prt__web_point_lights_meta(meta, l);
     const double region[6] = {s->region[0], s->region[1], s->region[2], s->region[3], s->region[4], s->region[5]};
     ok = ok && cJSON_AddNumberToObject(meta, "cloud_count", s->cloud_count) && cJSON_AddNumberToObject(meta, "spacing", s->spacing) &&
          cJSON_AddItemToObject(meta, "region", cJSON_CreateDoubleArray(region, 6)) && cJSON_AddNumberToObject(meta, "lobes", s->lobes) &&

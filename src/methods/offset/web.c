@@ -9,13 +9,6 @@
 
 extern const char prt__js_offset_web[];   /* methods/offset/web.js, compiled in */
 
-static bool same_rotation(const double a[9], const double b[9])
-{
-    for (int i = 0; i < 9; ++i)
-        if (fabs(a[i] - b[i]) > 1e-6) return false;
-    return true;
-}
-
 prt_status prt__offset_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page)
 {
     prt__offset_set *s = t->state;
@@ -23,39 +16,25 @@ prt_status prt__offset_web(prt_context *ctx, const prt_transfer *t, const prt_ex
     if (d->variant != 0)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web draws the final light of offset files: %s is not offered yet", prt_transfer_variant_name(t, d->variant));
     const prt_lighting *l = d->lighting;
-    for (int i = 0; i < prt_lighting_count(l); ++i)
-        if (prt_lighting_light(l, i)->type != PRT_LIGHT_POINT)
-            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: the offset page lights with point lights (and the environment); light %d is not one "
-                             "(give --light point:X,Y,Z:R,G,B)", i + 1);
-    if (prt_lighting_count(l) > PRT_MAX_PIXEL_LIGHTS)
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: the page draws at most %d point lights", PRT_MAX_PIXEL_LIGHTS);
+    prt_status st = prt__web_point_lights_only(ctx, l, "the offset page lights with point lights (and the environment)", PRT_MAX_PIXEL_LIGHTS);
+    if (st) return st;
     int lo, hi, def;
     t->method->control_range(t, 0, &lo, &hi, &def);
     const int bounces = d->controls ? d->controls[0] : def;
     if (bounces < lo || bounces > hi) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "bounces %d out of range %d..%d", bounces, lo, hi);
-    prt_status st = prt__offset_shadow_samples(ctx, t);
+    st = prt__offset_shadow_samples(ctx, t);
     if (!st && s->radiosity) st = prt__offset_filter_ready(ctx, t, s);
     if (st) return st;
 
     /* The environment as the page rotates it: SH order 3, unrotated, intensity 1. */
     const prt_envmap *env = prt_lighting_envmap(l);
     const prt_environment_desc *ed = prt_lighting_environment_desc(l);
-    double named[9], rot[9];
-    prt_rotation_from_euler_deg(ed->rotate_deg[0], ed->rotate_deg[1], ed->rotate_deg[2], named);
-    prt_lighting_rotation(l, rot);
-    if (env && !same_rotation(named, rot))
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: the environment's rotation is not one of yaw, pitch and roll (give it with --rotate)");
+    if ((st = prt__web_require_named_rotation(ctx, l))) return st;
     float envflat[3 * PRT__OFFSET_ENV_COEFFS];
     memset(envflat, 0, sizeof envflat);
     if (env) {
-        static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-        prt_lighting *only = NULL;
         prt_sh_light sh;
-        st = prt_lighting_copy(l, &only);
-        if (!st) prt_lighting_clear_lights(only);
-        if (!st) { prt_lighting_set_rotation(only, identity); prt_lighting_set_intensity(only, 1.0f); st = prt_lighting_sh(only, 3, &sh); }
-        prt_lighting_release(only);
-        if (st) return prt__fail(ctx, st, "%s", prt_last_error());
+        if ((st = prt__web_unit_environment_sh(ctx, l, 3, &sh))) return st;
         for (int c = 0; c < 3; ++c) memcpy(envflat + c * PRT__OFFSET_ENV_COEFFS, sh.coeffs[c], PRT__OFFSET_ENV_COEFFS * sizeof(float));
     }
     /* The albedo the per-pixel lights shade with (relight.c's pixel_lights): on translucent texels
@@ -74,15 +53,8 @@ prt_status prt__offset_web(prt_context *ctx, const prt_transfer *t, const prt_ex
     for (size_t i = 0; i < (size_t)s->width * s->height; ++i) source[i] = s->source[i] < 0 ? UINT32_MAX : (uint32_t)s->source[i];
     const float emission = prt_lighting_emission(l);
 
-    cJSON *meta = prt__web_meta(page), *lights = cJSON_CreateArray();
-    bool ok = lights && cJSON_AddItemToObject(meta, "lights", lights);
-    for (int i = 0; ok && i < prt_lighting_count(l); ++i) {
-        const prt_light *li = prt_lighting_light(l, i);
-        cJSON *o = cJSON_CreateObject();
-        const double p[3] = {li->position[0], li->position[1], li->position[2]}, k[3] = {li->intensity[0], li->intensity[1], li->intensity[2]};
-        ok = o && cJSON_AddItemToArray(lights, o) && cJSON_AddItemToObject(o, "position", cJSON_CreateDoubleArray(p, 3)) &&
-             cJSON_AddItemToObject(o, "intensity", cJSON_CreateDoubleArray(k, 3));
-    }
+    cJSON *meta = prt__web_meta(page);
+    bool ok = prt__web_point_lights_meta(meta, l);
     const double eu[3] = {ed->rotate_deg[0], ed->rotate_deg[1], ed->rotate_deg[2]};
     ok = ok && cJSON_AddNumberToObject(meta, "width", s->width) && cJSON_AddNumberToObject(meta, "height", s->height) &&
          cJSON_AddNumberToObject(meta, "covered", (double)nc) && cJSON_AddNumberToObject(meta, "count", s->count) &&

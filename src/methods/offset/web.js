@@ -92,15 +92,7 @@ PRT.method(function (api) {
     var points = lights.points(api.array('sample_pos'), api.array('sample_nrm'));
     api.lightMap(W, H);
     var ui = api.ui, sliders = {};
-    if (p.environment) {
-        ui.heading('Environment');
-        ['yaw', 'pitch', 'roll'].forEach(function (name, k) {
-            sliders[name] = ui.slider({label: name + ' (degrees)', min: -180, max: 180, step: 1, value: state.rotate[k],
-                                       input: function (v) { state.rotate[k] = v; api.relight(); }});
-        });
-        sliders.intensity = ui.slider({label: 'intensity', min: 0, max: 4, step: 0.05, value: state.intensity,
-                                       input: function (v) { state.intensity = v; api.relight(); }});
-    }
+    var environment = ui.environment(state);
     if (p.radiosity && p.bounces_max > 0) {
         ui.heading('Inter-reflection');
         sliders.bounces = ui.slider({label: p.bounces_max === 1 ? 'bounces (the maps hold them all: 0 or 1 pass)' : 'bounces', min: 0, max: p.bounces_max,
@@ -158,12 +150,7 @@ PRT.method(function (api) {
             return map;
         },
         set: function (q) {
-            var r;
-            if (q.rotate && (r = api.numbers(q.rotate, 3))) {
-                state.rotate = r;
-                if (sliders.yaw) { sliders.yaw.set(r[0]); sliders.pitch.set(r[1]); sliders.roll.set(r[2]); }
-            }
-            if (q.intensity !== undefined && +q.intensity >= 0) { state.intensity = +q.intensity; if (sliders.intensity) sliders.intensity.set(state.intensity); }
+            environment.set(q);
             if (q.bounces !== undefined && +q.bounces >= 0 && +q.bounces <= p.bounces_max) {
                 state.bounces = Math.round(+q.bounces);
                 if (sliders.bounces) sliders.bounces.set(state.bounces);

@@ -5,13 +5,6 @@
 
 extern const char prt__js_sh_web[];   /* methods/sh/web.js, compiled in */
 
-static bool same_rotation(const double a[9], const double b[9])
-{
-    for (int i = 0; i < 9; ++i)
-        if (fabs(a[i] - b[i]) > 1e-6) return false;
-    return true;
-}
-
 prt_status prt__sh_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page)
 {
     const prt__sh_state *s = t->state;
@@ -36,11 +29,8 @@ prt_status prt__sh_web(prt_context *ctx, const prt_transfer *t, const prt_export
     if (st) { prt_lighting_release(env); return prt__fail(ctx, st, "%s", prt_last_error()); }
     prt_lighting_clear_lights(env);
     const prt_environment_desc *ed = prt_lighting_environment_desc(l);
-    double named[9], rot[9];
-    prt_rotation_from_euler_deg(ed->rotate_deg[0], ed->rotate_deg[1], ed->rotate_deg[2], named);
-    prt_lighting_rotation(l, rot);
     float euler[3] = {0, 0, 0};
-    if (same_rotation(named, rot)) {
+    if (prt__web_rotation_named(l)) {
         static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
         memcpy(euler, ed->rotate_deg, sizeof euler);
         prt_lighting_set_rotation(env, identity);

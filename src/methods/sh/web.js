@@ -25,15 +25,8 @@ PRT.method(function (api) {
     }
 
     var ui = api.ui, sliders = {};
-    if (p.environment) {
-        ui.heading('Environment');
-        ['yaw', 'pitch', 'roll'].forEach(function (name, i) {
-            sliders[name] = ui.slider({label: name + ' (degrees)', min: -180, max: 180, step: 1, value: state.rotate[i],
-                                       input: function (v) { state.rotate[i] = v; api.relight(); }});
-        });
-        sliders.intensity = ui.slider({label: 'intensity', min: 0, max: 4, step: 0.05, value: state.intensity,
-                                       input: function (v) { state.intensity = v; api.relight(); }});
-    } else {
+    var environment = ui.environment(state);
+    if (!p.environment) {
         ui.note('No environment: the page relights the directional lights.');
     }
     if (N > 1)
@@ -63,12 +56,7 @@ PRT.method(function (api) {
             return radiance;
         },
         set: function (q) {
-            var r;
-            if (q.rotate && (r = api.numbers(q.rotate, 3))) {
-                state.rotate = r;
-                if (sliders.yaw) { sliders.yaw.set(r[0]); sliders.pitch.set(r[1]); sliders.roll.set(r[2]); }
-            }
-            if (q.intensity !== undefined && +q.intensity >= 0) { state.intensity = +q.intensity; if (sliders.intensity) sliders.intensity.set(state.intensity); }
+            environment.set(q);
             if (q.order !== undefined && +q.order >= 1 && +q.order <= N) { state.order = Math.round(+q.order); if (sliders.order) sliders.order.set(state.order); }
         }
     };

@@ -8,13 +8,6 @@
 
 extern const char prt__js_spectral_web[];   /* methods/spectral/web.js, compiled in */
 
-static bool same_rotation(const double a[9], const double b[9])
-{
-    for (int i = 0; i < 9; ++i)
-        if (fabs(a[i] - b[i]) > 1e-6) return false;
-    return true;
-}
-
 prt_status prt__spectral_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page)
 {
     const prt__spectral_set *s = t->state;
@@ -24,10 +17,8 @@ prt_status prt__spectral_web(prt_context *ctx, const prt_transfer *t, const prt_
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web relights diffuse spectral files for now: this one has %u glossy vertices, whose final "
                          "bounce the page does not evaluate yet", s->glossy_count);
     const prt_lighting *l = d->lighting;
-    for (int i = 0; i < prt_lighting_count(l); ++i)
-        if (prt_lighting_light(l, i)->type != PRT_LIGHT_POINT)
-            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: the spectral page lights with point lights (and the environment); light %d is not one "
-                             "(give --light point:X,Y,Z:R,G,B)", i + 1);
+    prt_status st = prt__web_point_lights_only(ctx, l, "the spectral page lights with point lights (and the environment)", 0);
+    if (st) return st;
     if (s->row_start[nv] > UINT32_MAX || b->offset[nv] > UINT32_MAX)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: this file's transfer is too large for a page");
     int lo, hi, bounces_def, tail_def;
@@ -38,17 +29,13 @@ prt_status prt__spectral_web(prt_context *ctx, const prt_transfer *t, const prt_
     /* The environment as the page rotates it: its SH unrotated, at intensity 1. */
     const prt_envmap *env = prt_lighting_envmap(l);
     const prt_environment_desc *ed = prt_lighting_environment_desc(l);
-    double named[9], rot[9];
-    prt_rotation_from_euler_deg(ed->rotate_deg[0], ed->rotate_deg[1], ed->rotate_deg[2], named);
-    prt_lighting_rotation(l, rot);
-    if (env && !same_rotation(named, rot))
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: the environment's rotation is not one of yaw, pitch and roll (give it with --rotate)");
+    if ((st = prt__web_require_named_rotation(ctx, l))) return st;
     prt_sh_light sh;
     memset(&sh, 0, sizeof sh);
     if (env && s->env && s->env_order > 0) {
         prt_lighting *unit = NULL;
         static const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-        prt_status st = prt_lighting_copy(l, &unit);
+        st = prt_lighting_copy(l, &unit);
         if (st) return prt__fail(ctx, st, "%s", prt_last_error());
         prt_lighting_set_rotation(unit, identity);
         prt_lighting_set_intensity(unit, 1.0f);
@@ -77,15 +64,8 @@ prt_status prt__spectral_web(prt_context *ctx, const prt_transfer *t, const prt_
     if (!row32 || !offset32) { free(row32); free(offset32); free(emit); free(own); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
     for (size_t v = 0; v <= nv; ++v) { row32[v] = (uint32_t)s->row_start[v]; offset32[v] = (uint32_t)b->offset[v]; }
 
-    cJSON *meta = prt__web_meta(page), *lights = cJSON_CreateArray();
-    bool ok = lights && cJSON_AddItemToObject(meta, "lights", lights);
-    for (int i = 0; ok && i < prt_lighting_count(l); ++i) {
-        const prt_light *li = prt_lighting_light(l, i);
-        cJSON *o = cJSON_CreateObject();
-        const double p[3] = {li->position[0], li->position[1], li->position[2]}, k[3] = {li->intensity[0], li->intensity[1], li->intensity[2]};
-        ok = o && cJSON_AddItemToArray(lights, o) && cJSON_AddItemToObject(o, "position", cJSON_CreateDoubleArray(p, 3)) &&
-             cJSON_AddItemToObject(o, "intensity", cJSON_CreateDoubleArray(k, 3));
-    }
+    cJSON *meta = prt__web_meta(page);
+    bool ok = prt__web_point_lights_meta(meta, l);
     const double eu[3] = {ed->rotate_deg[0], ed->rotate_deg[1], ed->rotate_deg[2]};
     ok = ok && cJSON_AddNumberToObject(meta, "bounces", bounces) && cJSON_AddNumberToObject(meta, "bounces_max", hi > 64 ? hi : 64) &&
          cJSON_AddNumberToObject(meta, "tail", tail) && cJSON_AddNumberToObject(meta, "tail_max_ratio", PRT__SPECTRAL_TAIL_MAX_RATIO) &&

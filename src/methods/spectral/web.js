@@ -92,15 +92,7 @@ PRT.method(function (api) {
 
     var lights = api.pointLights({albedo: albedo, lights: p.lights});
     var ui = api.ui, sliders = {};
-    if (nc) {
-        ui.heading('Environment');
-        ['yaw', 'pitch', 'roll'].forEach(function (name, k) {
-            sliders[name] = ui.slider({label: name + ' (degrees)', min: -180, max: 180, step: 1, value: state.rotate[k],
-                                       input: function (v) { state.rotate[k] = v; api.relight(); }});
-        });
-        sliders.intensity = ui.slider({label: 'intensity', min: 0, max: 4, step: 0.05, value: state.intensity,
-                                       input: function (v) { state.intensity = v; api.relight(); }});
-    }
+    var environment = ui.environment(state, nc > 0);
     ui.heading('Bounces');
     sliders.bounces = ui.slider({label: 'bounces', min: 0, max: 16, step: 1, value: state.bounces, input: function (v) { state.bounces = v; api.relight(); }});
     sliders.tail = ui.checkbox('the rest of the series as a geometric tail', !!state.tail, function (v) { state.tail = v ? 1 : 0; api.relight(); });
@@ -134,12 +126,7 @@ PRT.method(function (api) {
             return radiance;
         },
         set: function (q) {
-            var r;
-            if (q.rotate && (r = api.numbers(q.rotate, 3))) {
-                state.rotate = r;
-                if (sliders.yaw) { sliders.yaw.set(r[0]); sliders.pitch.set(r[1]); sliders.roll.set(r[2]); }
-            }
-            if (q.intensity !== undefined && +q.intensity >= 0) { state.intensity = +q.intensity; if (sliders.intensity) sliders.intensity.set(state.intensity); }
+            environment.set(q);
             if (q.bounces !== undefined && +q.bounces >= 0 && +q.bounces <= p.bounces_max) { state.bounces = Math.round(+q.bounces); sliders.bounces.set(state.bounces); }
             if (q.tail !== undefined) { state.tail = +q.tail ? 1 : 0; sliders.tail.set(!!state.tail); }
         }

@@ -11,13 +11,6 @@
 
 extern const char prt__js_wavelet_web[];   /* methods/wavelet/web.js, compiled in */
 
-static bool same_rotation(const double a[9], const double b[9])
-{
-    for (int i = 0; i < 9; ++i)
-        if (fabs(a[i] - b[i]) > 1e-6) return false;
-    return true;
-}
-
 prt_status prt__wavelet_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page)
 {
     const prt__wavelet_set *w = t->state;
@@ -38,11 +31,8 @@ prt_status prt__wavelet_web(prt_context *ctx, const prt_transfer *t, const prt_e
 
     /* The rotation the page starts at: the yaw, pitch and roll the environment was named with. */
     const prt_environment_desc *ed = prt_lighting_environment_desc(l);
-    double named[9], rot[9];
-    prt_rotation_from_euler_deg(ed->rotate_deg[0], ed->rotate_deg[1], ed->rotate_deg[2], named);
-    prt_lighting_rotation(l, rot);
-    if (env && !same_rotation(named, rot))
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--web: the environment's rotation is not one of yaw, pitch and roll (give it with --rotate)");
+    prt_status st = prt__web_require_named_rotation(ctx, l);
+    if (st) return st;
 
     cJSON *meta = prt__web_meta(page), *lights = cJSON_CreateArray();
     bool ok = lights && cJSON_AddItemToObject(meta, "lights", lights);
@@ -71,7 +61,7 @@ prt_status prt__wavelet_web(prt_context *ctx, const prt_transfer *t, const prt_e
         const size_t count = (size_t)6 * PRT__ENV_CUBE_QUADS * PRT__ENV_CUBE_QUADS * 3;
         float *quads = malloc(count * sizeof *quads);
         if (!quads) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        prt_status st = prt__env_cube_quads(ctx, env, quads);
+        st = prt__env_cube_quads(ctx, env, quads);
         if (st) { free(quads); return st; }
         ok = prt__web_floats(page, "quads", quads, count);
         free(quads);

@@ -405,15 +405,7 @@ PRT.method(function (api) {
     })();
 
     var ui = api.ui, sliders = {};
-    if (p.environment) {
-        ui.heading('Environment');
-        ['yaw', 'pitch', 'roll'].forEach(function (name, i) {
-            sliders[name] = ui.slider({label: name + ' (degrees)', min: -180, max: 180, step: 1, value: state.rotate[i],
-                                       input: function (v) { state.rotate[i] = v; api.relight(); }});
-        });
-        sliders.intensity = ui.slider({label: 'intensity', min: 0, max: 4, step: 0.05, value: state.intensity,
-                                       input: function (v) { state.intensity = v; api.relight(); }});
-    }
+    var environment = ui.environment(state);
     sliders.coefficients = ui.slider({label: 'lighting coefficients kept', min: p.light_coefficients_min, max: p.light_coefficients_max, step: 64,
                                       value: state.coefficients, input: function (v) { state.coefficients = v; api.relight(); }});
     if (p.lights.length) ui.note(p.lights.length + ' directional light(s), fixed.');
@@ -446,12 +438,7 @@ PRT.method(function (api) {
             return radiance;
         },
         set: function (q) {
-            var r;
-            if (q.rotate && (r = api.numbers(q.rotate, 3))) {
-                state.rotate = r;
-                if (sliders.yaw) { sliders.yaw.set(r[0]); sliders.pitch.set(r[1]); sliders.roll.set(r[2]); }
-            }
-            if (q.intensity !== undefined && +q.intensity >= 0) { state.intensity = +q.intensity; if (sliders.intensity) sliders.intensity.set(state.intensity); }
+            environment.set(q);
             var k = q['light-coefficients'];
             if (k !== undefined && +k >= p.light_coefficients_min && +k <= p.light_coefficients_max) {
                 state.coefficients = Math.round(+k);
