@@ -119,8 +119,10 @@ prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_t
         if (st) { free(table); return prt__fail(ctx, st, "%s", prt_last_error()); }
         bool any = false;
         for (int i = 0; i < (brdf ? 1 : t->brdf_count); ++i) any |= has[i];
-        if (!any) free(table);
-        if (!any) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "no glossy material to convolve with: name a BRDF (--brdf phong:N) or give the scene glossy materials");
+        if (!any) {
+            free(table);
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "no glossy material to convolve with: name a BRDF (--brdf phong:N) or give the scene glossy materials");
+        }
     }
     const int n = sh->order * sh->order, nl = light->order < sh->order ? light->order * light->order : n;
     const size_t nv = t->mesh.vertex_count, dim = prt__set_dim(sh, k);
