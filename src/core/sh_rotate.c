@@ -3,6 +3,7 @@
  * exact for every order, with no re-projection. */
 #include "core/internal.h"
 
+#include <pthread.h>
 #include <string.h>
 
 struct prt_sh_rotation {
@@ -23,6 +24,27 @@ static double p_term(const prt_sh_rotation *r, int i, int l, int a, int b)
     return ri0 * BAND(r, l - 1, a, b);
 }
 
+/* The recurrence's coefficients u, v, w at (l, m, n): the same for every rotation, so computed
+ * once. Their square roots were most of a rotation's cost (perf), and the SH bake builds one
+ * rotation per vertex. */
+static double uvw[PRT_SH_MAX_ORDER][2 * PRT_SH_MAX_ORDER - 1][2 * PRT_SH_MAX_ORDER - 1][3];
+static pthread_once_t uvw_once = PTHREAD_ONCE_INIT;
+
+static void uvw_init(void)
+{
+    for (int l = 2; l < PRT_SH_MAX_ORDER; ++l)
+        for (int m = -l; m <= l; ++m)
+            for (int n = -l; n <= l; ++n) {
+                int am = abs(m);
+                double d = m == 0 ? 1.0 : 0.0;
+                double denom = abs(n) < l ? (double)(l + n) * (l - n) : (double)(2 * l) * (2 * l - 1);
+                double *c = uvw[l][m + l][n + l];
+                c[0] = sqrt((double)(l + m) * (l - m) / denom);
+                c[1] = 0.5 * sqrt((1.0 + d) * (l + am - 1.0) * (l + am) / denom) * (1.0 - 2.0 * d);
+                c[2] = -0.5 * sqrt((l - am - 1.0) * (l - am) / denom) * (1.0 - d);
+            }
+}
+
 prt_status prt_sh_rotation_create(int order, const double rot[9], prt_sh_rotation **out)
 {
     *out = NULL;
@@ -36,6 +58,7 @@ prt_status prt_sh_rotation_create(int order, const double rot[9], prt_sh_rotatio
     r->m = prt__calloc(total, sizeof(double));
     if (!r || !r->m) { if (r) free(r->m); free(r); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory"); }
     r->order = order;
+    pthread_once(&uvw_once, uvw_init);
     BAND(r, 0, 0, 0) = 1.0;
     if (order > 1) {
         /* Band 1 basis order is (y, z, x) for m = -1, 0, 1. */
@@ -46,12 +69,7 @@ prt_status prt_sh_rotation_create(int order, const double rot[9], prt_sh_rotatio
     for (int l = 2; l < order; ++l) {
         for (int m = -l; m <= l; ++m) {
             for (int n = -l; n <= l; ++n) {
-                int am = abs(m);
-                double d = m == 0 ? 1.0 : 0.0;
-                double denom = abs(n) < l ? (double)(l + n) * (l - n) : (double)(2 * l) * (2 * l - 1);
-                double u = sqrt((double)(l + m) * (l - m) / denom);
-                double v = 0.5 * sqrt((1.0 + d) * (l + am - 1.0) * (l + am) / denom) * (1.0 - 2.0 * d);
-                double w = -0.5 * sqrt((l - am - 1.0) * (l - am) / denom) * (1.0 - d);
+                const double *c = uvw[l][m + l][n + l], u = c[0], v = c[1], w = c[2];
                 double val = 0.0;
                 if (u != 0.0) val += u * p_term(r, 0, l, m, n);
                 if (v != 0.0) {

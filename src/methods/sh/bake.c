@@ -252,7 +252,7 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, f
 }
 
 /* Interpolates a 3-channel transfer at a hit point. */
-static inline void gather_hit(const prt__mesh *m, const float *prev, int nc3, const hit_entry *h, float *acc)
+static inline __attribute__((always_inline)) void gather_hit(const prt__mesh *m, const float *prev, int nc3, const hit_entry *h, float *acc)
 {
     const uint32_t *t = m->indices + (size_t)h->prim * 3;
     float b0 = (1.0f - h->u - h->v) * h->weight, b1 = h->u * h->weight, b2 = h->v * h->weight;
@@ -307,6 +307,17 @@ static prt_status run_visibility(prt__bake_job *b, uint64_t unit, int thread)
     return PRT_OK;
 }
 
+/* One vertex's gather over its hits; nc3 known at compile time for the usual orders, so that the
+ * sums stay in registers across the hits instead of going through memory at each one. */
+static inline __attribute__((always_inline)) void gather_vertex(const prt__mesh *m, const float *prev, int nc3, const hit_entry *hits, uint32_t count,
+                                                                float *restrict acc)
+{
+    float a[3 * PRT_SH_MAX_COEFFS];
+    for (int i = 0; i < nc3; ++i) a[i] = 0;
+    for (uint32_t h = 0; h < count; ++h) gather_hit(m, prev, nc3, &hits[h], a);
+    memcpy(acc, a, (size_t)nc3 * sizeof(float));
+}
+
 static prt_status run_bounce(prt__bake_job *b, uint64_t unit, int thread)
 {
     (void)thread;
@@ -315,8 +326,14 @@ static prt_status run_bounce(prt__bake_job *b, uint64_t unit, int thread)
     const int nc = sb->job.ncoeff, nc3 = 3 * nc;
     for (size_t v = unit * BLOCK; v < m->vertex_count && v < (unit + 1) * BLOCK; ++v) {
         float acc[3 * PRT_SH_MAX_COEFFS];
-        memset(acc, 0, (size_t)nc3 * sizeof(float));
-        for (uint32_t h = 0; h < sb->job.hit_count[v]; ++h) gather_hit(m, sb->prev, nc3, &sb->job.hits[v][h], acc);
+        const hit_entry *hits = sb->job.hits[v];
+        const uint32_t count = sb->job.hit_count[v];
+        switch (nc3) {
+        case 27: gather_vertex(m, sb->prev, 27, hits, count, acc); break;
+        case 48: gather_vertex(m, sb->prev, 48, hits, count, acc); break;
+        case 75: gather_vertex(m, sb->prev, 75, hits, count, acc); break;
+        default: gather_vertex(m, sb->prev, nc3, hits, count, acc); break;
+        }
         for (int c = 0; c < 3; ++c) {
             float k = m->albedo[v * 3 + c] / (float)PRT_PI;
             for (int i = 0; i < nc; ++i) {

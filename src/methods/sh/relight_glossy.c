@@ -10,11 +10,12 @@
 #include <omp.h>
 #include <string.h>
 
-/* out[c][i] = sum_j X[c or 0][j][i] L[c][j] for the first nl lighting coefficients. One pass
- * over the matrix rows feeds all three channels; the fixed-size variants let the compiler keep
- * the accumulators in vector registers. */
+/* out[c][i] = f[c][i] sum_j X[c or 0][j][i] L[c][j] for the first nl lighting coefficients (f:
+ * the lobe factors per coefficient, NULL for none). One pass over the matrix rows feeds all three
+ * channels; the fixed-size variants let the compiler keep the accumulators in vector registers,
+ * and the factors meet them there before the one store. */
 static inline __attribute__((always_inline)) void apply_light_n(const float *restrict X, int channels, int n, int nl,
-                                                                const prt_sh_light *light, float *restrict out)
+                                                                const prt_sh_light *light, const float *restrict f, float *restrict out)
 {
     float o0[PRT_SH_MAX_COEFFS], o1[PRT_SH_MAX_COEFFS], o2[PRT_SH_MAX_COEFFS];
     for (int i = 0; i < n; ++i) o0[i] = o1[i] = o2[i] = 0.0f;   /* only n: zeroing all 100 cost more than the sums */
@@ -34,24 +35,27 @@ static inline __attribute__((always_inline)) void apply_light_n(const float *res
             for (int i = 0; i < n; ++i) { o0[i] += l0 * r0[i]; o1[i] += l1 * r1[i]; o2[i] += l2 * r2[i]; }
         }
     }
+    if (f)
+        for (int i = 0; i < n; ++i) { o0[i] *= f[i]; o1[i] *= f[n + i]; o2[i] *= f[2 * n + i]; }
     memcpy(out, o0, (size_t)n * sizeof(float));
     memcpy(out + n, o1, (size_t)n * sizeof(float));
     memcpy(out + 2 * n, o2, (size_t)n * sizeof(float));
 }
 
-static void apply_light(const float *X, int channels, int n, int nl, const prt_sh_light *light, float *out)
+static void apply_light(const float *X, int channels, int n, int nl, const prt_sh_light *light, const float *f, float *out)
 {
     switch (n) {   /* orders 3 to 6 cover glossy use; the generic path handles the rest */
-    case 9: apply_light_n(X, channels, 9, nl, light, out); break;
-    case 16: apply_light_n(X, channels, 16, nl, light, out); break;
-    case 25: apply_light_n(X, channels, 25, nl, light, out); break;
-    case 36: apply_light_n(X, channels, 36, nl, light, out); break;
-    default: apply_light_n(X, channels, n, nl, light, out); break;
+    case 9: apply_light_n(X, channels, 9, nl, light, f, out); break;
+    case 16: apply_light_n(X, channels, 16, nl, light, f, out); break;
+    case 25: apply_light_n(X, channels, 25, nl, light, f, out); break;
+    case 36: apply_light_n(X, channels, 36, nl, light, f, out); break;
+    default: apply_light_n(X, channels, n, nl, light, f, out); break;
     }
 }
 
-/* Per-vertex lobe factors (3 x order) or NULL for vertices without a glossy lobe. */
-static prt_status lobe_factors(const prt_transfer *t, int order, const prt_brdf *brdf, float (*table)[3 * PRT_SH_MAX_ORDER], bool *has)
+/* Each material's lobe factors, expanded to every coefficient ([k][c][i] for coefficient i = l(l + 1) + m
+ * of band l), and whether it has a glossy lobe (has[k]). */
+static prt_status lobe_factors(const prt_transfer *t, int order, const prt_brdf *brdf, float *table, bool *has)
 {
     const int count = brdf ? 1 : t->brdf_count;
     for (int k = 0; k < count; ++k) {
@@ -65,8 +69,10 @@ static prt_status lobe_factors(const prt_transfer *t, int order, const prt_brdf 
          * direction, applied where the exit vector is evaluated) make it the library's Phong or
          * Blinn-Phong: (n+2)/(n+1) and, for Blinn-Phong's mirror lobe of exponent n/4, (n+8)/(n+4). */
         const double n = b->exponent, norm = b->model == PRT_BRDF_BLINN_PHONG ? (n + 8.0) / (n + 4.0) : (n + 2.0) / (n + 1.0);
+        const int nc = order * order;
         for (int c = 0; c < 3; ++c)
-            for (int l = 0; l < order; ++l) table[k][c * PRT_SH_MAX_ORDER + l] = (float)(b->specular[c] * a[l] * norm);
+            for (int l = 0; l < order; ++l)
+                for (int m = -l; m <= l; ++m) table[((size_t)k * 3 + c) * nc + l * (l + 1) + m] = (float)(b->specular[c] * a[l] * norm);
     }
     return PRT_OK;
 }
@@ -91,7 +97,6 @@ prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_t
     if (light->order < 1 || light->order > PRT_SH_MAX_ORDER) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "light order %d out of range", light->order);
     if (sh->glossy_exit && brdf)
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this transfer has its BRDF baked in; a run-time BRDF cannot replace it (re-bake without --brdf)");
-    float table[PRT__MAX_BRDFS][3 * PRT_SH_MAX_ORDER];   /* 30 KB; shared by the worker threads */
     bool has[PRT__MAX_BRDFS] = {false};
     /* A run-time lobe given for the glossy materials only replaces their lobes: the diffuse
      * surfaces beside them stay diffuse. */
@@ -103,35 +108,41 @@ prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_t
             return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf shapes the glossy materials and this scene has none (they are named in a "
                              "JSON scene, docs/SCENE.md): --brdf-all gives every surface the lobe");
     }
+    if (local && (local_order < 1 || local_order > light->order || local_order > sh->order))
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "local lights at order %d for a lighting of order %d", local_order, light->order);
+    float *table = NULL;   /* lobe_factors'; shared by the worker threads */
     if (!sh->glossy_exit) {
         if (brdf && prt_brdf_validate(brdf)) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "BRDF: %s", prt_last_error());
+        if (!(table = malloc((size_t)(brdf ? 1 : t->brdf_count) * 3 * sh->order * sh->order * sizeof(float) + 1)))
+            return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         prt_status st = lobe_factors(t, sh->order, brdf, table, has);
-        if (st) return prt__fail(ctx, st, "%s", prt_last_error());
+        if (st) { free(table); return prt__fail(ctx, st, "%s", prt_last_error()); }
         bool any = false;
         for (int i = 0; i < (brdf ? 1 : t->brdf_count); ++i) any |= has[i];
-        if (!any) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "no glossy material to convolve with: name a BRDF (--brdf phong:N) or give the scene glossy materials");
+        if (!any) {
+            free(table);
+            return prt__fail(ctx, PRT_ERR_INVALID_ARG, "no glossy material to convolve with: name a BRDF (--brdf phong:N) or give the scene glossy materials");
+        }
     }
     const int n = sh->order * sh->order, nl = light->order < sh->order ? light->order * light->order : n;
     const size_t nv = t->mesh.vertex_count, dim = prt__set_dim(sh, k);
     const prt__cpca *cp = s->cpca;
-    if (local && (local_order < 1 || local_order > light->order || local_order > sh->order))
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "local lights at order %d for a lighting of order %d", local_order, light->order);
     const int nloc = local ? local_order * local_order : 0;
     /* Compressed sets meet per-vertex lighting one vertex at a time: its matrix rebuilt in a
      * buffer of the thread's own. */
     const int threads = prt__threads(ctx);
     float *rows = cp && local ? malloc((size_t)threads * dim * sizeof(float)) : NULL;
-    if (cp && local && !rows) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (cp && local && !rows) { free(table); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
     /* Compressed: every mean and PCA vector meets the lighting once. */
     float *proj_mean = NULL, *proj_basis = NULL;
     if (cp) {
         proj_mean = malloc((size_t)cp->clusters * 3 * n * sizeof(float));
         proj_basis = malloc((cp->vectors_total ? cp->vectors_total : 1) * 3 * (size_t)n * sizeof(float));
-        if (!proj_mean || !proj_basis) { free(proj_mean); free(proj_basis); free(rows); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+        if (!proj_mean || !proj_basis) { free(proj_mean); free(proj_basis); free(rows); free(table); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
 #pragma omp parallel for schedule(static) num_threads(prt__threads(ctx))
         for (size_t q = 0; q < (size_t)cp->clusters + cp->vectors_total; ++q) {
-            if (q < (size_t)cp->clusters) apply_light(cp->means + q * dim, s->channels, n, nl, light, proj_mean + q * 3 * n);
-            else apply_light(cp->basis + (q - cp->clusters) * dim, s->channels, n, nl, light, proj_basis + (q - cp->clusters) * 3 * n);
+            if (q < (size_t)cp->clusters) apply_light(cp->means + q * dim, s->channels, n, nl, light, NULL, proj_mean + q * 3 * n);
+            else apply_light(cp->basis + (q - cp->clusters) * dim, s->channels, n, nl, light, NULL, proj_basis + (q - cp->clusters) * 3 * n);
         }
     }
 #pragma omp parallel for schedule(static) num_threads(threads)
@@ -149,6 +160,7 @@ prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_t
         const int own = t->mesh.material ? t->mesh.material[v] : 0;
         const int mat = !brdf ? own : brdf_everywhere || (own && scene_glossy[own - 1]) ? 1 : 0;
         if (!sh->glossy_exit && (!mat || !has[mat - 1])) { memset(e, 0, (size_t)3 * n * sizeof(float)); continue; }
+        const float *restrict f = sh->glossy_exit ? NULL : table + (size_t)(mat - 1) * 3 * n;
         if (cp) {
             const uint32_t cl = cp->cluster_of[v], cnt = cp->counts[cl];
             const float *restrict mean = proj_mean + (size_t)cl * 3 * n, *restrict B = proj_basis + cp->basis_start[cl] * 3 * n;
@@ -181,19 +193,16 @@ prt_status prt__relight_sh_glossy(prt_context *ctx, const prt_transfer *t, prt_t
                 here.order = local_order;
                 const float *L = local + v * 3 * (size_t)nloc;
                 for (int c = 0; c < 3; ++c) memcpy(here.coeffs[c], L + c * nloc, (size_t)nloc * sizeof(float));
-                apply_light(M, s->channels, n, nloc, &here, add);
+                apply_light(M, s->channels, n, nloc, &here, NULL, add);
                 for (int i = 0; i < m3; ++i) e[i] += add[i];
             }
+            if (f)
+                for (int i = 0; i < m3; ++i) e[i] *= f[i];
         } else {
-            apply_light(s->coeffs + v * dim, s->channels, n, nl, lv, e);
-        }
-        if (!sh->glossy_exit) {
-            const float *f = table[mat - 1];
-            for (int c = 0; c < 3; ++c)
-                for (int l = 0; l < sh->order; ++l)
-                    for (int m = -l; m <= l; ++m) e[c * n + l * (l + 1) + m] *= f[c * PRT_SH_MAX_ORDER + l];
+            apply_light(s->coeffs + v * dim, s->channels, n, nl, lv, f, e);
         }
     }
+    free(table);
     free(proj_mean);
     free(proj_basis);
     free(rows);
