@@ -564,7 +564,7 @@ expect 1 "bad --cloud list" -- "$PRT" bake -q "$T/demo.obj" -o "$T/badlc.prt" --
 says "light 1 is not a position"
 [ ! -e "$T/badlc.prt.checkpoint" ] && ok || bad "a bad --cloud list was read after work had begun"
 expect 2 "absurd --cloud-grid" -- "$PRT" bake -q "$T/demo.obj" -o "$T/badlc.prt" --method lightcloud --cloud-grid 4000,4000,4000
-says "at most 4096"
+says "at most 1048576"
 [ ! -e "$T/badlc.prt.checkpoint" ] && ok || bad "an absurd --cloud-grid was refused after work had begun"
 expect 0 "lightcloud info" -- "$PRT" info "$T/lc.prt"
 grep -q "cloud:" "$T/out" && grep -q "zones:" "$T/out" && grep -q "neighbours" "$T/out" && ok || bad "info lacks the cloud, zones or control"

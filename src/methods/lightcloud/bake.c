@@ -21,6 +21,10 @@
 #include <stdio.h>
 #include <unistd.h>
 
+/* Candidate pairs at most: beyond, the merge distance takes in a large part of the cloud (26 GiB of
+ * bookkeeping at the limit). */
+#define PAIRS_MAX (1ull << 29)
+
 void openblas_set_num_threads(int);
 int openblas_get_num_threads(void);
 
@@ -38,7 +42,7 @@ typedef struct lcbake {
     size_t stride;                   /* floats per light: its lobes' responses one after another */
     size_t one;                      /* floats per lobe's response */
     uint32_t *pos_of;                /* [vertex] position in member order */
-    uint8_t *visible;                /* [light * n + light] mutual visibility (1 = visible) */
+    prt__lightcloud_pairs pairs;     /* the pairs within the merge distance and their mutual visibility */
     uint8_t *dark;                   /* [light] 1 when the light reaches no vertex at all */
     float merge_distance, merge_error;
     int merge_response;              /* PRT__LIGHTCLOUD_MERGE_* */
@@ -101,7 +105,7 @@ static prt_status read_list(prt_context *ctx, const char *path, float **pts, uin
     const int n = cJSON_IsArray(list) ? cJSON_GetArraySize(list) : -1;
     if (n < 0) st = prt__fail(ctx, PRT_ERR_FORMAT, "%s: expected a list of [x, y, z] positions (or {\"lights\": [...]})", path);
     else if (n == 0) st = prt__fail(ctx, PRT_ERR_FORMAT, "%s: the list holds no lights", path);
-    else if (n > PRT__LIGHTCLOUD_MAX_LIGHTS) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s: %d lights, at most %d", path, n, PRT__LIGHTCLOUD_MAX_LIGHTS);
+    else if ((unsigned)n > PRT__LIGHTCLOUD_MAX_LIGHTS) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%s: %d lights, at most %u", path, n, PRT__LIGHTCLOUD_MAX_LIGHTS);
     float *p = st ? NULL : malloc((size_t)(n > 0 ? n : 1) * 3 * sizeof(float));
     if (!st && !p) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     for (int i = 0; i < n && !st; ++i) {
@@ -346,20 +350,22 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
     s->merge_response = (uint32_t)b->merge_response;
     s->merge_distance = b->merge_distance;
     s->merge_error = b->merge_error;
-    /* Mutual visibility of the pairs that could merge (V_jk of eq. 9). */
-    if (!st && (!(b->visible = prt__calloc((size_t)n * n, 1)) || !(b->dark = prt__calloc(n, 1)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    /* The pairs that could merge and their mutual visibility (V_jk of eq. 9): lights farther
+     * apart than the merge distance never merge, so no table holds every pair. */
+    if (!st) st = prt__lightcloud_pairs_find(ctx, s->cloud, n, b->merge_distance, job->threads, &b->pairs);
+    if (!st && b->pairs.count > PAIRS_MAX)
+        st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "%llu pairs of cloud lights lie within the merge distance %g (%.1f per light): at most %llu; lower "
+                       "--merge-distance", (unsigned long long)b->pairs.count, b->merge_distance, (double)b->pairs.count / n, (unsigned long long)PAIRS_MAX);
+    if (!st && (!(b->pairs.visible = prt__calloc(b->pairs.count + 1, 1)) || !(b->dark = prt__calloc(n, 1))))
+        st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) {
-        /* A pair is one ray, a microsecond: below 256 lights (32,640 pairs) the loop takes less
-         * than waking a team costs on a loaded machine (a scheduler's time slice). */
-#pragma omp parallel for schedule(dynamic, 4) num_threads(job->threads) if (n >= 256)
+        /* A pair is one ray, a microsecond: below 256 lights the loop takes less than waking a
+         * team costs on a loaded machine (a scheduler's time slice). */
+        const prt__lightcloud_pairs *pp = &b->pairs;
+#pragma omp parallel for schedule(dynamic, 16) num_threads(job->threads) if (n >= 256)
         for (uint32_t j = 0; j < n; ++j)
-            for (uint32_t k = j + 1; k < n; ++k) {
-                float d[3];
-                prt__v3_sub(s->cloud + (size_t)j * 3, s->cloud + (size_t)k * 3, d);
-                if (prt__v3_len(d) >= b->merge_distance) continue;
-                const uint8_t vis = prt__raycaster_segment_clear(&rc, s->cloud + (size_t)j * 3, s->cloud + (size_t)k * 3);
-                b->visible[(size_t)j * n + k] = b->visible[(size_t)k * n + j] = vis;
-            }
+            for (uint64_t q = pp->start[j]; q < pp->start[j + 1]; ++q)
+                pp->visible[q] = prt__raycaster_segment_clear(&rc, s->cloud + (size_t)j * 3, s->cloud + (size_t)pp->other[q] * 3);
     }
     prt__raycaster_release(&rc);
     /* Zones. */
@@ -394,9 +400,20 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
         if (!s->emit || !s->emit_sh) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         else st = solve(b, ctx, NULL, 0, s->emit, s->emit + nv * 3, s->emit_sh);
     }
-    if (!st)
-        prt__log(ctx, PRT_LOG_INFO, "light cloud: %u light%s (spacing %.3g), %u zones, responses %.1f MiB on disk", n, n == 1 ? "" : "s", s->spacing, s->zone_count,
-                 (double)b->stride * n * 4 / 1048576.0);
+    if (!st) {
+        /* What the cloud will take, said before the lights are solved: each zone's thread holds
+         * every light's response at the zone's vertices, and as much again merged. */
+        uint64_t zone_floats = 0;
+        for (uint32_t z = 0; z < s->zone_count; ++z) {
+            const uint64_t f = (uint64_t)(s->member_start[z + 1] - s->member_start[z]) * 3 + (uint64_t)(s->glossy_start[z + 1] - s->glossy_start[z]) * 48;
+            if (f > zone_floats) zone_floats = f;
+        }
+        const double mib = 1048576.0, zone = 2.0 * (double)zone_floats * s->lobes * n * 4 / mib;
+        const double pairs = ((double)b->pairs.count * (4 + 1 + 2 * 8 + 20) + (double)n * 40) / mib;
+        prt__log(ctx, PRT_LOG_INFO, "light cloud: %u light%s (spacing %.3g), %llu pairs within the merge distance (%.1f MiB with the clustering's), "
+                 "%u zones (up to %.1f MiB per thread while one clusters and compresses), responses %.1f MiB on disk", n, n == 1 ? "" : "s", s->spacing,
+                 (unsigned long long)b->pairs.count, pairs, s->zone_count, zone, (double)b->stride * n * 4 / mib);
+    }
     return st;
 }
 
@@ -501,8 +518,9 @@ typedef struct zone_data {
 
 /* Eq. 9: w1 |p_j - p_k| + w2 max over vertices of the response difference + V_jk, with w1 = 1 /
  * merge distance and w2 = 1 / (merge error x the zone's largest response). Returns early once
- * it reaches 1: only whether it stays below 1 and its order below 1 matter. */
-static float metric(void *user, uint32_t j, uint32_t k)
+ * it reaches 1: only whether it stays below 1 and its order below 1 matter. Only pairs within the
+ * merge distance come here (pair: their index in b->pairs). */
+static float metric(void *user, uint32_t j, uint32_t k, uint64_t pair)
 {
     const zone_data *z = user;
     const lcbake *b = z->b;
@@ -511,7 +529,7 @@ static float metric(void *user, uint32_t j, uint32_t k)
     prt__v3_sub(b->s->cloud + (size_t)j * 3, b->s->cloud + (size_t)k * 3, d);
     float m = prt__v3_len(d) / b->merge_distance;
     if (m >= 1.0f) return m;
-    if (!b->visible[(size_t)j * z->n + k]) return m + 1.0f;
+    if (!b->pairs.visible[pair]) return m + 1.0f;
     if (z->w2 <= 0) return m;
     const float *rj = z->R + (size_t)j * z->nz * 3, *rk = z->R + (size_t)k * z->nz * 3;
     float worst = 0;
@@ -623,7 +641,7 @@ static prt_status zone_run(lcbake *b, prt_context *ctx, uint32_t z)
     for (size_t i = 0; !st && i < (size_t)n * nz * 3; ++i) largest = fabsf(R[i]) > largest ? fabsf(R[i]) : largest;
     for (size_t i = 0; !st && i < (size_t)n * gz * 48; ++i) largest = fabsf(G[i]) > largest ? fabsf(G[i]) : largest;
     zone_data zd = {b, n, nz, gz, R, G, b->merge_error > 0 && largest > 0 ? 1.0f / (b->merge_error * largest) : 0.0f};
-    if (!st) st = prt__lightcloud_cluster(ctx, n, metric, &zd, zone->light_of, &zone->lights);
+    if (!st) st = prt__lightcloud_cluster(ctx, &b->pairs, metric, &zd, zone->light_of, &zone->lights);
     /* Columns: merged light l's lobe k at l * K + k. */
     const uint32_t L = zone->lights * (uint32_t)K;
     float *X = NULL, *Y = NULL;
@@ -787,7 +805,7 @@ static void lc_release(prt__bake_job *job)
     prt__lightcloud_responses_close(b->kept);
     free(b->responses_path);
     free(b->pos_of);
-    free(b->visible);
+    prt__lightcloud_pairs_free(&b->pairs);
     free(b->dark);
     free(b->list);
     free(b);
@@ -819,8 +837,14 @@ prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, 
     const uint64_t total = grid_size(&d, g) + nlist + (uint64_t)d.surface_lights;
     if (total > PRT__LIGHTCLOUD_MAX_LIGHTS) {
         free(list);
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%llu cloud lights asked for, at most %d (the clustering holds every pair)", (unsigned long long)total,
-                         PRT__LIGHTCLOUD_MAX_LIGHTS);
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "%llu cloud lights asked for, at most %u", (unsigned long long)total, PRT__LIGHTCLOUD_MAX_LIGHTS);
+    }
+    {   /* What it will take, before any work (cloud_step says it again exactly, before the lights are solved). */
+        const uint64_t nv = t->mesh.vertex_count, zv = nv < (uint64_t)d.zone_vertices ? nv : (uint64_t)d.zone_vertices;
+        const double mib = 1048576.0, K = (double)d.emission_order * d.emission_order;
+        prt__log(ctx, PRT_LOG_INFO, "light cloud: up to %llu lights: about %.1f MiB per thread while a zone clusters and compresses (more with glossy "
+                 "surfaces), %.1f MiB of responses on disk", (unsigned long long)total, 2.0 * K * (double)total * (double)zv * 12 / mib,
+                 K * (double)total * (double)nv * 12 / mib);
     }
     lcbake *b = prt__calloc(1, sizeof *b);
     prt__lightcloud_set *s = prt__calloc(1, sizeof *s);

@@ -2,8 +2,14 @@
  * cloud while every pair of lights across the two clusters is "close" (metric below 1), closest
  * cluster pair first. The distance between clusters is the largest metric over their member pairs
  * (complete linkage: the paper's all-pairs rule), kept up to date with the Lance-Williams update
- * max(d(g, k), d(h, k)); a heap with stale entries skipped picks the next pair, so n lights cost
- * O(n^2 log n), not the O(n^3) of scanning every pair after each merge. */
+ * max(d(g, k), d(h, k)); a heap with stale entries skipped picks the next pair.
+ *
+ * Only the candidate pairs (pairs.c: lights within the merge distance) are looked at, and only
+ * cluster pairs whose every cross pair is close are kept: a cluster's neighbours are a sorted list
+ * of (cluster, distance), and a merge keeps the neighbours both sides had (the largest of a close
+ * and a far pair is far). Memory and time follow the close pairs, not n^2; the merges, and so the
+ * clusters, are those of the all-pairs table it replaced, which held every distance (the heap's
+ * order is by distance then index, and the same entries are live in both). */
 #include "methods/lightcloud/lightcloud.h"
 
 typedef struct pair { float d; uint32_t a, b; uint32_t stamp_a, stamp_b; } pair;
@@ -53,45 +59,81 @@ static pair heap_pop(heap *h)
     return top;
 }
 
-/* Index of (i, j), i < j, in a strict upper triangle of n. */
-static size_t tri(size_t n, size_t i, size_t j) { return i * (2 * n - i - 1) / 2 + (j - i - 1); }
+typedef struct edge { uint32_t k; float d; } edge;   /* a neighbouring cluster and the distance to it (>= 1: far) */
 
-prt_status prt__lightcloud_cluster(prt_context *ctx, uint32_t n, prt__light_metric_fn metric, void *user, uint32_t *cluster_of, uint32_t *clusters)
+/* The entry for cluster k in a sorted neighbour list; every close pair is listed on both sides. */
+static edge *find(edge *list, uint32_t len, uint32_t k)
+{
+    uint32_t lo = 0, hi = len;
+    while (lo < hi) {
+        const uint32_t mid = lo + (hi - lo) / 2;
+        if (list[mid].k < k) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < len && list[lo].k == k ? &list[lo] : NULL;
+}
+
+prt_status prt__lightcloud_cluster(prt_context *ctx, const prt__lightcloud_pairs *pairs, prt__light_metric_fn metric, void *user, uint32_t *cluster_of,
+                                   uint32_t *clusters)
 {
     *clusters = 0;
+    const uint32_t n = pairs->n;
     if (n == 0) return PRT_OK;
-    const size_t pairs = (size_t)n * (n - 1) / 2;
-    float *d = malloc((pairs ? pairs : 1) * sizeof(float));
-    uint32_t *stamp = prt__calloc(n, sizeof(uint32_t));
-    uint32_t *parent = malloc((size_t)n * sizeof(uint32_t));
+    float *m = malloc((size_t)(pairs->count ? pairs->count : 1) * sizeof(float));
+    uint64_t *start = prt__calloc((size_t)n + 1, sizeof(uint64_t));
+    uint32_t *len = prt__calloc(n, sizeof(uint32_t)), *stamp = prt__calloc(n, sizeof(uint32_t)), *parent = malloc((size_t)n * sizeof(uint32_t));
+    edge *adj = NULL;
     heap h = {0};
-    prt_status st = d && stamp && parent ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    for (uint32_t i = 0; i < n && !st; ++i) {
-        parent[i] = i;
-        for (uint32_t j = i + 1; j < n; ++j) {
-            const float m = metric(user, i, j);
-            d[tri(n, i, j)] = m < 1.0f ? m : INFINITY;
-            if (m < 1.0f && !heap_push(&h, (pair){m, i, j, 0, 0})) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+    prt_status st = m && start && len && stamp && parent ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    /* Every candidate pair's distance, once; the close ones counted on both sides. */
+    for (uint32_t j = 0; j < n && !st; ++j) {
+        parent[j] = j;
+        for (uint64_t p = pairs->start[j]; p < pairs->start[j + 1]; ++p) {
+            m[p] = metric(user, j, pairs->other[p], p);
+            if (m[p] < 1.0f) { start[j + 1]++; start[pairs->other[p] + 1]++; }
         }
         if (prt__cancelled(ctx)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "cancelled");
     }
+    if (!st) {
+        for (uint32_t j = 0; j < n; ++j) start[j + 1] += start[j];
+        if (!(adj = malloc((size_t)(start[n] ? start[n] : 1) * sizeof(edge)))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    }
+    /* Lists ascending: j's lower neighbours arrive while they are visited, then its upper ones
+     * (pairs lists each light's in ascending order). */
+    for (uint32_t j = 0; j < n && !st; ++j)
+        for (uint64_t p = pairs->start[j]; p < pairs->start[j + 1]; ++p) {
+            if (!(m[p] < 1.0f)) continue;
+            const uint32_t k = pairs->other[p];
+            adj[start[j] + len[j]++] = (edge){k, m[p]};
+            adj[start[k] + len[k]++] = (edge){j, m[p]};
+            if (!heap_push(&h, (pair){m[p], j, k, 0, 0})) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+        }
+    free(m);
     /* Cluster ids are their smallest member; parent[i] = i while i heads a live cluster. */
     while (!st && h.n) {
         const pair e = heap_pop(&h);
         if (parent[e.a] != e.a || parent[e.b] != e.b || stamp[e.a] != e.stamp_a || stamp[e.b] != e.stamp_b) continue;   /* stale */
-        /* Merge b into a (a < b): a's distances become the larger of the two. */
+        /* Merge b into a (a < b): a keeps the neighbours both had, each at the larger distance. */
         parent[e.b] = e.a;
         stamp[e.a]++;
-        for (uint32_t k = 0; k < n; ++k) {
-            if (k == e.a || k == e.b || parent[k] != k) continue;
-            float *dak = &d[k < e.a ? tri(n, k, e.a) : tri(n, e.a, k)];
-            const float dbk = d[k < e.b ? tri(n, k, e.b) : tri(n, e.b, k)];
-            if (dbk > *dak) *dak = dbk;
-            if (*dak < 1.0f) {
-                const uint32_t lo = k < e.a ? k : e.a, hi = k < e.a ? e.a : k;
-                if (!heap_push(&h, (pair){*dak, lo, hi, stamp[lo], stamp[hi]})) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
-            }
+        edge *A = adj + start[e.a];
+        const edge *B = adj + start[e.b];
+        const uint32_t na = len[e.a], nb = len[e.b];
+        uint32_t kept = 0;
+        for (uint32_t i = 0, j = 0; i < na; ++i) {
+            const edge ea = A[i];
+            if (ea.k == e.b || parent[ea.k] != ea.k || !(ea.d < 1.0f)) continue;   /* absorbed, or already far */
+            while (j < nb && B[j].k < ea.k) j++;
+            const float db = j < nb && B[j].k == ea.k ? B[j].d : INFINITY, d = ea.d > db ? ea.d : db;
+            edge *back = find(adj + start[ea.k], len[ea.k], e.a);
+            if (back) back->d = d;
+            if (!(d < 1.0f)) continue;
+            A[kept++] = (edge){ea.k, d};
+            const uint32_t lo = ea.k < e.a ? ea.k : e.a, hi = ea.k < e.a ? e.a : ea.k;
+            if (!heap_push(&h, (pair){d, lo, hi, stamp[lo], stamp[hi]})) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
         }
+        len[e.a] = kept;
+        len[e.b] = 0;
     }
     if (!st) {
         /* Number the clusters in order of their smallest member. */
@@ -105,7 +147,9 @@ prt_status prt__lightcloud_cluster(prt_context *ctx, uint32_t n, prt__light_metr
         *clusters = count;
     }
     free(h.p);
-    free(d);
+    free(adj);
+    free(start);
+    free(len);
     free(stamp);
     free(parent);
     return st;

@@ -163,7 +163,7 @@ static prt_status load_zone(prt_context *ctx, const prt_transfer *t, prt__lightc
     for (uint32_t j = 0; j < s->cloud_count; ++j)
         if (zone->light_of[j] >= lights) return bad(ctx, "light-cloud merged light index out of range");
     if (!prt__all_finite(zone->positions, (size_t)lights * 3)) return bad(ctx, "non-finite light-cloud positions");
-    const uint32_t cols = lights * (uint32_t)s->lobes;   /* lights <= cloud_count <= 4096: no overflow */
+    const uint32_t cols = lights * (uint32_t)s->lobes;   /* lights <= cloud_count <= 2^20: 48 x 9 x lights fits 32 bits */
     prt_status st = load_block(ctx, &c, nz, 3 * cols, dform == 1, &zone->diffuse);
     if (!st) st = load_block(ctx, &c, gz, 48 * cols, gform == 1, &zone->glossy);
     if (!st && c.left) st = bad(ctx, "light-cloud zone chunk has trailing bytes");

@@ -19,7 +19,11 @@
 #include "transfer/method.h"
 #include "light/vertex_lights.h"
 
-#define PRT__LIGHTCLOUD_MAX_LIGHTS 4096
+/* Cloud lights at most: nothing in the bake or the file holds every pair of them any more (pairs.c,
+ * cluster.c); the limit keeps a zone's columns (48 SH values x 9 lobes x merged lights) within 32
+ * bits with room, and is far beyond what a machine solves (each light is one spectral solve, and
+ * each zone's thread holds every light's response in the zone: bake.c says how much up front). */
+#define PRT__LIGHTCLOUD_MAX_LIGHTS (1u << 20)
 #define PRT__LIGHTCLOUD_GLOSSY_N 16      /* SH order 4 exit radiance for glossy vertices, as the paper's n_b = 16 */
 #define PRT__LIGHTCLOUD_EMISSION_ORDER 1 /* default --emission-order (lobes.c) */
 
@@ -113,11 +117,27 @@ typedef struct prt__lightcloud_bake_desc {
 prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, const prt__lightcloud_bake_desc *d,
                                       prt_transfer *t, prt__bake_job **job);
 
-/* Clustering (cluster.c): merges n lights bottom-up while every pair across two
- * clusters has metric(j, k) < 1, smallest first; cluster_of[i] numbers the clusters in order of
- * their first member. */
-typedef float (*prt__light_metric_fn)(void *user, uint32_t j, uint32_t k);
-prt_status prt__lightcloud_cluster(prt_context *ctx, uint32_t n, prt__light_metric_fn metric, void *user, uint32_t *cluster_of, uint32_t *clusters);
+/* Candidate pairs (pairs.c): for each light j, the lights k > j closer than the merge distance
+ * (the only ones eq. 9 can put below 1), ascending, found through a uniform grid. */
+typedef struct prt__lightcloud_pairs {
+    uint32_t n;                  /* lights */
+    uint64_t count;              /* pairs */
+    uint64_t *start;             /* [light + 1]: light j's pairs are other[start[j] .. start[j + 1]) */
+    uint32_t *other;             /* [pair] */
+    uint8_t *visible;            /* [pair] V_jk of eq. 9 (1 = the segment is clear); the bake's to fill */
+} prt__lightcloud_pairs;
+/* Pairs of the n lights at pos closer than r (none when r <= 0), on up to `threads` threads; the
+ * result does not depend on them. */
+prt_status prt__lightcloud_pairs_find(prt_context *ctx, const float *pos, uint32_t n, float r, int threads, prt__lightcloud_pairs *out);
+void prt__lightcloud_pairs_free(prt__lightcloud_pairs *p);
+
+/* Clustering (cluster.c): merges the lights bottom-up while every pair across two clusters has
+ * metric(j, k) < 1, smallest first; only candidate pairs can be below 1 (the metric of any other
+ * pair must be 1 or more). pair: the pair's index in `pairs`. cluster_of[i] numbers the clusters
+ * in order of their first member. */
+typedef float (*prt__light_metric_fn)(void *user, uint32_t j, uint32_t k, uint64_t pair);
+prt_status prt__lightcloud_cluster(prt_context *ctx, const prt__lightcloud_pairs *pairs, prt__light_metric_fn metric, void *user, uint32_t *cluster_of,
+                                   uint32_t *clusters);
 /* Merged responses (how: PRT__LIGHTCLOUD_MERGE_MEAN or _HARMONIC): src [cloud light][width],
  * dst [width][merged light]; groups of `group` values (1, or 16 SH coefficients) merge together. */
 prt_status prt__lightcloud_merge(prt_context *ctx, int how, uint32_t n, const uint32_t *light_of, uint32_t lights, const float *src, size_t width,

@@ -73,6 +73,15 @@ static void put64(unsigned char *p, uint64_t x)
     for (int i = 0; i < 8; ++i) p[i] = (unsigned char)(x >> (8 * i));
 }
 
+/* A record's position as bytes, and its index: sorted by both. */
+typedef struct keyed { float p[3]; uint32_t record; } keyed;
+static int key_cmp(const void *a, const void *b)
+{
+    const keyed *x = a, *y = b;
+    const int c = memcmp(x->p, y->p, sizeof x->p);
+    return c ? c : (x->record > y->record) - (x->record < y->record);
+}
+
 prt_status prt__lightcloud_responses_open(prt_context *ctx, const char *path, const prt__fingerprint *fp, uint64_t nv, uint64_t glossy, int lobes,
                                           const float *cloud, uint32_t n, prt__lightcloud_responses **out)
 {
@@ -118,10 +127,28 @@ prt_status prt__lightcloud_responses_open(prt_context *ctx, const char *path, co
     }
     r->records = records;
     /* Positions match bit for bit: the grid and the lists give the same floats every bake. The
-     * last record of a position wins (a file never holds two; a damaged one is no worse). */
-    for (uint32_t j = 0; j < n && !st; ++j)
-        for (uint64_t i = 0; i < records; ++i)
-            if (!memcmp(r->pos + i * 4, cloud + (size_t)j * 3, 3 * sizeof(float))) r->record_of[j] = (uint32_t)i;
+     * last record of a position wins (a file never holds two; a damaged one is no worse). Records
+     * sorted by position, each light found by bisection: clouds of 10^5 lights and more. */
+    keyed *key = st ? NULL : malloc((records + 1) * sizeof *key);
+    if (!st && !key) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (uint64_t i = 0; i < records && !st; ++i) {
+        memcpy(key[i].p, r->pos + i * 4, sizeof key[i].p);
+        key[i].record = (uint32_t)i;
+    }
+    if (!st) qsort(key, records, sizeof *key, key_cmp);
+    for (uint32_t j = 0; j < n && !st; ++j) {
+        keyed want;
+        memcpy(want.p, cloud + (size_t)j * 3, sizeof want.p);
+        want.record = UINT32_MAX;   /* after every record of its position: the last one is just before */
+        uint64_t lo = 0, hi = records;
+        while (lo < hi) {
+            const uint64_t mid = lo + (hi - lo) / 2;
+            if (key_cmp(&key[mid], &want) < 0) lo = mid + 1;
+            else hi = mid;
+        }
+        if (lo > 0 && !memcmp(key[lo - 1].p, want.p, sizeof want.p)) r->record_of[j] = key[lo - 1].record;
+    }
+    free(key);
     if (st) { prt__lightcloud_responses_close(r); return st; }
     *out = r;
     return PRT_OK;

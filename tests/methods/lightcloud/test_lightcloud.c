@@ -128,8 +128,9 @@ static void test_light_at_cloud_light(void **state)
 /* ---- clustering ---- */
 typedef struct points { const float *p; float scale; } points;
 
-static float distance_metric(void *user, uint32_t j, uint32_t k)
+static float distance_metric(void *user, uint32_t j, uint32_t k, uint64_t pair)
 {
+    (void)pair;
     const points *pts = user;
     float d[3];
     for (int i = 0; i < 3; ++i) d[i] = pts->p[j * 3 + i] - pts->p[k * 3 + i];
@@ -151,7 +152,7 @@ static uint32_t brute_force(const points *pts, uint32_t n, uint32_t *cluster_of)
                 float worst = 0;
                 for (uint32_t i = 0; i < n; ++i)
                     for (uint32_t j = 0; j < n; ++j)
-                        if (head[i] == a && head[j] == b) worst = fmaxf(worst, distance_metric((void *)pts, i, j));
+                        if (head[i] == a && head[j] == b) worst = fmaxf(worst, distance_metric((void *)pts, i, j, 0));
                 if (worst < best) { best = worst; ba = a; bb = b; }
             }
         if (!(best < 1.0f)) break;
@@ -179,7 +180,11 @@ static void test_clustering_distance_only(void **state)
         }
         points pts = {p, 1.0f / (0.15f + 0.05f * round)};
         uint32_t *fast = malloc(n * sizeof(uint32_t)), *slow = malloc(n * sizeof(uint32_t)), count = 0;
-        assert_int_equal(prt__lightcloud_cluster(NULL, n, distance_metric, &pts, fast, &count), PRT_OK);
+        /* Candidates a little beyond the distance: the clustering leaves pairs at 1 or more apart. */
+        prt__lightcloud_pairs pairs;
+        assert_int_equal(prt__lightcloud_pairs_find(NULL, p, n, 1.001f / pts.scale, 1, &pairs), PRT_OK);
+        assert_int_equal(prt__lightcloud_cluster(NULL, &pairs, distance_metric, &pts, fast, &count), PRT_OK);
+        prt__lightcloud_pairs_free(&pairs);
         const uint32_t expect = brute_force(&pts, n, slow);
         assert_int_equal(count, expect);
         assert_true(count < n && count > 1);
@@ -187,7 +192,7 @@ static void test_clustering_distance_only(void **state)
         /* Every pair inside a cluster is close (the all-pairs rule). */
         for (uint32_t i = 0; i < n; ++i)
             for (uint32_t j = i + 1; j < n; ++j)
-                if (fast[i] == fast[j]) assert_true(distance_metric(&pts, i, j) < 1.0f);
+                if (fast[i] == fast[j]) assert_true(distance_metric(&pts, i, j, 0) < 1.0f);
         free(p);
         free(fast);
         free(slow);
