@@ -80,6 +80,19 @@ typedef struct prt_render_passes {
 } prt_render_passes;
 
 /* Borrowed arrays describing what to draw. */
+/* A participating medium the renderer ray-marches over the surfaces (depth-correct: each pixel's
+ * march ends at the first surface it meets): dims voxels spanning lo..hi (x fastest; values at
+ * voxel centres, trilinear between them), the extinction per world unit, and the radiance the
+ * medium scatters per unit extinction as SH (source_order 1 or 2) of the direction the light
+ * travels, that is the view ray's: L = integral T(t) sigma_t(t) S(t, d) dt + T(end) L(end). */
+typedef struct prt_render_volume {
+    int dims[3];
+    float lo[3], hi[3];
+    const float *extinction;     /* [voxel] */
+    const float *source;         /* [voxel][3][source_order^2] */
+    int source_order;
+} prt_render_volume;
+
 typedef struct prt_render_mesh {
     const float *positions;      /* 3 per vertex */
     const float *radiance;       /* 3 per vertex, linear (view-independent part) */
@@ -149,6 +162,9 @@ typedef struct prt_render_mesh {
     /* With gpu_passes: the first-order light map on the left half of the image, the final one
      * on the right (the paper's side-by-side viewer). */
     int side_by_side;
+    /* Optional participating media drawn over the surfaces (prt_relit.volumes). */
+    const prt_render_volume *volumes;
+    int volume_count;
 } prt_render_mesh;
 
 prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, prt_renderer **out);

@@ -1,6 +1,7 @@
 /* The headless target: an EGL context without a window (Mesa's surfaceless platform, which
  * runs on llvmpipe where there is no GPU) and a multisampled float framebuffer. */
 #include "render/draw.h"
+#include "render/volumes.h"
 
 #include <epoxy/egl.h>
 #include <stdio.h>
@@ -114,5 +115,7 @@ prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_ca
     prt_status st = prt__draw_upload(&r->draw, mesh);
     if (st) return st;
     if (!prt__target_draw_cancellable(&r->target, &r->draw, cam, background, r->ctx)) return prt__fail(r->ctx, PRT_ERR_CANCELLED, "drawing cancelled");
-    return prt__target_read(&r->target, out);
+    st = prt__target_read(&r->target, out);
+    if (!st && mesh->volume_count) st = prt__render_volumes(r->ctx, mesh, cam, out);
+    return st;
 }

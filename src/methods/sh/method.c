@@ -30,6 +30,8 @@ void prt__sh_state_free(void *state)
     }
     prt__texel_sets_free(&s->texels);
     prt__sh_grid_free(&s->grid);
+    for (int k = 0; k < s->volume_count; ++k) prt__sh_volume_free(&s->volumes[k]);
+    free(s->volumes);
     prt__sh_frames_free(&s->frames);
     if (s->rays_ready) prt__raycaster_release(&s->rays);
     if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
@@ -692,6 +694,24 @@ static prt_status relight_with(prt_context *ctx, const prt_transfer *t, const pr
         if (!r->texels) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         if ((st = prt_relight_sh_texels(ctx, t, prt__kind_from_index(k), shl, r->texels))) return st;
         if (local && (st = prt__relight_sh_texels_local(ctx, t, k, l, order, window, r->texels))) return st;
+    }
+    /* Volumes: the light their media scatter, for the renderer's ray march (distant light only). */
+    if (s->volume_count && !(r->volumes = prt__calloc((size_t)s->volume_count, sizeof *r->volumes))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (int q = 0; q < s->volume_count; ++q) {
+        const prt__sh_volume *v = &s->volumes[q];
+        const size_t voxels = prt__volume_voxels(&v->medium);
+        prt_render_volume *rv = &r->volumes[q];
+        float *ext = malloc(voxels * sizeof *ext), *src = malloc(voxels * 3 * (size_t)v->bands * v->bands * sizeof *src);
+        rv->extinction = ext;
+        rv->source = src;
+        r->volume_count = q + 1;
+        if (!ext || !src) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        memcpy(rv->dims, v->medium.dims, sizeof rv->dims);
+        memcpy(rv->lo, v->medium.lo, sizeof rv->lo);
+        memcpy(rv->hi, v->medium.hi, sizeof rv->hi);
+        rv->source_order = v->bands;
+        for (size_t i = 0; i < voxels; ++i) ext[i] = v->medium.sigma_t * v->medium.density[i];
+        prt__sh_volume_source(v, s->order, shl, src);
     }
     return PRT_OK;
 }
