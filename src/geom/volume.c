@@ -193,13 +193,13 @@ prt_status prt_volume_generate(prt_context *ctx, const char *kind, const int dim
     if (!d) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for a volume of %zu voxels", n);
     /* A cloud: puffs placed from the seed on a low heap, their union softened and eroded by
      * noise; its base flattened. */
-    double puff[12][4];
-    for (int k = 0; k < 12; ++k) {
-        const double a = 2 * PRT_PI * lattice(k, 1, 0, seed), r = 0.22 * sqrt(lattice(k, 2, 0, seed));
+    double puff[14][4];
+    for (int k = 0; k < 14; ++k) {
+        const double a = 2 * PRT_PI * lattice(k, 1, 0, seed), r = 0.26 * sqrt(lattice(k, 2, 0, seed));
+        puff[k][3] = 0.09 + 0.14 * lattice(k, 3, 0, seed) * (1 - r / 0.26 * 0.5);   /* bigger in the middle */
         puff[k][0] = 0.5 + r * cos(a);
         puff[k][2] = 0.5 + r * sin(a);
-        puff[k][3] = 0.13 + 0.1 * lattice(k, 3, 0, seed) * (1 - r / 0.22 * 0.5);
-        puff[k][1] = 0.35 + 0.6 * puff[k][3] + 0.08 * lattice(k, 4, 0, seed);
+        puff[k][1] = 0.3 + 0.9 * puff[k][3] + 0.1 * lattice(k, 4, 0, seed);
     }
     for (int z = 0; z < dims[2]; ++z)
         for (int y = 0; y < dims[1]; ++y)
@@ -207,13 +207,13 @@ prt_status prt_volume_generate(prt_context *ctx, const char *kind, const int dim
                 const double u = (x + 0.5) / dims[0], v = (y + 0.5) / dims[1], w = (z + 0.5) / dims[2];
                 double rho;
                 if (cloud) {
-                    double f = 0;
-                    for (int k = 0; k < 12; ++k) {
+                    double f = -1;
+                    for (int k = 0; k < 14; ++k) {
                         const double dx = u - puff[k][0], dy = v - puff[k][1], dz = w - puff[k][2];
                         f = fmax(f, 1.0 - sqrt(dx * dx + dy * dy + dz * dz) / puff[k][3]);
                     }
-                    const double nse = fbm(u * 5, v * 5, w * 5, seed);
-                    rho = smooth01(0.0, 0.35, f + 0.35 * (nse - 0.5)) * smooth01(0.28, 0.36, v);
+                    const double nse = fbm(u * 6, v * 6, w * 6, seed);
+                    rho = smooth01(0.0, 0.25, f + 0.4 * (nse - 0.5)) * smooth01(0.24, 0.32, v + 0.05 * (nse - 0.5));
                 } else {
                     const double cx = 0.5 + 0.12 * (fbm(v * 2, 0.3, 0.7, seed) - 0.5) * 2 * v, cz = 0.5 + 0.12 * (fbm(0.9, v * 2, 0.1, seed) - 0.5) * 2 * v;
                     const double radius = 0.06 + 0.3 * v, r = sqrt((u - cx) * (u - cx) + (w - cz) * (w - cz));

@@ -193,9 +193,27 @@ prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
         prt__put32(h + 20, (uint32_t)v->orders);
         memcpy(h + 48, &v->medium.sigma_t, 4);
         memcpy(h + 64, &v->medium.g, 4);
+        /* Transfer of the voxels with medium around them only, as halves. */
         const size_t voxels = prt__volume_voxels(&v->medium), n = (size_t)sh->order * sh->order;
-        prt__chunks_add(l, CHUNK_VOLU, h, (size_t)VOLU_HEADER, v->medium.density, voxels * 4, v->direct, voxels * 3 * (size_t)v->bands * v->bands * n * 4,
-                        v->multi, voxels * 3 * n * 4, NULL);
+        const size_t pd = 3 * (size_t)v->bands * v->bands * n, pm = 3 * n;
+        size_t active = 0;
+        for (int z = 0; z < v->medium.dims[2]; ++z)
+            for (int y = 0; y < v->medium.dims[1]; ++y)
+                for (int x = 0; x < v->medium.dims[0]; ++x) active += prt__sh_volume_active(&v->medium, x, y, z);
+        const size_t halves = active * (pd + pm);
+        uint16_t *q = prt__chunks_alloc(l, halves * 2 + 2);
+        if (!q) break;
+        size_t at = 0, k2 = 0;
+        for (int z = 0; z < v->medium.dims[2]; ++z)
+            for (int y = 0; y < v->medium.dims[1]; ++y)
+                for (int x = 0; x < v->medium.dims[0]; ++x, ++k2) {
+                    if (!prt__sh_volume_active(&v->medium, x, y, z)) continue;
+                    for (size_t i = 0; i < pd; ++i) q[at++] = prt__half_from_float(v->direct[k2 * pd + i]);
+                    for (size_t i = 0; i < pm; ++i) q[at++] = prt__half_from_float(v->multi[k2 * pm + i]);
+                }
+        q[halves] = 0;
+        if (l->version < 2) l->version = 2;   /* half-float chunk */
+        prt__chunks_add(l, CHUNK_VOLU, h, (size_t)VOLU_HEADER, v->medium.density, voxels * 4, q, halves * 2 + (halves & 1 ? 2 : 0), NULL);
     }
     return PRT_OK;   /* allocation failures are recorded in the list and reported when writing */
 }
@@ -469,21 +487,37 @@ static prt_status load_volume(prt_context *ctx, prt__sh_state *sh, const prt__ch
     memcpy(&v.medium.sigma_t, p + 48, 4);
     memcpy(&v.medium.g, p + 64, 4);
     if (!(v.medium.sigma_t >= 0) || !isfinite(v.medium.sigma_t) || !(fabsf(v.medium.g) < 1)) return bad(ctx, "corrupt .prt file: volume extinction or g out of range");
-    const uint64_t n = (uint64_t)sh->order * sh->order, nd = voxels * 3 * (uint64_t)v.bands * v.bands * n, nm = voxels * 3 * n;
-    if (VOLU_HEADER + (voxels + nd + nm) * 4 != in->size) return bad(ctx, "corrupt .prt file: volume chunk size mismatch");
+    const uint64_t n = (uint64_t)sh->order * sh->order, pd = 3 * (uint64_t)v.bands * v.bands * n, pm = 3 * n;
+    if (in->size < VOLU_HEADER + voxels * 4) return bad(ctx, "corrupt .prt file: volume chunk size mismatch");
+    /* The densities say which voxels carry transfer; only then is the rest's size known. */
     v.medium.density = malloc(voxels * 4);
-    v.direct = malloc(nd * 4);
-    v.multi = malloc(nm * 4);
-    if (!v.medium.density || !v.direct || !v.multi) { prt__sh_volume_free(&v); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    if (!v.medium.density) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     memcpy(v.medium.density, p + VOLU_HEADER, voxels * 4);
-    memcpy(v.direct, p + VOLU_HEADER + voxels * 4, nd * 4);
-    memcpy(v.multi, p + VOLU_HEADER + (voxels + nd) * 4, nm * 4);
-    bool ok = prt__all_finite(v.direct, nd) && prt__all_finite(v.multi, nm);
+    bool ok = true;
     for (uint64_t i = 0; ok && i < voxels; ++i) {
         ok = v.medium.density[i] >= 0 && isfinite(v.medium.density[i]);
         v.medium.max_density = fmaxf(v.medium.max_density, v.medium.density[i]);
     }
-    if (!ok) { prt__sh_volume_free(&v); return bad(ctx, "corrupt .prt file: a volume density below zero or non-finite volume transfer"); }
+    if (!ok) { prt__sh_volume_free(&v); return bad(ctx, "corrupt .prt file: a volume density below zero or not a number"); }
+    uint64_t active = 0;
+    for (int z = 0; z < v.medium.dims[2]; ++z)
+        for (int y = 0; y < v.medium.dims[1]; ++y)
+            for (int x = 0; x < v.medium.dims[0]; ++x) active += prt__sh_volume_active(&v.medium, x, y, z);
+    const uint64_t halves = active * (pd + pm);
+    if (VOLU_HEADER + voxels * 4 + halves * 2 + (halves & 1) * 2 != in->size) { prt__sh_volume_free(&v); return bad(ctx, "corrupt .prt file: volume chunk size mismatch"); }
+    v.direct = prt__calloc(voxels * pd, 4);
+    v.multi = prt__calloc(voxels * pm, 4);
+    if (!v.direct || !v.multi) { prt__sh_volume_free(&v); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    const unsigned char *q = p + VOLU_HEADER + voxels * 4;
+    uint64_t k2 = 0;
+    for (int z = 0; z < v.medium.dims[2]; ++z)
+        for (int y = 0; y < v.medium.dims[1]; ++y)
+            for (int x = 0; x < v.medium.dims[0]; ++x, ++k2) {
+                if (!prt__sh_volume_active(&v.medium, x, y, z)) continue;
+                for (uint64_t i = 0; i < pd; ++i, q += 2) v.direct[k2 * pd + i] = prt__half_to_float((uint16_t)(q[0] | q[1] << 8));
+                for (uint64_t i = 0; i < pm; ++i, q += 2) v.multi[k2 * pm + i] = prt__half_to_float((uint16_t)(q[0] | q[1] << 8));
+            }
+    if (!prt__all_finite(v.direct, voxels * pd) || !prt__all_finite(v.multi, voxels * pm)) { prt__sh_volume_free(&v); return bad(ctx, "corrupt .prt file: non-finite volume transfer"); }
     prt__sh_volume *grown = realloc(sh->volumes, (size_t)(sh->volume_count + 1) * sizeof *grown);
     if (!grown) { prt__sh_volume_free(&v); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
     sh->volumes = grown;

@@ -43,8 +43,9 @@ size_t prt__sh_volume_floats(const prt__sh_volume *v, int order)
     return prt__volume_voxels(&v->medium) * 3 * n * ((size_t)v->bands * v->bands + 1);
 }
 
-/* A voxel whose neighbourhood holds no medium scatters nothing that trilinear reads reach. */
-static bool active(const prt__volume *v, int x, int y, int z)
+/* A voxel whose neighbourhood holds no medium scatters nothing that trilinear reads reach: its
+ * transfer is zero, and files leave it out. */
+bool prt__sh_volume_active(const prt__volume *v, int x, int y, int z)
 {
     for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
@@ -125,7 +126,7 @@ prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, in
     }
     for (int z = 0; z < v->dims[2]; ++z)
         for (int y = 0; y < v->dims[1]; ++y)
-            for (int x = 0; x < v->dims[0]; ++x) act[((size_t)z * v->dims[1] + y) * v->dims[0] + x] = active(v, x, y, z);
+            for (int x = 0; x < v->dims[0]; ++x) act[((size_t)z * v->dims[1] + y) * v->dims[0] + x] = prt__sh_volume_active(v, x, y, z);
     /* Progress: the direct rows, then one step per order of scattering. */
     prt__progress_begin(p, p->stage, (uint64_t)v->dims[2] * (1 + MAX_ORDERS));
     int cancelled = 0;

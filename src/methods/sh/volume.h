@@ -31,6 +31,8 @@ typedef struct prt__volume_scene {
 
 prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, int which, prt__sh_volume *out, prt__progress *p);
 void prt__sh_volume_free(prt__sh_volume *v);
+/* Whether voxel (x, y, z) or one of its 26 neighbours holds medium: only those carry transfer. */
+bool prt__sh_volume_active(const prt__volume *v, int x, int y, int z);
 /* Floats of its direct and multi arrays. */
 size_t prt__sh_volume_floats(const prt__sh_volume *v, int order);
 /* The light each voxel scatters per unit extinction under light (truncated at the bake's order,
