@@ -195,12 +195,12 @@ prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
         memcpy(h + 64, &v->medium.g, 4);
         /* Transfer of the voxels with medium around them only, as halves. */
         const size_t voxels = prt__volume_voxels(&v->medium), n = (size_t)sh->order * sh->order;
-        const size_t pd = 3 * (size_t)v->bands * v->bands * n, pm = 3 * n;
+        const size_t pd = 3 * (size_t)v->bands * v->bands * n;
         size_t active = 0;
         for (int z = 0; z < v->medium.dims[2]; ++z)
             for (int y = 0; y < v->medium.dims[1]; ++y)
                 for (int x = 0; x < v->medium.dims[0]; ++x) active += prt__sh_volume_active(&v->medium, x, y, z);
-        const size_t halves = active * (pd + pm);
+        const size_t halves = active * pd;
         uint16_t *q = prt__chunks_alloc(l, halves * 2 + 2);
         if (!q) break;
         size_t at = 0, k2 = 0;
@@ -208,8 +208,7 @@ prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
             for (int y = 0; y < v->medium.dims[1]; ++y)
                 for (int x = 0; x < v->medium.dims[0]; ++x, ++k2) {
                     if (!prt__sh_volume_active(&v->medium, x, y, z)) continue;
-                    for (size_t i = 0; i < pd; ++i) q[at++] = prt__half_from_float(v->direct[k2 * pd + i]);
-                    for (size_t i = 0; i < pm; ++i) q[at++] = prt__half_from_float(v->multi[k2 * pm + i]);
+                    for (size_t i = 0; i < pd; ++i) q[at++] = prt__half_from_float(v->incident[k2 * pd + i]);
                 }
         q[halves] = 0;
         if (l->version < 2) l->version = 2;   /* half-float chunk */
@@ -458,7 +457,8 @@ static prt_status load_grid(prt_context *ctx, prt__sh_state *sh, const prt__chun
 }
 
 /* u32 dims[3], order, bands, orders; f32 lo[3], hi[3], sigma_t, albedo[3], g; then f32
- * density[voxel], direct[voxel][3][bands^2][n], multi[voxel][3][n] (docs/FORMAT.md). */
+ * density[voxel], then as halves incident[voxel][3][bands^2][n] of the voxels with medium in
+ * their 3 x 3 x 3 neighbourhood (docs/FORMAT.md). */
 static prt_status load_volume(prt_context *ctx, prt__sh_state *sh, const prt__chunk_in *in)
 {
     const unsigned char *p = in->data;
@@ -487,7 +487,7 @@ static prt_status load_volume(prt_context *ctx, prt__sh_state *sh, const prt__ch
     memcpy(&v.medium.sigma_t, p + 48, 4);
     memcpy(&v.medium.g, p + 64, 4);
     if (!(v.medium.sigma_t >= 0) || !isfinite(v.medium.sigma_t) || !(fabsf(v.medium.g) < 1)) return bad(ctx, "corrupt .prt file: volume extinction or g out of range");
-    const uint64_t n = (uint64_t)sh->order * sh->order, pd = 3 * (uint64_t)v.bands * v.bands * n, pm = 3 * n;
+    const uint64_t n = (uint64_t)sh->order * sh->order, pd = 3 * (uint64_t)v.bands * v.bands * n;
     if (in->size < VOLU_HEADER + voxels * 4) return bad(ctx, "corrupt .prt file: volume chunk size mismatch");
     /* The densities say which voxels carry transfer; only then is the rest's size known. */
     v.medium.density = malloc(voxels * 4);
@@ -503,21 +503,19 @@ static prt_status load_volume(prt_context *ctx, prt__sh_state *sh, const prt__ch
     for (int z = 0; z < v.medium.dims[2]; ++z)
         for (int y = 0; y < v.medium.dims[1]; ++y)
             for (int x = 0; x < v.medium.dims[0]; ++x) active += prt__sh_volume_active(&v.medium, x, y, z);
-    const uint64_t halves = active * (pd + pm);
+    const uint64_t halves = active * pd;
     if (VOLU_HEADER + voxels * 4 + halves * 2 + (halves & 1) * 2 != in->size) { prt__sh_volume_free(&v); return bad(ctx, "corrupt .prt file: volume chunk size mismatch"); }
-    v.direct = prt__calloc(voxels * pd, 4);
-    v.multi = prt__calloc(voxels * pm, 4);
-    if (!v.direct || !v.multi) { prt__sh_volume_free(&v); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    v.incident = prt__calloc(voxels * pd, 4);
+    if (!v.incident) { prt__sh_volume_free(&v); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
     const unsigned char *q = p + VOLU_HEADER + voxels * 4;
     uint64_t k2 = 0;
     for (int z = 0; z < v.medium.dims[2]; ++z)
         for (int y = 0; y < v.medium.dims[1]; ++y)
             for (int x = 0; x < v.medium.dims[0]; ++x, ++k2) {
                 if (!prt__sh_volume_active(&v.medium, x, y, z)) continue;
-                for (uint64_t i = 0; i < pd; ++i, q += 2) v.direct[k2 * pd + i] = prt__half_to_float((uint16_t)(q[0] | q[1] << 8));
-                for (uint64_t i = 0; i < pm; ++i, q += 2) v.multi[k2 * pm + i] = prt__half_to_float((uint16_t)(q[0] | q[1] << 8));
+                for (uint64_t i = 0; i < pd; ++i, q += 2) v.incident[k2 * pd + i] = prt__half_to_float((uint16_t)(q[0] | q[1] << 8));
             }
-    if (!prt__all_finite(v.direct, voxels * pd) || !prt__all_finite(v.multi, voxels * pm)) { prt__sh_volume_free(&v); return bad(ctx, "corrupt .prt file: non-finite volume transfer"); }
+    if (!prt__all_finite(v.incident, voxels * pd)) { prt__sh_volume_free(&v); return bad(ctx, "corrupt .prt file: non-finite volume transfer"); }
     prt__sh_volume *grown = realloc(sh->volumes, (size_t)(sh->volume_count + 1) * sizeof *grown);
     if (!grown) { prt__sh_volume_free(&v); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
     sh->volumes = grown;

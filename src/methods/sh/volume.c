@@ -3,23 +3,26 @@
  *
  * What is stored, and why: the radiance a voxel scatters towards a direction w is, per unit
  * extinction, S(w) = albedo integral p(w, s) L_in(s) ds. With the Henyey-Greenstein phase
- * function the integral is a convolution: S_lm = albedo g^l L_in,lm (Funk-Hecke), so the light
- * scattered once needs the SH of the incident direct radiance, band by band. We keep its rows
- * for bands 0 and 1 (`bands` 2) when g != 0 and band 0 only for isotropic media: g^2 of a
- * typical cloud's g (0.3-0.6) is under a third, and those rows cost order^2 floats each. Light
- * scattered twice or more has lost most of its direction (and its rows would cost the whole
- * order^2 x order^2 matrix), so it is kept as an isotropic source, one transfer vector per
- * channel. Per voxel then:
- *     direct[c][i][j] = integral y_i(s) T(p, s) [y_j(s) where s escapes to the distant light,
- *                       the surfaces' exit transfer E_c,j where s meets a front face] ds,
- *     multi[c][j]     = sum over scattering orders b >= 2 of S^b_c,j (isotropic, albedo in),
- * T(p, s) the transmittance of every volume towards s. Orders are iterated over the grid:
- *     S^1_c = albedo_c direct[c][0] / sqrt(4 pi),
- *     S^b_c(p) = albedo_c / K sum_k integral T(p, p + t s_k) sigma_t(p + t s_k) S^{b-1}_c dt,
+ * function the integral is a convolution: S_lm = albedo g^l L_in,lm (Funk-Hecke), so a voxel
+ * needs the SH of the radiance arriving there, band by band, as rows of a matrix from the
+ * lighting's coefficients. We keep bands 0 and 1 (`bands` 2) when g != 0 and band 0 only for
+ * isotropic media: g^2 of a cloud's g (0.3-0.6) is under a third, and every band kept costs
+ * 3 order^2 floats a row per voxel. The rows hold all the light arriving, direct and scattered:
+ *     incident[c][i][j] = integral y_i(s) T(p, s) [y_j(s) where s escapes to the distant light,
+ *                         the surfaces' exit transfer E_c,j where s meets a front face] ds
+ *                       + sum over orders b >= 1 of the rows of light scattered b times,
+ * T(p, s) the transmittance of every volume towards s. Orders are iterated over the grid, each
+ * scattered isotropically into the next (bands 1+ of a source are left out of the march: after
+ * a scattering or two light has lost most of its direction):
+ *     S^1_c = albedo_c incident_direct[c][0] / sqrt(4 pi),
+ *     rows of order b at p: 4 pi / K sum_k y_i(s_k) integral T sigma_t S^b(p + t s_k) dt,
+ *     S^(b+1)_c = albedo_c (its row 0) / sqrt(4 pi),
  * marched voxel by voxel (exact exp per step of a piecewise-constant medium: what the direct
- * rows' transmittance uses too, so that a non-absorbing medium conserves energy), until an
- * order adds under 0.1% of the total or 24 orders, then a geometric tail. Every voxel depends
- * only on its own rays and the previous order, so results do not depend on thread count. */
+ * rows' transmittance uses too), each voxel's orders scaled so that its K directions stop the
+ * share of light its direct rows' many directions found stopped (light neither appears nor
+ * vanishes between orders), until an order adds under 0.1% of the total or 24 orders, then a
+ * geometric tail. Every voxel depends only on its own rays and the previous order, so results
+ * do not depend on the thread count. */
 #include "methods/sh/volume.h"
 
 #include <stdlib.h>
@@ -32,15 +35,18 @@
 void prt__sh_volume_free(prt__sh_volume *v)
 {
     prt__volume_free(&v->medium);
-    free(v->direct);
-    free(v->multi);
+    free(v->incident);
     memset(v, 0, sizeof *v);
 }
 
-size_t prt__sh_volume_floats(const prt__sh_volume *v, int order)
+size_t prt__sh_volume_bytes(const prt__sh_volume *v, int order)
 {
     const size_t n = (size_t)order * order;
-    return prt__volume_voxels(&v->medium) * 3 * n * ((size_t)v->bands * v->bands + 1);
+    size_t active = 0;
+    for (int z = 0; z < v->medium.dims[2]; ++z)
+        for (int y = 0; y < v->medium.dims[1]; ++y)
+            for (int x = 0; x < v->medium.dims[0]; ++x) active += prt__sh_volume_active(&v->medium, x, y, z);
+    return prt__volume_voxels(&v->medium) * 4 + active * 3 * n * (size_t)v->bands * v->bands * 2;
 }
 
 /* A voxel whose neighbourhood holds no medium scatters nothing that trilinear reads reach: its
@@ -93,6 +99,7 @@ prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, in
     const prt__volume *v = &in->volumes[which];
     const int order = in->order, n = order * order, bands = fabsf(v->g) > 1e-6f && order > 1 ? 2 : 1, rows = bands * bands;
     const size_t voxels = prt__volume_voxels(v), per_direct = 3 * (size_t)rows * n, per_multi = 3 * (size_t)n;
+    const double w_bounce = 4.0 * PRT_PI / BOUNCE_DIRS;
     memset(out, 0, sizeof *out);
     prt_volume_desc d = {.density = v->density, .sigma_t = v->sigma_t, .g = v->g};
     memcpy(d.dims, v->dims, sizeof d.dims);
@@ -103,13 +110,14 @@ prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, in
     if (st) return st;
     out->bands = bands;
     const int ndir = in->samples < VOLUME_DIRS_MAX ? in->samples : VOLUME_DIRS_MAX;
-    float *dirs = malloc((size_t)(ndir + BOUNCE_DIRS) * 3 * sizeof *dirs), *ys = malloc((size_t)ndir * n * sizeof *ys);
+    float *dirs = malloc((size_t)(ndir + BOUNCE_DIRS) * 3 * sizeof *dirs), *ys = malloc((size_t)(ndir + BOUNCE_DIRS) * n * sizeof *ys);
+    float *last_rows = prt__calloc(voxels * per_direct, sizeof(float));   /* the last order's rows, for the tail */
     float *tmax = malloc(voxels * BOUNCE_DIRS * sizeof *tmax);
     float *prev = prt__calloc(voxels * per_multi, sizeof(float)), *next = prt__calloc(voxels * per_multi, sizeof(float));
     uint8_t *act = malloc(voxels);
-    out->direct = prt__calloc(voxels * per_direct, sizeof(float));
-    out->multi = prt__calloc(voxels * per_multi, sizeof(float));
-    if (!dirs || !ys || !tmax || !prev || !next || !act || !out->direct || !out->multi) {
+    float *absorbed = prt__calloc(voxels, sizeof(float));   /* share of the direct rows' rays the medium stops */
+    out->incident = prt__calloc(voxels * per_direct, sizeof(float));
+    if (!dirs || !ys || !last_rows || !tmax || !prev || !next || !act || !absorbed || !out->incident) {
         st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the transfer of a volume of %zu voxels", voxels);
         goto done;
     }
@@ -119,10 +127,8 @@ prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, in
         else prt__sobol2((uint32_t)(j - ndir), in->seed ^ 0x5eed5eedu, &a, &b);
         prt__sphere_dir(a, b, dir);
         for (int c = 0; c < 3; ++c) dirs[j * 3 + c] = (float)dir[c];
-        if (j < ndir) {
-            prt_sh_eval(order, dir, y);
-            for (int i = 0; i < n; ++i) ys[(size_t)j * n + i] = (float)y[i];
-        }
+        prt_sh_eval(order, dir, y);
+        for (int i = 0; i < n; ++i) ys[(size_t)j * n + i] = (float)y[i];
     }
     for (int z = 0; z < v->dims[2]; ++z)
         for (int y = 0; y < v->dims[1]; ++y)
@@ -146,12 +152,14 @@ prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, in
                 }
                 if (!act[k]) continue;
                 memset(acc, 0, per_direct * sizeof *acc);
+                double stopped = 0;
                 for (int s = 0; s < ndir; ++s) {
                     const float *dir = dirs + (size_t)s * 3, *ysb = ys + (size_t)s * n;
                     prt__ray_hit h;
                     const bool hit = in->rc && prt__raycaster_hit(in->rc, o, dir, &h);
                     const float t_end = hit ? h.t : INFINITY;
                     float T = march(v, o, dir, t_end, NULL, 0, 0, NULL);
+                    stopped += 1.0 - T;
                     for (int q = 0; q < in->count; ++q)
                         if (q != which) T *= expf(-prt__volumes_optical_depth(&in->volumes[q], 1, o, dir, t_end));
                     if (!(T > 0)) continue;
@@ -179,7 +187,8 @@ prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, in
                         }
                     }
                 }
-                float *dst = out->direct + k * per_direct;
+                absorbed[k] = (float)(stopped / ndir);
+                float *dst = out->incident + k * per_direct;
                 for (size_t i = 0; i < per_direct; ++i) dst[i] = (float)acc[i];
                 for (int c = 0; c < 3; ++c)
                     for (int j = 0; j < n; ++j) prev[k * per_multi + (size_t)c * n + j] = (float)(v->albedo[c] * k0 * acc[(size_t)c * rows * n + j]);
@@ -195,17 +204,32 @@ prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, in
         for (int z = 0; z < v->dims[2]; ++z) {
             if (__atomic_load_n(&cancelled, __ATOMIC_RELAXED)) continue;
             float acc[3 * PRT_SH_MAX_COEFFS];
+            double lam[3 * 4 * PRT_SH_MAX_COEFFS];
             for (int y = 0; y < v->dims[1]; ++y)
                 for (int x = 0; x < v->dims[0]; ++x) {
                     const size_t k = ((size_t)z * v->dims[1] + y) * v->dims[0] + x;
-                    float *dst = next + k * per_multi;
+                    float *dst = next + k * per_multi, *lr = last_rows + k * per_direct;
                     if (!act[k]) { memset(dst, 0, per_multi * sizeof *dst); continue; }
                     float o[3];
                     prt__volume_voxel_centre(v, x, y, z, o);
-                    memset(acc, 0, per_multi * sizeof *acc);
-                    for (int s = 0; s < BOUNCE_DIRS; ++s) march(v, o, dirs + (size_t)(ndir + s) * 3, tmax[k * BOUNCE_DIRS + s], prev, per_multi, (int)per_multi, acc);
+                    memset(lam, 0, per_direct * sizeof *lam);
+                    double stopped = 0;
+                    for (int s = 0; s < BOUNCE_DIRS; ++s) {
+                        memset(acc, 0, per_multi * sizeof *acc);
+                        stopped += 1.0 - march(v, o, dirs + (size_t)(ndir + s) * 3, tmax[k * BOUNCE_DIRS + s], prev, per_multi, (int)per_multi, acc);
+                        const float *yk = ys + (size_t)(ndir + s) * n;
+                        for (int c = 0; c < 3; ++c)
+                            for (int i = 0; i < rows; ++i)
+                                for (int j = 0; j < n; ++j) lam[((size_t)c * rows + i) * n + j] += yk[i] * acc[(size_t)c * n + j];
+                    }
+                    /* The few scattering directions stop another share of the light than the
+                     * direct rows' many found: scaled to theirs, light neither appears nor
+                     * vanishes between orders (a non-absorbing medium in a white furnace stays
+                     * at 1 voxel by voxel). */
+                    const double scale = w_bounce * (stopped > 1e-6 * BOUNCE_DIRS ? absorbed[k] * BOUNCE_DIRS / stopped : 1.0);
+                    for (size_t i = 0; i < per_direct; ++i) lr[i] = (float)(scale * lam[i]);
                     for (int c = 0; c < 3; ++c)
-                        for (int j = 0; j < n; ++j) dst[(size_t)c * n + j] = v->albedo[c] / BOUNCE_DIRS * acc[(size_t)c * n + j];
+                        for (int j = 0; j < n; ++j) dst[(size_t)c * n + j] = (float)(v->albedo[c] * k0 * lr[(size_t)c * rows * n + j]);
                 }
             if (prt__progress_add(p, 1)) __atomic_store_n(&cancelled, 1, __ATOMIC_RELAXED);
         }
@@ -213,7 +237,7 @@ prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, in
         memcpy(before, last, sizeof before);
         memset(last, 0, sizeof last);
         for (size_t k = 0; k < voxels; ++k) {
-            for (size_t i = 0; i < per_multi; ++i) out->multi[k * per_multi + i] += next[k * per_multi + i];
+            for (size_t i = 0; i < per_direct; ++i) out->incident[k * per_direct + i] += last_rows[k * per_direct + i];
             for (int c = 0; c < 3; ++c) last[c] += next[k * per_multi + (size_t)c * n];
         }
         float *tmp = prev; prev = next; next = tmp;
@@ -227,7 +251,7 @@ prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, in
         for (int c = 0; c < 3; ++c) {
             const double r = before[c] > 0 ? fmin(fmax(last[c] / before[c], 0.0), 0.95) : 0.0, tail = r / (1.0 - r);
             for (size_t k = 0; k < voxels; ++k)
-                for (int j = 0; j < n; ++j) out->multi[k * per_multi + (size_t)c * n + j] += (float)tail * prev[k * per_multi + (size_t)c * n + j];
+                for (size_t i = 0; i < (size_t)rows * n; ++i) out->incident[k * per_direct + (size_t)c * rows * n + i] += (float)tail * last_rows[k * per_direct + (size_t)c * rows * n + i];
         }
     out->orders = orders;
     prt__progress_end(p);
@@ -235,7 +259,7 @@ prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, in
     else prt__log(ctx, PRT_LOG_INFO, "volume %d: %d x %d x %d voxels, %d directions (%d for scattering), %d orders of scattering%s", which, v->dims[0], v->dims[1],
                   v->dims[2], ndir, BOUNCE_DIRS, orders, orders == MAX_ORDERS ? " and a geometric tail" : "");
 done:
-    free(dirs); free(ys); free(tmax); free(prev); free(next); free(act);
+    free(dirs); free(ys); free(last_rows); free(tmax); free(prev); free(next); free(act); free(absorbed);
     if (st) prt__sh_volume_free(out);
     return st;
 }
@@ -243,24 +267,17 @@ done:
 void prt__sh_volume_source(const prt__sh_volume *v, int order, const prt_sh_light *light, float *out)
 {
     const int n = order * order, rows = v->bands * v->bands;
-    const size_t voxels = prt__volume_voxels(&v->medium), per_direct = 3 * (size_t)rows * n, per_multi = 3 * (size_t)n;
-    const float s4pi = sqrtf(4.0f * (float)PRT_PI);
+    const size_t voxels = prt__volume_voxels(&v->medium), per = 3 * (size_t)rows * n;
     const int ln = light->order < order ? light->order * light->order : n;
     for (size_t k = 0; k < voxels; ++k) {
-        const float *D = v->direct + k * per_direct, *M = v->multi + k * per_multi;
+        const float *I = v->incident + k * per;
         float *o = out + k * 3 * (size_t)rows;
         for (int c = 0; c < 3; ++c)
             for (int i = 0; i < rows; ++i) {
                 float sum = 0;
-                for (int j = 0; j < ln; ++j) sum += D[((size_t)c * rows + i) * n + j] * light->coeffs[c][j];
-                /* band l of the incident light scatters with g^l (Funk-Hecke of the HG lobe). */
-                float s = v->medium.albedo[c] * (i == 0 ? 1.0f : v->medium.g) * sum;
-                if (i == 0) {
-                    float m = 0;
-                    for (int j = 0; j < ln; ++j) m += M[(size_t)c * n + j] * light->coeffs[c][j];
-                    s += s4pi * m;   /* an isotropic source's coefficient 0 */
-                }
-                o[c * rows + i] = s;
+                for (int j = 0; j < ln; ++j) sum += I[((size_t)c * rows + i) * n + j] * light->coeffs[c][j];
+                /* band l of the arriving light scatters with g^l (Funk-Hecke of the HG lobe). */
+                o[c * rows + i] = v->medium.albedo[c] * (i == 0 ? 1.0f : v->medium.g) * sum;
             }
     }
 }

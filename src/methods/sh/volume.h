@@ -10,10 +10,9 @@
 
 typedef struct prt__sh_volume {
     prt__volume medium;   /* grid, box, extinction, albedo, g (its own copy) */
-    int bands;            /* incident-light bands kept for light scattered once: 1 (isotropic) or 2 (HG) */
+    int bands;            /* bands of the arriving light kept: 1 (isotropic) or 2 (HG) */
     int orders;           /* orders of scattering the bake iterated */
-    float *direct;        /* [voxel][3][bands^2][order^2]: SH of the direct radiance arriving (channel, band row, lighting coefficient) */
-    float *multi;         /* [voxel][3][order^2]: isotropic source of light scattered twice or more, albedo in */
+    float *incident;      /* [voxel][3][bands^2][order^2]: SH of the radiance arriving, direct and scattered (channel, band row, lighting coefficient) */
 } prt__sh_volume;
 
 /* What the bake of a scene's volumes reads: every volume (their shadows on each other), the
@@ -33,8 +32,9 @@ prt_status prt__sh_volume_bake(prt_context *ctx, const prt__volume_scene *in, in
 void prt__sh_volume_free(prt__sh_volume *v);
 /* Whether voxel (x, y, z) or one of its 26 neighbours holds medium: only those carry transfer. */
 bool prt__sh_volume_active(const prt__volume *v, int x, int y, int z);
-/* Floats of its direct and multi arrays. */
-size_t prt__sh_volume_floats(const prt__sh_volume *v, int order);
+/* Bytes its file chunk holds (densities as floats, rows of voxels with medium around them as
+ * halves), the header left out. */
+size_t prt__sh_volume_bytes(const prt__sh_volume *v, int order);
 /* The light each voxel scatters per unit extinction under light (truncated at the bake's order,
  * `order`), as SH of the direction the light travels (the view ray's), bands^2 coefficients per
  * channel: out[voxel][3][bands^2]. */
