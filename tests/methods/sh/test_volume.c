@@ -298,6 +298,49 @@ static void test_threads_and_file(void **state)
     tm_free(&m);
 }
 
+/* A small homogeneous medium under a smooth sky (exactly SH order 3): what the bake's ray march
+ * sees through it against the path tracer (delta tracking, HG sampling, the sky by next-event
+ * estimation) at a few rays, isotropic and forward-scattering. */
+static void vs_path_tracer(float g, float albedo, double tol)
+{
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_quad(&m, (float[3]){-0.01f, -50, -0.01f}, (float[3]){0, 0, 0.02f}, (float[3]){0.02f, 0, 0}, 1);
+    prt_scene *s = tm_scene(ctx, &m, 0.5f);
+    float *density;
+    const prt_volume_desc vd = box_volume((int[3]){4, 4, 4}, (float[3]){-1, -1, -1}, (float[3]){1, 1, 1}, 1.5f, albedo, g, &density);
+    assert_int_equal(prt_scene_add_volume(s, &vd), PRT_OK);
+    free(density);
+    prt_transfer *t = bake_sh(ctx, s, 3, 256, PRT_TRANSFER_SHADOWED);
+    prt_lighting *l = NULL;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    assert_int_equal(prt_lighting_set_envmap(l, band_limited_env(128), NULL, 1.0f), PRT_OK);
+    prt_relit r;
+    assert_int_equal(prt_relight(ctx, t, l, NULL, &r), PRT_OK);
+    const float rays[4][6] = {{-3, 0.2f, 0.1f, 1, 0, 0}, {0.1f, 3, -0.3f, 0, -1, 0}, {0.3f, -3, 0, 0, 1, 0}, {0, 0.4f, 3, 0, 0, -1}};
+    double worst = 0;
+    for (int i = 0; i < 4; ++i) {
+        float baked[3], ref[3], err;
+        prt__march_volumes(r.volumes, r.volume_count, rays[i], rays[i] + 3, INFINITY, 0.5f, baked);
+        prt_reference_desc rd = {.lighting = l, .seed = 3};
+        assert_int_equal(prt__reference_media_radiance(ctx, s, &rd, rays[i], rays[i] + 3, 40000, ref, &err), PRT_OK);
+        const double rel = fabs(baked[1] - ref[1]) / ref[1];
+        print_message("g %.1f, ray %d: baked %.4f %.4f %.4f, path tracer %.4f %.4f %.4f (+- %.4f): %.1f%%\n", g, i, baked[0], baked[1], baked[2], ref[0], ref[1],
+                      ref[2], err, 100 * rel);
+        worst = fmax(worst, rel);
+    }
+    assert_true(worst < tol);
+    prt_relit_free(&r);
+    prt_lighting_release(l);
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
+static void test_vs_path_tracer_isotropic(void **state) { (void)state; vs_path_tracer(0.0f, 0.8f, 0.05); }
+static void test_vs_path_tracer_hg(void **state) { (void)state; vs_path_tracer(0.5f, 0.8f, 0.10); }
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -305,6 +348,8 @@ int main(void)
         cmocka_unit_test(test_furnace_thick),
         cmocka_unit_test(test_furnace_hg),
         cmocka_unit_test(test_slab_shadow),
+        cmocka_unit_test(test_vs_path_tracer_isotropic),
+        cmocka_unit_test(test_vs_path_tracer_hg),
         cmocka_unit_test(test_grid_files),
         cmocka_unit_test(test_threads_and_file),
     };
