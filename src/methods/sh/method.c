@@ -455,7 +455,7 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
                 cJSON_AddNumberToObject(o, "extinction", v->medium.sigma_t);
                 cJSON_AddNumberToObject(o, "g", v->medium.g);
                 cJSON_AddNumberToObject(o, "max_density", v->medium.max_density);
-                cJSON_AddNumberToObject(o, "single_scattering_bands", v->bands);
+                cJSON_AddNumberToObject(o, "bands", v->bands);
                 cJSON_AddNumberToObject(o, "orders_of_scattering", v->orders);
                 cJSON_AddNumberToObject(o, "bytes", (double)prt__sh_volume_bytes(v, s->order));
                 cJSON_AddItemToArray(vs, o);
@@ -527,10 +527,10 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
     for (int q = 0; q < s->volume_count; ++q) {
         const prt__sh_volume *v = &s->volumes[q];
         prt__describe_line(d, q ? "" : "volumes:", "%d x %d x %d voxels from (%g, %g, %g) to (%g, %g, %g): extinction %g x density (up to %g), albedo (%g, %g, %g), "
-                           "g %g; light scattered once from %s, %d orders of scattering; %.2f MiB", v->medium.dims[0], v->medium.dims[1], v->medium.dims[2],
+                           "g %g; arriving light kept in %s, %d orders of scattering; %.2f MiB", v->medium.dims[0], v->medium.dims[1], v->medium.dims[2],
                            v->medium.lo[0], v->medium.lo[1], v->medium.lo[2], v->medium.hi[0], v->medium.hi[1], v->medium.hi[2], v->medium.sigma_t,
                            v->medium.max_density, v->medium.albedo[0], v->medium.albedo[1], v->medium.albedo[2], v->medium.g,
-                           v->bands == 2 ? "SH bands 0-1 of the incident light" : "its band 0 (isotropic)", v->orders,
+                           v->bands == 2 ? "SH bands 0-1 (HG)" : "band 0 (isotropic)", v->orders,
                            prt__sh_volume_bytes(v, s->order) / 1048576.0);
     }
     if (s->frames.count) {
