@@ -169,6 +169,10 @@ typedef struct prt_render_mesh {
 
 prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, prt_renderer **out);
 void prt_renderer_release(prt_renderer *r);
+/* How prt_render draws media (prt_render_mesh.volumes): 0 (the default) ray-marched per pixel
+ * on the CPU; 1 as the viewer draws them, slices through 3D textures blended by OpenGL (faster,
+ * coarser). */
+void prt_renderer_set_volume_slices(prt_renderer *r, int on);
 /* background: linear RGB behind the mesh (NULL = black). */
 prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_camera *cam,
                       const float background[3], prt_image *out);

@@ -341,6 +341,69 @@ static void vs_path_tracer(float g, float albedo, double tol)
 static void test_vs_path_tracer_isotropic(void **state) { (void)state; vs_path_tracer(0.0f, 0.8f, 0.05); }
 static void test_vs_path_tracer_hg(void **state) { (void)state; vs_path_tracer(0.5f, 0.8f, 0.10); }
 
+/* The viewer's slices (OpenGL, 3D textures) and prt_render's ray march draw the same cloud over
+ * the same ground: the images agree. Skips without an OpenGL context. */
+static void test_slices_vs_march(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(0);
+    test_mesh m = {0};
+    tm_quad(&m, (float[3]){-3, 0, -3}, (float[3]){0, 0, 6}, (float[3]){6, 0, 0}, 12);
+    prt_scene *s = tm_scene(ctx, &m, 0.6f);
+    const int dims[3] = {16, 12, 16};
+    float *d;
+    assert_int_equal(prt_volume_generate(ctx, "cloud", dims, 4, &d), PRT_OK);
+    prt_volume_desc vd = {.dims = {16, 12, 16}, .density = d, .lo = {-1.5f, 0.5f, -1.5f}, .hi = {1.5f, 2.5f, 1.5f}, .sigma_t = 6, .albedo = {0.9f, 0.9f, 0.9f}, .g = 0.4f};
+    assert_int_equal(prt_scene_add_volume(s, &vd), PRT_OK);
+    free(d);
+    prt_transfer *t = bake_sh(ctx, s, 3, 64, PRT_TRANSFER_SHADOWED);
+    prt_lighting *l = NULL;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    assert_int_equal(prt_lighting_set_envmap(l, band_limited_env(64), NULL, 1.0f), PRT_OK);
+    prt_relit r;
+    assert_int_equal(prt_relight(ctx, t, l, NULL, &r), PRT_OK);
+    prt_render_mesh mesh;
+    prt_relit_render_mesh(t, &r, &mesh);
+    prt_renderer *ren = NULL;
+    if (prt_renderer_create(ctx, &(prt_renderer_desc){160, 120, 1}, &ren) != PRT_OK) {
+        print_message("no OpenGL context (%s): skipped\n", prt_last_error());
+    } else {
+        const prt_camera cam = {{4, 2.5f, 5}, {0, 1.2f, 0}, {0, 0, 0}, 45};
+        prt_image march, slices, bare;
+        const float bg[3] = {0.1f, 0.1f, 0.1f};
+        assert_int_equal(prt_render(ren, &mesh, &cam, bg, &march), PRT_OK);
+        prt_renderer_set_volume_slices(ren, 1);
+        assert_int_equal(prt_render(ren, &mesh, &cam, bg, &slices), PRT_OK);
+        prt_render_mesh none = mesh;
+        none.volume_count = 0;
+        assert_int_equal(prt_render(ren, &none, &cam, bg, &bare), PRT_OK);
+        double diff = 0, mean = 0, cloud = 0;
+        for (size_t i = 0; i < (size_t)160 * 120 * 3; ++i) {
+            diff += fabs(march.rgb[i] - slices.rgb[i]);
+            mean += march.rgb[i];
+            cloud += fabs(march.rgb[i] - bare.rgb[i]);
+        }
+        print_message("slices against the ray march: mean |difference| %.2f%% of the mean radiance; the cloud changes the image by %.1f%%\n", 100 * diff / mean,
+                      100 * cloud / mean);
+        if (getenv("PRT_VOLUME_IMAGES")) {
+            prt_image_save("/tmp/volume_march.png", &march, NULL);
+            prt_image_save("/tmp/volume_slices.png", &slices, NULL);
+        }
+        assert_true(cloud / mean > 0.05);   /* the cloud is there */
+        assert_true(diff / mean < 0.05);
+        prt_image_free(&march);
+        prt_image_free(&slices);
+        prt_image_free(&bare);
+        prt_renderer_release(ren);
+    }
+    prt_relit_free(&r);
+    prt_lighting_release(l);
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    tm_free(&m);
+    prt_context_release(ctx);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -350,6 +413,7 @@ int main(void)
         cmocka_unit_test(test_slab_shadow),
         cmocka_unit_test(test_vs_path_tracer_isotropic),
         cmocka_unit_test(test_vs_path_tracer_hg),
+        cmocka_unit_test(test_slices_vs_march),
         cmocka_unit_test(test_grid_files),
         cmocka_unit_test(test_threads_and_file),
     };
