@@ -17,7 +17,7 @@
  *     S^1_c = albedo_c incident_direct[c][0] / sqrt(4 pi),
  *     rows of order b at p: 4 pi / K sum_k y_i(s_k) integral T sigma_t S^b(p + t s_k) dt,
  *     S^(b+1)_c = albedo_c (its row 0) / sqrt(4 pi),
- * marched voxel by voxel (exact exp per step of a piecewise-constant medium: what the direct
+ * marched voxel by voxel (exact exp per step of the extinction at its middle: what the direct
  * rows' transmittance uses too), each voxel's orders scaled so that its K directions stop the
  * share of light its direct rows' many directions found stopped (light neither appears nor
  * vanishes between orders), until an order adds under 0.1% of the total or 24 orders, then a
@@ -63,8 +63,8 @@ bool prt__sh_volume_active(const prt__volume *v, int x, int y, int z)
     return false;
 }
 
-/* Marches volume v from o along d up to tmax one voxel at a time (nearest voxel, exact
- * attenuation per step). With src ([voxel][stride]) adds T (1 - e) src[voxel] into acc (count
+/* Marches volume v from o along d up to tmax one voxel at a time (trilinear extinction at each
+ * step's middle, exact attenuation per step; the source of the nearest voxel). With src ([voxel][stride]) adds T (1 - e) src[voxel] into acc (count
  * floats); returns the transmittance at the end. */
 static float march(const prt__volume *v, const float o[3], const float d[3], float tmax, const float *src, size_t stride, int count, float *acc)
 {
@@ -81,7 +81,8 @@ static float march(const prt__volume *v, const float o[3], const float d[3], flo
             idx += (size_t)i * mul;
             mul *= (size_t)v->dims[c];
         }
-        const float sigma = v->sigma_t * v->density[idx];
+        const float pm[3] = {o[0] + tm * d[0], o[1] + tm * d[1], o[2] + tm * d[2]};
+        const float sigma = prt__volume_extinction(v, pm);   /* the medium the renderer and the path tracer see */
         if (!(sigma > 0)) continue;
         const float e = expf(-sigma * dt);
         if (src) {
