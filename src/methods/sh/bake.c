@@ -492,7 +492,7 @@ static prt_status run_texels(prt__bake_job *b, prt_context *ctx, prt__progress *
     prt_transfer *t = sb->t;
     prt__texel_input ti = {&t->mesh, t->source, sb->d.order, sb->d.samples, sb->job.dirs, sb->job.basis, sb->job.rc.scene, sb->job.offset,
                            sb->s->sets[2].coeffs, sb->d.kinds & 7u, sb->d.texels, sb->d.texels, sb->d.normal_map,
-                           sb->d.height_map ? &sb->height : NULL, p};
+                           sb->d.height_map ? &sb->height : NULL, p, sb->job.volumes, sb->job.volume_count};
     return prt__bake_texels(ctx, &ti, &sb->s->texels);
 }
 
