@@ -246,6 +246,18 @@ static void test_grid_files(void **state)
         assert_non_null(strstr(prt_last_error(), "volumes[0]"));
     }
     free(d);
+    /* examples/cloud.json loads: its ground and box, and a 32^3 procedural cloud. */
+    char example[1024];
+    snprintf(example, sizeof example, "%s", __FILE__);
+    char *cut = strstr(example, "tests/methods/sh/test_volume.c");
+    if (cut) {
+        strcpy(cut, "examples/cloud.json");
+        assert_int_equal(prt_scene_load(ctx, example, NULL, &s), PRT_OK);
+        assert_int_equal(prt_scene_volume_count(s), 1);
+        assert_int_equal(prt_scene_volume(s, 0, &vd), PRT_OK);
+        assert_true(vd.dims[0] == 32 && vd.dims[1] == 32 && vd.dims[2] == 32 && vd.g > 0);
+        prt_scene_release(s);
+    }
     prt_context_release(ctx);
 }
 
