@@ -366,7 +366,7 @@ expect 0 "volume render" -- $NOLEAK "$PRT" render -q "$T/vol.prt" -o "$T/vol.png
 expect 0 "volume reference" -- "$PRT" reference -q "$T/vol.json" --image "$T/volref.exr" --width 16 --height 12 --samples 4
 printf '{"meshes": [{"file": "nouv.obj"}], "volumes": [{"procedural": "fog", "min": [0, 0, 0], "max": [1, 1, 1]}]}' >"$T/badvol.json"
 expect 1 "unknown procedural volume" -- "$PRT" bake "$T/badvol.json" -o "$T/x.prt"
-says "volumes[0]"
+says "volumes.0.: unknown procedural volume"
 expect 0 "height map" -- "$PRT" bake -q "$T/demo.obj" -o "$T/h.prt" --order 2 --samples 64 --bounces 1 --texels 32 --kinds shadowed --height-map "$T/nm.pfm" --bump-height 0.05
 expect 2 "height map without texels" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --height-map "$T/nm.pfm"
 says "--texels"

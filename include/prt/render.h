@@ -239,6 +239,8 @@ void prt_window_set_radiance(prt_window *w, const float *rgb, size_t vertex_coun
 /* Replaces the lights drawn per pixel and their albedo (mesh's lights, light_count, albedo and
  * positions; the geometry must be the one given to set_mesh). */
 void prt_window_set_lights(prt_window *w, const prt_render_mesh *mesh);
+/* Replaces the media drawn (mesh's volumes, relit: their source changes with the lighting). */
+void prt_window_set_volumes(prt_window *w, const prt_render_mesh *mesh);
 /* Replaces the per-texel radiance map (needs the mesh's uv); NULL switches back to vertex radiance. */
 void prt_window_set_texels(prt_window *w, const float *rgb, int width, int height);
 /* Replaces the GPU-finished input (mesh's gpu_* fields, the transfer given to set_mesh) and runs
