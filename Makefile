@@ -66,7 +66,7 @@ test-valgrind: build
 # fuzz/crashes/NAME/ (copy them into fuzz/regress/NAME/ once fixed).
 fuzz: deps
 	cmake -S . -B $(FUZZ_BUILD) -DCMAKE_C_COMPILER=clang -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPRT_SANITIZE=ON -DPRT_FUZZ=ON -DPRT_WERROR=OFF -DBUILD_TESTING=OFF >/dev/null
-	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_image fuzz_prt fuzz_scene fuzz_mesh fuzz_ies
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_image fuzz_prt fuzz_scene fuzz_mesh fuzz_ies fuzz_grid
 	@sh scripts/fuzz.sh $(FUZZ_BUILD) $(FUZZ_SECONDS)
 
 fuzz-regress: build

@@ -8,7 +8,7 @@ set -u
 B=$1
 S=$2
 status=0
-for h in image prt scene mesh ies; do
+for h in image prt scene mesh ies grid; do
     mkdir -p "$B/corpus/$h" "fuzz/crashes/$h"
     ASAN_OPTIONS=detect_leaks=1 "$B/fuzz_$h" "$B/corpus/$h" $(find "fuzz/regress/$h" -type d) -max_total_time="$S" -rss_limit_mb=4096 -timeout=10 \
         -artifact_prefix="fuzz/crashes/$h/" -print_final_stats=1 >"$B/fuzz_$h.log" 2>&1

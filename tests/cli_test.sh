@@ -357,6 +357,16 @@ expect 2 "bad probe" -- "$PRT" render "$T/nb.prt" -o "$T/probe.png" --probe 0,0.
 says "--probe"
 expect 2 "probe with trailing junk" -- "$PRT" render "$T/nb.prt" -o "$T/probe.png" --probe 0,0.5,0,0.1x
 expect 2 "grid too fine" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --neighbourhood 65
+# Participating media: a scene's "volumes" baked, listed, rendered and path-traced; a bad one named.
+printf '{"meshes": [{"file": "nouv.obj"}], "volumes": [{"procedural": "smoke", "resolution": [4, 6, 4], "min": [0, 0.1, -1], "max": [1, 1, 0], "extinction": 3, "albedo": 0.8, "g": 0.3}]}' >"$T/vol.json"
+expect 0 "volume bake" -- "$PRT" bake -q "$T/vol.json" -o "$T/vol.prt" --order 2 --samples 64 --bounces 1
+expect 0 "volume info" -- "$PRT" info "$T/vol.prt"
+grep -q "^volumes: *4 x 6 x 4 voxels" "$T/out" && ok || bad "info does not show the volume"
+expect 0 "volume render" -- $NOLEAK "$PRT" render -q "$T/vol.prt" -o "$T/vol.png" --width 64 --height 48
+expect 0 "volume reference" -- "$PRT" reference -q "$T/vol.json" --image "$T/volref.exr" --width 16 --height 12 --samples 4
+printf '{"meshes": [{"file": "nouv.obj"}], "volumes": [{"procedural": "fog", "min": [0, 0, 0], "max": [1, 1, 1]}]}' >"$T/badvol.json"
+expect 1 "unknown procedural volume" -- "$PRT" bake "$T/badvol.json" -o "$T/x.prt"
+says "volumes.0.: unknown procedural volume"
 expect 0 "height map" -- "$PRT" bake -q "$T/demo.obj" -o "$T/h.prt" --order 2 --samples 64 --bounces 1 --texels 32 --kinds shadowed --height-map "$T/nm.pfm" --bump-height 0.05
 expect 2 "height map without texels" -- "$PRT" bake "$T/demo.obj" -o "$T/x.prt" --height-map "$T/nm.pfm"
 says "--texels"

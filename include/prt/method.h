@@ -429,6 +429,10 @@ typedef struct prt_relit {
      * bounces but the shown maps leave out, as the CPU's texels do; radiance leaves it out too.
      * NULL otherwise. */
     float *gpu_pixel_direct;
+    /* Participating media relit (the SH method's volumes): extinction and source arrays owned
+     * by the result. NULL / 0 when the file holds none. */
+    prt_render_volume *volumes;
+    int volume_count;
 } prt_relit;
 
 /* The PRT_LIGHTS_* bits relighting t under lighting needs: what the lighting holds, with

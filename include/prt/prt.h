@@ -22,5 +22,6 @@
 #include "prt/spectral.h"
 #include "prt/offset.h"
 #include "prt/paint.h"
+#include "prt/volume.h"
 
 #endif

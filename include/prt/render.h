@@ -80,6 +80,19 @@ typedef struct prt_render_passes {
 } prt_render_passes;
 
 /* Borrowed arrays describing what to draw. */
+/* A participating medium the renderer ray-marches over the surfaces (depth-correct: each pixel's
+ * march ends at the first surface it meets): dims voxels spanning lo..hi (x fastest; values at
+ * voxel centres, trilinear between them), the extinction per world unit, and the radiance the
+ * medium scatters per unit extinction as SH (source_order 1 or 2) of the direction the light
+ * travels, that is the view ray's: L = integral T(t) sigma_t(t) S(t, d) dt + T(end) L(end). */
+typedef struct prt_render_volume {
+    int dims[3];
+    float lo[3], hi[3];
+    const float *extinction;     /* [voxel] */
+    const float *source;         /* [voxel][3][source_order^2] */
+    int source_order;
+} prt_render_volume;
+
 typedef struct prt_render_mesh {
     const float *positions;      /* 3 per vertex */
     const float *radiance;       /* 3 per vertex, linear (view-independent part) */
@@ -149,10 +162,17 @@ typedef struct prt_render_mesh {
     /* With gpu_passes: the first-order light map on the left half of the image, the final one
      * on the right (the paper's side-by-side viewer). */
     int side_by_side;
+    /* Optional participating media drawn over the surfaces (prt_relit.volumes). */
+    const prt_render_volume *volumes;
+    int volume_count;
 } prt_render_mesh;
 
 prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, prt_renderer **out);
 void prt_renderer_release(prt_renderer *r);
+/* How prt_render draws media (prt_render_mesh.volumes): 0 (the default) ray-marched per pixel
+ * on the CPU; 1 as the viewer draws them, slices through 3D textures blended by OpenGL (faster,
+ * coarser). */
+void prt_renderer_set_volume_slices(prt_renderer *r, int on);
 /* background: linear RGB behind the mesh (NULL = black). */
 prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_camera *cam,
                       const float background[3], prt_image *out);
@@ -219,6 +239,8 @@ void prt_window_set_radiance(prt_window *w, const float *rgb, size_t vertex_coun
 /* Replaces the lights drawn per pixel and their albedo (mesh's lights, light_count, albedo and
  * positions; the geometry must be the one given to set_mesh). */
 void prt_window_set_lights(prt_window *w, const prt_render_mesh *mesh);
+/* Replaces the media drawn (mesh's volumes, relit: their source changes with the lighting). */
+void prt_window_set_volumes(prt_window *w, const prt_render_mesh *mesh);
 /* Replaces the per-texel radiance map (needs the mesh's uv); NULL switches back to vertex radiance. */
 void prt_window_set_texels(prt_window *w, const float *rgb, int width, int height);
 /* Replaces the GPU-finished input (mesh's gpu_* fields, the transfer given to set_mesh) and runs

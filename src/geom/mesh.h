@@ -5,6 +5,7 @@
 #include "core/internal.h"
 #include "prt/brdf.h"
 #include "prt/scene.h"
+#include "geom/volume.h"
 
 /* Struct-of-arrays mesh; every array has 3 entries per vertex or per triangle. */
 typedef struct prt__mesh {
@@ -88,6 +89,8 @@ struct prt_scene {
     struct prt__named_medium { char name[PRT__SURFACE_NAME]; prt_medium m; } *media;
     int specular_count;               /* specular surfaces, by name */
     struct prt__named_specular { char name[PRT__SURFACE_NAME]; prt_specular s; } *speculars;
+    int volume_count;                 /* participating media ("volumes") */
+    prt__volume *volumes;
 };
 
 /* Adds brdf to the candidates of surface (1-based) unless it is there; PRT_ERR_INVALID_ARG when

@@ -180,6 +180,8 @@ void prt_scene_release(prt_scene *s)
     free(s->brdf_set);
     free(s->media);
     free(s->speculars);
+    for (int k = 0; k < s->volume_count; ++k) prt__volume_free(&s->volumes[k]);
+    free(s->volumes);
     free(s);
 }
 
@@ -190,6 +192,37 @@ static prt_status require_surface(prt_scene *s, const char *surface)
         if (!strcmp(s->mesh.surface_names[k], surface)) return PRT_OK;
     const float keep[3] = {0, 0, 0};
     return prt__mesh_paint(&s->mesh, surface, keep, NULL);   /* fails naming the surfaces there are */
+}
+
+prt_status prt_scene_add_volume(prt_scene *s, const prt_volume_desc *d)
+{
+    if (!s || !d) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_add_volume: scene and volume are required");
+    if (s->volume_count >= 64) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "a scene holds at most 64 volumes");
+    prt__volume v;
+    prt_status st = prt__volume_init(NULL, d, &v);
+    if (st) return st;
+    prt__volume *grown = realloc(s->volumes, (size_t)(s->volume_count + 1) * sizeof *grown);
+    if (!grown) { prt__volume_free(&v); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory"); }
+    s->volumes = grown;
+    s->volumes[s->volume_count++] = v;
+    return PRT_OK;
+}
+
+int prt_scene_volume_count(const prt_scene *s) { return s ? s->volume_count : 0; }
+
+prt_status prt_scene_volume(const prt_scene *s, int index, prt_volume_desc *out)
+{
+    if (!s || !out || index < 0 || index >= s->volume_count) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_scene_volume: no volume %d", index);
+    const prt__volume *v = &s->volumes[index];
+    memset(out, 0, sizeof *out);
+    memcpy(out->dims, v->dims, sizeof out->dims);
+    memcpy(out->lo, v->lo, sizeof out->lo);
+    memcpy(out->hi, v->hi, sizeof out->hi);
+    memcpy(out->albedo, v->albedo, sizeof out->albedo);
+    out->density = v->density;
+    out->sigma_t = v->sigma_t;
+    out->g = v->g;
+    return PRT_OK;
 }
 
 prt_status prt_scene_set_medium(prt_scene *s, const char *surface, const prt_medium *m)

@@ -243,6 +243,78 @@ static prt_status read_specular(const prt_context *ctx, const char *path, const 
     return PRT_OK;
 }
 
+/* One entry of "volumes" (docs/SCENE.md): a grid ("file" or "procedural" with "resolution" and
+ * "seed") in the box "min".."max", with "extinction", "albedo" and "g". */
+static prt_status read_volume(const prt_context *ctx, const char *path, const char *dir, int i, const cJSON *o, prt_scene *scene)
+{
+    static const char *const keys[] = {"file", "procedural", "resolution", "seed", "min", "max", "extinction", "albedo", "g"};
+    if (!cJSON_IsObject(o)) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': volumes[%d] must be an object", path, i);
+    const cJSON *v;
+    cJSON_ArrayForEach(v, o) {
+        bool known = false;
+        for (size_t k = 0; k < sizeof keys / sizeof *keys; ++k) known |= !strcmp(v->string, keys[k]);
+        if (!known) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': volumes[%d] has no \"%s\" (file, procedural, resolution, seed, min, max, extinction, albedo, g)", path, i, v->string);
+    }
+    const cJSON *file = cJSON_GetObjectItemCaseSensitive(o, "file"), *proc = cJSON_GetObjectItemCaseSensitive(o, "procedural");
+    if (!!file == !!proc) return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': volumes[%d] needs a grid \"file\" or a \"procedural\" one (cloud or smoke), not both", path, i);
+    prt_volume_desc d = {.sigma_t = 1.0f, .albedo = {1, 1, 1}};
+    float *density = NULL;
+    prt_status st = PRT_OK;
+    char msg[600];
+    if ((v = cJSON_GetObjectItemCaseSensitive(o, "min")) && (st = read_vec3(ctx, v, "min", d.lo))) goto fail;
+    if ((v = cJSON_GetObjectItemCaseSensitive(o, "max")) && (st = read_vec3(ctx, v, "max", d.hi))) goto fail;
+    if (!cJSON_GetObjectItemCaseSensitive(o, "min") || !cJSON_GetObjectItemCaseSensitive(o, "max")) {
+        st = prt__fail(ctx, PRT_ERR_FORMAT, "scene: a volume needs its box, \"min\" and \"max\"");
+        goto fail;
+    }
+    if ((v = cJSON_GetObjectItemCaseSensitive(o, "albedo")) && (st = read_colour(ctx, v, "albedo", d.albedo))) goto fail;
+    if ((v = cJSON_GetObjectItemCaseSensitive(o, "extinction"))) {
+        if (!cJSON_IsNumber(v)) { st = prt__fail(ctx, PRT_ERR_FORMAT, "scene: \"extinction\" must be a number (per unit length at density 1)"); goto fail; }
+        d.sigma_t = (float)v->valuedouble;
+    }
+    if ((v = cJSON_GetObjectItemCaseSensitive(o, "g"))) {
+        if (!cJSON_IsNumber(v)) { st = prt__fail(ctx, PRT_ERR_FORMAT, "scene: \"g\" must be a number in (-1, 1)"); goto fail; }
+        d.g = (float)v->valuedouble;
+    }
+    if (file) {
+        if (!cJSON_IsString(file)) { st = prt__fail(ctx, PRT_ERR_FORMAT, "scene: a volume's \"file\" must be a string"); goto fail; }
+        if (cJSON_GetObjectItemCaseSensitive(o, "resolution") || cJSON_GetObjectItemCaseSensitive(o, "seed")) {
+            st = prt__fail(ctx, PRT_ERR_FORMAT, "scene: \"resolution\" and \"seed\" belong to procedural volumes (a file says its own size)");
+            goto fail;
+        }
+        char full[1024];
+        snprintf(full, sizeof full, "%s%s", file->valuestring[0] == '/' ? "" : dir, file->valuestring);
+        if ((st = prt_volume_grid_load((prt_context *)ctx, full, d.dims, &density))) goto fail;
+    } else {
+        if (!cJSON_IsString(proc)) { st = prt__fail(ctx, PRT_ERR_FORMAT, "scene: \"procedural\" must be \"cloud\" or \"smoke\""); goto fail; }
+        float res[3] = {32, 32, 32};
+        uint32_t seed = 1;
+        if ((v = cJSON_GetObjectItemCaseSensitive(o, "resolution")) && (st = read_vec3(ctx, v, "resolution", res))) goto fail;
+        for (int c = 0; c < 3; ++c) {
+            if (!(res[c] >= 1 && res[c] <= PRT_VOLUME_MAX_DIM) || res[c] != floorf(res[c])) {
+                st = prt__fail(ctx, PRT_ERR_FORMAT, "scene: \"resolution\" must be whole numbers of voxels in 1..%d", PRT_VOLUME_MAX_DIM);
+                goto fail;
+            }
+            d.dims[c] = (int)res[c];
+        }
+        if ((v = cJSON_GetObjectItemCaseSensitive(o, "seed"))) {
+            if (!cJSON_IsNumber(v) || !(v->valuedouble >= 0 && v->valuedouble <= 4294967295.0) || v->valuedouble != floor(v->valuedouble)) {
+                st = prt__fail(ctx, PRT_ERR_FORMAT, "scene: \"seed\" must be a whole number in 0..4294967295");
+                goto fail;
+            }
+            seed = (uint32_t)v->valuedouble;
+        }
+        if ((st = prt_volume_generate((prt_context *)ctx, proc->valuestring, d.dims, seed, &density))) goto fail;
+    }
+    d.density = density;
+    st = prt_scene_add_volume(scene, &d);
+fail:
+    free(density);
+    if (!st) return PRT_OK;
+    snprintf(msg, sizeof msg, "%s", prt_last_error());
+    return prt__fail(ctx, st == PRT_ERR_NO_MEMORY ? st : PRT_ERR_FORMAT, "'%s': volumes[%d]: %s", path, i, msg + (strncmp(msg, "scene: ", 7) ? 0 : 7));
+}
+
 prt_status prt__import_scene_json(const prt_context *ctx, const char *path, const prt_scene_desc *desc, prt_scene *scene)
 {
     prt__mesh *m = &scene->mesh;
@@ -273,6 +345,11 @@ prt_status prt__import_scene_json(const prt_context *ctx, const char *path, cons
     if (lights && (st = read_lights(ctx, path, lights, scene))) { cJSON_Delete(root); return st; }
     const cJSON *camera = cJSON_GetObjectItemCaseSensitive(root, "camera");
     if (camera && (st = read_camera(ctx, path, camera, scene))) { cJSON_Delete(root); return st; }
+    const cJSON *volumes = cJSON_GetObjectItemCaseSensitive(root, "volumes"), *vol;
+    if (volumes && !cJSON_IsArray(volumes)) { cJSON_Delete(root); return prt__fail(ctx, PRT_ERR_FORMAT, "'%s': \"volumes\" must be an array", path); }
+    int vi = 0;
+    cJSON_ArrayForEach(vol, volumes)
+        if ((st = read_volume(ctx, path, dir, vi++, vol, scene))) { cJSON_Delete(root); return st; }
     /* Lights with a position sit inside whatever room they light, and the camera inside the room
      * it looks around: its walls face them. So do the points the caller names (its own lights). */
     const size_t extra = desc->inside_points ? desc->inside_point_count : 0;

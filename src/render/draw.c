@@ -216,11 +216,13 @@ prt_status prt__draw_init(prt__draw *d)
     glGenBuffers(1, &d->vbo_pos);
     glGenBuffers(1, &d->vbo_rad);
     glGenBuffers(1, &d->ibo);
+    if (prt__volume_gl_init(&d->volumes)) memset(&d->volumes, 0, sizeof d->volumes);   /* media stay undrawn, the rest works */
     return PRT_OK;
 }
 
 void prt__draw_free(prt__draw *d)
 {
+    prt__volume_gl_free(&d->volumes);
     prt__pixel_lights_free(&d->lights);
     if (d->program) glDeleteProgram(d->program);
     if (d->program_g) glDeleteProgram(d->program_g);
@@ -282,6 +284,7 @@ prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     glBindVertexArray(0);
     d->index_count = m->triangle_count * 3;
     prt__draw_set_lights(d, m);
+    prt__volume_gl_upload(&d->volumes, m->volumes, m->volumes ? m->volume_count : 0);
     d->lights.dirty = true;   /* new geometry casts new shadows */
     if (d->exit_order) prt__draw_upload_exit(d, m->exit_sh, m->vertex_count);
     if (d->kvec_terms) {
@@ -515,6 +518,7 @@ void prt__draw_mesh(prt__draw *d, const prt_camera *cam, int w, int h, const flo
     glDrawElements(GL_TRIANGLES, (GLsizei)d->index_count, GL_UNSIGNED_INT, NULL);
     glBindVertexArray(0);
     prt__pixel_lights_draw(&d->lights, d->vao, d->index_count, mvp, cam->eye);
+    prt__volume_gl_draw(&d->volumes, mvp, cam->eye);   /* over the surfaces, tested against their depth */
 }
 
 void prt_camera_frame(const float lo[3], const float hi[3], const float *from, float fov_y_deg, float aspect, prt_camera *out)

@@ -8,6 +8,7 @@
 #include "prt/render.h"
 #include "render/light_map_gl.h"
 #include "render/pixel_lights.h"
+#include "render/volume_gl.h"
 
 #include <epoxy/gl.h>
 
@@ -42,6 +43,8 @@ typedef struct prt__draw {
     GLuint tex_first;
     bool side_by_side;
     int gpu_width, gpu_height;   /* tex and tex_first allocated as render targets of this size (0: not) */
+    /* Participating media as slices (the window's; prt_render ray-marches them on the CPU). */
+    prt__volume_gl volumes;
 } prt__draw;
 
 /* Compiles and links vs (+ gs, may be NULL) + fs; 0 after recording the compiler's message. */

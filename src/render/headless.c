@@ -1,6 +1,7 @@
 /* The headless target: an EGL context without a window (Mesa's surfaceless platform, which
  * runs on llvmpipe where there is no GPU) and a multisampled float framebuffer. */
 #include "render/draw.h"
+#include "render/volumes.h"
 
 #include <epoxy/egl.h>
 #include <stdio.h>
@@ -13,6 +14,7 @@ struct prt_renderer {
     prt__target target;
     prt__draw draw;
     char name[256];
+    int volume_slices;
 };
 
 static EGLDisplay open_display(void)
@@ -104,6 +106,11 @@ prt_status prt_render_light_map(prt_renderer *r, const prt_render_mesh *mesh, fl
     return PRT_OK;
 }
 
+void prt_renderer_set_volume_slices(prt_renderer *r, int on)
+{
+    if (r) r->volume_slices = on != 0;
+}
+
 prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_camera *cam, const float background[3], prt_image *out)
 {
     memset(out, 0, sizeof *out);
@@ -111,8 +118,14 @@ prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_ca
         return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render: mesh arrays and camera are required");
     if (mesh->triangle_count * 3 > (size_t)INT32_MAX) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "mesh too large to draw");
     eglMakeCurrent(r->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, r->egl);
-    prt_status st = prt__draw_upload(&r->draw, mesh);
+    /* Media are ray-marched on the CPU below (exact per pixel), not drawn as the window's slices,
+     * unless the caller asks for the slices (prt_renderer_set_volume_slices: what the viewer shows). */
+    prt_render_mesh surfaces = *mesh;
+    if (!r->volume_slices) { surfaces.volumes = NULL; surfaces.volume_count = 0; }
+    prt_status st = prt__draw_upload(&r->draw, &surfaces);
     if (st) return st;
     if (!prt__target_draw_cancellable(&r->target, &r->draw, cam, background, r->ctx)) return prt__fail(r->ctx, PRT_ERR_CANCELLED, "drawing cancelled");
-    return prt__target_read(&r->target, out);
+    st = prt__target_read(&r->target, out);
+    if (!st && mesh->volume_count && !r->volume_slices) st = prt__render_volumes(r->ctx, mesh, cam, out);
+    return st;
 }

@@ -23,6 +23,8 @@
 #include "light/env_sample.h"
 #include "light/light_sample.h"
 #include "brdf/specular.h"
+#include "geom/volume.h"
+#include "render/volumes.h"
 
 #include <string.h>
 
@@ -52,7 +54,17 @@ typedef struct pt_job {
     const float *eye;
     float *origins;   /* per vertex, as the bakes use them */
     prt_specular *spec;   /* per surface (prt__specular_table); NULL when nothing is specular */
+    const prt__volume *volumes;   /* participating media (the scene's "volumes") */
+    int volume_count;
+    float majorant;               /* of their summed extinction, for delta tracking */
 } pt_job;
+
+/* Transmittance of the media along o + t d, t < tfar (surface paths see media as absorbers:
+ * what they scatter towards surfaces is left out, as the bakes leave it out). */
+static float media_transmittance(const pt_job *j, const float o[3], const float d[3], float tfar)
+{
+    return j->volume_count ? expf(-prt__volumes_optical_depth(j->volumes, j->volume_count, o, d, tfar)) : 1.0f;
+}
 
 /* ---- counter-based random numbers: one stream per (item, sample), independent of threads */
 typedef struct rng { uint64_t s; } rng;
@@ -336,8 +348,9 @@ static void add_light(const pt_job *j, const surface *s, const float wo[3], cons
     } else if (occluded(j, s->o, wi, INFINITY)) {
         return;
     }
+    const float tr = media_transmittance(j, s->o, wi, dist);
     float w = pdf_l > 0.0f ? mis(pdf_l, (float)brdf_pdf(&j->mats[s->mat], wo, wil)) : 1.0f;
-    for (int c = 0; c < 3; ++c) acc[c] += beta[c] * f[c] * cl * value[c] * w;
+    for (int c = 0; c < 3; ++c) acc[c] += beta[c] * f[c] * cl * value[c] * w * tr;
 }
 
 /* Radiance that sphere lights add along o + t d for t < tmax, MIS-weighted against pdf_b (0 = no MIS). */
@@ -373,6 +386,8 @@ static void path(const pt_job *j, const surface *start, const float wo_world[3],
             for (int c = 0; c < 3; ++c) { beta[c] *= wgt; org[c] = s.p[c] + (float)side * j->offset * s.ng[c]; }
             surface next;
             const int hit = intersect(j, org, nd, &next);
+            const float tr = media_transmittance(j, org, nd, hit ? next.dist : INFINITY);
+            for (int c = 0; c < 3; ++c) beta[c] *= tr;
             spheres_along(j, s.p, org, nd, hit ? next.dist : INFINITY, 0.0f, sph);
             for (int c = 0; c < 3; ++c) acc[c] += beta[c] * sph[c];
             if (hit == 0) {
@@ -430,6 +445,8 @@ static void path(const pt_job *j, const surface *start, const float wo_world[3],
         for (int c = 0; c < 3; ++c) weight[c] = beta[c] * f[c] * wil[2] / pdf_b;
         surface next;
         int hit = intersect(j, s.o, wi, &next);
+        const float tr = media_transmittance(j, s.o, wi, hit ? next.dist : INFINITY);
+        for (int c = 0; c < 3; ++c) weight[c] *= tr;
         float sph[3];
         spheres_along(j, s.p, s.o, wi, hit ? next.dist : INFINITY, pdf_b, sph);
         for (int c = 0; c < 3; ++c) acc[c] += weight[c] * sph[c];
@@ -486,6 +503,9 @@ static prt_status job_init(prt_context *ctx, const prt_scene *scene, const prt_e
     j->max_depth = d->max_depth ? d->max_depth : 256;
     j->seed = d->seed;
     j->eye = d->eye;
+    j->volumes = scene->volumes;
+    j->volume_count = scene->volume_count;
+    for (int k = 0; k < scene->volume_count; ++k) j->majorant += scene->volumes[k].sigma_t * scene->volumes[k].max_density;
     material_init(&j->mats[0], NULL);
     for (int k = 0; k < scene->brdf_count; ++k) material_init(&j->mats[k + 1], &scene->brdfs[k]);
     /* Without a lighting: the env argument, rotated and scaled, with the scene's emitters at scale 1. */
@@ -636,6 +656,105 @@ prt_status prt_reference_trace_vertices(prt_context *ctx, const prt_scene *scene
     return st;
 }
 
+/* Radiance arriving at o from direction -d through the media (delta tracking against the
+ * summed extinction's majorant; at each scattering the environment by next-event estimation
+ * with its transmittance, then a Henyey-Greenstein turn, Russian roulette after 3). Where a
+ * ray leaves the media at a surface, the surface's path (media as absorbers) takes over; a
+ * camera ray that meets nothing shows the background, a scattered one nothing (the
+ * environment came by next-event estimation). */
+static void media_path(const pt_job *j, const float o_in[3], const float d_in[3], const float *background, rng *r, float out[3])
+{
+    float o[3] = {o_in[0], o_in[1], o_in[2]}, d[3] = {d_in[0], d_in[1], d_in[2]}, beta[3] = {1, 1, 1};
+    out[0] = out[1] = out[2] = 0;
+    for (int depth = 0; depth < j->max_depth; ++depth) {
+        surface hit;
+        const int h = intersect(j, o, d, &hit);
+        const float ts = h ? hit.dist : INFINITY;
+        /* The stretch of the ray inside any volume's box. */
+        float a = INFINITY, b = -INFINITY;
+        for (int q = 0; q < j->volume_count; ++q) {
+            float t0, t1;
+            if (prt__volume_clip(&j->volumes[q], o, d, ts, &t0, &t1)) { a = fminf(a, t0); b = fmaxf(b, t1); }
+        }
+        int scatter = -1;
+        float x[3];
+        if (j->majorant > 0 && b > a)
+            for (float t = a;;) {
+                t -= logf(1.0f - (float)uniform(r)) / j->majorant;
+                if (t >= b) break;
+                for (int c = 0; c < 3; ++c) x[c] = o[c] + t * d[c];
+                float sig[64], total = 0;
+                for (int q = 0; q < j->volume_count && q < 64; ++q) total += sig[q] = prt__volume_extinction(&j->volumes[q], x);
+                float u = (float)uniform(r) * j->majorant;
+                if (u >= total) continue;   /* a null collision */
+                for (int q = 0; q < j->volume_count && q < 64 && scatter < 0; ++q) {
+                    if (u < sig[q]) scatter = q;
+                    u -= sig[q];
+                }
+                if (scatter < 0) scatter = j->volume_count - 1;
+                break;
+            }
+        if (scatter < 0) {
+            if (h > 0) {
+                float dl[3], il[3], back[3] = {-d[0], -d[1], -d[2]};
+                path(j, &hit, back, r, dl, il);
+                for (int c = 0; c < 3; ++c) out[c] += beta[c] * (dl[c] + il[c]);
+            } else if (h == 0 && depth == 0 && background) {
+                for (int c = 0; c < 3; ++c) out[c] += background[c];
+            }
+            return;
+        }
+        const prt__volume *v = &j->volumes[scatter];
+        for (int c = 0; c < 3; ++c) beta[c] *= v->albedo[c];
+        if (j->has_env) {
+            double u1 = uniform(r), u2 = uniform(r), u3 = uniform(r);
+            float L[3], wi[3];
+            const float pdf = prt__env_sample(&j->env, u1, u2, u3, wi, L);
+            if (pdf > 0.0f && !occluded(j, x, wi, INFINITY)) {
+                const float f = prt__hg_phase(v->g, prt__v3_dot(wi, d)) * media_transmittance(j, x, wi, INFINITY) / pdf;
+                for (int c = 0; c < 3; ++c) out[c] += beta[c] * f * L[c];
+            }
+        }
+        if (depth >= 3) {
+            const float q = fminf(fmaxf(beta[0], fmaxf(beta[1], beta[2])), 0.95f);
+            if (!(q > 0.0f) || uniform(r) >= q) return;
+            for (int c = 0; c < 3; ++c) beta[c] /= q;
+        }
+        float nd[3];
+        const double u1 = uniform(r), u2 = uniform(r);
+        prt__hg_sample(v->g, d, u1, u2, nd);
+        if (!prt__v3_normalize(nd)) return;
+        memcpy(o, x, sizeof o);
+        memcpy(d, nd, sizeof d);
+    }
+}
+
+prt_status prt__reference_media_radiance(prt_context *ctx, const prt_scene *scene, const prt_reference_desc *desc, const float o[3], const float d[3],
+                                         int samples, float out[3], float *std_error)
+{
+    prt_reference_desc dd = desc ? *desc : (prt_reference_desc){0};
+    pt_job j;
+    prt_status st = job_init(ctx, scene, NULL, &dd, &j);
+    if (st) return st;
+    float *v = malloc((size_t)(samples > 0 ? samples : 1) * 3 * sizeof *v);
+    if (!v) { job_free(&j); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+#pragma omp parallel for schedule(dynamic, 64) num_threads(prt__threads(ctx))
+    for (int k = 0; k < samples; ++k) {
+        rng r = rng_for(j.seed, 0x5ca77e5ull, (uint32_t)k);
+        media_path(&j, o, d, NULL, &r, v + (size_t)k * 3);
+    }
+    double sum[3] = {0, 0, 0}, sq = 0;   /* summed in sample order: the same for any thread count */
+    for (int k = 0; k < samples; ++k) {
+        for (int c = 0; c < 3; ++c) sum[c] += v[(size_t)k * 3 + c];
+        sq += (double)v[(size_t)k * 3 + 1] * v[(size_t)k * 3 + 1];
+    }
+    free(v);
+    for (int c = 0; c < 3; ++c) out[c] = (float)(sum[c] / samples);
+    if (std_error) *std_error = (float)std_err(sum[1], sq, samples);
+    job_free(&j);
+    return PRT_OK;
+}
+
 prt_status prt_reference_trace_image(prt_context *ctx, const prt_scene *scene, const prt_envmap *env, const prt_reference_desc *desc,
                                      const prt_camera *cam, int width, int height, const float background[3], prt_image *out,
                                      prt_image *std_error)
@@ -676,8 +795,11 @@ prt_status prt_reference_trace_image(prt_context *ctx, const prt_scene *scene, c
                 prt__v3_normalize(dir);
                 surface hit;
                 float v[3] = {0, 0, 0}, back[3] = {-dir[0], -dir[1], -dir[2]};
-                int h = intersect(&j, cam->eye, dir, &hit);
-                if (h == 0) {
+                int h = j.volume_count ? 2 : intersect(&j, cam->eye, dir, &hit);
+                if (h == 2) {
+                    media_path(&j, cam->eye, dir, background, &r, v);
+                    h = intersect(&j, cam->eye, dir, &hit);   /* for the sphere lights below */
+                } else if (h == 0) {
                     if (background) memcpy(v, background, sizeof v);
                 } else if (h > 0) {
                     float dl[3], il[3];

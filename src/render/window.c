@@ -224,6 +224,12 @@ void prt_window_set_lights(prt_window *w, const prt_render_mesh *mesh)
     prt__draw_set_lights(&w->draw, mesh);
 }
 
+void prt_window_set_volumes(prt_window *w, const prt_render_mesh *mesh)
+{
+    glfwMakeContextCurrent(w->win);
+    prt__volume_gl_upload(&w->draw.volumes, mesh->volumes, mesh->volumes ? mesh->volume_count : 0);
+}
+
 void prt_window_set_radiance(prt_window *w, const float *rgb, size_t nv)
 {
     glfwMakeContextCurrent(w->win);

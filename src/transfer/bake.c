@@ -293,6 +293,17 @@ static void fingerprint(const prt__method *m, const prt_options *o, const prt_tr
         prt__fingerprint_add(fp, &sp->reflectance, sizeof sp->reflectance);
         prt__fingerprint_add(fp, &sp->ior, sizeof sp->ior);
     }
+    /* Volumes shadow the surfaces (only where named: older checkpoints stay valid). */
+    for (int i = 0; i < scene->volume_count; ++i) {
+        const prt__volume *v = &scene->volumes[i];
+        prt__fingerprint_add(fp, v->dims, sizeof v->dims);
+        prt__fingerprint_add(fp, v->lo, sizeof v->lo);
+        prt__fingerprint_add(fp, v->hi, sizeof v->hi);
+        prt__fingerprint_add(fp, &v->sigma_t, sizeof v->sigma_t);
+        prt__fingerprint_add(fp, v->albedo, sizeof v->albedo);
+        prt__fingerprint_add(fp, &v->g, sizeof v->g);
+        prt__fingerprint_add(fp, v->density, prt__volume_voxels(v) * sizeof(float));
+    }
 }
 
 prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__method *m, prt__bake_begin_fn begin, const void *desc,

@@ -281,6 +281,11 @@ void prt_relit_free(prt_relit *r)
     free(r->pixel_brdfs);
     free(r->gpu_input);
     free(r->gpu_pixel_direct);
+    for (int k = 0; k < r->volume_count; ++k) {
+        free((void *)r->volumes[k].extinction);
+        free((void *)r->volumes[k].source);
+    }
+    free(r->volumes);
     memset(r, 0, sizeof *r);
 }
 
@@ -367,6 +372,8 @@ void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render
     m->light_material = r->pixel_lights ? r->pixel_material : NULL;
     m->light_brdfs = r->pixel_lights ? r->pixel_brdfs : NULL;
     m->light_brdf_count = r->pixel_lights && r->pixel_material ? r->pixel_brdf_count : 0;
+    m->volumes = r->volumes;
+    m->volume_count = r->volume_count;
     if (r->gpu_input) {
         m->gpu_passes = r->gpu_passes;
         m->gpu_input = r->gpu_input;

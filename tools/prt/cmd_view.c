@@ -306,6 +306,7 @@ static void show(viewer *v, prt_relit *r, prt_transfer *pose)
         prt_render_mesh mesh;
         prt_relit_render_mesh(t, r, &mesh);
         prt_window_set_lights(v->win, &mesh);   /* shadow maps are redrawn only when the lights moved */
+        if (r->volume_count) prt_window_set_volumes(v->win, &mesh);
     } else {
         prt_render_mesh mesh;
         prt_relit_render_mesh(t, r, &mesh);

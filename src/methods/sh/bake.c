@@ -33,6 +33,8 @@ typedef struct bake_job {
     hit_entry **hits;     /* per vertex, for interreflection */
     uint32_t *hit_count;
     prt_specular *spec;   /* per surface (prt__specular_table); NULL when nothing is specular */
+    const prt__volume *volumes;   /* the scene's media: sample rays carry their transmittance */
+    int volume_count;
 } bake_job;
 
 prt_sh_bake_desc prt_sh_bake_desc_defaults(void)
@@ -197,8 +199,9 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, f
                  * counter-clockwise, like prt's normals (the pit and colour-bleeding tests pin
                  * this). The back of a surface emits nothing: only front-face hits carry light. */
                 if (rh.hit.Ng_x[k] * d[0] + rh.hit.Ng_y[k] * d[1] + rh.hit.Ng_z[k] * d[2] >= 0.0f) continue;
+                const float tr = job->volume_count ? expf(-prt__volumes_optical_depth(job->volumes, job->volume_count, org, d, rh.ray.tfar[k])) : 1.0f;
                 scratch[nhits++] = (hit_entry){rh.hit.primID[k], (uint32_t)lane_sample[k], rh.hit.u[k], rh.hit.v[k],
-                                               lane_cos[k] * (float)(4.0 * PRT_PI / job->samples)};
+                                               tr * lane_cos[k] * (float)(4.0 * PRT_PI / job->samples)};
             }
         } else {
             _Alignas(64) struct RTCRay16 r;
@@ -211,14 +214,17 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, f
             float c = lane_cos[k] * w;
             if (unsh)
                 for (int i = 0; i < nc; ++i) unsh[i] += c * y[i];
+            /* Volumes dim what reaches the vertex: the shadowed sums carry their transmittance. */
+            const float tr = job->volume_count && !blocked[k] ? expf(-prt__volumes_optical_depth(job->volumes, job->volume_count, org, dirs + (size_t)lane_sample[k] * 3, INFINITY)) : 1.0f;
             if (sh && !blocked[k]) {
+                c *= tr;
                 for (int i = 0; i < nc; ++i) sh[i] += c * y[i];
                 sq += (double)(c * y[0]) * (c * y[0]);
             } else if (!sh && unsh) {
                 sq += (double)(c * y[0]) * (c * y[0]);
             }
             if (glossy && !blocked[k]) {
-                const float wg = (float)(4.0 * PRT_PI / job->samples);
+                const float wg = tr * (float)(4.0 * PRT_PI / job->samples);
                 for (int j = 0; j < nc; ++j) {
                     float s = wg * y[j];
                     for (int i = 0; i < nc; ++i) glossy[j * nc + i] += s * y[i];
@@ -264,7 +270,7 @@ static inline __attribute__((always_inline)) void gather_hit(const prt__mesh *m,
  * coupled glossy bounce loop or one stage per diffuse bounce, then texels and the BRDF. */
 #define BLOCK 64
 
-typedef enum { ST_VISIBILITY, ST_GLOSSY_BOUNCES, ST_BOUNCE, ST_SUBSURFACE, ST_NEIGHBOURHOOD, ST_TEXELS, ST_BRDF_IN, ST_COMPRESS, ST_QUANTIZE } stage_kind;
+typedef enum { ST_VISIBILITY, ST_GLOSSY_BOUNCES, ST_BOUNCE, ST_SUBSURFACE, ST_NEIGHBOURHOOD, ST_TEXELS, ST_BRDF_IN, ST_COMPRESS, ST_QUANTIZE, ST_VOLUME } stage_kind;
 
 typedef struct sh_bake {
     prt__bake_job base;
@@ -503,7 +509,7 @@ static prt_status run_texels(prt__bake_job *b, prt_context *ctx, prt__progress *
     prt_transfer *t = sb->t;
     prt__texel_input ti = {&t->mesh, t->source, sb->d.order, sb->d.samples, sb->job.dirs, sb->job.basis, sb->job.rc.scene, sb->job.offset,
                            sb->s->sets[2].coeffs, sb->d.kinds & 7u, sb->d.texels, sb->d.texels, sb->d.normal_map,
-                           sb->d.height_map ? &sb->height : NULL, p};
+                           sb->d.height_map ? &sb->height : NULL, p, sb->job.volumes, sb->job.volume_count};
     return prt__bake_texels(ctx, &ti, &sb->s->texels);
 }
 
@@ -532,6 +538,23 @@ static prt_status run_neighbourhood(prt__bake_job *b, prt_context *ctx, prt__pro
     }
     const float *exit = sb->s->sets[2].coeffs ? sb->s->sets[2].coeffs : sb->shad;
     return prt__sh_neighbourhood_bake(ctx, m, &sb->job.rc, sb->job.dirs, sb->job.basis, sb->d.samples, sb->d.order, exit, sb->s->sets[2].coeffs ? 3 : 1, g, p);
+}
+
+static prt_status run_volumes(prt__bake_job *b, prt_context *ctx, prt__progress *p)
+{
+    sh_bake *sb = (sh_bake *)b;
+    prt__sh_state *s = sb->s;
+    const prt_scene *scene = sb->extra.scene;
+    const float *exit = s->sets[2].coeffs ? s->sets[2].coeffs : sb->shad ? sb->shad : s->sets[1].coeffs;
+    const prt__volume_scene in = {scene->volumes, scene->volume_count, &sb->job.rc, &sb->t->mesh, exit, s->sets[2].coeffs ? 3 : 1,
+                                  sb->d.order, sb->d.samples, sb->d.seed};
+    if (!(s->volumes = prt__calloc((size_t)scene->volume_count, sizeof *s->volumes))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (int k = 0; k < scene->volume_count; ++k) {
+        const prt_status st = prt__sh_volume_bake(ctx, &in, k, &s->volumes[k], p);
+        if (st) return st;
+        s->volume_count = k + 1;
+    }
+    return PRT_OK;
 }
 
 static prt_status run_brdf_in(prt__bake_job *b, prt_context *ctx, prt__progress *p)
@@ -670,6 +693,7 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
     case ST_SUBSURFACE: snprintf(out->name, sizeof out->name, "subsurface"); out->whole = run_subsurface; break;
     case ST_NEIGHBOURHOOD: snprintf(out->name, sizeof out->name, "neighbourhood"); out->whole = run_neighbourhood; break;
     case ST_TEXELS: snprintf(out->name, sizeof out->name, "texels"); out->whole = run_texels; break;
+    case ST_VOLUME: snprintf(out->name, sizeof out->name, "volumes"); out->whole = run_volumes; break;
     case ST_BRDF_IN: snprintf(out->name, sizeof out->name, "bake BRDF in"); out->whole = run_brdf_in; break;
     case ST_COMPRESS:
         sb->compressing_set = sb->bounce_of[index];
@@ -919,6 +943,13 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
         prt__log(ctx, PRT_LOG_INFO, "%d specular surface%s: sample rays turn at %s (up to %d times) and carry the light %s focus%s into the shadowed and "
                  "inter-reflected transfer (caustics)", n, n > 1 ? "s" : "", n > 1 ? "them" : "it", MAX_SPECULAR, n > 1 ? "they" : "it", n > 1 ? "" : "es");
     }
+    if (!st && sb->extra.scene && sb->extra.scene->volume_count) {
+        job->volumes = sb->extra.scene->volumes;
+        job->volume_count = sb->extra.scene->volume_count;
+        for (int k = 0; k < job->volume_count; ++k)
+            if (prt__volume_voxels(&job->volumes[k]) > 128u * 128u * 128u)
+                st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "volume %d has %zu voxels; the SH bake takes at most 128^3 per volume", k, prt__volume_voxels(&job->volumes[k]));
+    }
     if (!st) st = prt__vertex_origins(&t->mesh, job->offset, &job->origins);
     if (!st && !(job->buried = malloc(nv ? nv : 1))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) st = prt__unbury_origins(ctx, &job->rc, &t->mesh, job->offset, job->origins, job->buried, PRT_LOG_INFO);
@@ -931,6 +962,7 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
         for (int bnc = 1; bnc <= d.bounces; ++bnc) { sb->bounce_of[sb->stages] = bnc; sb->plan[sb->stages++] = ST_BOUNCE; }
     if (sb->medium && (d.kinds & PRT_TRANSFER_INTERREFLECTED)) sb->plan[sb->stages++] = ST_SUBSURFACE;
     if (d.neighbourhood) sb->plan[sb->stages++] = ST_NEIGHBOURHOOD;
+    if (sb->extra.scene && sb->extra.scene->volume_count) sb->plan[sb->stages++] = ST_VOLUME;
     if (d.texels) sb->plan[sb->stages++] = ST_TEXELS;
     if (d.glossy_exit) sb->plan[sb->stages++] = ST_BRDF_IN;
     if (sb->extra.compressing)

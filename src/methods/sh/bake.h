@@ -49,6 +49,8 @@ typedef struct prt__texel_input {
     const prt_image *normal_map;     /* tangent-space, values in [0, 1] (0.5 = flat), or NULL */
     const prt__height_field *bumps;  /* a height field that shades and shadows the texels, or NULL */
     prt__progress *progress;
+    const prt__volume *volumes;      /* participating media: sample rays carry their transmittance */
+    int volume_count;
 } prt__texel_input;
 
 /* Translucency (subsurface.c): the inter-reflected transfer T ([vertex][3][nc]) of every vertex

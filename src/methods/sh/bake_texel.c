@@ -164,7 +164,8 @@ static bool texel_bake(const texel_job *job, size_t texel, float *unsh, float *s
                 if (rh.hit.Ng_x[k] * d[0] + rh.hit.Ng_y[k] * d[1] + rh.hit.Ng_z[k] * d[2] >= 0.0f) continue;   /* back faces emit nothing */
                 const uint32_t *t = m->indices + (size_t)rh.hit.primID[k] * 3;
                 const float u = rh.hit.u[k], v = rh.hit.v[k], bw[3] = {1.0f - u - v, u, v};
-                const float cw = lane_cos[k] * (float)(4.0 * PRT_PI / in->samples);
+                const float tr = in->volume_count ? expf(-prt__volumes_optical_depth(in->volumes, in->volume_count, org, d, rh.ray.tfar[k])) : 1.0f;
+                const float cw = tr * lane_cos[k] * (float)(4.0 * PRT_PI / in->samples);
                 for (int q = 0; q < 3; ++q) {
                     const float *T = in->vertex_ir + (size_t)t[q] * 3 * nc;
                     for (int i = 0; i < 3 * nc; ++i) gather[i] += cw * bw[q] * T[i];
@@ -179,7 +180,8 @@ static bool texel_bake(const texel_job *job, size_t texel, float *unsh, float *s
         for (int k = 0; k < lanes; ++k) {
             if (blocked[k]) continue;
             const float *y = in->basis + (size_t)lane_sample[k] * nc;
-            for (int i = 0; i < nc; ++i) direct[i] += lane_cos[k] * w * y[i];
+            const float tr = in->volume_count ? expf(-prt__volumes_optical_depth(in->volumes, in->volume_count, org, in->dirs + (size_t)lane_sample[k] * 3, INFINITY)) : 1.0f;
+            for (int i = 0; i < nc; ++i) direct[i] += tr * lane_cos[k] * w * y[i];
         }
     }
     if (shad) memcpy(shad, direct, (size_t)nc * sizeof(float));

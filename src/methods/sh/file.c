@@ -11,6 +11,8 @@
 #define CHUNK_TXLQ PRT__FOURCC('T', 'X', 'L', 'Q')   /* the same as bytes, a scale and bias per coefficient */
 #define CHUNK_NBHD PRT__FOURCC('N', 'B', 'H', 'D')   /* neighbourhood transfer */
 #define NBHD_HEADER 40
+#define CHUNK_VOLU PRT__FOURCC('V', 'O', 'L', 'U')   /* transfer in a participating medium, one per volume */
+#define VOLU_HEADER 68
 #define CHUNK_FRMS PRT__FOURCC('F', 'R', 'M', 'S')   /* key frames' poses */
 #define CHUNK_FRCP PRT__FOURCC('F', 'R', 'C', 'P')   /* a set's rows of every key frame, one CPCA */
 #define CPCA_HEADER 64
@@ -175,6 +177,42 @@ prt_status prt__sh_save(const prt_transfer *t, prt__chunk_list *l)
             const size_t points = (size_t)g->dims[0] * g->dims[1] * g->dims[2];
             prt__chunks_add(l, CHUNK_NBHD, h, (size_t)NBHD_HEADER, g->matrices, points * 3 * n * n * sizeof(float), g->front, points * sizeof(float), NULL);
         }
+    }
+    for (int k = 0; k < sh->volume_count; ++k) {
+        const prt__sh_volume *v = &sh->volumes[k];
+        unsigned char *h = prt__chunks_alloc(l, VOLU_HEADER);
+        if (!h) break;
+        for (int c = 0; c < 3; ++c) {
+            prt__put32(h + 4 * c, (uint32_t)v->medium.dims[c]);
+            memcpy(h + 24 + 4 * c, &v->medium.lo[c], 4);
+            memcpy(h + 36 + 4 * c, &v->medium.hi[c], 4);
+            memcpy(h + 52 + 4 * c, &v->medium.albedo[c], 4);
+        }
+        prt__put32(h + 12, (uint32_t)sh->order);
+        prt__put32(h + 16, (uint32_t)v->bands);
+        prt__put32(h + 20, (uint32_t)v->orders);
+        memcpy(h + 48, &v->medium.sigma_t, 4);
+        memcpy(h + 64, &v->medium.g, 4);
+        /* Transfer of the voxels with medium around them only, as halves. */
+        const size_t voxels = prt__volume_voxels(&v->medium), n = (size_t)sh->order * sh->order;
+        const size_t pd = 3 * (size_t)v->bands * v->bands * n;
+        size_t active = 0;
+        for (int z = 0; z < v->medium.dims[2]; ++z)
+            for (int y = 0; y < v->medium.dims[1]; ++y)
+                for (int x = 0; x < v->medium.dims[0]; ++x) active += prt__sh_volume_active(&v->medium, x, y, z);
+        const size_t halves = active * pd;
+        uint16_t *q = prt__chunks_alloc(l, halves * 2 + 2);
+        if (!q) break;
+        size_t at = 0, k2 = 0;
+        for (int z = 0; z < v->medium.dims[2]; ++z)
+            for (int y = 0; y < v->medium.dims[1]; ++y)
+                for (int x = 0; x < v->medium.dims[0]; ++x, ++k2) {
+                    if (!prt__sh_volume_active(&v->medium, x, y, z)) continue;
+                    for (size_t i = 0; i < pd; ++i) q[at++] = prt__half_from_float(v->incident[k2 * pd + i]);
+                }
+        q[halves] = 0;
+        if (l->version < 2) l->version = 2;   /* half-float chunk */
+        prt__chunks_add(l, CHUNK_VOLU, h, (size_t)VOLU_HEADER, v->medium.density, voxels * 4, q, halves * 2 + (halves & 1 ? 2 : 0), NULL);
     }
     return PRT_OK;   /* allocation failures are recorded in the list and reported when writing */
 }
@@ -418,6 +456,73 @@ static prt_status load_grid(prt_context *ctx, prt__sh_state *sh, const prt__chun
     return PRT_OK;
 }
 
+/* u32 dims[3], order, bands, orders; f32 lo[3], hi[3], sigma_t, albedo[3], g; then f32
+ * density[voxel], then as halves incident[voxel][3][bands^2][n] of the voxels with medium in
+ * their 3 x 3 x 3 neighbourhood (docs/FORMAT.md). */
+static prt_status load_volume(prt_context *ctx, prt__sh_state *sh, const prt__chunk_in *in)
+{
+    const unsigned char *p = in->data;
+    if (in->size < VOLU_HEADER) return bad(ctx, "corrupt .prt file: short volume chunk");
+    if (sh->volume_count >= 64) return bad(ctx, "corrupt .prt file: more than 64 volume chunks");
+    prt__sh_volume v;
+    memset(&v, 0, sizeof v);
+    uint64_t voxels = 1;
+    for (int c = 0; c < 3; ++c) {
+        const uint32_t d = prt__get32(p + 4 * c);
+        if (d < 1 || d > PRT_VOLUME_MAX_DIM) return bad(ctx, "corrupt .prt file: volume grid size out of range");
+        v.medium.dims[c] = (int)d;
+        voxels *= d;
+        memcpy(&v.medium.lo[c], p + 24 + 4 * c, 4);
+        memcpy(&v.medium.hi[c], p + 36 + 4 * c, 4);
+        memcpy(&v.medium.albedo[c], p + 52 + 4 * c, 4);
+        if (!isfinite(v.medium.lo[c]) || !isfinite(v.medium.hi[c]) || !(v.medium.hi[c] > v.medium.lo[c])) return bad(ctx, "corrupt .prt file: volume box invalid");
+        if (!(v.medium.albedo[c] >= 0 && v.medium.albedo[c] <= 1)) return bad(ctx, "corrupt .prt file: volume albedo outside [0, 1]");
+    }
+    if (voxels > 128u * 128u * 128u) return bad(ctx, "corrupt .prt file: volume of more than 128^3 voxels");
+    if (prt__get32(p + 12) != (uint32_t)sh->order) return bad(ctx, "corrupt .prt file: volume transfer of another SH order than the transfer");
+    v.bands = (int)prt__get32(p + 16);
+    v.orders = (int)prt__get32(p + 20);
+    if (v.bands < 1 || v.bands > 2 || v.bands > sh->order) return bad(ctx, "corrupt .prt file: volume bands out of range");
+    if (v.orders < 1 || v.orders > 1000) return bad(ctx, "corrupt .prt file: volume orders of scattering out of range");
+    memcpy(&v.medium.sigma_t, p + 48, 4);
+    memcpy(&v.medium.g, p + 64, 4);
+    if (!(v.medium.sigma_t >= 0) || !isfinite(v.medium.sigma_t) || !(fabsf(v.medium.g) < 1)) return bad(ctx, "corrupt .prt file: volume extinction or g out of range");
+    const uint64_t n = (uint64_t)sh->order * sh->order, pd = 3 * (uint64_t)v.bands * v.bands * n;
+    if (in->size < VOLU_HEADER + voxels * 4) return bad(ctx, "corrupt .prt file: volume chunk size mismatch");
+    /* The densities say which voxels carry transfer; only then is the rest's size known. */
+    v.medium.density = malloc(voxels * 4);
+    if (!v.medium.density) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    memcpy(v.medium.density, p + VOLU_HEADER, voxels * 4);
+    bool ok = true;
+    for (uint64_t i = 0; ok && i < voxels; ++i) {
+        ok = v.medium.density[i] >= 0 && isfinite(v.medium.density[i]);
+        v.medium.max_density = fmaxf(v.medium.max_density, v.medium.density[i]);
+    }
+    if (!ok) { prt__sh_volume_free(&v); return bad(ctx, "corrupt .prt file: a volume density below zero or not a number"); }
+    uint64_t active = 0;
+    for (int z = 0; z < v.medium.dims[2]; ++z)
+        for (int y = 0; y < v.medium.dims[1]; ++y)
+            for (int x = 0; x < v.medium.dims[0]; ++x) active += prt__sh_volume_active(&v.medium, x, y, z);
+    const uint64_t halves = active * pd;
+    if (VOLU_HEADER + voxels * 4 + halves * 2 + (halves & 1) * 2 != in->size) { prt__sh_volume_free(&v); return bad(ctx, "corrupt .prt file: volume chunk size mismatch"); }
+    v.incident = prt__calloc(voxels * pd, 4);
+    if (!v.incident) { prt__sh_volume_free(&v); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    const unsigned char *q = p + VOLU_HEADER + voxels * 4;
+    uint64_t k2 = 0;
+    for (int z = 0; z < v.medium.dims[2]; ++z)
+        for (int y = 0; y < v.medium.dims[1]; ++y)
+            for (int x = 0; x < v.medium.dims[0]; ++x, ++k2) {
+                if (!prt__sh_volume_active(&v.medium, x, y, z)) continue;
+                for (uint64_t i = 0; i < pd; ++i, q += 2) v.incident[k2 * pd + i] = prt__half_to_float((uint16_t)(q[0] | q[1] << 8));
+            }
+    if (!prt__all_finite(v.incident, voxels * pd)) { prt__sh_volume_free(&v); return bad(ctx, "corrupt .prt file: non-finite volume transfer"); }
+    prt__sh_volume *grown = realloc(sh->volumes, (size_t)(sh->volume_count + 1) * sizeof *grown);
+    if (!grown) { prt__sh_volume_free(&v); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    sh->volumes = grown;
+    sh->volumes[sh->volume_count++] = v;
+    return PRT_OK;
+}
+
 prt_status prt__sh_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, prt__chunk_in *chunks, int count)
 {
     prt__sh_state *sh = prt__sh_state_new();
@@ -440,5 +545,6 @@ prt_status prt__sh_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, pr
     if (!st && prt__chunk_take(chunks, count, CHUNK_TXAL)) st = bad(ctx, "corrupt .prt file: two texel albedo chunks");
     if (!st && (in = prt__chunk_take(chunks, count, CHUNK_NBHD))) st = load_grid(ctx, sh, in);
     if (!st && prt__chunk_take(chunks, count, CHUNK_NBHD)) st = bad(ctx, "corrupt .prt file: two neighbourhood chunks");
+    while (!st && (in = prt__chunk_take(chunks, count, CHUNK_VOLU))) st = load_volume(ctx, sh, in);
     return st;
 }

@@ -30,6 +30,8 @@ void prt__sh_state_free(void *state)
     }
     prt__texel_sets_free(&s->texels);
     prt__sh_grid_free(&s->grid);
+    for (int k = 0; k < s->volume_count; ++k) prt__sh_volume_free(&s->volumes[k]);
+    free(s->volumes);
     prt__sh_frames_free(&s->frames);
     if (s->rays_ready) prt__raycaster_release(&s->rays);
     if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
@@ -357,6 +359,7 @@ static size_t sh_bytes(const prt_transfer *t)
             prt_transfer_compress_info(t, prt__kind_from_index(i), &ci);
             bytes += ci.bytes;
         }
+    for (int q = 0; q < s->volume_count; ++q) bytes += prt__sh_volume_bytes(&s->volumes[q], s->order);
     return bytes + texel_bytes(s) + grid_bytes(s);
 }
 
@@ -437,6 +440,27 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
             }
             cJSON_AddNumberToObject(g, "bytes", (double)grid_bytes(s));
         }
+        if (s->volume_count) {
+            cJSON *vs = cJSON_AddArrayToObject(j, "volumes");
+            for (int q = 0; q < s->volume_count; ++q) {
+                const prt__sh_volume *v = &s->volumes[q];
+                cJSON *o = cJSON_CreateObject(), *dims = cJSON_AddArrayToObject(o, "voxels"), *lo = cJSON_AddArrayToObject(o, "min"),
+                      *hi = cJSON_AddArrayToObject(o, "max"), *al = cJSON_AddArrayToObject(o, "albedo");
+                for (int c = 0; c < 3; ++c) {
+                    cJSON_AddItemToArray(dims, cJSON_CreateNumber(v->medium.dims[c]));
+                    cJSON_AddItemToArray(lo, cJSON_CreateNumber(v->medium.lo[c]));
+                    cJSON_AddItemToArray(hi, cJSON_CreateNumber(v->medium.hi[c]));
+                    cJSON_AddItemToArray(al, cJSON_CreateNumber(v->medium.albedo[c]));
+                }
+                cJSON_AddNumberToObject(o, "extinction", v->medium.sigma_t);
+                cJSON_AddNumberToObject(o, "g", v->medium.g);
+                cJSON_AddNumberToObject(o, "max_density", v->medium.max_density);
+                cJSON_AddNumberToObject(o, "bands", v->bands);
+                cJSON_AddNumberToObject(o, "orders_of_scattering", v->orders);
+                cJSON_AddNumberToObject(o, "bytes", (double)prt__sh_volume_bytes(v, s->order));
+                cJSON_AddItemToArray(vs, o);
+            }
+        }
         if (s->frames.count) {
             cJSON *fr = cJSON_AddObjectToObject(j, "key_frames");
             cJSON_AddNumberToObject(fr, "count", s->frames.count);
@@ -500,6 +524,15 @@ static void sh_describe(const prt_transfer *t, prt__describe *d)
         prt__describe_line(d, "neighbourhood:", "%d x %d x %d points from (%g, %g, %g) to (%g, %g, %g), %.2f MiB (prt render --probe)", s->grid.dims[0],
                            s->grid.dims[1], s->grid.dims[2], s->grid.lo[0], s->grid.lo[1], s->grid.lo[2], s->grid.hi[0], s->grid.hi[1], s->grid.hi[2],
                            grid_bytes(s) / 1048576.0);
+    for (int q = 0; q < s->volume_count; ++q) {
+        const prt__sh_volume *v = &s->volumes[q];
+        prt__describe_line(d, q ? "" : "volumes:", "%d x %d x %d voxels from (%g, %g, %g) to (%g, %g, %g): extinction %g x density (up to %g), albedo (%g, %g, %g), "
+                           "g %g; arriving light kept in %s, %d orders of scattering; %.2f MiB", v->medium.dims[0], v->medium.dims[1], v->medium.dims[2],
+                           v->medium.lo[0], v->medium.lo[1], v->medium.lo[2], v->medium.hi[0], v->medium.hi[1], v->medium.hi[2], v->medium.sigma_t,
+                           v->medium.max_density, v->medium.albedo[0], v->medium.albedo[1], v->medium.albedo[2], v->medium.g,
+                           v->bands == 2 ? "SH bands 0-1 (HG)" : "band 0 (isotropic)", v->orders,
+                           prt__sh_volume_bytes(v, s->order) / 1048576.0);
+    }
     if (s->frames.count) {
         const double held = (double)prt__sh_frames_bytes(s, nv), apart = (double)separate_frames_bytes(s, nv);
         const bool mib = apart >= 1048576.0;
@@ -692,6 +725,24 @@ static prt_status relight_with(prt_context *ctx, const prt_transfer *t, const pr
         if (!r->texels) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
         if ((st = prt_relight_sh_texels(ctx, t, prt__kind_from_index(k), shl, r->texels))) return st;
         if (local && (st = prt__relight_sh_texels_local(ctx, t, k, l, order, window, r->texels))) return st;
+    }
+    /* Volumes: the light their media scatter, for the renderer's ray march (distant light only). */
+    if (s->volume_count && !(r->volumes = prt__calloc((size_t)s->volume_count, sizeof *r->volumes))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (int q = 0; q < s->volume_count; ++q) {
+        const prt__sh_volume *v = &s->volumes[q];
+        const size_t voxels = prt__volume_voxels(&v->medium);
+        prt_render_volume *rv = &r->volumes[q];
+        float *ext = malloc(voxels * sizeof *ext), *src = malloc(voxels * 3 * (size_t)v->bands * v->bands * sizeof *src);
+        rv->extinction = ext;
+        rv->source = src;
+        r->volume_count = q + 1;
+        if (!ext || !src) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        memcpy(rv->dims, v->medium.dims, sizeof rv->dims);
+        memcpy(rv->lo, v->medium.lo, sizeof rv->lo);
+        memcpy(rv->hi, v->medium.hi, sizeof rv->hi);
+        rv->source_order = v->bands;
+        for (size_t i = 0; i < voxels; ++i) ext[i] = v->medium.sigma_t * v->medium.density[i];
+        prt__sh_volume_source(v, s->order, shl, src);
     }
     return PRT_OK;
 }

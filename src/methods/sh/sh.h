@@ -7,6 +7,7 @@
 #include "geom/raycast.h"
 #include "transfer/method.h"
 #include "prt/sh_transfer.h"
+#include "methods/sh/volume.h"
 
 #include <pthread.h>
 
@@ -70,6 +71,8 @@ typedef struct prt__sh_state {
     bool glossy_exit;                    /* glossy sets hold exit radiance (BRDF baked in) */
     prt__texel_sets texels;
     prt__sh_grid grid;
+    int volume_count;                    /* the scene's participating media (volume.c) */
+    prt__sh_volume *volumes;
     /* Key frames; sets[] then hold key frame 0 reconstructed (what relighting without a time uses). */
     prt__sh_frames frames;
     /* Shadow rays for the local-light reach check, built on first use under lock. */
