@@ -241,6 +241,8 @@ void prt__draw_free(prt__draw *d)
     if (d->vao) glDeleteVertexArrays(1, &d->vao);
     GLuint bufs[3] = {d->vbo_pos, d->vbo_rad, d->ibo};
     if (d->vbo_pos) glDeleteBuffers(3, bufs);
+    prt__sums_gl_free(&d->sums);
+    if (d->vbo_rad2) glDeleteBuffers(1, &d->vbo_rad2);
     memset(d, 0, sizeof *d);
 }
 
@@ -312,7 +314,23 @@ prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
         prt__draw_upload_kvec(d, m->kvec, m->vertex_count);
     }
     if (m->texel_radiance && m->texel_width > 0 && m->texel_height > 0) prt__draw_upload_texels(d, m->texel_radiance, m->texel_width, m->texel_height);
-    return prt__draw_upload_gpu(d, m);
+    prt_status st = prt__draw_upload_sums(d, m);
+    return st ? st : prt__draw_upload_gpu(d, m);
+}
+
+prt_status prt__draw_upload_sums(prt__draw *d, const prt_render_mesh *m)
+{
+    if (!m->gpu_sums) { d->sums.on_gpu = -1; return PRT_OK; }
+    glBindBuffer(GL_ARRAY_BUFFER, d->vbo_rad);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(m->vertex_count * 3 * sizeof(float)), m->radiance, GL_DYNAMIC_DRAW);
+    if (!d->vbo_rad2) glGenBuffers(1, &d->vbo_rad2);
+    if (d->rad2_vertices != m->vertex_count) {
+        glBindBuffer(GL_ARRAY_BUFFER, d->vbo_rad2);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(m->vertex_count * 3 * sizeof(float)), NULL, GL_DYNAMIC_COPY);
+        d->rad2_vertices = m->vertex_count;
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+    return prt__sums_gl_run(&d->sums, d->ctx, m, d->vbo_rad, d->vbo_rad2);
 }
 
 /* A display map: RGBA32F, filtered as the per-texel path samples it. */

@@ -281,6 +281,7 @@ void prt_relit_free(prt_relit *r)
     free(r->pixel_brdfs);
     free(r->gpu_input);
     free(r->gpu_pixel_direct);
+    free(r->gpu_vector);
     memset(r, 0, sizeof *r);
 }
 
@@ -375,6 +376,10 @@ void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render
         m->gpu_component = r->gpu_component;
         m->gpu_pixel_direct = r->gpu_pixel_direct;
     }
+    if (r->gpu_sums && r->gpu_vector) {
+        m->gpu_sums = r->gpu_sums;
+        m->gpu_vector = r->gpu_vector;
+    }
 }
 
 void prt_glossy_eval(int order, const float *exit_coeffs, int mirror, const float normal[3], const float to_eye[3], float rgb[3])
@@ -404,6 +409,11 @@ prt_status prt_relit_shade(prt_context *ctx, const prt_transfer *t, const prt_re
     if (prt_relit_view_dependent(r) && !eye) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this result is view-dependent: an eye position is required");
     const size_t nv = t->mesh.vertex_count;
     memcpy(rgb, r->radiance, nv * 3 * sizeof(float));
+    /* The light a renderer would have summed on the GPU, summed here. */
+    if (r->gpu_sums && r->gpu_vector) {
+        const prt_status st = prt_render_sums_cpu(r->gpu_sums, r->gpu_vector, nv, rgb);
+        if (st) return prt__fail(ctx, st, "%s", prt_last_error());
+    }
     if (r->exit_sh) {
         const size_t stride = 3 * (size_t)r->exit_order * r->exit_order;
         const float *P = t->mesh.positions, *N = t->mesh.normals;

@@ -76,6 +76,8 @@ typedef struct prt__sh_state {
     pthread_mutex_t *lock;
     prt__raycaster rays;
     bool rays_ready;
+    /* Diffuse sets' descriptions for the GPU (gpu.c), built on first use under lock. */
+    struct prt__gpu_sums *gpu[3];
 } prt__sh_state;
 
 extern const prt__method prt__method_sh;
@@ -152,6 +154,11 @@ void prt__sh_local_project(prt_context *ctx, const prt_lighting *l, int order, i
 prt_status prt__relight_sh_local(prt_context *ctx, const prt_transfer *t, int k, const float *local, int order, float *out_rgb);
 /* The same per texel (points from the file's UV layout), into a texel map. */
 prt_status prt__relight_sh_texels_local(prt_context *ctx, const prt_transfer *t, int k, const prt_lighting *l, int order, int window, float *out_rgb);
+
+/* Diffuse set k (0..2) relit for the GPU to finish (gpu.c): r gets zero radiance, the products
+ * and the frame's vector. prt__sh_gpu_can says whether set k can be. */
+bool prt__sh_gpu_can(const prt__sh_state *s, int k);
+prt_status prt__sh_gpu_relight(prt_context *ctx, const prt_transfer *t, int k, const prt_sh_light *light, prt_relit *r);
 
 /* prt export (export.c): --sh and --glsl. */
 prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);
