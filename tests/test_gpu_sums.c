@@ -1,6 +1,6 @@
 /* Every method relit on the GPU (prt_relight_desc.gpu_finish, prt_render_sums) gives what the CPU
  * gives, to float rounding: SH diffuse (raw, 8-bit quantized, clustered PCA), wavelet, spectral
- * bounces and the light cloud (clustered PCA and raw zones), in a pit with a sphere in it. Each
+ * bounces, the light cloud (clustered PCA and raw zones) and ambient occlusion, in a pit with a sphere in it. Each
  * description is summed on the CPU (prt_render_sums_cpu) and, where a GL 3.3 context can be made
  * (EGL surfaceless on llvmpipe without a GPU), on the GPU: the vertices' radiance read back and
  * the images drawn from both results. Without a context the GPU half skips, saying so. */
@@ -162,6 +162,18 @@ static void test_lightcloud(void **state)
     prt_context_release(ctx);
 }
 
+static void test_ao(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    prt_scene *s = pit_scene(ctx);
+    static const char *const opts[] = {"samples", "128", NULL};
+    const gpu_case c = {"ao", "ao", opts, 1, {-1, -1}};
+    run_case(ctx, s, &c);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
 static int teardown(void **state)
 {
     (void)state;
@@ -177,6 +189,7 @@ int main(void)
         cmocka_unit_test(test_wavelet),
         cmocka_unit_test(test_spectral),
         cmocka_unit_test(test_lightcloud),
+        cmocka_unit_test(test_ao),
     };
     return cmocka_run_group_tests(tests, NULL, teardown);
 }
