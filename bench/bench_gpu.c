@@ -77,6 +77,10 @@ static int bench_file(prt_context *ctx, prt_renderer *ren, int width, int height
         prt_lighting_set_environment(base, &(prt_environment_desc){0});
     }
     const size_t nv = prt_transfer_vertex_count(t);
+    if (!(prt_method_lighting(m) & PRT_LIGHTS_ENVIRONMENT)) {
+        prt_lighting_set_environment(l, &(prt_environment_desc){.none = 1});
+        prt_lighting_set_environment(base, &(prt_environment_desc){.none = 1});
+    }
     if (!(prt_method_lighting(m) & PRT_LIGHTS_ENVIRONMENT) && prt_lighting_count(l) == 0) {
         float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
         const float *p = prt_transfer_positions(t);

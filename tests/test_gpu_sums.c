@@ -174,6 +174,67 @@ static void test_ao(void **state)
     prt_context_release(ctx);
 }
 
+static void on_log(void *user, prt_log_level level, const char *msg)
+{
+    (void)level;
+    if (strstr(msg, "summed on the CPU instead of the GPU")) snprintf(user, 256, "%s", msg);
+}
+
+/* Where the GPU cannot hold a description (here a renderer told it has 1000 buffer texels), the
+ * renderer sums on the CPU, says so once, and draws the same; bad descriptions are refused. */
+static void test_fallback(void **state)
+{
+    (void)state;
+    char note[256] = "";
+    prt_context *ctx = NULL;
+    assert_int_equal(prt_context_create(&(prt_context_desc){.threads = 2, .log = on_log, .log_user = note}, &ctx), PRT_OK);
+    prt_scene *s = pit_scene(ctx);
+    static const char *const raw[] = {"order", "4", "samples", "64", "bounces", "1", NULL};
+    prt_transfer *t = test_bake_with(ctx, s, "sh", raw);
+    const size_t nv = prt_transfer_vertex_count(t);
+    prt_lighting *l = NULL;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    assert_int_equal(prt_lighting_set_envmap(l, band_limited_env(64), NULL, 1.0f), PRT_OK);
+    prt_relight_desc d = {.variant = -1, .gpu_finish = 1};
+    prt_relit r;
+    assert_int_equal(prt_relight(ctx, t, l, &d, &r), PRT_OK);
+    float *cpu = calloc(nv * 3, sizeof(float)), *back = malloc(nv * 3 * sizeof(float));
+    assert_int_equal(prt_render_sums_cpu(r.gpu_sums, r.gpu_vector, nv, cpu), PRT_OK);
+    prt_renderer *small = NULL;
+    if (prt_renderer_create(ctx, &(prt_renderer_desc){32, 32, 1}, &small)) {
+        print_message("skipping the GPU half: no OpenGL 3.3 context (%s)\n", prt_last_error());
+    } else {
+        prt_renderer_limit_buffer_texels(small, 1000);
+        prt_render_mesh m;
+        prt_relit_render_mesh(t, &r, &m);
+        assert_int_equal(prt_render_vertex_radiance(small, &m, back), PRT_OK);
+        assert_int_equal(prt_render_sums_on_gpu(small), 0);
+        assert_non_null(strstr(note, "texels exceed"));
+        print_message("note: %s\n", note);
+        for (size_t i = 0; i < nv * 3; ++i) assert_float_equal(back[i], cpu[i], 1e-6);
+        prt_renderer_release(small);
+    }
+    /* A product reading past its input is refused, naming it. */
+    prt_render_product bad = r.gpu_sums->products[0];
+    uint32_t *index = malloc(bad.start[bad.rows] * sizeof(uint32_t));
+    memcpy(index, bad.index, bad.start[bad.rows] * sizeof(uint32_t));
+    index[5] = 1000000;
+    bad.index = index;
+    prt_render_sums sums = *r.gpu_sums;
+    sums.products = &bad;
+    sums.product_count = 1;
+    assert_int_equal(prt_render_sums_cpu(&sums, r.gpu_vector, nv, cpu), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "product 0 reads row 1000000"));
+    free(index);
+    free(cpu);
+    free(back);
+    prt_relit_free(&r);
+    prt_lighting_release(l);
+    prt_transfer_release(t);
+    prt_scene_release(s);
+    prt_context_release(ctx);
+}
+
 static int teardown(void **state)
 {
     (void)state;
@@ -190,6 +251,7 @@ int main(void)
         cmocka_unit_test(test_spectral),
         cmocka_unit_test(test_lightcloud),
         cmocka_unit_test(test_ao),
+        cmocka_unit_test(test_fallback),
     };
     return cmocka_run_group_tests(tests, NULL, teardown);
 }

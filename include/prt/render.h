@@ -204,6 +204,9 @@ prt_status prt_render_vertex_radiance(prt_renderer *r, const prt_render_mesh *me
 /* Where mesh's gpu_sums were last evaluated: 1 on the GPU, 0 on the CPU (the GL limits or memory
  * did not allow), -1 when the mesh has none. */
 int prt_render_sums_on_gpu(const prt_renderer *r);
+/* Buffer-texture texels the GPU sums may use: 0 = what the GL allows (the default); fewer make
+ * bigger descriptions fall back to the CPU, as a smaller GPU would. */
+void prt_renderer_limit_buffer_texels(prt_renderer *r, size_t texels);
 /* A camera that frames the box [lo, hi] from direction `from` (towards the eye; NULL = a
  * default three-quarter view). */
 void prt_camera_frame(const float lo[3], const float hi[3], const float *from, float fov_y_deg,

@@ -120,6 +120,12 @@ prt_status prt_render_vertex_radiance(prt_renderer *r, const prt_render_mesh *me
 
 int prt_render_sums_on_gpu(const prt_renderer *r) { return r ? r->draw.sums.on_gpu : -1; }
 
+void prt_renderer_limit_buffer_texels(prt_renderer *r, size_t texels)
+{
+    r->draw.sums.max_texels = texels;
+    r->draw.sums.id = 0;   /* the next description is checked against the new limit */
+}
+
 prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_camera *cam, const float background[3], prt_image *out)
 {
     memset(out, 0, sizeof *out);

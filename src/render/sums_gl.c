@@ -128,8 +128,9 @@ static bool load(prt__sums_gl *g, const prt_render_sums *s, size_t vertex_count,
         if (p->rows + 1 > need) need = p->rows + 1;
         if (p->start[p->rows] > need) need = p->start[p->rows];
     }
+    if (g->max_texels && g->max_texels < (size_t)max_texels) max_texels = (GLint)g->max_texels;
     if (need > (size_t)max_texels) {
-        snprintf(why, why_size, "%zu texels exceed this GL's buffer textures (GL_MAX_TEXTURE_BUFFER_SIZE %d)", need, max_texels);
+        snprintf(why, why_size, "%zu texels exceed the buffer textures' %d (GL_MAX_TEXTURE_BUFFER_SIZE, or the renderer's limit)", need, max_texels);
         return false;
     }
     if (!(g->p = prt__calloc((size_t)s->product_count, sizeof *g->p))) { snprintf(why, why_size, "out of memory"); return false; }

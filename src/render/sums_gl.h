@@ -27,6 +27,7 @@ typedef struct prt__sums_gl {
     bool cpu;                     /* the description is evaluated on the CPU (limits, memory) */
     bool noted;
     int on_gpu;                   /* prt_render_sums_on_gpu */
+    size_t max_texels;            /* 0, or fewer buffer-texture texels than the GL allows */
 } prt__sums_gl;
 
 /* Radiance (vertex_count RGB, in buffer rad, which it replaces) plus the shown products of
