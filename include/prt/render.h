@@ -85,8 +85,8 @@ typedef struct prt_render_passes {
  *     y_k[r] = scale[r] * f(sum over entries e of row r of weight[e] * x_k[index[e]])
  * per channel, where x_k is the per-frame vector (prt_render_mesh.gpu_vector) when input is -1,
  * or product input's y (input < k); f clamps at zero when clamp is set; scale NULL is 1. Every
- * product with `shown` set has one row per vertex and is added to prt_render_mesh.radiance (the
- * part the CPU computed). A method builds the description once per file (lighting projected per
+ * product with `shown` set is added row by row to the first vertices' prt_render_mesh.radiance
+ * (the part the CPU computed; a mesh may have more vertices, a probe's sphere after them). A method builds the description once per file (lighting projected per
  * cluster, or a light vector, is all that changes per frame); the renderer uploads it once per id
  * into buffer textures and runs one transform-feedback pass per product. Where the GL limits or
  * memory do not allow, it evaluates the same products on the CPU and says so once. */

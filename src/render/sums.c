@@ -16,7 +16,7 @@ prt_status prt__render_sums_check(const prt_render_sums *s, size_t vertex_count)
         const size_t in = p->input < 0 ? s->vector_length : s->products[p->input].rows;
         if (!p->start || (p->start[p->rows] && (!p->index || !p->weight)) || p->rows > (size_t)INT32_MAX)
             return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: product %d lacks its arrays", k);
-        if (p->shown && p->rows != vertex_count)
+        if (p->shown && p->rows > vertex_count)
             return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: product %d has %zu rows for %zu vertices", k, p->rows, vertex_count);
         if (p->start[0] != 0) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: product %d's rows start at %u", k, p->start[0]);
         for (size_t r = 0; r < p->rows; ++r)
@@ -57,7 +57,7 @@ prt_status prt_render_sums_cpu(const prt_render_sums *s, const float *vector, si
     }
     for (int k = 0; !st && k < s->product_count; ++k)
         if (s->products[k].shown)
-            for (size_t i = 0; i < vertex_count * 3; ++i) rgb[i] += y[k][i];
+            for (size_t i = 0; i < s->products[k].rows * 3; ++i) rgb[i] += y[k][i];
     for (int k = 0; k < s->product_count; ++k) free(y[k]);
     free(y);
     return st;

@@ -269,13 +269,14 @@ prt_status prt__sums_gl_run(prt__sums_gl *g, const prt_context *ctx, const prt_r
         glUniform1i(g->c_base, 0);
         bind_tex(1, g->p[k].t_out, g->c_y);
         glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, rad2);
+        const size_t rows = s->products[k].rows;   /* the first vertices (a probe's sphere may follow) */
         glBeginTransformFeedback(GL_POINTS);
-        glDrawArrays(GL_POINTS, 0, (GLsizei)nv);
+        glDrawArrays(GL_POINTS, 0, (GLsizei)rows);
         glEndTransformFeedback();
         glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, 0);
         glBindBuffer(GL_COPY_READ_BUFFER, rad2);
         glBindBuffer(GL_COPY_WRITE_BUFFER, rad);
-        glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0, 0, (GLsizeiptr)(nv * 3 * sizeof(float)));
+        if (rows) glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0, 0, (GLsizeiptr)(rows * 3 * sizeof(float)));
     }
     glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, 0);
     glDisable(GL_RASTERIZER_DISCARD);
