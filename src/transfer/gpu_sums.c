@@ -28,9 +28,18 @@ prt_render_product *prt__gpu_sums_add(prt__gpu_sums *g, int input, size_t rows, 
     return p;
 }
 
+bool prt__gpu_sums_replace(prt__gpu_sums **slot, prt__gpu_sums *next)
+{
+    if (!next) return false;
+    next->replaced = *slot;
+    *slot = next;
+    return true;
+}
+
 void prt__gpu_sums_free(prt__gpu_sums *g)
 {
     if (!g) return;
+    prt__gpu_sums_free(g->replaced);
     for (int k = 0; k < g->sums.product_count; ++k) {
         free((void *)g->products[k].start);
         free((void *)g->products[k].index);

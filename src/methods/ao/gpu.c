@@ -51,11 +51,9 @@ prt_status prt__ao_gpu(prt_context *ctx, const prt_transfer *t, const prt_lighti
     for (int c = 0; c < 3; ++c) prt_sh_convolve_zh(sh.order, zh, 1, sh.coeffs[c]);
     pthread_mutex_lock(&build_lock);
     if (!s->gpu || !s->gpu_albedo || memcmp(s->gpu_albedo, albedo, nv * 3 * sizeof(float))) {
-        prt__gpu_sums_free(s->gpu);
-        s->gpu = build(t, s, albedo);
         if (!s->gpu_albedo) s->gpu_albedo = malloc(nv * 3 * sizeof(float));
-        if (s->gpu_albedo) memcpy(s->gpu_albedo, albedo, nv * 3 * sizeof(float));
-        if (!s->gpu || !s->gpu_albedo) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        if (!s->gpu_albedo || !prt__gpu_sums_replace(&s->gpu, build(t, s, albedo))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        else memcpy(s->gpu_albedo, albedo, nv * 3 * sizeof(float));
     }
     const prt__gpu_sums *g = s->gpu;
     pthread_mutex_unlock(&build_lock);

@@ -58,13 +58,10 @@ prt_status prt__sh_gpu_relight(prt_context *ctx, const prt_transfer *t, int k, c
     prt__sh_state *sh = t->state;
     const int order = light->order < sh->order ? light->order : sh->order, n = order * order;
     pthread_mutex_lock(sh->lock);
-    prt__gpu_sums *g = sh->gpu[k];
-    if (!g || g->key[1] != n) {
-        prt__gpu_sums_free(g);
-        g = sh->gpu[k] = build(t, sh, k, n);
-    }
+    if (!sh->gpu[k] || sh->gpu[k]->key[1] != n) prt__gpu_sums_replace(&sh->gpu[k], build(t, sh, k, n));
+    const prt__gpu_sums *g = sh->gpu[k];
     pthread_mutex_unlock(sh->lock);
-    if (!g) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!g || g->key[1] != n) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     prt_status st = prt__relit_alloc(ctx, t, r, false);
     if (st) return st;
     const size_t length = g->sums.vector_length;

@@ -71,11 +71,9 @@ prt_status prt__spectral_gpu(prt_context *ctx, const prt_transfer *t, const floa
     pthread_mutex_lock(&c->lock);
     /* The scales hold albedo: a run-time albedo (--albedo-of) makes a new description. */
     if (!c->gpu || c->gpu->key[0] != bounces || !c->gpu_albedo || memcmp(c->gpu_albedo, albedo, nv * 3 * sizeof(float))) {
-        prt__gpu_sums_free(c->gpu);
-        c->gpu = build(t, s, albedo, bounces);
         if (!c->gpu_albedo) c->gpu_albedo = malloc(nv * 3 * sizeof(float));
-        if (c->gpu_albedo) memcpy(c->gpu_albedo, albedo, nv * 3 * sizeof(float));
-        if (!c->gpu || !c->gpu_albedo) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        if (!c->gpu_albedo || !prt__gpu_sums_replace(&c->gpu, build(t, s, albedo, bounces))) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        else memcpy(c->gpu_albedo, albedo, nv * 3 * sizeof(float));
     }
     const prt__gpu_sums *g = c->gpu;
     pthread_mutex_unlock(&c->lock);
