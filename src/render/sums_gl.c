@@ -177,7 +177,9 @@ prt_status prt__sums_gl_run(prt__sums_gl *g, const prt_context *ctx, const prt_r
         drop_products(g);
         g->cpu = false;
         char why[200] = "";
-        if (!g->program && (!(g->program = link_tf(VS_PRODUCT, "y")) || !(g->combine = link_tf(VS_COMBINE, "rgb")))) {
+        if (!g->program) g->program = link_tf(VS_PRODUCT, "y");
+        if (g->program && !g->combine) g->combine = link_tf(VS_COMBINE, "rgb");
+        if (!g->program || !g->combine) {
             snprintf(why, sizeof why, "%s", prt_last_error());
             g->cpu = true;
         } else if (!load(g, s, nv, why, sizeof why)) {
@@ -189,7 +191,7 @@ prt_status prt__sums_gl_run(prt__sums_gl *g, const prt_context *ctx, const prt_r
             g->noted = true;
         }
         g->id = s->id;
-        if (g->program) {
+        if (g->program && g->combine) {
             g->u_start = glGetUniformLocation(g->program, "u_start");
             g->u_index = glGetUniformLocation(g->program, "u_index");
             g->u_weight = glGetUniformLocation(g->program, "u_weight");
