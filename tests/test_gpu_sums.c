@@ -1,5 +1,6 @@
 /* Every method relit on the GPU (prt_relight_desc.gpu_finish, prt_render_sums) gives what the CPU
- * gives, to float rounding: SH diffuse (raw, 8-bit quantized, clustered PCA), wavelet, spectral
+ * gives, to float rounding: SH diffuse (raw, 8-bit quantized, clustered PCA) and glossy (exit
+ * vectors, with a run-time lobe and with the BRDF baked in), wavelet, spectral
  * bounces, the light cloud (clustered PCA and raw zones) and ambient occlusion, in a pit with a sphere in it. Each
  * description is summed on the CPU (prt_render_sums_cpu) and, where a GL 3.3 context can be made
  * (EGL surfaceless on llvmpipe without a GPU), on the GPU: the vertices' radiance read back and
@@ -125,6 +126,90 @@ static void test_sh(void **state)
     prt_context_release(ctx);
 }
 
+/* Glossy SH: exit vectors summed on the GPU and drawn per pixel, against the CPU's exit_sh. */
+static void glossy_case(prt_context *ctx, int glossy_exit)
+{
+    test_mesh m = {0};
+    tm_pit(&m, 8);
+    tm_sphere(&m, (float[3]){0, 0.25f, 0}, 0.18f, 10, 16);
+    prt_scene *scene = tm_scene(ctx, &m, 0.4f);
+    tm_free(&m);
+    prt_brdf phong;
+    assert_int_equal(prt_brdf_parse("phong:8:0.5:0.3", &phong), PRT_OK);
+    assert_int_equal(prt_scene_set_brdf(scene, 0, prt_scene_vertex_count(scene), &phong), PRT_OK);
+    prt_bake_desc bd = {0};
+    bd.order = 4;
+    bd.samples = 128;
+    bd.kinds = PRT_TRANSFER_SHADOWED | PRT_TRANSFER_GLOSSY_SHADOWED;
+    bd.glossy_exit = glossy_exit;
+    prt_transfer *t = NULL;
+    assert_int_equal(prt_bake_sh(ctx, scene, &bd, &t), PRT_OK);
+    const size_t nv = prt_transfer_vertex_count(t);
+    prt_lighting *l = NULL;
+    assert_int_equal(prt_lighting_create(&l), PRT_OK);
+    assert_int_equal(prt_lighting_set_envmap(l, band_limited_env(64), NULL, 1.0f), PRT_OK);
+    prt_relight_desc cd = {.variant = prt_transfer_find_variant(t, "glossy-shadowed")}, gd = cd;
+    gd.gpu_finish = 1;
+    prt_relit cpu, gpu;
+    assert_int_equal(prt_relight(ctx, t, l, &cd, &cpu), PRT_OK);
+    assert_int_equal(prt_relight(ctx, t, l, &gd, &gpu), PRT_OK);
+    assert_non_null(cpu.exit_sh);
+    assert_null(gpu.exit_sh);
+    assert_non_null(gpu.gpu_sums);
+    const size_t ne = nv * 3 * 16;
+    float *e = malloc(ne * sizeof(float));
+    assert_int_equal(prt_render_sums_exit_cpu(gpu.gpu_sums, gpu.gpu_vector, nv, 4, e), PRT_OK);
+    double a, r, peak = 0;
+    for (size_t i = 0; i < ne; ++i) peak = fmax(peak, fabs(cpu.exit_sh[i]));
+    assert_true(peak > 1e-3);   /* the exit vectors carry light */
+    diff(e, cpu.exit_sh, ne, &a, &r);
+    print_message("sh glossy%-13s %6zu vertices  exit sums on the CPU: max abs %.3g, rel %.3g\n", glossy_exit ? " (baked)" : " (lobe)", nv, a, r);
+    assert_true(r < 2e-5);
+    prt_renderer *ren = get_renderer(ctx);
+    if (ren) {
+        prt_render_mesh gm, cm;
+        prt_relit_render_mesh(t, &gpu, &gm);
+        prt_relit_render_mesh(t, &cpu, &cm);
+        assert_int_equal(gm.exit_order, 4);
+        prt_camera cam;
+        prt_camera_frame_mesh(ctx, prt_transfer_positions(t), nv, prt_transfer_indices(t), prt_transfer_triangle_count(t), NULL, 0, 96.0f / 72.0f, &cam);
+        prt_image ig, ic;
+        assert_int_equal(prt_render(ren, &gm, &cam, NULL, &ig), PRT_OK);
+        assert_int_equal(prt_render_sums_on_gpu(ren), 1);
+        assert_int_equal(prt_render(ren, &cm, &cam, NULL, &ic), PRT_OK);
+        double ia, ir;
+        diff(ig.rgb, ic.rgb, (size_t)ig.width * ig.height * 3, &ia, &ir);
+        print_message("sh glossy%-13s %6s           images: max abs %.3g, rel %.3g\n", glossy_exit ? " (baked)" : " (lobe)", "", ia, ir);
+        assert_true(ir < 2e-3);
+        prt_image_free(&ig);
+        prt_image_free(&ic);
+    }
+    /* The CPU's view factor from the GPU's description: prt_relit_shade sums it there. */
+    float *sc = malloc(nv * 3 * sizeof(float)), *sg = malloc(nv * 3 * sizeof(float));
+    const float eye[3] = {0.8f, 1.2f, 1.5f};
+    assert_int_equal(prt_relit_shade(ctx, t, &cpu, eye, sc), PRT_OK);
+    assert_int_equal(prt_relit_shade(ctx, t, &gpu, eye, sg), PRT_OK);
+    diff(sg, sc, nv * 3, &a, &r);
+    assert_true(r < 2e-5);
+    free(sc);
+    free(sg);
+    free(e);
+    prt_relit_free(&cpu);
+    prt_relit_free(&gpu);
+    prt_lighting_release(l);
+    prt_transfer_release(t);
+    prt_scene_release(scene);
+}
+
+static void test_sh_glossy(void **state)
+{
+    (void)state;
+    prt_context *ctx = test_context(2);
+    glossy_case(ctx, 0);
+    glossy_case(ctx, 1);
+    prt_context_release(ctx);
+}
+
 static void test_wavelet(void **state)
 {
     (void)state;
@@ -247,6 +332,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sh),
+        cmocka_unit_test(test_sh_glossy),
         cmocka_unit_test(test_wavelet),
         cmocka_unit_test(test_spectral),
         cmocka_unit_test(test_lightcloud),

@@ -98,6 +98,10 @@ typedef struct prt_render_product {
     const float *weight;      /* [entries][3] */
     const float *scale;       /* [rows][3], or NULL */
     int clamp, shown;
+    /* Non-zero: the rows are the glossy exit SH coefficients (vertex v's coefficient i at row
+     * v * exit_order^2 + i; prt_render_mesh.exit_order), drawn in place of exit_sh (which may then
+     * be NULL). At most one product. */
+    int exit;
 } prt_render_product;
 
 typedef struct prt_render_sums {
@@ -110,6 +114,11 @@ typedef struct prt_render_sums {
 /* Adds the shown products of s, evaluated on the CPU from vector, to rgb (vertex_count RGB): the
  * same sums as the GPU's passes, to float rounding. */
 prt_status prt_render_sums_cpu(const prt_render_sums *s, const float *vector, size_t vertex_count, float *rgb);
+/* The exit product's rows on the CPU as prt_relit.exit_sh lays them out ([vertex][channel][n],
+ * n = order^2, vertex_count vertices); fails when s has none or its rows do not fit. */
+prt_status prt_render_sums_exit_cpu(const prt_render_sums *s, const float *vector, size_t vertex_count, int order, float *exit_sh);
+/* The exit product of s, or NULL. */
+const prt_render_product *prt_render_sums_exit_product(const prt_render_sums *s);
 
 /* Borrowed arrays describing what to draw. */
 typedef struct prt_render_mesh {

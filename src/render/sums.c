@@ -27,13 +27,19 @@ prt_status prt__render_sums_check(const prt_render_sums *s, size_t vertex_count)
     return PRT_OK;
 }
 
-prt_status prt_render_sums_cpu(const prt_render_sums *s, const float *vector, size_t vertex_count, float *rgb)
+const prt_render_product *prt_render_sums_exit_product(const prt_render_sums *s)
 {
-    if (!vector || !rgb) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_sums_cpu: vector and output are required");
-    prt_status st = prt__render_sums_check(s, vertex_count);
-    if (st) return st;
+    for (int k = 0; s && k < s->product_count; ++k)
+        if (s->products[k].exit) return &s->products[k];
+    return NULL;
+}
+
+/* Every product's rows (RGB), or NULL after recording why. */
+static float **eval_all(const prt_render_sums *s, const float *vector)
+{
+    prt_status st = PRT_OK;
     float **y = prt__calloc((size_t)s->product_count, sizeof *y);
-    if (!y) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    if (!y) { prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory"); return NULL; }
     for (int k = 0; !st && k < s->product_count; ++k) {
         const prt_render_product *p = &s->products[k];
         const float *x = p->input < 0 ? vector : y[p->input];
@@ -55,10 +61,49 @@ prt_status prt_render_sums_cpu(const prt_render_sums *s, const float *vector, si
             out[r * 3 + 2] = a2;
         }
     }
-    for (int k = 0; !st && k < s->product_count; ++k)
-        if (s->products[k].shown)
-            for (size_t i = 0; i < s->products[k].rows * 3; ++i) rgb[i] += y[k][i];
+    if (st) {
+        for (int k = 0; k < s->product_count; ++k) free(y[k]);
+        free(y);
+        return NULL;
+    }
+    return y;
+}
+
+static void free_all(const prt_render_sums *s, float **y)
+{
     for (int k = 0; k < s->product_count; ++k) free(y[k]);
     free(y);
-    return st;
+}
+
+prt_status prt_render_sums_cpu(const prt_render_sums *s, const float *vector, size_t vertex_count, float *rgb)
+{
+    if (!vector || !rgb) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_sums_cpu: vector and output are required");
+    prt_status st = prt__render_sums_check(s, vertex_count);
+    if (st) return st;
+    float **y = eval_all(s, vector);
+    if (!y) return PRT_ERR_NO_MEMORY;
+    for (int k = 0; k < s->product_count; ++k)
+        if (s->products[k].shown)
+            for (size_t i = 0; i < s->products[k].rows * 3; ++i) rgb[i] += y[k][i];
+    free_all(s, y);
+    return PRT_OK;
+}
+
+prt_status prt_render_sums_exit_cpu(const prt_render_sums *s, const float *vector, size_t vertex_count, int order, float *exit_sh)
+{
+    if (!vector || !exit_sh) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_sums_exit_cpu: vector and output are required");
+    prt_status st = prt__render_sums_check(s, vertex_count);
+    if (st) return st;
+    const prt_render_product *e = prt_render_sums_exit_product(s);
+    const size_t n = (size_t)order * order;
+    if (!e || order < 1 || e->rows != vertex_count * n)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: no exit product of %zu rows", vertex_count * n);
+    float **y = eval_all(s, vector);
+    if (!y) return PRT_ERR_NO_MEMORY;
+    const float *rows = y[e - s->products];
+    for (size_t v = 0; v < vertex_count; ++v)
+        for (size_t i = 0; i < n; ++i)
+            for (int c = 0; c < 3; ++c) exit_sh[(v * 3 + (size_t)c) * n + i] = rows[(v * n + i) * 3 + (size_t)c];
+    free_all(s, y);
+    return PRT_OK;
 }

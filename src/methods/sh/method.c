@@ -33,7 +33,7 @@ void prt__sh_state_free(void *state)
     prt__sh_grid_free(&s->grid);
     prt__sh_frames_free(&s->frames);
     if (s->rays_ready) prt__raycaster_release(&s->rays);
-    for (int i = 0; i < 3; ++i) prt__gpu_sums_free(s->gpu[i]);
+    for (int i = 0; i < PRT__KIND_COUNT; ++i) prt__gpu_sums_free(s->gpu[i]);
     if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
     free(s);
 }
@@ -662,9 +662,11 @@ static prt_status relight_with(prt_context *ctx, const prt_transfer *t, const pr
                          prt__kind_glossy(k) ? " (diffuse and glossy)" : "");
     if (d->component == PRT_COMPONENT_DIRECT) k = prt__kind_glossy(k) ? 3 : 1;
     else if (d->component == PRT_COMPONENT_INDIRECT) k = prt__kind_glossy(k) ? 4 : 2;
-    /* Diffuse light from distant lighting, drawn per vertex: the GPU sums it (gpu.c). Local
-     * lights (lighting per vertex), glossy sets, per-texel maps and split components stay here. */
-    if (d->gpu_finish && !local && !d->with_indirect && prt__sh_gpu_can(s, k) && !(!d->per_vertex && d->component == PRT_COMPONENT_ALL && s->texels.coeffs[k]))
+    /* Light from distant lighting, drawn per vertex: the GPU sums it (gpu.c). Local lights
+     * (lighting per vertex), compressed glossy sets, per-texel maps and the indirect part (a
+     * difference of two sets) stay here. */
+    if (d->gpu_finish && !local && !d->with_indirect && d->component != PRT_COMPONENT_INDIRECT && prt__sh_gpu_can(s, k, d) &&
+        !(!d->per_vertex && d->component == PRT_COMPONENT_ALL && k <= 2 && s->texels.coeffs[k]))
         return prt__sh_gpu_relight(ctx, t, k, shl, r);
     const bool want_indirect = (d->with_indirect || d->component == PRT_COMPONENT_INDIRECT) && split_ok && (k == 2 || k == 4);
     if ((st = prt__relit_alloc(ctx, t, r, want_indirect))) return st;

@@ -77,7 +77,7 @@ typedef struct prt__sh_state {
     prt__raycaster rays;
     bool rays_ready;
     /* Diffuse sets' descriptions for the GPU (gpu.c), built on first use under lock. */
-    struct prt__gpu_sums *gpu[3];
+    struct prt__gpu_sums *gpu[PRT__KIND_COUNT];
 } prt__sh_state;
 
 extern const prt__method prt__method_sh;
@@ -155,9 +155,11 @@ prt_status prt__relight_sh_local(prt_context *ctx, const prt_transfer *t, int k,
 /* The same per texel (points from the file's UV layout), into a texel map. */
 prt_status prt__relight_sh_texels_local(prt_context *ctx, const prt_transfer *t, int k, const prt_lighting *l, int order, int window, float *out_rgb);
 
-/* Diffuse set k (0..2) relit for the GPU to finish (gpu.c): r gets zero radiance, the products
- * and the frame's vector. prt__sh_gpu_can says whether set k can be. */
-bool prt__sh_gpu_can(const prt__sh_state *s, int k);
+/* Set k relit for the GPU to finish (gpu.c): r gets zero radiance, the products and the frame's
+ * vector (glossy sets: exit order and mirror too, exit_sh left NULL). prt__sh_gpu_can says
+ * whether set k can be (diffuse sets; raw glossy sets with a raw or no diffuse part, the
+ * materials' own lobes). */
+bool prt__sh_gpu_can(const prt__sh_state *s, int k, const prt_relight_desc *d);
 prt_status prt__sh_gpu_relight(prt_context *ctx, const prt_transfer *t, int k, const prt_sh_light *light, prt_relit *r);
 
 /* prt export (export.c): --sh and --glsl. */
