@@ -111,8 +111,12 @@ expect 0 "render offset on the CPU, point light" -- $NOLEAK "$PRT" render -q "$T
 expect 0 "GPU and CPU draw a point light alike" -- "$PRT" compare --json "$T/cmp.json" "$T/offset_gpu2.exr" "$T/offset_cpu2.exr"
 r=$(sed -n 's/.*"relative_l2":[[:space:]]*\([-0-9.eE+]*\).*/\1/p' "$T/cmp.json" | head -n 1)
 awk -v r="$r" 'BEGIN { exit !(r != "" && r + 0 < 1e-3) }' && ok || bad "GPU and CPU offset renders under a point light differ by relative L2 '$r'"
-expect 2 "--accumulate of an SH file" -- "$PRT" render "$T/demo.prt" --accumulate gpu -o "$T/x.png"
-says "methods with GPU passes (offset)"
+# Per-vertex methods sum on the GPU too (transform feedback): the same picture as the CPU's.
+expect 0 "render SH on the GPU" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -o "$T/sh_gpu.exr" --width 64 --height 48 --accumulate gpu
+expect 0 "render SH on the CPU" -- $NOLEAK "$PRT" render -q "$T/demo.prt" -o "$T/sh_cpu.exr" --width 64 --height 48 --accumulate cpu
+expect 0 "GPU and CPU SH sums draw the same" -- "$PRT" compare --json "$T/cmp.json" "$T/sh_gpu.exr" "$T/sh_cpu.exr"
+r=$(sed -n 's/.*"relative_l2":[[:space:]]*\([-0-9.eE+]*\).*/\1/p' "$T/cmp.json" | head -n 1)
+awk -v r="$r" 'BEGIN { exit !(r != "" && r + 0 < 1e-3) }' && ok || bad "GPU and CPU SH renders differ (relative L2 '$r')"
 expect 2 "--accumulate gpu with --per-vertex" -- "$PRT" render "$T/offset.prt" --accumulate gpu --per-vertex -o "$T/x.png"
 expect 2 "--accumulate nonsense" -- "$PRT" render "$T/offset.prt" --accumulate fpga -o "$T/x.png"
 mkdir -p "$T/maps" && : >"$T/maps/radiosity_0999.exr" && : >"$T/maps/mine.txt"

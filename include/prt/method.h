@@ -433,6 +433,12 @@ typedef struct prt_relit {
      * by the result. NULL / 0 when the file holds none. */
     prt_render_volume *volumes;
     int volume_count;
+    /* With desc.gpu_finish, for methods whose per-vertex light the GPU finishes: the products
+     * (borrowed from the transfer) and the per-frame vector they start from (vector_length RGB);
+     * radiance then holds only what the CPU computed, and the products' shown rows add the rest
+     * (prt_render_sums). NULL otherwise. */
+    const prt_render_sums *gpu_sums;
+    float *gpu_vector;
 } prt_relit;
 
 /* The PRT_LIGHTS_* bits relighting t under lighting needs: what the lighting holds, with

@@ -79,6 +79,47 @@ typedef struct prt_render_passes {
     prt_render_map_set scatter, bounce;
 } prt_render_passes;
 
+/* ---- Per-vertex light finished on the GPU ----
+ * Sparse products over RGB vectors, described as data (the renderer knows no method): product k
+ * computes for each of its rows r
+ *     y_k[r] = scale[r] * f(sum over entries e of row r of weight[e] * x_k[index[e]])
+ * per channel, where x_k is the per-frame vector (prt_render_mesh.gpu_vector) when input is -1,
+ * or product input's y (input < k); f clamps at zero when clamp is set; scale NULL is 1. Every
+ * product with `shown` set is added row by row to the first vertices' prt_render_mesh.radiance
+ * (the part the CPU computed; a mesh may have more vertices, a probe's sphere after them). A method builds the description once per file (lighting projected per
+ * cluster, or a light vector, is all that changes per frame); the renderer uploads it once per id
+ * into buffer textures and runs one transform-feedback pass per product. Where the GL limits or
+ * memory do not allow, it evaluates the same products on the CPU and says so once. */
+typedef struct prt_render_product {
+    int input;                /* -1: gpu_vector; j < k: product j's rows */
+    size_t rows;
+    const uint32_t *start;    /* [rows + 1] row r's entries are start[r] .. start[r + 1] - 1 */
+    const uint32_t *index;    /* [entries] the input row each entry reads */
+    const float *weight;      /* [entries][3] */
+    const float *scale;       /* [rows][3], or NULL */
+    int clamp, shown;
+    /* Non-zero: the rows are the glossy exit SH coefficients (vertex v's coefficient i at row
+     * v * exit_order^2 + i; prt_render_mesh.exit_order), drawn in place of exit_sh (which may then
+     * be NULL). At most one product. */
+    int exit;
+} prt_render_product;
+
+typedef struct prt_render_sums {
+    uint64_t id;              /* the renderer keeps one upload per id: equal ids describe equal data */
+    size_t vector_length;     /* RGB entries of gpu_vector */
+    int product_count;
+    const prt_render_product *products;
+} prt_render_sums;
+
+/* Adds the shown products of s, evaluated on the CPU from vector, to rgb (vertex_count RGB): the
+ * same sums as the GPU's passes, to float rounding. */
+prt_status prt_render_sums_cpu(const prt_render_sums *s, const float *vector, size_t vertex_count, float *rgb);
+/* The exit product's rows on the CPU as prt_relit.exit_sh lays them out ([vertex][channel][n],
+ * n = order^2, vertex_count vertices); fails when s has none or its rows do not fit. */
+prt_status prt_render_sums_exit_cpu(const prt_render_sums *s, const float *vector, size_t vertex_count, int order, float *exit_sh);
+/* The exit product of s, or NULL. */
+const prt_render_product *prt_render_sums_exit_product(const prt_render_sums *s);
+
 /* Borrowed arrays describing what to draw. */
 /* A participating medium the renderer ray-marches over the surfaces (depth-correct: each pixel's
  * march ends at the first surface it meets): dims voxels spanning lo..hi (x fastest; values at
@@ -159,6 +200,11 @@ typedef struct prt_render_mesh {
      * max(first + emission - gpu_pixel_direct, 0) (plus the bounces), as the CPU's map.
      * NULL = none. */
     const float *gpu_pixel_direct;
+    /* Optional: per-vertex light the GPU adds to radiance (prt_render_sums above) from the
+     * per-frame vector gpu_vector (vector_length RGB). prt_relit_render_mesh fills these from
+     * what relighting with prt_relight_desc.gpu_finish gave. */
+    const struct prt_render_sums *gpu_sums;
+    const float *gpu_vector;
     /* With gpu_passes: the first-order light map on the left half of the image, the final one
      * on the right (the paper's side-by-side viewer). */
     int side_by_side;
@@ -181,6 +227,15 @@ prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_ca
  * first_rgb (may be NULL) the first-order map; else texel_radiance as uploaded.
  * Fails when the mesh draws no per-texel map, or first_rgb is asked of one not GPU-finished. */
 prt_status prt_render_light_map(prt_renderer *r, const prt_render_mesh *mesh, float *rgb, float *first_rgb);
+/* The per-vertex radiance the renderer draws for mesh (vertex_count RGB) read back: radiance
+ * plus what gpu_sums added on the GPU (or on the CPU where the GPU could not). */
+prt_status prt_render_vertex_radiance(prt_renderer *r, const prt_render_mesh *mesh, float *rgb);
+/* Where mesh's gpu_sums were last evaluated: 1 on the GPU, 0 on the CPU (the GL limits or memory
+ * did not allow), -1 when the mesh has none. */
+int prt_render_sums_on_gpu(const prt_renderer *r);
+/* Buffer-texture texels the GPU sums may use: 0 = what the GL allows (the default); fewer make
+ * bigger descriptions fall back to the CPU, as a smaller GPU would. */
+void prt_renderer_limit_buffer_texels(prt_renderer *r, size_t texels);
 /* A camera that frames the box [lo, hi] from direction `from` (towards the eye; NULL = a
  * default three-quarter view). */
 void prt_camera_frame(const float lo[3], const float hi[3], const float *from, float fov_y_deg,
@@ -246,6 +301,9 @@ void prt_window_set_texels(prt_window *w, const float *rgb, int width, int heigh
 /* Replaces the GPU-finished input (mesh's gpu_* fields, the transfer given to set_mesh) and runs
  * the accumulation passes again; side_by_side as in prt_render_mesh. */
 void prt_window_set_gpu_input(prt_window *w, const prt_render_mesh *mesh);
+/* Replaces the per-vertex radiance and runs the mesh's gpu_sums again from its gpu_vector (the
+ * description given to set_mesh, or a new one). */
+void prt_window_set_gpu_sums(prt_window *w, const prt_render_mesh *mesh);
 /* Replaces the glossy exit coefficients (same layout and order as given to set_mesh). */
 void prt_window_set_exit(prt_window *w, const float *exit_sh, size_t vertex_count);
 /* Replaces the wavelet K-vectors (same layout as prt_render_mesh.kvec). */

@@ -243,6 +243,8 @@ void prt__draw_free(prt__draw *d)
     if (d->vao) glDeleteVertexArrays(1, &d->vao);
     GLuint bufs[3] = {d->vbo_pos, d->vbo_rad, d->ibo};
     if (d->vbo_pos) glDeleteBuffers(3, bufs);
+    prt__sums_gl_free(&d->sums);
+    if (d->vbo_rad2) glDeleteBuffers(1, &d->vbo_rad2);
     memset(d, 0, sizeof *d);
 }
 
@@ -259,7 +261,8 @@ prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, NULL);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d->ibo);
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(m->triangle_count * 3 * sizeof(uint32_t)), m->indices, GL_STATIC_DRAW);
-    d->exit_order = m->exit_sh && m->normals && m->exit_order >= 1 && m->exit_order <= PRT_SH_MAX_ORDER ? m->exit_order : 0;
+    const bool exit_given = m->exit_sh || (m->gpu_sums && prt_render_sums_exit_product(m->gpu_sums));   /* or summed on the GPU */
+    d->exit_order = exit_given && m->normals && m->exit_order >= 1 && m->exit_order <= PRT_SH_MAX_ORDER ? m->exit_order : 0;
     d->exit_mirror = m->exit_mirror;
     d->kvec_terms = m->kvec && m->normals && m->view_set && m->view_maps && m->kvec_terms >= 1 && m->view_map_sets >= 1 &&
                             m->view_map_resolution >= 1 ? m->kvec_terms : 0;
@@ -286,7 +289,7 @@ prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     prt__draw_set_lights(d, m);
     prt__volume_gl_upload(&d->volumes, m->volumes, m->volumes ? m->volume_count : 0);
     d->lights.dirty = true;   /* new geometry casts new shadows */
-    if (d->exit_order) prt__draw_upload_exit(d, m->exit_sh, m->vertex_count);
+    if (d->exit_order && m->exit_sh) prt__draw_upload_exit(d, m->exit_sh, m->vertex_count);
     if (d->kvec_terms) {
         free(d->view_set);
         d->view_set = malloc(m->vertex_count);
@@ -315,7 +318,43 @@ prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
         prt__draw_upload_kvec(d, m->kvec, m->vertex_count);
     }
     if (m->texel_radiance && m->texel_width > 0 && m->texel_height > 0) prt__draw_upload_texels(d, m->texel_radiance, m->texel_width, m->texel_height);
-    return prt__draw_upload_gpu(d, m);
+    prt_status st = prt__draw_upload_sums(d, m);
+    return st ? st : prt__draw_upload_gpu(d, m);
+}
+
+prt_status prt__draw_upload_sums(prt__draw *d, const prt_render_mesh *m)
+{
+    if (!m->gpu_sums) { d->sums.on_gpu = -1; return PRT_OK; }
+    glBindBuffer(GL_ARRAY_BUFFER, d->vbo_rad);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(m->vertex_count * 3 * sizeof(float)), m->radiance, GL_DYNAMIC_DRAW);
+    if (!d->vbo_rad2) glGenBuffers(1, &d->vbo_rad2);
+    if (d->rad2_vertices != m->vertex_count) {
+        glBindBuffer(GL_ARRAY_BUFFER, d->vbo_rad2);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(m->vertex_count * 3 * sizeof(float)), NULL, GL_DYNAMIC_COPY);
+        d->rad2_vertices = m->vertex_count;
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+    prt_status st = prt__sums_gl_run(&d->sums, d->ctx, m, d->vbo_rad, d->vbo_rad2);
+    const prt_render_product *e = prt_render_sums_exit_product(m->gpu_sums);
+    if (st || !e || !d->exit_order) return st;
+    const size_t n = (size_t)d->exit_order * d->exit_order;
+    if (e->rows != m->vertex_count * n) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: %zu exit rows for %zu vertices of order %d", e->rows, m->vertex_count, d->exit_order);
+    if (d->sums.on_gpu == 1) {   /* the rows are the exit buffer texture's texels already */
+        glBindBuffer(GL_COPY_READ_BUFFER, d->sums.p[e - m->gpu_sums->products].out);
+        glBindBuffer(GL_COPY_WRITE_BUFFER, d->tbo);
+        glBufferData(GL_COPY_WRITE_BUFFER, (GLsizeiptr)(e->rows * 4 * sizeof(float)), NULL, GL_DYNAMIC_DRAW);
+        glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0, 0, (GLsizeiptr)(e->rows * 4 * sizeof(float)));
+        glBindTexture(GL_TEXTURE_BUFFER, d->tbo_tex);
+        glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, d->tbo);
+        glBindTexture(GL_TEXTURE_BUFFER, 0);
+        return PRT_OK;
+    }
+    float *exit_sh = malloc(m->vertex_count * 3 * n * sizeof(float));
+    if (!exit_sh) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+    st = prt_render_sums_exit_cpu(m->gpu_sums, m->gpu_vector, m->vertex_count, d->exit_order, exit_sh);
+    if (!st) prt__draw_upload_exit(d, exit_sh, m->vertex_count);
+    free(exit_sh);
+    return st;
 }
 
 /* A display map: RGBA32F, filtered as the per-texel path samples it. */

@@ -9,6 +9,7 @@
 #include "render/light_map_gl.h"
 #include "render/pixel_lights.h"
 #include "render/volume_gl.h"
+#include "render/sums_gl.h"
 
 #include <epoxy/gl.h>
 
@@ -45,6 +46,11 @@ typedef struct prt__draw {
     int gpu_width, gpu_height;   /* tex and tex_first allocated as render targets of this size (0: not) */
     /* Participating media as slices (the window's; prt_render ray-marches them on the CPU). */
     prt__volume_gl volumes;
+    /* Per-vertex light finished on the GPU (prt_render_sums) into vbo_rad; vbo_rad2 its scratch. */
+    prt__sums_gl sums;
+    GLuint vbo_rad2;
+    size_t rad2_vertices;
+    const prt_context *ctx;      /* where notes go (the renderer's), may be NULL */
 } prt__draw;
 
 /* Compiles and links vs (+ gs, may be NULL) + fs; 0 after recording the compiler's message. */
@@ -60,6 +66,9 @@ prt_status prt__draw_upload_gpu(prt__draw *d, const prt_render_mesh *mesh);
 /* Replaces the lights drawn per pixel, the albedo and glossy materials they shade (mesh's lights,
  * albedo, light_visibility, light_material; none when it has no lights, albedo or normals). */
 void prt__draw_set_lights(prt__draw *d, const prt_render_mesh *mesh);
+/* Replaces the vertices' radiance with mesh's radiance plus its gpu_sums from gpu_vector (when
+ * it has them). */
+prt_status prt__draw_upload_sums(prt__draw *d, const prt_render_mesh *mesh);
 /* Replaces the per-texel radiance map; NULL turns the per-texel path off (vertex radiance). */
 void prt__draw_upload_texels(prt__draw *d, const float *rgb, int width, int height);
 /* Replaces the glossy exit coefficients (mesh layout: vertex, channel, coefficient). */

@@ -62,6 +62,7 @@ prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, 
     snprintf(r->name, sizeof r->name, "%s", (const char *)glGetString(GL_RENDERER));
     prt_status st = prt__draw_init(&r->draw);
     if (st) { prt_renderer_release(r); return prt__fail(ctx, st, "%s", prt_last_error()); }
+    r->draw.ctx = ctx;
 
     st = prt__target_init(&r->target, d.width, d.height, d.samples);
     if (st) { prt_renderer_release(r); return prt__fail(ctx, st, "%s", prt_last_error()); }
@@ -109,6 +110,27 @@ prt_status prt_render_light_map(prt_renderer *r, const prt_render_mesh *mesh, fl
 void prt_renderer_set_volume_slices(prt_renderer *r, int on)
 {
     if (r) r->volume_slices = on != 0;
+}
+
+prt_status prt_render_vertex_radiance(prt_renderer *r, const prt_render_mesh *mesh, float *rgb)
+{
+    if (!r || !mesh || !rgb || !mesh->positions || !mesh->radiance || !mesh->indices)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_vertex_radiance: renderer, mesh arrays and output are required");
+    eglMakeCurrent(r->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, r->egl);
+    prt_status st = prt__draw_upload(&r->draw, mesh);
+    if (st) return st;
+    glBindBuffer(GL_ARRAY_BUFFER, r->draw.vbo_rad);
+    glGetBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)(mesh->vertex_count * 3 * sizeof(float)), rgb);
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+    return PRT_OK;
+}
+
+int prt_render_sums_on_gpu(const prt_renderer *r) { return r ? r->draw.sums.on_gpu : -1; }
+
+void prt_renderer_limit_buffer_texels(prt_renderer *r, size_t texels)
+{
+    r->draw.sums.max_texels = texels;
+    r->draw.sums.id = 0;   /* the next description is checked against the new limit */
 }
 
 prt_status prt_render(prt_renderer *r, const prt_render_mesh *mesh, const prt_camera *cam, const float background[3], prt_image *out)

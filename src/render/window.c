@@ -157,6 +157,7 @@ prt_status prt_window_create(prt_context *ctx, const prt_window_desc *desc, prt_
     int fw, fh;
     glfwGetFramebufferSize(w->win, &fw, &fh);
     prt_status st = prt__draw_init(&w->draw);
+    w->draw.ctx = ctx;
     if (!st) st = prt__target_init(&w->target, fw, fh, d.samples);
     w->tm_program = st ? 0 : program(TM_VS, TM_FS);
     w->text_program = st ? 0 : program(TEXT_VS, TEXT_FS);
@@ -216,6 +217,12 @@ void prt_window_set_gpu_input(prt_window *w, const prt_render_mesh *mesh)
 {
     glfwMakeContextCurrent(w->win);
     uploaded(w, prt__draw_upload_gpu(&w->draw, mesh));
+}
+
+void prt_window_set_gpu_sums(prt_window *w, const prt_render_mesh *mesh)
+{
+    glfwMakeContextCurrent(w->win);
+    uploaded(w, prt__draw_upload_sums(&w->draw, mesh));
 }
 
 void prt_window_set_lights(prt_window *w, const prt_render_mesh *mesh)

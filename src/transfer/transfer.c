@@ -286,6 +286,7 @@ void prt_relit_free(prt_relit *r)
         free((void *)r->volumes[k].source);
     }
     free(r->volumes);
+    free(r->gpu_vector);
     memset(r, 0, sizeof *r);
 }
 
@@ -340,7 +341,10 @@ unsigned prt_relight_needs(const prt_transfer *t, const prt_lighting *l)
     return what;
 }
 
-int prt_relit_view_dependent(const prt_relit *r) { return r && (r->exit_sh || r->kvec || (r->pixel_lights && r->pixel_material)); }
+int prt_relit_view_dependent(const prt_relit *r)
+{
+    return r && (r->exit_sh || (r->gpu_sums && prt_render_sums_exit_product(r->gpu_sums)) || r->kvec || (r->pixel_lights && r->pixel_material));
+}
 
 void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render_mesh *m)
 {
@@ -353,7 +357,7 @@ void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render
     m->uv = prt__mesh_has_uv(&t->mesh) ? t->mesh.uv : NULL;
     m->radiance = r->radiance;
     m->exit_sh = r->exit_sh;
-    m->exit_order = r->exit_sh ? r->exit_order : 0;
+    m->exit_order = r->exit_sh || (r->gpu_sums && prt_render_sums_exit_product(r->gpu_sums)) ? r->exit_order : 0;
     m->exit_mirror = r->exit_mirror;
     m->texel_radiance = r->texels;
     m->texel_width = r->texel_width;
@@ -381,6 +385,10 @@ void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render
         m->gpu_bounces = r->gpu_bounces;
         m->gpu_component = r->gpu_component;
         m->gpu_pixel_direct = r->gpu_pixel_direct;
+    }
+    if (r->gpu_sums && r->gpu_vector) {
+        m->gpu_sums = r->gpu_sums;
+        m->gpu_vector = r->gpu_vector;
     }
 }
 
@@ -411,15 +419,29 @@ prt_status prt_relit_shade(prt_context *ctx, const prt_transfer *t, const prt_re
     if (prt_relit_view_dependent(r) && !eye) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "this result is view-dependent: an eye position is required");
     const size_t nv = t->mesh.vertex_count;
     memcpy(rgb, r->radiance, nv * 3 * sizeof(float));
-    if (r->exit_sh) {
+    /* The light a renderer would have summed on the GPU, summed here. */
+    if (r->gpu_sums && r->gpu_vector) {
+        const prt_status st = prt_render_sums_cpu(r->gpu_sums, r->gpu_vector, nv, rgb);
+        if (st) return prt__fail(ctx, st, "%s", prt_last_error());
+    }
+    /* Exit coefficients the GPU would have summed, summed here. */
+    float *gpu_exit = NULL;
+    if (!r->exit_sh && r->gpu_sums && prt_render_sums_exit_product(r->gpu_sums)) {
+        if (!(gpu_exit = malloc(nv * 3 * (size_t)r->exit_order * r->exit_order * sizeof(float)))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        const prt_status st = prt_render_sums_exit_cpu(r->gpu_sums, r->gpu_vector, nv, r->exit_order, gpu_exit);
+        if (st) { free(gpu_exit); return prt__fail(ctx, st, "%s", prt_last_error()); }
+    }
+    const float *exit_sh = r->exit_sh ? r->exit_sh : gpu_exit;
+    if (exit_sh) {
         const size_t stride = 3 * (size_t)r->exit_order * r->exit_order;
         const float *P = t->mesh.positions, *N = t->mesh.normals;
         for (size_t v = 0; v < nv; ++v) {
             float to_eye[3] = {eye[0] - P[v * 3], eye[1] - P[v * 3 + 1], eye[2] - P[v * 3 + 2]}, g[3];
-            prt_glossy_eval(r->exit_order, r->exit_sh + v * stride, r->exit_mirror, N + v * 3, to_eye, g);
+            prt_glossy_eval(r->exit_order, exit_sh + v * stride, r->exit_mirror, N + v * 3, to_eye, g);
             for (int c = 0; c < 3; ++c) rgb[v * 3 + c] += g[c];
         }
     }
+    free(gpu_exit);
     if ((r->kvec || r->pixel_lights) && t->method->shade) return t->method->shade(ctx, t, r, eye, rgb);
     return PRT_OK;
 }

@@ -759,7 +759,7 @@ bool cli_check_accumulate(const cli *c, const prt_transfer *t, bool per_vertex)
                   prt_method_name(prt_transfer_method(t)));
         return false;
     }
-    if (per_vertex) {
+    if (per_vertex && prt_method_light_map(prt_transfer_method(t))) {
         cli_error(c, "--accumulate gpu draws the light map per texel; --per-vertex asks for vertex colours");
         return false;
     }

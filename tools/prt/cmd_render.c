@@ -39,9 +39,11 @@ static const char *HELP =
     "                         and lit by the scene as an object moved there; repeatable (8)\n"
     "      --per-vertex       shade from the vertex sets even where the file has per-texel ones,\n"
     "                         and evaluate view-dependent parts per vertex rather than per pixel\n"
-    "      --accumulate W     files whose method has GPU passes (prt info says): where the passes\n"
-    "                         run - cpu (default: threads) or gpu (the maps binned into atlases,\n"
-    "                         accumulated by additive blending); the same light map either way\n"
+    "      --accumulate W     files whose method has GPU passes (prt info says): where the last\n"
+    "                         sums run - cpu (default: threads) or gpu (offset maps binned into\n"
+    "                         atlases and blended; the other methods' per-vertex sums - transfer\n"
+    "                         rows, CPCA weights, sparse rows, bounces - as transform-feedback\n"
+    "                         passes over buffer textures); the same image either way\n"
     "  -j, --threads N        worker threads for relighting\n"
     "  -q, --quiet            no messages\n"
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
@@ -126,6 +128,7 @@ int cmd_render(int argc, char **argv)
     char kind_buf[512];
     const char *output = NULL;
     bool per_vertex = false;
+    int gpu_asked = 0, gpu_taken = 0;   /* panels relit with --accumulate gpu, and those whose sums the renderer got */
     cli_view view = CLI_VIEW_DEFAULTS;
     int frames = 1, fps = 12, to_count = 0, probe_count = 0;
     float probes[CLI_MAX_PROBES][4];
@@ -296,6 +299,10 @@ int cmd_render(int argc, char **argv)
                 prt_relit relit;
                 if ((st = cli_relight(&c, t, lighting, &light, src[i].variants[k], per_vertex, false, &relit))) break;
                 if ((st = cli_check_interrupt(&c))) { prt_relit_free(&relit); break; }
+                if (light.gpu_finish) {
+                    gpu_asked++;
+                    gpu_taken += relit.gpu_sums || relit.gpu_passes;
+                }
                 prt_render_mesh mesh;
                 prt_relit_render_mesh(t, &relit, &mesh);
                 if (per_vertex && prt_relit_view_dependent(&relit)) {
@@ -336,6 +343,11 @@ int cmd_render(int argc, char **argv)
                         prt_transfer_variant_name(src[i].t, src[i].variants[v]));
         }
         fprintf(stderr, "; %s", prt_renderer_name(r));
+        /* Where the last sums ran: some relightings keep the CPU path (docs/GPU.md). */
+        if (gpu_asked)
+            fprintf(stderr, "; %s", gpu_taken == gpu_asked ? (prt_render_sums_on_gpu(r) == 0 ? "sums on the CPU (GPU limits)" : "sums on the GPU")
+                                    : gpu_taken ? "sums on the GPU for some panels, the CPU for the rest"
+                                                : "sums on the CPU: this relighting keeps the CPU path (docs/GPU.md)");
         if (frames > 1) fprintf(stderr, "; %d frames at %d per second", frames, fps);
         fprintf(stderr, ")\n");
     }

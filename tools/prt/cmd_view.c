@@ -56,9 +56,11 @@ static const char *HELP =
     "                             frames in (0..F-1); space plays and pauses (a key frame a\n"
     "                             second, looping), / and \\ step a tenth of a frame\n"
     "      --play                 start playing\n"
-    "      --accumulate W         files whose method has GPU passes (prt info says): where they\n"
-    "                             run - gpu (the default: binned atlases, additive blending; b\n"
-    "                             shows first-order and final side by side) or cpu; g switches\n"
+    "      --accumulate W         files whose method has GPU passes (prt info says): where the\n"
+    "                             last sums run - gpu (the default: offset maps in binned atlases,\n"
+    "                             additive blending, b shows first-order and final side by side;\n"
+    "                             the other methods' per-vertex sums as transform-feedback passes)\n"
+    "                             or cpu; g switches\n"
     CLI_LIGHT_OPTIONS_HELP
     "Other:\n"
     "  -j, --threads N            relighting threads\n"
@@ -275,7 +277,7 @@ static void show(viewer *v, prt_relit *r, prt_transfer *pose)
     const bool same = !pose && o->radiance && (o->exit_sh != NULL) == (r->exit_sh != NULL) && o->exit_order == r->exit_order &&
                       (o->texels != NULL) == (r->texels != NULL) && o->texel_width == r->texel_width && o->texel_height == r->texel_height &&
                       (o->kvec != NULL) == (r->kvec != NULL) && o->kvec_terms == r->kvec_terms && o->exit_mirror == r->exit_mirror &&
-                      (o->gpu_input != NULL) == (r->gpu_input != NULL);
+                      (o->gpu_input != NULL) == (r->gpu_input != NULL) && (o->gpu_sums != NULL) == (r->gpu_sums != NULL);
     /* A probe sphere joins the mesh: the whole mesh goes up while one is shown, and once more
      * when it goes. */
     const bool probe = v->result_probe_on;
@@ -294,6 +296,11 @@ static void show(viewer *v, prt_relit *r, prt_transfer *pose)
         v->shown_probe_on = probe;
     } else if (same) {
         prt_window_set_radiance(v->win, r->radiance, nv);
+        if (r->gpu_sums) {   /* the per-vertex sums again on the GPU from this frame's vector */
+            prt_render_mesh mesh;
+            prt_relit_render_mesh(t, r, &mesh);
+            prt_window_set_gpu_sums(v->win, &mesh);
+        }
         if (r->gpu_input) {
             prt_render_mesh mesh;
             prt_relit_render_mesh(t, r, &mesh);
@@ -364,6 +371,7 @@ static void status_line(const viewer *v, char *buf, size_t n)
     for (int i = 0, at = 0; i < nc && at < (int)sizeof settings; ++i)
         at += snprintf(settings + at, sizeof settings - (size_t)at, ", %s %d", cd[i].name, v->want.controls[i]);
     if (v->shown.gpu_input) snprintf(settings + strlen(settings), sizeof settings - strlen(settings), ", GPU passes%s", v->side_by_side ? ", first-order | final" : "");
+    if (v->shown.gpu_sums) snprintf(settings + strlen(settings), sizeof settings - strlen(settings), ", GPU sums");
     int len = snprintf(buf, n, "%s %s%s%s, %zu vertices, exposure %+.1f, light at %.0f, %.0f deg\nframe %.2f ms  draw %.2f ms  relight %.2f ms  (h: help)",
                        prt_method_name(prt_transfer_method(v->t)), prt_transfer_variant_name(v->t, v->want.variant), component[v->want.component], settings,
                        prt_transfer_vertex_count(v->t), v->exposure, v->want.env_yaw, v->want.env_pitch, v->frame_ms_sum / frames, v->draw_ms_sum / draws,
@@ -403,7 +411,7 @@ int view_frame(viewer *v)
     char overlay[4096] = "";
     if (v->hud) status_line(v, overlay, sizeof overlay);
     prt_status st = prt_window_draw(v->win, &cam, v->background, v->exposure, v->tonemap, overlay);
-    if (st && v->shown.gpu_input) {
+    if (st && (v->shown.gpu_input || v->shown.gpu_sums)) {
         /* The GPU could not take the maps (too many atlases, too little memory): the same passes
          * on the CPU, and say so. */
         snprintf(v->message, sizeof v->message, "GPU passes failed (%.160s): on the CPU now", prt_last_error());

@@ -19,9 +19,14 @@ typedef struct prt__ao_set {
     float ray_offset;    /* the origin offset the bake used */
     uint32_t buried;     /* vertices with no free origin: given their neighbours' mean */
     float *access;       /* [vertex] A in [0, 1] */
+    struct prt__gpu_sums *gpu;   /* the rows for the GPU (gpu.c), built on first use for this albedo: */
+    float *gpu_albedo;
 } prt__ao_set;
 
 extern const prt__method prt__method_ao;
+
+/* Relighting finished on the GPU (gpu.c): r's products and frame vector (albedo NULL: as baked). */
+prt_status prt__ao_gpu(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const float *albedo, prt_relit *r);
 
 /* prt export --web (web.c, web.js). */
 prt_status prt__ao_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page);

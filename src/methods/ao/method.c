@@ -3,12 +3,15 @@
  * chunks in file.c (AOCP, AOCA), description and relighting; the bake lives in bake.c, the kernel
  * in relight.c. */
 #include "methods/ao/ao.h"
+#include "transfer/gpu_sums.h"
 
 void prt__ao_set_free(void *state)
 {
     prt__ao_set *s = state;
     if (!s) return;
     free(s->access);
+    prt__gpu_sums_free(s->gpu);
+    free(s->gpu_albedo);
     free(s);
 }
 
@@ -75,6 +78,7 @@ static prt_status ao_relight(prt_context *ctx, const prt_transfer *t, const prt_
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "ambient occlusion holds direct light only: it has no indirect component");
     prt_status st = prt__relit_alloc(ctx, t, r, false);
     if (st) return st;
+    if (d->gpu_finish) return prt__ao_gpu(ctx, t, l, d->albedo, r);   /* summed on the GPU (gpu.c) */
     return prt__ao_radiance(ctx, t, l, d->albedo, r->radiance);
 }
 
@@ -93,5 +97,6 @@ const prt__method prt__method_ao = {
     .load = prt__ao_load,
     .describe = ao_describe,
     .transfer_bytes = ao_bytes,
+    .gpu_passes = true,
     .relight = ao_relight,
 };

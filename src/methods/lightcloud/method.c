@@ -4,6 +4,7 @@
  * ies lights with emission lobes, lobes.c). The bake is bake.c (+ cluster.c), the run time
  * relight.c. */
 #include "methods/lightcloud/lightcloud.h"
+#include "transfer/gpu_sums.h"
 
 
 prt__lightcloud_cache *prt__lightcloud_cache_new(void)
@@ -46,6 +47,7 @@ void prt__lightcloud_set_free(void *state)
         prt__vertex_lights_free(&s->cache->lights);
         prt__kdtree_free(&s->cache->tree);
         pthread_mutex_destroy(&s->cache->lock);
+        prt__gpu_sums_free(s->cache->gpu);
         free(s->cache);
     }
     free(s);
@@ -336,7 +338,12 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
     float *exit_sh = s->glossy_count ? prt__calloc(nv * 48, sizeof(float)) : NULL;
     if (!w || !cloud || !E || (s->glossy_count && !exit_sh)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) st = prt__lightcloud_weights(ctx, t, l, neighbours, w);
-    if (!st && d->component != PRT_COMPONENT_DIRECT) st = prt__lightcloud_eval(ctx, t, w, cloud, exit_sh);
+    /* Drawn with all its light, the diffuse responses are summed on the GPU (gpu.c); cloud stays
+     * zero here (glossy files still evaluate here for their exit vectors). */
+    const bool gpu = d->gpu_finish && d->component == PRT_COMPONENT_ALL && !r->indirect;
+    if (!st && gpu) st = prt__lightcloud_gpu(ctx, t, w, r);
+    if (!st && d->component != PRT_COMPONENT_DIRECT && (!gpu || exit_sh)) st = prt__lightcloud_eval(ctx, t, w, cloud, exit_sh);
+    if (!st && gpu) memset(cloud, 0, nv * 3 * sizeof(float));
     /* Direct light of the user's lights, unless the cloud holds it. */
     if (!st && !s->store_direct && count) {
         prt_light *lights = malloc((size_t)count * sizeof(prt_light));
@@ -429,6 +436,7 @@ const prt__method prt__method_lightcloud = {
     .transfer_bytes = lightcloud_bytes,
     .control_range = lc_control_range,
     .web = prt__lightcloud_web,
+    .gpu_passes = true,
     .relight = lightcloud_relight,
     .shade = lightcloud_shade,
 };

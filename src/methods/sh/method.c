@@ -3,6 +3,7 @@
  * in bake*.c, relighting kernels in relight*.c, compression in compress.c, exports in
  * export.c. */
 #include "methods/sh/sh.h"
+#include "transfer/gpu_sums.h"
 #include "geom/texel_raster.h"
 #include "light/envmap_internal.h"
 
@@ -34,6 +35,7 @@ void prt__sh_state_free(void *state)
     free(s->volumes);
     prt__sh_frames_free(&s->frames);
     if (s->rays_ready) prt__raycaster_release(&s->rays);
+    for (int i = 0; i < PRT__KIND_COUNT; ++i) prt__gpu_sums_free(s->gpu[i]);
     if (s->lock) { pthread_mutex_destroy(s->lock); free(s->lock); }
     free(s);
 }
@@ -693,6 +695,12 @@ static prt_status relight_with(prt_context *ctx, const prt_transfer *t, const pr
                          prt__kind_glossy(k) ? " (diffuse and glossy)" : "");
     if (d->component == PRT_COMPONENT_DIRECT) k = prt__kind_glossy(k) ? 3 : 1;
     else if (d->component == PRT_COMPONENT_INDIRECT) k = prt__kind_glossy(k) ? 4 : 2;
+    /* Light from distant lighting, drawn per vertex: the GPU sums it (gpu.c). Local lights
+     * (lighting per vertex), compressed glossy sets, per-texel maps and the indirect part (a
+     * difference of two sets) stay here. */
+    if (d->gpu_finish && !local && !d->with_indirect && d->component != PRT_COMPONENT_INDIRECT && prt__sh_gpu_can(s, k, d) &&
+        !(!d->per_vertex && d->component == PRT_COMPONENT_ALL && k <= 2 && s->texels.coeffs[k]))
+        return prt__sh_gpu_relight(ctx, t, k, shl, r);
     const bool want_indirect = (d->with_indirect || d->component == PRT_COMPONENT_INDIRECT) && split_ok && (k == 2 || k == 4);
     if ((st = prt__relit_alloc(ctx, t, r, want_indirect))) return st;
     const size_t exit_floats = 3 * (size_t)s->order * s->order;
@@ -773,6 +781,7 @@ const prt__method prt__method_sh = {
     .default_variant = sh_default_variant,
     .find_variant = sh_find_variant,
     .control_range = sh_control_range,
+    .gpu_passes = true,
     .relight = sh_relight,
     .light_at_box = prt__sh_light_at_box,
     .light_at = prt__sh_light_at_lighting,

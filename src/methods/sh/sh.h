@@ -79,6 +79,8 @@ typedef struct prt__sh_state {
     pthread_mutex_t *lock;
     prt__raycaster rays;
     bool rays_ready;
+    /* Diffuse sets' descriptions for the GPU (gpu.c), built on first use under lock. */
+    struct prt__gpu_sums *gpu[PRT__KIND_COUNT];
 } prt__sh_state;
 
 extern const prt__method prt__method_sh;
@@ -155,6 +157,13 @@ void prt__sh_local_project(prt_context *ctx, const prt_lighting *l, int order, i
 prt_status prt__relight_sh_local(prt_context *ctx, const prt_transfer *t, int k, const float *local, int order, float *out_rgb);
 /* The same per texel (points from the file's UV layout), into a texel map. */
 prt_status prt__relight_sh_texels_local(prt_context *ctx, const prt_transfer *t, int k, const prt_lighting *l, int order, int window, float *out_rgb);
+
+/* Set k relit for the GPU to finish (gpu.c): r gets zero radiance, the products and the frame's
+ * vector (glossy sets: exit order and mirror too, exit_sh left NULL). prt__sh_gpu_can says
+ * whether set k can be (diffuse sets; raw glossy sets with a raw or no diffuse part, the
+ * materials' own lobes). */
+bool prt__sh_gpu_can(const prt__sh_state *s, int k, const prt_relight_desc *d);
+prt_status prt__sh_gpu_relight(prt_context *ctx, const prt_transfer *t, int k, const prt_sh_light *light, prt_relit *r);
 
 /* prt export (export.c): --sh and --glsl. */
 prt_status prt__sh_export(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt_export_result *out);

@@ -4,6 +4,7 @@
  * run-time albedo and BRDFs switched among the baked sets (the paper's Fig. 7). The basis is built
  * in basis.c, the transfer in bake.c, the run time in relight.c. */
 #include "methods/spectral/spectral.h"
+#include "transfer/gpu_sums.h"
 #include "brdf/sh_matrix.h"
 
 
@@ -50,6 +51,8 @@ void prt__spectral_set_free(void *state)
         for (uint32_t g = 0; fr && g < s->glossy_count; ++g) prt__frame_rot_release(&fr[g]);
         free(fr);
         pthread_mutex_destroy(&s->cache->lock);
+        prt__gpu_sums_free(s->cache->gpu);
+        free(s->cache->gpu_albedo);
         free(s->cache);
     }
     free(s);
@@ -289,7 +292,10 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
     if (!st) st = prt__spectral_direct(ctx, t, l, E, Ep, pixel);
     if (!st) {
         for (size_t i = 0; i < nv * 3; ++i) direct[i] = albedo[i] / (float)PRT_PI * E[i];
-        st = prt__spectral_bounces(ctx, t, albedo, direct, d->component == PRT_COMPONENT_DIRECT ? 0 : bounces, tail, indirect);
+        /* Drawn with all its light, the bounces run on the GPU (gpu.c) from this direct light. */
+        const bool gpu = d->gpu_finish && d->component == PRT_COMPONENT_ALL && !r->indirect && prt__spectral_gpu_can(t, bounces, tail);
+        st = prt__spectral_bounces(ctx, t, albedo, direct, d->component == PRT_COMPONENT_DIRECT || gpu ? 0 : bounces, tail, indirect);
+        if (!st && gpu) st = prt__spectral_gpu(ctx, t, albedo, direct, bounces, r);
     }
     if (!st && pixel) {
         r->pixel_lights = malloc((size_t)pixel * sizeof(prt_light));
@@ -382,6 +388,7 @@ const prt__method prt__method_spectral = {
     .control_range = spectral_control_range,
     .web = prt__spectral_web,
     .brdf_set = spectral_brdf_set,
+    .gpu_passes = true,
     .relight = spectral_relight,
     .shade = spectral_shade,
 };

@@ -45,6 +45,8 @@ typedef struct prt__spectral_cache {
     prt__vertex_lights lights;   /* shadow rays */
     pthread_mutex_t lock;        /* guards frames */
     void *frames;            /* prt__frame_rot[glossy_count]: the glossy vertices' frame rotations */
+    struct prt__gpu_sums *gpu;   /* the bounces for the GPU (gpu.c), under lock, for this albedo: */
+    float *gpu_albedo;
 } prt__spectral_cache;
 
 typedef struct prt__spectral_set {
@@ -108,6 +110,11 @@ typedef struct prt__spectral_set {
 } prt__spectral_set;
 
 extern const prt__method prt__method_spectral;
+
+/* Relighting finished on the GPU (gpu.c): whether these controls allow it (no tail, no glossy
+ * final bounce), and r's products and frame vector (the direct light reflected, per vertex). */
+bool prt__spectral_gpu_can(const prt_transfer *t, int bounces, int tail);
+prt_status prt__spectral_gpu(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct, int bounces, prt_relit *r);
 
 /* prt export --web (web.c, web.js). */
 prt_status prt__spectral_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page);

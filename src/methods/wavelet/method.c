@@ -2,6 +2,7 @@
  * options, its chunks in file.c (WAVP, WBRF, WAVT), description, controls, relighting and the CPU view
  * factor. The bake lives in bake.c, the kernels in relight.c, the lighting in lighting.c. */
 #include "methods/wavelet/wavelet.h"
+#include "transfer/gpu_sums.h"
 
 #include <strings.h>
 
@@ -16,6 +17,7 @@ void prt__wavelet_set_free(void *state)
     free(w->vertex_set);
     prt__sparse_free(&w->store);
     for (int k = 0; k < PRT__MAX_BRDFS; ++k) prt_brdf_factors_release(w->factors[k]);
+    prt__gpu_sums_free(w->gpu);
     free(w);
 }
 
@@ -258,6 +260,23 @@ static prt_status wavelet_relight(prt_context *ctx, const prt_transfer *t, const
     prt_status st = prt__relit_alloc(ctx, t, r, false);
     if (st) return st;
     const size_t nv = t->mesh.vertex_count;
+    const bool gpu = d->gpu_finish && prt__wavelet_gpu_can(t);   /* the sparse rows summed on the GPU (gpu.c) */
+    if (gpu) {
+        const prt_envmap *env = prt_lighting_envmap(l);
+        prt_wavelet_light *wl = NULL;
+        if (env || prt_lighting_count(l)) {
+            prt_wavelet_light_desc ld = {0};
+            prt_lighting_rotation(l, ld.rotation);
+            ld.intensity = prt_lighting_intensity(l);
+            ld.coefficients = d->controls ? d->controls[0] : 0;
+            ld.lights = prt_lighting_count(l) ? prt_lighting_light(l, 0) : NULL;
+            ld.light_count = prt_lighting_count(l);
+            if ((st = prt_wavelet_light_create(ctx, env, &ld, &wl))) return st;
+        }
+        st = prt__wavelet_gpu(ctx, t, wl, r);
+        prt_wavelet_light_release(wl);
+        return st;
+    }
     r->kvec = prt__calloc(nv * (size_t)w->terms * 3, sizeof(float));
     if (!r->kvec) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     r->kvec_terms = w->terms;
@@ -303,6 +322,7 @@ const prt__method prt__method_wavelet = {
     .controls = controls,
     .control_count = (int)(sizeof controls / sizeof controls[0]),
     .bake_begin = wavelet_bake_begin,
+    .gpu_passes = true,
     .free_state = prt__wavelet_set_free,
     .save = prt__wavelet_save,
     .load = prt__wavelet_load,
