@@ -289,9 +289,10 @@ static prt_status memory_check(prt_context *ctx, const prt__method *m, const prt
     prt_memory_size_format(least, l, sizeof l);
     prt_memory_size_format(limit, lim, sizeof lim);
     if (least > limit)
-        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "baking %zu vertices with --method %s would need about %s%s%s%s%s, over the memory limit of %s: %s%s"
-                         "or raise --memory-limit", t->mesh.vertex_count, m->name, l, least < bytes ? " even streaming" : "", e.what[0] ? " (" : "",
-                         e.what, e.what[0] ? ")" : "", lim, e.lower[0] ? e.lower : "", e.lower[0] ? " lower it, " : "");
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "baking %zu vertices with --method %s would need about %s%s%s%s%s%s%s, over the memory limit of %s: %s%s"
+                         "or raise --memory-limit", t->mesh.vertex_count, m->name, l, least < bytes ? " even streaming, " : "", least < bytes ? b : "",
+                         least < bytes ? " without" : "", e.what[0] ? " (" : "", e.what, e.what[0] ? ")" : "", lim, e.lower[0] ? e.lower : "",
+                         e.lower[0] ? " lower it, " : "");
     *over = bytes > limit;
     if (*over)
         prt__log(ctx, PRT_LOG_INFO, "memory: the bake's estimate is %s%s%s%s, over the limit of %s: it streams, holding about %s", b, e.what[0] ? " (" : "",
