@@ -7,7 +7,8 @@
 # for the method:size pairs in BAKE (the rest: estimate only). SH is also baked twice more at STREAM_SIZE
 # with 256 directions (so that its ray hits dominate): with no limit, and with STREAM_LIMIT (under
 # its estimate), when it streams its hits: the peak before and after. Low sample counts throughout (OPTS_<method> below): this measures memory, not quality.
-# Writes OUTDIR/memory.csv, OUTDIR/memory.md (a table) and, with gnuplot, OUTDIR/memory.png.
+# Writes OUTDIR/memory.csv, OUTDIR/memory.md (a table) and, with gnuplot, OUTDIR/memory.png
+# (PLOT_ONLY=1: only the table and plot, from an OUTDIR/memory.csv already there).
 # Usage: bench/memory_scale.sh PATH/TO/prt OUTDIR [SHARED_DATA]
 #   SIZES="100k:0.85 300k:0.49 1M:0.243" (label:max-edge), METHODS, BAKE="sh:100k ao:1M ...",
 #   LIMIT=5G, STREAM_SIZE (default 300k) and STREAM_LIMIT (default 400M: under SH's estimate
@@ -34,7 +35,8 @@ OPTS_offset="--offsets 20 --texels 128 --iterations 0"
 OPTS_ao="--samples 32"
 mkdir -p "$OUT"
 CSV=$OUT/memory.csv
-echo "method,size,vertices,estimate_mib,limit,result,seconds,peak_mib" >"$CSV"
+[ -n "${PLOT_ONLY:-}" ] && SIZES=""
+[ -n "${PLOT_ONLY:-}" ] || echo "method,size,vertices,estimate_mib,limit,result,seconds,peak_mib" >"$CSV"
 mib() { awk -v x="$1" -v u="$2" 'BEGIN { f = u == "GiB" ? 1024 : u == "KiB" ? 1 / 1024 : u == "bytes" ? 1 / 1048576 : 1; printf "%.0f", x * f }'; }
 
 for size in $SIZES; do
@@ -85,10 +87,10 @@ done
 cat "$OUT/memory.md"
 
 if command -v gnuplot >/dev/null 2>&1; then
-    for m in $METHODS; do awk -F, -v m="$m" '$1 == m { print $3, $4, ($8 == "" ? "NaN" : $8) }' "$CSV" >"$OUT/$m.dat"; done
+    for m in $METHODS; do awk -F, -v m="$m" '$1 == m { print $3, $4, ($8 == "" ? "NaN" : $8) }' "$CSV" | sort -n >"$OUT/$m.dat"; done
     {
         echo "set terminal pngcairo size 900,560; set output '$OUT/memory.png'"
-        echo "set logscale xy; set xlabel 'vertices (Sponza subdivided)'; set ylabel 'MiB'; set key left top"
+        echo "set logscale xy; set xrange [8e4:1.5e6]; set xlabel 'vertices (Sponza subdivided)'; set ylabel 'MiB'; set key outside right"
         echo "set title 'Bake memory: up-front estimate (lines) and measured peak (points), --memory-limit $LIMIT'"
         printf "plot "
         sep=""
