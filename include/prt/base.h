@@ -66,6 +66,22 @@ const char *prt_last_error(void);
 const char *prt_status_string(prt_status status);
 const char *prt_version_string(void);
 
+/* ---- Memory (bakes bounded by prt_bake_run_desc.memory_limit) ----
+ * A size as people write it: a number with an optional fraction and an optional K, M, G or T
+ * (powers of 1024; "iB" or "B" may follow: 4G, 512M, 1.5GiB, 65536), or "none" (no limit:
+ * UINT64_MAX). PRT_ERR_INVALID_ARG, with a message saying why, for anything else, zero, or a size
+ * past 2^63 bytes. */
+prt_status prt_memory_size_parse(const char *text, uint64_t *bytes);
+/* "3.2 GiB", "512 MiB", "none" (UINT64_MAX): into buf of size n; returns buf. */
+const char *prt_memory_size_format(uint64_t bytes, char *buf, size_t n);
+/* The machine's physical memory in bytes (0 when it cannot be told). */
+uint64_t prt_memory_physical(void);
+/* What a bake is held to when it names no limit: half the physical memory (4 GiB when that
+ * cannot be told). */
+uint64_t prt_memory_default_limit(void);
+/* The process's peak resident memory so far, in bytes (0 when it cannot be told). */
+uint64_t prt_memory_peak_resident(void);
+
 #ifdef __cplusplus
 }
 #endif

@@ -151,6 +151,15 @@ typedef struct prt_bake_run_desc {
      * (computed here) or prt_bake_work_put (a record computed elsewhere). NULL: the units run here. */
     prt_status (*spread)(void *user, prt_bake_work *work);
     void *spread_user;
+
+    /* ---- Memory ----
+     * The bytes the bake may hold (0: prt_memory_default_limit(), half the physical memory;
+     * UINT64_MAX: no limit). Before any work the method estimates its peak from the scene and
+     * options: over the limit, a method that can streams (SH keeps its ray hits in a scratch file
+     * instead of memory: the same bytes result), and one that cannot is refused at once with a
+     * line saying what it would need and which option lowers it. Only prt_bake (options) is held
+     * to it. The process's peak resident memory is kept in the transfer (prt_transfer_peak_bytes). */
+    uint64_t memory_limit;
 } prt_bake_run_desc;
 
 int prt_bake_work_stage(const prt_bake_work *w);
@@ -213,6 +222,10 @@ size_t prt_transfer_bytes(const prt_transfer *t);
 /* How long the bake took and on how many threads (informational: the result is the same for any
  * thread count), and the scene it read. */
 double prt_transfer_bake_seconds(const prt_transfer *t);
+/* The process's peak resident memory when the bake ended, and the limit it was held to (bytes;
+ * 0: not known, as in files of older versions). Bookkeeping like the bake time. */
+uint64_t prt_transfer_peak_bytes(const prt_transfer *t);
+uint64_t prt_transfer_memory_limit(const prt_transfer *t);
 int prt_transfer_bake_threads(const prt_transfer *t);
 const char *prt_transfer_source(const prt_transfer *t);
 /* Light arriving at points around a baked scene (a method's neighbourhood transfer: SH bakes it

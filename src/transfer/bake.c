@@ -133,6 +133,7 @@ static prt_status drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run
                         int *stopped)
 {
     const double start = prt__now();
+    const uint64_t limit = job->memory_limit ? job->memory_limit : UINT64_MAX;
     prt__progress prog = {run ? run->progress : NULL, run ? run->progress_user : NULL, NULL, 0, 0, 0.0, 0, ctx};
     prt__checkpoint *cp = io ? io->from : NULL, *shard = NULL;
     const bool sharding = run && run->shard_count > 0, stopping = run && run->stop_at_missing;
@@ -211,6 +212,8 @@ static prt_status drive(prt_context *ctx, prt__bake_job *job, const prt_bake_run
     if (!st) {
         t->bake_seconds = prt__now() - start;
         t->threads = prt__threads(ctx);
+        t->peak_bytes = prt_memory_peak_resident();
+        t->memory_limit = limit;
     }
     return st;
 }
@@ -260,6 +263,45 @@ void prt__transfer_fingerprint_scene(const prt_transfer *t, prt__fingerprint *fp
     }
 }
 
+uint64_t prt__memory_scene_bytes(const prt_transfer *t)
+{
+    const prt__mesh *m = &t->mesh;
+    const uint64_t nv = m->vertex_count, nt = m->triangle_count;
+    /* Positions, normals, albedo, UVs, emission, material, surface and the vertex origins every
+     * bake sends rays from; the indices; Embree's tree with its triangles (about 100 bytes a
+     * triangle at its build quality, measured on Sponza). The loaded scene the bake copied from
+     * stays too: twice the mesh. */
+    const uint64_t mesh = nv * (3 + 3 + 3 + 2 + (m->emission ? 3 : 0)) * sizeof(float) + nv * 3 + nt * 3 * sizeof(uint32_t);
+    return 2 * mesh + nv * 3 * sizeof(float) + nt * 100;
+}
+
+/* The memory the bake may hold and the method's estimate of it (options bakes only): refused up
+ * front when even streaming would not fit. */
+static prt_status memory_check(prt_context *ctx, const prt__method *m, const prt_options *o, const prt_transfer *t, uint64_t limit, bool *over)
+{
+    *over = false;
+    prt__memory_estimate e;
+    memset(&e, 0, sizeof e);
+    if (m->memory_estimate) m->memory_estimate(t, o, prt__threads(ctx), &e);
+    const uint64_t scene = prt__memory_scene_bytes(t), bytes = scene + e.bytes, least = scene + (e.least ? e.least : e.bytes);
+    char b[32], l[32], lim[32];
+    prt_memory_size_format(bytes, b, sizeof b);
+    prt_memory_size_format(least, l, sizeof l);
+    prt_memory_size_format(limit, lim, sizeof lim);
+    if (least > limit)
+        return prt__fail(ctx, PRT_ERR_INVALID_ARG, "baking %zu vertices with --method %s would need about %s%s%s%s%s%s%s, over the memory limit of %s: %s%s"
+                         "or raise --memory-limit", t->mesh.vertex_count, m->name, l, least < bytes ? " even streaming, " : "", least < bytes ? b : "",
+                         least < bytes ? " without" : "", e.what[0] ? " (" : "", e.what, e.what[0] ? ")" : "", lim, e.lower[0] ? e.lower : "",
+                         e.lower[0] ? " lower it, " : "");
+    *over = bytes > limit;
+    if (*over)
+        prt__log(ctx, PRT_LOG_INFO, "memory: the bake's estimate is %s%s%s%s, over the limit of %s: it streams, holding about %s", b, e.what[0] ? " (" : "",
+                 e.what, e.what[0] ? ")" : "", lim, l);
+    else
+        prt__log(ctx, PRT_LOG_INFO, "memory: the bake's estimate is %s%s%s%s (limit %s)", b, e.what[0] ? " (" : "", e.what, e.what[0] ? ")" : "", lim);
+    return PRT_OK;
+}
+
 /* Everything a bake's results depend on, so that a checkpoint is only ever resumed by the same
  * bake: the library version, the method and its options, and the scene as the transfer holds it. */
 static void fingerprint(const prt__method *m, const prt_options *o, const prt_transfer *t, const prt_scene *scene, prt__fingerprint *fp)
@@ -306,6 +348,8 @@ static void fingerprint(const prt__method *m, const prt_options *o, const prt_tr
     }
 }
 
+static prt_status begin_from_options(prt_context *ctx, const prt_scene *scene, const void *desc, prt_transfer *t, prt__bake_job **job);
+
 prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__method *m, prt__bake_begin_fn begin, const void *desc,
                           const prt_bake_run_desc *run, prt_transfer **out)
 {
@@ -322,6 +366,11 @@ prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__m
     if (!st && run && run->shard_count > 0 && (run->shard_index < 1 || run->shard_index > run->shard_count || !run->shard))
         st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "bake: shard %d/%d is not one of 1..%d, or no shard file was given", run->shard_index,
                        run->shard_count, run->shard_count);
+    /* The memory the bake may hold: said up front, before the checkpoint (a refusal leaves one
+     * to resume as it was), the ray caster and the origins. */
+    const uint64_t limit = !run || !run->memory_limit ? prt_memory_default_limit() : run->memory_limit;
+    bool over = false;
+    if (!st && begin == begin_from_options) st = memory_check(ctx, m, desc, t, limit, &over);
     /* Setting up a bake of tens of millions of triangles takes seconds a step: look between steps. */
     if (!st && prt__cancelled(ctx)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     if (!st && run && (run->checkpoint || run->shard_count > 0)) {
@@ -331,6 +380,10 @@ prt_status prt__bake_with(prt_context *ctx, const prt_scene *scene, const prt__m
         else if (run->checkpoint) st = prt__checkpoint_open(ctx, run->checkpoint, &fp, run->resume != 0, &cp);
     }
     if (!st) st = begin(ctx, scene, desc, t, &job);
+    if (!st) {
+        job->memory_limit = limit;
+        job->memory_over = over;
+    }
     if (!st && prt__cancelled(ctx)) {
         job->release(job);
         st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");

@@ -77,6 +77,8 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
         cJSON_AddNumberToObject(j, "bytes_per_vertex", (double)bytes / (double)nv);
         cJSON_AddNumberToObject(j, "bake_seconds", t->bake_seconds);
         cJSON_AddNumberToObject(j, "bake_threads", t->threads);
+        if (t->peak_bytes) cJSON_AddNumberToObject(j, "bake_peak_resident_bytes", (double)t->peak_bytes);
+        if (t->memory_limit) cJSON_AddNumberToObject(j, "bake_memory_limit_bytes", t->memory_limit == UINT64_MAX ? -1.0 : (double)t->memory_limit);
         cJSON_AddStringToObject(j, "source", t->source);
         cJSON *mats = cJSON_GetObjectItemCaseSensitive(j, "materials");
         if (!mats) {
@@ -191,6 +193,11 @@ prt_status prt_transfer_describe(const prt_transfer *t, const char *name, int js
     }
     prt__describe_line(&d, "storage:", "%.2f MiB transfer, %.0f bytes per vertex", bytes / 1048576.0, (double)bytes / (double)nv);
     prt__describe_line(&d, "bake time:", "%.2f s on %d threads", t->bake_seconds, t->threads);
+    if (t->peak_bytes) {
+        char peak[32], limit[32];
+        prt__describe_line(&d, "bake memory:", "peak %s resident (limit %s)", prt_memory_size_format(t->peak_bytes, peak, sizeof peak),
+                           t->memory_limit ? prt_memory_size_format(t->memory_limit, limit, sizeof limit) : "not recorded");
+    }
     prt__describe_line(&d, "source:", "%s", t->source);
     if (d.failed) { free(d.text); return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory"); }
     *out = d.text;

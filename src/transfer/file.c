@@ -48,6 +48,8 @@ static char *meta_text(const prt_transfer *t)
     cJSON_AddStringToObject(meta, "prt_version", prt_version_string());
     cJSON_AddNumberToObject(meta, "threads", t->threads);
     cJSON_AddNumberToObject(meta, "bake_seconds", t->bake_seconds);
+    if (t->peak_bytes) cJSON_AddNumberToObject(meta, "peak_resident_bytes", (double)t->peak_bytes);
+    if (t->memory_limit) cJSON_AddNumberToObject(meta, "memory_limit_bytes", t->memory_limit == UINT64_MAX ? -1.0 : (double)t->memory_limit);
     cJSON_AddStringToObject(meta, "source", t->source);
     if (t->has_env) {
         cJSON *e = cJSON_AddObjectToObject(meta, "environment");
@@ -141,6 +143,10 @@ static prt_status read_meta(prt_context *ctx, const cJSON *meta, prt_transfer *t
     const cJSON *x;
     if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "threads"))) t->threads = x->valueint;
     if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "bake_seconds"))) t->bake_seconds = x->valuedouble;
+    if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "peak_resident_bytes")) && x->valuedouble >= 0 && x->valuedouble < 1.8e19)
+        t->peak_bytes = (uint64_t)x->valuedouble;
+    if (cJSON_IsNumber(x = cJSON_GetObjectItemCaseSensitive(meta, "memory_limit_bytes")))
+        t->memory_limit = x->valuedouble < 0 ? UINT64_MAX : x->valuedouble < 1.8e19 ? (uint64_t)x->valuedouble : 0;
     if (cJSON_IsString(x = cJSON_GetObjectItemCaseSensitive(meta, "source"))) snprintf(t->source, sizeof t->source, "%s", x->valuestring);
     if (cJSON_IsObject(x = cJSON_GetObjectItemCaseSensitive(meta, "environment"))) read_environment(x, t);
     if ((x = cJSON_GetObjectItemCaseSensitive(meta, "lights"))) {

@@ -47,7 +47,25 @@ struct prt__bake_job {
     void (*release)(prt__bake_job *job);
     prt_context *ctx;
     int threads;                   /* set before the first stage */
+    /* Set before the first stage (prt_bake_run_desc.memory_limit, transfer/bake.c): the bytes the
+     * bake may hold (UINT64_MAX: no limit), and whether the method's estimate of an unbounded bake
+     * (memory_estimate) is over it: then the method streams what it can. */
+    uint64_t memory_limit;
+    bool memory_over;
 };
+
+/* ---- Memory (prt_bake_run_desc.memory_limit) ----
+ * A method's estimate of its bake's peak from the scene and options alone, before any work: the
+ * driver adds what every bake holds (the transfer's mesh, the ray caster's tree) and refuses a
+ * bake whose `least` is over the limit, naming `lower`. */
+typedef struct prt__memory_estimate {
+    uint64_t bytes;        /* the method's own data at its peak, baked as it would be without a limit */
+    uint64_t least;        /* the same when streaming (== bytes: the method cannot stream) */
+    char what[160];        /* what the bytes are ("ray hits of 1024 directions per vertex") */
+    char lower[160];       /* the options that lower it ("--samples or --order") */
+} prt__memory_estimate;
+/* What the transfer's mesh and a ray caster over it hold (bytes). */
+uint64_t prt__memory_scene_bytes(const prt_transfer *t);
 
 /* Runs a job to the end (progress and cancellation through run, which may be NULL), then frees
  * it; t's bake_seconds and threads are filled in. Used by prt_bake and the methods' own bake
@@ -139,6 +157,9 @@ struct prt_method {
 
     /* Bake: set up a job for t (which holds the scene's mesh, materials and lighting). */
     prt_status (*bake_begin)(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job);
+    /* Its bake's memory from t's scene and the options (threads: the bake's), filled into out
+     * (zeroed); NULL: the method's data is small beside the scene's. */
+    void (*memory_estimate)(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *out);
     void (*free_state)(void *state);
 
     /* Files: the method's META fields and chunks; load consumes its chunks (marking them used),

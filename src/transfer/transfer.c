@@ -112,6 +112,8 @@ prt_status prt_transfer_at_time(prt_context *ctx, const prt_transfer *t, double 
     return PRT_OK;
 }
 double prt_transfer_bake_seconds(const prt_transfer *t) { return t ? t->bake_seconds : 0; }
+uint64_t prt_transfer_peak_bytes(const prt_transfer *t) { return t ? t->peak_bytes : 0; }
+uint64_t prt_transfer_memory_limit(const prt_transfer *t) { return t ? t->memory_limit : 0; }
 int prt_transfer_bake_threads(const prt_transfer *t) { return t ? t->threads : 0; }
 const char *prt_transfer_source(const prt_transfer *t) { return t ? t->source : ""; }
 size_t prt_transfer_vertex_count(const prt_transfer *t) { return t->mesh.vertex_count; }

@@ -23,6 +23,7 @@ struct prt_transfer {
     char source[512];
     double bake_seconds;
     int threads;
+    uint64_t peak_bytes, memory_limit;   /* the process's peak resident memory after the bake, the limit (0: unknown) */
     const struct prt_method *method;
     void *state;                      /* the method's own, freed by method->free_state */
     uint64_t serial;                  /* unique in the process: what GPU caches key on (never reused, unlike an address) */

@@ -28,6 +28,14 @@ static const char *HELP_HEAD =
     "      --no-checkpoint    do not keep OUT.prt.checkpoint while baking (it holds every\n"
     "                         finished work unit, can be as large as the bake's memory, and is\n"
     "                         deleted once OUT.prt is written)\n"
+    "      --memory-limit SIZE\n"
+    "                         the memory the bake may hold (4G, 512M, 'none'; default: half the\n"
+    "                         machine's physical memory). Each method estimates its peak before\n"
+    "                         any work: over the limit, a method that can streams its largest\n"
+    "                         data through a scratch file in TMPDIR (the same file results),\n"
+    "                         and a bake that cannot fit is refused at once, saying what it\n"
+    "                         needs and which option lowers it. The peak resident memory is\n"
+    "                         printed at the end and kept in OUT.prt (prt info)\n"
     "      --summary FILE     also write a JSON summary: input, output, method, mesh, storage,\n"
     "                         each stage's seconds (compression among them) and the total\n"
     "      --refine           split triangles where transfer changes faster than the vertices\n"
@@ -74,7 +82,7 @@ static const char *HELP_TAIL =
     "  -h, --help             this text\n\n" EXIT_CODES_HELP;
 
 enum { OPT_KEY_FRAMES = 1490, OPT_SHARD = 1495, OPT_STAGE, OPT_FROM, OPT_BRDF_SET = 1498, OPT_BAKE_LIGHT = 1499, OPT_METHOD = 1500, OPT_RESUME, OPT_NO_CHECKPOINT, OPT_SUMMARY, OPT_REFINE, OPT_REFINE_VERTICES, OPT_REFINE_THRESHOLD,
-       OPT_NO_REFINE, OPT_METHOD_OPTION = 3000 };
+       OPT_NO_REFINE, OPT_MEMORY_LIMIT, OPT_METHOD_OPTION = 3000 };
 
 /* "NAME  summary" at the description column, the summary wrapped at 100 columns. */
 static void print_method_line(const prt_method *m)
@@ -102,7 +110,7 @@ static int collect_options(const prt_method *chosen, struct option *opts, int ma
     static const struct option fixed[] = {
         {"output", required_argument, 0, 'o'}, {"method", required_argument, 0, OPT_METHOD}, {"resume", no_argument, 0, OPT_RESUME},
         {"no-checkpoint", no_argument, 0, OPT_NO_CHECKPOINT}, {"summary", required_argument, 0, OPT_SUMMARY},
-        {"refine", no_argument, 0, OPT_REFINE}, {"no-refine", no_argument, 0, OPT_NO_REFINE}, {"refine-vertices", required_argument, 0, OPT_REFINE_VERTICES},
+        {"memory-limit", required_argument, 0, OPT_MEMORY_LIMIT}, {"refine", no_argument, 0, OPT_REFINE}, {"no-refine", no_argument, 0, OPT_NO_REFINE}, {"refine-vertices", required_argument, 0, OPT_REFINE_VERTICES},
         {"refine-threshold", required_argument, 0, OPT_REFINE_THRESHOLD}, {"light", required_argument, 0, OPT_BAKE_LIGHT},
         {"brdf-set", required_argument, 0, OPT_BRDF_SET}, {"frames", no_argument, 0, OPT_KEY_FRAMES}, {"shard", required_argument, 0, OPT_SHARD},
         {"stage", optional_argument, 0, OPT_STAGE}, {"from", required_argument, 0, OPT_FROM}, CLI_SCENE_LONG_OPTIONS,
@@ -250,6 +258,7 @@ static prt_status write_summary(cli *c, const char *path, const char *input, con
         cJSON_AddItemToArray(stages, o);
     }
     cJSON_AddNumberToObject(j, "bake_seconds", prt_transfer_bake_seconds(t));
+    cJSON_AddNumberToObject(j, "peak_resident_bytes", (double)prt_transfer_peak_bytes(t));
     char *text = cJSON_Print(j);
     cJSON_Delete(j);
     if (!text) return PRT_ERR_NO_MEMORY;
@@ -331,6 +340,7 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
     prt_scene_desc sd = {0};
     const char *output = NULL;
     const char *summary = NULL;
+    uint64_t memory_limit = 0;   /* 0: the library's default */
     bool resume = false, checkpoint = true, refine = false, no_refine = false, key_frames = false;
     prt_refine_desc rd = {0};
     cli_light lights = {.intensity = 1.0f};   /* --light only */
@@ -362,6 +372,9 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
         case OPT_RESUME: resume = true; break;
         case OPT_KEY_FRAMES: key_frames = true; break;
         case OPT_NO_CHECKPOINT: checkpoint = false; break;
+        case OPT_MEMORY_LIMIT:
+            if (prt_memory_size_parse(optarg, &memory_limit)) rc = cli_usage(&c, "--memory-limit: %s", prt_last_error());
+            break;
         case OPT_SUMMARY: summary = optarg; break;
         case OPT_SHARD: {
             char tail;
@@ -470,7 +483,8 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
         uint64_t recovered = 0, total = 0;
         int stopped = -1;
         prt_bake_run_desc run = {.progress = cli_progress, .progress_user = &c, .checkpoint = checkpoint ? checkpoint_path : NULL,
-                                 .resume = resume, .recovered_units = &recovered, .total_units = &total, .stopped_stage = &stopped};
+                                 .resume = resume, .recovered_units = &recovered, .total_units = &total, .stopped_stage = &stopped,
+                                 .memory_limit = memory_limit};
         if (shard_n) {
             run.checkpoint = from ? from_abs : NULL;
             run.shard_index = shard_i;
@@ -545,6 +559,10 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
         for (int i = 0; i < ns && at < sizeof line; ++i)
             at += (size_t)snprintf(line + at, sizeof line - at, "%s%s %.2f s", i ? ", " : "", names[i], secs[i]);
         if (ns) fprintf(stderr, "prt bake: stage times: %s\n", line);
+        char peak[32], limit[32];
+        if (prt_transfer_peak_bytes(t))
+            fprintf(stderr, "prt bake: peak resident memory %s (limit %s)\n", prt_memory_size_format(prt_transfer_peak_bytes(t), peak, sizeof peak),
+                    prt_memory_size_format(prt_transfer_memory_limit(t), limit, sizeof limit));
     }
     if (!st) st = cli_check_interrupt(&c);
     /* The summary first: if it cannot be written, the bake fails before its file appears. */

@@ -25,6 +25,16 @@ static const prt_option_desc options[] = {
     {"ray-offset", "E", PRT_OPTION_FLOAT, 1e-30, 1e30, NULL, "ray origin offset (default 1e-4 x scene diagonal)"},
 };
 
+/* One float a vertex. */
+static void ao_memory_estimate(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e)
+{
+    (void)o;
+    (void)threads;
+    e->bytes = e->least = (uint64_t)t->mesh.vertex_count * sizeof(float);
+    snprintf(e->what, sizeof e->what, "one float a vertex");
+    snprintf(e->lower, sizeof e->lower, "a mesh of fewer vertices");
+}
+
 static prt_status ao_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job)
 {
     (void)scene;
@@ -92,6 +102,7 @@ const prt__method prt__method_ao = {
     .options = options,
     .option_count = (int)(sizeof options / sizeof options[0]),
     .bake_begin = ao_bake_begin,
+    .memory_estimate = ao_memory_estimate,
     .free_state = prt__ao_set_free,
     .save = prt__ao_save,
     .load = prt__ao_load,

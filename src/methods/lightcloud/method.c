@@ -5,6 +5,7 @@
  * relight.c. */
 #include "methods/lightcloud/lightcloud.h"
 #include "transfer/gpu_sums.h"
+#include "methods/spectral/spectral.h"
 
 
 prt__lightcloud_cache *prt__lightcloud_cache_new(void)
@@ -182,6 +183,36 @@ static prt_status parse_floats(prt_context *ctx, const char *name, const char *t
         }
     }
     return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--%s expects %d comma-separated numbers, got \"%s\"", name, n, text);
+}
+
+/* The spectral stages' memory (the bake runs them, on a second copy of the mesh), each thread's
+ * solve of one cloud light (a few arrays over every vertex) and one zone's responses to every
+ * light and lobe (the responses themselves wait in a scratch file). Lights counted from the
+ * grid or --cloud-surface (a --cloud FILE: as the default grid). */
+static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e)
+{
+    prt__spectral_bake_desc d = {0};
+    d.functions = prt__opt_int(o, "basis", 0);
+    d.full = prt__opt_flag(o, "full-basis");
+    d.partition_size = prt__opt_int(o, "partition", 0);
+    d.samples = prt__opt_int(o, "samples", 0);
+    prt__spectral_memory(t, &d, threads, e);
+    const uint64_t nv = t->mesh.vertex_count, spectral = e->bytes;
+    uint64_t lights = 216;
+    const char *grid = prt__opt(o, "cloud-grid");
+    int g[3];
+    if (grid && sscanf(grid, "%d,%d,%d", &g[0], &g[1], &g[2]) == 3 && g[0] > 0 && g[1] > 0 && g[2] > 0) lights = (uint64_t)g[0] * g[1] * g[2];
+    if (prt__opt(o, "cloud-surface")) lights = (uint64_t)prt__opt_int(o, "cloud-surface", 216);
+    /* More is refused by the bake's own checks, which say so more plainly than a size would. */
+    if (lights > PRT__LIGHTCLOUD_MAX_LIGHTS) lights = PRT__LIGHTCLOUD_MAX_LIGHTS;
+    const int order = prt__opt_int(o, "emission-order", 1);
+    const uint64_t lobes = (uint64_t)order * order, zone = (uint64_t)prt__opt_int(o, "zone-vertices", 2000);
+    const uint64_t mesh = nv * (12 * sizeof(float) + 4) + t->mesh.triangle_count * 12;
+    const uint64_t per_thread = nv * 3 * sizeof(float) * 8 + zone * lights * lobes * 3 * sizeof(float) * 3;
+    e->bytes = e->least = spectral + mesh + (uint64_t)threads * per_thread;
+    snprintf(e->what, sizeof e->what, "%.0f MiB for the spectral stages, %.0f MiB a thread for the solves and zones of %llu lights",
+             (double)spectral / 1048576.0, (double)per_thread / 1048576.0, (unsigned long long)lights);
+    snprintf(e->lower, sizeof e->lower, "a smaller --basis, --zone-vertices or fewer -j threads");
 }
 
 static prt_status lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job)
@@ -429,6 +460,7 @@ const prt__method prt__method_lightcloud = {
     .controls = controls,
     .control_count = (int)(sizeof controls / sizeof controls[0]),
     .bake_begin = lightcloud_bake_begin,
+    .memory_estimate = lightcloud_memory_estimate,
     .free_state = prt__lightcloud_set_free,
     .save = prt__lightcloud_save,
     .load = prt__lightcloud_load,

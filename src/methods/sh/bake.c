@@ -30,8 +30,7 @@ typedef struct bake_job {
     float *basis;         /* [samples][ncoeff] */
     prt__raycaster rc;
     bool need_hits;
-    hit_entry **hits;     /* per vertex, for interreflection */
-    uint32_t *hit_count;
+    prt__hit_store hits;  /* for interreflection (set up with the visibility stage) */
     prt_specular *spec;   /* per surface (prt__specular_table); NULL when nothing is specular */
     const prt__volume *volumes;   /* the scene's media: sample rays carry their transmittance */
     int volume_count;
@@ -132,9 +131,10 @@ static bool follow_specular(const bake_job *job, size_t v, uint32_t sample, cons
 }
 
 /* Visibility pass for one vertex: fills the unshadowed and shadowed sums and, when needed, the
- * list of occluded directions with what they hit. Returns false on allocation failure. */
+ * list of occluded directions with what they hit (kept in job->hits). Returns false when keeping
+ * them fails (memory, or the scratch file of a streamed bake). */
 static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, float *glossy, hit_entry *scratch,
-                              hit_entry **hits_out, uint32_t *nhits_out, float *rdirs, float *noise)
+                              float *rdirs, float *noise)
 {
     double sq = 0;   /* sum of squared T_00 terms: the estimate's variance, for the noise report */
     const prt__mesh *m = job->mesh;
@@ -245,16 +245,7 @@ static bool visibility_vertex(bake_job *job, size_t v, float *unsh, float *sh, f
         prt_sh_rotation_release(rot);
     }
     for (int i = 0; sh && job->spec && i < nc; ++i) sh[i] += caustic[i];
-    if (hits_out) {
-        *nhits_out = nhits;
-        *hits_out = NULL;
-        if (nhits) {
-            *hits_out = malloc(nhits * sizeof(hit_entry));
-            if (!*hits_out) return false;
-            memcpy(*hits_out, scratch, nhits * sizeof(hit_entry));
-        }
-    }
-    return true;
+    return !job->need_hits || prt__hits_put(&job->hits, v, v + 1, scratch, &nhits);
 }
 
 /* Interpolates a 3-channel transfer at a hit point. */
@@ -306,10 +297,10 @@ static prt_status run_visibility(prt__bake_job *b, uint64_t unit, int thread)
     const size_t nv = sb->t->mesh.vertex_count, nc = (size_t)job->ncoeff, nn = nc * nc;
     for (size_t v = unit * BLOCK; v < nv && v < (unit + 1) * BLOCK; ++v)
         if (!visibility_vertex(job, v, sb->unsh ? sb->unsh + v * nc : NULL, sb->shad ? sb->shad + v * nc : NULL, sb->gshad ? sb->gshad + v * nn : NULL,
-                               job->need_hits ? sb->scratch[thread] : NULL, job->need_hits ? &job->hits[v] : NULL,
-                               job->need_hits ? &job->hit_count[v] : NULL, thread < sb->nrdirs ? sb->rdirs[thread] : NULL,
+                               job->need_hits ? sb->scratch[thread] : NULL, thread < sb->nrdirs ? sb->rdirs[thread] : NULL,
                                sb->noise ? sb->noise + v : NULL))
-            return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory recording ray hits");
+            return job->hits.spill ? prt__fail(b->ctx, PRT_ERR_IO, "cannot write the ray hits' scratch file (disk full?)")
+                                   : prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory recording ray hits");
     return PRT_OK;
 }
 
@@ -326,14 +317,14 @@ static inline __attribute__((always_inline)) void gather_vertex(const prt__mesh 
 
 static prt_status run_bounce(prt__bake_job *b, uint64_t unit, int thread)
 {
-    (void)thread;
     sh_bake *sb = (sh_bake *)b;
     const prt__mesh *m = &sb->t->mesh;
     const int nc = sb->job.ncoeff, nc3 = 3 * nc;
     for (size_t v = unit * BLOCK; v < m->vertex_count && v < (unit + 1) * BLOCK; ++v) {
         float acc[3 * PRT_SH_MAX_COEFFS];
-        const hit_entry *hits = sb->job.hits[v];
-        const uint32_t count = sb->job.hit_count[v];
+        const uint32_t count = sb->job.hits.count[v];
+        const hit_entry *hits = prt__hits_get(&sb->job.hits, v, sb->scratch[thread]);
+        if (count && !hits) return prt__fail(b->ctx, PRT_ERR_IO, "cannot read the ray hits' scratch file");
         switch (nc3) {
         case 27: gather_vertex(m, sb->prev, 27, hits, count, acc); break;
         case 48: gather_vertex(m, sb->prev, 48, hits, count, acc); break;
@@ -409,10 +400,17 @@ static void save_visibility(prt__bake_job *b, uint64_t unit, prt__bytes *out)
     unit_range(sb, unit, &v0, &v1);
     save_rows(r, visibility_rows(sb, r), v0, v1, out);
     if (!sb->job.need_hits) return;
+    /* A streamed bake reads them back from its scratch file: the same record either way. */
+    hit_entry *buf = sb->job.hits.spill ? malloc((size_t)sb->d.samples * sizeof *buf) : NULL;
+    if (sb->job.hits.spill && !buf) { out->failed = true; return; }
     for (size_t v = v0; v < v1; ++v) {
-        prt__bytes_put(out, &sb->job.hit_count[v], sizeof(uint32_t));
-        prt__bytes_put(out, sb->job.hits[v], sb->job.hit_count[v] * sizeof(hit_entry));
+        const uint32_t n = sb->job.hits.count[v];
+        const hit_entry *h = prt__hits_get(&sb->job.hits, v, buf);
+        if (n && !h) { out->failed = true; break; }
+        prt__bytes_put(out, &n, sizeof n);
+        prt__bytes_put(out, h, n * sizeof(hit_entry));
     }
+    free(buf);
 }
 
 static bool load_visibility(prt__bake_job *b, uint64_t unit, const unsigned char *data, size_t size)
@@ -453,11 +451,7 @@ static bool load_visibility(prt__bake_job *b, uint64_t unit, const unsigned char
         uint32_t count;
         memcpy(&count, p, sizeof count);
         p += sizeof count;
-        free(sb->job.hits[v]);
-        sb->job.hits[v] = count ? malloc((size_t)count * sizeof(hit_entry)) : NULL;
-        if (count && !sb->job.hits[v]) { sb->job.hit_count[v] = 0; return false; }
-        if (count) memcpy(sb->job.hits[v], p, (size_t)count * sizeof(hit_entry));
-        sb->job.hit_count[v] = count;
+        if (!prt__hits_put(&sb->job.hits, v, v + 1, p, &count)) return false;
         p += (size_t)count * sizeof(hit_entry);
     }
     return true;
@@ -486,7 +480,7 @@ static prt_status run_glossy_bounces(prt__bake_job *b, prt_context *ctx, prt__pr
 {
     sh_bake *sb = (sh_bake *)b;
     prt_transfer *t = sb->t;
-    prt__bounce_input bi = {&t->mesh, sb->d.order, sb->d.samples, sb->job.basis, sb->job.hits, sb->job.hit_count, sb->shad, sb->gshad,
+    prt__bounce_input bi = {&t->mesh, sb->d.order, sb->d.samples, sb->job.basis, &sb->job.hits, sb->shad, sb->gshad,
                             t->brdfs, t->brdf_count, sb->d.bounces, sb->want_gir, p};
     float *dtot = NULL, *gtot = NULL;
     prt_status st = prt__bake_glossy_bounces(ctx, &bi, &dtot, sb->want_gir ? &gtot : NULL);
@@ -662,6 +656,13 @@ static prt_status sh_stage(prt__bake_job *b, int index, prt__stage *out)
     switch (sb->plan[index]) {
     case ST_VISIBILITY: {
         snprintf(out->name, sizeof out->name, "visibility");
+        if (sb->job.need_hits && !sb->job.hits.count) {
+            /* Over the memory limit the hits, the bake's largest part, go to a scratch file. */
+            prt_status st = prt__hits_init(b->ctx, &sb->job.hits, nv, (uint32_t)sb->d.samples, b->memory_over);
+            if (st) return st;
+            if (b->memory_over)
+                prt__log(b->ctx, PRT_LOG_INFO, "the ray hits of the bounces stream through a scratch file in TMPDIR (the bake's estimate is over its memory limit)");
+        }
         if (sb->job.need_hits && !sb->scratch) {
             sb->scratch = prt__calloc((size_t)b->threads, sizeof *sb->scratch);
             if (!sb->scratch) return prt__fail(b->ctx, PRT_ERR_NO_MEMORY, "out of memory");
@@ -729,14 +730,13 @@ static void sh_release(prt__bake_job *b)
     sh_bake *sb = (sh_bake *)b;
     bake_job *job = &sb->job;
     prt__raycaster_release(&job->rc);
-    if (job->hits)
-        for (size_t v = 0; v < sb->t->mesh.vertex_count; ++v) free(job->hits[v]);
+    prt__hits_free(&job->hits);
     for (int i = 0; i < sb->nscratch; ++i) free(sb->scratch[i]);
     for (int i = 0; i < sb->nrdirs; ++i) free(sb->rdirs[i]);
     free(sb->rdirs);
     free(sb->noise);
     free(sb->scratch);
-    free(job->hits); free(job->hit_count); free(job->spec); free(job->origins); free(job->buried); free(job->dirs); free(job->basis);
+    free(job->spec); free(job->origins); free(job->buried); free(job->dirs); free(job->basis);
     free(sb->medium); free(sb->kernels);
     free(sb->unsh); free(sb->shad); free(sb->gshad); free(sb->total); free(sb->prev); free(sb->next);
     prt_image_free(&sb->extra.normal_map);
@@ -919,13 +919,8 @@ prt_status prt__sh_bake_begin(prt_context *ctx, const prt_sh_bake_desc *desc_in,
     if ((sb->noise = malloc((nv ? nv : 1) * sizeof(float))))
         for (size_t v = 0; v < nv; ++v) sb->noise[v] = NAN;   /* a report only: no memory, no report */
     sb->gshad = need_glossy_sh ? prt__calloc(nv * nn, sizeof(float)) : NULL;
-    if (job->need_hits) {
-        job->hits = prt__calloc(nv, sizeof *job->hits);
-        job->hit_count = prt__calloc(nv, sizeof *job->hit_count);
-    }
     prt_status st = PRT_OK;
-    if (!job->dirs || !job->basis || (want_unsh && !sb->unsh) || (want_sh && !sb->shad) || (need_glossy_sh && !sb->gshad) ||
-        (job->need_hits && (!job->hits || !job->hit_count)))
+    if (!job->dirs || !job->basis || (want_unsh && !sb->unsh) || (want_sh && !sb->shad) || (need_glossy_sh && !sb->gshad))
         st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for a bake of %zu vertices", nv);
     for (int j = 0; j < d.samples && !st; ++j) {
         double u, v, dir[3], y[PRT_SH_MAX_COEFFS];

@@ -9,18 +9,43 @@
 #include "brdf/dipole.h"
 #include "methods/sh/sh.h"
 
+#include <stdio.h>
+
 /* One occluded direction of a vertex and the front face it hit. */
 typedef struct prt__hit {
     uint32_t prim, sample;
     float u, v, weight;   /* barycentrics of the hit; cos * 4pi/N */
 } prt__hit;
 
+/* The bounces' ray hits (hits.c): each vertex's list in memory, or, when the bake streams
+ * (prt__bake_job.memory_over), in an unlinked scratch file written block by block as visibility
+ * finishes and read back vertex by vertex by every bounce (through the page cache, not the
+ * process's memory). Either way the bounces gather the same hits in the same order. */
+typedef struct prt__hit_store {
+    size_t vertex_count;
+    uint32_t samples;           /* a vertex has at most this many hits */
+    uint32_t *count;            /* [vertex] */
+    prt__hit **list;            /* [vertex] in memory; NULL when streaming */
+    FILE *spill;                /* streaming: the scratch file */
+    uint64_t *at;               /* streaming: [vertex] where its hits start in spill */
+    uint64_t end;               /* streaming: bytes written (taken atomically) */
+} prt__hit_store;
+
+/* Sets up an empty store; streaming with a scratch file in TMPDIR. */
+prt_status prt__hits_init(prt_context *ctx, prt__hit_store *s, size_t vertex_count, uint32_t samples, bool streaming);
+void prt__hits_free(prt__hit_store *s);
+/* Keeps vertices [v0, v1)'s hits, given one after another (count[v - v0] each); thread-safe for
+ * disjoint ranges. False when memory or the scratch file fails. */
+bool prt__hits_put(prt__hit_store *s, size_t v0, size_t v1, const void *hits, const uint32_t *count);
+/* Vertex v's hits: in memory, or read into buf (room for `samples`); NULL when reading fails
+ * (or, in memory, when it has none). */
+const prt__hit *prt__hits_get(const prt__hit_store *s, size_t v, prt__hit *buf);
+
 typedef struct prt__bounce_input {
     const prt__mesh *mesh;
     int order, samples;
     const float *basis;              /* [sample][order^2] */
-    prt__hit *const *hits;           /* per vertex */
-    const uint32_t *hit_count;
+    const prt__hit_store *hits;
     const float *shadowed;           /* [vertex][order^2], includes 1/pi */
     const float *glossy_shadowed;    /* [vertex][order^2 (lighting j)][order^2 (incident i)] */
     const prt_brdf *brdfs;           /* materials: mesh.material k -> brdfs[k - 1] */

@@ -54,7 +54,7 @@ prt_status prt__bake_glossy_bounces(prt_context *ctx, const prt__bounce_input *i
         for (int mm = -l; mm <= l; ++mm) sign[l * (l + 1) + mm] = (l & 1) ? -1.0f : 1.0f;
 
     char stage[48];
-    int alloc_failed = 0;
+    int alloc_failed = 0, read_failed = 0;
     for (int b = 1; b <= in->bounces && !st; ++b) {
         /* Exit matrices of the glossy vertices from this bounce's incident light. */
         if (glossy_count) {
@@ -75,16 +75,20 @@ prt_status prt__bake_glossy_bounces(prt_context *ctx, const prt__bounce_input *i
 #pragma omp parallel num_threads(prt__threads(ctx))
         {
             float *accM = malloc(nn3 * sizeof(float));
-            if (!accM) __atomic_store_n(&alloc_failed, 1, __ATOMIC_RELAXED);
+            prt__hit *buf = malloc((size_t)in->samples * sizeof *buf);   /* a streamed vertex's hits */
+            if (!accM || !buf) __atomic_store_n(&alloc_failed, 1, __ATOMIC_RELAXED);
 #pragma omp for schedule(dynamic, 32)
             for (size_t p = 0; p < nv; ++p) {
-                if (!accM || prt__progress_cancelled(in->progress)) continue;
+                if (!accM || !buf || prt__progress_cancelled(in->progress)) continue;
+                const uint32_t nh = in->hits->count[p];
+                const prt__hit *hits = prt__hits_get(in->hits, p, buf);
+                if (nh && !hits) { __atomic_store_n(&read_failed, 1, __ATOMIC_RELAXED); continue; }
                 const bool needM = totM || glossy_vertex[p];
                 float accD[3 * PRT_SH_MAX_COEFFS], I[3 * PRT_SH_MAX_COEFFS], yneg[PRT_SH_MAX_COEFFS];
                 memset(accD, 0, (size_t)n3 * sizeof(float));
                 if (needM) memset(accM, 0, nn3 * sizeof(float));
-                for (uint32_t h = 0; h < in->hit_count[p]; ++h) {
-                    const prt__hit *hit = &in->hits[p][h];
+                for (uint32_t h = 0; h < nh; ++h) {
+                    const prt__hit *hit = &hits[h];
                     const uint32_t *tri = m->indices + (size_t)hit->prim * 3;
                     const float bary[3] = {1.0f - hit->u - hit->v, hit->u, hit->v};
                     const float *ys = in->basis + (size_t)hit->sample * n;
@@ -121,9 +125,11 @@ prt_status prt__bake_glossy_bounces(prt_context *ctx, const prt__bounce_input *i
                 if ((p & 63) == 0) prt__progress_add(in->progress, 64);
             }
             free(accM);
+            free(buf);
         }
         prt__progress_end(in->progress);
         if (alloc_failed) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory in the glossy bounce"); break; }
+        if (read_failed) { st = prt__fail(ctx, PRT_ERR_IO, "cannot read the ray hits' scratch file"); break; }
         if (prt__progress_cancelled(in->progress)) { st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled"); break; }
         for (size_t i = 0; i < nv * n3; ++i) totD[i] += nextD[i];
         if (totM)

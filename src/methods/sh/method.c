@@ -4,6 +4,7 @@
  * export.c. */
 #include "methods/sh/sh.h"
 #include "transfer/gpu_sums.h"
+#include "methods/sh/bake.h"
 #include "geom/texel_raster.h"
 #include "light/envmap_internal.h"
 
@@ -274,6 +275,60 @@ static prt_status load_data_map(prt_context *ctx, const char *what, const char *
     return PRT_OK;
 }
 
+/* The kinds --kinds names (0: the default). */
+static unsigned option_kinds(const prt_options *o)
+{
+    unsigned kinds = 0;
+    if (!prt__opt(o, "kinds")) return 0;
+    char buf[256], *save = NULL;
+    snprintf(buf, sizeof buf, "%s", prt__opt(o, "kinds"));
+    for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+        prt_transfer_kind k;
+        if (!strcmp(tok, "all")) kinds |= 7u;
+        else if (!prt_transfer_kind_parse(tok, &k)) kinds |= (unsigned)k;
+    }
+    return kinds;
+}
+
+/* The bake's peak (bake.c's arrays): the sets of every kind, the bounce buffers and the ray hits -
+ * by far the most, up to one 20-byte hit per direction over the hemisphere (a closed room has
+ * about that many; an open scene fewer), which a streamed bake keeps in a scratch file instead. */
+static void sh_memory_estimate(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e)
+{
+    const prt_sh_bake_desc def = prt_sh_bake_desc_defaults();
+    const uint64_t nv = t->mesh.vertex_count, order = (uint64_t)prt__opt_int(o, "order", def.order), nc = order * order, nn = nc * nc;
+    const uint64_t samples = (uint64_t)prt__opt_int(o, "samples", def.samples), texels = (uint64_t)prt__opt_int(o, "texels", 0);
+    unsigned kinds = option_kinds(o);
+    if (!kinds) kinds = def.kinds;
+    bool scene_glossy = false;
+    for (size_t v = 0; v < nv && !scene_glossy; ++v) {
+        const uint8_t k = t->mesh.material[v];
+        scene_glossy = k && k <= t->brdf_count && prt_brdf_is_glossy(&t->brdfs[k - 1]);
+    }
+    const bool ir = kinds & (PRT_TRANSFER_INTERREFLECTED | PRT_TRANSFER_GLOSSY_INTERREFLECTED);
+    const bool coupled = ir && ((kinds & PRT_TRANSFER_GLOSSY_INTERREFLECTED) || scene_glossy);
+    const uint64_t f = sizeof(float);
+    uint64_t per_vertex = f;   /* the noise report */
+    if (kinds & PRT_TRANSFER_UNSHADOWED) per_vertex += nc * f;
+    if ((kinds & PRT_TRANSFER_SHADOWED) || ir) per_vertex += nc * f;
+    if ((kinds & PRT_TRANSFER_GLOSSY_SHADOWED) || coupled) per_vertex += nn * f;
+    if (coupled) per_vertex += 3 * 3 * nc * f + ((kinds & PRT_TRANSFER_GLOSSY_INTERREFLECTED) ? 4 : 3) * 3 * nn * f;
+    else if (kinds & PRT_TRANSFER_INTERREFLECTED) per_vertex += 3 * 3 * nc * f;
+    if (prt__opt(o, "compress") || prt__opt(o, "clusters") || prt__opt(o, "vectors")) per_vertex += 2 * 3 * nc * f;   /* the set and its projection */
+    const uint64_t fixed = nv * per_vertex + texels * texels * 3 * 3 * nc * f + (uint64_t)threads * samples * (3 * f + sizeof(prt__hit));
+    /* Hits: a list per vertex in memory (its allocation's header and pointer beside it), or a
+     * place and count per vertex when streamed. */
+    const uint64_t hits = ir ? nv * ((samples / 2 + 1) * sizeof(prt__hit) + 16 + 8 + 4) : 0;
+    e->bytes = fixed + hits;
+    e->least = ir ? fixed + nv * 12 : e->bytes;
+    if (ir)
+        snprintf(e->what, sizeof e->what, "%.0f MiB of transfer beside up to %.0f MiB of ray hits at %llu directions a vertex, which can stream",
+                 (double)fixed / 1048576.0, (double)hits / 1048576.0, (unsigned long long)samples);
+    else
+        snprintf(e->what, sizeof e->what, "%.0f MiB of transfer", (double)fixed / 1048576.0);
+    snprintf(e->lower, sizeof e->lower, "%s", ir ? "--order, fewer --kinds or no --compress" : "--order or fewer --kinds");
+}
+
 static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **out)
 {
     prt_sh_bake_desc d = {0};
@@ -291,15 +346,7 @@ static prt_status sh_bake_begin(prt_context *ctx, const prt_scene *scene, const 
     d.neighbourhood = prt__opt_int(o, "neighbourhood", 0);
     extra.scene = scene;
     prt_status st = PRT_OK;
-    if (prt__opt(o, "kinds")) {
-        char buf[256], *save = NULL;
-        snprintf(buf, sizeof buf, "%s", prt__opt(o, "kinds"));
-        for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-            prt_transfer_kind k;
-            if (!strcmp(tok, "all")) d.kinds |= 7u;
-            else if (!prt_transfer_kind_parse(tok, &k)) d.kinds |= (unsigned)k;
-        }
-    }
+    d.kinds = option_kinds(o);
     if (prt__opt(o, "brdf")) {
         if ((st = prt_brdf_parse(prt__opt(o, "brdf"), &brdf))) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "--brdf: %s", prt_last_error());
         d.glossy_brdf = &brdf;
@@ -770,6 +817,7 @@ const prt__method prt__method_sh = {
     .export_files = prt__sh_export,
     .web = prt__sh_web,
     .bake_begin = sh_bake_begin,
+    .memory_estimate = sh_memory_estimate,
     .free_state = prt__sh_state_free,
     .save_meta = prt__sh_save_meta,
     .save = prt__sh_save,

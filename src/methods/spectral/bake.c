@@ -529,6 +529,36 @@ static void spectral_release(prt__bake_job *base)
     free(sb);
 }
 
+void prt__spectral_memory(const prt_transfer *t, const prt__spectral_bake_desc *d, int threads, prt__memory_estimate *e)
+{
+    const uint64_t nv = t->mesh.vertex_count;
+    const uint64_t ps = d->full ? 1 : d->partition_size ? (uint64_t)d->partition_size : 1000;
+    uint64_t F = d->full ? nv : d->functions ? (uint64_t)d->functions : 1024;
+    if (F > nv) F = nv;
+    const uint64_t samples = d->samples ? (uint64_t)d->samples : 4096, order = d->env_order ? (uint64_t)d->env_order : 4;
+    uint64_t glossy = 0;
+    for (size_t v = 0; v < nv; ++v) {
+        const uint8_t k = t->mesh.material[v];
+        glossy += k && k <= t->brdf_count && prt_brdf_is_glossy(&t->brdfs[k - 1]);
+    }
+    /* A row holds at most F entries, and at most what its rays reach: three vertices a hit, each
+     * with the functions of its partition. */
+    const uint64_t parts = nv / ps ? nv / ps : 1, per_part = F / parts ? F / parts : 1;
+    uint64_t entries = samples * 3 * per_part;
+    if (entries > F) entries = F;
+    const uint64_t rows = nv + glossy * PRT__SPECTRAL_GLOSSY_N;
+    /* Units' float rows (6 bytes an entry) and the quantized copy (4) side by side at the end,
+     * and the raw rows (6) when kept. */
+    const uint64_t row_bytes = rows * entries * (6 + 4 + (d->keep_rows ? 6 : 0)) + rows * (8 + 4);
+    const uint64_t basis = F * ps * sizeof(float) + nv * 8 + (uint64_t)threads * ps * ps * sizeof(double);
+    const uint64_t other = nv * order * order * sizeof(float) + glossy * PRT__SPECTRAL_GLOSSY_N * order * order * sizeof(float) +
+                           (uint64_t)threads * (nv * 8 + (glossy ? nv * PRT__SPECTRAL_GLOSSY_N * sizeof(float) : 0));
+    e->bytes = e->least = row_bytes + basis + other;
+    snprintf(e->what, sizeof e->what, "up to %.0f MiB of rows of %llu basis functions for %llu vertices, %.0f MiB besides", (double)row_bytes / 1048576.0,
+             (unsigned long long)entries, (unsigned long long)nv, (double)(basis + other) / 1048576.0);
+    snprintf(e->lower, sizeof e->lower, "a smaller --basis or fewer -j threads");
+}
+
 prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_desc *desc, prt_transfer *t, prt__bake_job **out)
 {
     prt__spectral_bake_desc d = desc ? *desc : (prt__spectral_bake_desc){0};

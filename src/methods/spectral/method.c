@@ -126,6 +126,17 @@ static const prt_control_desc controls[] = {
     {"tail", "the bounces past the last estimated as a geometric series (1) or left out (0)", 'U', 'O', 0},
 };
 
+static void spectral_memory_estimate(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e)
+{
+    prt__spectral_bake_desc d = {0};
+    d.functions = prt__opt_int(o, "basis", 0);
+    d.full = prt__opt_flag(o, "full-basis");
+    d.partition_size = prt__opt_int(o, "partition", 0);
+    d.samples = prt__opt_int(o, "samples", 0);
+    d.env_order = prt__opt_int(o, "env-order", 0);
+    prt__spectral_memory(t, &d, threads, e);
+}
+
 static prt_status spectral_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job)
 {
     prt__spectral_bake_desc d = {0};
@@ -380,6 +391,7 @@ const prt__method prt__method_spectral = {
     .controls = controls,
     .control_count = (int)(sizeof controls / sizeof controls[0]),
     .bake_begin = spectral_bake_begin,
+    .memory_estimate = spectral_memory_estimate,
     .free_state = prt__spectral_set_free,
     .save = prt__spectral_save,
     .load = prt__spectral_load,

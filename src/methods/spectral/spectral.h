@@ -162,6 +162,11 @@ typedef struct prt__spectral_bake_desc {
  * their values to q; returns how many. *scale = m / 32767 (0 for a row of zeros). */
 uint32_t prt__spectral_quantize_row(const float *x, uint32_t n, float drop, uint32_t *keep, int16_t *q, float *scale);
 prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_desc *d, prt_transfer *t, prt__bake_job **job);
+/* The spectral bake's memory (transfer/method.h's prt__memory_estimate) for d's settings (zeros:
+ * the defaults) on t's scene, with `threads` gathering: the rows, dense in a closed scene (every
+ * basis function reached), held as floats and then quantized, the environment transfer and each
+ * thread's weights over every vertex. It cannot stream. */
+void prt__spectral_memory(const prt_transfer *t, const prt__spectral_bake_desc *d, int threads, prt__memory_estimate *e);
 
 /* Numbers the glossy vertices of t (a material whose BRDF has a glossy part, or a surface with a
  * glossy candidate in s->set) into s->glossy_of; false when out of memory. */

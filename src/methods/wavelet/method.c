@@ -155,6 +155,27 @@ static const prt_control_desc controls[] = {
     {"light-coefficients", "Haar coefficients of the lighting kept", '[', ']', 1},
 };
 
+/* Sparse stores of --coefficients per transport vector (a uint16 index and three channels), one
+ * vector a vertex and --terms at glossy vertices: with bounces the direct pass, the previous and
+ * next passes and their sum at 16 bits, then the file's store; each thread's cube-map planes. */
+static void wavelet_memory_estimate(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e)
+{
+    const uint64_t nv = t->mesh.vertex_count, n = (uint64_t)prt__opt_int(o, "coefficients", 128), terms = (uint64_t)prt__opt_int(o, "terms", 4);
+    const uint64_t bounces = (uint64_t)prt__opt_int(o, "bounces", 2), bits = (uint64_t)prt__opt_int(o, "bits", 8);
+    uint64_t vectors = 0;
+    for (size_t v = 0; v < nv; ++v) {
+        const uint8_t k = t->mesh.material[v];
+        vectors += k && k <= t->brdf_count && prt_brdf_is_glossy(&t->brdfs[k - 1]) ? terms : 1;
+    }
+    const uint64_t store = vectors * n * (2 + 3 * 2), final = vectors * n * (2 + 3 * bits / 8);
+    const uint64_t stores = (bounces ? 4 * store : 0) + final;
+    const uint64_t per_thread = terms * 3 * PRT_WAVELET_DIM * sizeof(float) + nv * sizeof(int32_t);
+    e->bytes = e->least = stores + nv * (9 * sizeof(float) + 8 + 1) + (uint64_t)threads * per_thread;
+    snprintf(e->what, sizeof e->what, "%.0f MiB of sparse transport, %llu coefficients a vector for %llu vectors", (double)stores / 1048576.0,
+             (unsigned long long)n, (unsigned long long)vectors);
+    snprintf(e->lower, sizeof e->lower, "fewer --coefficients, --bounces 0 or fewer --terms");
+}
+
 static prt_status wavelet_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job)
 {
     (void)scene;
@@ -323,6 +344,7 @@ const prt__method prt__method_wavelet = {
     .control_count = (int)(sizeof controls / sizeof controls[0]),
     .bake_begin = wavelet_bake_begin,
     .gpu_passes = true,
+    .memory_estimate = wavelet_memory_estimate,
     .free_state = prt__wavelet_set_free,
     .save = prt__wavelet_save,
     .load = prt__wavelet_load,
