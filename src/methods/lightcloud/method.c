@@ -203,8 +203,9 @@ static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options 
     int g[3];
     if (grid && sscanf(grid, "%d,%d,%d", &g[0], &g[1], &g[2]) == 3 && g[0] > 0 && g[1] > 0 && g[2] > 0) lights = (uint64_t)g[0] * g[1] * g[2];
     if (prt__opt(o, "cloud-surface")) lights = (uint64_t)prt__opt_int(o, "cloud-surface", 216);
-    /* More is refused by the bake's own checks, which say so more plainly than a size would. */
-    if (lights > PRT__LIGHTCLOUD_MAX_LIGHTS) lights = PRT__LIGHTCLOUD_MAX_LIGHTS;
+    /* More is refused by the bake's own checks, which say so more plainly than a size would:
+     * no estimate stands in their way. */
+    if (lights > PRT__LIGHTCLOUD_MAX_LIGHTS) { e->bytes = e->least = 0; return; }
     const int order = prt__opt_int(o, "emission-order", 1);
     const uint64_t lobes = (uint64_t)order * order, zone = (uint64_t)prt__opt_int(o, "zone-vertices", 2000);
     const uint64_t mesh = nv * (12 * sizeof(float) + 4) + t->mesh.triangle_count * 12;
