@@ -3,6 +3,8 @@
  * glows at exactly the sky's radiance (white furnace); a homogeneous slab's shadow on the ground is
  * the integral of its transmittance; density grid files round-trip and every damaged one is
  * refused by name; bakes do not depend on the thread count. */
+#include <sys/stat.h>
+
 #include "common.h"
 #include "render/volumes.h"
 #include "prt/reference.h"
@@ -246,13 +248,30 @@ static void test_grid_files(void **state)
         assert_non_null(strstr(prt_last_error(), "volumes[0]"));
     }
     free(d);
-    /* examples/cloud.json loads: its ground and box, and a 32^3 procedural cloud. */
-    char example[1024];
+    /* examples/cloud.json loads: the demo scene it names (../out/scene.obj, as the README's tour
+       writes it) and a 32^3 procedural cloud. Copied beside a fresh demo scene in the test folder. */
+    char example[1024], text[4096], dir[1024], copy[1024];
     snprintf(example, sizeof example, "%s", __FILE__);
     char *cut = strstr(example, "tests/methods/sh/test_volume.c");
     if (cut) {
         strcpy(cut, "examples/cloud.json");
-        assert_int_equal(prt_scene_load(ctx, example, NULL, &s), PRT_OK);
+        FILE *f = fopen(example, "rb");
+        assert_non_null(f);
+        size_t n = fread(text, 1, sizeof text - 1, f);
+        fclose(f);
+        text[n] = 0;
+        snprintf(dir, sizeof dir, "%s/out", test_dir);
+        assert_int_equal(mkdir(dir, 0700), 0);
+        snprintf(copy, sizeof copy, "%s/out/scene.obj", test_dir);
+        assert_int_equal(prt_demo_scene_write(copy), PRT_OK);
+        snprintf(dir, sizeof dir, "%s/examples", test_dir);
+        assert_int_equal(mkdir(dir, 0700), 0);
+        snprintf(copy, sizeof copy, "%s/examples/cloud.json", test_dir);
+        f = fopen(copy, "wb");
+        assert_non_null(f);
+        assert_int_equal(fwrite(text, 1, n, f), n);
+        fclose(f);
+        assert_int_equal(prt_scene_load(ctx, copy, NULL, &s), PRT_OK);
         assert_int_equal(prt_scene_volume_count(s), 1);
         assert_int_equal(prt_scene_volume(s, 0, &vd), PRT_OK);
         assert_true(vd.dims[0] == 32 && vd.dims[1] == 32 && vd.dims[2] == 32 && vd.g > 0);
