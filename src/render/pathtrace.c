@@ -25,6 +25,7 @@
 #include "brdf/specular.h"
 #include "geom/volume.h"
 #include "render/volumes.h"
+#include "render/pinhole.h"
 
 #include <string.h>
 
@@ -772,14 +773,8 @@ prt_status prt_reference_trace_image(prt_context *ctx, const prt_scene *scene, c
     out->rgb = prt__calloc((size_t)width * height * 3, sizeof(float));
     float *err = prt__calloc((size_t)width * height * 3, sizeof(float));
     if (!out->rgb || !err) { free(err); prt_image_free(out); job_free(&j); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
-    float f[3], s[3], u[3], up[3] = {cam->up[0], cam->up[1], cam->up[2]};
-    if (up[0] == 0 && up[1] == 0 && up[2] == 0) up[1] = 1;
-    prt__v3_sub(cam->target, cam->eye, f);
-    prt__v3_normalize(f);
-    prt__v3_cross(f, up, s);
-    prt__v3_normalize(s);
-    prt__v3_cross(s, f, u);
-    const float th = tanf(0.5f * (cam->fov_y_deg > 0 ? cam->fov_y_deg : 40.0f) * (float)PRT_PI / 180.0f), aspect = (float)width / height;
+    prt__pinhole pin;
+    prt__pinhole_init(cam, width, height, &pin);
     prt__progress prog = {d.progress, d.progress_user, NULL, 0, 0, 0.0, 0, ctx};
     prt__progress_begin(&prog, "reference image", (uint64_t)height);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(prt__threads(ctx))
@@ -789,10 +784,9 @@ prt_status prt_reference_trace_image(prt_context *ctx, const prt_scene *scene, c
             double sum[3] = {0, 0, 0}, sq[3] = {0, 0, 0};
             for (int k = 0; k < spp; ++k) {
                 rng r = rng_for(j.seed, (uint64_t)y * width + x, (uint32_t)k);
-                float px = (2.0f * (x + (float)uniform(&r)) / width - 1.0f) * th * aspect;
-                float py = (1.0f - 2.0f * (y + (float)uniform(&r)) / height) * th;
-                float dir[3] = {f[0] + px * s[0] + py * u[0], f[1] + px * s[1] + py * u[1], f[2] + px * s[2] + py * u[2]};
-                prt__v3_normalize(dir);
+                const float jx = (float)uniform(&r), jy = (float)uniform(&r);
+                float dir[3];
+                prt__pinhole_dir(&pin, (float)x + jx, (float)y + jy, dir);
                 surface hit;
                 float v[3] = {0, 0, 0}, back[3] = {-dir[0], -dir[1], -dir[2]};
                 int h = j.volume_count ? 2 : intersect(&j, cam->eye, dir, &hit);

@@ -4,6 +4,7 @@
  * voxel), so this is only emission-absorption along the ray. */
 #include "render/volumes.h"
 #include "geom/raycast.h"
+#include "render/pinhole.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -96,21 +97,14 @@ prt_status prt__render_volumes(const prt_context *ctx, const prt_render_mesh *me
     prt__raycaster rc;
     prt_status st = prt__raycaster_create(ctx, &m, &rc);
     if (st) return st;
-    float f[3], s[3], u[3], up[3] = {cam->up[0], cam->up[1], cam->up[2]};
-    if (up[0] == 0 && up[1] == 0 && up[2] == 0) up[1] = 1;
-    prt__v3_sub(cam->target, cam->eye, f);
-    prt__v3_normalize(f);
-    prt__v3_cross(f, up, s);
-    prt__v3_normalize(s);
-    prt__v3_cross(s, f, u);
     const int width = img->width, height = img->height;
-    const float th = tanf(0.5f * (cam->fov_y_deg > 0 ? cam->fov_y_deg : 40.0f) * (float)PRT_PI / 180.0f), aspect = (float)width / (float)height;
+    prt__pinhole pin;
+    prt__pinhole_init(cam, width, height, &pin);
 #pragma omp parallel for schedule(dynamic, 4) num_threads(prt__threads(ctx))
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
-            const float px = (2.0f * ((float)x + 0.5f) / (float)width - 1.0f) * th * aspect, py = (1.0f - 2.0f * ((float)y + 0.5f) / (float)height) * th;
-            float dir[3] = {f[0] + px * s[0] + py * u[0], f[1] + px * s[1] + py * u[1], f[2] + px * s[2] + py * u[2]};
-            prt__v3_normalize(dir);
+            float dir[3];
+            prt__pinhole_dir(&pin, (float)x + 0.5f, (float)y + 0.5f, dir);
             prt__ray_hit h;
             const float tmax = prt__raycaster_hit(&rc, cam->eye, dir, &h) ? h.t : INFINITY;
             float add[3];
