@@ -48,6 +48,8 @@ prt_status prt__ao_load(prt_context *ctx, prt_transfer *t, const cJSON *meta, pr
 
 /* Exit radiance per vertex (relight.c): albedo / pi * A * E(n), E from the lighting's SH
  * projection at order 3; albedo NULL = as baked. */
+/* The environment's irradiance over pi as order-3 SH (relight.c): E(n) / pi at any normal n. */
+prt_status prt__ao_irradiance_sh(prt_context *ctx, const prt_lighting *l, prt_sh_light *sh);
 prt_status prt__ao_radiance(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const float *albedo, float *rgb);
 
 #endif

@@ -42,13 +42,8 @@ prt_status prt__ao_gpu(prt_context *ctx, const prt_transfer *t, const prt_lighti
     const size_t nv = t->mesh.vertex_count;
     if (!albedo) albedo = t->mesh.albedo;
     prt_sh_light sh;
-    prt_status st = prt_lighting_sh(l, PRT__AO_ENV_ORDER, &sh);
-    if (st) return prt__fail(ctx, st, "%s", prt_last_error());
-    /* relight.c's E(n) / pi. */
-    double zh[PRT__AO_ENV_ORDER];
-    prt_sh_clamped_cosine_zh(sh.order, zh);
-    for (int i = 0; i < sh.order; ++i) zh[i] /= PRT_PI;
-    for (int c = 0; c < 3; ++c) prt_sh_convolve_zh(sh.order, zh, 1, sh.coeffs[c]);
+    prt_status st = prt__ao_irradiance_sh(ctx, l, &sh);
+    if (st) return st;
     pthread_mutex_lock(&build_lock);
     if (!s->gpu || !s->gpu_albedo || memcmp(s->gpu_albedo, albedo, nv * 3 * sizeof(float))) {
         if (!s->gpu_albedo) s->gpu_albedo = malloc(nv * 3 * sizeof(float));

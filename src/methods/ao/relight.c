@@ -5,6 +5,19 @@
  * directions alike, as ambient occlusion does. */
 #include "methods/ao/ao.h"
 
+prt_status prt__ao_irradiance_sh(prt_context *ctx, const prt_lighting *l, prt_sh_light *sh)
+{
+    prt_status st = prt_lighting_sh(l, PRT__AO_ENV_ORDER, sh);
+    if (st) return prt__fail(ctx, st, "%s", prt_last_error());
+    /* E(n) / pi, so that a vertex's radiance is albedo * A * this. Channels lie PRT_SH_MAX_COEFFS
+     * apart, not order^2: convolve each alone. */
+    double zh[PRT__AO_ENV_ORDER];
+    prt_sh_clamped_cosine_zh(sh->order, zh);
+    for (int i = 0; i < sh->order; ++i) zh[i] /= PRT_PI;
+    for (int c = 0; c < 3; ++c) prt_sh_convolve_zh(sh->order, zh, 1, sh->coeffs[c]);
+    return PRT_OK;
+}
+
 prt_status prt__ao_radiance(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const float *albedo, float *rgb)
 {
     const prt__ao_set *s = prt__ao(t);
@@ -13,14 +26,8 @@ prt_status prt__ao_radiance(prt_context *ctx, const prt_transfer *t, const prt_l
     const size_t nv = m->vertex_count;
     if (!albedo) albedo = m->albedo;
     prt_sh_light sh;
-    prt_status st = prt_lighting_sh(l, PRT__AO_ENV_ORDER, &sh);
-    if (st) return prt__fail(ctx, st, "%s", prt_last_error());
-    /* E(n) / pi, so that a vertex's radiance is albedo * A * this. Channels lie PRT_SH_MAX_COEFFS
-     * apart, not order^2: convolve each alone. */
-    double zh[PRT__AO_ENV_ORDER];
-    prt_sh_clamped_cosine_zh(sh.order, zh);
-    for (int i = 0; i < sh.order; ++i) zh[i] /= PRT_PI;
-    for (int c = 0; c < 3; ++c) prt_sh_convolve_zh(sh.order, zh, 1, sh.coeffs[c]);
+    prt_status st = prt__ao_irradiance_sh(ctx, l, &sh);
+    if (st) return st;
 #pragma omp parallel for schedule(static, 1024) num_threads(prt__threads(ctx))
     for (size_t v = 0; v < nv; ++v) {
         float e[3];
