@@ -180,10 +180,10 @@ static prt_status refine_scene(cli *c, prt_scene *scene, const prt_refine_desc *
     prt_status st = prt_scene_refine(c->ctx, scene, &rd, &rs);
     if (st || c->quiet) return st;
     if (!rs.new_vertices) {
-        fprintf(stderr, "prt bake: refine: no edge differs by more than the threshold (%zu points probed): the mesh is kept\n", rs.probes);
+        fprintf(stderr, "prt %s: refine: no edge differs by more than the threshold (%zu points probed): the mesh is kept\n", c->cmd, rs.probes);
         return PRT_OK;
     }
-    fprintf(stderr, "prt bake: refine: %d levels added %zu vertices (%.0f%%), now %zu vertices, %zu triangles (%zu points probed)%s\n",
+    fprintf(stderr, "prt %s: refine: %d levels added %zu vertices (%.0f%%), now %zu vertices, %zu triangles (%zu points probed)%s\n", c->cmd,
             rs.levels, rs.new_vertices, 100.0 * (double)rs.new_vertices / (double)before, prt_scene_vertex_count(scene), rs.triangles,
             rs.probes, rs.budget_spent ? "; the vertex budget stopped it (raise --refine-vertices for more)" : "");
     return PRT_OK;
@@ -226,12 +226,12 @@ static prt_status auto_refine(cli *c, const prt_method *m, prt_scene *scene, con
     const size_t nt = prt_scene_triangle_count(scene), nv = prt_scene_vertex_count(scene);
     if (rs.marked_triangles * 100 < nt || rs.marked_triangles < 20) return PRT_OK;
     if (!c->quiet)
-        fprintf(stderr, "prt bake: about %zu triangles (%.0f%%) span contact or shadow edges that their vertices cannot resolve: refining them "
-                "(--no-refine keeps the mesh)\n", rs.marked_triangles, 100.0 * (double)rs.marked_triangles / (double)nt);
+        fprintf(stderr, "prt %s: about %zu triangles (%.0f%%) span contact or shadow edges that their vertices cannot resolve: refining them "
+                "(--no-refine keeps the mesh)\n", c->cmd, rs.marked_triangles, 100.0 * (double)rs.marked_triangles / (double)nt);
     rd.max_new_vertices = nv < 10000 ? 10000 : nv > 100000 ? 100000 : nv;
     st = refine_scene(c, scene, &rd);
     if (st && st != PRT_ERR_CANCELLED) {   /* a convenience: the bake goes on with the mesh as it is */
-        if (!c->quiet) fprintf(stderr, "prt bake: warning: refinement failed (%s): baking the mesh as it is\n", prt_last_error());
+        if (!c->quiet) fprintf(stderr, "prt %s: warning: refinement failed (%s): baking the mesh as it is\n", c->cmd, prt_last_error());
         return PRT_OK;
     }
     return st;
@@ -455,7 +455,7 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
         rc = cli_usage(&c, "%s holds the finished work of an interrupted bake: add --resume to continue it, or delete it to start over",
                        checkpoint_path);
     if (!rc && resume && access(checkpoint_path, F_OK) != 0 && !c.quiet)
-        fprintf(stderr, "prt bake: no checkpoint %s to resume from: baking from the start\n", checkpoint_path);
+        fprintf(stderr, "prt %s: no checkpoint %s to resume from: baking from the start\n", c.cmd, checkpoint_path);
     if (!rc) rc = cli_make_context(&c);
     if (rc) { prt_options_release(o); return rc; }
     prt_scene *scene = NULL;
@@ -473,7 +473,7 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
     }
     if (!st) scene = frames[0];
     if (!st && !c.quiet)
-        fprintf(stderr, "prt bake: %s%s: %zu vertices, %zu triangles\n", argv[optind], key_frames ? " and the other key frames" : "", prt_scene_vertex_count(scene),
+        fprintf(stderr, "prt %s: %s%s: %zu vertices, %zu triangles\n", c.cmd, argv[optind], key_frames ? " and the other key frames" : "", prt_scene_vertex_count(scene),
                 prt_scene_triangle_count(scene));
     prt_light sun;
     if (!st && refine && (rd.extra_light_count = sky_sun(method, scene, &sun))) rd.extra_lights = &sun;
@@ -508,10 +508,10 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
                 prt_bake_shard info;
                 if (!prt_bake_shard_info(c.ctx, output, &info)) {
                     if (info.stage < 0)
-                        fprintf(stderr, "prt bake: warning: no stage of this bake can be spread (all its work is whole steps): %s holds "
-                                "nothing, and prt merge bakes it all\n", output);
+                        fprintf(stderr, "prt %s: warning: no stage of this bake can be spread (all its work is whole steps): %s holds "
+                                "nothing, and prt merge bakes it all\n", c.cmd, output);
                     else
-                        fprintf(stderr, "prt bake: wrote shard %d/%d of stage %d (%s): %llu of its %llu units, to %s\n", shard_i, shard_n,
+                        fprintf(stderr, "prt %s: wrote shard %d/%d of stage %d (%s): %llu of its %llu units, to %s\n", c.cmd, shard_i, shard_n,
                                 info.stage, info.stage_name, (unsigned long long)info.records, (unsigned long long)info.units, output);
                     free(info.note);
                 }
@@ -535,7 +535,7 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
             return rc;
         }
         if (!st && resume && !c.quiet && total)
-            fprintf(stderr, "prt bake: resumed: %llu of %llu work units (%.0f%%) came from %s\n", (unsigned long long)recovered,
+            fprintf(stderr, "prt %s: resumed: %llu of %llu work units (%.0f%%) came from %s\n", c.cmd, (unsigned long long)recovered,
                     (unsigned long long)total, 100.0 * (double)recovered / (double)total, checkpoint_path);
     }
     if (!st && rank) {   /* rank 0 writes the file */
@@ -548,7 +548,11 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
     }
     if (!st && !c.quiet) {
         char *report = NULL;
-        if (!prt_transfer_bake_report(t, &report)) cli_print_lines(stderr, "prt bake: ", report);
+        if (!prt_transfer_bake_report(t, &report)) {
+            char prefix[32];
+            snprintf(prefix, sizeof prefix, "prt %s: ", c.cmd);
+            cli_print_lines(stderr, prefix, report);
+        }
         free(report);
         /* Where the time went, stage by stage (compression is its own stage). */
         const char *const *names;
@@ -558,10 +562,10 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
         size_t at = 0;
         for (int i = 0; i < ns && at < sizeof line; ++i)
             at += (size_t)snprintf(line + at, sizeof line - at, "%s%s %.2f s", i ? ", " : "", names[i], secs[i]);
-        if (ns) fprintf(stderr, "prt bake: stage times: %s\n", line);
+        if (ns) fprintf(stderr, "prt %s: stage times: %s\n", c.cmd, line);
         char peak[32], limit[32];
         if (prt_transfer_peak_bytes(t))
-            fprintf(stderr, "prt bake: peak resident memory %s (limit %s)\n", prt_memory_size_format(prt_transfer_peak_bytes(t), peak, sizeof peak),
+            fprintf(stderr, "prt %s: peak resident memory %s (limit %s)\n", c.cmd, prt_memory_size_format(prt_transfer_peak_bytes(t), peak, sizeof peak),
                     prt_memory_size_format(prt_transfer_memory_limit(t), limit, sizeof limit));
     }
     if (!st) st = cli_check_interrupt(&c);
@@ -569,7 +573,7 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
     if (!st && summary) st = write_summary(&c, summary, argv[optind], output, t);
     /* A big file should not come as a surprise: say its size before writing it. */
     if (!st && !c.quiet && prt_transfer_bytes(t) >= (size_t)64 << 20)
-        fprintf(stderr, "prt bake: writing %.0f MB to %s (prt bake --method %s --help lists what stores less)\n", (double)prt_transfer_bytes(t) / 1e6,
+        fprintf(stderr, "prt %s: writing %.0f MB to %s (prt bake --method %s --help lists what stores less)\n", c.cmd, (double)prt_transfer_bytes(t) / 1e6,
                 output, prt_method_name(method));
     if (!st) {
         st = prt_transfer_save(t, output);
@@ -583,7 +587,7 @@ int cli_bake_main(int argc, char **argv, const cli_bake_extra *extra)
     if (!st && !c.quiet) {
         char *text = NULL;
         if (!prt_transfer_describe(t, output, 0, &text)) {
-            fprintf(stderr, "prt bake: wrote %s:\n", output);
+            fprintf(stderr, "prt %s: wrote %s:\n", c.cmd, output);
             cli_print_lines(stderr, "  ", text);
         }
         free(text);
