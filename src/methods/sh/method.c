@@ -729,6 +729,30 @@ static prt_status sh_relight(prt_context *ctx, const prt_transfer *t, const prt_
     return relight_with(ctx, t, l, d, s, k, &sh, NULL, window, r);
 }
 
+/* Volumes: the light their media scatter, for the renderer's ray march and the viewer's slices
+ * (distant light only), whichever path summed the surfaces. */
+static prt_status relight_volumes(prt_context *ctx, const prt__sh_state *s, const prt_sh_light *shl, prt_relit *r)
+{
+    if (s->volume_count && !(r->volumes = prt__calloc((size_t)s->volume_count, sizeof *r->volumes))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    for (int q = 0; q < s->volume_count; ++q) {
+        const prt__sh_volume *v = &s->volumes[q];
+        const size_t voxels = prt__volume_voxels(&v->medium);
+        prt_render_volume *rv = &r->volumes[q];
+        float *ext = malloc(voxels * sizeof *ext), *src = malloc(voxels * 3 * (size_t)v->bands * v->bands * sizeof *src);
+        rv->extinction = ext;
+        rv->source = src;
+        r->volume_count = q + 1;
+        if (!ext || !src) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        memcpy(rv->dims, v->medium.dims, sizeof rv->dims);
+        memcpy(rv->lo, v->medium.lo, sizeof rv->lo);
+        memcpy(rv->hi, v->medium.hi, sizeof rv->hi);
+        rv->source_order = v->bands;
+        for (size_t i = 0; i < voxels; ++i) ext[i] = v->medium.sigma_t * v->medium.density[i];
+        prt__sh_volume_source(v, s->order, shl, src);
+    }
+    return PRT_OK;
+}
+
 static prt_status relight_with(prt_context *ctx, const prt_transfer *t, const prt_lighting *l, const prt_relight_desc *d, const prt__sh_state *s, int k,
                                const prt_sh_light *shl, const float *local, int window, prt_relit *r)
 {
@@ -747,7 +771,7 @@ static prt_status relight_with(prt_context *ctx, const prt_transfer *t, const pr
      * difference of two sets) stay here. */
     if (d->gpu_finish && !local && !d->with_indirect && d->component != PRT_COMPONENT_INDIRECT && prt__sh_gpu_can(s, k, d) &&
         !(!d->per_vertex && d->component == PRT_COMPONENT_ALL && k <= 2 && s->texels.coeffs[k]))
-        return prt__sh_gpu_relight(ctx, t, k, shl, r);
+        return (st = prt__sh_gpu_relight(ctx, t, k, shl, r)) ? st : relight_volumes(ctx, s, shl, r);
     const bool want_indirect = (d->with_indirect || d->component == PRT_COMPONENT_INDIRECT) && split_ok && (k == 2 || k == 4);
     if ((st = prt__relit_alloc(ctx, t, r, want_indirect))) return st;
     const size_t exit_floats = 3 * (size_t)s->order * s->order;
@@ -781,25 +805,7 @@ static prt_status relight_with(prt_context *ctx, const prt_transfer *t, const pr
         if ((st = prt_relight_sh_texels(ctx, t, prt__kind_from_index(k), shl, r->texels))) return st;
         if (local && (st = prt__relight_sh_texels_local(ctx, t, k, l, order, window, r->texels))) return st;
     }
-    /* Volumes: the light their media scatter, for the renderer's ray march (distant light only). */
-    if (s->volume_count && !(r->volumes = prt__calloc((size_t)s->volume_count, sizeof *r->volumes))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-    for (int q = 0; q < s->volume_count; ++q) {
-        const prt__sh_volume *v = &s->volumes[q];
-        const size_t voxels = prt__volume_voxels(&v->medium);
-        prt_render_volume *rv = &r->volumes[q];
-        float *ext = malloc(voxels * sizeof *ext), *src = malloc(voxels * 3 * (size_t)v->bands * v->bands * sizeof *src);
-        rv->extinction = ext;
-        rv->source = src;
-        r->volume_count = q + 1;
-        if (!ext || !src) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
-        memcpy(rv->dims, v->medium.dims, sizeof rv->dims);
-        memcpy(rv->lo, v->medium.lo, sizeof rv->lo);
-        memcpy(rv->hi, v->medium.hi, sizeof rv->hi);
-        rv->source_order = v->bands;
-        for (size_t i = 0; i < voxels; ++i) ext[i] = v->medium.sigma_t * v->medium.density[i];
-        prt__sh_volume_source(v, s->order, shl, src);
-    }
-    return PRT_OK;
+    return relight_volumes(ctx, s, shl, r);
 }
 
 const prt__method prt__method_sh = {

@@ -56,6 +56,11 @@ static void furnace(float sigma_t, float g, double tol)
     prt_transfer *t = bake_sh(ctx, s, 3, 256, PRT_TRANSFER_SHADOWED);
     prt_lighting *l = uniform_lighting(1.0f);
     prt_relit r;
+    /* Relit for the GPU's sums (the viewer's default), the media come along all the same. */
+    assert_int_equal(prt_relight(ctx, t, l, &(prt_relight_desc){.gpu_finish = 1}, &r), PRT_OK);
+    assert_non_null(r.gpu_sums);
+    assert_int_equal(r.volume_count, 1);
+    prt_relit_free(&r);
     assert_int_equal(prt_relight(ctx, t, l, NULL, &r), PRT_OK);
     assert_int_equal(r.volume_count, 1);
     const prt_render_volume *v = &r.volumes[0];
