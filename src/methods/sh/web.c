@@ -20,6 +20,9 @@ prt_status prt__sh_web(prt_context *ctx, const prt_transfer *t, const prt_export
         return prt__fail(ctx, PRT_ERR_INVALID_ARG, "light-window %d: use 0 (none), 1 (Hanning) or 2 (Lanczos)", window);
     const prt_lighting *l = d->lighting;
     const size_t nv = t->mesh.vertex_count;
+    if (s->volume_count)
+        prt__log(ctx, PRT_LOG_WARN, "the page draws the surfaces only: the file's participating media shadow them there but are not drawn (prt render and "
+                                    "prt view draw them)");
 
     /* The environment as the page rotates it: unrotated and at intensity 1 when its rotation is
      * the yaw, pitch and roll it was named with (the page starts there); else as it is. */
