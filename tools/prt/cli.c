@@ -1,5 +1,7 @@
 #include "cli.h"
 
+#include <cjson/cJSON.h>
+
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -309,6 +311,12 @@ int cli_view_option(const cli *c, cli_view *v, int opt, const char *arg)
 void cli_view_camera(const cli *c, const cli_view *v, const float *p, size_t nv, const uint32_t *indices, size_t nt, float aspect,
                      prt_camera *cam)
 {
+    cli_view_camera_boxes(c, v, p, nv, indices, nt, NULL, 0, aspect, cam);
+}
+
+void cli_view_camera_boxes(const cli *c, const cli_view *v, const float *p, size_t nv, const uint32_t *indices, size_t nt, const float *boxes,
+                           int box_count, float aspect, prt_camera *cam)
+{
     if (v->have_eye) {   /* no framing to find: the camera is given */
         memset(cam, 0, sizeof *cam);
         memcpy(cam->eye, v->eye, sizeof v->eye);
@@ -317,7 +325,57 @@ void cli_view_camera(const cli *c, const cli_view *v, const float *p, size_t nv,
         cam->fov_y_deg = v->fov;
         return;
     }
-    prt_camera_frame_mesh(c ? c->ctx : NULL, p, nv, indices, nt, v->have_view ? v->view : NULL, v->have_fov ? v->fov : 0, aspect, cam);
+    /* The boxes' corners join the vertices as points no triangle uses: the framing's bounds
+     * take them in, its rays still meet only the mesh. */
+    float *all = box_count > 0 ? malloc((nv + 8 * (size_t)box_count) * 3 * sizeof(float)) : NULL;
+    if (all) {
+        memcpy(all, p, nv * 3 * sizeof(float));
+        for (int b = 0; b < box_count; ++b)
+            for (int k = 0; k < 8; ++k)
+                for (int a = 0; a < 3; ++a) all[(nv + 8 * (size_t)b + (size_t)k) * 3 + (size_t)a] = boxes[b * 6 + ((k >> a) & 1) * 3 + a];
+    }
+    prt_camera_frame_mesh(c ? c->ctx : NULL, all ? all : p, all ? nv + 8 * (size_t)box_count : nv, indices, nt, v->have_view ? v->view : NULL,
+                          v->have_fov ? v->fov : 0, aspect, cam);
+    free(all);
+}
+
+int cli_scene_media_boxes(const prt_scene *s, float boxes[CLI_MAX_MEDIA * 6])
+{
+    int n = 0;
+    prt_volume_desc vd;
+    for (int i = 0; i < prt_scene_volume_count(s) && n < CLI_MAX_MEDIA; ++i)
+        if (!prt_scene_volume(s, i, &vd)) {
+            memcpy(boxes + n * 6, vd.lo, sizeof vd.lo);
+            memcpy(boxes + n * 6 + 3, vd.hi, sizeof vd.hi);
+            n++;
+        }
+    return n;
+}
+
+int cli_transfer_media_boxes(const prt_transfer *t, float boxes[CLI_MAX_MEDIA * 6])
+{
+    /* The file's description lists its media (any method that keeps them): "volumes", each with a
+     * "min" and "max" corner. */
+    char *text = NULL;
+    if (prt_transfer_describe(t, NULL, 1, &text) || !text) return 0;
+    cJSON *root = cJSON_Parse(text);
+    free(text);
+    int n = 0;
+    const cJSON *vol;
+    cJSON_ArrayForEach(vol, cJSON_GetObjectItemCaseSensitive(root, "volumes"))
+    {
+        const cJSON *lo = cJSON_GetObjectItemCaseSensitive(vol, "min"), *hi = cJSON_GetObjectItemCaseSensitive(vol, "max");
+        if (n >= CLI_MAX_MEDIA || cJSON_GetArraySize(lo) != 3 || cJSON_GetArraySize(hi) != 3) continue;
+        bool ok = true;
+        for (int a = 0; a < 3; ++a) {
+            const cJSON *x = cJSON_GetArrayItem(lo, a), *y = cJSON_GetArrayItem(hi, a);
+            ok = ok && cJSON_IsNumber(x) && cJSON_IsNumber(y) && isfinite(x->valuedouble) && isfinite(y->valuedouble);
+            if (ok) { boxes[n * 6 + a] = (float)x->valuedouble; boxes[n * 6 + 3 + a] = (float)y->valuedouble; }
+        }
+        n += ok;
+    }
+    cJSON_Delete(root);
+    return n;
 }
 
 /* ---- scene ---- */

@@ -305,6 +305,13 @@ int cli_view_option(const cli *c, cli_view *v, int opt, const char *arg);
  * unless --eye/--target were given. */
 void cli_view_camera(const cli *c, const cli_view *v, const float *positions, size_t nv, const uint32_t *indices, size_t nt, float aspect,
                      prt_camera *cam);
+/* The same, framing the boxes too (lo xyz, hi xyz each): participating media above a scene. */
+void cli_view_camera_boxes(const cli *c, const cli_view *v, const float *positions, size_t nv, const uint32_t *indices, size_t nt, const float *boxes,
+                           int box_count, float aspect, prt_camera *cam);
+#define CLI_MAX_MEDIA 64
+/* The boxes of a scene's or a file's participating media (at most CLI_MAX_MEDIA). */
+int cli_scene_media_boxes(const prt_scene *s, float boxes[CLI_MAX_MEDIA * 6]);
+int cli_transfer_media_boxes(const prt_transfer *t, float boxes[CLI_MAX_MEDIA * 6]);
 /* The points a room must keep facing as the scene is loaded (prt_scene_desc.inside_points): the
  * positions of l's --light lights (directional ones have none) and v's --eye; either may be NULL.
  * out holds 3 floats per point; returns the count. */

@@ -136,8 +136,10 @@ int cmd_reference(int argc, char **argv)
     rd.progress_user = &c;
     /* View-dependent surfaces are seen from the camera, as prt relight and compare see them. */
     prt_camera cam;
-    if (!st) cli_view_camera(&c, &view, prt_scene_positions(scene), prt_scene_vertex_count(scene), prt_scene_indices(scene), prt_scene_triangle_count(scene),
-                                 (float)view.width / view.height, &cam);
+    float media[CLI_MAX_MEDIA * 6];
+    if (!st)
+        cli_view_camera_boxes(&c, &view, prt_scene_positions(scene), prt_scene_vertex_count(scene), prt_scene_indices(scene), prt_scene_triangle_count(scene),
+                              media, cli_scene_media_boxes(scene, media), (float)view.width / view.height, &cam);
     rd.eye = cam.eye;
     if (!st && output) st = prt_reference_trace_vertices(c.ctx, scene, NULL, &rd, &res);
     if (!st && output) st = cli_check_interrupt(&c);

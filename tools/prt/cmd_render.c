@@ -273,8 +273,10 @@ int cmd_render(int argc, char **argv)
     float centre[3] = {0, 0, 0};
     if (!st && !rc) {
         const prt_transfer *t0 = src[first].file ? src[first].file : src[first].t;
-        cli_view_camera(&c, &view, prt_transfer_positions(t0), prt_transfer_vertex_count(t0), prt_transfer_indices(t0), prt_transfer_triangle_count(t0),
-                        (float)width / height, &cam);
+        float media[CLI_MAX_MEDIA * 6];
+        const int nmedia = view.have_eye ? 0 : cli_transfer_media_boxes(t0, media);
+        cli_view_camera_boxes(&c, &view, prt_transfer_positions(t0), prt_transfer_vertex_count(t0), prt_transfer_indices(t0), prt_transfer_triangle_count(t0),
+                              media, nmedia, (float)width / height, &cam);
         float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
         const float *p = prt_transfer_positions(t0);
         for (size_t v = 0; v < prt_transfer_vertex_count(t0); ++v)

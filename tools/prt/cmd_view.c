@@ -632,7 +632,10 @@ int cmd_view(int argc, char **argv)
     }
     prt_camera_frame((float[3]){0, 0, 0}, (float[3]){0, 0, 0}, NULL, 40, 1, &v.start_cam);
     {   /* the same framing as prt render */
-        cli_view_camera(&c, &view, prt_transfer_positions(v.t), nv, prt_transfer_indices(v.t), prt_transfer_triangle_count(v.t), (float)fw / fh, &v.start_cam);
+        float media[CLI_MAX_MEDIA * 6];
+        const int nmedia = view.have_eye ? 0 : cli_transfer_media_boxes(v.t, media);
+        cli_view_camera_boxes(&c, &view, prt_transfer_positions(v.t), nv, prt_transfer_indices(v.t), prt_transfer_triangle_count(v.t), media, nmedia,
+                              (float)fw / fh, &v.start_cam);
     }
     v.result_version = v.shown_version = v.want.version;
     pthread_create(&v.thread, NULL, worker, &v);
