@@ -47,6 +47,8 @@ if node $WS -e 'process.exit(typeof WebSocket === "function" ? 0 : 1)' 2>/dev/nu
     shooter=$!
     trap 'kill "$shooter" 2>/dev/null; wait "$shooter" 2>/dev/null; rm -rf "$T"' EXIT
     for i in $(seq 1 600); do [ -s "$T/shots/DevToolsActivePort" ] && break; sleep 0.1; done
+    # No DevTools port after a minute: a browser per shot, as without WebSocket.
+    [ -s "$T/shots/DevToolsActivePort" ] || { kill "$shooter" 2>/dev/null; wait "$shooter" 2>/dev/null; shooter=; }
 fi
 # shot PAGE HASH OUT.png: a screenshot of the page opened from the file system at #HASH.
 shot() {
