@@ -96,16 +96,23 @@ static void test_parse_errors(void **state)
     assert_true(l.angle_deg == 30.0f && l.falloff_deg == 30.0f);
 }
 
-/* Irradiance from a uniform unit-radiance sphere cap by brute-force quadrature over the cap. */
+/* Irradiance from a uniform unit-radiance sphere cap by brute-force quadrature over the cap. The
+ * azimuths' sines and cosines are computed once, not per point: the same sums, bit for bit, in a
+ * fraction of the time (this test runs under valgrind in every make test). */
 static double cap_irradiance_numeric(double theta, double sigma)
 {
-    const int nt = 1500, np = 1500;
+    enum { nt = 1500, np = 1500 };
+    static double cp[np], sp[np];
+    for (int k = 0; k < np; ++k) {
+        double p = 2 * M_PI * (k + 0.5) / np;
+        cp[k] = cos(p);
+        sp[k] = sin(p);
+    }
     double n[3] = {sin(theta), cos(theta), 0}, e = 0;   /* the cap is centred on +y */
     for (int i = 0; i < nt; ++i) {
         double t = sigma * (i + 0.5) / nt, st = sin(t), ct = cos(t);
         for (int k = 0; k < np; ++k) {
-            double p = 2 * M_PI * (k + 0.5) / np;
-            double w[3] = {st * cos(p), ct, st * sin(p)};
+            double w[3] = {st * cp[k], ct, st * sp[k]};
             double c = w[0] * n[0] + w[1] * n[1] + w[2] * n[2];
             if (c > 0) e += c * st;
         }
