@@ -102,6 +102,16 @@ typedef struct prt_render_product {
      * v * exit_order^2 + i; prt_render_mesh.exit_order), drawn in place of exit_sh (which may then
      * be NULL). At most one product. */
     int exit;
+    /* Optional, for what sums cannot say (ratios, roots): a function applied to each row last,
+     *     y[r] = map(y[r], a_0, .., a_{map_argc - 1}),
+     * a_j read from map_args[j] (product j < k, or -1: gpu_vector) at row r, or at row 0 where
+     * that has one row. Given twice by the description's builder, the same in float: map_glsl
+     * the body of GLSL's `vec3 map(vec3 y, vec3 a0, vec3 a1, vec3 a2)` (unused arguments are
+     * zero), map_cpu the C. NULL map_glsl: none. */
+    const char *map_glsl;
+    void (*map_cpu)(const float y[3], const float *const a[3], float out[3]);
+    int map_argc;
+    int map_args[3];
 } prt_render_product;
 
 typedef struct prt_render_sums {

@@ -23,6 +23,14 @@ prt_status prt__render_sums_check(const prt_render_sums *s, size_t vertex_count)
             if (p->start[r + 1] < p->start[r]) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: product %d's row %zu ends before it starts", k, r);
         for (uint32_t e = 0; e < p->start[p->rows]; ++e)
             if (p->index[e] >= in) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: product %d reads row %u of %zu", k, p->index[e], in);
+        if (p->map_glsl && (!p->map_cpu || p->map_argc < 0 || p->map_argc > 3))
+            return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: product %d's map lacks its C or has %d arguments", k, p->map_argc);
+        for (int j = 0; p->map_glsl && j < p->map_argc; ++j) {
+            const int a = p->map_args[j];
+            const size_t rows = a < 0 ? s->vector_length : a < k ? s->products[a].rows : 0;
+            if (a < -1 || a >= k || (rows != p->rows && rows != 1))
+                return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: product %d's map reads %d, of %zu rows for its %zu", k, a, rows, p->rows);
+        }
     }
     return PRT_OK;
 }
@@ -59,6 +67,18 @@ static float **eval_all(const prt_render_sums *s, const float *vector)
             out[r * 3] = a0;
             out[r * 3 + 1] = a1;
             out[r * 3 + 2] = a2;
+            if (p->map_glsl) {
+                static const float zero[3] = {0, 0, 0};
+                const float *arg[3] = {zero, zero, zero};
+                for (int j = 0; j < p->map_argc; ++j) {
+                    const int a = p->map_args[j];
+                    const float *src = a < 0 ? vector : y[a];
+                    const size_t rows = a < 0 ? s->vector_length : s->products[a].rows;
+                    arg[j] = src + (rows == 1 ? 0 : r * 3);
+                }
+                const float sum[3] = {a0, a1, a2};
+                p->map_cpu(sum, arg, out + r * 3);
+            }
         }
     }
     if (st) {
