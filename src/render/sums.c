@@ -42,6 +42,13 @@ const prt_render_product *prt_render_sums_exit_product(const prt_render_sums *s)
     return NULL;
 }
 
+const prt_render_product *prt_render_sums_kvec_product(const prt_render_sums *s)
+{
+    for (int k = 0; s && k < s->product_count; ++k)
+        if (s->products[k].kvec) return &s->products[k];
+    return NULL;
+}
+
 /* Every product's rows (RGB), or NULL after recording why. */
 static float **eval_all(const prt_render_sums *s, const float *vector)
 {
@@ -124,6 +131,21 @@ prt_status prt_render_sums_exit_cpu(const prt_render_sums *s, const float *vecto
     for (size_t v = 0; v < vertex_count; ++v)
         for (size_t i = 0; i < n; ++i)
             for (int c = 0; c < 3; ++c) exit_sh[(v * 3 + (size_t)c) * n + i] = rows[(v * n + i) * 3 + (size_t)c];
+    free_all(s, y);
+    return PRT_OK;
+}
+
+prt_status prt_render_sums_kvec_cpu(const prt_render_sums *s, const float *vector, size_t vertex_count, int terms, float *kvec)
+{
+    if (!vector || !kvec) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_sums_kvec_cpu: vector and output are required");
+    prt_status st = prt__render_sums_check(s, vertex_count);
+    if (st) return st;
+    const prt_render_product *e = prt_render_sums_kvec_product(s);
+    if (!e || terms < 1 || e->rows != vertex_count * (size_t)terms)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: no kvec product of %zu rows", vertex_count * (size_t)(terms > 0 ? terms : 0));
+    float **y = eval_all(s, vector);
+    if (!y) return PRT_ERR_NO_MEMORY;
+    memcpy(kvec, y[e - s->products], e->rows * 3 * sizeof(float));   /* the rows are the layout */
     free_all(s, y);
     return PRT_OK;
 }
