@@ -87,6 +87,31 @@ static void run_case(prt_context *ctx, const prt_scene *scene, const gpu_case *c
         assert_true(r < 2e-5);
         free(e);
     }
+    /* Separable view factors' light-dependent terms (wavelet glossy vertices). */
+    if (cpu.kvec) {
+        assert_null(gpu.kvec);
+        assert_int_equal(gpu.kvec_terms, cpu.kvec_terms);
+        const size_t nk = nv * 3 * (size_t)cpu.kvec_terms;
+        float *k = malloc(nk * sizeof(float));
+        assert_int_equal(prt_render_sums_kvec_cpu(gpu.gpu_sums, gpu.gpu_vector, nv, cpu.kvec_terms, k), PRT_OK);
+        diff(k, cpu.kvec, nk, &a, &r);
+        print_message("%-22s %6s           K-vector sums on the CPU: max abs %.3g, rel %.3g\n", c->name, "", a, r);
+        assert_true(r < 2e-5);
+        free(k);
+    }
+    /* The CPU's view factor from the GPU's description (prt_relit_shade sums it there). */
+    if (prt_relit_view_dependent(&cpu)) {
+        assert_true(prt_relit_view_dependent(&gpu));
+        float *sc = malloc(nv * 3 * sizeof(float)), *sg = malloc(nv * 3 * sizeof(float));
+        const float eye[3] = {0.8f, 1.2f, 1.5f};
+        assert_int_equal(prt_relit_shade(ctx, t, &cpu, eye, sc), PRT_OK);
+        assert_int_equal(prt_relit_shade(ctx, t, &gpu, eye, sg), PRT_OK);
+        diff(sg, sc, nv * 3, &a, &r);
+        print_message("%-22s %6s           shaded from an eye: max abs %.3g, rel %.3g\n", c->name, "", a, r);
+        assert_true(r < 2e-5);
+        free(sc);
+        free(sg);
+    }
     /* On the GPU: the vertices' radiance read back, then both images. */
     prt_renderer *ren = get_renderer(ctx);
     if (ren) {
@@ -250,6 +275,14 @@ static void test_wavelet(void **state)
     static const char *const opts[] = {"supersample", "1", "bounces", "0", NULL};
     const gpu_case c = {"wavelet", "wavelet", opts, 1, {-1, -1}};
     run_case(ctx, s, &c);
+    /* Glossy vertices (the sphere's last 150 with a Phong lobe): their K-vectors summed on the GPU
+     * and read by the per-pixel view factor, the Lambertian ones' radiance from their first term. */
+    prt_brdf phong;
+    assert_int_equal(prt_brdf_parse("phong:8:0.5:0.3", &phong), PRT_OK);
+    const size_t nv = prt_scene_vertex_count(s);
+    assert_int_equal(prt_scene_set_brdf(s, nv - 150, 150, &phong), PRT_OK);
+    const gpu_case g = {"wavelet glossy", "wavelet", opts, 1, {-1, -1}};
+    run_case(ctx, s, &g);
     prt_scene_release(s);
     prt_context_release(ctx);
 }
