@@ -353,6 +353,79 @@ static void on_log(void *user, prt_log_level level, const char *msg)
 
 /* Where the GPU cannot hold a description (here a renderer told it has 1000 buffer texels), the
  * renderer sums on the CPU, says so once, and draws the same; bad descriptions are refused. */
+static void square_times(const float y[3], const float *const a[3], float out[3])
+{
+    for (int c = 0; c < 3; ++c) out[c] = y[c] * y[c] * a[0][c];
+}
+
+/* A product's map (GLSL on the GPU, C on the CPU) gives the same rows both ways; GLSL that does
+ * not compile sends the description to the CPU, saying why; a map reading a later product is
+ * refused. */
+static void map_case(prt_context *ctx, const prt_transfer *t, const prt_relit *r, char *note)
+{
+    const size_t nv = prt_transfer_vertex_count(t);
+    float *x = malloc(nv * 3 * sizeof(float)), *cpu = calloc(nv * 3, sizeof(float)), *back = malloc(nv * 3 * sizeof(float));
+    float *w = malloc(nv * 3 * sizeof(float)), *zero = calloc(nv * 3, sizeof(float));
+    uint32_t *start = malloc((nv + 1) * sizeof(uint32_t)), *index = malloc(nv * sizeof(uint32_t));
+    for (size_t v = 0; v < nv; ++v) {
+        start[v] = (uint32_t)v;
+        index[v] = (uint32_t)(nv - 1 - v);
+        for (int c = 0; c < 3; ++c) {
+            x[v * 3 + c] = 0.25f + (float)((v * 7 + (size_t)c * 3) % 17) / 17.0f;
+            w[v * 3 + c] = 0.5f + (float)c;
+        }
+    }
+    start[nv] = (uint32_t)nv;
+    prt_render_product p = {.input = -1, .rows = nv, .start = start, .index = index, .weight = w, .shown = 1,
+                            .map_glsl = "return y * y * a0;", .map_cpu = square_times, .map_argc = 1, .map_args = {-1}};
+    prt_render_sums sums = {.id = UINT64_MAX - 7, .vector_length = nv, .product_count = 1, .products = &p};
+    assert_int_equal(prt_render_sums_cpu(&sums, x, nv, cpu), PRT_OK);
+    for (size_t v = 0; v < nv; ++v)
+        for (int c = 0; c < 3; ++c) {
+            const float y = w[v * 3 + c] * x[(nv - 1 - v) * 3 + c];
+            assert_float_equal(cpu[v * 3 + c], y * y * x[v * 3 + c], 1e-6);
+        }
+    /* Renderers of their own: releasing one terminates the EGL display the others share. */
+    prt_renderer *ren = NULL;
+    if (!no_gl && !prt_renderer_create(ctx, &(prt_renderer_desc){32, 32, 1}, &ren)) {
+        prt_render_mesh m;
+        prt_relit_render_mesh(t, r, &m);
+        m.radiance = zero;
+        m.exit_sh = NULL;
+        m.exit_order = 0;
+        m.gpu_sums = &sums;
+        m.gpu_vector = x;
+        assert_int_equal(prt_render_vertex_radiance(ren, &m, back), PRT_OK);
+        assert_int_equal(prt_render_sums_on_gpu(ren), 1);
+        double a, rel;
+        diff(back, cpu, nv * 3, &a, &rel);
+        print_message("map on the GPU: max abs %.3g, rel %.3g\n", a, rel);
+        assert_true(rel < 2e-6);
+        /* GLSL that does not compile: the CPU sums it, and the note says why. */
+        p.map_glsl = "return y * undeclared;";
+        sums.id = UINT64_MAX - 8;
+        note[0] = 0;
+        assert_int_equal(prt_render_vertex_radiance(ren, &m, back), PRT_OK);
+        assert_int_equal(prt_render_sums_on_gpu(ren), 0);
+        print_message("note: %.80s...\n", note);
+        assert_non_null(strstr(note, "GPU sums shader"));
+        for (size_t i = 0; i < nv * 3; ++i) assert_float_equal(back[i], cpu[i], 1e-6);
+        p.map_glsl = "return y * y * a0;";
+        prt_renderer_release(ren);
+    }
+    /* A map reading itself or a later product is refused. */
+    p.map_args[0] = 0;
+    assert_int_equal(prt_render_sums_cpu(&sums, x, nv, cpu), PRT_ERR_INVALID_ARG);
+    assert_non_null(strstr(prt_last_error(), "map reads 0"));
+    free(x);
+    free(cpu);
+    free(back);
+    free(w);
+    free(zero);
+    free(start);
+    free(index);
+}
+
 static void test_fallback(void **state)
 {
     (void)state;
@@ -397,6 +470,7 @@ static void test_fallback(void **state)
     assert_int_equal(prt_render_sums_cpu(&sums, r.gpu_vector, nv, cpu), PRT_ERR_INVALID_ARG);
     assert_non_null(strstr(prt_last_error(), "product 0 reads row 1000000"));
     free(index);
+    map_case(ctx, t, &r, note);
     free(cpu);
     free(back);
     prt_relit_free(&r);
