@@ -5,7 +5,7 @@
  * Measured in the same run against the limit those frames cannot beat: drawing the same mesh
  * with its colours fixed (upload, draw and read back, no relighting). On llvmpipe the "GPU" is
  * the same CPU cores; on a real GPU run it where EGL finds the driver (the script prints how).
- * Spectral files are relit without the tail on both paths (it needs the CPU).
+ * Every file is relit with its default controls (spectral: three bounces and the tail).
  * Usage: prt_bench_gpu [--frames N] [--size WxH] [FILE.prt ...]  (none: the demo scene, SH)
  * Prints one JSON line per file. */
 #include "prt/prt.h"
@@ -98,7 +98,6 @@ static int bench_file(prt_context *ctx, prt_renderer *ren, int width, int height
     for (int i = 0; i < nc; ++i) {
         int lo, hi;
         prt_transfer_control_range(t, i, &lo, &hi, &controls[i]);
-        if (!strcmp(cd[i].name, "tail")) controls[i] = 0;
     }
     prt_camera cam;
     prt_camera_frame_mesh(ctx, prt_transfer_positions(t), nv, prt_transfer_indices(t), prt_transfer_triangle_count(t), NULL, 0,

@@ -102,6 +102,20 @@ typedef struct prt_render_product {
      * v * exit_order^2 + i; prt_render_mesh.exit_order), drawn in place of exit_sh (which may then
      * be NULL). At most one product. */
     int exit;
+    /* Non-zero: the rows are the separable view factor's light-dependent terms (vertex v's term k
+     * at row v * kvec_terms + k; prt_render_mesh.kvec_terms), drawn in place of kvec (which may
+     * then be NULL). At most one product. */
+    int kvec;
+    /* Optional, for what sums cannot say (ratios, roots): a function applied to each row last,
+     *     y[r] = map(y[r], a_0, .., a_{map_argc - 1}),
+     * a_j read from map_args[j] (product j < k, or -1: gpu_vector) at row r, or at row 0 where
+     * that has one row. Given twice by the description's builder, the same in float: map_glsl
+     * the body of GLSL's `vec3 map(vec3 y, vec3 a0, vec3 a1, vec3 a2)` (unused arguments are
+     * zero), map_cpu the C. NULL map_glsl: none. */
+    const char *map_glsl;
+    void (*map_cpu)(const float y[3], const float *const a[3], float out[3]);
+    int map_argc;
+    int map_args[3];
 } prt_render_product;
 
 typedef struct prt_render_sums {
@@ -119,6 +133,11 @@ prt_status prt_render_sums_cpu(const prt_render_sums *s, const float *vector, si
 prt_status prt_render_sums_exit_cpu(const prt_render_sums *s, const float *vector, size_t vertex_count, int order, float *exit_sh);
 /* The exit product of s, or NULL. */
 const prt_render_product *prt_render_sums_exit_product(const prt_render_sums *s);
+/* The kvec product's rows on the CPU as prt_relit.kvec lays them out ([vertex][term][channel]);
+ * fails when s has none or its rows do not fit. */
+prt_status prt_render_sums_kvec_cpu(const prt_render_sums *s, const float *vector, size_t vertex_count, int terms, float *kvec);
+/* The kvec product of s, or NULL. */
+const prt_render_product *prt_render_sums_kvec_product(const prt_render_sums *s);
 
 /* Borrowed arrays describing what to draw. */
 /* A participating medium the renderer ray-marches over the surfaces (depth-correct: each pixel's

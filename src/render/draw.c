@@ -97,7 +97,7 @@ static const char *FS_G =
 static const char *FS_S =
     "#version 330 core\n"
     "in vec3 f_pos; in vec3 f_nrm; in vec3 f_rad; in vec3 f_bary; flat in ivec3 f_ids;\n"
-    "uniform samplerBuffer kvec; uniform sampler2DArray maps; uniform int terms; uniform int polar; uniform vec3 eye;\n"
+    "uniform samplerBuffer kvec, kset; uniform sampler2DArray maps; uniform int terms; uniform int polar; uniform vec3 eye;\n"
     "out vec4 color;\n"
     "void main() {\n"
     "  vec3 n = normalize(f_nrm);\n"
@@ -112,7 +112,7 @@ static const char *FS_S =
     "  vec3 acc = vec3(0.0);\n"
     "  for (int c = 0; c < 3; ++c) {\n"
     "    int id = f_ids[c];\n"
-    "    int set = int(texelFetch(kvec, id * terms).a + 0.5);\n"
+    "    int set = int(texelFetch(kset, id).r + 0.5);\n"
     "    if (set == 0) continue;\n"
     "    vec3 sum = vec3(0.0);\n"
     "    for (int k = 0; k < terms; ++k)\n"
@@ -195,6 +195,7 @@ prt_status prt__draw_init(prt__draw *d)
     d->us_polar = glGetUniformLocation(d->program_s, "polar");
     d->us_kvec = glGetUniformLocation(d->program_s, "kvec");
     d->us_maps = glGetUniformLocation(d->program_s, "maps");
+    d->us_kset = glGetUniformLocation(d->program_s, "kset");
     glGenBuffers(1, &d->tbo_k);
     glGenTextures(1, &d->tbo_k_tex);
     glGenTextures(1, &d->maps_tex);
@@ -230,6 +231,8 @@ void prt__draw_free(prt__draw *d)
     if (d->program_s) glDeleteProgram(d->program_s);
     if (d->tbo_k) glDeleteBuffers(1, &d->tbo_k);
     if (d->tbo_k_tex) glDeleteTextures(1, &d->tbo_k_tex);
+    if (d->tbo_set) glDeleteBuffers(1, &d->tbo_set);
+    if (d->tbo_set_tex) glDeleteTextures(1, &d->tbo_set_tex);
     if (d->maps_tex) glDeleteTextures(1, &d->maps_tex);
     free(d->kpack);
     free(d->view_set);
@@ -264,7 +267,8 @@ prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
     const bool exit_given = m->exit_sh || (m->gpu_sums && prt_render_sums_exit_product(m->gpu_sums));   /* or summed on the GPU */
     d->exit_order = exit_given && m->normals && m->exit_order >= 1 && m->exit_order <= PRT_SH_MAX_ORDER ? m->exit_order : 0;
     d->exit_mirror = m->exit_mirror;
-    d->kvec_terms = m->kvec && m->normals && m->view_set && m->view_maps && m->kvec_terms >= 1 && m->view_map_sets >= 1 &&
+    const bool kvec_given = m->kvec || (m->gpu_sums && prt_render_sums_kvec_product(m->gpu_sums));   /* or summed on the GPU */
+    d->kvec_terms = kvec_given && m->normals && m->view_set && m->view_maps && m->kvec_terms >= 1 && m->view_map_sets >= 1 &&
                             m->view_map_resolution >= 1 ? m->kvec_terms : 0;
     if (m->normals) {   /* also for lights set later (prt_window_set_lights) */
         glBindBuffer(GL_ARRAY_BUFFER, d->vbo_nrm);
@@ -295,6 +299,19 @@ prt_status prt__draw_upload(prt__draw *d, const prt_render_mesh *m)
         d->view_set = malloc(m->vertex_count);
         if (!d->view_set) { d->kvec_terms = 0; return PRT_OK; }
         memcpy(d->view_set, m->view_set, m->vertex_count);
+        /* Each vertex's view-map set (0: none) beside its terms, which the GPU may write. */
+        float *set = malloc(m->vertex_count * sizeof(float) + 1);
+        if (!set) { d->kvec_terms = 0; return PRT_OK; }
+        for (size_t v = 0; v < m->vertex_count; ++v) set[v] = (float)m->view_set[v];
+        if (!d->tbo_set) glGenBuffers(1, &d->tbo_set);
+        if (!d->tbo_set_tex) glGenTextures(1, &d->tbo_set_tex);
+        glBindBuffer(GL_TEXTURE_BUFFER, d->tbo_set);
+        glBufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)(m->vertex_count * sizeof(float)), set, GL_STATIC_DRAW);
+        glBindTexture(GL_TEXTURE_BUFFER, d->tbo_set_tex);
+        glTexBuffer(GL_TEXTURE_BUFFER, GL_R32F, d->tbo_set);
+        glBindTexture(GL_TEXTURE_BUFFER, 0);
+        glBindBuffer(GL_TEXTURE_BUFFER, 0);
+        free(set);
         d->kpack_vertices = 0;   /* the packing must be rebuilt with the new sets */
         d->view_polar = m->view_map_polar;
         const int res = m->view_map_resolution, layers = m->view_map_sets * m->kvec_terms;
@@ -335,6 +352,27 @@ prt_status prt__draw_upload_sums(prt__draw *d, const prt_render_mesh *m)
     }
     glBindBuffer(GL_ARRAY_BUFFER, 0);
     prt_status st = prt__sums_gl_run(&d->sums, d->ctx, m, d->vbo_rad, d->vbo_rad2);
+    const prt_render_product *kv = prt_render_sums_kvec_product(m->gpu_sums);
+    if (!st && kv && d->kvec_terms) {
+        const size_t K = (size_t)d->kvec_terms;
+        if (kv->rows != m->vertex_count * K) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: %zu kvec rows for %zu vertices of %zu terms", kv->rows, m->vertex_count, K);
+        if (d->sums.on_gpu == 1) {   /* the rows are the terms' buffer texture texels already */
+            glBindBuffer(GL_COPY_READ_BUFFER, d->sums.p[kv - m->gpu_sums->products].out);
+            glBindBuffer(GL_COPY_WRITE_BUFFER, d->tbo_k);
+            glBufferData(GL_COPY_WRITE_BUFFER, (GLsizeiptr)(kv->rows * 4 * sizeof(float)), NULL, GL_DYNAMIC_DRAW);
+            glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0, 0, (GLsizeiptr)(kv->rows * 4 * sizeof(float)));
+            glBindTexture(GL_TEXTURE_BUFFER, d->tbo_k_tex);
+            glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, d->tbo_k);
+            glBindTexture(GL_TEXTURE_BUFFER, 0);
+        } else {
+            float *kvec = malloc(kv->rows * 3 * sizeof(float) + 1);
+            if (!kvec) return prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory");
+            st = prt_render_sums_kvec_cpu(m->gpu_sums, m->gpu_vector, m->vertex_count, d->kvec_terms, kvec);
+            if (!st) prt__draw_upload_kvec(d, kvec, m->vertex_count);
+            free(kvec);
+            if (st) return st;
+        }
+    }
     const prt_render_product *e = prt_render_sums_exit_product(m->gpu_sums);
     if (st || !e || !d->exit_order) return st;
     const size_t n = (size_t)d->exit_order * d->exit_order;
@@ -537,6 +575,9 @@ void prt__draw_mesh(prt__draw *d, const prt_camera *cam, int w, int h, const flo
         glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D_ARRAY, d->maps_tex);
         glUniform1i(d->us_maps, 1);
+        glActiveTexture(GL_TEXTURE2);
+        glBindTexture(GL_TEXTURE_BUFFER, d->tbo_set_tex);
+        glUniform1i(d->us_kset, 2);
     } else if (d->exit_order) {
         float knorm[PRT_SH_MAX_ORDER * PRT_SH_MAX_ORDER];   /* the same K_lm as the CPU's evaluation */
         prt__sh_norms(knorm);

@@ -30,8 +30,8 @@ typedef struct prt__draw {
     bool has_uv;
     /* Separable view factor: K-vectors and view-map sets in a texture buffer, view maps in a
      * texture array. */
-    GLuint program_s, tbo_k, tbo_k_tex, maps_tex;
-    GLint us_mvp, us_eye, us_terms, us_polar, us_kvec, us_maps;
+    GLuint program_s, tbo_k, tbo_k_tex, maps_tex, tbo_set, tbo_set_tex;
+    GLint us_mvp, us_eye, us_terms, us_polar, us_kvec, us_maps, us_kset;
     int kvec_terms, view_polar;
     uint8_t *view_set;               /* a copy, for K-vector updates */
     float *kpack;

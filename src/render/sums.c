@@ -23,6 +23,14 @@ prt_status prt__render_sums_check(const prt_render_sums *s, size_t vertex_count)
             if (p->start[r + 1] < p->start[r]) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: product %d's row %zu ends before it starts", k, r);
         for (uint32_t e = 0; e < p->start[p->rows]; ++e)
             if (p->index[e] >= in) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: product %d reads row %u of %zu", k, p->index[e], in);
+        if (p->map_glsl && (!p->map_cpu || p->map_argc < 0 || p->map_argc > 3))
+            return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: product %d's map lacks its C or has %d arguments", k, p->map_argc);
+        for (int j = 0; p->map_glsl && j < p->map_argc; ++j) {
+            const int a = p->map_args[j];
+            const size_t rows = a < 0 ? s->vector_length : a < k ? s->products[a].rows : 0;
+            if (a < -1 || a >= k || (rows != p->rows && rows != 1))
+                return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: product %d's map reads %d, of %zu rows for its %zu", k, a, rows, p->rows);
+        }
     }
     return PRT_OK;
 }
@@ -31,6 +39,13 @@ const prt_render_product *prt_render_sums_exit_product(const prt_render_sums *s)
 {
     for (int k = 0; s && k < s->product_count; ++k)
         if (s->products[k].exit) return &s->products[k];
+    return NULL;
+}
+
+const prt_render_product *prt_render_sums_kvec_product(const prt_render_sums *s)
+{
+    for (int k = 0; s && k < s->product_count; ++k)
+        if (s->products[k].kvec) return &s->products[k];
     return NULL;
 }
 
@@ -59,6 +74,18 @@ static float **eval_all(const prt_render_sums *s, const float *vector)
             out[r * 3] = a0;
             out[r * 3 + 1] = a1;
             out[r * 3 + 2] = a2;
+            if (p->map_glsl) {
+                static const float zero[3] = {0, 0, 0};
+                const float *arg[3] = {zero, zero, zero};
+                for (int j = 0; j < p->map_argc; ++j) {
+                    const int a = p->map_args[j];
+                    const float *src = a < 0 ? vector : y[a];
+                    const size_t rows = a < 0 ? s->vector_length : s->products[a].rows;
+                    arg[j] = src + (rows == 1 ? 0 : r * 3);
+                }
+                const float sum[3] = {a0, a1, a2};
+                p->map_cpu(sum, arg, out + r * 3);
+            }
         }
     }
     if (st) {
@@ -104,6 +131,21 @@ prt_status prt_render_sums_exit_cpu(const prt_render_sums *s, const float *vecto
     for (size_t v = 0; v < vertex_count; ++v)
         for (size_t i = 0; i < n; ++i)
             for (int c = 0; c < 3; ++c) exit_sh[(v * 3 + (size_t)c) * n + i] = rows[(v * n + i) * 3 + (size_t)c];
+    free_all(s, y);
+    return PRT_OK;
+}
+
+prt_status prt_render_sums_kvec_cpu(const prt_render_sums *s, const float *vector, size_t vertex_count, int terms, float *kvec)
+{
+    if (!vector || !kvec) return prt__fail(NULL, PRT_ERR_INVALID_ARG, "prt_render_sums_kvec_cpu: vector and output are required");
+    prt_status st = prt__render_sums_check(s, vertex_count);
+    if (st) return st;
+    const prt_render_product *e = prt_render_sums_kvec_product(s);
+    if (!e || terms < 1 || e->rows != vertex_count * (size_t)terms)
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "GPU sums: no kvec product of %zu rows", vertex_count * (size_t)(terms > 0 ? terms : 0));
+    float **y = eval_all(s, vector);
+    if (!y) return PRT_ERR_NO_MEMORY;
+    memcpy(kvec, y[e - s->products], e->rows * 3 * sizeof(float));   /* the rows are the layout */
     free_all(s, y);
     return PRT_OK;
 }

@@ -9,12 +9,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* One product's pass; %s is the body of its map (prt_render_product.map_glsl), "return y;" when
+ * it has none. Map arguments a_j read row r times u_n<j> (0 where they have one row). */
 static const char *VS_PRODUCT =
     "#version 330 core\n"
     "uniform usamplerBuffer u_start, u_index;\n"
-    "uniform samplerBuffer u_weight, u_scale, u_x;\n"
-    "uniform int u_has_scale, u_clamp;\n"
+    "uniform samplerBuffer u_weight, u_scale, u_x, u_a0, u_a1, u_a2;\n"
+    "uniform int u_has_scale, u_clamp, u_argc, u_n0, u_n1, u_n2;\n"
     "out vec4 y;\n"
+    "vec3 map(vec3 y, vec3 a0, vec3 a1, vec3 a2) {\n%s\n}\n"
     "void main() {\n"
     "  int r = gl_VertexID;\n"
     "  int e0 = int(texelFetch(u_start, r).r), e1 = int(texelFetch(u_start, r + 1).r);\n"
@@ -22,7 +25,10 @@ static const char *VS_PRODUCT =
     "  for (int e = e0; e < e1; ++e) s += texelFetch(u_weight, e).rgb * texelFetch(u_x, int(texelFetch(u_index, e).r)).rgb;\n"
     "  if (u_clamp != 0) s = max(s, vec3(0.0));\n"
     "  if (u_has_scale != 0) s *= texelFetch(u_scale, r).rgb;\n"
-    "  y = vec4(s, 0.0);\n"
+    "  vec3 a0 = u_argc > 0 ? texelFetch(u_a0, r * u_n0).rgb : vec3(0.0);\n"
+    "  vec3 a1 = u_argc > 1 ? texelFetch(u_a1, r * u_n1).rgb : vec3(0.0);\n"
+    "  vec3 a2 = u_argc > 2 ? texelFetch(u_a2, r * u_n2).rgb : vec3(0.0);\n"
+    "  y = vec4(map(s, a0, a1, a2), 0.0);\n"
     "}\n";
 /* Radiance (three floats a vertex, read as single floats) plus one shown product. */
 static const char *VS_COMBINE =
@@ -65,10 +71,23 @@ static GLuint link_tf(const char *src, const char *varying)
     return p;
 }
 
+/* The pass's program for a map body. */
+static GLuint link_product(const char *map)
+{
+    const size_t n = strlen(VS_PRODUCT) + strlen(map) + 1;
+    char *src = malloc(n);
+    if (!src) { prt__fail(NULL, PRT_ERR_NO_MEMORY, "out of memory"); return 0; }
+    snprintf(src, n, VS_PRODUCT, map);
+    const GLuint p = link_tf(src, "y");
+    free(src);
+    return p;
+}
+
 static void drop_products(prt__sums_gl *g)
 {
     for (int k = 0; k < g->count; ++k) {
         prt__sums_product_gl *p = &g->p[k];
+        if (p->program) glDeleteProgram(p->program);
         GLuint b[5] = {p->start, p->index, p->weight, p->scale, p->out}, t[5] = {p->t_start, p->t_index, p->t_weight, p->t_scale, p->t_out};
         glDeleteBuffers(5, b);
         glDeleteTextures(5, t);
@@ -150,6 +169,10 @@ static bool load(prt__sums_gl *g, const prt_render_sums *s, size_t vertex_count,
         tbo(&q->out, &q->t_out, GL_RGBA32F, p->rows * 4 * sizeof(float), NULL);
         free(w);
         free(sc);
+        if (p->map_glsl && !(q->program = link_product(p->map_glsl))) {
+            snprintf(why, why_size, "%s", prt_last_error());
+            ok = false;
+        }
         if (glGetError() == GL_OUT_OF_MEMORY) { snprintf(why, why_size, "the GPU's memory cannot hold them"); ok = false; }
     }
     glBindBuffer(GL_TEXTURE_BUFFER, 0);
@@ -177,7 +200,7 @@ prt_status prt__sums_gl_run(prt__sums_gl *g, const prt_context *ctx, const prt_r
         drop_products(g);
         g->cpu = false;
         char why[200] = "";
-        if (!g->program) g->program = link_tf(VS_PRODUCT, "y");
+        if (!g->program) g->program = link_product("return y;");
         if (g->program && !g->combine) g->combine = link_tf(VS_COMBINE, "rgb");
         if (!g->program || !g->combine) {
             snprintf(why, sizeof why, "%s", prt_last_error());
@@ -192,13 +215,6 @@ prt_status prt__sums_gl_run(prt__sums_gl *g, const prt_context *ctx, const prt_r
         }
         g->id = s->id;
         if (g->program && g->combine) {
-            g->u_start = glGetUniformLocation(g->program, "u_start");
-            g->u_index = glGetUniformLocation(g->program, "u_index");
-            g->u_weight = glGetUniformLocation(g->program, "u_weight");
-            g->u_scale = glGetUniformLocation(g->program, "u_scale");
-            g->u_x = glGetUniformLocation(g->program, "u_x");
-            g->u_has_scale = glGetUniformLocation(g->program, "u_has_scale");
-            g->u_clamp = glGetUniformLocation(g->program, "u_clamp");
             g->c_base = glGetUniformLocation(g->combine, "u_base");
             g->c_y = glGetUniformLocation(g->combine, "u_y");
         }
@@ -244,17 +260,27 @@ prt_status prt__sums_gl_run(prt__sums_gl *g, const prt_context *ctx, const prt_r
     glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &was);
     glBindFramebuffer(GL_FRAMEBUFFER, g->fbo);
     glEnable(GL_RASTERIZER_DISCARD);
-    glUseProgram(g->program);
     for (int k = 0; k < g->count; ++k) {
         const prt_render_product *p = &s->products[k];
         const prt__sums_product_gl *q = &g->p[k];
-        bind_tex(0, q->t_start, g->u_start);
-        bind_tex(1, q->t_index, g->u_index);
-        bind_tex(2, q->t_weight, g->u_weight);
-        bind_tex(3, p->scale ? q->t_scale : q->t_weight, g->u_scale);
-        bind_tex(4, p->input < 0 ? g->t_vector : g->p[p->input].t_out, g->u_x);
-        glUniform1i(g->u_has_scale, p->scale != NULL);
-        glUniform1i(g->u_clamp, p->clamp != 0);
+        const GLuint prog = q->program ? q->program : g->program;
+        glUseProgram(prog);
+        bind_tex(0, q->t_start, glGetUniformLocation(prog, "u_start"));
+        bind_tex(1, q->t_index, glGetUniformLocation(prog, "u_index"));
+        bind_tex(2, q->t_weight, glGetUniformLocation(prog, "u_weight"));
+        bind_tex(3, p->scale ? q->t_scale : q->t_weight, glGetUniformLocation(prog, "u_scale"));
+        bind_tex(4, p->input < 0 ? g->t_vector : g->p[p->input].t_out, glGetUniformLocation(prog, "u_x"));
+        glUniform1i(glGetUniformLocation(prog, "u_has_scale"), p->scale != NULL);
+        glUniform1i(glGetUniformLocation(prog, "u_clamp"), p->clamp != 0);
+        const int argc = p->map_glsl ? p->map_argc : 0;
+        glUniform1i(glGetUniformLocation(prog, "u_argc"), argc);
+        for (int j = 0; j < 3; ++j) {
+            static const char *const tex[3] = {"u_a0", "u_a1", "u_a2"}, *const step[3] = {"u_n0", "u_n1", "u_n2"};
+            const int a = j < argc ? p->map_args[j] : -1;
+            const size_t rows = a < 0 ? s->vector_length : s->products[a].rows;
+            bind_tex(5 + j, a < 0 ? g->t_vector : g->p[a].t_out, glGetUniformLocation(prog, tex[j]));
+            glUniform1i(glGetUniformLocation(prog, step[j]), rows == 1 ? 0 : 1);
+        }
         glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, q->out);
         glBeginTransformFeedback(GL_POINTS);
         glDrawArrays(GL_POINTS, 0, (GLsizei)p->rows);
@@ -285,7 +311,7 @@ prt_status prt__sums_gl_run(prt__sums_gl *g, const prt_context *ctx, const prt_r
     glBindFramebuffer(GL_FRAMEBUFFER, (GLuint)was);
     glUseProgram(0);
     glBindVertexArray(0);
-    for (int u = 0; u < 5; ++u) {
+    for (int u = 0; u < 8; ++u) {
         glActiveTexture(GL_TEXTURE0 + (GLenum)u);
         glBindTexture(GL_TEXTURE_BUFFER, 0);
     }

@@ -14,6 +14,7 @@
 typedef struct prt__sums_product_gl {
     GLuint start, index, weight, scale, out;      /* buffers */
     GLuint t_start, t_index, t_weight, t_scale, t_out;   /* their buffer textures */
+    GLuint program;               /* its own pass where it has a map, else 0 (the shared one) */
 } prt__sums_product_gl;
 
 typedef struct prt__sums_gl {
@@ -21,7 +22,7 @@ typedef struct prt__sums_gl {
     int count;
     prt__sums_product_gl *p;
     GLuint vector, t_vector, base_tex, program, combine, vao, fbo, rb;
-    GLint u_start, u_index, u_weight, u_scale, u_x, u_has_scale, u_clamp, c_base, c_y;
+    GLint c_base, c_y;
     float *pack;                  /* RGBA staging for the vector */
     size_t pack_length;
     bool cpu;                     /* the description is evaluated on the CPU (limits, memory) */

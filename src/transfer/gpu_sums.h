@@ -7,7 +7,7 @@
 #include "core/internal.h"
 #include "prt/render.h"
 
-#define PRT__GPU_SUMS_MAX 132   /* the spectral bounces: two products each, up to 64 */
+#define PRT__GPU_SUMS_MAX 136   /* the spectral bounces: two products each, up to 64, and the tail's eight */
 
 typedef struct prt__gpu_sums {
     prt_render_sums sums;          /* sums.products points at products */

@@ -345,7 +345,8 @@ unsigned prt_relight_needs(const prt_transfer *t, const prt_lighting *l)
 
 int prt_relit_view_dependent(const prt_relit *r)
 {
-    return r && (r->exit_sh || (r->gpu_sums && prt_render_sums_exit_product(r->gpu_sums)) || r->kvec || (r->pixel_lights && r->pixel_material));
+    return r && (r->exit_sh || (r->gpu_sums && (prt_render_sums_exit_product(r->gpu_sums) || prt_render_sums_kvec_product(r->gpu_sums))) || r->kvec ||
+                 (r->pixel_lights && r->pixel_material));
 }
 
 void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render_mesh *m)
@@ -365,7 +366,7 @@ void prt_relit_render_mesh(const prt_transfer *t, const prt_relit *r, prt_render
     m->texel_width = r->texel_width;
     m->texel_height = r->texel_height;
     m->kvec = r->kvec;
-    m->kvec_terms = r->kvec ? r->kvec_terms : 0;
+    m->kvec_terms = r->kvec || (r->gpu_sums && prt_render_sums_kvec_product(r->gpu_sums)) ? r->kvec_terms : 0;
     m->view_set = r->view_set;
     m->view_maps = r->view_maps;
     m->view_map_sets = r->view_map_sets;
@@ -444,6 +445,16 @@ prt_status prt_relit_shade(prt_context *ctx, const prt_transfer *t, const prt_re
         }
     }
     free(gpu_exit);
+    /* View-factor terms the GPU would have summed: the method's shade reads them from a copy. */
+    if (!r->kvec && r->gpu_sums && prt_render_sums_kvec_product(r->gpu_sums) && t->method->shade) {
+        prt_relit with = *r;
+        if (!(with.kvec = malloc(nv * (size_t)r->kvec_terms * 3 * sizeof(float)))) return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        prt_status st = prt_render_sums_kvec_cpu(r->gpu_sums, r->gpu_vector, nv, r->kvec_terms, with.kvec);
+        if (st) st = prt__fail(ctx, st, "%s", prt_last_error());
+        else st = t->method->shade(ctx, t, &with, eye, rgb);
+        free(with.kvec);
+        return st;
+    }
     if ((r->kvec || r->pixel_lights) && t->method->shade) return t->method->shade(ctx, t, r, eye, rgb);
     return PRT_OK;
 }

@@ -85,9 +85,10 @@ prt_status prt__lightcloud_web(prt_context *ctx, const prt_transfer *t, const pr
 static inline prt__lightcloud_set *prt__lightcloud(const prt_transfer *t) { return prt__state_of(t, &prt__method_lightcloud); }
 void prt__lightcloud_set_free(void *state);
 prt__lightcloud_cache *prt__lightcloud_cache_new(void);
-/* The diffuse responses left to the GPU (gpu.c): r's products and the frame's vector from the
- * cloud weights w (prt__lightcloud_weights). */
-prt_status prt__lightcloud_gpu(prt_context *ctx, const prt_transfer *t, const float *w, prt_relit *r);
+/* The responses left to the GPU (gpu.c): r's products (the diffuse light, and the glossy vertices'
+ * exit vectors with their emitted part) and the frame's vector from the cloud weights w
+ * (prt__lightcloud_weights) and the lighting's emission. */
+prt_status prt__lightcloud_gpu(prt_context *ctx, const prt_transfer *t, const float *w, float emission, prt_relit *r);
 /* Numbers the glossy vertices (material with a glossy part) into s->glossy_of; derives members,
  * member_start and glossy_start from zone_of. False when out of memory or zone_of is out of range
  * or leaves a zone empty. */

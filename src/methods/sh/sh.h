@@ -160,8 +160,8 @@ prt_status prt__relight_sh_texels_local(prt_context *ctx, const prt_transfer *t,
 
 /* Set k relit for the GPU to finish (gpu.c): r gets zero radiance, the products and the frame's
  * vector (glossy sets: exit order and mirror too, exit_sh left NULL). prt__sh_gpu_can says
- * whether set k can be (diffuse sets; raw glossy sets with a raw or no diffuse part, the
- * materials' own lobes). */
+ * whether set k can be (diffuse sets; glossy sets, raw or clustered PCA, relit with the
+ * materials' own lobes or the BRDF baked in, not a run-time --brdf). */
 bool prt__sh_gpu_can(const prt__sh_state *s, int k, const prt_relight_desc *d);
 prt_status prt__sh_gpu_relight(prt_context *ctx, const prt_transfer *t, int k, const prt_sh_light *light, prt_relit *r);
 

@@ -306,7 +306,7 @@ static prt_status spectral_relight(prt_context *ctx, const prt_transfer *t, cons
         /* Drawn with all its light, the bounces run on the GPU (gpu.c) from this direct light. */
         const bool gpu = d->gpu_finish && d->component == PRT_COMPONENT_ALL && !r->indirect && prt__spectral_gpu_can(t, bounces, tail);
         st = prt__spectral_bounces(ctx, t, albedo, direct, d->component == PRT_COMPONENT_DIRECT || gpu ? 0 : bounces, tail, indirect);
-        if (!st && gpu) st = prt__spectral_gpu(ctx, t, albedo, direct, bounces, r);
+        if (!st && gpu) st = prt__spectral_gpu(ctx, t, albedo, direct, bounces, tail, r);
     }
     if (!st && pixel) {
         r->pixel_lights = malloc((size_t)pixel * sizeof(prt_light));

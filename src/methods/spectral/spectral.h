@@ -111,10 +111,10 @@ typedef struct prt__spectral_set {
 
 extern const prt__method prt__method_spectral;
 
-/* Relighting finished on the GPU (gpu.c): whether these controls allow it (no tail, no glossy
- * final bounce), and r's products and frame vector (the direct light reflected, per vertex). */
+/* Relighting finished on the GPU (gpu.c): whether these controls allow it (no glossy final
+ * bounce), and r's products and frame vector (the direct light reflected, per vertex). */
 bool prt__spectral_gpu_can(const prt_transfer *t, int bounces, int tail);
-prt_status prt__spectral_gpu(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct, int bounces, prt_relit *r);
+prt_status prt__spectral_gpu(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct, int bounces, int tail, prt_relit *r);
 
 /* prt export --web (web.c, web.js). */
 prt_status prt__spectral_web(prt_context *ctx, const prt_transfer *t, const prt_export_desc *d, prt__web *page);

@@ -281,7 +281,7 @@ static prt_status wavelet_relight(prt_context *ctx, const prt_transfer *t, const
     prt_status st = prt__relit_alloc(ctx, t, r, false);
     if (st) return st;
     const size_t nv = t->mesh.vertex_count;
-    const bool gpu = d->gpu_finish && prt__wavelet_gpu_can(t);   /* the sparse rows summed on the GPU (gpu.c) */
+    const bool gpu = d->gpu_finish;   /* the sparse rows summed on the GPU (gpu.c) */
     if (gpu) {
         const prt_envmap *env = prt_lighting_envmap(l);
         prt_wavelet_light *wl = NULL;
@@ -296,6 +296,10 @@ static prt_status wavelet_relight(prt_context *ctx, const prt_transfer *t, const
         }
         st = prt__wavelet_gpu(ctx, t, wl, r);
         prt_wavelet_light_release(wl);
+        /* Glossy vertices: their terms (a kvec product) meet the view maps per pixel. */
+        if (!st && prt__wavelet_glossy(t) &&
+            prt_wavelet_view_maps(t, &r->view_maps, &r->view_map_sets, &r->view_map_resolution, &r->view_map_polar, &r->view_set))
+            r->kvec_terms = w->terms;
         return st;
     }
     r->kvec = prt__calloc(nv * (size_t)w->terms * 3, sizeof(float));

@@ -18,7 +18,7 @@ typedef struct prt__wavelet_set {
     float *view_maps;                             /* prt_wavelet_view_maps' arrays, built on first use */
     uint8_t *vertex_set;
     int view_sets;
-    struct prt__gpu_sums *gpu;                    /* the Lambertian rows for the GPU (gpu.c), built on first use */
+    struct prt__gpu_sums *gpu;                    /* the rows for the GPU (gpu.c), built on first use */
 } prt__wavelet_set;
 
 extern const prt__method prt__method_wavelet;
@@ -28,9 +28,9 @@ prt_status prt__wavelet_web(prt_context *ctx, const prt_transfer *t, const prt_e
 
 static inline prt__wavelet_set *prt__wavelet(const prt_transfer *t) { return prt__state_of(t, &prt__method_wavelet); }
 void prt__wavelet_set_free(void *w);
-/* Relighting finished on the GPU (gpu.c): whether t's vertices are all Lambertian (glossy ones
- * need their K-vectors here), and r's products and frame vector for light (NULL: no light). */
-bool prt__wavelet_gpu_can(const prt_transfer *t);
+/* Relighting finished on the GPU (gpu.c): whether t has glossy vertices (their K-vectors then
+ * come as a kvec product), and r's products and frame vector for light (NULL: no light). */
+bool prt__wavelet_glossy(const prt_transfer *t);   /* any vertex with a separable BRDF */
 prt_status prt__wavelet_gpu(prt_context *ctx, const prt_transfer *t, const prt_wavelet_light *light, prt_relit *r);
 /* Fills vec_start from term_count; false if a count is 0 or above 16. */
 bool prt__wavelet_index(prt__wavelet_set *w, size_t vertex_count, size_t *vectors);
