@@ -3,7 +3,8 @@
 # refused clearly; an SH bake forced to stream its ray hits through a scratch file (diffuse
 # bounces, and the coupled glossy bounces) writes the same bytes outside META as a plain bake,
 # also when resumed from the plain bake's checkpoint; a spectral bake forced to stream its
-# transfer rows does the same (diffuse and glossy rows, any thread count, shards and resume); every method refuses an impossible limit up
+# transfer rows does the same (diffuse and glossy rows, any thread count, shards and resume; the
+# light cloud's spectral stages too); every method refuses an impossible limit up
 # front - before any progress, leaving no file and no checkpoint - saying what it would need and
 # which option lowers it; prt info shows the peak. Usage: memory_test.sh PATH/TO/prt PATH/TO/same_chunks
 set -u
@@ -129,6 +130,17 @@ expect 0 "streamed spectral bake resumed from a plain shard" -- "$PRT" $GB -j 2 
 says "stream through a scratch file"
 says "came from"
 "$SAME" gsplain.prt gsresumed.prt && ok || bad "a streamed spectral bake resumed from a checkpoint differs from the plain one"
+# The light cloud runs the spectral stages: over its limit they stream their rows, same bytes.
+LC="--method lightcloud --samples 64 --basis 48 --cloud-grid 2,2,2 --partition 200"
+expect 0 "plain light cloud bake" -- "$PRT" $B -o lcplain.prt $LC --no-checkpoint
+expect 2 "the light cloud's need" -- "$PRT" $B -o refused.prt $LC --memory-limit 1K
+lcneed=$(sed -n 's/.*would need about \([0-9.]*\) MiB even streaming, \([0-9.]*\) MiB without.*/\1 \2/p' err)
+[ -n "$lcneed" ] && ok || bad "the light cloud does not say what it needs streaming and without: $(cat err)"
+lcmid=$(echo "${lcneed:-0 0}" | awk '{ printf "%dK", ($1 + $2) / 2 * 1024 }')
+expect 0 "streamed light cloud bake" -- "$PRT" $B -o lcstreamed.prt $LC --no-checkpoint --memory-limit "$lcmid"
+says "stream through a scratch file"
+"$SAME" lcplain.prt lcstreamed.prt && ok || bad "a light cloud bake with streamed spectral rows differs from the plain one"
+
 # Under the streamed need: refused up front in one line that says what streaming would need.
 low=$(echo "${need:-0 0}" | awk '{ printf "%dK", $1 * 1024 * 0.9 }')
 expect 2 "spectral under its streamed need" -- "$PRT" $GB -j 3 -o refused.prt $GP --memory-limit "$low"
