@@ -6,13 +6,15 @@
 #    prints at the end), or the refusal's line when the estimate is over the limit,
 # for the method:size pairs in BAKE (the rest: estimate only). SH is also baked twice more at STREAM_SIZE
 # with 256 directions (so that its ray hits dominate): with no limit, and with STREAM_LIMIT (under
-# its estimate), when it streams its hits: the peak before and after. Low sample counts throughout (OPTS_<method> below): this measures memory, not quality.
+# its estimate), when it streams its hits: the peak before and after; spectral likewise at
+# SPECTRAL_STREAM_SIZE with SPECTRAL_STREAM_LIMIT, when it streams its transfer rows. Low sample counts throughout (OPTS_<method> below): this measures memory, not quality.
 # Writes OUTDIR/memory.csv, OUTDIR/memory.md (a table) and, with gnuplot, OUTDIR/memory.png
 # (PLOT_ONLY=1: only the table and plot, from an OUTDIR/memory.csv already there).
 # Usage: bench/memory_scale.sh PATH/TO/prt OUTDIR [SHARED_DATA]
 #   SIZES="100k:0.85 300k:0.49 1M:0.243" (label:max-edge), METHODS, BAKE="sh:100k ao:1M ...",
 #   LIMIT=5G, STREAM_SIZE (default 300k) and STREAM_LIMIT (default 400M: under SH's estimate
-#   there), THREADS (default 2).
+#   there), SPECTRAL_STREAM_SIZE (default 300k) and SPECTRAL_STREAM_LIMIT (default 600M: between
+#   spectral's streamed and plain estimates there), THREADS (default 2).
 set -eu
 PRT=$1
 OUT=$2
@@ -25,6 +27,8 @@ BAKE=${BAKE:-sh:100k sh:300k sh:1M ao:100k ao:300k ao:1M offset:100k spectral:10
 LIMIT=${LIMIT:-5G}
 STREAM_LIMIT=${STREAM_LIMIT:-400M}
 STREAM_SIZE=${STREAM_SIZE:-300k}
+SPECTRAL_STREAM_LIMIT=${SPECTRAL_STREAM_LIMIT:-600M}
+SPECTRAL_STREAM_SIZE=${SPECTRAL_STREAM_SIZE:-300k}
 THREADS=${THREADS:-2}
 OPTS_sh="--order 3 --samples 64 --bounces 2"
 OPTS_sh_stream="--order 3 --samples 256 --bounces 2"
@@ -60,7 +64,9 @@ for size in $SIZES; do
                 secs=$(($(date +%s) - start))
                 peak=$(sed -n 's/.*peak resident memory \([0-9.]*\) \([KMG]iB\).*/\1 \2/p' "$blog" | head -1)
                 result=baked
-                grep -q "stream through a scratch file" "$blog" && result="baked; hits streamed"
+                if grep -q "stream through a scratch file" "$blog"; then
+                    if [ "$m" = spectral ]; then result="baked; rows streamed"; else result="baked; hits streamed"; fi
+                fi
                 e=$(sed -n "s/.*the bake's estimate is \([0-9.]*\) \([KMG]iB\).*/\1 \2/p" "$blog" | head -1)
                 echo "$3,$label,$nv,$(mib ${e:-0 MiB}),$1,$result,$secs,$(mib $peak)" >>"$CSV"
             elif grep -q "would need" "$blog"; then
@@ -75,6 +81,10 @@ for size in $SIZES; do
             opts=$OPTS_sh_stream
             run none plain "sh 256 directions"
             run "$STREAM_LIMIT" stream "sh 256 directions"
+        fi
+        if [ "$m" = spectral ] && [ "$label" = "$SPECTRAL_STREAM_SIZE" ]; then   # its rows: plain, then streamed
+            run none plain "spectral"
+            run "$SPECTRAL_STREAM_LIMIT" stream "spectral"
         fi
     done
 done

@@ -2,7 +2,9 @@
 # Bakes held to a memory limit (prt bake --memory-limit, docs/CLI.md): sizes parsed, bad ones
 # refused clearly; an SH bake forced to stream its ray hits through a scratch file (diffuse
 # bounces, and the coupled glossy bounces) writes the same bytes outside META as a plain bake,
-# also when resumed from the plain bake's checkpoint; every method refuses an impossible limit up
+# also when resumed from the plain bake's checkpoint; a spectral bake forced to stream its
+# transfer rows does the same (diffuse and glossy rows, any thread count, shards and resume; the
+# light cloud's spectral stages too); every method refuses an impossible limit up
 # front - before any progress, leaving no file and no checkpoint - saying what it would need and
 # which option lowers it; prt info shows the peak. Usage: memory_test.sh PATH/TO/prt PATH/TO/same_chunks
 set -u
@@ -82,6 +84,70 @@ if [ -e vis.checkpoint ]; then
     says "recovered from the checkpoint"
     "$SAME" plain.prt resumed.prt && ok || bad "a streamed sh bake resumed from a checkpoint differs from the plain one"
 fi
+
+# Spectral: its transfer rows stream through a scratch file in blocks - diffuse, and the glossy
+# final bounce's 16 rows a vertex - with the plain bake's bytes at any thread count, also resumed
+# from a plain shard's records; a streamed shard merges with a plain one into those bytes too.
+printf 'v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 3 2\nf 1 4 3\n' >floor.obj
+printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n' >cube.obj
+printf 'f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 7 3\nf 4 8 7\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n' >>cube.obj
+cat >glossy.json <<'JSON'
+{"environment": "none", "materials": {"floor": {"albedo": 0.5}, "shiny": {"brdfs": ["phong:20:0.5:0.3", "lambert:0.6"]}},
+ "meshes": [{"file": "floor.obj", "material": "floor"}, {"file": "cube.obj", "material": "shiny", "translate": [-0.5, 0, -0.5]}]}
+JSON
+SP="--method spectral --basis 48 --samples 64"
+expect 0 "plain spectral bake" -- "$PRT" $B -o splain.prt $SP --no-checkpoint
+# The limit between the streamed need and the plain one, both read from a refusal's line.
+expect 2 "spectral's need" -- "$PRT" $B -o refused.prt $SP --memory-limit 1K
+need=$(sed -n 's/.*would need about \([0-9.]*\) MiB even streaming, \([0-9.]*\) MiB without.*/\1 \2/p' err)
+[ -n "$need" ] && ok || bad "spectral does not say what it needs streaming and without: $(cat err)"
+mid=$(echo "${need:-0 0}" | awk '{ printf "%dK", ($1 + $2) / 2 * 1024 }')
+expect 0 "streamed spectral bake" -- "$PRT" $B -o sstreamed.prt $SP --no-checkpoint --memory-limit "$mid"
+says "stream through a scratch file"
+"$SAME" splain.prt sstreamed.prt && ok || bad "a streamed spectral bake differs from the plain one"
+ls "$T"/tmp* >/dev/null 2>&1 && bad "the spectral scratch file was left in TMPDIR" || ok
+GB="bake glossy.json --max-edge 0.2 --no-refine"
+GP="$SP --partition 200"   # small eigen problems: the rows, not the threads' solves, set the need
+expect 0 "plain glossy spectral bake" -- "$PRT" $GB -j 2 -o gsplain.prt $GP --no-checkpoint
+# One limit that streams at 1, 2 and 3 threads: over the plain need at -j 1, within the streamed one at -j 3.
+expect 2 "glossy spectral's need at -j 1" -- "$PRT" $GB -j 1 -o refused.prt $GP --memory-limit 1K
+need1=$(sed -n 's/.*would need about \([0-9.]*\) MiB even streaming, \([0-9.]*\) MiB without.*/\1 \2/p' err)
+expect 2 "glossy spectral's need at -j 3" -- "$PRT" $GB -j 3 -o refused.prt $GP --memory-limit 1K
+need=$(sed -n 's/.*would need about \([0-9.]*\) MiB even streaming, \([0-9.]*\) MiB without.*/\1 \2/p' err)
+mid=$(echo "${need:-0 0} ${need1:-0 0}" | awk '{ printf "%dK", ($1 + $4) / 2 * 1024 }')
+echo "${need:-0 0} ${need1:-0 0}" | awk '{ exit !($1 > 0 && $1 < $4) }' && ok || bad "no limit streams at both -j 1 and -j 3: needs $need (-j 3), $need1 (-j 1)"
+for j in 1 2 3; do
+    expect 0 "streamed glossy spectral bake, -j $j" -- "$PRT" $GB -j $j -o gs$j.prt $GP --no-checkpoint --memory-limit "$mid"
+    says "stream through a scratch file"
+    "$SAME" gsplain.prt gs$j.prt && ok || bad "a streamed glossy spectral bake at -j $j differs from the plain one"
+done
+expect 0 "spectral shard 1/2" -- "$PRT" $GB -j 2 -o gs1.shard $GP --shard 1/2
+expect 0 "streamed spectral shard 2/2" -- "$PRT" $GB -j 2 -o gs2.shard $GP --shard 2/2 --memory-limit "$mid"
+expect 0 "merge of a plain and a streamed shard" -- "$PRT" merge gs1.shard gs2.shard -o gsmerged.prt
+"$SAME" gsplain.prt gsmerged.prt && ok || bad "a streamed spectral shard merged differs from the plain bake"
+cp gs1.shard gsresumed.prt.checkpoint
+expect 0 "streamed spectral bake resumed from a plain shard" -- "$PRT" $GB -j 2 -o gsresumed.prt $GP --resume --memory-limit "$mid"
+says "stream through a scratch file"
+says "came from"
+"$SAME" gsplain.prt gsresumed.prt && ok || bad "a streamed spectral bake resumed from a checkpoint differs from the plain one"
+# The light cloud runs the spectral stages: over its limit they stream their rows, same bytes.
+LC="--method lightcloud --samples 64 --basis 48 --cloud-grid 2,2,2 --partition 200"
+expect 0 "plain light cloud bake" -- "$PRT" $B -o lcplain.prt $LC --no-checkpoint
+expect 2 "the light cloud's need" -- "$PRT" $B -o refused.prt $LC --memory-limit 1K
+lcneed=$(sed -n 's/.*would need about \([0-9.]*\) MiB even streaming, \([0-9.]*\) MiB without.*/\1 \2/p' err)
+[ -n "$lcneed" ] && ok || bad "the light cloud does not say what it needs streaming and without: $(cat err)"
+lcmid=$(echo "${lcneed:-0 0}" | awk '{ printf "%dK", ($1 + $2) / 2 * 1024 }')
+expect 0 "streamed light cloud bake" -- "$PRT" $B -o lcstreamed.prt $LC --no-checkpoint --memory-limit "$lcmid"
+says "stream through a scratch file"
+"$SAME" lcplain.prt lcstreamed.prt && ok || bad "a light cloud bake with streamed spectral rows differs from the plain one"
+
+# Under the streamed need: refused up front in one line that says what streaming would need.
+low=$(echo "${need:-0 0}" | awk '{ printf "%dK", $1 * 1024 * 0.9 }')
+expect 2 "spectral under its streamed need" -- "$PRT" $GB -j 3 -o refused.prt $GP --memory-limit "$low"
+says "would need about .* even streaming"
+[ "$(grep -c "would need" err)" = 1 ] && ok || bad "the refusal is not one line: $(cat err)"
+grep -q "%" err && bad "spectral: progress before the refusal" || ok
+[ ! -e refused.prt ] && [ ! -e refused.prt.checkpoint ] && ok || bad "spectral: a refused bake left a file"
 
 # An impossible limit: refused before any progress, nothing left behind, the need and the option said.
 for m in sh wavelet spectral lightcloud offset ao; do

@@ -185,7 +185,8 @@ static prt_status parse_floats(prt_context *ctx, const char *name, const char *t
     return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--%s expects %d comma-separated numbers, got \"%s\"", name, n, text);
 }
 
-/* The spectral stages' memory (the bake runs them, on a second copy of the mesh), each thread's
+/* The spectral stages' memory (the bake runs them, on a second copy of the mesh; over the limit
+ * they stream their rows), each thread's
  * solve of one cloud light (a few arrays over every vertex) and one zone's responses to every
  * light and lobe (the responses themselves wait in a scratch file). Lights counted from the
  * grid or --cloud-surface (a --cloud FILE: as the default grid). */
@@ -197,7 +198,7 @@ static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options 
     d.partition_size = prt__opt_int(o, "partition", 0);
     d.samples = prt__opt_int(o, "samples", 0);
     prt__spectral_memory(t, &d, threads, e);
-    const uint64_t nv = t->mesh.vertex_count, spectral = e->bytes;
+    const uint64_t nv = t->mesh.vertex_count, spectral = e->bytes, spectral_least = e->least ? e->least : e->bytes;
     uint64_t lights = 216;
     const char *grid = prt__opt(o, "cloud-grid");
     int g[3];
@@ -210,7 +211,8 @@ static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options 
     const uint64_t lobes = (uint64_t)order * order, zone = (uint64_t)prt__opt_int(o, "zone-vertices", 2000);
     const uint64_t mesh = nv * (12 * sizeof(float) + 4) + t->mesh.triangle_count * 12;
     const uint64_t per_thread = nv * 3 * sizeof(float) * 8 + zone * lights * lobes * 3 * sizeof(float) * 3;
-    e->bytes = e->least = spectral + mesh + (uint64_t)threads * per_thread;
+    e->bytes = spectral + mesh + (uint64_t)threads * per_thread;
+    e->least = spectral_least + mesh + (uint64_t)threads * per_thread;   /* the spectral rows streamed */
     snprintf(e->what, sizeof e->what, "%.0f MiB for the spectral stages, %.0f MiB a thread for the solves and zones of %llu lights",
              (double)spectral / 1048576.0, (double)per_thread / 1048576.0, (unsigned long long)lights);
     snprintf(e->lower, sizeof e->lower, "a smaller --basis, --zone-vertices or fewer -j threads");

@@ -36,6 +36,8 @@ typedef struct thread_scratch {
     float *gweight;          /* [vertex][16] hit weight times y_k / cos for glossy receivers */
     uint32_t *touched;       /* vertices with a weight */
     float *row;              /* [ROWS][function] */
+    uint32_t *keep;          /* [function] a row's quantization (streamed bakes count what it keeps) */
+    int16_t *q;
     uint16_t *index;         /* a unit's rows before they are copied out, grown as needed */
     float *value;
     size_t cap;
@@ -56,6 +58,14 @@ static bool scratch_room(thread_scratch *sc, size_t used, size_t more)
     return true;
 }
 
+/* A streamed bake's block (memory_over): where its record - counts, indices, values, as the
+ * checkpoint's - lies in the scratch file, its entries (diffuse, glossy) and how many of them
+ * quantization keeps, so that the end allocates exactly the rows it writes. */
+typedef struct spilled_unit {
+    uint64_t at;
+    uint32_t total[2], kept[2];
+} spilled_unit;
+
 typedef struct sbake {
     prt__bake_job base;
     prt_transfer *t;
@@ -64,7 +74,9 @@ typedef struct sbake {
     prt__raycaster rc;
     float *origins;
     prt__emitters emitters;          /* the scene's emissive triangles at scale 1 (count 0: none) */
-    unit_rows *units;
+    unit_rows *units;                /* in memory; or, streamed: */
+    spilled_unit *spilled;
+    prt__spectral_spill spill;
     uint64_t unit_count;
     thread_scratch *scratch;
     int nscratch;
@@ -211,6 +223,30 @@ static void gather_vertex(const sbake *sb, size_t v, thread_scratch *sc, float *
     }
 }
 
+/* A streamed block's rows into the scratch file: counts, indices and values (the checkpoint
+ * record's first parts), and what quantizing each row keeps. */
+static bool spill_unit(sbake *sb, uint64_t unit, const uint32_t *count, const uint16_t *index, const float *value, uint32_t *keep, int16_t *q)
+{
+    const size_t nv = sb->t->mesh.vertex_count, v0 = unit * BLOCK, n = (v0 + BLOCK < nv ? v0 + BLOCK : nv) - v0;
+    spilled_unit *su = &sb->spilled[unit];
+    uint32_t total[2] = {0, 0}, kept[2] = {0, 0};
+    size_t e = 0;
+    for (size_t i = 0; i < n * ROWS; ++i) {
+        float scale;
+        kept[i % ROWS != 0] += prt__spectral_quantize_row(value + e, count[i], sb->d.drop_below, keep, q, &scale);
+        total[i % ROWS != 0] += count[i];
+        e += count[i];
+    }
+    const void *parts[3] = {count, index, value};
+    const size_t bytes[3] = {n * ROWS * sizeof(uint32_t), e * sizeof(uint16_t), e * sizeof(float)};
+    uint64_t at;
+    if (!prt__spectral_spill_put(&sb->spill, parts, bytes, 3, &at)) return false;
+    su->at = at;
+    memcpy(su->total, total, sizeof total);
+    memcpy(su->kept, kept, sizeof kept);
+    return true;
+}
+
 static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
 {
     sbake *sb = (sbake *)base;
@@ -218,9 +254,10 @@ static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
     const uint32_t F = sb->s->basis.functions;
     const int nc = sb->d.env_order * sb->d.env_order;
     thread_scratch *sc = &sb->scratch[thread];
-    unit_rows *u = &sb->units[unit];
+    uint32_t streamed[BLOCK * ROWS];
+    uint32_t *count = sb->spilled ? streamed : sb->units[unit].count;
     size_t at = 0;
-    memset(u->count, 0, sizeof u->count);
+    memset(count, 0, sizeof streamed);
     for (size_t v = v0; v < v1; ++v) {
         const uint32_t g = sb->s->glossy_of ? sb->s->glossy_of[v] : UINT32_MAX;
         float *genv = g != UINT32_MAX ? sb->s->genv + (size_t)g * PRT__SPECTRAL_GLOSSY_N * nc : NULL;
@@ -234,9 +271,15 @@ static prt_status run_unit(prt__bake_job *base, uint64_t unit, int thread)
             uint32_t n = 0;
             for (uint32_t l = 0; l < F; ++l)
                 if (row[l] != 0.0f) { index[at] = (uint16_t)l; value[at++] = row[l]; ++n; }
-            u->count[(v - v0) * ROWS + (size_t)r] = n;
+            count[(v - v0) * ROWS + (size_t)r] = n;
         }
     }
+    if (sb->spilled) {
+        if (!spill_unit(sb, unit, count, sc->index, sc->value, sc->keep, sc->q))
+            return prt__fail(base->ctx, PRT_ERR_IO, "cannot write the spectral transfer rows' scratch file (disk full?)");
+        return PRT_OK;
+    }
+    unit_rows *u = &sb->units[unit];
     free(u->index);
     free(u->value);
     u->index = malloc(at ? at * sizeof(uint16_t) : 1);
@@ -264,12 +307,21 @@ static void save_unit(prt__bake_job *base, uint64_t unit, prt__bytes *out)
     sbake *sb = (sbake *)base;
     const size_t nv = sb->t->mesh.vertex_count, v0 = unit * BLOCK, v1 = v0 + BLOCK < nv ? v0 + BLOCK : nv;
     const int nc = sb->d.env_order * sb->d.env_order;
-    const unit_rows *u = &sb->units[unit];
-    size_t total = 0;
-    for (size_t i = 0; i < (v1 - v0) * ROWS; ++i) total += u->count[i];
-    prt__bytes_put(out, u->count, (v1 - v0) * ROWS * sizeof(uint32_t));
-    prt__bytes_put(out, u->index, total * sizeof(uint16_t));
-    prt__bytes_put(out, u->value, total * sizeof(float));
+    if (sb->spilled) {   /* the record's rows as the scratch file holds them */
+        const spilled_unit *su = &sb->spilled[unit];
+        const size_t bytes = (v1 - v0) * ROWS * sizeof(uint32_t) + ((size_t)su->total[0] + su->total[1]) * (sizeof(uint16_t) + sizeof(float));
+        void *rec = malloc(bytes);
+        if (!rec || !prt__spectral_spill_get(&sb->spill, su->at, rec, bytes)) out->failed = true;
+        else prt__bytes_put(out, rec, bytes);
+        free(rec);
+    } else {
+        const unit_rows *u = &sb->units[unit];
+        size_t total = 0;
+        for (size_t i = 0; i < (v1 - v0) * ROWS; ++i) total += u->count[i];
+        prt__bytes_put(out, u->count, (v1 - v0) * ROWS * sizeof(uint32_t));
+        prt__bytes_put(out, u->index, total * sizeof(uint16_t));
+        prt__bytes_put(out, u->value, total * sizeof(float));
+    }
     prt__bytes_put(out, sb->s->env + v0 * nc, (v1 - v0) * nc * sizeof(float));
     if (sb->s->emit) prt__bytes_put(out, sb->s->emit + v0 * 3, (v1 - v0) * 3 * sizeof(float));
     uint32_t g0;
@@ -319,14 +371,28 @@ static bool load_unit(prt__bake_job *base, uint64_t unit, const unsigned char *d
         memcpy(genv, pg, gn * sizeof(float));
         ok = prt__all_finite(genv, gn);
     }
+    if (ok && sb->spilled) {
+        uint32_t *keep = malloc((F ? F : 1) * sizeof(uint32_t));
+        int16_t *q = malloc((F ? F : 1) * sizeof(int16_t));
+        ok = keep && q && spill_unit(sb, unit, count, index, value, keep, q);
+        if (!ok) prt__log(base->ctx, PRT_LOG_ERROR, "cannot write the spectral transfer rows' scratch file (disk full?)");
+        free(keep);
+        free(q);
+        free(index);
+        free(value);
+        index = NULL;
+        value = NULL;
+    }
     if (!ok) { free(index); free(value); return false; }
-    unit_rows *u = &sb->units[unit];
-    free(u->index);
-    free(u->value);
-    u->index = index;
-    u->value = value;
-    memset(u->count, 0, sizeof u->count);
-    memcpy(u->count, count, n * ROWS * sizeof(uint32_t));
+    if (!sb->spilled) {
+        unit_rows *u = &sb->units[unit];
+        free(u->index);
+        free(u->value);
+        u->index = index;
+        u->value = value;
+        memset(u->count, 0, sizeof u->count);
+        memcpy(u->count, count, n * ROWS * sizeof(uint32_t));
+    }
     memcpy(sb->s->env + v0 * nc, env, n * nc * sizeof(float));
     if (ne) memcpy(sb->s->emit + v0 * 3, emit, ne * sizeof(float));
     return true;
@@ -346,6 +412,15 @@ static prt_status scratch_init(sbake *sb)
     sb->scratch = prt__calloc((size_t)threads, sizeof *sb->scratch);
     if (!sb->scratch) return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
     sb->nscratch = threads;
+    /* Over the memory limit the rows, the bake's largest part, go to a scratch file. */
+    if (sb->base.memory_over) {
+        prt_status st = prt__spectral_spill_open(sb->base.ctx, &sb->spill);
+        if (st) return st;
+        if (!(sb->spilled = prt__calloc(sb->unit_count, sizeof *sb->spilled))) return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        prt__log(sb->base.ctx, PRT_LOG_INFO, "the spectral transfer rows stream through a scratch file in TMPDIR (the bake's estimate is over its memory limit)");
+    } else if (!(sb->units = prt__calloc(sb->unit_count, sizeof *sb->units))) {
+        return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    }
     for (int i = 0; i < threads; ++i) {
         thread_scratch *sc = &sb->scratch[i];
         sc->weight = prt__calloc(nv, sizeof(float));
@@ -353,6 +428,8 @@ static prt_status scratch_init(sbake *sb)
         const size_t rows = sb->s->glossy_count ? ROWS : 1;
         sc->row = prt__calloc(rows * sb->s->basis.functions, sizeof(float));
         if (sb->s->glossy_count && !(sc->gweight = prt__calloc(nv * PRT__SPECTRAL_GLOSSY_N, sizeof(float))))
+            return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
+        if (sb->spilled && (!(sc->keep = malloc(sb->s->basis.functions * sizeof(uint32_t))) || !(sc->q = malloc(sb->s->basis.functions * sizeof(int16_t)))))
             return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
         if (!sc->weight || !sc->touched || !sc->row) return prt__fail(sb->base.ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
@@ -405,20 +482,32 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
     prt__spectral_set *s = sb->s;
     const size_t nv = t->mesh.vertex_count;
     size_t total[2] = {0, 0};   /* diffuse, glossy: at most what the units hold */
-    for (uint64_t u = 0; u < sb->unit_count; ++u)
+    size_t kept[2] = {0, 0};    /* streamed: exactly what quantization keeps */
+    for (uint64_t u = 0; u < sb->unit_count; ++u) {
+        if (sb->spilled) {
+            for (int g = 0; g < 2; ++g) { total[g] += sb->spilled[u].total[g]; kept[g] += sb->spilled[u].kept[g]; }
+            continue;
+        }
         for (size_t i = 0; i < BLOCK * ROWS; ++i) total[i % ROWS != 0] += sb->units[u].count[i];
+    }
+    if (!sb->spilled) { kept[0] = total[0]; kept[1] = total[1]; }
     s->drop = sb->d.drop_below;
     const size_t ng = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N, F = s->basis.functions;
     s->row_start = prt__calloc(nv + 1, sizeof(uint64_t));
     s->row_scale = prt__calloc(nv ? nv : 1, sizeof(float));
-    s->index = malloc(total[0] ? total[0] * sizeof(uint16_t) : 1);
-    s->value = malloc(total[0] ? total[0] * sizeof(int16_t) : 1);
+    s->index = malloc(kept[0] ? kept[0] * sizeof(uint16_t) : 1);
+    s->value = malloc(kept[0] ? kept[0] * sizeof(int16_t) : 1);
     s->grow_start = prt__calloc(ng + 1, sizeof(uint64_t));
     s->grow_scale = prt__calloc(ng ? ng : 1, sizeof(float));
-    s->gindex = malloc(total[1] ? total[1] * sizeof(uint16_t) : 1);
-    s->gvalue = malloc(total[1] ? total[1] * sizeof(int16_t) : 1);
-    uint32_t *keep = malloc(F * sizeof(uint32_t));
-    int16_t *q = malloc(F * sizeof(int16_t));
+    s->gindex = malloc(kept[1] ? kept[1] * sizeof(uint16_t) : 1);
+    s->gvalue = malloc(kept[1] ? kept[1] * sizeof(int16_t) : 1);
+    uint32_t *keep = malloc((F ? F : 1) * sizeof(uint32_t));
+    int16_t *q = malloc((F ? F : 1) * sizeof(int16_t));
+    /* A streamed block read back: its counts, indices and values. */
+    uint32_t rcount[BLOCK * ROWS];
+    uint16_t *rindex = NULL;
+    float *rvalue = NULL;
+    size_t rcap = 0;
     if (sb->d.keep_rows) {
         s->raw_start = prt__calloc(nv + 1, sizeof(uint64_t));
         s->raw_index = malloc(total[0] ? total[0] * sizeof(uint16_t) : 1);
@@ -464,28 +553,58 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
     const size_t genv_n = (size_t)s->glossy_count * PRT__SPECTRAL_GLOSSY_N * s->env_order * s->env_order;
     for (size_t i = 0; s->genv && i < genv_n; ++i) s->genv[i] = prt__half_to_float(prt__half_from_float(s->genv[i]));
     size_t at[2] = {0, 0};
-    for (uint64_t u = 0; u < sb->unit_count; ++u) {
-        const unit_rows *r = &sb->units[u];
+    prt_status st = PRT_OK;
+    for (uint64_t u = 0; u < sb->unit_count && !st; ++u) {
+        const uint32_t *count;
+        const uint16_t *rows_index;
+        const float *rows_value;
+        if (sb->spilled) {
+            const spilled_unit *su = &sb->spilled[u];
+            const size_t n = (u + 1) * BLOCK < nv ? BLOCK : nv - u * BLOCK, entries = (size_t)su->total[0] + su->total[1];
+            if (entries > rcap) {
+                free(rindex);
+                free(rvalue);
+                rindex = malloc(entries * sizeof(uint16_t));
+                rvalue = malloc(entries * sizeof(float));
+                rcap = rindex && rvalue ? entries : 0;
+                if (!rcap) { st = prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory"); break; }
+            }
+            const uint64_t ai = su->at + n * ROWS * sizeof(uint32_t), av = ai + entries * sizeof(uint16_t);
+            if (!prt__spectral_spill_get(&sb->spill, su->at, rcount, n * ROWS * sizeof(uint32_t)) ||
+                !prt__spectral_spill_get(&sb->spill, ai, rindex, entries * sizeof(uint16_t)) ||
+                !prt__spectral_spill_get(&sb->spill, av, rvalue, entries * sizeof(float))) {
+                st = prt__fail(base->ctx, PRT_ERR_IO, "cannot read the spectral transfer rows' scratch file");
+                break;
+            }
+            count = rcount;
+            rows_index = rindex;
+            rows_value = rvalue;
+        } else {
+            count = sb->units[u].count;
+            rows_index = sb->units[u].index;
+            rows_value = sb->units[u].value;
+        }
         size_t e = 0;
-        for (size_t v = u * BLOCK; v < nv && v < (u + 1) * BLOCK; ++v) {
+        for (size_t v = u * BLOCK; v < nv && v < (u + 1) * BLOCK && !st; ++v) {
             const uint32_t gv = s->glossy_of ? s->glossy_of[v] : UINT32_MAX;
-            for (int row = 0; row < ROWS; ++row) {
+            for (int row = 0; row < ROWS && !st; ++row) {
                 const int g = row != 0;
-                const uint32_t n = r->count[(v - u * BLOCK) * ROWS + (size_t)row];
+                const uint32_t n = count[(v - u * BLOCK) * ROWS + (size_t)row];
                 if (g && gv == UINT32_MAX) continue;   /* no glossy rows: n is 0 */
                 const size_t gr = g ? (size_t)gv * PRT__SPECTRAL_GLOSSY_N + (size_t)(row - 1) : 0;
                 if (sb->d.keep_rows) {
                     uint64_t *start = g ? s->raw_gstart + gr : s->raw_start + v;
-                    memcpy((g ? s->raw_gindex : s->raw_index) + start[0], r->index + e, n * sizeof(uint16_t));
-                    memcpy((g ? s->raw_gvalue : s->raw_value) + start[0], r->value + e, n * sizeof(float));
+                    memcpy((g ? s->raw_gindex : s->raw_index) + start[0], rows_index + e, n * sizeof(uint16_t));
+                    memcpy((g ? s->raw_gvalue : s->raw_value) + start[0], rows_value + e, n * sizeof(float));
                     start[1] = start[0] + n;
                 }
                 float scale;
-                const uint32_t k = prt__spectral_quantize_row(r->value + e, n, sb->d.drop_below, keep, q, &scale);
+                const uint32_t k = prt__spectral_quantize_row(rows_value + e, n, sb->d.drop_below, keep, q, &scale);
+                if (at[g] + k > kept[g]) { st = prt__fail(base->ctx, PRT_ERR_IO, "the spectral transfer rows' scratch file changed under the bake"); break; }
                 uint16_t *index = (g ? s->gindex : s->index) + at[g];
                 int16_t *value = (g ? s->gvalue : s->value) + at[g];
                 for (uint32_t i = 0; i < k; ++i) {
-                    index[i] = r->index[e + keep[i]];
+                    index[i] = rows_index[e + keep[i]];
                     value[i] = q[i];
                 }
                 at[g] += k;
@@ -502,6 +621,9 @@ static prt_status spectral_finish(prt__bake_job *base, prt_transfer *t)
     }
     free(keep);
     free(q);
+    free(rindex);
+    free(rvalue);
+    if (st) return st;
     /* Room was made for every entry: give back what the drop threshold left over. */
     uint16_t *i16;
     int16_t *v16;
@@ -521,9 +643,11 @@ static void spectral_release(prt__bake_job *base)
     if (sb->units)
         for (uint64_t u = 0; u < sb->unit_count; ++u) { free(sb->units[u].index); free(sb->units[u].value); }
     free(sb->units);
+    free(sb->spilled);
+    prt__spectral_spill_close(&sb->spill);
     for (int i = 0; i < sb->nscratch; ++i) {
         thread_scratch *sc = &sb->scratch[i];
-        free(sc->weight); free(sc->gweight); free(sc->touched); free(sc->row); free(sc->index); free(sc->value);
+        free(sc->weight); free(sc->gweight); free(sc->touched); free(sc->row); free(sc->index); free(sc->value); free(sc->keep); free(sc->q);
     }
     free(sb->scratch);
     free(sb);
@@ -531,9 +655,16 @@ static void spectral_release(prt__bake_job *base)
 
 void prt__spectral_memory(const prt_transfer *t, const prt__spectral_bake_desc *d, int threads, prt__memory_estimate *e)
 {
-    const uint64_t nv = t->mesh.vertex_count;
+    const uint64_t nv = t->mesh.vertex_count, T = threads > 0 ? (uint64_t)threads : 1;
     const uint64_t ps = d->full ? 1 : d->partition_size ? (uint64_t)d->partition_size : 1000;
-    uint64_t F = d->full ? nv : d->functions ? (uint64_t)d->functions : 1024;
+    const uint64_t asked = d->full ? nv : d->functions ? (uint64_t)d->functions : 1024;
+    /* The basis as basis.c cuts it: ceil(nv / ps) partitions, each its share of the functions by
+     * vertex count, at least one (256 functions over 208 partitions are 208). */
+    const uint64_t parts = nv ? (nv + ps - 1) / ps : 1;
+    uint64_t per_part = d->full ? 1 : (asked + parts / 2) / parts;
+    if (per_part < 1) per_part = 1;
+    if (per_part > ps) per_part = ps;
+    uint64_t F = parts * per_part;
     if (F > nv) F = nv;
     const uint64_t samples = d->samples ? (uint64_t)d->samples : 4096, order = d->env_order ? (uint64_t)d->env_order : 4;
     uint64_t glossy = 0;
@@ -542,20 +673,30 @@ void prt__spectral_memory(const prt_transfer *t, const prt__spectral_bake_desc *
         glossy += k && k <= t->brdf_count && prt_brdf_is_glossy(&t->brdfs[k - 1]);
     }
     /* A row holds at most F entries, and at most what its rays reach: three vertices a hit, each
-     * with the functions of its partition. */
-    const uint64_t parts = nv / ps ? nv / ps : 1, per_part = F / parts ? F / parts : 1;
+     * with the functions of its partition. Dense in a closed scene; open ones hold fewer (rays
+     * that escape reach nothing), which the scene's size alone does not tell. */
     uint64_t entries = samples * 3 * per_part;
     if (entries > F) entries = F;
-    const uint64_t rows = nv + glossy * PRT__SPECTRAL_GLOSSY_N;
-    /* Units' float rows (6 bytes an entry) and the quantized copy (4) side by side at the end,
-     * and the raw rows (6) when kept. */
-    const uint64_t row_bytes = rows * entries * (6 + 4 + (d->keep_rows ? 6 : 0)) + rows * (8 + 4);
-    const uint64_t basis = F * ps * sizeof(float) + nv * 8 + (uint64_t)threads * ps * ps * sizeof(double);
+    const uint64_t rows = nv + glossy * PRT__SPECTRAL_GLOSSY_N, units = (nv + BLOCK - 1) / BLOCK, rows_per_vertex = glossy ? ROWS : 1;
+    /* Every bake ends holding the quantized rows (4 bytes an entry, at most every entry), their
+     * starts and scales; resident, the float rows (6) beside them and each block's counts; streamed,
+     * a block read back at a time and a place in the scratch file per block. Raw rows (6) when kept. */
+    const uint64_t quantized = rows * entries * 4 + rows * (8 + 4) + (d->keep_rows ? rows * entries * 6 + rows * 8 : 0);
+    const uint64_t resident = rows * entries * 6 + units * sizeof(unit_rows);
+    const uint64_t streamed = (uint64_t)BLOCK * rows_per_vertex * entries * 6 + units * sizeof(spilled_unit) + T * F * 6;
+    /* The basis (each vertex's values, offsets, grouping) and each thread's dense eigen problem;
+     * the environment transfer, the emitters' light; each thread's weights over every vertex, its
+     * row of every function and a block's rows before they are copied out. */
+    const uint64_t basis = nv * per_part * sizeof(float) + nv * (8 + 4 + 4) + T * ps * ps * sizeof(double);
     const uint64_t other = nv * order * order * sizeof(float) + glossy * PRT__SPECTRAL_GLOSSY_N * order * order * sizeof(float) +
-                           (uint64_t)threads * (nv * 8 + (glossy ? nv * PRT__SPECTRAL_GLOSSY_N * sizeof(float) : 0));
-    e->bytes = e->least = row_bytes + basis + other;
-    snprintf(e->what, sizeof e->what, "up to %.0f MiB of rows of %llu basis functions for %llu vertices, %.0f MiB besides", (double)row_bytes / 1048576.0,
-             (unsigned long long)entries, (unsigned long long)nv, (double)(basis + other) / 1048576.0);
+                           (t->mesh.emission ? nv * 3 * sizeof(float) : 0) +
+                           T * (nv * 8 + (glossy ? nv * PRT__SPECTRAL_GLOSSY_N * sizeof(float) : 0) + rows_per_vertex * F * sizeof(float) +
+                                (uint64_t)BLOCK * rows_per_vertex * entries * 6);
+    e->bytes = quantized + resident + basis + other;
+    e->least = quantized + streamed + basis + other;
+    snprintf(e->what, sizeof e->what, "rows of up to %llu of %llu basis functions for %llu vertices: %.0f MiB as floats, %.0f MiB quantized; %.0f MiB besides",
+             (unsigned long long)entries, (unsigned long long)F, (unsigned long long)nv, (double)resident / 1048576.0, (double)quantized / 1048576.0,
+             (double)(basis + other) / 1048576.0);
     snprintf(e->lower, sizeof e->lower, "a smaller --basis or fewer -j threads");
 }
 
@@ -591,9 +732,8 @@ prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_d
     s->env_order = d.env_order;
     s->ray_offset = d.ray_offset > 0 ? d.ray_offset : prt__ray_offset(&t->mesh);
     sb->unit_count = (nv + BLOCK - 1) / BLOCK;
-    sb->units = prt__calloc(sb->unit_count, sizeof *sb->units);
     s->env = prt__calloc(nv * (size_t)d.env_order * d.env_order, sizeof(float));
-    prt_status st = !sb->units || !s->env ? prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory") : PRT_OK;
+    prt_status st = !s->env ? prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory") : PRT_OK;
     if (!st && t->mesh.emission) st = prt__emitters_init(&sb->emitters, &t->mesh, 1.0f);
     /* The scene's BRDF sets; glossy candidates need an SH projection, which only isotropic
      * BRDFs have. */

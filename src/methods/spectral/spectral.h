@@ -20,6 +20,7 @@
 #include "light/vertex_lights.h"
 
 #include <pthread.h>
+#include <stdio.h>
 
 #define PRT__SPECTRAL_MAX_FUNCTIONS 65535   /* indices are stored in 16 bits */
 #define PRT__SPECTRAL_GLOSSY_ORDER 4        /* the glossy final bounce's SH: 16 BRDF bases, as the paper */
@@ -160,12 +161,27 @@ typedef struct prt__spectral_bake_desc {
 /* Quantizes a row of n values to 16 bits against its largest magnitude m: keeps the entries with
  * |x| >= drop * m whose quantized value is not zero, writing their positions in x to keep and
  * their values to q; returns how many. *scale = m / 32767 (0 for a row of zeros). */
+/* Transfer rows streamed through an unlinked scratch file (spill.c): a bake whose estimate is
+ * over its memory limit keeps each block's unquantized rows there instead of in memory. */
+typedef struct prt__spectral_spill {
+    FILE *file;
+    uint64_t end;            /* where the next record goes (taken atomically) */
+} prt__spectral_spill;
+prt_status prt__spectral_spill_open(prt_context *ctx, prt__spectral_spill *s);
+void prt__spectral_spill_close(prt__spectral_spill *s);
+/* Writes the n parts one after another as one record, from any thread; *at: where it starts.
+ * False on a write error. */
+bool prt__spectral_spill_put(prt__spectral_spill *s, const void *const *parts, const size_t *bytes, int n, uint64_t *at);
+/* Reads `bytes` at `at`; false on a read error. */
+bool prt__spectral_spill_get(const prt__spectral_spill *s, uint64_t at, void *data, size_t bytes);
+
 uint32_t prt__spectral_quantize_row(const float *x, uint32_t n, float drop, uint32_t *keep, int16_t *q, float *scale);
 prt_status prt__spectral_bake_begin(prt_context *ctx, const prt__spectral_bake_desc *d, prt_transfer *t, prt__bake_job **job);
 /* The spectral bake's memory (transfer/method.h's prt__memory_estimate) for d's settings (zeros:
  * the defaults) on t's scene, with `threads` gathering: the rows, dense in a closed scene (every
  * basis function reached), held as floats and then quantized, the environment transfer and each
- * thread's weights over every vertex. It cannot stream. */
+ * thread's weights over every vertex; streaming (least), the quantized rows only, the floats in
+ * a scratch file. */
 void prt__spectral_memory(const prt_transfer *t, const prt__spectral_bake_desc *d, int threads, prt__memory_estimate *e);
 
 /* Numbers the glossy vertices of t (a material whose BRDF has a glossy part, or a surface with a
