@@ -185,11 +185,14 @@ static prt_status parse_floats(prt_context *ctx, const char *name, const char *t
     return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--%s expects %d comma-separated numbers, got \"%s\"", name, n, text);
 }
 
-/* The spectral stages' memory (the bake runs them, on a second copy of the mesh), each thread's
- * solve of one cloud light (a few arrays over every vertex) and one zone's responses to every
- * light and lobe (the responses themselves wait in a scratch file). Lights counted from the
- * grid or --cloud-surface (a --cloud FILE: as the default grid). */
-static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e)
+/* The spectral stages' memory (the bake runs them, on a second copy of the mesh), then per light or
+ * zone in flight: one cloud light's solve (a few arrays over every vertex) and one zone's
+ * responses to every light and lobe, merged and compressed (the responses themselves wait in a
+ * scratch file). Lights counted from the grid or --cloud-surface (a --cloud FILE: as the default
+ * grid). Over a limit, fewer lights and zones are in flight than threads (bake.c): at least one,
+ * the least. fixed and per_flight: what the bake sizes that by (prt__lightcloud_bake_desc). */
+static void lightcloud_memory_parts(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e, uint64_t *fixed,
+                                    uint64_t *per_flight)
 {
     prt__spectral_bake_desc d = {0};
     d.functions = prt__opt_int(o, "basis", 0);
@@ -197,7 +200,8 @@ static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options 
     d.partition_size = prt__opt_int(o, "partition", 0);
     d.samples = prt__opt_int(o, "samples", 0);
     prt__spectral_memory(t, &d, threads, e);
-    const uint64_t nv = t->mesh.vertex_count, spectral = e->bytes;
+    const uint64_t nv = t->mesh.vertex_count, spectral = e->least ? e->least : e->bytes;
+    *fixed = *per_flight = 0;
     uint64_t lights = 216;
     const char *grid = prt__opt(o, "cloud-grid");
     int g[3];
@@ -207,13 +211,25 @@ static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options 
      * no estimate stands in their way. */
     if (lights > PRT__LIGHTCLOUD_MAX_LIGHTS) { e->bytes = e->least = 0; return; }
     const int order = prt__opt_int(o, "emission-order", 1);
-    const uint64_t lobes = (uint64_t)order * order, zone = (uint64_t)prt__opt_int(o, "zone-vertices", 2000);
+    uint64_t zone = (uint64_t)prt__opt_int(o, "zone-vertices", 2000);
+    if (zone > nv) zone = nv;
+    const uint64_t lobes = (uint64_t)order * order;
     const uint64_t mesh = nv * (12 * sizeof(float) + 4) + t->mesh.triangle_count * 12;
-    const uint64_t per_thread = nv * 3 * sizeof(float) * 8 + zone * lights * lobes * 3 * sizeof(float) * 3;
-    e->bytes = e->least = spectral + mesh + (uint64_t)threads * per_thread;
-    snprintf(e->what, sizeof e->what, "%.0f MiB for the spectral stages, %.0f MiB a thread for the solves and zones of %llu lights",
-             (double)spectral / 1048576.0, (double)per_thread / 1048576.0, (unsigned long long)lights);
-    snprintf(e->lower, sizeof e->lower, "a smaller --basis, --zone-vertices or fewer -j threads");
+    *per_flight = nv * 3 * sizeof(float) * 8 + zone * lights * lobes * 3 * sizeof(float) * 3;
+    *fixed = spectral + mesh;
+    const uint64_t flights = threads > 1 ? (uint64_t)threads : 1;
+    e->bytes = *fixed + flights * *per_flight;
+    e->least = *fixed + *per_flight;
+    snprintf(e->what, sizeof e->what, "%.0f MiB for the spectral stages, %.0f MiB a thread for the solves and zones of %llu lights%s",
+             (double)spectral / 1048576.0, (double)*per_flight / 1048576.0, (unsigned long long)lights,
+             flights > 1 ? ", fewer of them in flight under a limit" : "");
+    snprintf(e->lower, sizeof e->lower, "a smaller --basis, --zone-vertices or fewer cloud lights");
+}
+
+static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e)
+{
+    uint64_t fixed, per_flight;
+    lightcloud_memory_parts(t, o, threads, e, &fixed, &per_flight);
 }
 
 static prt_status lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job)
@@ -248,6 +264,10 @@ static prt_status lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene
     if (d.raw && (prt__opt(o, "clusters") || prt__opt(o, "vectors"))) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--clusters and --vectors apply to --compress cpca, not none");
     d.clusters = prt__opt_int(o, "clusters", 0);
     d.vectors = prt__opt_int(o, "vectors", 0);
+    prt__memory_estimate e;
+    memset(&e, 0, sizeof e);
+    lightcloud_memory_parts(t, o, prt__threads(ctx), &e, &d.memory_fixed, &d.memory_per_flight);
+    d.memory_fixed += prt__memory_scene_bytes(t);
     return prt__lightcloud_bake_begin(ctx, scene, o, &d, t, job);
 }
 
