@@ -799,6 +799,9 @@ static prt_status lc_stage(prt__bake_job *job, int index, prt__stage *out)
     lcbake *b = (lcbake *)job;
     if (b->first_own < 0) {
         b->inner_job->threads = job->threads;
+        /* The spectral stages stream what they can under the same limit (the estimate counted their least). */
+        b->inner_job->memory_limit = job->memory_limit;
+        b->inner_job->memory_over = job->memory_over;
         memset(&b->inner_stage, 0, sizeof b->inner_stage);
         prt_status st = b->inner_job->stage(b->inner_job, index, &b->inner_stage);
         if (st) return st;

@@ -200,7 +200,8 @@ static void lightcloud_memory_parts(const prt_transfer *t, const prt_options *o,
     d.partition_size = prt__opt_int(o, "partition", 0);
     d.samples = prt__opt_int(o, "samples", 0);
     prt__spectral_memory(t, &d, threads, e);
-    const uint64_t nv = t->mesh.vertex_count, spectral = e->least ? e->least : e->bytes;
+    /* Under a limit the spectral stages stream too (bake.c passes it on): their least. */
+    const uint64_t nv = t->mesh.vertex_count, spectral = e->bytes, spectral_least = e->least ? e->least : e->bytes;
     *fixed = *per_flight = 0;
     uint64_t lights = 216;
     const char *grid = prt__opt(o, "cloud-grid");
@@ -216,9 +217,9 @@ static void lightcloud_memory_parts(const prt_transfer *t, const prt_options *o,
     const uint64_t lobes = (uint64_t)order * order;
     const uint64_t mesh = nv * (12 * sizeof(float) + 4) + t->mesh.triangle_count * 12;
     *per_flight = nv * 3 * sizeof(float) * 8 + zone * lights * lobes * 3 * sizeof(float) * 3;
-    *fixed = spectral + mesh;
+    *fixed = spectral_least + mesh;
     const uint64_t flights = threads > 1 ? (uint64_t)threads : 1;
-    e->bytes = *fixed + flights * *per_flight;
+    e->bytes = spectral + mesh + flights * *per_flight;
     e->least = *fixed + *per_flight;
     snprintf(e->what, sizeof e->what, "%.0f MiB for the spectral stages, %.0f MiB a thread for the solves and zones of %llu lights%s",
              (double)spectral / 1048576.0, (double)*per_flight / 1048576.0, (unsigned long long)lights,
