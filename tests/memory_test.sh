@@ -148,6 +148,52 @@ says "would need about .* even streaming"
 [ "$(grep -c "would need" err)" = 1 ] && ok || bad "the refusal is not one line: $(cat err)"
 grep -q "%" err && bad "spectral: progress before the refusal" || ok
 [ ! -e refused.prt ] && [ ! -e refused.prt.checkpoint ] && ok || bad "spectral: a refused bake left a file"
+# ---- light cloud (issue 28: lights and zones in flight bounded) ----
+# Over the limit, fewer cloud lights and zones are in flight than threads: on 4 threads, a limit
+# one and a half threads' worth under the plain bake's estimate lets two run at once; the same
+# bytes. Under the least (the rest and one in flight) it is refused up front, saying so.
+LC="--method lightcloud --cloud-grid 4,4,4 --samples 256 --basis 64"
+expect 0 "plain lightcloud bake" -- "$PRT" $B -o lcplain.prt $LC -j 4 --no-checkpoint
+lc_est=$(sed -n "s/.*the bake's estimate is \([0-9.]*\) MiB.*/\1/p" err | head -n 1)
+lc_per=$(sed -n 's/.*, \([0-9.]*\) MiB a thread for the solves.*/\1/p' err | head -n 1)
+if [ -n "$lc_est" ] && [ -n "$lc_per" ]; then
+    lc_limit=$(awk -v e="$lc_est" -v p="$lc_per" 'BEGIN { printf "%dK", (e - 1.5 * p) * 1024 }')
+    expect 0 "lightcloud bake under $lc_limit" -- "$PRT" $B -o lclimited.prt $LC -j 4 --no-checkpoint --memory-limit "$lc_limit"
+    says "in flight at a time of 4 threads"
+    "$SAME" lcplain.prt lclimited.prt && ok || bad "a lightcloud bake held to $lc_limit differs from the plain one"
+    lc_low=$(awk -v e="$lc_est" -v p="$lc_per" 'BEGIN { printf "%dK", (e - 5 * p) * 1024 }')
+    expect 2 "lightcloud under $lc_low" -- "$PRT" $B -o refused.prt $LC -j 4 --memory-limit "$lc_low"
+    says "even streaming"
+    [ "$(wc -l <err)" -le 3 ] && ok || bad "the lightcloud refusal is not a line or two: $(cat err)"
+else
+    bad "the plain lightcloud bake does not say its estimate: $(grep memory err)"
+fi
+ls "$T"/tmp* >/dev/null 2>&1 && bad "a lightcloud scratch file was left in TMPDIR" || ok
+# ---- end light cloud ----
+
+# ---- offset (issue 28: maps in a mapped scratch file) ----
+# Over the limit, the maps live in a scratch file and only a block's pages stay resident: the same
+# bytes, with and without the maps' bounces (whose units write and checkpoint the maps too), also
+# resumed from a plain bake's checkpoint of the maps and a part of the bounces.
+OF="--method offset --texels 128 --offsets 100"
+for mb in "1" "2 --walks 16"; do
+    expect 0 "plain offset bake, --map-bounces $mb" -- "$PRT" $B -o ofplain${mb%% *}.prt $OF --map-bounces $mb --no-checkpoint
+    expect 0 "offset bake under 24M, --map-bounces $mb" -- "$PRT" $B -o oflimited${mb%% *}.prt $OF --map-bounces $mb --no-checkpoint --memory-limit 24M
+    says "maps stream through a scratch file"
+    "$SAME" ofplain${mb%% *}.prt oflimited${mb%% *}.prt && ok || bad "an offset bake held to 24M (--map-bounces $mb) differs from the plain one"
+done
+expect 0 "offset bounces, shard 1/3" -- "$PRT" $B -o of1.shard $OF --map-bounces 2 --walks 16 --shard 1/3
+if [ -e of1.shard ]; then
+    cp of1.shard ofresumed.prt.checkpoint
+    expect 0 "offset bake under 24M resumed" -- "$PRT" $B -o ofresumed.prt $OF --map-bounces 2 --walks 16 --resume --memory-limit 24M
+    says "recovered from the checkpoint"
+    "$SAME" ofplain2.prt ofresumed.prt && ok || bad "an offset bake held to 24M and resumed differs from the plain one"
+fi
+expect 2 "offset under 12M" -- "$PRT" $B -o refused.prt $OF --memory-limit 12M
+says "even streaming"
+[ "$(wc -l <err)" -le 3 ] && ok || bad "the offset refusal is not a line or two: $(cat err)"
+ls "$T"/tmp* >/dev/null 2>&1 && bad "an offset scratch file was left in TMPDIR" || ok
+# ---- end offset ----
 
 # An impossible limit: refused before any progress, nothing left behind, the need and the option said.
 for m in sh wavelet spectral lightcloud offset ao; do

@@ -54,7 +54,32 @@ typedef struct lcbake {
     float *list;                     /* --cloud positions, read when the bake begins */
     uint32_t list_count;
     int blas_threads;                /* OpenBLAS's own thread count while the zones run (0: untouched) */
+    /* Under a memory limit: at most `flights` cloud lights or zones in flight at once (0: as many
+     * as threads); the others' threads wait at the gate holding nothing. */
+    int flights, in_flight;
+    bool gate_ready;
+    pthread_mutex_t gate;
+    pthread_cond_t gate_freed;
 } lcbake;
+
+/* The gate: which thread goes first changes nothing in the results, only when they come. */
+static void flight_enter(lcbake *b)
+{
+    if (!b->flights) return;
+    pthread_mutex_lock(&b->gate);
+    while (b->in_flight >= b->flights) pthread_cond_wait(&b->gate_freed, &b->gate);
+    b->in_flight++;
+    pthread_mutex_unlock(&b->gate);
+}
+
+static void flight_leave(lcbake *b)
+{
+    if (!b->flights) return;
+    pthread_mutex_lock(&b->gate);
+    b->in_flight--;
+    pthread_cond_signal(&b->gate_freed);
+    pthread_mutex_unlock(&b->gate);
+}
 
 /* ---- the spectral stages, passed through ---- */
 static prt_status inner_run(prt__bake_job *job, uint64_t unit, int thread)
@@ -413,6 +438,18 @@ static prt_status cloud_step(prt__bake_job *job, prt_context *ctx, prt__progress
         prt__log(ctx, PRT_LOG_INFO, "light cloud: %u light%s (spacing %.3g), %llu pairs within the merge distance (%.1f MiB with the clustering's), "
                  "%u zones (up to %.1f MiB per thread while one clusters and compresses), responses %.1f MiB on disk", n, n == 1 ? "" : "s", s->spacing,
                  (unsigned long long)b->pairs.count, pairs, s->zone_count, zone, (double)b->stride * n * 4 / mib);
+        /* Over the limit: as many lights and zones in flight as fit beside the rest, sized as the
+         * estimate sized them (at least one: the estimate's least, checked before the bake). The
+         * zones are the cloud's now, no longer the options' guess: the larger of the two counts. */
+        const uint64_t actual = (uint64_t)nv * 3 * sizeof(float) * 8 + 3 * zone_floats * (uint64_t)s->lobes * n * sizeof(float);
+        const uint64_t per = actual > b->d.memory_per_flight ? actual : b->d.memory_per_flight;
+        if (job->memory_over && per && job->threads > 1) {
+            const uint64_t room = job->memory_limit > b->d.memory_fixed ? (job->memory_limit - b->d.memory_fixed) / per : 0;
+            b->flights = room < 1 ? 1 : room < (uint64_t)job->threads ? (int)room : 0;
+            if (b->flights)
+                prt__log(ctx, PRT_LOG_INFO, "memory: %d cloud light%s or zone%s in flight at a time of %d threads (%.1f MiB each), to stay within the limit",
+                         b->flights, b->flights == 1 ? "" : "s", b->flights == 1 ? "" : "s", job->threads, (double)per / mib);
+        }
     }
     return st;
 }
@@ -445,10 +482,20 @@ static prt_status light_response(lcbake *b, prt_context *ctx, const float *pos, 
     return st;
 }
 
+static prt_status light_solve_unit(lcbake *b, uint64_t unit);
 static prt_status light_run(prt__bake_job *job, uint64_t unit, int thread)
 {
     (void)thread;
     lcbake *b = (lcbake *)job;
+    flight_enter(b);
+    const prt_status st = light_solve_unit(b, unit);
+    flight_leave(b);
+    return st;
+}
+
+static prt_status light_solve_unit(lcbake *b, uint64_t unit)
+{
+    prt__bake_job *job = &b->base;
     prt__lightcloud_set *s = b->s;
     const size_t nv = b->t->mesh.vertex_count;
     float *diffuse = malloc(nv * 3 * sizeof(float));
@@ -740,7 +787,11 @@ static void zones_end(lcbake *b)
 static prt_status zone_unit(prt__bake_job *job, uint64_t unit, int thread)
 {
     (void)thread;
-    return zone_run((lcbake *)job, job->ctx, (uint32_t)unit);
+    lcbake *b = (lcbake *)job;
+    flight_enter(b);
+    const prt_status st = zone_run(b, job->ctx, (uint32_t)unit);
+    flight_leave(b);
+    return st;
 }
 
 static prt_status lc_stage(prt__bake_job *job, int index, prt__stage *out)
@@ -811,6 +862,7 @@ static void lc_release(prt__bake_job *job)
     prt__lightcloud_pairs_free(&b->pairs);
     free(b->dark);
     free(b->list);
+    if (b->gate_ready) { pthread_mutex_destroy(&b->gate); pthread_cond_destroy(&b->gate_freed); }
     free(b);
 }
 
@@ -866,12 +918,14 @@ prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, 
         return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     }
     b->first_own = -1;
+    b->gate_ready = !pthread_mutex_init(&b->gate, NULL);
+    if (b->gate_ready && pthread_cond_init(&b->gate_freed, NULL)) { pthread_mutex_destroy(&b->gate); b->gate_ready = false; }
     t->state = s;
     s->store_direct = d.store_direct;
     s->lobes = d.emission_order * d.emission_order;
     s->bounces = d.bounces;
     s->samples = prt__opt_int(o, "samples", 4096);
-    prt_status st = (s->cache = prt__lightcloud_cache_new()) ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
+    prt_status st = b->gate_ready && (s->cache = prt__lightcloud_cache_new()) ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) st = prt__transfer_copy_frame(ctx, t, &b->inner);
     if (!st) {
         b->inner->method = &prt__method_spectral;

@@ -118,6 +118,10 @@ typedef struct prt__lightcloud_bake_desc {
     bool raw;                    /* no CPCA */
     int clusters, vectors;       /* per zone; 0 = 8, 8 */
     int emission_order;          /* 0 = PRT__LIGHTCLOUD_EMISSION_ORDER; 1..3 */
+    /* The memory estimate's parts (method.c): what the bake holds besides the lights and zones in
+     * flight, and one light's solve with one zone's clustering; under a memory limit
+     * (prt__bake_job.memory_over) fewer are in flight than threads. 0: not known, no bound. */
+    uint64_t memory_fixed, memory_per_flight;
 } prt__lightcloud_bake_desc;
 prt_status prt__lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, const prt__lightcloud_bake_desc *d,
                                       prt_transfer *t, prt__bake_job **job);

@@ -185,12 +185,14 @@ static prt_status parse_floats(prt_context *ctx, const char *name, const char *t
     return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--%s expects %d comma-separated numbers, got \"%s\"", name, n, text);
 }
 
-/* The spectral stages' memory (the bake runs them, on a second copy of the mesh; over the limit
- * they stream their rows), each thread's
- * solve of one cloud light (a few arrays over every vertex) and one zone's responses to every
- * light and lobe (the responses themselves wait in a scratch file). Lights counted from the
- * grid or --cloud-surface (a --cloud FILE: as the default grid). */
-static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e)
+/* The spectral stages' memory (the bake runs them, on a second copy of the mesh), then per light or
+ * zone in flight: one cloud light's solve (a few arrays over every vertex) and one zone's
+ * responses to every light and lobe, merged and compressed (the responses themselves wait in a
+ * scratch file). Lights counted from the grid or --cloud-surface (a --cloud FILE: as the default
+ * grid). Over a limit, fewer lights and zones are in flight than threads (bake.c): at least one,
+ * the least. fixed and per_flight: what the bake sizes that by (prt__lightcloud_bake_desc). */
+static void lightcloud_memory_parts(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e, uint64_t *fixed,
+                                    uint64_t *per_flight)
 {
     prt__spectral_bake_desc d = {0};
     d.functions = prt__opt_int(o, "basis", 0);
@@ -198,7 +200,9 @@ static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options 
     d.partition_size = prt__opt_int(o, "partition", 0);
     d.samples = prt__opt_int(o, "samples", 0);
     prt__spectral_memory(t, &d, threads, e);
+    /* Under a limit the spectral stages stream too (bake.c passes it on): their least. */
     const uint64_t nv = t->mesh.vertex_count, spectral = e->bytes, spectral_least = e->least ? e->least : e->bytes;
+    *fixed = *per_flight = 0;
     uint64_t lights = 216;
     const char *grid = prt__opt(o, "cloud-grid");
     int g[3];
@@ -208,14 +212,25 @@ static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options 
      * no estimate stands in their way. */
     if (lights > PRT__LIGHTCLOUD_MAX_LIGHTS) { e->bytes = e->least = 0; return; }
     const int order = prt__opt_int(o, "emission-order", 1);
-    const uint64_t lobes = (uint64_t)order * order, zone = (uint64_t)prt__opt_int(o, "zone-vertices", 2000);
+    uint64_t zone = (uint64_t)prt__opt_int(o, "zone-vertices", 2000);
+    if (zone > nv) zone = nv;
+    const uint64_t lobes = (uint64_t)order * order;
     const uint64_t mesh = nv * (12 * sizeof(float) + 4) + t->mesh.triangle_count * 12;
-    const uint64_t per_thread = nv * 3 * sizeof(float) * 8 + zone * lights * lobes * 3 * sizeof(float) * 3;
-    e->bytes = spectral + mesh + (uint64_t)threads * per_thread;
-    e->least = spectral_least + mesh + (uint64_t)threads * per_thread;   /* the spectral rows streamed */
-    snprintf(e->what, sizeof e->what, "%.0f MiB for the spectral stages, %.0f MiB a thread for the solves and zones of %llu lights",
-             (double)spectral / 1048576.0, (double)per_thread / 1048576.0, (unsigned long long)lights);
-    snprintf(e->lower, sizeof e->lower, "a smaller --basis, --zone-vertices or fewer -j threads");
+    *per_flight = nv * 3 * sizeof(float) * 8 + zone * lights * lobes * 3 * sizeof(float) * 3;
+    *fixed = spectral_least + mesh;
+    const uint64_t flights = threads > 1 ? (uint64_t)threads : 1;
+    e->bytes = spectral + mesh + flights * *per_flight;
+    e->least = *fixed + *per_flight;
+    snprintf(e->what, sizeof e->what, "%.0f MiB for the spectral stages, %.0f MiB a thread for the solves and zones of %llu lights%s",
+             (double)spectral / 1048576.0, (double)*per_flight / 1048576.0, (unsigned long long)lights,
+             flights > 1 ? ", fewer of them in flight under a limit" : "");
+    snprintf(e->lower, sizeof e->lower, "a smaller --basis, --zone-vertices or fewer cloud lights");
+}
+
+static void lightcloud_memory_estimate(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e)
+{
+    uint64_t fixed, per_flight;
+    lightcloud_memory_parts(t, o, threads, e, &fixed, &per_flight);
 }
 
 static prt_status lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene, const prt_options *o, prt_transfer *t, prt__bake_job **job)
@@ -250,6 +265,10 @@ static prt_status lightcloud_bake_begin(prt_context *ctx, const prt_scene *scene
     if (d.raw && (prt__opt(o, "clusters") || prt__opt(o, "vectors"))) return prt__fail(ctx, PRT_ERR_INVALID_ARG, "--clusters and --vectors apply to --compress cpca, not none");
     d.clusters = prt__opt_int(o, "clusters", 0);
     d.vectors = prt__opt_int(o, "vectors", 0);
+    prt__memory_estimate e;
+    memset(&e, 0, sizeof e);
+    lightcloud_memory_parts(t, o, prt__threads(ctx), &e, &d.memory_fixed, &d.memory_per_flight);
+    d.memory_fixed += prt__memory_scene_bytes(t);
     return prt__lightcloud_bake_begin(ctx, scene, o, &d, t, job);
 }
 
@@ -372,11 +391,12 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
     float *exit_sh = s->glossy_count ? prt__calloc(nv * 48, sizeof(float)) : NULL;
     if (!w || !cloud || !E || (s->glossy_count && !exit_sh)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) st = prt__lightcloud_weights(ctx, t, l, neighbours, w);
-    /* Drawn with all its light, the responses are summed on the GPU (gpu.c), the glossy exit
-     * vectors too: cloud stays zero and exit_sh unused here. */
+    /* Drawn with all its light, the diffuse responses are summed on the GPU (gpu.c); cloud stays
+     * zero here (glossy files still evaluate here for their exit vectors). */
     const bool gpu = d->gpu_finish && d->component == PRT_COMPONENT_ALL && !r->indirect;
-    if (!st && gpu) st = prt__lightcloud_gpu(ctx, t, w, prt_lighting_emission(l), r);
-    if (!st && d->component != PRT_COMPONENT_DIRECT && !gpu) st = prt__lightcloud_eval(ctx, t, w, cloud, exit_sh);
+    if (!st && gpu) st = prt__lightcloud_gpu(ctx, t, w, r);
+    if (!st && d->component != PRT_COMPONENT_DIRECT && (!gpu || exit_sh)) st = prt__lightcloud_eval(ctx, t, w, cloud, exit_sh);
+    if (!st && gpu) memset(cloud, 0, nv * 3 * sizeof(float));
     /* Direct light of the user's lights, unless the cloud holds it. */
     if (!st && !s->store_direct && count) {
         prt_light *lights = malloc((size_t)count * sizeof(prt_light));
@@ -420,7 +440,7 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
             default: r->radiance[i] = own + direct + indirect; break;
             }
         }
-        if (exit_sh && d->component != PRT_COMPONENT_DIRECT && !gpu) {
+        if (exit_sh && d->component != PRT_COMPONENT_DIRECT) {
             if (s->emit_sh && emission > 0)
                 for (size_t v = 0; v < nv; ++v)
                     if (s->glossy_of[v] != UINT32_MAX)

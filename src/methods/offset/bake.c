@@ -31,7 +31,18 @@ typedef struct obake {
     prt__progress *progress;
     struct bounce_scratch *bounce;   /* [bounce_threads] the bounces' per-thread scratch */
     int bounce_threads;
+    /* Over the memory limit (base.memory_over): the maps live in mapped scratch files (maps.c),
+     * written block by block, their pages handed back between blocks; block: texels per block. */
+    bool streaming;
+    size_t block;
+    uint64_t units_touched;      /* bounce units since the pages were last handed back */
 } obake;
+
+/* Between blocks of a streamed bake: the maps' pages handed back (none otherwise). */
+static void maps_block_done(const obake *ob)
+{
+    if (ob->streaming) prt__offset_maps_drop(ob->s);
+}
 
 /* ---- offsets ---- */
 
@@ -217,8 +228,10 @@ static bool radiosity_maps(obake *ob, const int32_t *label, float *maps, prt__pr
         receiver rc;
         const bool ready = receiver_init(&rc, K);
         if (!ready) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
+        for (size_t first = 0; first < nc; first += ob->block) {   /* one block unless streaming */
+        const size_t end = first + ob->block < nc ? first + ob->block : nc;
 #pragma omp for schedule(dynamic, 16)
-        for (size_t i = 0; i < nc; ++i) {
+        for (size_t i = first; i < end; ++i) {
             for (int o = 0; o < K; ++o) memset(maps + ((size_t)o * nc + i) * 3, 0, 3 * sizeof *maps);   /* also when cancelled: the cap reads them */
             if (!ready || prt__progress_cancelled(p)) continue;
             const size_t t = s->texel[i];
@@ -256,6 +269,9 @@ static bool radiosity_maps(obake *ob, const int32_t *label, float *maps, prt__pr
                 for (int c = 0; c < 3; ++c) maps[((size_t)o * nc + i) * 3 + c] += s->albedo[i * 3 + c] * w;
             }
             prt__progress_add(p, 1);
+        }
+#pragma omp single
+        maps_block_done(ob);
         }
         receiver_free(&rc);
     }
@@ -315,8 +331,10 @@ static bool subsurface_maps(obake *ob, const int32_t *label, float *maps, prt__p
         receiver rc;
         const bool ready = receiver_init(&rc, K);
         if (!ready) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
+        for (size_t first = 0; first < nc; first += ob->block) {   /* one block unless streaming */
+        const size_t end = first + ob->block < nc ? first + ob->block : nc;
 #pragma omp for schedule(dynamic, 16)
-        for (size_t i = 0; i < nc; ++i) {
+        for (size_t i = first; i < end; ++i) {
             for (int o = 0; o < K; ++o) memset(maps + ((size_t)o * nc + i) * 3, 0, 3 * sizeof *maps);
             if (!ready || prt__progress_cancelled(p)) continue;
             if (s->medium[i]) {
@@ -361,6 +379,9 @@ static bool subsurface_maps(obake *ob, const int32_t *label, float *maps, prt__p
             }
             prt__progress_add(p, 1);
         }
+#pragma omp single
+        maps_block_done(ob);
+        }
         receiver_free(&rc);
     }
     free(reach); free(start); free(order); free(at);
@@ -380,10 +401,13 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
     prt__progress_begin(p, p->stage, (uint64_t)nc * (uint64_t)((ob->d.kinds & 1) + ((ob->d.kinds >> 1) & 1)));
     for (int k = 0; k < 2 && !st; ++k) {
         if (!(ob->d.kinds & (1u << k))) continue;
-        float *maps = malloc(nc * (size_t)K * 3 * sizeof *maps + 1);
-        if (!maps) { st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for %d transfer maps", K); break; }
+        float *maps = NULL;
+        if ((st = prt__offset_maps_new(ctx, nc * (size_t)K * 3, ob->streaming, &maps))) break;
+        /* The state's at once: the blocks hand its pages back as they finish. */
+        s->mapped[k] = ob->streaming;
+        if (k == 0) s->radiosity = maps;
+        else s->subsurface = maps;
         if (!(k == 0 ? radiosity_maps(ob, label, maps, p) : subsurface_maps(ob, label, maps, p))) {
-            free(maps);
             st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the transfer maps");
             break;
         }
@@ -404,6 +428,7 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
                 factor = fmax(factor, limit > 0 ? sum / limit : INFINITY);
                 for (int o = 0; o < K; ++o) maps[((size_t)o * nc + i) * 3 + c] *= (float)(limit / sum);
             }
+            if (i + 1 == nc || (i + 1) % ob->block == 0) maps_block_done(ob);
             if (!(factor > 1)) continue;
             capped++;
             top = fmax(top, factor);
@@ -415,8 +440,6 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
             prt__log(ctx, PRT_LOG_INFO, "%s maps: %zu of %zu texels would gather more than they %s (their offsets' cells overlap; %s); scaled down to that",
                      k ? "subsurface" : "radiosity", capped, nc, k ? "scatter" : "reflect",
                      k ? "scattering wider than the light map's reach or texels, see --mm-per-unit" : "more offsets make it rarer");
-        if (k == 0) s->radiosity = maps;
-        else s->subsurface = maps;
         if (prt__progress_cancelled(p)) st = prt__fail(ctx, PRT_ERR_CANCELLED, "bake cancelled");
     }
     free(label);
@@ -487,6 +510,13 @@ static prt_status env_step(prt__bake_job *base, prt_context *ctx, prt__progress 
  * other: a unit's record is its texels' radiosity maps after the bounces. */
 #define BOUNCE_BLOCK 64
 
+/* A bounce unit's rows written or read: in a streamed bake, every PRT__OFFSET_BOUNCE_DROP of them the pages
+ * go back (units in flight on other threads touch theirs again, read back from the file). */
+static void bounce_touched(obake *ob)
+{
+    if (ob->streaming && __atomic_add_fetch(&ob->units_touched, 1, __ATOMIC_RELAXED) % PRT__OFFSET_BOUNCE_DROP == 0) prt__offset_maps_drop(ob->s);
+}
+
 static void bounce_texel(obake *ob, receiver *rc, double *acc, size_t i)
 {
     prt__offset_set *s = ob->s;
@@ -555,6 +585,7 @@ static prt_status bounce_unit(prt__bake_job *base, uint64_t unit, int thread)
     }
     const size_t nc = ob->s->covered, end = (size_t)(unit + 1) * BOUNCE_BLOCK < nc ? (size_t)(unit + 1) * BOUNCE_BLOCK : nc;
     for (size_t i = (size_t)unit * BOUNCE_BLOCK; i < end; ++i) bounce_texel(ob, &b->rc, b->acc, i);
+    bounce_touched(ob);
     return PRT_OK;
 }
 
@@ -564,6 +595,7 @@ static void bounce_save(prt__bake_job *base, uint64_t unit, prt__bytes *out)
     const prt__offset_set *s = ((obake *)base)->s;
     const size_t nc = s->covered, first = (size_t)unit * BOUNCE_BLOCK, end = first + BOUNCE_BLOCK < nc ? first + BOUNCE_BLOCK : nc;
     for (int k = 0; k < s->count; ++k) prt__bytes_put(out, s->radiosity + ((size_t)k * nc + first) * 3, (end - first) * 3 * sizeof(float));
+    bounce_touched((obake *)base);
 }
 
 static bool bounce_load(prt__bake_job *base, uint64_t unit, const unsigned char *data, size_t size)
@@ -581,6 +613,7 @@ static bool bounce_load(prt__bake_job *base, uint64_t unit, const unsigned char 
         }
         memcpy(s->radiosity + ((size_t)k * nc + first) * 3, data + row * (size_t)k, row);
     }
+    bounce_touched((obake *)base);
     return true;
 }
 
@@ -589,6 +622,11 @@ static prt_status offset_stage(prt__bake_job *base, int index, prt__stage *out)
     static const char *const names[3] = {"offsets", "transfer maps", "first-order light"};
     static prt_status (*const steps[3])(prt__bake_job *, prt_context *, prt__progress *) = {offsets_step, maps_step, env_step};
     obake *ob = (obake *)base;
+    /* The memory limit is known once the bake has begun: before the first stage. */
+    ob->streaming = base->memory_over;
+    ob->block = ob->streaming ? PRT__OFFSET_MAP_BLOCK : ob->s->covered ? ob->s->covered : 1;
+    if (index == 1 && ob->streaming)
+        prt__log(base->ctx, PRT_LOG_INFO, "memory: the transfer maps stream through a scratch file, %d texels at a time", PRT__OFFSET_MAP_BLOCK);
     if (index < 0 || index > 3 || (index == 3 && (ob->s->map_bounces < 2 || !ob->s->radiosity))) return PRT_OK;
     if (index == 3) {
         free(ob->bounce);
@@ -609,15 +647,20 @@ static prt_status offset_stage(prt__bake_job *base, int index, prt__stage *out)
 
 static prt_status offset_finish(prt__bake_job *base, prt_transfer *t)
 {
-    (void)base;
+    const obake *ob = (const obake *)base;
     /* The steps wrote into the state. The maps are stored as halves (11 significant bits, 0.05%
      * relative: far under the paths' noise), so the transfer holds what its file will. */
     prt__offset_set *s = t->state;
-    const size_t n = (size_t)s->count * s->covered * 3;
+    const size_t n = (size_t)s->count * s->covered * 3, step = ob->block * (size_t)s->count * 3;
     for (int k = 0; k < 2; ++k) {
         float *maps = k ? s->subsurface : s->radiosity;
-        for (size_t i = 0; maps && i < n; ++i) maps[i] = prt__half_to_float(prt__half_from_float(maps[i]));
+        for (size_t first = 0; maps && first < n; first += step) {
+            const size_t end = n - first > step ? first + step : n;
+            for (size_t i = first; i < end; ++i) maps[i] = prt__half_to_float(prt__half_from_float(maps[i]));
+            maps_block_done(ob);
+        }
     }
+    maps_block_done(ob);
     return PRT_OK;
 }
 

@@ -47,7 +47,13 @@ prt_status prt__offset_save(const prt_transfer *t, prt__chunk_list *l)
         uint16_t *h = maps ? prt__chunks_alloc(l, values * sizeof(uint16_t) + 2) : NULL;   /* + 2: 4-byte chunks */
         if (!maps) continue;
         if (!h) return PRT_OK;
-        for (size_t i = 0; i < values; ++i) h[i] = prt__half_from_float(maps[i]);
+        /* A streamed bake's maps (maps.c): their pages handed back as they are read. */
+        const size_t step = (size_t)PRT__OFFSET_MAP_BLOCK * (size_t)(s->count > 0 ? s->count : 1) * 3;
+        for (size_t first = 0; first < values; first += step) {
+            const size_t end = values - first > step ? first + step : values;
+            for (size_t i = first; i < end; ++i) h[i] = prt__half_from_float(maps[i]);
+            prt__offset_maps_drop(s);
+        }
         if (l->version < 2) l->version = 2;   /* readers of version 1 would miss the maps */
         h[values] = 0;
         prt__chunks_add(l, k ? CHUNK_OFHS : CHUNK_OFHR, h, values * sizeof(uint16_t) + (values & 1 ? 2 : 0), NULL);

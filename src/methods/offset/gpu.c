@@ -29,6 +29,7 @@ prt_status prt__offset_crop_maps(prt_context *ctx, const prt__offset_set *s, con
             memcpy(full + (size_t)s->texel[i] * 3, m + i * 3, 3 * sizeof *full);
             out->data += m[i * 3] != 0 || m[i * 3 + 1] != 0 || m[i * 3 + 2] != 0;
         }
+        prt__offset_maps_drop(s);   /* a streamed bake's maps (maps.c): read map by map, not kept */
         int x0, y0, w, h;
         if (prt__map_crop(full, W, H, &x0, &y0, &w, &h)) out->whole += (int64_t)w * h;
         const int first = out->count;

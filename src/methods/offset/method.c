@@ -11,7 +11,10 @@ void prt__offset_set_free(void *state)
     prt__offset_set *s = state;
     if (!s) return;
     free(s->offsets); free(s->texel); free(s->pos); free(s->nrm); free(s->albedo); free(s->area); free(s->emit); free(s->emit_in); free(s->env);
-    free(s->radiosity); free(s->subsurface); free(s->index); free(s->source); free(s->xy); free(s->media); free(s->medium);
+    const size_t values = (size_t)s->count * s->covered * 3;
+    prt__offset_maps_free(s->radiosity, values, s->mapped[0]);
+    prt__offset_maps_free(s->subsurface, values, s->mapped[1]);
+    free(s->index); free(s->source); free(s->xy); free(s->media); free(s->medium);
     if (s->lights) { prt__vertex_lights_free(s->lights); free(s->lights); }
     if (s->vertex_lights) { prt__vertex_lights_free(s->vertex_lights); free(s->vertex_lights); }
     free(s->sample_pos);
@@ -102,20 +105,27 @@ static bool parse_rgb(const char *text, float out[3])
 
 /* One float RGB map per offset over the light map's covered texels (bounded here by the whole map:
  * --texels, or the largest size a scene gets without it), for radiosity and for subsurface
- * transfer, and the texels' points, normals, areas and environment transfer. Sized by the light
- * map, not the vertices. */
+ * transfer, and their halves as the file is written; the texels' points, normals, areas and
+ * environment transfer. Sized by the light map, not the vertices. Streamed (bake.c, maps.c), the
+ * float maps live in a mapped scratch file and only the pages of the block in hand are resident:
+ * a block of texels' rows of every offset, or the bounce units between drops on every thread. */
 static void offset_memory_estimate(const prt_transfer *t, const prt_options *o, int threads, prt__memory_estimate *e)
 {
-    (void)threads;
     const uint64_t w = (uint64_t)prt__opt_int(o, "texels", 512), texels = w * w, K = (uint64_t)prt__opt_int(o, "offsets", 200);
     const int kind = prt__opt_choice(o, "transfer", 0);   /* auto, radiosity, subsurface, both */
     const uint64_t kinds = kind == 3 ? 2 : 1;   /* auto: radiosity, and subsurface maps only where a medium is named (not known here) */
-    const uint64_t maps = texels * K * 3 * sizeof(float) * kinds;
+    const uint64_t maps = texels * K * 3 * sizeof(float) * kinds, halves = maps / 2;
+    const bool bounces = kind != 2 && prt__opt_int(o, "map-bounces", PRT__OFFSET_MAX_MAP_BOUNCES) > 1;
+    const uint64_t page = 4096, block = K * (PRT__OFFSET_MAP_BLOCK * 3 * sizeof(float) + 2 * page);
+    const uint64_t bounce = bounces ? K * 2 * page * (PRT__OFFSET_BOUNCE_DROP + (uint64_t)(threads > 1 ? threads : 1)) : 0;
     /* The UV atlas (vertices copied along seams), the charts and texel patches over every
      * triangle: about 256 bytes a vertex, measured on Sponza at 126k vertices. */
-    e->bytes = e->least = maps + texels * (4 + 4 * 3 * sizeof(float) + 9 * sizeof(float) + 16) + (uint64_t)t->mesh.vertex_count * 256;
-    snprintf(e->what, sizeof e->what, "up to %.0f MiB of %llu maps over %llux%llu texels", (double)maps / 1048576.0, (unsigned long long)(K * kinds),
-             (unsigned long long)w, (unsigned long long)w);
+    const uint64_t other = texels * (4 + 4 * 3 * sizeof(float) + 9 * sizeof(float) + 16) + (uint64_t)t->mesh.vertex_count * 256;
+    e->bytes = maps + halves + other;
+    e->least = halves + (block > bounce ? block : bounce) + other;
+    if (e->least > e->bytes) e->least = e->bytes;
+    snprintf(e->what, sizeof e->what, "up to %.0f MiB of %llu maps over %llux%llu texels and %.0f MiB of their halves as the file is written; the maps can stream",
+             (double)maps / 1048576.0, (unsigned long long)(K * kinds), (unsigned long long)w, (unsigned long long)w, (double)halves / 1048576.0);
     snprintf(e->lower, sizeof e->lower, "fewer --offsets or a smaller --texels");
 }
 
@@ -197,7 +207,8 @@ static bool describe_crops(const prt__offset_set *s, prt__offset_crops c[2])
     const float *maps[2] = {s->radiosity, s->subsurface};
     memset(c, 0, 2 * sizeof *c);
     for (int k = 0; k < 2; ++k)
-        if (maps[k] && prt__offset_crop_maps(NULL, s, maps[k], &c[k])) { prt__offset_crops_free(&c[0]); return false; }
+        if (maps[k] && prt__offset_crop_maps(NULL, s, maps[k], &c[k])) { prt__offset_maps_drop(s); prt__offset_crops_free(&c[0]); return false; }
+    prt__offset_maps_drop(s);   /* a streamed bake's maps: read, not kept */
     return true;
 }
 

@@ -46,6 +46,7 @@ typedef struct prt__offset_set {
                                    * shadowed; with emit */
     float *env;                   /* [covered][9] shadowed SH transfer (cosine / pi folded in) */
     float *radiosity, *subsurface;   /* [count][covered][3] or NULL */
+    bool mapped[2];               /* radiosity, subsurface: in a mapped scratch file (maps.c), not malloc'd */
     /* Subsurface: the media (up to 255) and each covered texel's (0 = opaque: diffuse). */
     int medium_count;
     prt_medium *media;
@@ -97,6 +98,17 @@ bool prt__offset_cache_new(prt__offset_set *s);
  * from its own texels (label: prt__texel_support_charts of the mesh, NULL: by distance alone);
  * false when out of memory or the texel list is not increasing and inside the map. */
 bool prt__offset_set_index(prt__offset_set *s, const int32_t *label);
+
+/* The maps' storage (maps.c): values floats, malloc'd or (mapped: a bake over its memory limit) in
+ * a shared mapping of an unlinked scratch file; drop hands a mapped state's map pages back to the
+ * kernel (their bytes stay: the next touch reads them back), a no-op for malloc'd maps. */
+prt_status prt__offset_maps_new(prt_context *ctx, size_t values, bool mapped, float **out);
+void prt__offset_maps_free(float *maps, size_t values, bool mapped);
+void prt__offset_maps_drop(const prt__offset_set *s);
+/* Texels per block between drops: about 12 bytes x offsets each, per kind of map written. */
+#define PRT__OFFSET_MAP_BLOCK 1024
+/* Bounce units (64 texels, touching 1-2 pages per offset each) between drops. */
+#define PRT__OFFSET_BOUNCE_DROP 8
 
 #define PRT__OFFSET_MAX_MEDIA 255
 
