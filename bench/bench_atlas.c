@@ -1,8 +1,10 @@
 /* Benchmark of generated UV atlases (geom/uv_atlas.c): for each mesh and map size, the seconds
  * the atlas takes, its charts, and its coverage both ways prt counts it: texels the charts touch
- * (the atlas's report, the bake's log) and texels whose centres lie on the surface (prt info's
- * atlas_coverage, what the offset method bakes). --ppm DIR writes each layout as a picture
- * (charts in colours, centre texels bright, touched-only texels dim, gutter black).
+ * (the atlas's report, the bake's log) and texels the raster samples on the surface (prt info's
+ * atlas_coverage, what the offset method bakes; since border texels are sampled, the same), and
+ * the texels the charts' bilinear reads reach (their own gutter rings too; the rest lies free).
+ * --ppm DIR writes each layout as a picture (charts in colours, sampled texels bright,
+ * touched-only texels dim, gutter black).
  * Usage: prt_bench_atlas [MESH...] [--sizes 128,256,512] [--threads N] [--ppm DIR]
  * Without MESH: ../shared/data's bunny, else the procedural demo scene. JSON lines on stdout. */
 #include "bench_common.h"
@@ -76,16 +78,22 @@ int main(int argc, char **argv)
                 prt_context_release(ctx);
                 continue;
             }
-            /* Centres on the surface, counted as the offset bake counts them (prt info). */
+            /* Sampled texels on the surface, counted as the offset bake counts them (prt info). */
             const size_t n = (size_t)res * res;
             uint32_t *owner = calloc(n, sizeof *owner);
             float *bary = calloc(n * 2, sizeof *bary), *area = calloc(n, sizeof *area);
             size_t overlap = 0, outside = 0, centres = 0, touched = 0;
             if (!owner || !bary || !area || !prt__texel_raster(m, res, res, owner, bary, &overlap, &outside) || !prt__texel_areas(m, res, res, area)) return 1;
             for (size_t i = 0; i < n; ++i) { centres += owner[i] && area[i] > 0; touched += area[i] > 0; }
+            /* Texels a chart's bilinear reads reach (its data and its own gutter ring): the rest is free. */
+            int32_t *label = malloc(n * sizeof *label);
+            size_t reached = 0;
+            if (!label || prt__texel_support_charts(ctx, m, res, res, label)) return 1;
+            for (size_t i = 0; i < n; ++i) reached += label[i] >= 0;
+            free(label);
             printf("{\"mesh\": \"%s\", \"texels\": %d, \"charts\": %zu, \"shared\": %zu, \"glued\": %zu, \"seconds\": %.3f, \"touched\": %.4f, \"centres\": %.4f, "
-                   "\"worst_stretch\": %.3f, \"overlap\": %zu}\n",
-                   used, res, r.charts, r.shared, r.glued, dt, (double)touched / n, (double)centres / n, r.worst_stretch, overlap);
+                   "\"reached\": %.4f, \"worst_stretch\": %.3f, \"overlap\": %zu}\n",
+                   used, res, r.charts, r.shared, r.glued, dt, (double)touched / n, (double)centres / n, (double)reached / n, r.worst_stretch, overlap);
             fflush(stdout);
             if (ppm) {
                 const char *base = strrchr(used, '/');

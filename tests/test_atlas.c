@@ -199,6 +199,31 @@ static size_t check_atlas(prt__mesh *m, int res, const char *what, double min_co
         float *bary = malloc(n * 2 * sizeof *bary);
         size_t overlap, outside, wrong = 0, reached = 0;
         assert_true(prt__texel_raster(m, res, res, tri, bary, &overlap, &outside));
+        /* Every texel the surface touches is sampled (what the per-texel bakes bake and prt info
+         * counts), at a point of its own triangle, within a bilinear read's reach of its centre
+         * (the chart's point nearest it, within 0.71 texels, moved at most 0.25 inwards; a
+         * sliver's once lay a fifth of the way to its centroid, 8.8 texels off in the fan). */
+        float *area = malloc(n * sizeof *area);
+        assert_true(prt__texel_areas(m, res, res, area));
+        size_t touched = 0, sampled = 0;
+        double farthest = 0;
+        for (size_t i = 0; i < n; ++i) {
+            touched += area[i] > 0;
+            if (!tri[i]) continue;
+            sampled += area[i] > 0;
+            const float b1 = bary[i * 2], b2 = bary[i * 2 + 1];
+            assert_true(b1 >= -1e-5f && b2 >= -1e-5f && b1 + b2 <= 1 + 1e-5f);
+            const uint32_t *ix = m->indices + (size_t)(tri[i] - 1) * 3;
+            for (int axis = 0; axis < 2; ++axis) {
+                const double q = ((1 - b1 - b2) * m->uv[ix[0] * 2 + axis] + b1 * m->uv[ix[1] * 2 + axis] + b2 * m->uv[ix[2] * 2 + axis]) * res;
+                farthest = fmax(farthest, fabs(q - ((axis ? i / (size_t)res : i % (size_t)res) + 0.5)));
+            }
+        }
+        free(area);
+        print_message("%s: %zu texels touched, %zu sampled (%.1f%% of the map), samples within %.2f texels of their centres\n", what, touched, sampled,
+                      100.0 * sampled / n, farthest);
+        assert_int_equal(sampled, touched);
+        assert_true(farthest < 1.0);
         for (size_t i = 0; i < n; ++i) index[i] = tri[i] ? (int32_t)i : -1;
         assert_int_equal(prt__texel_support_charts(ctx, m, res, res, label), PRT_OK);
         assert_true(prt__texel_gutter_sources(res, res, index, label, source));
@@ -476,6 +501,42 @@ static void test_real_meshes(void **state)
     }
 }
 
+/* Issue 30: at the offset method's default light map (128^2) the atlas of a scan covers at least
+ * 70% of the texels with surface it bakes (prt info's atlas_coverage). Texels a chart's border
+ * only crosses count since they are sampled at the chart's surface nearest their centre: coarse
+ * scans, their triangles a texel or larger, gained most (the dragon's res4 66 -> 74%, the teapot
+ * 63 -> 71%). The bunny at 128 is checked in test_real_meshes. */
+static void test_scan_coverage(void **state)
+{
+    (void)state;
+    /* Procedural, no data needed: a coarse bumpy sphere, its triangles several texels wide. */
+    test_mesh t = {0};
+    bumpy_sphere(&t, 16, 32, 0.03f);
+    prt__mesh pm = to_mesh(&t);
+    check_atlas(&pm, 128, "coarse bumpy sphere at 128", 0.66);   /* 68.6% */
+    prt__mesh_free(&pm);
+    tm_free(&t);
+    const char *dir = shared_data_dir();
+    /* The low-resolution bunny (18 charts, a few huge and ragged) packs to 65% only (58.7% by
+     * texel centres): issue 30's 70% is not met there yet. */
+    const struct { const char *name; double min; } scans[] = {
+        {"meshes/dragon/dragon_vrip_res3.ply", 0.70}, {"meshes/dragon/dragon_vrip_res4.ply", 0.70},
+        {"meshes/teapot/teapot.obj", 0.70}, {"meshes/bunny/bunny_lowres.obj", 0.64},
+    };
+    for (size_t i = 0; i < sizeof scans / sizeof *scans; ++i) {
+        char path[1024], what[128];
+        snprintf(path, sizeof path, "%s/%s", dir ? dir : "", scans[i].name);
+        if (!dir || access(path, R_OK)) { print_message("skipped %s: %s not found (../shared/data)\n", scans[i].name, path); continue; }
+        prt_context *ctx = test_context(1);
+        prt_scene *s = NULL;
+        assert_int_equal(prt_scene_load(ctx, path, NULL, &s), PRT_OK);
+        snprintf(what, sizeof what, "%s at 128", scans[i].name);
+        check_atlas(&s->mesh, 128, what, scans[i].min);
+        prt_scene_release(s);
+        prt_context_release(ctx);
+    }
+}
+
 /* The Stanford dragon's crude decimation: edges shared by 4-8 triangles, back-to-back duplicate
  * faces, pinched vertices. It once gave ~3400 charts and did not fit 128 or 256 texels. */
 static void test_dragon(void **state)
@@ -550,6 +611,7 @@ int main(void)
         cmocka_unit_test(test_flat_pieces),
         cmocka_unit_test(test_layouts),
         cmocka_unit_test(test_real_meshes),
+        cmocka_unit_test(test_scan_coverage),
         cmocka_unit_test(test_dragon),
         cmocka_unit_test(test_texels_on_atlas),
     };

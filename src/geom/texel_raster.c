@@ -1,4 +1,4 @@
-/* Texel patches of a UV layout: which triangle owns each texel centre, and how much surface each
+/* Texel patches of a UV layout: which triangle each texel samples, and how much surface each
  * texel covers. Shared by every method that bakes transfer per texel. */
 #include "geom/texel_raster.h"
 
@@ -84,6 +84,38 @@ uint8_t *prt__texel_duplicates(const prt__mesh *m)
     return skip;
 }
 
+/* How far inside a chart a border texel's sample lies, in texels (prt__texel_raster). */
+#define BORDER_INSET 0.25f
+
+/* The point (b1, b2) of triangle (u, v) (texel units) moved towards its centroid, away from where
+ * surfaces touch: BORDER_INSET of a texel, at most a fifth of the way (a sliver's centroid may lie
+ * texels away, and the sample must stay in its texel's reach). Barycentrics into out. */
+static void inset(const float u[3], const float v[3], float b1, float b2, float out[2])
+{
+    const float gu = (u[0] + u[1] + u[2]) / 3, gv = (v[0] + v[1] + v[2]) / 3;
+    const float qu = u[0] + b1 * (u[1] - u[0]) + b2 * (u[2] - u[0]), qv = v[0] + b1 * (v[1] - v[0]) + b2 * (v[2] - v[0]);
+    const float to_g = sqrtf((gu - qu) * (gu - qu) + (gv - qv) * (gv - qv));
+    const float f = to_g > 0 ? fminf(0.2f, BORDER_INSET / to_g) : 0.0f;
+    out[0] = (1 - f) * b1 + f / 3;
+    out[1] = (1 - f) * b2 + f / 3;
+}
+
+/* Does triangle (u, v) (texel units) meet the open square of half-side r about (px, py)?
+ * Separating axes: the square's two, the triangle's edge normals. */
+static bool meets_square(const float u[3], const float v[3], float px, float py, float r)
+{
+    if (fminf(u[0], fminf(u[1], u[2])) >= px + r || fmaxf(u[0], fmaxf(u[1], u[2])) <= px - r) return false;
+    if (fminf(v[0], fminf(v[1], v[2])) >= py + r || fmaxf(v[0], fmaxf(v[1], v[2])) <= py - r) return false;
+    for (int e = 0; e < 3; ++e) {
+        const int j = (e + 1) % 3, k = (e + 2) % 3;
+        const float nx = v[j] - v[e], ny = u[e] - u[j], half = r * (fabsf(nx) + fabsf(ny));
+        if (!(half > 0)) continue;
+        const float a = nx * u[e] + ny * v[e], b = nx * u[k] + ny * v[k], c = nx * px + ny * py;
+        if (fmaxf(a, b) <= c - half || fminf(a, b) >= c + half) return false;
+    }
+    return true;
+}
+
 bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float *bary, size_t *overlap_out, size_t *outside_out)
 {
     /* Rasterize the UV layout: texel (x, y) has its centre at ((x + .5) / W, (y + .5) / H); the
@@ -121,9 +153,7 @@ bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float 
     }
     /* Triangles no texel centre falls in (slivers, charts smaller than a texel) take the texels
      * they touch, at their nearest point: otherwise the gutter fill would give them another
-     * chart's light. Borders of larger triangles are left to the fill, which copies their own
-     * chart's texels: a border sample sits where surfaces touch (a sphere resting on the floor)
-     * and would see through the floor. */
+     * chart's light. */
     {
         float *near = malloc(ntex * sizeof *near);
         uint8_t *owns = prt__calloc(m->triangle_count, 1);
@@ -150,9 +180,32 @@ bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float 
                     if (d2 > 0.5f || d2 >= near[i]) continue;   /* 0.5: the texel's corner is the farthest it reaches */
                     near[i] = d2;
                     owner[i] = (uint32_t)t + 1;
-                    /* A fifth of the way to the centroid, away from where surfaces touch. */
-                    bary[i * 2] = 0.8f * b1 + 0.2f / 3;
-                    bary[i * 2 + 1] = 0.8f * b2 + 0.2f / 3;
+                    inset(u, v, b1, b2, bary + i * 2);
+                }
+        }
+        /* Border texels: those a chart's triangles cover part of but not the centre. Bilinear
+         * reads on the chart weigh them, so they hold the chart's own surface, sampled at the
+         * point nearest the centre (the light there is what the centre would extrapolate), inset
+         * as a sliver's, away from where surfaces touch (a sphere resting on the floor). Their
+         * surface counts then, not only the gutter fill's copy of the next texel in. */
+        for (size_t i = 0; i < ntex; ++i) near[i] = owner[i] ? -1.0f : INFINITY;
+        for (size_t t = 0; t < m->triangle_count; ++t) {
+            if (dup[t]) continue;
+            const uint32_t *ix = m->indices + t * 3;
+            float u[3], v[3];
+            for (int k = 0; k < 3; ++k) { u[k] = m->uv[ix[k] * 2] * W; v[k] = m->uv[ix[k] * 2 + 1] * H; }
+            if ((u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]) == 0.0f) continue;
+            const int x0 = (int)fmaxf(floorf(fminf(u[0], fminf(u[1], u[2]))), 0.0f), x1 = (int)fminf(ceilf(fmaxf(u[0], fmaxf(u[1], u[2]))), (float)W);
+            const int y0 = (int)fmaxf(floorf(fminf(v[0], fminf(v[1], v[2]))), 0.0f), y1 = (int)fminf(ceilf(fmaxf(v[0], fmaxf(v[1], v[2]))), (float)H);
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    const size_t i = (size_t)y * W + x;
+                    if (near[i] < 0 || !meets_square(u, v, x + 0.5f, y + 0.5f, 0.5f)) continue;
+                    float b1 = 0, b2 = 0, d2 = nearest_on_triangle(u, v, x + 0.5f, y + 0.5f, &b1, &b2);
+                    if (d2 >= near[i]) continue;
+                    near[i] = d2;
+                    owner[i] = (uint32_t)t + 1;
+                    inset(u, v, b1, b2, bary + i * 2);
                 }
         }
         free(near);
@@ -221,22 +274,6 @@ bool prt__texel_areas(const prt__mesh *m, int W, int H, float *area)
     for (size_t i = 0; i < ntex; ++i) area[i] = (float)acc[i];
     free(acc);
     free(dup);
-    return true;
-}
-
-/* Does triangle (u, v) (texel units) meet the open square of half-side r about (px, py)?
- * Separating axes: the square's two, the triangle's edge normals. */
-static bool meets_square(const float u[3], const float v[3], float px, float py, float r)
-{
-    if (fminf(u[0], fminf(u[1], u[2])) >= px + r || fmaxf(u[0], fmaxf(u[1], u[2])) <= px - r) return false;
-    if (fminf(v[0], fminf(v[1], v[2])) >= py + r || fmaxf(v[0], fmaxf(v[1], v[2])) <= py - r) return false;
-    for (int e = 0; e < 3; ++e) {
-        const int j = (e + 1) % 3, k = (e + 2) % 3;
-        const float nx = v[j] - v[e], ny = u[e] - u[j], half = r * (fabsf(nx) + fabsf(ny));
-        if (!(half > 0)) continue;
-        const float a = nx * u[e] + ny * v[e], b = nx * u[k] + ny * v[k], c = nx * px + ny * py;
-        if (fmaxf(a, b) <= c - half || fminf(a, b) >= c + half) return false;
-    }
     return true;
 }
 

@@ -13,7 +13,8 @@ uint8_t *prt__texel_duplicates(const prt__mesh *m);
 /* Rasterizes the mesh's UVs (every vertex has them) into a W x H grid: texel (x, y) has its
  * centre at ((x + .5) / W, (y + .5) / H) and belongs to the first triangle covering it (owner:
  * triangle + 1, 0 = none; bary: 2 barycentrics per texel); triangles no centre falls in take the
- * texels they touch. Counts centres claimed twice inside triangles (overlap) and vertex uses
+ * texels they touch, and texels some triangle covers part of but not the centre go to the nearest
+ * such triangle, sampled a quarter texel inside its point nearest the centre. Counts centres claimed twice inside triangles (overlap) and vertex uses
  * outside [0, 1] (outside). Duplicate faces (prt__texel_duplicates) take no texels. False when out
  * of memory. */
 bool prt__texel_raster(const prt__mesh *m, int W, int H, uint32_t *owner, float *bary, size_t *overlap, size_t *outside);

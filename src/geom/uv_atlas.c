@@ -1370,7 +1370,7 @@ static int by_size(const void *x, const void *y)
 
 /* A chart's footprint is its bilinear support: the texels whose centres lie within one texel
  * (on both axes) of some point of the chart, every texel a bilinear read on the chart can weigh
- * (texel_raster.c's slivers reach less far). Packing keeps footprints disjoint, so each such
+ * (texel_raster.c samples those whose square the chart meets, reaching less far). Packing keeps footprints disjoint, so each such
  * texel can hold its own chart's light and no read on a chart takes another's (the gutter
  * sources are chosen by chart, texel_raster.c). REACH_SLACK covers float UVs written after.
  * The grid a chart is rasterised into has its box's corner on a texel's edge, one texel above

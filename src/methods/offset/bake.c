@@ -799,8 +799,8 @@ static prt_status layout(prt_context *ctx, prt__offset_bake_desc *d, prt_transfe
                  t->source, was);
         d->texels = r.resolution;
     }
-    prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts touch %.0f%% of the %dx%d light map's texels (those whose centres they hold, the "
-             "coverage prt info reports, are fewer), worst stretch %.2f", t->source, why,
+    prt__log(ctx, PRT_LOG_INFO, "UV atlas for '%s' (%s): %zu charts touch %.0f%% of the %dx%d light map's texels (each one baked: "
+             "the coverage prt info reports), worst stretch %.2f", t->source, why,
              r.charts, 100 * r.coverage, d->texels, d->texels, r.worst_stretch);
     return PRT_OK;
 }
