@@ -391,12 +391,11 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
     float *exit_sh = s->glossy_count ? prt__calloc(nv * 48, sizeof(float)) : NULL;
     if (!w || !cloud || !E || (s->glossy_count && !exit_sh)) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory");
     if (!st) st = prt__lightcloud_weights(ctx, t, l, neighbours, w);
-    /* Drawn with all its light, the diffuse responses are summed on the GPU (gpu.c); cloud stays
-     * zero here (glossy files still evaluate here for their exit vectors). */
+    /* Drawn with all its light, the responses are summed on the GPU (gpu.c), the glossy exit
+     * vectors too: cloud stays zero and exit_sh unused here. */
     const bool gpu = d->gpu_finish && d->component == PRT_COMPONENT_ALL && !r->indirect;
-    if (!st && gpu) st = prt__lightcloud_gpu(ctx, t, w, r);
-    if (!st && d->component != PRT_COMPONENT_DIRECT && (!gpu || exit_sh)) st = prt__lightcloud_eval(ctx, t, w, cloud, exit_sh);
-    if (!st && gpu) memset(cloud, 0, nv * 3 * sizeof(float));
+    if (!st && gpu) st = prt__lightcloud_gpu(ctx, t, w, prt_lighting_emission(l), r);
+    if (!st && d->component != PRT_COMPONENT_DIRECT && !gpu) st = prt__lightcloud_eval(ctx, t, w, cloud, exit_sh);
     /* Direct light of the user's lights, unless the cloud holds it. */
     if (!st && !s->store_direct && count) {
         prt_light *lights = malloc((size_t)count * sizeof(prt_light));
@@ -440,7 +439,7 @@ static prt_status lightcloud_relight(prt_context *ctx, const prt_transfer *t, co
             default: r->radiance[i] = own + direct + indirect; break;
             }
         }
-        if (exit_sh && d->component != PRT_COMPONENT_DIRECT) {
+        if (exit_sh && d->component != PRT_COMPONENT_DIRECT && !gpu) {
             if (s->emit_sh && emission > 0)
                 for (size_t v = 0; v < nv; ++v)
                     if (s->glossy_of[v] != UINT32_MAX)
