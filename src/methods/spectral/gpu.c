@@ -78,6 +78,21 @@ static int add_power(prt__gpu_sums *g, const prt__spectral_basis *b, const float
     return g->sums.product_count - 1;
 }
 
+/* A product whose row v reads row v of `from` (weight 1): what a per-row map then rewrites. */
+static prt_render_product *identity_product(prt__gpu_sums *g, int from, size_t nv, int shown)
+{
+    prt_render_product *p = prt__gpu_sums_add(g, from, nv, nv, false, 0, shown);
+    if (!p) return NULL;
+    uint32_t *start = (uint32_t *)p->start, *index = (uint32_t *)p->index;
+    float *w = (float *)p->weight;
+    for (size_t v = 0; v < nv; ++v) {
+        start[v + 1] = (uint32_t)(v + 1);
+        index[v] = (uint32_t)v;
+        w[v * 3] = w[v * 3 + 1] = w[v * 3 + 2] = 1.0f;
+    }
+    return p;
+}
+
 /* The tail's products after the bounces' (last: the last bounce's product, before: the one before
  * it, -1 the frame's vector). */
 static bool add_tail(prt__gpu_sums *g, const prt_transfer *t, const prt__spectral_basis *b, int before, int last)
@@ -86,25 +101,11 @@ static bool add_tail(prt__gpu_sums *g, const prt_transfer *t, const prt__spectra
     const size_t nv = m->vertex_count;
     float *area = prt__calloc(nv ? nv : 1, sizeof(float));   /* as add_tail: a third of each triangle to each corner */
     if (!area) return false;
-    for (size_t i = 0; i < m->triangle_count; ++i) {
-        const uint32_t *ix = m->indices + i * 3;
-        const float *p0 = m->positions + (size_t)ix[0] * 3, *p1 = m->positions + (size_t)ix[1] * 3, *p2 = m->positions + (size_t)ix[2] * 3;
-        const float u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, w[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-        const float cx = u[1] * w[2] - u[2] * w[1], cy = u[2] * w[0] - u[0] * w[2], cz = u[0] * w[1] - u[1] * w[0];
-        const float third = sqrtf(cx * cx + cy * cy + cz * cz) / 6.0f;
-        for (int k = 0; k < 3; ++k) area[ix[k]] += third;
-    }
+    prt__spectral_vertex_areas(m, area);
     /* Each vertex's weight: the last bounce's row (one entry of weight 1) through the map. */
-    prt_render_product *p = prt__gpu_sums_add(g, last, nv, nv, false, 0, 0);
+    prt_render_product *p = identity_product(g, last, nv, 0);
     bool ok = p != NULL;
     if (ok) {
-        uint32_t *start = (uint32_t *)p->start, *index = (uint32_t *)p->index;
-        float *w = (float *)p->weight;
-        for (size_t v = 0; v < nv; ++v) {
-            start[v + 1] = (uint32_t)(v + 1);
-            index[v] = (uint32_t)v;
-            w[v * 3] = w[v * 3 + 1] = w[v * 3 + 2] = 1.0f;
-        }
         p->map_glsl = TAIL_WEIGHT_GLSL;
         p->map_cpu = tail_weight;
         p->map_argc = 1;
@@ -114,14 +115,7 @@ static bool add_tail(prt__gpu_sums *g, const prt_transfer *t, const prt__spectra
     const int p_before = ok ? add_power(g, b, area, before, nv) : -1, p_last = p_before >= 0 ? add_power(g, b, area, last, nv) : -1;
     const int p_w = p_last >= 0 ? add_power(g, b, area, weight, nv) : -1;
     free(area);
-    if (p_w < 0 || !(p = prt__gpu_sums_add(g, weight, nv, nv, false, 0, 1))) return false;
-    uint32_t *start = (uint32_t *)p->start, *index = (uint32_t *)p->index;
-    float *w = (float *)p->weight;
-    for (size_t v = 0; v < nv; ++v) {
-        start[v + 1] = (uint32_t)(v + 1);
-        index[v] = (uint32_t)v;
-        w[v * 3] = w[v * 3 + 1] = w[v * 3 + 2] = 1.0f;
-    }
+    if (p_w < 0 || !(p = identity_product(g, weight, nv, 1))) return false;
     p->map_glsl = TAIL_SCALE_GLSL;
     p->map_cpu = tail_scale;
     p->map_argc = 3;

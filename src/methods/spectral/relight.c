@@ -102,14 +102,8 @@ static void bounce_power(const prt__spectral_basis *b, const float *area, const 
  * ratios per vertex or per partition mislead where light is still spreading (a closed room of
  * albedo 0.7: 18% and 4% off 64 bounces, against 2.6% for one ratio for the whole mesh). q is
  * capped at 0.95 (a tail of 19 times the last bounce); a dark last-but-one bounce gives none. */
-static prt_status add_tail(prt_context *ctx, const prt_transfer *t, const float *before, const float *last, float *indirect_out)
+void prt__spectral_vertex_areas(const prt__mesh *m, float *area)
 {
-    const prt__spectral_basis *b = &((const prt__spectral_set *)t->state)->basis;
-    const prt__mesh *m = &t->mesh;
-    const size_t nv = m->vertex_count;
-    float *area = prt__calloc(nv, sizeof(float));   /* a third of each triangle's area to each corner */
-    double *part = prt__calloc((size_t)b->partitions * 3, sizeof(double));
-    if (!area || !part) { free(area); free(part); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
     for (size_t i = 0; i < m->triangle_count; ++i) {
         const uint32_t *ix = m->indices + i * 3;
         const float *p0 = m->positions + (size_t)ix[0] * 3, *p1 = m->positions + (size_t)ix[1] * 3, *p2 = m->positions + (size_t)ix[2] * 3;
@@ -118,6 +112,17 @@ static prt_status add_tail(prt_context *ctx, const prt_transfer *t, const float 
         const float third = sqrtf(cx * cx + cy * cy + cz * cz) / 6.0f;
         for (int k = 0; k < 3; ++k) area[ix[k]] += third;
     }
+}
+
+static prt_status add_tail(prt_context *ctx, const prt_transfer *t, const float *before, const float *last, float *indirect_out)
+{
+    const prt__spectral_basis *b = &((const prt__spectral_set *)t->state)->basis;
+    const prt__mesh *m = &t->mesh;
+    const size_t nv = m->vertex_count;
+    float *area = prt__calloc(nv, sizeof(float));   /* a third of each triangle's area to each corner */
+    double *part = prt__calloc((size_t)b->partitions * 3, sizeof(double));
+    if (!area || !part) { free(area); free(part); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory"); }
+    prt__spectral_vertex_areas(m, area);
     double p_before[3], p_last[3];
     bounce_power(b, area, before, part, p_before, prt__threads(ctx));
     bounce_power(b, area, last, part, p_last, prt__threads(ctx));

@@ -115,6 +115,8 @@ extern const prt__method prt__method_spectral;
 /* Relighting finished on the GPU (gpu.c): whether these controls allow it (no glossy final
  * bounce), and r's products and frame vector (the direct light reflected, per vertex). */
 bool prt__spectral_gpu_can(const prt_transfer *t, int bounces, int tail);
+/* A third of each triangle's area to each of its corners (relight.c; area zeroed by the caller). */
+void prt__spectral_vertex_areas(const prt__mesh *m, float *area);
 prt_status prt__spectral_gpu(prt_context *ctx, const prt_transfer *t, const float *albedo, const float *direct, int bounces, int tail, prt_relit *r);
 
 /* prt export --web (web.c, web.js). */
