@@ -385,7 +385,6 @@ static void map_case(prt_context *ctx, const prt_transfer *t, const prt_relit *r
             const float y = w[v * 3 + c] * x[(nv - 1 - v) * 3 + c];
             assert_float_equal(cpu[v * 3 + c], y * y * x[v * 3 + c], 1e-6);
         }
-    /* Renderers of their own: releasing one terminates the EGL display the others share. */
     prt_renderer *ren = NULL;
     if (!no_gl && !prt_renderer_create(ctx, &(prt_renderer_desc){32, 32, 1}, &ren)) {
         prt_render_mesh m;
@@ -445,6 +444,7 @@ static void test_fallback(void **state)
     float *cpu = calloc(nv * 3, sizeof(float)), *back = malloc(nv * 3 * sizeof(float));
     assert_int_equal(prt_render_sums_cpu(r.gpu_sums, r.gpu_vector, nv, cpu), PRT_OK);
     prt_renderer *small = NULL;
+    get_renderer(ctx);   /* held across small's life and release */
     if (prt_renderer_create(ctx, &(prt_renderer_desc){32, 32, 1}, &small)) {
         print_message("skipping the GPU half: no OpenGL 3.3 context (%s)\n", prt_last_error());
     } else {
@@ -457,6 +457,13 @@ static void test_fallback(void **state)
         print_message("note: %s\n", note);
         for (size_t i = 0; i < nv * 3; ++i) assert_float_equal(back[i], cpu[i], 1e-6);
         prt_renderer_release(small);
+        /* Another renderer (the shared one, made before small) still draws after small's release:
+         * the EGL display they share stays up while either holds it. */
+        prt_renderer *other = get_renderer(ctx);
+        assert_non_null(other);
+        memset(back, 0, nv * 3 * sizeof(float));
+        assert_int_equal(prt_render_vertex_radiance(other, &m, back), PRT_OK);
+        for (size_t i = 0; i < nv * 3; ++i) assert_float_equal(back[i], cpu[i], 1e-5);
     }
     /* A product reading past its input is refused, naming it. */
     prt_render_product bad = r.gpu_sums->products[0];

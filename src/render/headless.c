@@ -4,6 +4,7 @@
 #include "render/volumes.h"
 
 #include <epoxy/egl.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -17,7 +18,14 @@ struct prt_renderer {
     int volume_slices;
 };
 
-static EGLDisplay open_display(void)
+/* EGL hands every caller the same display, and eglTerminate ends every context on it, so the
+ * display stays initialised while any renderer holds it: releasing one renderer must not pull the
+ * context from under another. */
+static pthread_mutex_t display_lock = PTHREAD_MUTEX_INITIALIZER;
+static EGLDisplay shared_display = EGL_NO_DISPLAY;
+static int display_users;
+
+static EGLDisplay initialise_display(void)
 {
     /* Surfaceless needs no X server or DRM device; fall back to the default display. */
     if (epoxy_has_egl_extension(EGL_NO_DISPLAY, "EGL_MESA_platform_surfaceless")) {
@@ -27,6 +35,26 @@ static EGLDisplay open_display(void)
     EGLDisplay d = eglGetDisplay(EGL_DEFAULT_DISPLAY);
     if (d != EGL_NO_DISPLAY && eglInitialize(d, NULL, NULL)) return d;
     return EGL_NO_DISPLAY;
+}
+
+static EGLDisplay open_display(void)
+{
+    pthread_mutex_lock(&display_lock);
+    if (display_users == 0) shared_display = initialise_display();
+    EGLDisplay d = shared_display;
+    if (d != EGL_NO_DISPLAY) display_users++;
+    pthread_mutex_unlock(&display_lock);
+    return d;
+}
+
+static void close_display(void)
+{
+    pthread_mutex_lock(&display_lock);
+    if (display_users > 0 && --display_users == 0) {
+        eglTerminate(shared_display);
+        shared_display = EGL_NO_DISPLAY;
+    }
+    pthread_mutex_unlock(&display_lock);
 }
 
 prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, prt_renderer **out)
@@ -48,7 +76,7 @@ prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, 
     EGLConfig cfg;
     EGLint ncfg = 0;
     if (!eglBindAPI(EGL_OPENGL_API) || !eglChooseConfig(r->dpy, cfg_attr, &cfg, 1, &ncfg) || ncfg < 1) {
-        eglTerminate(r->dpy); free(r);
+        close_display(); free(r);
         return prt__fail(ctx, PRT_ERR_BACKEND, "EGL has no desktop OpenGL config");
     }
     const EGLint ctx_attr[] = {EGL_CONTEXT_MAJOR_VERSION, 3, EGL_CONTEXT_MINOR_VERSION, 3,
@@ -56,7 +84,7 @@ prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, 
     r->egl = eglCreateContext(r->dpy, cfg, EGL_NO_CONTEXT, ctx_attr);
     if (r->egl == EGL_NO_CONTEXT || !eglMakeCurrent(r->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, r->egl)) {
         if (r->egl != EGL_NO_CONTEXT) eglDestroyContext(r->dpy, r->egl);
-        eglTerminate(r->dpy); free(r);
+        close_display(); free(r);
         return prt__fail(ctx, PRT_ERR_BACKEND, "cannot create a surfaceless OpenGL 3.3 core context (EGL error 0x%x)", eglGetError());
     }
     snprintf(r->name, sizeof r->name, "%s", (const char *)glGetString(GL_RENDERER));
@@ -80,7 +108,7 @@ void prt_renderer_release(prt_renderer *r)
         eglMakeCurrent(r->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
         eglDestroyContext(r->dpy, r->egl);
     }
-    if (r->dpy != EGL_NO_DISPLAY) eglTerminate(r->dpy);
+    if (r->dpy != EGL_NO_DISPLAY) close_display();
     eglReleaseThread();   /* frees the per-thread state EGL keeps for the calling thread */
     free(r);
 }
