@@ -77,6 +77,12 @@ typedef struct prt_render_passes {
     const int32_t *chart;     /* [covered] the UV chart of each texel (under 2^24; negative: the texel
                                * is no block's with others, it reads single texels); with levels */
     prt_render_map_set scatter, bounce;
+    /* With levels: the bounced light (the sum of b_k) each texel shows is the mean over the
+     * covered texels of its chart within smooth_radius texels in x and y, weighted by
+     * (r + 1 - |dx|) (r + 1 - |dy|) x area x max(0, n . n')^32 (normal: [covered][3], unit; a
+     * texel with a negative chart keeps its own); 0: none (methods/offset/smooth.c). */
+    int smooth_radius;
+    const float *normal;
 } prt_render_passes;
 
 /* ---- Per-vertex light finished on the GPU ----

@@ -252,6 +252,22 @@ static prt_status write_bytes(const char *path, const void *data, size_t size)
     return prt__atomic_commit(&f);
 }
 
+/* OpenEXRCore (3.1 here; fixed after 3.4.7, openexr issue 2306) keeps a ZIP chunk's zlib output when it is
+ * exactly as long as the packed pixels, and every reader takes a chunk of that length for the
+ * packed pixels themselves: the image reads back as noise (an exported 3 x 8 offset map piece had
+ * a NaN). The library's compressor, then the packed pixels in its place in that case, as the
+ * fixed library stores them. */
+typedef struct exr_zip_guard { exr_result_t (*compress)(exr_encode_pipeline_t *); } exr_zip_guard;
+static exr_result_t exr_zip_guarded(exr_encode_pipeline_t *enc)
+{
+    const exr_zip_guard *g = enc->encoding_user_data;
+    const exr_result_t rv = g->compress(enc);
+    if (rv == EXR_ERR_SUCCESS && enc->compressed_buffer && enc->packed_buffer && enc->compressed_bytes == enc->packed_bytes &&
+        enc->compressed_buffer != enc->packed_buffer)
+        memcpy(enc->compressed_buffer, enc->packed_buffer, enc->packed_bytes);
+    return rv;
+}
+
 static prt_status save_exr(const char *path, const prt_image *img)
 {
     char tmp[1100];
@@ -291,8 +307,17 @@ static prt_status save_exr(const char *path, const prt_image *img)
             enc.channels[c].user_data_type = EXR_PIXEL_FLOAT;
             enc.channels[c].user_bytes_per_element = sizeof(float);
         }
-        if (exr_encoding_choose_default_routines(ctx, part, &enc) || exr_encoding_run(ctx, part, &enc))
+        if (exr_encoding_choose_default_routines(ctx, part, &enc)) {
             st = prt__fail(NULL, PRT_ERR_IO, "OpenEXR encoding failed: %s", exr_message);
+            break;
+        }
+        exr_zip_guard guard = {enc.compress_fn};
+        if (guard.compress) {
+            enc.encoding_user_data = &guard;
+            enc.compress_fn = exr_zip_guarded;
+        }
+        if (exr_encoding_run(ctx, part, &enc)) st = prt__fail(NULL, PRT_ERR_IO, "OpenEXR encoding failed: %s", exr_message);
+        enc.encoding_user_data = NULL;
     }
     if (initialised) exr_encoding_destroy(ctx, &enc);
     if (exr_finish(&ctx) && !st) st = prt__fail(NULL, PRT_ERR_IO, "OpenEXR: could not finish '%s'", tmp);

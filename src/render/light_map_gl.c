@@ -112,13 +112,33 @@ static const char *FS_PYRAMID =
  * (component 0 all, 1 direct, 2 indirect); the first-order map alone as the second output. */
 static const char *FS_FINAL =
     "#version 330 core\n"
-    "uniform isampler2D source; uniform sampler2D first, total, emit, pixel_direct; uniform float emission; uniform int component, has_pixel;\n"
+    "uniform isampler2D source; uniform sampler2D first, total, emit, pixel_direct, area_chart, normals; uniform float emission;\n"
+    "uniform int component, has_pixel, smooth_radius;\n"
     "layout(location = 0) out vec4 color;\n"
     "layout(location = 1) out vec4 first_order;\n"
     "void main() {\n"
     "  ivec2 s = texelFetch(source, ivec2(gl_FragCoord.xy), 0).xy;\n"
     "  if (s.x < 0) { color = first_order = vec4(0.0, 0.0, 0.0, 1.0); return; }\n"
     "  vec3 f = texelFetch(first, s, 0).rgb + emission * texelFetch(emit, s, 0).rgb, g = texelFetch(total, s, 0).rgb;\n"
+    /* The bounced light over the texel's chart around it (methods/offset/smooth.c, in its order). */
+    "  float own = smooth_radius > 0 ? texelFetch(area_chart, s, 0).g : -1.0;\n"
+    "  if (own >= 0.0) {\n"
+    "    ivec2 size = textureSize(area_chart, 0);\n"
+    "    vec3 acc = vec3(0.0), n = texelFetch(normals, s, 0).rgb; float sum = 0.0;\n"
+    "    for (int dy = -smooth_radius; dy <= smooth_radius; ++dy)\n"
+    "      for (int dx = -smooth_radius; dx <= smooth_radius; ++dx) {\n"
+    "        ivec2 q = s + ivec2(dx, dy);\n"
+    "        if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) continue;\n"
+    "        vec2 ac = texelFetch(area_chart, q, 0).rg;\n"
+    "        if (ac.g != own) continue;\n"
+    "        float f = max(dot(n, texelFetch(normals, q, 0).rgb), 0.0);\n"
+    "        for (int k = 0; k < 5; ++k) f *= f;\n"
+    "        float w = float((smooth_radius + 1 - abs(dx)) * (smooth_radius + 1 - abs(dy))) * ac.r * f;\n"
+    "        acc += w * texelFetch(total, q, 0).rgb;\n"
+    "        sum += w;\n"
+    "      }\n"
+    "    if (sum > 0.0) g = acc / sum;\n"
+    "  }\n"
     "  if (has_pixel != 0) f = max(f - texelFetch(pixel_direct, s, 0).rgb, 0.0);\n"
     "  color = vec4(component == 1 ? f : component == 2 ? g : f + g, 1.0);\n"
     "  first_order = vec4(f, 1.0);\n"
@@ -164,7 +184,7 @@ void prt__light_map_gl_free(prt__light_map_gl *g)
         if (g->vao[k]) glDeleteVertexArrays(1, &g->vao[k]);
     }
     GLuint tex[] = {g->source, g->albedo, g->mask, g->emit, g->input, g->sub, g->first, g->bounce[0], g->bounce[1], g->total, g->pixel_direct,
-                    g->area_chart, g->pyramid, g->charts};
+                    g->area_chart, g->normals, g->pyramid, g->charts};
     for (size_t i = 0; i < sizeof tex / sizeof *tex; ++i)
         if (tex[i]) glDeleteTextures(1, &tex[i]);
     if (g->fbo) glDeleteFramebuffers(1, &g->fbo);
@@ -287,6 +307,7 @@ prt_status prt__light_map_gl_load(prt__light_map_gl *g, const prt_render_passes 
     if (!g->p_pyramid) { prt__light_map_gl_free(g); return PRT_ERR_BACKEND; }   /* prt__gl_program said why */
     g->levels = 0;
     for (int k = 0; lm->bounce.levels && k < lm->bounce.map_count; ++k) g->levels = lm->bounce.levels[k] > g->levels ? lm->bounce.levels[k] : g->levels;
+    g->smooth_radius = g->levels && lm->normal ? lm->smooth_radius : 0;
     g->pyramid_size = 1;
     while (g->pyramid_size < W || g->pyramid_size < H) g->pyramid_size *= 2;
     if (g->levels && (g->levels > 15 || !lm->area || !lm->chart || (1 << g->levels) > g->pyramid_size)) {
@@ -325,6 +346,11 @@ prt_status prt__light_map_gl_load(prt__light_map_gl *g, const prt_render_passes 
                 scratch[(size_t)lm->texel[i] * 2 + 1] = lm->chart[i] < 0 ? -1.0f : (float)lm->chart[i];   /* no chart: never pure (prefilter.c) */
             }
             g->area_chart = new_map(W, H, GL_RG32F, GL_RG, GL_FLOAT, scratch);
+            if (g->smooth_radius) {
+                for (size_t i = 0; i < n * 3; ++i) scratch[i] = 0;
+                for (size_t i = 0; i < lm->covered; ++i) memcpy(scratch + (size_t)lm->texel[i] * 3, lm->normal + i * 3, 3 * sizeof *scratch);
+                g->normals = new_map(W, H, GL_RGB32F, GL_RGB, GL_FLOAT, scratch);
+            }
             GLuint *pyr[2] = {&g->pyramid, &g->charts};
             const GLenum internal[2] = {GL_RGBA32F, GL_R32F}, format[2] = {GL_RGBA, GL_RED};
             for (int k = 0; k < 2; ++k) {
@@ -486,6 +512,9 @@ void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, const float
     bind(g->p_final, "total", 2, GL_TEXTURE_2D, g->total);
     bind(g->p_final, "emit", 3, GL_TEXTURE_2D, g->emit);
     bind(g->p_final, "pixel_direct", 4, GL_TEXTURE_2D, g->pixel_direct);
+    bind(g->p_final, "area_chart", 5, GL_TEXTURE_2D, g->area_chart);   /* 0 without smooth_radius: then never read */
+    bind(g->p_final, "normals", 6, GL_TEXTURE_2D, g->normals);
+    glUniform1i(glGetUniformLocation(g->p_final, "smooth_radius"), g->smooth_radius);
     glUniform1f(glGetUniformLocation(g->p_final, "emission"), g->has_emit ? emission : 0.0f);
     glUniform1i(glGetUniformLocation(g->p_final, "component"), component);
     glUniform1i(glGetUniformLocation(g->p_final, "has_pixel"), pixel_direct != NULL);
@@ -501,7 +530,7 @@ void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, const float
     if (depth) glEnable(GL_DEPTH_TEST);
     if (cull) glEnable(GL_CULL_FACE);
     if (blend) glEnable(GL_BLEND);
-    for (int unit = 4; unit >= 0; --unit) {
+    for (int unit = 6; unit >= 0; --unit) {
         glActiveTexture(GL_TEXTURE0 + (GLenum)unit);
         glBindTexture(GL_TEXTURE_2D, 0);
         glBindTexture(GL_TEXTURE_2D_ARRAY, 0);

@@ -25,6 +25,8 @@ typedef struct prt__light_map_gl {
      * and the light's pyramid of pyramid_size^2 texels (the map's size up to a power of two). */
     int levels, pyramid_size;
     GLuint area_chart, pyramid, charts;
+    int smooth_radius;            /* prt_render_passes.smooth_radius, with levels (it reads area_chart) */
+    GLuint normals;               /* RGB32F: each surface texel's normal, with smooth_radius */
     bool has_emit, has_mask;
 } prt__light_map_gl;
 

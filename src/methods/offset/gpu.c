@@ -124,6 +124,8 @@ prt_status prt__offset_gpu_passes(prt_context *ctx, const prt_transfer *t, const
                 p->bounce.levels = s->level;
                 p->area = s->area;
                 p->chart = s->chart;
+                p->smooth_radius = prt__offset_smooth_radius(s);   /* as the CPU's (smooth.c) */
+                p->normal = s->nrm;
             }
             __atomic_store_n(&s->passes, p, __ATOMIC_RELEASE);
         } else {

@@ -158,6 +158,32 @@ float *prt__offset_filter_take(prt__offset_set *s);
 void prt__offset_filter_give(prt__offset_set *s, float *scratch);
 void prt__offset_filter(const prt__offset_set *s, const float *in, float *scratch, const float **out);
 
+/* The bounced light shown (smooth.c): each receiver's gathered light averaged with its chart's
+ * texels within prt__offset_smooth_radius texels (a tent, weighted by texel area), when the maps
+ * read prefiltered light (s->levels > 0; after prt__offset_filter_ready). A far cell's light is
+ * read at one representative, and which surface the representatives land on changes from one
+ * receiver to the next: a receiver with one on a small hot spot (the Cornell box's lamp panel,
+ * 10-100 times its surroundings) gathers it over the whole cell, its neighbour without one
+ * gathers none. Right on average (the cells reach around small charts for that, bake.c), each
+ * receiver's gather is one draw of that lottery, and shows as blotches of a few texels;
+ * averaging the neighbours' draws keeps the mean and takes out much of the spread (issue 30). It
+ * also softens the bounced light's own detail over that radius. in, out: [covered][3], not the
+ * same. */
+void prt__offset_smooth(const prt__offset_set *s, const float *in, float *out);
+/* A neighbour's weight by the cosine between the two texels' normals: cos^32 (0 from 90
+ * degrees): on a curved chart - a torus's side and its underside - texels facing other ways
+ * gather other light (the demo scene's torus: the smoothing's worst block 1-3 points less off).
+ * By squaring, as the GPU's and the page's (render/light_map_gl.c, web.js). */
+static inline float prt__offset_smooth_facing(float cosine)
+{
+    float f = cosine > 0 ? cosine : 0;
+    for (int k = 0; k < 5; ++k) f *= f;
+    return f;
+}
+/* The radius: a texel per 64 of the map's smaller side (the default maps' texels are about a
+ * 64th of the scene's diagonal or finer, so it is about as wide in the scene whatever the map). */
+int prt__offset_smooth_radius(const prt__offset_set *s);
+
 /* The GPU passes for t (gpu.c): the maps cropped to the boxes of their axial slicing and sliced into atlases
  * (bins.c, section 5.2), described for the renderer; built once, then borrowed from t. */
 prt_status prt__offset_gpu_passes(prt_context *ctx, const prt_transfer *t, const prt_render_passes **out);

@@ -60,6 +60,7 @@ prt_status prt__offset_web(prt_context *ctx, const prt_transfer *t, const prt_ex
          cJSON_AddNumberToObject(meta, "covered", (double)nc) && cJSON_AddNumberToObject(meta, "count", s->count) &&
          cJSON_AddNumberToObject(meta, "samples", (double)S) && cJSON_AddNumberToObject(meta, "bounces", bounces) &&
          cJSON_AddNumberToObject(meta, "bounces_max", hi) && cJSON_AddNumberToObject(meta, "levels", s->radiosity ? s->levels : 0) &&
+         cJSON_AddNumberToObject(meta, "smooth_radius", s->radiosity && s->levels ? prt__offset_smooth_radius(s) : 0) &&
          cJSON_AddBoolToObject(meta, "radiosity", s->radiosity != NULL) && cJSON_AddBoolToObject(meta, "subsurface", s->subsurface != NULL) &&
          cJSON_AddBoolToObject(meta, "emits", s->emit != NULL) && cJSON_AddNumberToObject(meta, "emission", emission) &&
          cJSON_AddBoolToObject(meta, "environment", env != NULL) && cJSON_AddItemToObject(meta, "rotate", cJSON_CreateDoubleArray(eu, 3)) &&
@@ -73,7 +74,7 @@ prt_status prt__offset_web(prt_context *ctx, const prt_transfer *t, const prt_ex
          (!s->emit || (prt__web_floats(page, "emit", s->emit, nc * 3) && prt__web_floats(page, "emit_in", s->emit_in, nc * 3))) &&
          (!s->radiosity || (prt__web_floats(page, "radiosity", s->radiosity, (size_t)s->count * nc * 3) &&
                             prt__web_uints(page, "chart", (const uint32_t *)s->chart, nc) && prt__web_small(page, "level", "u8", s->level, (size_t)s->count) &&
-                            prt__web_floats(page, "area", s->area, nc))) &&
+                            prt__web_floats(page, "area", s->area, nc) && prt__web_floats(page, "texel_nrm", s->nrm, nc * 3))) &&
          (!s->subsurface || (prt__web_floats(page, "subsurface", s->subsurface, (size_t)s->count * nc * 3) &&
                              prt__web_small(page, "medium", "u8", s->medium, nc)));
     free(pixel_albedo);

@@ -15,7 +15,7 @@ PRT.method(function (api) {
     var radiosity = p.radiosity ? api.array('radiosity') : null, subsurface = p.subsurface ? api.array('subsurface') : null;
     var medium = p.subsurface ? api.array('medium') : null;
     var chart = p.radiosity ? new Int32Array(api.array('chart').buffer) : null, level = p.radiosity ? api.array('level') : null;
-    var area = p.radiosity ? api.array('area') : null;
+    var area = p.radiosity ? api.array('area') : null, tnrm = p.radiosity ? api.array('texel_nrm') : null;
     var state = {rotate: p.rotate.slice(), intensity: p.intensity, bounces: p.bounces};
     var xs = new Int32Array(nc), ys = new Int32Array(nc);
     for (var i = 0; i < nc; ++i) { xs[i] = texel[i] % W; ys[i] = Math.floor(texel[i] / W); }
@@ -88,6 +88,31 @@ PRT.method(function (api) {
         return out;
     }
 
+    // The bounced light over each texel's chart around it (smooth.c): a tent of smooth_radius
+    // texels, weighted by texel area and max(0, n . n')^32; a texel without a chart keeps its own.
+    var at = new Int32Array(W * H).fill(-1);
+    for (var t = 0; t < nc; ++t) at[texel[t]] = t;
+    function smooth(light, out) {
+        var R = p.smooth_radius;
+        for (var i = 0; i < nc; ++i) {
+            var own = chart[i], acc = [0, 0, 0], sum = 0, c;
+            if (own < 0) { for (c = 0; c < 3; ++c) out[i * 3 + c] = light[i * 3 + c]; continue; }
+            for (var dy = -R; dy <= R; ++dy)
+                for (var dx = -R; dx <= R; ++dx) {
+                    var X = xs[i] + dx, Y = ys[i] + dy;
+                    if (X < 0 || Y < 0 || X >= W || Y >= H) continue;
+                    var j = at[Y * W + X];
+                    if (j < 0 || chart[j] !== own) continue;
+                    var f = Math.max(tnrm[i * 3] * tnrm[j * 3] + tnrm[i * 3 + 1] * tnrm[j * 3 + 1] + tnrm[i * 3 + 2] * tnrm[j * 3 + 2], 0);
+                    for (var k = 0; k < 5; ++k) f *= f;
+                    var w = (R + 1 - Math.abs(dx)) * (R + 1 - Math.abs(dy)) * area[j] * f;
+                    for (c = 0; c < 3; ++c) acc[c] += w * light[j * 3 + c];
+                    sum += w;
+                }
+            for (c = 0; c < 3; ++c) out[i * 3 + c] = sum > 0 ? acc[c] / sum : light[i * 3 + c];
+        }
+    }
+
     var lights = api.pointLights({albedo: api.array('albedo'), lights: p.lights});
     var points = lights.points(api.array('sample_pos'), api.array('sample_nrm'));
     api.lightMap(W, H);
@@ -139,6 +164,7 @@ PRT.method(function (api) {
                     for (i = 0; i < nc * 3; ++i) indirect[i] += next[i];
                     var tmp = cur; cur = next; next = tmp;
                 }
+                if (p.levels && p.smooth_radius) { smooth(indirect, next); indirect.set(next); }
             }
             if (emit) for (i = 0; i < nc * 3; ++i) first[i] += p.emission * emit[i];
             for (i = 0; i < nc * 3; ++i) b[i] = Math.max(first[i] - hide[i], 0) + indirect[i];
