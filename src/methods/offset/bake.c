@@ -26,7 +26,6 @@ typedef struct obake {
     uint8_t *texel_medium;       /* [width * height] */
     int32_t *chart;              /* [width * height] each surface texel's UV chart, -1 off the surface */
     double *chart_area;          /* [charts] each chart's world area */
-    double *reach;               /* [charts] how far a chart's cells reach onto larger charts (small_reach), NULL until measured */
     prt__offset_charts charts;   /* what splits the offsets' cells (with s->source, s->texel) */
     prt__dipole (*dipoles)[3];   /* per medium */
     prt__progress *progress;
@@ -109,7 +108,7 @@ static int32_t landing(const obake *ob, const float o[3], const float d[3], prt_
 }
 
 /* A receiver's representatives sorted along x, for nearest_rep's pruned search. */
-typedef struct rep_point { float p[3]; int o, chart; double area, reach; } rep_point;   /* chart, its area, its reach squared (m^2) */
+typedef struct rep_point { float p[3]; int o, chart; double area; } rep_point;   /* chart and its area */
 typedef struct rep_index { rep_point *pt; int n; } rep_index;
 
 static int rep_point_cmp(const void *a, const void *b)
@@ -129,7 +128,6 @@ static void rep_index_build(const obake *ob, const int32_t *rep, int K, rep_inde
         q->o = o;
         q->chart = ob->chart[rep[o]];
         q->area = q->chart >= 0 ? ob->chart_area[q->chart] : 0;
-        q->reach = q->chart >= 0 && ob->reach ? ob->reach[q->chart] * q->area : 0;
     }
     qsort(ix->pt, (size_t)ix->n, sizeof *ix->pt, rep_point_cmp);
 }
@@ -156,28 +154,25 @@ static int nearest_where(const rep_index *ix, const float *q, int32_t chart, dou
 }
 
 /* The landing's own chart, one of a quarter its area or more, or a smaller chart's representative
- * within its chart's reach (small_reach): a small chart's cell takes in only the larger chart's
- * surface close around it. (The Cornell box at 200 offsets: the nearest alone 0.216 relative L2 to
- * the path tracer, worst 16-pixel block 538% off; 0.5 of the small chart's side 0.069 and 50%, 0.7
- * 0.074 and 75%, own charts only 0.070 and 44% - but then the receivers without a representative
- * on a small lit chart see none of its light, which a cell reaching around it makes up for.) */
+ * within SMALL_REACH of that chart's side (the square root of its area): a small chart's cell
+ * takes in only the larger chart's surface close around it. (The Cornell box at 200 offsets:
+ * the nearest alone 0.216 relative L2 to the path tracer, worst 16-pixel block 538% off; 0.5 of
+ * the side 0.069 and 50%, 0.7 0.074 and 75%, own charts only 0.070 and 44% - but then the receivers
+ * without a representative on a small lit chart see none of its light, which a cell reaching
+ * around it makes up for on average.) The reach balances two flows, on average only: the small
+ * chart's hits that nearer representatives on the larger chart take (its light lost) against the
+ * larger chart's surface its own representatives take in (its light counted there too). A painted
+ * 0.2 m tile on a floor (test_paint.c) has about five representatives for every wall texel, most
+ * through its gutter onto its border texels: at 0.7 of its side its representatives kept 0.55 of
+ * its hits and took in floor worth 0.83 of them, a bounce 1.38 times the exact one (0.97 before
+ * border texels were sampled); at 0.45 1.05 (0.94 over all bounces). Where fewer receivers have a
+ * representative on the small chart less is made up: test_offset.c's lamp panel keeps 0.92 of the
+ * exact bounce's energy (0.98 at 0.7), the Cornell box's image 0.94 of the path tracer's mean
+ * (0.97), with less error per block (issue 30: a reach per chart from the flows it measures). */
+#define SMALL_REACH 0.45
 static bool near_enough(const rep_point *r, int32_t chart, double area, double d2)
 {
-    return r->chart == chart || r->area >= area / 4 || d2 <= r->reach;
-}
-
-/* Representatives of charts under a quarter of the landing's area: those only a reach lets in. */
-static bool smaller(const rep_point *r, int32_t chart, double area, double d2)
-{
-    (void)chart; (void)d2;
-    return r->area < area / 4;
-}
-
-/* Representatives of the landing's own chart or of one a quarter its area or more. */
-static bool without_reach(const rep_point *r, int32_t chart, double area, double d2)
-{
-    (void)d2;
-    return r->chart == chart || r->area >= area / 4;
+    return r->chart == chart || r->area >= area / 4 || d2 <= SMALL_REACH * SMALL_REACH * r->area;
 }
 
 /* The offset whose representative stands for surface texel `land` - the cell it counts in: the
@@ -221,122 +216,6 @@ static void receiver_at(const obake *ob, receiver *r, int tx, int ty)
     const prt__offset_set *s = ob->s;
     prt__offset_reps(&ob->charts, s->width, s->height, s->offsets, s->count, tx, ty, r->rep, r->rep_chart);
     rep_index_build(ob, r->rep, s->count, &r->ix);
-}
-
-/* ---- how far small charts' cells reach ---- */
-
-#define REACH_RECEIVERS 1024   /* texels (evenly spread) whose rays measure the reaches */
-#define REACH_RAYS 256         /* rays from each, stratified */
-#define REACH_MOST 1.0         /* the longest reach, in sides of its chart */
-
-/* A ray's landing as small_reach counts it: a hit on `chart` that a chart over four times its
- * area takes (t < 0: its light lost), or a hit on a larger chart whose nearest representative on a
- * chart under a quarter its area - `chart`'s - is nearer than the one it takes without reaches
- * (taken at a reach of at least t times that chart's area); w the ray's weight; chart -1 neither. */
-typedef struct reach_hit { int32_t chart; float t, w; uint32_t at; } reach_hit;
-
-static int reach_hit_cmp(const void *a, const void *b)
-{
-    const reach_hit *x = a, *y = b;
-    if (x->chart != y->chart) return x->chart < y->chart ? -1 : 1;
-    if (x->t != y->t) return x->t < y->t ? -1 : 1;
-    return (x->at > y->at) - (x->at < y->at);
-}
-
-static double distance2(const float *a, const float *b)
-{
-    const double x = (double)a[0] - b[0], y = (double)a[1] - b[1], z = (double)a[2] - b[2];
-    return x * x + y * y + z * z;
-}
-
-/* Each chart's reach onto charts over four times its area (near_enough), squared, in multiples of
- * its area. A small chart's hits go to the larger charts' nearer representatives, and receivers
- * without a representative on it give all of them there: its light lost. Its cells take in the
- * larger charts' surface around them, counting its light there. For any light even over each,
- * the bounce is right when the two weigh the same; the reach is the shortest at which they do over
- * the rays of REACH_RECEIVERS texels (at most REACH_MOST). A fixed reach balanced only some
- * layouts: at 0.7 of the side a painted 0.2 m tile on a floor, with about five representatives for
- * every wall texel, kept 0.55 of its hits and took in floor worth 0.83 of them, a bounce 1.38 times
- * the exact one; at 0.45 1.05, but the lamp panel of test_offset.c, with fewer, kept 0.92 (issue 30).
- * Seeded per texel and summed in order: the same for any thread count. */
-static prt_status small_reach(prt_context *ctx, obake *ob)
-{
-    if (ob->reach) return PRT_OK;
-    const prt__offset_set *s = ob->s;
-    const int W = s->width, K = s->count, strata = (int)sqrt((double)REACH_RAYS);
-    const size_t n = (size_t)W * s->height, nc = s->covered;
-    const size_t stride = nc > REACH_RECEIVERS ? (nc + REACH_RECEIVERS - 1) / REACH_RECEIVERS : 1, nr = (nc + stride - 1) / stride;
-    int32_t charts = 0;
-    for (size_t i = 0; i < n; ++i) charts = ob->chart[i] >= charts ? ob->chart[i] + 1 : charts;
-    double *reach = prt__calloc((size_t)charts + 1, sizeof *reach), *lost = prt__calloc((size_t)charts + 1, sizeof *lost);
-    reach_hit *hit = malloc(nr * REACH_RAYS * sizeof *hit + 1);
-    int short_of_memory = !reach || !lost || !hit;
-#pragma omp parallel num_threads(prt__threads(ctx)) if (!short_of_memory)
-    {
-        receiver rc;
-        const bool ready = !short_of_memory && receiver_init(&rc, K);
-        if (!ready) __atomic_store_n(&short_of_memory, 1, __ATOMIC_RELAXED);
-#pragma omp for schedule(dynamic, 8)
-        for (size_t r = 0; r < nr; ++r) {
-            if (!ready) continue;
-            reach_hit *h = hit + r * REACH_RAYS;
-            for (int j = 0; j < REACH_RAYS; ++j) h[j] = (reach_hit){-1, 0, 0, (uint32_t)(r * REACH_RAYS + (size_t)j)};
-            const size_t i = r * stride, t = s->texel[i];
-            const int tx = (int)(t % (size_t)W), ty = (int)(t / (size_t)W);
-            const int32_t own = ob->chart[t];
-            receiver_at(ob, &rc, tx, ty);
-            uint64_t rng = ((uint64_t)ob->d.seed << 32) ^ (i * 0xA24BAED4963EE407ull) ^ 0x2545F4914F6CDD1Dull;
-            float org[3];
-            for (int c = 0; c < 3; ++c) org[c] = s->pos[i * 3 + c] + s->nrm[i * 3 + c] * s->ray_offset;
-            const float w = (s->albedo[i * 3] + s->albedo[i * 3 + 1] + s->albedo[i * 3 + 2]) / (3.0f * REACH_RAYS);
-            for (int j = 0; j < REACH_RAYS; ++j) {
-                float d[3];
-                cosine_direction(s->nrm + i * 3, (j / strata + walk_uniform(&rng)) / strata, (j % strata + walk_uniform(&rng)) / strata, d);
-                prt__ray_hit ray;
-                const int32_t at = landing(ob, org, d, &ray);
-                if (at < 0) continue;
-                const uint32_t land = s->texel[at];
-                const int32_t x = ob->chart[land];
-                const int lx = (int)(land % (uint32_t)W), ly = (int)(land / (uint32_t)W);
-                if (x < 0 || (x == own && abs(lx - tx) <= NEAR_FIELD && abs(ly - ty) <= NEAR_FIELD)) continue;   /* summed exactly */
-                const float *q = ob->patches.pos + (size_t)land * 3;
-                const double area = ob->chart_area[x];
-                const int b = nearest_where(&rc.ix, q, x, area, without_reach);
-                const int32_t y = b >= 0 ? ob->chart[rc.rep[b]] : -1;
-                if (y >= 0 && y != x && area < ob->chart_area[y] / 4) { h[j] = (reach_hit){x, -1, w, h[j].at}; continue; }
-                const int c = nearest_where(&rc.ix, q, x, area, smaller);
-                const int32_t z = c >= 0 ? ob->chart[rc.rep[c]] : -1;
-                if (z < 0) continue;
-                const double dc = distance2(q, ob->patches.pos + (size_t)rc.rep[c] * 3);
-                if (b < 0 || dc < distance2(q, ob->patches.pos + (size_t)rc.rep[b] * 3)) h[j] = (reach_hit){z, (float)(dc / ob->chart_area[z]), w, h[j].at};
-            }
-        }
-        if (ready) receiver_free(&rc);
-    }
-    if (short_of_memory) { free(reach); free(lost); free(hit); return prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory measuring the charts' reach"); }
-    size_t m = 0;
-    for (size_t k = 0; k < nr * REACH_RAYS; ++k) {
-        if (hit[k].chart < 0) continue;
-        if (hit[k].t < 0) lost[hit[k].chart] += hit[k].w;
-        else hit[m++] = hit[k];
-    }
-    qsort(hit, m, sizeof *hit, reach_hit_cmp);
-    for (int32_t c = 0; c < charts; ++c) reach[c] = lost[c] > 0 ? REACH_MOST * REACH_MOST : 0;   /* what it cannot make up: all it may */
-    int reaching = 0;
-    double longest = 0;
-    for (size_t k = 0; k < m;) {
-        const int32_t c = hit[k].chart;
-        double got = 0;
-        for (bool done = !(lost[c] > 0); k < m && hit[k].chart == c; ++k)
-            if (!done && (got += hit[k].w) >= lost[c]) { reach[c] = fmin(hit[k].t, REACH_MOST * REACH_MOST); done = true; }
-    }
-    for (int32_t c = 0; c < charts; ++c)
-        if (reach[c] > 0) { reaching++; longest = fmax(longest, sqrt(reach[c])); }
-    prt__log(ctx, PRT_LOG_DEBUG, "%d of %d charts reach onto larger ones, at most %.2f of their side", reaching, charts, longest);
-    free(lost);
-    free(hit);
-    ob->reach = reach;
-    return PRT_OK;
 }
 
 /* First-bounce radiosity maps, entry (o, t) the transfer to t from the surface its cell o holds
@@ -527,7 +406,6 @@ static prt_status maps_step(prt__bake_job *base, prt_context *ctx, prt__progress
     int32_t *label = NULL;
     prt_status st = prt__offset_labels(ctx, W, H, s->offsets, K, &label);
     if (!st && (s->offsets[0] != 0 || s->offsets[1] != 0)) st = prt__fail(ctx, PRT_ERR_INVALID_ARG, "the first offset must be (0, 0)");
-    if (!st && (ob->d.kinds & 1)) st = small_reach(ctx, ob);
     prt__progress_begin(p, p->stage, (uint64_t)nc * (uint64_t)((ob->d.kinds & 1) + ((ob->d.kinds >> 1) & 1)));
     for (int k = 0; k < 2 && !st; ++k) {
         if (!(ob->d.kinds & (1u << k))) continue;
@@ -763,8 +641,6 @@ static prt_status offset_stage(prt__bake_job *base, int index, prt__stage *out)
         if (!(ob->bounce = prt__calloc((size_t)base->threads, sizeof *ob->bounce))) return prt__fail(base->ctx, PRT_ERR_NO_MEMORY, "out of memory");
         ob->bounce_threads = base->threads;
         ob->charts = (prt__offset_charts){ob->chart, ob->s->source, ob->s->texel, ob->patches.pos};
-        const prt_status st = small_reach(base->ctx, ob);   /* measured again when the maps were loaded */
-        if (st) return st;
         snprintf(out->name, sizeof out->name, "bounces");
         out->units = (ob->s->covered + BOUNCE_BLOCK - 1) / BOUNCE_BLOCK;
         out->run = bounce_unit;
@@ -809,7 +685,6 @@ static void offset_release(prt__bake_job *base)
     free(ob->texel_medium);
     free(ob->chart);
     free(ob->chart_area);
-    free(ob->reach);
     free(ob->dipoles);
     free(ob);
 }
