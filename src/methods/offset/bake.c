@@ -168,7 +168,9 @@ static int nearest_where(const rep_index *ix, const float *q, int32_t chart, dou
  * border texels were sampled); at 0.45 1.05 (0.94 over all bounces). Where fewer receivers have a
  * representative on the small chart less is made up: test_offset.c's lamp panel keeps 0.92 of the
  * exact bounce's energy (0.98 at 0.7), the Cornell box's image 0.94 of the path tracer's mean
- * (0.97), with less error per block (issue 30: a reach per chart from the flows it measures). */
+ * (0.97), with less error per block. A reach per chart measured to balance the flows (a3be35c,
+ * reverted) gave the tile 1.02, the lamp panel 0.92 still, and the demo's worst blocks 4-6 points
+ * worse: what the images miss is not made of these flows alone (issue 30). */
 #define SMALL_REACH 0.45
 static bool near_enough(const rep_point *r, int32_t chart, double area, double d2)
 {
