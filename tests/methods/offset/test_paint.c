@@ -100,14 +100,16 @@ static void test_tile_lights_the_wall(void **state)
         }
     print_message("painted tile, one bounce onto the wall: power %.4g %.4g %.4g, the exact gather %.4g %.4g %.4g; texel by texel relative L2 %.3f\n",
                   po[0], po[1], po[2], pe[0], pe[1], pe[2], sqrt(d2 / e2));
-    /* Measured 1.52 times the exact power, 0.875 texel by texel: the few offsets that land in a
-     * small bright tile each stand for the surface nearest them in space, much more than the tile
-     * (cells of map texels gave 1.04 and 0.45 here, but 0.58 against 0.41 for smooth light across
-     * charts: test_bounce_across_charts). The prefiltered light does not help here: a wall's offsets
-     * that land in the tile are near ones, read at single texels. */
-    for (int c = 0; c < 3; ++c) assert_float_equal(po[c], pe[c], 0.6 * pe[c]);
+    /* Measured 1.049 times the exact power, 0.42 texel by texel (1.045 and 0.44 before the run
+     * time smoothed bounced light over neighbouring receivers). Each of the tile's few
+     * representatives stands for the surface nearest it: its cells lose the tile's hits that the
+     * floor's representatives are nearer to and take in floor within bake.c's SMALL_REACH of the
+     * tile's side; that balance is tuned (at 0.7: 1.38, 0.52 texel by texel), so 0.12 of margin.
+     * The prefiltered light does not help here: a wall's offsets that land in the tile are near
+     * ones, read at single texels. */
+    for (int c = 0; c < 3; ++c) assert_float_equal(po[c], pe[c], 0.12 * pe[c]);
     assert_float_equal(po[1] / po[0], 0.5, 0.01);   /* the tile's colour, as painted */
-    assert_true(sqrt(d2 / e2) < 1.0);
+    assert_true(sqrt(d2 / e2) < 0.6);
     prt_relit_free(&r);
     free(first);
     free(exact);
@@ -193,14 +195,11 @@ static void test_tile_lights_the_wall(void **state)
                   sqrt(dp / dr));
     assert_true(nwall > 50);
     for (int c = 0; c < 3; ++c) {
-        /* Measured 22% high (the emitter: within 1%): 19% before the run time smoothed the
-           bounced light over neighbouring receivers (smooth.c: near the floor the wall's light
-           falls off fastest, and a tent there lifts the lower half), 12% (emitter 4%) before
-           border texels were sampled with their own area. The few offsets landing in a small
-           spot each stand for the surface nearest them (the one-bounce check above): issue 30
-           keeps it open. */
-        assert_float_equal(wp[c], wr[c], 0.25 * wr[c]);
-        assert_float_equal(wp[c], we[c], 0.25 * we[c]);
+        /* Measured 4% low (the emitter: within 1%): the balance of the one-bounce check above
+           over every bounce (5.6% low without the run time's smoothing; 19% high at bake.c's
+           SMALL_REACH 0.7, 12% before border texels were sampled), so 0.12. */
+        assert_float_equal(wp[c], wr[c], 0.12 * wr[c]);
+        assert_float_equal(wp[c], we[c], 0.12 * we[c]);
     }
     prt_reference_vertices_free(&ref);
     prt_scene_release(ts);
