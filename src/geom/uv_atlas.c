@@ -1509,20 +1509,28 @@ static void turned(packer *p, int W, int H, int turn, int *w_out, int *h_out)
     *h_out = height;
 }
 
-/* Does the turned footprint (w wide, h rows) touch no occupied texel when its corner is at (x, y)? */
-static bool fits(const packer *p, int w, int h, int x, int y)
+/* Does row r of the turned footprint (w wide) touch an occupied texel when its corner is at (x, y)? */
+static bool row_hits(const packer *p, int w, int r, int x, int y)
 {
     const int words = (w + 63) / 64, sh = x % 64, base = x / 64;
-    for (int r = 0; r < h; ++r) {
-        const uint64_t *m = p->mask + (size_t)r * words, *o = p->occupied + (size_t)(y + r) * p->words + base;
-        uint64_t carry = 0;
-        for (int k = 0; k <= words; ++k) {
-            const uint64_t cur = k < words ? m[k] : 0;
-            const uint64_t v = sh ? (cur << sh) | carry : cur;
-            carry = sh ? cur >> (64 - sh) : 0;
-            if (v && (base + k >= p->words || (o[k] & v))) return false;
-        }
+    const uint64_t *m = p->mask + (size_t)r * words, *o = p->occupied + (size_t)(y + r) * p->words + base;
+    uint64_t carry = 0;
+    for (int k = 0; k <= words; ++k) {
+        const uint64_t cur = k < words ? m[k] : 0;
+        const uint64_t v = sh ? (cur << sh) | carry : cur;
+        carry = sh ? cur >> (64 - sh) : 0;
+        if (v && (base + k >= p->words || (o[k] & v))) return true;
     }
+    return false;
+}
+
+/* Does the turned footprint (w wide, h rows) touch no occupied texel when its corner is at (x, y)?
+ * The row that last hit (*hint) is asked first: climbing past an obstacle, it mostly hits again. */
+static bool fits(const packer *p, int w, int h, int x, int y, int *hint)
+{
+    if (*hint >= 0 && *hint < h && row_hits(p, w, *hint, x, y)) return false;
+    for (int r = 0; r < h; ++r)
+        if (r != *hint && row_hits(p, w, r, x, y)) { *hint = r; return false; }
     return true;
 }
 
@@ -1573,12 +1581,13 @@ static bool pack(packer *p, double s, bool tilt, placement *at, size_t *touched)
                 int w, h;
                 if ((turn & 1 ? H : W) > res) continue;
                 turned(p, W, H, turn, &w, &h);
+                int hint = -1;
                 for (int x = 0; x + w <= res; ++x) {
                     /* From the lowest free texel under every column up; above all that is packed it fits. */
                     int64_t y = 0;
                     for (int j = 0; j < w; ++j)
                         if (p->bottom[j] != INT32_MAX && (int64_t)p->floor[x + j] - p->bottom[j] > y) y = (int64_t)p->floor[x + j] - p->bottom[j];
-                    while (y + h < best_top && y + h <= res && !fits(p, w, h, x, (int)y)) y++;
+                    while (y + h < best_top && y + h <= res && !fits(p, w, h, x, (int)y, &hint)) y++;
                     if (y + h < best_top && y + h <= res) { best_top = y + h; best = (placement){x, (int32_t)y, turn, k}; }
                 }
             }
