@@ -519,15 +519,15 @@ static void test_scan_coverage(void **state)
     test_mesh t = {0};
     bumpy_sphere(&t, 16, 32, 0.03f);
     prt__mesh pm = to_mesh(&t);
-    check_atlas(&pm, 128, "coarse bumpy sphere at 128", 0.66);   /* 68.6% */
+    check_atlas(&pm, 128, "coarse bumpy sphere at 128", 0.71);   /* 72.6% (68.6% in one order of its six charts) */
     prt__mesh_free(&pm);
     tm_free(&t);
     const char *dir = shared_data_dir();
-    /* The low-resolution bunny (18 charts, a few huge and ragged) packs to 65% only (58.7% by
-     * texel centres): issue 30's 70% is not met there yet. */
+    /* The low-resolution bunny (18 charts, four of 15-29% of the surface, ragged) packed to 65%
+     * until the atlas cut large ragged charts in two for packing: 74.7% (21 charts). */
     const struct { const char *name; double min; } scans[] = {
         {"meshes/dragon/dragon_vrip_res3.ply", 0.70}, {"meshes/dragon/dragon_vrip_res4.ply", 0.70},
-        {"meshes/teapot/teapot.obj", 0.70}, {"meshes/bunny/bunny_lowres.obj", 0.64},
+        {"meshes/teapot/teapot.obj", 0.70}, {"meshes/bunny/bunny_lowres.obj", 0.70},
     };
     for (size_t i = 0; i < sizeof scans / sizeof *scans; ++i) {
         char path[1024], what[128];
