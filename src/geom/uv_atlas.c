@@ -1780,25 +1780,57 @@ static int by_cut(const void *x, const void *y)
     return a->t < b->t ? -1 : a->t > b->t;
 }
 
-/* The smallest box (of PACK_ANGLES / 2 turns), each side grown by g, around the chart's triangles
- * t with side[t] == which. */
-static double piece_box(const chart *c, const uint8_t *side, uint8_t which, double g)
+/* The smallest box (of PACK_ANGLES / 2 turns), each side grown by g, around the chart's vertices v[0..n). */
+static double piece_box(const chart *c, const uint32_t *v, size_t n, double g)
 {
     double best = INFINITY;
     for (int i = 0; i < PACK_ANGLES / 2; ++i) {
         const double th = PRT_PI * i / PACK_ANGLES, cs = cos(th), sn = sin(th);
-        double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
-        for (size_t t = 0; t < c->nt; ++t) {
-            if (side[t] != which) continue;
-            for (int k = 0; k < 3; ++k) {
-                const double *q = c->uv + (size_t)c->corner[t * 3 + k] * 2;
-                const double u = cs * q[0] - sn * q[1], w = sn * q[0] + cs * q[1];
-                lo[0] = fmin(lo[0], u); hi[0] = fmax(hi[0], u); lo[1] = fmin(lo[1], w); hi[1] = fmax(hi[1], w);
-            }
+        double lo0 = INFINITY, hi0 = -INFINITY, lo1 = INFINITY, hi1 = -INFINITY;
+        for (size_t k = 0; k < n; ++k) {
+            const double *q = c->uv + (size_t)v[k] * 2;
+            const double u = cs * q[0] - sn * q[1], w = sn * q[0] + cs * q[1];
+            lo0 = u < lo0 ? u : lo0; hi0 = u > hi0 ? u : hi0; lo1 = w < lo1 ? w : lo1; hi1 = w > hi1 ? w : hi1;
         }
-        best = fmin(best, (hi[0] - lo[0] + g) * (hi[1] - lo[1] + g));
+        const double area = (hi0 - lo0 + g) * (hi1 - lo1 + g);
+        best = area < best ? area : best;
     }
     return best;
+}
+
+typedef struct rim_edge { uint32_t a, b; } rim_edge;
+static int by_rim_edge(const void *x, const void *y)
+{
+    const rim_edge *p = x, *q = y;
+    if (p->a != q->a) return p->a < q->a ? -1 : 1;
+    return p->b < q->b ? -1 : p->b > q->b;
+}
+
+/* rim[t]: triangle t of the chart has an edge on its border (no other triangle of the chart along
+ * it); the longest edge of its map in *longest. False without memory. */
+static bool chart_rim(const chart *c, uint8_t *rim, double *longest)
+{
+    rim_edge *e = malloc(c->nt * 3 * sizeof *e);
+    if (!e) return false;
+    *longest = 0;
+    for (size_t t = 0; t < c->nt; ++t)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t p = c->corner[t * 3 + k], q = c->corner[t * 3 + (k + 1) % 3];
+            e[t * 3 + k] = (rim_edge){p < q ? p : q, p < q ? q : p};
+            *longest = fmax(*longest, hypot(c->uv[p * 2] - c->uv[q * 2], c->uv[p * 2 + 1] - c->uv[q * 2 + 1]));
+        }
+    qsort(e, c->nt * 3, sizeof *e, by_rim_edge);
+    memset(rim, 0, c->nt);
+    for (size_t t = 0; t < c->nt; ++t)
+        for (int k = 0; k < 3 && !rim[t]; ++k) {
+            const uint32_t p = c->corner[t * 3 + k], q = c->corner[t * 3 + (k + 1) % 3];
+            const rim_edge key = {p < q ? p : q, p < q ? q : p};
+            const rim_edge *f = bsearch(&key, e, c->nt * 3, sizeof *e, by_rim_edge);
+            /* bsearch finds one of the run: the edge is shared when a neighbour in the run matches. */
+            rim[t] = !((f > e && !by_rim_edge(f - 1, &key)) || (f + 1 < e + c->nt * 3 && !by_rim_edge(f + 1, &key)));
+        }
+    free(e);
+    return true;
 }
 
 /* Is the piece of triangles with side[t] == which joined through its vertices? */
@@ -1872,9 +1904,15 @@ static prt_status split_ragged(const prt_context *ctx, atlas *a, int res, int pa
         if (area <= SPLIT_SHARE * a->total || twins || c->nt < 8) { ci++; continue; }
         cut_key *keys = malloc(c->nt * sizeof *keys);
         uint8_t *side = malloc(c->nt), *best_side = malloc(c->nt);
-        uint32_t *parent = malloc((c->nv + 1) * sizeof *parent);
+        uint8_t *rim = malloc(c->nt);
+        uint32_t *parent = malloc((c->nv + 1) * sizeof *parent), *outline[2] = {malloc(c->nt * 3 * sizeof **outline), malloc(c->nt * 3 * sizeof **outline)};
         int32_t *local = malloc((c->nv + 1) * sizeof *local);
-        if (!keys || !side || !best_side || !parent || !local) st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+        double longest = 0;
+        if (!keys || !side || !best_side || !rim || !parent || !outline[0] || !outline[1] || !local || !chart_rim(c, rim, &longest))
+            st = prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+        /* A piece's box is its outline's: triangles on the chart's border, or beside the cut - whose
+         * keys (three corners' projections) lie within two edges of it. */
+        const double band = 2 * longest * (1 + 1e-6) + 1e-12;
         const double whole = (c->w + g) * (c->h + g);
         double best = whole * (1 - SPLIT_GAIN);
         bool found = false;
@@ -1897,7 +1935,13 @@ static prt_status split_ragged(const prt_context *ctx, atlas *a, int res, int pa
                 if (i == 0 || i == c->nt) continue;
                 for (size_t j = 0; j < c->nt; ++j) side[keys[j].t] = j >= i;
                 if (!piece_joined(c, side, 0, parent) || !piece_joined(c, side, 1, parent)) continue;
-                const double cost = piece_box(c, side, 0, g) + piece_box(c, side, 1, g);
+                size_t n[2] = {0, 0};
+                for (size_t j = 0; j < c->nt; ++j) {
+                    const uint32_t t = keys[j].t;
+                    if (!rim[t] && fabs(keys[j].key - keys[i].key) > band) continue;
+                    for (int k = 0; k < 3; ++k) outline[side[t]][n[side[t]]++] = c->corner[t * 3 + k];
+                }
+                const double cost = piece_box(c, outline[0], n[0], g) + piece_box(c, outline[1], n[1], g);
                 if (cost < best) { best = cost; found = true; memcpy(best_side, side, c->nt); }
             }
         }
@@ -1915,7 +1959,7 @@ static prt_status split_ragged(const prt_context *ctx, atlas *a, int res, int pa
             cuts++;
         }
         ci++;
-        free(keys); free(side); free(best_side); free(parent); free(local);
+        free(keys); free(side); free(best_side); free(rim); free(parent); free(outline[0]); free(outline[1]); free(local);
     }
     return st;
 }
