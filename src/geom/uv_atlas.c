@@ -1765,12 +1765,14 @@ static prt_status pack_map(const prt_context *ctx, const atlas *a, const pack_or
  * charts of 15-29%, filling half their boxes, 65% of the map). Such a chart is cut in two along a
  * straight line across its map (SPLIT_DIRS directions, SPLIT_CUTS places each) where the pieces'
  * boxes, each grown by the texels a chart's border costs, shrink the most, by SPLIT_GAIN at
- * least; each piece keeps its part of the map, so it stays as valid as the whole. */
+ * least, or nearly as much along sharper creases; each piece keeps its part of the map, so it
+ * stays as valid as the whole (and its density, rescaled as every chart is, the same). */
 #define SPLIT_SHARE 0.0625
 #define SPLIT_GAIN 0.10
 #define SPLIT_DIRS 8
 #define SPLIT_CUTS 15
 #define SPLIT_MAX 64   /* cuts in one atlas */
+#define SPLIT_SLACK 0.03
 
 typedef struct cut_key { double key, area; uint32_t t; } cut_key;
 static int by_cut(const void *x, const void *y)
@@ -1893,7 +1895,9 @@ static prt_status split_ragged(const prt_context *ctx, atlas *a, int res, int pa
     /* A chart's border costs its reach and the padding beyond, on each side: in scene units at
      * about the density charts pack to (70% of the map). */
     const double g = (2 * REACH + pad + 1) * sqrt(a->total / 0.7) / res;
-    prt_status st = PRT_OK;
+    int32_t *where = malloc(a->nt * sizeof *where);   /* [mesh triangle] its index in the chart being cut, else -1 */
+    prt_status st = where ? PRT_OK : prt__fail(ctx, PRT_ERR_NO_MEMORY, "out of memory for the UV atlas");
+    for (size_t t = 0; t < a->nt && !st; ++t) where[t] = -1;
     int cuts = 0;
     for (size_t ci = 0; ci < a->count && !st && cuts < SPLIT_MAX;) {
         chart *c = &a->charts[ci];
@@ -1914,37 +1918,63 @@ static prt_status split_ragged(const prt_context *ctx, atlas *a, int res, int pa
          * keys (three corners' projections) lie within two edges of it. */
         const double band = 2 * longest * (1 + 1e-6) + 1e-12;
         const double whole = (c->w + g) * (c->h + g);
-        double best = whole * (1 - SPLIT_GAIN);
+        double best = whole * (1 - SPLIT_GAIN), limit = 0, best_crease = -1;
         bool found = false;
-        for (int dir = 0; dir < SPLIT_DIRS && !st; ++dir) {
-            const double th = PRT_PI * dir / SPLIT_DIRS, cs = cos(th), sn = sin(th);
-            for (size_t t = 0; t < c->nt; ++t) {
-                double k = 0;
-                for (int j = 0; j < 3; ++j) {
-                    const double *q = c->uv + (size_t)c->corner[t * 3 + j] * 2;
-                    k += cs * q[0] + sn * q[1];
+        for (size_t t = 0; t < c->nt && !st; ++t) where[c->tris[t]] = (int32_t)t;
+        /* Two rounds: the smallest boxes, then of the cuts within SPLIT_SLACK of them the one
+         * running most along creases (the mean of 1 - cos of the normals across its edges), where
+         * a seam shows least and the map bends most. */
+        for (int round = 0; round < 2 && !st; ++round) {
+            if (round) { if (!found) break; limit = fmin(best * (1 + SPLIT_SLACK), whole * (1 - SPLIT_GAIN)); }
+            for (int dir = 0; dir < SPLIT_DIRS && !st; ++dir) {
+                const double th = PRT_PI * dir / SPLIT_DIRS, cs = cos(th), sn = sin(th);
+                for (size_t t = 0; t < c->nt; ++t) {
+                    double k = 0;
+                    for (int j = 0; j < 3; ++j) {
+                        const double *q = c->uv + (size_t)c->corner[t * 3 + j] * 2;
+                        k += cs * q[0] + sn * q[1];
+                    }
+                    keys[t] = (cut_key){k, a->area[c->tris[t]], (uint32_t)t};
                 }
-                keys[t] = (cut_key){k, a->area[c->tris[t]], (uint32_t)t};
-            }
-            qsort(keys, c->nt, sizeof *keys, by_cut);
-            double run = 0;
-            size_t i = 0;
-            for (int q = 1; q <= SPLIT_CUTS; ++q) {
-                const double at = area * q / (SPLIT_CUTS + 1);
-                while (i < c->nt && run + keys[i].area <= at) run += keys[i++].area;
-                if (i == 0 || i == c->nt) continue;
-                for (size_t j = 0; j < c->nt; ++j) side[keys[j].t] = j >= i;
-                if (!piece_joined(c, side, 0, parent) || !piece_joined(c, side, 1, parent)) continue;
-                size_t n[2] = {0, 0};
-                for (size_t j = 0; j < c->nt; ++j) {
-                    const uint32_t t = keys[j].t;
-                    if (!rim[t] && fabs(keys[j].key - keys[i].key) > band) continue;
-                    for (int k = 0; k < 3; ++k) outline[side[t]][n[side[t]]++] = c->corner[t * 3 + k];
+                qsort(keys, c->nt, sizeof *keys, by_cut);
+                double run = 0;
+                size_t i = 0;
+                for (int q = 1; q <= SPLIT_CUTS; ++q) {
+                    const double at = area * q / (SPLIT_CUTS + 1);
+                    while (i < c->nt && run + keys[i].area <= at) run += keys[i++].area;
+                    if (i == 0 || i == c->nt) continue;
+                    for (size_t j = 0; j < c->nt; ++j) side[keys[j].t] = j >= i;
+                    if (!piece_joined(c, side, 0, parent) || !piece_joined(c, side, 1, parent)) continue;
+                    size_t n[2] = {0, 0};
+                    for (size_t j = 0; j < c->nt; ++j) {
+                        const uint32_t t = keys[j].t;
+                        if (!rim[t] && fabs(keys[j].key - keys[i].key) > band) continue;
+                        for (int k = 0; k < 3; ++k) outline[side[t]][n[side[t]]++] = c->corner[t * 3 + k];
+                    }
+                    const double cost = piece_box(c, outline[0], n[0], g) + piece_box(c, outline[1], n[1], g);
+                    if (!round) {
+                        if (cost < best) { best = cost; found = true; }
+                        continue;
+                    }
+                    if (cost > limit) continue;
+                    double crease = 0;
+                    size_t edges = 0;
+                    for (size_t t = 0; t < c->nt; ++t) {
+                        if (side[t]) continue;
+                        for (int k = 0; k < 3; ++k) {
+                            const int64_t o = a->across[(size_t)c->tris[t] * 3 + k];
+                            if (o < 0 || where[o] < 0 || !side[where[o]]) continue;
+                            const double *n0 = a->smooth + (size_t)c->tris[t] * 3, *n1 = a->smooth + (size_t)o * 3;
+                            crease += 1 - (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2]);
+                            edges++;
+                        }
+                    }
+                    crease = edges ? crease / edges : 0;
+                    if (crease > best_crease) { best_crease = crease; memcpy(best_side, side, c->nt); }
                 }
-                const double cost = piece_box(c, outline[0], n[0], g) + piece_box(c, outline[1], n[1], g);
-                if (cost < best) { best = cost; found = true; memcpy(best_side, side, c->nt); }
             }
         }
+        for (size_t t = 0; t < c->nt; ++t) where[c->tris[t]] = -1;
         /* The whole stays beside its pieces: packing tries the map either way (pack_map). */
         if (!st && found) {
             chart p[2];
@@ -1961,6 +1991,7 @@ static prt_status split_ragged(const prt_context *ctx, atlas *a, int res, int pa
         ci++;
         free(keys); free(side); free(best_side); free(rim); free(parent); free(outline[0]); free(outline[1]); free(local);
     }
+    free(where);
     return st;
 }
 
