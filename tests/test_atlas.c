@@ -414,7 +414,7 @@ static void test_twins(void **state)
     tm_vertex(&t, 2.1f, 0.3f, 0, 0, 0, 1);
     tm_tri(&t, fin, fin + 1, fin + 2);
     tm_tri(&t, fin, fin + 2, fin + 1);
-    prt__mesh m = to_mesh(&t);
+    prt__mesh m = to_mesh(&t), twin = to_mesh(&t);
     tm_free(&t);
     prt__mesh plain = {0};
     test_mesh s = {0};
@@ -425,7 +425,13 @@ static void test_twins(void **state)
     prt__atlas_report rp;
     assert_int_equal(prt__uv_atlas(ctx, &plain, &(prt__atlas_desc){.resolution = 128}, &rp), PRT_OK);
     const size_t charts = check_atlas(&m, 128, "sphere with a twin and a fin", 0.5);
-    assert_int_equal(charts, rp.charts + 1);   /* the fin's chart; the twin none */
+    /* The fin's chart; the twin none. Large charts may be cut for packing, in one map and not the
+     * other: counted before. */
+    prt__atlas_report rt;
+    assert_int_equal(prt__uv_atlas(ctx, &twin, &(prt__atlas_desc){.resolution = 128}, &rt), PRT_OK);
+    assert_int_equal(charts, rt.charts);
+    assert_int_equal(rt.charts - rt.cut, rp.charts - rp.cut + 1);
+    prt__mesh_free(&twin);
     /* The twin on its face's UVs, corner by corner at the same position. */
     const uint32_t tw = (uint32_t)nt0;
     for (int k = 0; k < 3; ++k) {
@@ -513,15 +519,15 @@ static void test_scan_coverage(void **state)
     test_mesh t = {0};
     bumpy_sphere(&t, 16, 32, 0.03f);
     prt__mesh pm = to_mesh(&t);
-    check_atlas(&pm, 128, "coarse bumpy sphere at 128", 0.66);   /* 68.6% */
+    check_atlas(&pm, 128, "coarse bumpy sphere at 128", 0.71);   /* 72.6% (68.6% in one order of its six charts) */
     prt__mesh_free(&pm);
     tm_free(&t);
     const char *dir = shared_data_dir();
-    /* The low-resolution bunny (18 charts, a few huge and ragged) packs to 65% only (58.7% by
-     * texel centres): issue 30's 70% is not met there yet. */
+    /* The low-resolution bunny (18 charts, four of 15-29% of the surface, ragged) packed to 65%
+     * until the atlas cut large ragged charts in two for packing: 73.8% (21 charts). */
     const struct { const char *name; double min; } scans[] = {
         {"meshes/dragon/dragon_vrip_res3.ply", 0.70}, {"meshes/dragon/dragon_vrip_res4.ply", 0.70},
-        {"meshes/teapot/teapot.obj", 0.70}, {"meshes/bunny/bunny_lowres.obj", 0.64},
+        {"meshes/teapot/teapot.obj", 0.70}, {"meshes/bunny/bunny_lowres.obj", 0.70},
     };
     for (size_t i = 0; i < sizeof scans / sizeof *scans; ++i) {
         char path[1024], what[128];

@@ -260,6 +260,10 @@ bool prt__texel_areas(const prt__mesh *m, int W, int H, float *area)
         const int y0 = (int)fmaxf(floorf(fminf(v[0], fminf(v[1], v[2]))), 0.0f), y1 = (int)fminf(ceilf(fmaxf(v[0], fmaxf(v[1], v[2]))), (float)H);
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) {
+                /* Where the triangle only runs along the texel's edge or through its corner, the
+                 * clipping below leaves rounding (1e-9 of a texel) that the raster, asking the
+                 * same question as here, does not sample: such a texel holds none of it. */
+                if (!meets_square(u, v, x + 0.5f, y + 0.5f, 0.5f)) continue;
                 float poly[16][2] = {{u[0], v[0]}, {u[1], v[1]}, {u[2], v[2]}};
                 int n = 3;
                 n = clip_axis(poly, n, 0, (float)x, -1.0f);

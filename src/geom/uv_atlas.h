@@ -20,6 +20,7 @@ typedef struct prt__atlas_desc {
 typedef struct prt__atlas_report {
     size_t grown;            /* charts grown by normal deviation */
     size_t charts;           /* after cutting charts that would fold or overlap, and merging small ones */
+    size_t cut;              /* of those, the charts added by cutting large ragged ones in two for packing */
     size_t added_vertices;   /* copies made where a vertex lies on a seam between charts */
     size_t shared;           /* duplicate faces laid on their duplicate's texels (back-to-back twins) */
     size_t glued;            /* twins both on their own (a fin's two sides) glued into one chart */
