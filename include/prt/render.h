@@ -40,7 +40,7 @@ typedef struct prt_camera {
  *   b_1   = the bounce set's pass over first, b_k = its pass over b_(k-1), for gpu_bounces passes,
  *   final = first + emission scale x emission, less the light drawn per pixel
  *           (prt_render_mesh.gpu_pixel_direct) and clamped at zero (PRT_COMPONENT_DIRECT), sum
- *           of b_k (INDIRECT), or both (ALL).
+ *           of b_k (INDIRECT; smoothed over its chart with smooth_radius), or both (ALL).
  * The maps are uploaded packed into square texture-array atlases as the slices say (the method
  * packs them: rectangles of its maps, each placed in one atlas layer). */
 typedef struct prt_render_slice {
@@ -80,7 +80,8 @@ typedef struct prt_render_passes {
     /* With levels: the bounced light (the sum of b_k) each texel shows is the mean over the
      * covered texels of its chart within smooth_radius texels in x and y, weighted by
      * (r + 1 - |dx|) (r + 1 - |dy|) x area x max(0, n . n')^32 (normal: [covered][3], unit; a
-     * texel with a negative chart keeps its own); 0: none (methods/offset/smooth.c). */
+     * texel with a negative chart keeps its own); 0 (or normal NULL): none; at most 64
+     * (methods/offset/smooth.c). */
     int smooth_radius;
     const float *normal;
 } prt_render_passes;

@@ -290,6 +290,7 @@ static prt_status save_exr(const char *path, const prt_image *img)
     int32_t lines = 1;
     if (!st && exr_get_scanlines_per_chunk(ctx, part, &lines)) st = prt__fail(NULL, PRT_ERR_IO, "OpenEXR: %s", exr_message);
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    exr_zip_guard guard = {NULL};
     bool initialised = false;
     for (int32_t y = 0; !st && y < img->height; y += lines) {
         exr_chunk_info_t ci;
@@ -311,8 +312,8 @@ static prt_status save_exr(const char *path, const prt_image *img)
             st = prt__fail(NULL, PRT_ERR_IO, "OpenEXR encoding failed: %s", exr_message);
             break;
         }
-        exr_zip_guard guard = {enc.compress_fn};
-        if (guard.compress) {
+        if (enc.compress_fn != exr_zip_guarded) guard.compress = enc.compress_fn;   /* never wraps itself */
+        if (enc.compress_fn) {
             enc.encoding_user_data = &guard;
             enc.compress_fn = exr_zip_guarded;
         }

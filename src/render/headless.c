@@ -83,9 +83,10 @@ prt_status prt_renderer_create(prt_context *ctx, const prt_renderer_desc *desc, 
                                EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
     r->egl = eglCreateContext(r->dpy, cfg, EGL_NO_CONTEXT, ctx_attr);
     if (r->egl == EGL_NO_CONTEXT || !eglMakeCurrent(r->dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, r->egl)) {
+        const EGLint error = eglGetError();   /* before the calls below set their own */
         if (r->egl != EGL_NO_CONTEXT) eglDestroyContext(r->dpy, r->egl);
         close_display(); free(r);
-        return prt__fail(ctx, PRT_ERR_BACKEND, "cannot create a surfaceless OpenGL 3.3 core context (EGL error 0x%x)", eglGetError());
+        return prt__fail(ctx, PRT_ERR_BACKEND, "cannot create a surfaceless OpenGL 3.3 core context (EGL error 0x%x)", error);
     }
     snprintf(r->name, sizeof r->name, "%s", (const char *)glGetString(GL_RENDERER));
     prt_status st = prt__draw_init(&r->draw);

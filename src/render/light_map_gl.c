@@ -134,6 +134,7 @@ static const char *FS_FINAL =
     "        float f = max(dot(n, texelFetch(normals, q, 0).rgb), 0.0);\n"
     "        for (int k = 0; k < 5; ++k) f *= f;\n"
     "        float w = float((smooth_radius + 1 - abs(dx)) * (smooth_radius + 1 - abs(dy))) * ac.r * f;\n"
+    "        if (!(w > 0.0)) continue;\n"
     "        acc += w * texelFetch(total, q, 0).rgb;\n"
     "        sum += w;\n"
     "      }\n"
@@ -307,6 +308,10 @@ prt_status prt__light_map_gl_load(prt__light_map_gl *g, const prt_render_passes 
     if (!g->p_pyramid) { prt__light_map_gl_free(g); return PRT_ERR_BACKEND; }   /* prt__gl_program said why */
     g->levels = 0;
     for (int k = 0; lm->bounce.levels && k < lm->bounce.map_count; ++k) g->levels = lm->bounce.levels[k] > g->levels ? lm->bounce.levels[k] : g->levels;
+    if (lm->smooth_radius < 0 || lm->smooth_radius > 64) {
+        prt__light_map_gl_free(g);
+        return prt__fail(NULL, PRT_ERR_INVALID_ARG, "the light map's smoothing radius %d is outside 0..64 texels", lm->smooth_radius);
+    }
     g->smooth_radius = g->levels && lm->normal ? lm->smooth_radius : 0;
     g->pyramid_size = 1;
     while (g->pyramid_size < W || g->pyramid_size < H) g->pyramid_size *= 2;
@@ -514,7 +519,9 @@ void prt__light_map_gl_run(prt__light_map_gl *g, const float *input, const float
     bind(g->p_final, "pixel_direct", 4, GL_TEXTURE_2D, g->pixel_direct);
     bind(g->p_final, "area_chart", 5, GL_TEXTURE_2D, g->area_chart);   /* 0 without smooth_radius: then never read */
     bind(g->p_final, "normals", 6, GL_TEXTURE_2D, g->normals);
-    glUniform1i(glGetUniformLocation(g->p_final, "smooth_radius"), g->smooth_radius);
+    /* Nothing bounced (no bounces, or the direct light alone): nothing to smooth. */
+    const int smooth = bounces > 0 && component != PRT_COMPONENT_DIRECT ? g->smooth_radius : 0;
+    glUniform1i(glGetUniformLocation(g->p_final, "smooth_radius"), smooth);
     glUniform1f(glGetUniformLocation(g->p_final, "emission"), g->has_emit ? emission : 0.0f);
     glUniform1i(glGetUniformLocation(g->p_final, "component"), component);
     glUniform1i(glGetUniformLocation(g->p_final, "has_pixel"), pixel_direct != NULL);

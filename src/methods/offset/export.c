@@ -83,7 +83,8 @@ static prt_status write_maps(prt_context *ctx, const prt_transfer *t, const char
                                                  "first-order light map; maps holding map_bounces > 1 bounces give them all in one pass (final = first + "
                                                  "out), maps of 1 are a pass per bounce over what the last one gave (final = first + every pass). "
                                                  "prt's own radiosity pass reads far maps' light prefiltered (an area-weighted pyramid per chart, "
-                                                 "src/methods/offset/prefilter.c), which this export does not describe: the sum above is the paper's");
+                                                 "src/methods/offset/prefilter.c) and shows the bounced light averaged over each texel's chart within a few texels "
+                                                 "(src/methods/offset/smooth.c), which this export does not describe: the sum above is the paper's");
         cJSON_AddNumberToObject(index, "map_bounces", info.map_bounces);
     }
     static const char *const names[2] = {"radiosity", "subsurface"};

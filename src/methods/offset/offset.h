@@ -166,10 +166,11 @@ void prt__offset_filter(const prt__offset_set *s, const float *in, float *scratc
  * 10-100 times its surroundings) gathers it over the whole cell, its neighbour without one
  * gathers none. Right on average (the cells reach around small charts for that, bake.c), each
  * receiver's gather is one draw of that lottery, and shows as blotches of a few texels;
- * averaging the neighbours' draws keeps the mean and takes out much of the spread (issue 30). It
+ * averaging the neighbours' draws keeps the mean (about: it is normalised per receiver, so
+ * not exactly at chart borders or where texel areas vary; 0.3-1% in the tests) and takes out much of the spread (issue 30). It
  * also softens the bounced light's own detail over that radius. in, out: [covered][3], not the
  * same. */
-void prt__offset_smooth(const prt__offset_set *s, const float *in, float *out);
+void prt__offset_smooth(prt_context *ctx, const prt__offset_set *s, const float *in, float *out);
 /* A neighbour's weight by the cosine between the two texels' normals: cos^32 (0 from 90
  * degrees): on a curved chart - a torus's side and its underside - texels facing other ways
  * gather other light (the demo scene's torus: the smoothing's worst block 1-3 points less off).
@@ -180,8 +181,12 @@ static inline float prt__offset_smooth_facing(float cosine)
     for (int k = 0; k < 5; ++k) f *= f;
     return f;
 }
-/* The radius: a texel per 64 of the map's smaller side (the default maps' texels are about a
- * 64th of the scene's diagonal or finer, so it is about as wide in the scene whatever the map). */
+/* The radius: a texel per 64 of the map's smaller side, at most PRT__OFFSET_SMOOTH_MAX. The
+ * blotches are a share of an offset's cell, and with a given number of offsets the cells cover
+ * the same share of any map; the cap bounds the cost at (2 x 4 + 1)^2 reads per texel (at
+ * 1024^2 uncapped it was 5 s a relight), so maps above 256^2 are smoothed over less of their
+ * cells. R = 4 at 64^2 maps failed the tests' bounds: too wide on a small map. */
+#define PRT__OFFSET_SMOOTH_MAX 4
 int prt__offset_smooth_radius(const prt__offset_set *s);
 
 /* The GPU passes for t (gpu.c): the maps cropped to the boxes of their axial slicing and sliced into atlases

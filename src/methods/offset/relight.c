@@ -324,8 +324,8 @@ prt_status prt__offset_relight(prt_context *ctx, const prt_transfer *t, const pr
             float *tmp = a; a = b; b = tmp;
         }
         prt__offset_filter_give(s, pyramid);
-        if (s->levels) {   /* see prt__offset_smooth */
-            prt__offset_smooth(s, indirect, b);
+        if (s->levels && bounces > 0) {   /* see prt__offset_smooth */
+            prt__offset_smooth(ctx, s, indirect, b);
             memcpy(indirect, b, nc * 3 * sizeof(float));
         }
     }

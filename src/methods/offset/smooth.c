@@ -5,15 +5,16 @@
 
 int prt__offset_smooth_radius(const prt__offset_set *s)
 {
-    const int side = s->width < s->height ? s->width : s->height;
-    return side / 64 > 1 ? side / 64 : 1;
+    const int side = s->width < s->height ? s->width : s->height, r = side / 64;
+    return r < 1 ? 1 : r > PRT__OFFSET_SMOOTH_MAX ? PRT__OFFSET_SMOOTH_MAX : r;
 }
 
-void prt__offset_smooth(const prt__offset_set *s, const float *in, float *out)
+void prt__offset_smooth(prt_context *ctx, const prt__offset_set *s, const float *in, float *out)
 {
     const int W = s->width, H = s->height, R = prt__offset_smooth_radius(s);
-    const size_t nc = s->covered;
-    for (size_t i = 0; i < nc; ++i) {
+    const ptrdiff_t nc = (ptrdiff_t)s->covered;
+#pragma omp parallel for schedule(static, 256) num_threads(prt__threads(ctx))
+    for (ptrdiff_t i = 0; i < nc; ++i) {
         const int x = s->xy[i], y = s->xy[nc + i];
         const int32_t own = s->chart[i];
         if (own < 0) {   /* no chart of its own (none in practice): its own light, as the pyramid reads it */
@@ -30,6 +31,7 @@ void prt__offset_smooth(const prt__offset_set *s, const float *in, float *out)
                 if (j < 0 || s->chart[j] != own) continue;
                 const float *n = s->nrm + i * 3, *m = s->nrm + (size_t)j * 3;
                 const float w = (float)((R + 1 - abs(dx)) * (R + 1 - abs(dy))) * s->area[j] * prt__offset_smooth_facing(n[0] * m[0] + n[1] * m[1] + n[2] * m[2]);
+                if (!(w > 0)) continue;   /* a texel facing away (or of no area) adds nothing, not even its NaN */
                 for (int c = 0; c < 3; ++c) acc[c] += w * in[(size_t)j * 3 + c];
                 sum += w;
             }

@@ -106,6 +106,7 @@ PRT.method(function (api) {
                     var f = Math.max(tnrm[i * 3] * tnrm[j * 3] + tnrm[i * 3 + 1] * tnrm[j * 3 + 1] + tnrm[i * 3 + 2] * tnrm[j * 3 + 2], 0);
                     for (var k = 0; k < 5; ++k) f *= f;
                     var w = (R + 1 - Math.abs(dx)) * (R + 1 - Math.abs(dy)) * area[j] * f;
+                    if (!(w > 0)) continue;
                     for (c = 0; c < 3; ++c) acc[c] += w * light[j * 3 + c];
                     sum += w;
                 }
@@ -164,7 +165,7 @@ PRT.method(function (api) {
                     for (i = 0; i < nc * 3; ++i) indirect[i] += next[i];
                     var tmp = cur; cur = next; next = tmp;
                 }
-                if (p.levels && p.smooth_radius) { smooth(indirect, next); indirect.set(next); }
+                if (p.levels && p.smooth_radius && state.bounces > 0) { smooth(indirect, next); indirect.set(next); }
             }
             if (emit) for (i = 0; i < nc * 3; ++i) first[i] += p.emission * emit[i];
             for (i = 0; i < nc * 3; ++i) b[i] = Math.max(first[i] - hide[i], 0) + indirect[i];
